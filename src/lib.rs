@@ -1,0 +1,11 @@
+//! # ilopt — imitation learning as stochastic optimisation, checked
+//!
+//! A research kit for the thesis *Momentum-Based Variance Reduced Algorithms for Imitation
+//! Learning*: the unbiased gradient oracle of eq. 3.15, the exact engine that proves identities in
+//! rational arithmetic, and (in later modules) the algorithms, environments and theory checks.
+//!
+//! Everything numeric is generic over [`scalar::Scalar`], so the same code runs in `f64`/`f32`,
+//! exact rationals, interval arithmetic, and dual numbers over any of them.
+#![warn(missing_docs)]
+
+pub mod scalar;

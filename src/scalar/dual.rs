@@ -1,0 +1,320 @@
+//! `Dual<S>`: forward-mode automatic differentiation over any [`Scalar`].
+//!
+//! A dual number is a value `v ∈ S` with a gradient `g ∈ Sᵈ`; arithmetic follows the chain rule
+//! (`(a·b)' = a'b + ab'`, `(a/b)' = (a' − (a/b)·b')/b`). Because `Dual<S>` is itself a [`Scalar`],
+//! duals nest: `Dual<Dual<BigRational>>` carries exact second derivatives (the Hessian is the
+//! gradient of the gradient).
+//!
+//! The gradient may be stored shorter than `d`: missing trailing entries are zero. Constants
+//! (`Dual::constant`, `zero()`, `one()`) store an empty gradient, so they combine with duals of any
+//! dimension.
+
+use super::{BigRational, Real, Scalar, Sqrt};
+use std::cmp::Ordering;
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// A value with its gradient (forward-mode derivative with respect to `d` seeded variables).
+#[derive(Clone, Debug)]
+pub struct Dual<S> {
+    v: S,
+    g: Vec<S>,
+}
+
+impl<S: Scalar> Dual<S> {
+    /// A dual with an explicit gradient.
+    pub fn new(value: S, gradient: Vec<S>) -> Self {
+        Self {
+            v: value,
+            g: gradient,
+        }
+    }
+    /// A constant (zero gradient).
+    pub fn constant(value: S) -> Self {
+        Self {
+            v: value,
+            g: Vec::new(),
+        }
+    }
+    /// The `i`-th of `n` independent variables, with value `value` (gradient `eᵢ`).
+    ///
+    /// # Panics
+    /// If `i >= n`.
+    pub fn variable(value: S, i: usize, n: usize) -> Self {
+        assert!(i < n, "variable index {i} out of {n}");
+        let mut g = vec![S::zero(); n];
+        g[i] = S::one();
+        Self { v: value, g }
+    }
+    /// Seed every entry of `values` as an independent variable.
+    pub fn variables(values: &[S]) -> Vec<Self> {
+        let n = values.len();
+        values
+            .iter()
+            .enumerate()
+            .map(|(i, x)| Self::variable(x.clone(), i, n))
+            .collect()
+    }
+    /// The value part.
+    pub fn value(&self) -> &S {
+        &self.v
+    }
+    /// The stored gradient (possibly shorter than the number of variables; missing entries are 0).
+    pub fn gradient(&self) -> &[S] {
+        &self.g
+    }
+    /// The gradient padded with zeros to length `n`.
+    pub fn gradient_padded(&self, n: usize) -> Vec<S> {
+        let mut g = self.g.clone();
+        g.resize(n.max(g.len()), S::zero());
+        g
+    }
+    /// Split into value and gradient padded to length `n`.
+    pub fn into_parts(self, n: usize) -> (S, Vec<S>) {
+        let g = self.gradient_padded(n);
+        (self.v, g)
+    }
+
+    /// Apply a scalar function with known derivative: `f(self)` with gradient `f'(v)·g`.
+    fn chain(&self, value: S, derivative: S) -> Self {
+        Self {
+            v: value,
+            g: self.g.iter().map(|gi| derivative.clone() * gi).collect(),
+        }
+    }
+}
+
+fn zip_with<S: Scalar>(a: &[S], b: &[S], f: impl Fn(Option<&S>, Option<&S>) -> S) -> Vec<S> {
+    (0..a.len().max(b.len()))
+        .map(|i| f(a.get(i), b.get(i)))
+        .collect()
+}
+
+fn add_ref<S: Scalar>(a: &Dual<S>, b: &Dual<S>) -> Dual<S> {
+    Dual {
+        v: a.v.clone() + &b.v,
+        g: zip_with(&a.g, &b.g, |x, y| match (x, y) {
+            (Some(x), Some(y)) => x.clone() + y,
+            (Some(x), None) | (None, Some(x)) => x.clone(),
+            (None, None) => unreachable!(),
+        }),
+    }
+}
+
+fn sub_ref<S: Scalar>(a: &Dual<S>, b: &Dual<S>) -> Dual<S> {
+    Dual {
+        v: a.v.clone() - &b.v,
+        g: zip_with(&a.g, &b.g, |x, y| match (x, y) {
+            (Some(x), Some(y)) => x.clone() - y,
+            (Some(x), None) => x.clone(),
+            (None, Some(y)) => -y.clone(),
+            (None, None) => unreachable!(),
+        }),
+    }
+}
+
+fn mul_ref<S: Scalar>(a: &Dual<S>, b: &Dual<S>) -> Dual<S> {
+    Dual {
+        v: a.v.clone() * &b.v,
+        g: zip_with(&a.g, &b.g, |x, y| match (x, y) {
+            (Some(x), Some(y)) => b.v.clone() * x + a.v.clone() * y,
+            (Some(x), None) => b.v.clone() * x,
+            (None, Some(y)) => a.v.clone() * y,
+            (None, None) => unreachable!(),
+        }),
+    }
+}
+
+fn div_ref<S: Scalar>(a: &Dual<S>, b: &Dual<S>) -> Dual<S> {
+    let q = a.v.clone() / &b.v;
+    Dual {
+        g: zip_with(&a.g, &b.g, |x, y| match (x, y) {
+            (Some(x), Some(y)) => (x.clone() - q.clone() * y) / &b.v,
+            (Some(x), None) => x.clone() / &b.v,
+            (None, Some(y)) => -(q.clone() * y) / &b.v,
+            (None, None) => unreachable!(),
+        }),
+        v: q,
+    }
+}
+
+macro_rules! dual_binop {
+    ($Op:ident, $op:ident, $OpAssign:ident, $op_assign:ident, $f:ident) => {
+        impl<S: Scalar> $Op for Dual<S> {
+            type Output = Dual<S>;
+            fn $op(self, rhs: Dual<S>) -> Dual<S> {
+                $f(&self, &rhs)
+            }
+        }
+        impl<'a, S: Scalar> $Op<&'a Dual<S>> for Dual<S> {
+            type Output = Dual<S>;
+            fn $op(self, rhs: &'a Dual<S>) -> Dual<S> {
+                $f(&self, rhs)
+            }
+        }
+        impl<'a, S: Scalar> $Op<Dual<S>> for &'a Dual<S> {
+            type Output = Dual<S>;
+            fn $op(self, rhs: Dual<S>) -> Dual<S> {
+                $f(self, &rhs)
+            }
+        }
+        impl<'a, 'b, S: Scalar> $Op<&'b Dual<S>> for &'a Dual<S> {
+            type Output = Dual<S>;
+            fn $op(self, rhs: &'b Dual<S>) -> Dual<S> {
+                $f(self, rhs)
+            }
+        }
+        impl<S: Scalar> $OpAssign for Dual<S> {
+            fn $op_assign(&mut self, rhs: Dual<S>) {
+                *self = $f(self, &rhs);
+            }
+        }
+        impl<'a, S: Scalar> $OpAssign<&'a Dual<S>> for Dual<S> {
+            fn $op_assign(&mut self, rhs: &'a Dual<S>) {
+                *self = $f(self, rhs);
+            }
+        }
+    };
+}
+
+dual_binop!(Add, add, AddAssign, add_assign, add_ref);
+dual_binop!(Sub, sub, SubAssign, sub_assign, sub_ref);
+dual_binop!(Mul, mul, MulAssign, mul_assign, mul_ref);
+dual_binop!(Div, div, DivAssign, div_assign, div_ref);
+
+impl<S: Scalar> Neg for Dual<S> {
+    type Output = Dual<S>;
+    fn neg(self) -> Dual<S> {
+        Dual {
+            v: -self.v,
+            g: self.g.into_iter().map(|x| -x).collect(),
+        }
+    }
+}
+
+impl<S: Scalar> PartialEq for Dual<S> {
+    /// Equal values and equal gradients, missing entries counting as zero.
+    fn eq(&self, other: &Self) -> bool {
+        let zero = S::zero();
+        self.v == other.v
+            && (0..self.g.len().max(other.g.len()))
+                .all(|i| self.g.get(i).unwrap_or(&zero) == other.g.get(i).unwrap_or(&zero))
+    }
+}
+
+impl<S: Scalar> Scalar for Dual<S> {
+    fn zero() -> Self {
+        Self::constant(S::zero())
+    }
+    fn one() -> Self {
+        Self::constant(S::one())
+    }
+    fn from_ratio(num: i64, den: i64) -> Self {
+        Self::constant(S::from_ratio(num, den))
+    }
+    fn from_rational(q: &BigRational) -> Self {
+        Self::constant(S::from_rational(q))
+    }
+    fn to_f64(&self) -> f64 {
+        self.v.to_f64()
+    }
+    /// Orders by value only (the gradient does not take part).
+    fn certain_cmp(&self, other: &Self) -> Option<Ordering> {
+        self.v.certain_cmp(&other.v)
+    }
+    fn is_finite(&self) -> bool {
+        self.v.is_finite() && self.g.iter().all(Scalar::is_finite)
+    }
+}
+
+impl<S: Sqrt> Sqrt for Dual<S> {
+    /// `√v`, with derivative `g / (2√v)`.
+    fn sqrt(&self) -> Self {
+        let r = self.v.sqrt();
+        let d = S::one() / (S::from_i64(2) * &r);
+        self.chain(r, d)
+    }
+}
+
+impl<S: Real> Real for Dual<S> {
+    fn exp(&self) -> Self {
+        let e = self.v.exp();
+        self.chain(e.clone(), e)
+    }
+    fn ln(&self) -> Self {
+        self.chain(self.v.ln(), S::one() / &self.v)
+    }
+    fn sin(&self) -> Self {
+        self.chain(self.v.sin(), self.v.cos())
+    }
+    fn cos(&self) -> Self {
+        self.chain(self.v.cos(), -self.v.sin())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type Q = BigRational;
+    fn q(n: i64, d: i64) -> Q {
+        Q::from_ratio(n, d)
+    }
+
+    /// f(x, y) = (x² y − 3) / (x + y): gradient by hand, compared exactly.
+    #[test]
+    fn rational_quotient_rule_is_exact() {
+        let (x0, y0) = (q(1, 2), q(-3, 1));
+        let v = Dual::variables(&[x0.clone(), y0.clone()]);
+        let (x, y) = (&v[0], &v[1]);
+        let f = (x * x * y - Dual::from_i64(3)) / (x + y);
+        let den = x0.clone() + &y0;
+        let num = x0.clone() * &x0 * &y0 - q(3, 1);
+        let fx = (q(2, 1) * &x0 * &y0 * &den - &num) / (den.clone() * &den);
+        let fy = (x0.clone() * &x0 * &den - &num) / (den.clone() * &den);
+        assert_eq!(*f.value(), num / den);
+        assert_eq!(f.gradient(), &[fx, fy]);
+    }
+
+    /// Nested duals give the exact Hessian of x³y.
+    #[test]
+    fn nested_duals_give_second_derivatives() {
+        let (x0, y0) = (q(2, 3), q(5, 7));
+        let inner = Dual::variables(&[x0.clone(), y0.clone()]);
+        let outer: Vec<Dual<Dual<Q>>> = inner
+            .iter()
+            .enumerate()
+            .map(|(i, d)| Dual::variable(d.clone(), i, 2))
+            .collect();
+        let (x, y) = (&outer[0], &outer[1]);
+        let f = x * x * x * y;
+        let h: Vec<Vec<Q>> = f
+            .gradient()
+            .iter()
+            .map(|gi| gi.gradient_padded(2))
+            .collect();
+        let hxx = q(6, 1) * &x0 * &y0;
+        let hxy = q(3, 1) * &x0 * &x0;
+        assert_eq!(h, vec![vec![hxx, hxy.clone()], vec![hxy, q(0, 1)]]);
+    }
+
+    #[test]
+    fn constants_broadcast_against_any_dimension() {
+        let v = Dual::variables(&[q(1, 1), q(2, 1), q(3, 1)]);
+        let s = Dual::one() + &v[2] - Dual::from_i64(1);
+        assert_eq!(s.gradient_padded(3), vec![q(0, 1), q(0, 1), q(1, 1)]);
+        assert_eq!(
+            Dual::constant(q(1, 1)),
+            Dual::new(q(1, 1), vec![q(0, 1); 4])
+        );
+    }
+
+    #[test]
+    fn float_chain_rules() {
+        let x = Dual::variable(0.7_f64, 0, 1);
+        let y = (x.sin() * x.exp() + x.ln() * x.cos()).sqrt();
+        let f = |t: f64| (t.sin() * t.exp() + t.ln() * t.cos()).sqrt();
+        let h = 1e-6;
+        let fd = (f(0.7 + h) - f(0.7 - h)) / (2.0 * h);
+        assert!((y.gradient()[0] - fd).abs() < 1e-8);
+    }
+}

@@ -1,0 +1,77 @@
+//! `f64` and `f32`: the fast scalars of the experiments.
+
+use super::{BigRational, Real, Scalar, Sqrt};
+use num_traits::ToPrimitive;
+use std::cmp::Ordering;
+
+macro_rules! impl_float {
+    ($t:ty) => {
+        impl Scalar for $t {
+            fn zero() -> Self {
+                0.0
+            }
+            fn one() -> Self {
+                1.0
+            }
+            fn from_ratio(num: i64, den: i64) -> Self {
+                assert!(den != 0, "from_ratio: zero denominator");
+                Self::from_rational(&BigRational::new(num.into(), den.into()))
+            }
+            fn from_rational(q: &BigRational) -> Self {
+                // num-rational's to_f64 is correctly rounded for large numerators/denominators too.
+                ToPrimitive::to_f64(q).unwrap_or(f64::NAN) as $t
+            }
+            fn to_f64(&self) -> f64 {
+                f64::from(*self)
+            }
+            fn certain_cmp(&self, other: &Self) -> Option<Ordering> {
+                self.partial_cmp(other)
+            }
+            fn is_finite(&self) -> bool {
+                <$t>::is_finite(*self)
+            }
+        }
+
+        impl Sqrt for $t {
+            fn sqrt(&self) -> Self {
+                <$t>::sqrt(*self)
+            }
+        }
+
+        impl Real for $t {
+            fn exp(&self) -> Self {
+                <$t>::exp(*self)
+            }
+            fn ln(&self) -> Self {
+                <$t>::ln(*self)
+            }
+            fn sin(&self) -> Self {
+                <$t>::sin(*self)
+            }
+            fn cos(&self) -> Self {
+                <$t>::cos(*self)
+            }
+        }
+    };
+}
+
+impl_float!(f64);
+impl_float!(f32);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ratios_round_correctly() {
+        assert_eq!(f64::from_ratio(1, 3), 1.0 / 3.0);
+        assert_eq!(f32::from_ratio(-7, 2), -3.5);
+        assert_eq!(f64::from_ratio(i64::MAX, 1), i64::MAX as f64);
+    }
+
+    #[test]
+    fn nan_is_not_ordered() {
+        assert_eq!(f64::NAN.certain_cmp(&0.0), None);
+        assert!(!Scalar::is_finite(&f64::INFINITY));
+    }
+}

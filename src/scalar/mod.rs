@@ -1,0 +1,167 @@
+//! The scalar layer: one generic core, many number types (DESIGN.md, "The spine").
+//!
+//! Traits are layered like simba/nalgebra, each layer as small as it can be:
+//!
+//! | trait | adds | implemented for |
+//! |---|---|---|
+//! | [`Scalar`] | field operations (by value and by reference), exact construction from integer ratios, lossy [`Scalar::to_f64`], *certain* comparison | `f64`, `f32`, [`BigRational`], [`Interval`], [`Dual<S>`] |
+//! | [`Sqrt`] | `sqrt` | `f64`, `f32`, [`Interval`], `Dual<S: Sqrt>` |
+//! | [`Real`] | `exp`, `ln`, `sin`, `cos` | `f64`, `f32`, `Dual<S: Real>`, and [`Interval`] with the `mpfr` feature |
+//!
+//! Rationals are not [`Sqrt`]: a square root of a rational is rarely rational, and the kit never
+//! rounds an exact computation silently.
+//!
+//! Comparison is tri-state ([`Scalar::certain_cmp`]): an interval that straddles a threshold cannot be
+//! ordered, and generic code that branches on such a comparison returns [`Undecidable`] instead of
+//! guessing (STYLE.md 3).
+
+mod dual;
+mod float;
+mod interval;
+mod rational;
+mod report;
+
+pub use dual::Dual;
+pub use inari::Interval;
+pub use interval::{enclose_rational, interval_contains_rational};
+pub use num_rational::BigRational;
+pub use rational::{ParseExactError, parse_exact, parse_exact_list};
+pub use report::JsonScalar;
+
+use std::cmp::Ordering;
+use std::fmt::Debug;
+use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// A number type the generic core can compute with: an (approximate, exact or enclosing) field.
+///
+/// Laws hold exactly for [`BigRational`], up to rounding for floats, and as *enclosures* for
+/// [`Interval`] (the result contains every exact result for points in the operands).
+pub trait Scalar:
+    Clone
+    + PartialEq
+    + Debug
+    + Send
+    + Sync
+    + 'static
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+    + for<'a> Add<&'a Self, Output = Self>
+    + for<'a> Sub<&'a Self, Output = Self>
+    + for<'a> Mul<&'a Self, Output = Self>
+    + for<'a> Div<&'a Self, Output = Self>
+    + AddAssign
+    + SubAssign
+    + MulAssign
+    + DivAssign
+    + for<'a> AddAssign<&'a Self>
+    + for<'a> SubAssign<&'a Self>
+    + for<'a> MulAssign<&'a Self>
+    + for<'a> DivAssign<&'a Self>
+{
+    /// The additive identity.
+    fn zero() -> Self;
+    /// The multiplicative identity.
+    fn one() -> Self;
+    /// `num / den`: exact for rationals, an enclosure for intervals, correctly rounded for `f64`
+    /// (and `f64`-then-`f32` rounded for `f32`).
+    ///
+    /// # Panics
+    /// If `den == 0` (a programming error: callers construct constants).
+    fn from_ratio(num: i64, den: i64) -> Self;
+    /// A rational number, with the same guarantees as [`Scalar::from_ratio`].
+    fn from_rational(q: &BigRational) -> Self;
+    /// The lossy conversion used for reporting (midpoint for intervals, value part for duals).
+    fn to_f64(&self) -> f64;
+    /// Comparison that is only answered when it is certain: `None` for an interval that overlaps
+    /// the other operand (unless both are the same point) and for NaN.
+    fn certain_cmp(&self, other: &Self) -> Option<Ordering>;
+    /// `false` for NaN/±∞ floats and for unbounded or empty intervals: a result that must not be
+    /// reported as a number.
+    fn is_finite(&self) -> bool;
+
+    /// An integer, exactly where the type can hold it.
+    fn from_i64(n: i64) -> Self {
+        Self::from_ratio(n, 1)
+    }
+    /// `self * self`.
+    fn square(&self) -> Self {
+        self.clone() * self
+    }
+    /// Certainly `self > 0`.
+    fn is_certainly_positive(&self) -> bool {
+        self.certain_cmp(&Self::zero()) == Some(Ordering::Greater)
+    }
+    /// Certainly `self ≥ 0`.
+    fn is_certainly_nonnegative(&self) -> bool {
+        matches!(
+            self.certain_cmp(&Self::zero()),
+            Some(Ordering::Greater | Ordering::Equal)
+        )
+    }
+    /// Certainly `self = 0` (for intervals: the degenerate interval [0, 0]).
+    fn is_certainly_zero(&self) -> bool {
+        self.certain_cmp(&Self::zero()) == Some(Ordering::Equal)
+    }
+}
+
+/// A [`Scalar`] with a square root (enclosing for intervals).
+pub trait Sqrt: Scalar {
+    /// The principal square root.
+    fn sqrt(&self) -> Self;
+}
+
+/// A [`Scalar`] with the elementary functions the environments and the smooth policies need.
+pub trait Real: Sqrt {
+    /// `eˣ`.
+    fn exp(&self) -> Self;
+    /// Natural logarithm.
+    fn ln(&self) -> Self;
+    /// Sine (radians).
+    fn sin(&self) -> Self;
+    /// Cosine (radians).
+    fn cos(&self) -> Self;
+}
+
+/// A comparison that generic code needed to branch on could not be decided (an interval straddles
+/// the threshold). Carries what was being decided.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("undecidable comparison in {what}: the interval enclosure straddles the threshold")]
+pub struct Undecidable {
+    /// What the comparison decided.
+    pub what: &'static str,
+}
+
+/// `a < b`, certainly true, certainly false, or undecidable.
+///
+/// # Errors
+/// [`Undecidable`] when [`Scalar::certain_cmp`] cannot order the operands.
+pub fn certainly_less<S: Scalar>(a: &S, b: &S, what: &'static str) -> Result<bool, Undecidable> {
+    match a.certain_cmp(b) {
+        Some(o) => Ok(o == Ordering::Less),
+        None => Err(Undecidable { what }),
+    }
+}
+
+/// Sum of a sequence of scalars (zero when empty).
+pub fn sum<'a, S: Scalar>(xs: impl IntoIterator<Item = &'a S>) -> S {
+    xs.into_iter().fold(S::zero(), |acc, x| acc + x)
+}
+
+/// Dot product `Σ xᵢ yᵢ` of two equally long slices.
+///
+/// # Panics
+/// If the lengths differ.
+pub fn dot<S: Scalar>(x: &[S], y: &[S]) -> S {
+    assert_eq!(x.len(), y.len(), "dot: length mismatch");
+    x.iter()
+        .zip(y)
+        .fold(S::zero(), |acc, (a, b)| acc + a.clone() * b)
+}
+
+/// Squared Euclidean norm `Σ xᵢ²`.
+pub fn norm_sq<S: Scalar>(x: &[S]) -> S {
+    x.iter().fold(S::zero(), |acc, a| acc + a.square())
+}
