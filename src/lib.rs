@@ -8,4 +8,5 @@
 //! exact rationals, interval arithmetic, and dual numbers over any of them.
 #![warn(missing_docs)]
 
+pub mod problem;
 pub mod scalar;
