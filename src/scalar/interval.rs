@@ -63,6 +63,12 @@ impl Scalar for Interval {
     }
     fn from_ratio(num: i64, den: i64) -> Self {
         assert!(den != 0, "from_ratio: zero denominator");
+        const EXACT: u64 = 1 << 53;
+        if num.unsigned_abs() <= EXACT && den.unsigned_abs() <= EXACT {
+            let point = |x: i64| Interval::try_from((x as f64, x as f64)).expect("exact point");
+            // Outward-rounded division of exact points encloses num/den.
+            return point(num) / point(den);
+        }
         enclose_rational(&BigRational::new(num.into(), den.into()))
     }
     fn from_rational(q: &BigRational) -> Self {
