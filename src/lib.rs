@@ -13,4 +13,5 @@
 pub mod exact;
 pub mod problem;
 pub mod scalar;
+pub mod tolerance;
 pub mod toy;
