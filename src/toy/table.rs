@@ -53,6 +53,11 @@ impl<S: Scalar> PolicyTable<S> {
         for o in 0..spec.group_count() {
             let th = &theta[o * block..(o + 1) * block];
             let p = spec.group_probs(th, c)?;
+            if !p.iter().all(Scalar::is_finite) {
+                return Err(OracleError::NonFinite(
+                    "π_θ(a|s) (the arithmetic overflowed at this θ)",
+                ));
+            }
             let j = spec.group_jacobian(th, c, &p);
             let mut sc = Vec::with_capacity(p.len());
             for (pa, ja) in p.iter().zip(&j) {
