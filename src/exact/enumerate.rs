@@ -2,7 +2,7 @@
 //!
 //! `p(τ̄; θ) = μ(s_1) Π_{t=1}^{T−2} π_θ(a_t|s_t) P(s_{t+1}|s_t, a_t)`; zero-probability branches are
 //! dropped. For every prefix the engine evaluates the oracle's own estimator code
-//! ([`crate::toy::estimator`]), so E[g] = ∇F checks the oracle itself.
+//! ([`crate::toy::estimator`]), so E\[g\] = ∇F checks the oracle itself.
 
 use super::{ExactError, MAX_PREFIXES};
 use crate::scalar::{Dual, Scalar, norm_sq};
@@ -34,9 +34,9 @@ pub struct Prefix<S> {
 pub struct Enumeration<S> {
     /// F(θ) = Σ p L.
     pub objective: S,
-    /// E[g] = Σ p g.
+    /// E\[g\] = Σ p g.
     pub expected_estimate: Vec<S>,
-    /// E[g_full] = Σ p g_full.
+    /// E\[g_full\] = Σ p g_full.
     pub expected_full: Vec<S>,
     /// E‖g‖² = Σ p ‖g‖².
     pub second_moment: S,
@@ -152,7 +152,7 @@ pub fn prefixes<S: Scalar>(
     Ok(out)
 }
 
-/// (X1) F, E[g], E[g_full], E‖g‖², Var at θ.
+/// (X1) F, E\[g\], E\[g_full\], E‖g‖², Var at θ.
 ///
 /// # Errors
 /// As [`prefixes`].
@@ -188,7 +188,7 @@ pub fn moments<S: Scalar>(
     })
 }
 
-/// (X1, independent route) `∇F = Σ_τ̄ ∇[p(τ̄; θ) L(τ̄; θ)]`, evaluated in `Dual<S>` over the same
+/// (X1, independent route) `∇F = Σ_τ̄ ∇\[p(τ̄; θ) L(τ̄; θ)\]`, evaluated in `Dual<S>` over the same
 /// enumeration. It uses only π_θ and l in dual arithmetic — no score formula, no analytic Jacobian.
 /// Returns (F, ∇F).
 ///

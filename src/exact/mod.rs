@@ -3,12 +3,12 @@
 //!
 //! | route | module | computes |
 //! |---|---|---|
-//! | X1 enumeration of prefixes | [`enumerate`] | F, E[g], E[g_full], E‖g‖², and ∇F = Σ ∇[p·L] by dual numbers (no score formula) |
+//! | X1 enumeration of prefixes | [`enumerate`] | F, E\[g\], E\[g_full\], E‖g‖², and ∇F = Σ ∇\[p·L\] by dual numbers (no score formula) |
 //! | X2 forward DP | [`forward`] | F, ∇F from differentiated state distributions, and d_t |
 //! | X3 backward DP | [`backward`] | F, ∇F in the adjoint (performative policy-gradient) form |
 //! | importance sampling | [`importance`] | Σ p(τ̄;θ′) w g(θ, τ̄) (identity I3) and the bias b(θ, θ′) (I4) |
 //!
-//! The identities (I1) F_X1 = F_X2 = F_X3 and (I2) ∇F_X2 = ∇F_X3 = ∇F_enum = E[g] = E[g_full] are
+//! The identities (I1) F_X1 = F_X2 = F_X3 and (I2) ∇F_X2 = ∇F_X3 = ∇F_enum = E\[g\] = E\[g_full\] are
 //! the thesis's unbiasedness claim (eqs. 3.16/3.18) proved exactly.
 
 pub mod backward;
