@@ -144,7 +144,14 @@ mod tests {
     fn negative_theta_in_both_forms() {
         for argv in [
             ["x", "eval", "--mdp", "m.json", "--theta", "-1/2,3"],
-            ["x", "eval", "--mdp", "m.json", "--theta=-1/2,3", "--scalar=exact"],
+            [
+                "x",
+                "eval",
+                "--mdp",
+                "m.json",
+                "--theta=-1/2,3",
+                "--scalar=exact",
+            ],
         ] {
             let w = Wrapper::try_parse_from(argv.iter().filter(|a| !a.is_empty())).unwrap();
             let ToyCommand::Eval(a) = w.cmd;
