@@ -92,9 +92,9 @@ fn check(name: &str, theta: &[&str], seed: u64) {
     for n in [100usize, 1_000, 10_000] {
         // (1) one run, rigorous envelope per coordinate.
         let m = sample_mean(&p, &theta, n, &mut rng);
-        for j in 0..m.len() {
+        for (j, mj) in m.iter().enumerate() {
             let eps = bernstein(n as f64, ex.var[j], ex.range[j], 1e-6);
-            let err = (m[j] - ex.mean[j]).abs();
+            let err = (mj - ex.mean[j]).abs();
             assert!(
                 err <= eps,
                 "{name} N={n} coord {j}: |error| {err} > Bernstein radius {eps}"
