@@ -93,6 +93,10 @@ impl Scalar for Interval {
     fn is_finite(&self) -> bool {
         !self.is_empty() && self.inf().is_finite() && self.sup().is_finite()
     }
+    /// inari's `sqr`: the tight enclosure of {x² : x ∈ X} (x·x would give [−1, 1]·[−1, 1] = [−1, 1]).
+    fn square(&self) -> Self {
+        self.sqr()
+    }
 }
 
 impl Sqrt for Interval {
@@ -146,5 +150,11 @@ mod tests {
         assert_eq!(Interval::zero().certain_cmp(&b), Some(Ordering::Less));
         assert_eq!(b.certain_cmp(&b), Some(Ordering::Equal));
         assert!(!Scalar::is_finite(&(b / Interval::zero())));
+    }
+
+    #[test]
+    fn squares_are_tight() {
+        let x = Interval::try_from((-2.0, 3.0)).unwrap();
+        assert_eq!(x.square(), Interval::try_from((0.0, 9.0)).unwrap());
     }
 }
