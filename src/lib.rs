@@ -8,5 +8,10 @@
 //! exact rationals, interval arithmetic, and dual numbers over any of them.
 #![warn(missing_docs)]
 
+/// Command-line front ends (the `ilopt` binary's subcommands).
+pub mod cli;
+pub mod env;
+/// Experts that label states (thesis ch. 4): the CartPole LQR controller.
+pub mod expert;
 pub mod problem;
 pub mod scalar;
