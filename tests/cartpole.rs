@@ -92,6 +92,56 @@ fn matches_gymnasium_bit_for_bit() {
     assert!(terminating_cases >= 10 && terminating_cases < cases.len());
 }
 
+/// `ilopt replay cartpole` on every reference case: same states, same flags, and the printed JSON
+/// numbers read back to the same float64.
+#[test]
+fn replay_command_matches_gymnasium() {
+    use ilopt::cli::replay::{ReplayCartpoleArgs, run};
+    let r = reference();
+    for case in r["cases"].as_array().unwrap() {
+        let name = case["name"].as_str().unwrap();
+        let init = case["init"].as_array().unwrap();
+        let init: Vec<&str> = init.iter().map(|v| v.as_str().unwrap()).collect();
+        let actions: Vec<String> = case["actions"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.to_string())
+            .collect();
+        let init_arg = init.join(",");
+        let actions_arg = actions.join(",");
+        let args = <ReplayCartpoleArgs as clap::Parser>::try_parse_from([
+            "cartpole",
+            "--init",
+            init_arg.as_str(),
+            "--actions",
+            actions_arg.as_str(),
+        ])
+        .unwrap();
+        let out = run(&args).unwrap();
+        // What the binary prints, read back with a correctly rounded parser.
+        let printed = serde_json::to_string(&out).unwrap();
+        let reread: Value = serde_json::from_str(&printed).unwrap();
+        assert_eq!(reread["terminated"], case["terminated"], "{name}");
+        let got = out["states"].as_array().unwrap();
+        let want = case["states"].as_array().unwrap();
+        assert_eq!(got.len(), want.len());
+        for (t, (g, w)) in got.iter().zip(want).enumerate() {
+            let w = state(w);
+            for i in 0..4 {
+                let x = g[i].as_f64().unwrap();
+                assert_eq!(x.to_bits(), w[i].to_bits(), "{name}, step {}", t + 1);
+                let text = serde_json::to_string(&g[i]).unwrap();
+                assert_eq!(
+                    text.parse::<f64>().unwrap().to_bits(),
+                    x.to_bits(),
+                    "{text}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn the_free_function_is_the_dynamics() {
     let s = [0.01, -0.02, 0.03, -0.04];
@@ -287,6 +337,7 @@ mod intervals {
         }
         let width = x.iter().map(|v| v.wid()).fold(0.0, f64::max);
         eprintln!("LQR run: max width after 200 steps {width:e}");
+        // A loose regression guard: the enclosure must stay useful (far below the state's scale).
         assert!(width < 1e-6, "width {width:e}");
     }
 
@@ -300,7 +351,7 @@ mod intervals {
         // Certainly beyond on one side is decided even when the other test is not.
         let theta_out = point(0.3);
         let s = [around, Interval::zero(), theta_out, Interval::zero()];
-        assert_eq!(iv.step(&s, 1).unwrap().1, true);
+        assert!(iv.step(&s, 1).unwrap().1);
         // And the environment ends the episode on the error.
         let mut env = CartPole::<Interval>::new();
         env.reset_to([around, Interval::zero(), Interval::zero(), Interval::zero()]);
