@@ -7,7 +7,8 @@ Usage:  pip install gymnasium numpy && python3 scripts/cartpole_reference.py [OU
 For each case, Gymnasium's own `CartPoleEnv` (through `gym.make("CartPole-v1").unwrapped`, so that
 neither the time limit nor the order checks interfere) is put in a chosen float64 initial state by
 assigning `env.unwrapped.state`, then stepped with a fixed action sequence of 200 actions. After each
-step the float64 state `env.unwrapped.state` and the `terminated` flag are recorded. Stepping goes on
+step the float64 state `env.unwrapped.state` and the `terminated` flag are recorded (and, for the first
+10 steps, the float32 observation that `step` returns). Stepping goes on
 after termination (Gymnasium only warns), so the dynamics are compared there too.
 
 Cases (all seeded, so the file is reproducible):
@@ -32,6 +33,7 @@ import gymnasium as gym
 import numpy as np
 
 STEPS = 200
+OBSERVED_STEPS = 10  # Gymnasium's float32 observations are recorded for the first steps only
 
 
 def f(x):
@@ -58,14 +60,16 @@ def balancing_actions(env, init, rng, steps):
 def run_case(env, init, actions):
     env.unwrapped.state = np.array(init, dtype=np.float64)
     env.unwrapped.steps_beyond_terminated = None
-    states, terminated = [], []
-    for a in actions:
-        _, _, term, _, _ = env.unwrapped.step(a)
+    states, terminated, observations = [], [], []
+    for t, a in enumerate(actions):
+        obs, _, term, _, _ = env.unwrapped.step(a)
         s = env.unwrapped.state
-        assert s.dtype == np.float64
+        assert s.dtype == np.float64 and obs.dtype == np.float32
         states.append([f(v) for v in s])
         terminated.append(bool(term))
-    return states, terminated
+        if t < OBSERVED_STEPS:
+            observations.append([f(v) for v in obs])
+    return states, terminated, observations
 
 
 def main():
@@ -80,7 +84,7 @@ def main():
     cases = []
 
     def add(name, init, actions):
-        states, terminated = run_case(env, init, actions)
+        states, terminated, observations = run_case(env, init, actions)
         cases.append(
             {
                 "name": name,
@@ -88,6 +92,7 @@ def main():
                 "actions": [int(a) for a in actions],
                 "states": states,
                 "terminated": terminated,
+                "observations_float32": observations,
             }
         )
 

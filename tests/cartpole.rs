@@ -6,8 +6,8 @@
 //! comparison is bit-for-bit.
 
 use ilopt::env::cartpole::{
-    CartPole, CartPoleDynamics, MAX_EPISODE_STEPS, cartpole_step, sample_reset_state,
-    theta_threshold_rational, x_threshold_rational,
+    CartPole, CartPoleDynamics, MAX_EPISODE_STEPS, cartpole_step, gymnasium_observation,
+    sample_reset_state, theta_threshold_rational, x_threshold_rational,
 };
 use ilopt::env::{Env, EnvError};
 use ilopt::expert::lqr::LqrExpert;
@@ -142,6 +142,57 @@ fn replay_command_matches_gymnasium() {
     }
 }
 
+/// Gymnasium's float32 observation is the float64 state cast to float32.
+#[test]
+fn observation_cast_matches_gymnasium() {
+    let r = reference();
+    let mut compared = 0;
+    for case in r["cases"].as_array().unwrap() {
+        let states = case["states"].as_array().unwrap();
+        for (t, obs) in case["observations_float32"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .enumerate()
+        {
+            let want = state(obs);
+            let got = gymnasium_observation(&state(&states[t]));
+            for i in 0..4 {
+                assert_eq!(f64::from(got[i]).to_bits(), want[i].to_bits());
+            }
+            compared += 1;
+        }
+    }
+    assert!(compared >= 200);
+}
+
+/// The generic code instantiated with dual numbers computes the same values, bit for bit (the value
+/// part of each dual operation is the float operation), with derivatives alongside.
+#[test]
+fn dual_run_has_gymnasiums_values() {
+    use ilopt::scalar::Dual;
+    let r = reference();
+    let dynamics = CartPoleDynamics::<Dual<f64>>::new();
+    for case in r["cases"].as_array().unwrap().iter().take(6) {
+        let init = state(&case["init"]);
+        let mut s: [Dual<f64>; 4] = std::array::from_fn(|i| Dual::variable(init[i], i, 4));
+        let states = case["states"].as_array().unwrap();
+        for (t, a) in case["actions"].as_array().unwrap().iter().enumerate() {
+            let (next, _) = dynamics.step(&s, a.as_u64().unwrap() as usize).unwrap();
+            let want = state(&states[t]);
+            for i in 0..4 {
+                assert_eq!(
+                    next[i].value().to_bits(),
+                    want[i].to_bits(),
+                    "step {}",
+                    t + 1
+                );
+            }
+            s = next;
+        }
+    }
+}
+
 #[test]
 fn the_free_function_is_the_dynamics() {
     let s = [0.01, -0.02, 0.03, -0.04];
@@ -157,8 +208,7 @@ fn the_free_function_is_the_dynamics() {
     ));
 }
 
-/// Pushing right from the centre for long enough leaves the track on the right (or drops the pole):
-/// balance never lasts 500 steps this way, so the truncation test below uses the LQR expert.
+/// A full-length episode needs a controller: the LQR expert keeps the pole up for 500 steps.
 #[test]
 fn truncation_at_500_steps_and_reward_one_per_step() {
     let expert = LqrExpert::cartpole().unwrap();
