@@ -35,9 +35,11 @@
 //! …) and exact sine and cosine, and (b) the `f64` run from the same (float) initial state: every
 //! interval operation returns `[RD(lo), RU(hi)]` of the exact range, which contains the
 //! round-to-nearest result of the same operation on contained floats, and every `f64` constant is
-//! the rounding of the exact one; for `sin`/`cos` (b) relies on the platform's libm being faithfully
-//! rounded (glibc: error below 1 ulp). A termination test an interval cannot decide is
-//! [`EnvError::Undecidable`].
+//! the rounding of the exact one. For `sin`/`cos`, (b) also needs the libm that `f64` calls (glibc,
+//! which numpy calls too) to be faithfully rounded; glibc documents errors of at most 1 ulp, and the
+//! enclosure test in `tests/cartpole.rs` found the `f64` run inside on every step it checks (2 400
+//! steps of 24 trajectories; widths about 1e-11 after 100 steps, 2e-8 after 200 balanced steps).
+//! A termination test an interval cannot decide is [`EnvError::Undecidable`].
 //!
 //! # Differences from Gymnasium
 //! * The observation is the full-precision state `[S; 4]`; Gymnasium returns it cast to float32
