@@ -10,8 +10,12 @@
 // Index loops over states and actions mirror the equations they implement (math.md §1.4).
 #![allow(clippy::needless_range_loop)]
 
+/// Command-line front ends (the `ilopt` binary's subcommands).
 pub mod cli;
+pub mod env;
 pub mod exact;
+/// Experts that label states (thesis ch. 4): the CartPole LQR controller.
+pub mod expert;
 pub mod problem;
 pub mod scalar;
 pub mod tolerance;
