@@ -8,5 +8,11 @@
 //! exact rationals, interval arithmetic, and dual numbers over any of them.
 #![warn(missing_docs)]
 
+/// Command-line entry points (`ilopt expert vo`, …).
+pub mod cli;
+/// Environments (the obstacle-avoidance task of thesis §4.1.1, …).
+pub mod env;
+/// Experts that label states (the velocity-obstacle expert of thesis eq. 4.1, …).
+pub mod expert;
 pub mod problem;
 pub mod scalar;
