@@ -80,7 +80,7 @@
 //!
 //! # Reference
 //! Thesis §4.1.2, eq. 4.1 (the thesis solves it with MATLAB's `fmincon`, a local method); the
-//! velocity-obstacle formulation follows its reference [41].
+//! velocity-obstacle formulation follows its reference \[41\].
 
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
