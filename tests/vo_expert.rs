@@ -182,6 +182,21 @@ fn never_beaten_by_a_fine_grid() {
 }
 
 #[test]
+#[ignore = "slow (≈ 1 min in release): 401×401 grid on 5000 cases per cone; run with --release --ignored"]
+fn never_beaten_by_a_fine_grid_on_many_cases() {
+    for cone in [Cone::Double, Cone::Forward] {
+        let (active, gap) = grid_check(cone, 5000, 401, 13);
+        println!(
+            "{cone:?}: 401×401 grid, {active}/5000 active, worst (best grid − J*)/(1+J*) = {gap:.3e}"
+        );
+        assert!(
+            active >= 1500,
+            "too few active cases to test anything: {active}"
+        );
+    }
+}
+
+#[test]
 fn never_beaten_by_a_coarse_grid_on_many_cases() {
     for cone in [Cone::Double, Cone::Forward] {
         let (active, gap) = grid_check(cone, 4000, 61, 12);
