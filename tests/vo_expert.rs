@@ -8,9 +8,10 @@
 //! objective values are compared with a relative `1e-12` (a handful of roundings in a quadratic).
 
 use ilopt::expert::vo::{
-    Cone, VoError, VoSolution, constraint, objective, vo_expert, vo_expert_cone,
+    Cone, VoError, VoSolution, constraint, objective, vo_expert, vo_expert_cone, vo_expert_generic,
 };
 use ilopt::problem::KitRng;
+use ilopt::scalar::{Dual, Interval};
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
 
@@ -448,4 +449,115 @@ fn hand_computed_head_on() {
     )
     .unwrap();
     assert_eq!(f.u, s.u);
+}
+
+/// The generic closed form, instantiated at `f64`, is bit-identical to the `f64` one.
+#[test]
+fn generic_f64_is_bit_identical() {
+    let mut rng = KitRng::seed_from_u64(41);
+    for k in 0..20_000 {
+        let c = random_case(&mut rng);
+        for cone in [Cone::Double, Cone::Forward] {
+            let s = c.solve(cone).unwrap();
+            let g =
+                vo_expert_generic(cone, &c.r, &c.v_o, &c.v_r, &c.v_des, &c.lam, &c.big_r).unwrap();
+            assert_eq!(
+                (g.u, g.j, g.active),
+                (s.u, s.j, s.active),
+                "case {k} {cone:?}"
+            );
+        }
+    }
+    // Errors agree too.
+    let z = [0.0; 2];
+    assert_eq!(
+        vo_expert_generic(Cone::Double, &[1.0, 0.0], &z, &z, &z, &-1.0, &0.5),
+        Err(VoError::NegativeLambda(-1.0))
+    );
+}
+
+/// Rigorous accuracy of the `f64` closed form: with point-interval inputs the generic solver
+/// encloses the exact minimiser (of the exact problem with the `f64` inputs); the distance from the
+/// `f64` answer to that enclosure plus the enclosure's width bounds the `f64` error. Most cases
+/// must be decidable, and the `f64` error must be at the level of rounding (≤ 1e-9 relative to the
+/// inputs' scale; a bound, not a measurement, since the enclosure may be wide near α → 90°).
+#[test]
+fn f64_answer_lies_in_the_interval_enclosure() {
+    let point = |x: f64| Interval::try_from((x, x)).unwrap();
+    let pv = |v: [f64; 2]| [point(v[0]), point(v[1])];
+    let mut rng = KitRng::seed_from_u64(51);
+    let (mut decided, mut worst): (usize, f64) = (0, 0.0);
+    let cases = 20_000;
+    for k in 0..cases {
+        let c = random_case(&mut rng);
+        let s = c.solve(Cone::Double).unwrap();
+        let Ok(g) = vo_expert_generic(
+            Cone::Double,
+            &pv(c.r),
+            &pv(c.v_o),
+            &pv(c.v_r),
+            &pv(c.v_des),
+            &point(c.lam),
+            &point(c.big_r),
+        ) else {
+            continue;
+        };
+        decided += 1;
+        assert_eq!(g.active, s.active, "case {k}");
+        let scale = 1.0
+            + c.v_o[0].hypot(c.v_o[1])
+            + c.v_r[0].hypot(c.v_r[1])
+            + c.v_des[0].hypot(c.v_des[1]);
+        for (x, e) in s.u.iter().zip(&g.u) {
+            let outside = (e.inf() - x).max(x - e.sup()).max(0.0);
+            let bound = (outside + e.wid()) / scale;
+            worst = worst.max(bound);
+            assert!(
+                bound <= 1e-9,
+                "case {k}: f64 u* {x} vs enclosure {e:?} ({c:?})"
+            );
+        }
+    }
+    println!(
+        "interval enclosure: {decided}/{cases} decided, worst rigorous f64 error bound / scale = {worst:.3e}"
+    );
+    assert!(
+        decided * 10 >= cases * 9,
+        "only {decided}/{cases} decidable"
+    );
+}
+
+/// Dual numbers through the generic solver give `∂J*/∂v_des`, which by the envelope theorem (the
+/// constraint does not involve `v_des`) equals `∂J/∂v_des` at fixed `u*`: `2(v_des − v_r − u*)`.
+#[test]
+fn dual_gradient_matches_the_envelope_theorem() {
+    let mut rng = KitRng::seed_from_u64(61);
+    let cst = |v: [f64; 2]| [Dual::constant(v[0]), Dual::constant(v[1])];
+    for k in 0..2000 {
+        let c = random_case(&mut rng);
+        let v_des = [
+            Dual::variable(c.v_des[0], 0, 2),
+            Dual::variable(c.v_des[1], 1, 2),
+        ];
+        let g = vo_expert_generic(
+            Cone::Double,
+            &cst(c.r),
+            &cst(c.v_o),
+            &cst(c.v_r),
+            &v_des,
+            &Dual::constant(c.lam),
+            &Dual::constant(c.big_r),
+        )
+        .unwrap();
+        let u = [*g.u[0].value(), *g.u[1].value()];
+        let grad = g.j.gradient_padded(2);
+        for i in 0..2 {
+            let expect = 2.0 * (c.v_des[i] - c.v_r[i] - u[i]);
+            assert!(
+                (grad[i] - expect).abs() <= 1e-9 * (1.0 + expect.abs()),
+                "case {k}: ∂J*/∂v_des[{i}] = {} vs envelope {expect} ({c:?})",
+                grad[i]
+            );
+        }
+    }
 }

@@ -82,7 +82,9 @@
 //! Thesis §4.1.2, eq. 4.1 (the thesis solves it with MATLAB's `fmincon`, a local method); the
 //! velocity-obstacle formulation follows its reference \[41\].
 
+use crate::scalar::{Scalar, Sqrt, Undecidable};
 use serde::{Deserialize, Serialize};
+use std::cmp::Ordering;
 use thiserror::Error;
 
 /// Which collision cone the constraint excludes (see the module docs).
@@ -137,6 +139,9 @@ pub enum VoError {
     /// An intermediate result overflowed (inputs too large, ≳ 1e150).
     #[error("numerical overflow: inputs too large")]
     Overflow,
+    /// [`vo_expert_generic`] could not decide a branch (an interval straddles its threshold).
+    #[error(transparent)]
+    Undecidable(#[from] Undecidable),
 }
 
 #[inline]
@@ -267,6 +272,152 @@ pub fn vo_expert_cone(
         return Err(VoError::Overflow);
     }
     Ok(VoSolution { u, j, active })
+}
+
+/// The global minimiser of eq. 4.1 in a generic scalar type (see [`vo_expert_generic`]).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub struct VoSolutionOf<S> {
+    /// The optimal change of velocity `u*`.
+    pub u: [S; 2],
+    /// `J(u*)`.
+    pub j: S,
+    /// Whether the collision constraint is active.
+    pub active: bool,
+}
+
+fn dot_g<S: Sqrt>(a: &[S; 2], b: &[S; 2]) -> S {
+    a[0].clone() * &b[0] + a[1].clone() * &b[1]
+}
+
+fn cmp_g<S: Scalar>(a: &S, b: &S, what: &'static str) -> Result<Ordering, VoError> {
+    a.certain_cmp(b)
+        .ok_or(VoError::Undecidable(Undecidable { what }))
+}
+
+/// [`vo_expert_cone`] generic over the scalar type (any [`Sqrt`] scalar: `f64`, `f32`,
+/// [`crate::scalar::Interval`], [`crate::scalar::Dual`]): the same closed form, operation for
+/// operation (for `f64` the result is bit-identical to [`vo_expert_cone`]).
+///
+/// With intervals the result *encloses* the exact minimiser for every point input in the argument
+/// intervals, provided every branch was decided; with duals it carries the derivatives of `u*` and
+/// `J*` with respect to the inputs (valid where the branch does not change).
+///
+/// # Errors
+/// As [`vo_expert_cone`], plus [`VoError::Undecidable`] when a branch (sign of λ or R, inside the
+/// obstacle, inside the cone, which boundary line is nearer, ray clamp) cannot be decided — e.g. an
+/// interval input for which both boundary lines are equally near (an obstacle exactly dead ahead).
+/// Error payloads that are numbers are reported through [`Scalar::to_f64`].
+#[allow(clippy::too_many_arguments)]
+pub fn vo_expert_generic<S: Sqrt>(
+    cone: Cone,
+    r: &[S; 2],
+    v_o: &[S; 2],
+    v_r: &[S; 2],
+    v_des: &[S; 2],
+    lam: &S,
+    big_r: &S,
+) -> Result<VoSolutionOf<S>, VoError> {
+    let fin = |x: &[S], name: &'static str| {
+        if x.iter().all(Scalar::is_finite) {
+            Ok(())
+        } else {
+            Err(VoError::NonFinite { name })
+        }
+    };
+    fin(r, "r")?;
+    fin(v_o, "v_o")?;
+    fin(v_r, "v_r")?;
+    fin(v_des, "v_des")?;
+    fin(std::slice::from_ref(lam), "lam")?;
+    fin(std::slice::from_ref(big_r), "R")?;
+    let zero = S::zero();
+    if cmp_g(lam, &zero, "sign of λ")? == Ordering::Less {
+        return Err(VoError::NegativeLambda(lam.to_f64()));
+    }
+    if cmp_g(big_r, &zero, "sign of R")? != Ordering::Greater {
+        return Err(VoError::NonPositiveRadius(big_r.to_f64()));
+    }
+    let rr = dot_g(r, r);
+    let big_r2 = big_r.clone() * big_r;
+    if !rr.is_finite() || !big_r2.is_finite() {
+        return Err(VoError::Overflow);
+    }
+    if cmp_g(&rr, &big_r2, "‖r‖ vs R")? != Ordering::Greater {
+        return Err(VoError::InsideObstacle {
+            distance: rr.sqrt().to_f64(),
+            radius: big_r.to_f64(),
+        });
+    }
+    let inv = S::one() / (S::one() + lam);
+    let u0 = [
+        (v_des[0].clone() - &v_r[0]) * &inv,
+        (v_des[1].clone() - &v_r[1]) * &inv,
+    ];
+    let w = [
+        v_r[0].clone() + &u0[0] - &v_o[0],
+        v_r[1].clone() + &u0[1] - &v_o[1],
+    ];
+    let rw = dot_g(r, &w);
+    let k2 = rr.clone() - &big_r2;
+    let (lhs, rhs) = (rw.clone() * &rw, k2.clone() * dot_g(&w, &w));
+    if !(lhs.is_finite() && rhs.is_finite()) {
+        return Err(VoError::Overflow);
+    }
+    let in_double = cmp_g(&lhs, &rhs, "inside the collision cone")? == Ordering::Greater;
+    let inside = match cone {
+        Cone::Double => in_double,
+        Cone::Forward => {
+            in_double && cmp_g(&rw, &zero, "approaching the obstacle")? == Ordering::Greater
+        }
+    };
+    let (u, active) = if inside {
+        let k = k2.sqrt();
+        let d_plus = [
+            (k.clone() * &r[0] - big_r.clone() * &r[1]) / &rr,
+            (big_r.clone() * &r[0] + k.clone() * &r[1]) / &rr,
+        ];
+        let d_minus = [
+            (k.clone() * &r[0] + big_r.clone() * &r[1]) / &rr,
+            (-(big_r.clone() * &r[0]) + k.clone() * &r[1]) / &rr,
+        ];
+        let project = |d: &[S; 2]| -> Result<(S, S), VoError> {
+            let mut t = dot_g(d, &w);
+            if cone == Cone::Forward && cmp_g(&t, &zero, "ray clamp")? == Ordering::Less {
+                t = S::zero();
+            }
+            let e = [
+                w[0].clone() - t.clone() * &d[0],
+                w[1].clone() - t.clone() * &d[1],
+            ];
+            Ok((t, dot_g(&e, &e)))
+        };
+        let (tp, ep) = project(&d_plus)?;
+        let (tm, em) = project(&d_minus)?;
+        let (t, d) = if cmp_g(&ep, &em, "nearer boundary line")? != Ordering::Greater {
+            (tp, d_plus)
+        } else {
+            (tm, d_minus)
+        };
+        (
+            [
+                v_o[0].clone() + t.clone() * &d[0] - &v_r[0],
+                v_o[1].clone() + t * &d[1] - &v_r[1],
+            ],
+            true,
+        )
+    } else {
+        (u0, false)
+    };
+    let e = [
+        v_des[0].clone() - &v_r[0] - &u[0],
+        v_des[1].clone() - &v_r[1] - &u[1],
+    ];
+    let j = dot_g(&e, &e) + lam.clone() * dot_g(&u, &u);
+    if !(u[0].is_finite() && u[1].is_finite() && j.is_finite()) {
+        return Err(VoError::Overflow);
+    }
+    Ok(VoSolutionOf { u, j, active })
 }
 
 /// The objective of eq. 4.1: `J(u) = ‖v_des − (v_r + u)‖² + λ‖u‖²`.
@@ -417,6 +568,40 @@ mod tests {
             vo_expert(ok.0, ok.1, ok.2, [1e308, 1e308], 0.0, 0.5),
             Err(VoError::Overflow)
         );
+    }
+
+    /// Intervals: the dead-ahead tie cannot be decided (both lines are equally near); a case off
+    /// the axis is decided and encloses the f64 answer's exact value.
+    #[test]
+    fn generic_intervals_tie_is_undecidable() {
+        use crate::scalar::Interval;
+        let p = |x: f64| Interval::try_from((x, x)).unwrap();
+        let z = [p(0.0), p(0.0)];
+        let tie = vo_expert_generic(
+            Cone::Double,
+            &[p(1.0), p(0.0)],
+            &z,
+            &z,
+            &[p(1.0), p(0.0)],
+            &p(0.0),
+            &p(0.5),
+        );
+        assert!(matches!(tie, Err(VoError::Undecidable(_))), "{tie:?}");
+        let off = vo_expert_generic(
+            Cone::Double,
+            &[p(1.0), p(0.1)],
+            &z,
+            &z,
+            &[p(1.0), p(0.0)],
+            &p(0.0),
+            &p(0.5),
+        )
+        .unwrap();
+        let f = vo_expert([1.0, 0.1], [0.0; 2], [0.0; 2], [1.0, 0.0], 0.0, 0.5).unwrap();
+        assert!(off.active && f.active);
+        for (e, x) in off.u.iter().zip(f.u) {
+            assert!(e.inf() - 1e-15 <= x && x <= e.sup() + 1e-15, "{e:?} vs {x}");
+        }
     }
 
     #[test]
