@@ -333,7 +333,8 @@ impl ObstacleEnv {
     }
 
     /// Starts an episode: the agent at rest at `agent_start`, the obstacle's start and per-step
-    /// displacement drawn from `rng` (module docs). Consumes exactly four uniform draws.
+    /// displacement drawn from `rng` (module docs): one uniform draw per coordinate range with
+    /// `lo < hi` (a degenerate range `lo = hi` is its value and draws nothing).
     pub fn reset(&mut self, rng: &mut KitRng) -> ObstacleObs {
         let c = &self.config;
         let draw = |rng: &mut KitRng, [lo, hi]: [f64; 2]| {

@@ -64,6 +64,9 @@
 //! counter-clockwise from `r`. The apex is never the unique optimum when `x₀ ≠ v_o`, so the
 //! convention at `v = 0` only decides the case `x₀ = v_o`, which it makes feasible (and optimal).
 //!
+//! [`vo_expert_generic`] is the same closed form over any [`Sqrt`] scalar (intervals give rigorous
+//! enclosures of `u*`, duals give its derivatives).
+//!
 //! The feasibility test multiplies through by `‖v‖²` (no division):
 //! `x₀ ∈ K ⇔ (rᵀw)² > (‖r‖² − R²)‖w‖²` with `w = x₀ − v_o` (plus `rᵀw > 0` for the forward cone).
 //!
@@ -96,7 +99,7 @@ pub enum Cone {
     #[default]
     Double,
     /// Only future collisions: `rᵀv ≥ 0` (the obstacle is not approaching) or `c(u) ≤ 0`.
-    /// Excludes the open single cone `{x : rᵀ(x − v_o) > 0, c < 0}`.
+    /// Excludes the open single cone `{x = v_r + u : rᵀ(x − v_o) > 0, c(u) > 0}`.
     Forward,
 }
 
