@@ -49,8 +49,9 @@
 //!
 //! so minimising `J` over the feasible set is the **Euclidean projection** of `x₀ = v_r + u₀` onto
 //! the closed set `F` (in `x`). If `x₀ ∈ F`, `u₀` is optimal. Otherwise `x₀` lies in the open set
-//! `K`; the nearest point of the closed complement of an open set lies on its boundary, and
-//! `∂K` is the two lines `{v_o + t d±}` (double cone) or the two rays `t ≥ 0` (forward cone), where
+//! `K`, and for any feasible `y` the segment `[x₀, y]` leaves `K` at a boundary point that is no
+//! farther from `x₀` than `y` and is itself feasible (`∂K ⊆ F`, `F` closed): the minimum over `F` is
+//! the minimum over `∂K`, and `∂K` is the two lines `{v_o + t d±}` (double cone) or the two rays `t ≥ 0` (forward cone), where
 //! `d±` is `r/‖r‖` rotated by `±α`:
 //!
 //! ```text
@@ -61,8 +62,10 @@
 //! `v_o + t± d±` with `t± = d±ᵀ(x₀ − v_o)` (for a ray, `max(t±, 0)`), and the optimum is the nearer of
 //! the two — closed form, one square root, no iteration, no allocation. Ties (when `x₀ − v_o` is
 //! exactly on the axis, e.g. an obstacle dead ahead) go to `d₊`, the boundary rotated
-//! counter-clockwise from `r`. The apex is never the unique optimum when `x₀ ≠ v_o`, so the
-//! convention at `v = 0` only decides the case `x₀ = v_o`, which it makes feasible (and optimal).
+//! counter-clockwise from `r`. The apex is never optimal when `x₀ ≠ v_o` (it would need
+//! `t₊ ≤ 0` and `t₋ ≤ 0`, i.e. `x₀ − v_o` at more than 90° from both `d₊` and `d₋`, impossible
+//! inside the cone since the angle between `d₊` and `d₋` is `2α < π`), so the convention at `v = 0`
+//! only decides the case `x₀ = v_o`, which it makes feasible (and optimal).
 //!
 //! [`vo_expert_generic`] is the same closed form over any [`Sqrt`] scalar (intervals give rigorous
 //! enclosures of `u*`, duals give its derivatives).
