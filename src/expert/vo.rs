@@ -62,10 +62,11 @@
 //! `v_o + t± d±` with `t± = d±ᵀ(x₀ − v_o)` (for a ray, `max(t±, 0)`), and the optimum is the nearer of
 //! the two — closed form, one square root, no iteration, no allocation. Ties (when `x₀ − v_o` is
 //! exactly on the axis, e.g. an obstacle dead ahead) go to `d₊`, the boundary rotated
-//! counter-clockwise from `r`. The apex is never optimal when `x₀ ≠ v_o` (it would need
-//! `t₊ ≤ 0` and `t₋ ≤ 0`, i.e. `x₀ − v_o` at more than 90° from both `d₊` and `d₋`, impossible
-//! inside the cone since the angle between `d₊` and `d₋` is `2α < π`), so the convention at `v = 0`
-//! only decides the case `x₀ = v_o`, which it makes feasible (and optimal).
+//! counter-clockwise from `r`. The apex is never optimal when `x₀ ≠ v_o`: on lines it would need
+//! `t₊ = t₋ = 0`, i.e. `x₀ − v_o ⊥ d₊, d₋`, impossible as `d₊, d₋` are independent (`α < π/2`); on
+//! rays it would need `t± ≤ 0`, i.e. `x₀ − v_o` at ≥ 90° from both, impossible in the forward nappe,
+//! which lies between `d₊` and `d₋` (`2α < π` apart). So the convention at `v = 0` only decides the
+//! case `x₀ = v_o`, which it makes feasible (and optimal).
 //!
 //! [`vo_expert_generic`] is the same closed form over any [`Sqrt`] scalar (intervals give rigorous
 //! enclosures of `u*`, duals give its derivatives).
