@@ -205,3 +205,21 @@ fn without_margin_only_clipping_breaks_the_constraint() {
         min_sep - radius
     );
 }
+
+/// A harder task than the thesis's: the obstacle up to 2.5× faster (0.05 per step, still half the
+/// agent's speed, so it can be out-run). Same justification and threshold as the default task.
+#[test]
+fn expert_handles_a_faster_obstacle() {
+    let config = ObstacleConfig {
+        obstacle_max_speed: 0.05,
+        obstacle_step_x: [-0.05, 0.05],
+        obstacle_step_y: [-0.05, 0.05],
+        ..ObstacleConfig::default()
+    };
+    let t = run(&config, VoExpertParams::default(), 1000, 50_000);
+    println!(
+        "obstacle speed 0.05: success {}/1000, crash {}, time-out {}; crashed seeds {:?}",
+        t.success, t.crash, t.timeout, t.crashed_seeds
+    );
+    assert!(t.success >= 990 && t.crash <= 10, "{t:?}");
+}
