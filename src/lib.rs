@@ -14,7 +14,8 @@
 pub mod cli;
 pub mod env;
 pub mod exact;
-/// Experts that label states (thesis ch. 4): the CartPole LQR controller.
+/// Experts that label states (thesis ch. 4): the CartPole LQR controller and the velocity-obstacle
+/// expert of eq. 4.1.
 pub mod expert;
 pub mod problem;
 pub mod scalar;

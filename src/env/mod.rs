@@ -17,8 +17,7 @@ use crate::scalar::{Scalar, Undecidable};
 
 pub mod cartpole;
 
-// Reserved for the obstacle-avoidance environment (thesis §4.1), added by its own task:
-// pub mod obstacle;
+pub mod obstacle;
 
 /// What one environment step returns (Gymnasium's `(observation, reward, terminated, truncated,
 /// info)` without `info`).
