@@ -12,6 +12,8 @@
 
 pub mod cli;
 pub mod exact;
+pub mod lqg;
+pub mod policy;
 pub mod problem;
 pub mod scalar;
 pub mod tolerance;
