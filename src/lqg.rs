@@ -298,6 +298,33 @@ impl<S: Scalar> LqgSystem<S> {
         &self.k
     }
 
+    /// The dynamics matrix A (n×n).
+    pub fn a(&self) -> &DMatrix<S> {
+        &self.a
+    }
+    /// The input matrix B (n×m).
+    pub fn b(&self) -> &DMatrix<S> {
+        &self.b
+    }
+    /// The process-noise covariance Q (n×n).
+    pub fn q(&self) -> &DMatrix<S> {
+        &self.q
+    }
+    /// The initial-state covariance Σ₁ (n×n).
+    pub fn sigma1(&self) -> &DMatrix<S> {
+        &self.sigma1
+    }
+
+    /// The same system in another scalar type, every entry converted by `f` (e.g.
+    /// `Interval::from_rational`, `|x| x.to_f64()`), validated again.
+    ///
+    /// # Errors
+    /// As [`LqgSystem::new`] (e.g. a rational too large for `f64` becomes non-finite).
+    pub fn try_map<T: Scalar>(&self, f: impl Fn(&S) -> T) -> Result<LqgSystem<T>, LqgError> {
+        let l = self.lift(f);
+        LqgSystem::new(l.a, l.b, l.q, l.sigma1, l.k, l.sigma_pi_sq, l.horizon)
+    }
+
     fn check_w(&self, w: &DMatrix<S>) -> Result<(), LqgError> {
         check_shape("w", w, self.action_dim(), self.state_dim())
     }
