@@ -535,8 +535,14 @@ mod intervals {
             .collect()
     }
 
+    /// Both enclosures intersect (they contain the same real number), and both are narrow, so
+    /// that the intersection test has teeth: width ≤ 2⁻²⁰·(1 + |midpoint|).
     fn intersect(a: &[Interval], b: &[Interval]) -> bool {
-        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| !x.disjoint(*y))
+        let narrow = |x: &Interval| x.wid() <= (1.0 + x.mid().abs()) / f64::from(1u32 << 20);
+        a.len() == b.len()
+            && a.iter()
+                .zip(b)
+                .all(|(x, y)| !x.disjoint(*y) && narrow(x) && narrow(y))
     }
 
     fn check<P>(
@@ -613,6 +619,20 @@ mod intervals {
             let (_, df) = pf.loss(&theta, &phi, &target[..k]).unwrap();
             prop_assert!(df.iter().zip(&dl).all(|(x, i)| i.inf() - 1e-9 <= *x && *x <= i.sup() + 1e-9));
         }
+    }
+
+    /// The intersection test rejects a wrong formula (the score without its `−π` term).
+    #[test]
+    fn a_wrong_formula_is_disjoint() {
+        let pol = Softmax::new(3, 2).unwrap();
+        let (t, p) = (iv(&[0.5, -1.0, 0.25, 1.0, -0.75, 0.0]), iv(&[1.0, 2.0]));
+        let lp = pol.log_prob(&Dual::variables(&t), &consts(&p), 1).unwrap();
+        let mut wrong = vec![Interval::zero(); 6];
+        wrong[2] = p[0];
+        wrong[3] = p[1];
+        assert!(!intersect(&lp.gradient_padded(6), &wrong));
+        let right = Policy::<Interval>::score(&pol, &t, &p, &1).unwrap();
+        assert!(intersect(&lp.gradient_padded(6), &right));
     }
 
     /// One seed, one path with intervals: softmax sampling in f64 and in intervals picks the same
