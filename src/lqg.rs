@@ -418,7 +418,7 @@ impl<S: Scalar> LqgSystem<S> {
     }
 
     /// `∇_W F` by forward-mode dual numbers through the covariance recursion (no score formula;
-    /// the independent route of math.md §1.3's [CHECK]), an m×n matrix in the layout of W.
+    /// the independent route of math.md §1.3's \[CHECK\]), an m×n matrix in the layout of W.
     ///
     /// # Errors
     /// As [`LqgSystem::covariances`].

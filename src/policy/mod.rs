@@ -17,7 +17,7 @@
 //! policy documents its layout. Gradients are returned in the same layout.
 //!
 //! **Sampling draws randomness the same way for every scalar**: a standard normal or a uniform is
-//! drawn as an `f64` from the [`KitRng`](crate::problem::KitRng) and converted *exactly* with
+//! drawn as an `f64` from the [`KitRng`] and converted *exactly* with
 //! [`from_f64_exact`] (every finite `f64` is a dyadic rational). An `f64` run and an interval run
 //! with one seed therefore follow the same path, as long as interval comparisons stay decidable.
 
