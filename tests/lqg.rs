@@ -502,3 +502,30 @@ fn invalid_systems_are_rejected_with_the_parameter_named() {
         Err(LqgError::NotPositiveDefinite { param: "q" })
     ));
 }
+
+/// Calibration of the Monte-Carlo rule (slow: 400,000 trajectories): over R = 200 independent
+/// seeds with N = 2000 trajectories each, the 2R z-scores of the exact E[g] should look standard
+/// normal. Checks: the mean of z² within 1 ± 0.5 (its s.e. is ≈ √(2/400) ≈ 0.07 under N(0, 1),
+/// so this allows ≈ 7 s.e.), and at most 45 of the 400 |z| above 1.96 (expected 20; the binomial
+/// s.d. is ≈ 4.4, so 45 is ≈ 5.7 s.d. out).
+#[test]
+#[ignore = "slow calibration run (≈ 10 s at opt-level 1); CI runs it with --ignored"]
+fn monte_carlo_z_scores_are_calibrated() {
+    let (sys_q, w_q) = mc_system();
+    let sys = to_f64_system(&sys_q);
+    let w = w_q.map(|x| x.to_f64());
+    let exact = theta_of(&sys_q.expected_estimate(&w_q).unwrap());
+    let mut zs = Vec::new();
+    for seed in 0..200 {
+        let (mean, se) = mc_mean_and_se(&sys, &w, 0.5, 2000, 1000 + seed);
+        zs.extend((0..exact.len()).map(|j| (mean[j] - exact[j].to_f64()) / se[j]));
+    }
+    let mean_sq = zs.iter().map(|z| z * z).sum::<f64>() / zs.len() as f64;
+    let tail = zs.iter().filter(|z| z.abs() > 1.96).count();
+    eprintln!(
+        "calibration: mean z² = {mean_sq:.3}, |z| > 1.96 in {tail} of {}",
+        zs.len()
+    );
+    assert!((mean_sq - 1.0).abs() <= 0.5, "mean z² = {mean_sq}");
+    assert!(tail <= 45, "{tail} of {} beyond 1.96", zs.len());
+}
