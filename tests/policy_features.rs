@@ -14,8 +14,8 @@
 mod common;
 
 use ilopt::policy::{
-    LinearGaussian, Logistic, Mlp, MlpGaussian, MlpSoftmax, Policy, PolicyError, Softmax,
-    from_f64_exact, logistic_sigmoid, softmax_probs, softplus, tanh,
+    LikelihoodRatio, LinearGaussian, Logistic, Mlp, MlpGaussian, MlpSoftmax, Policy, PolicyError,
+    Softmax, from_f64_exact, logistic_sigmoid, softmax_probs, softplus, tanh,
 };
 use ilopt::problem::KitRng;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
@@ -309,6 +309,62 @@ fn the_derivative_check_catches_a_wrong_formula() {
     assert!(!derivative_f64_agrees(&lp.gradient_padded(6), &wrong));
     let right = pol.score(&theta, &phi, &1).unwrap();
     assert!(derivative_f64_agrees(&lp.gradient_padded(6), &right));
+}
+
+/// The likelihood ratios of importance weighting (math.md §4) reweight π_θ' into π_θ:
+/// `Σ_a π_θ'(a|s) exp(log π_θ(a|s) − log π_θ'(a|s)) = Σ_a π_θ(a|s)`, action by action.
+#[test]
+fn likelihood_ratios_reweight_one_policy_into_another() {
+    let phi = vec![0.5, -1.25];
+    let sm = Softmax::new(3, 2).unwrap();
+    let (t, t2) = (
+        vec![0.5, -1.0, 0.25, 1.0, -0.75, 0.0],
+        vec![0.0, 1.0, -0.5, 0.5, 2.0, -1.0],
+    );
+    let (p, p2) = (sm.probs(&t, &phi).unwrap(), sm.probs(&t2, &phi).unwrap());
+    for a in 0..3 {
+        let r: f64 = sm.log_likelihood_ratio(&t, &t2, &phi, &a).unwrap();
+        assert!(
+            derivative_f64_agrees(&[p2[a] * r.exp()], &[p[a]]),
+            "softmax a={a}"
+        );
+    }
+    let lg = Logistic::new(2).unwrap();
+    let (u, u2) = (vec![0.75, -0.5], vec![-1.0, 0.25]);
+    let (q1, q2) = (
+        lg.prob_one(&u, &phi).unwrap(),
+        lg.prob_one(&u2, &phi).unwrap(),
+    );
+    let r1: f64 = lg.log_likelihood_ratio(&u, &u2, &phi, &1).unwrap();
+    let r0: f64 = lg.log_likelihood_ratio(&u, &u2, &phi, &0).unwrap();
+    assert!(derivative_f64_agrees(
+        &[q2 * r1.exp(), (1.0 - q2) * r0.exp()],
+        &[q1, 1.0 - q1]
+    ));
+    let ms = MlpSoftmax::new(2, 3, 2).unwrap();
+    let v: Vec<f64> = ms.net().init(&mut KitRng::seed_from_u64(4));
+    let v2: Vec<f64> = ms.net().init(&mut KitRng::seed_from_u64(5));
+    let (m1, m2) = (ms.probs(&v, &phi).unwrap(), ms.probs(&v2, &phi).unwrap());
+    for a in 0..2 {
+        let r: f64 = ms.log_likelihood_ratio(&v, &v2, &phi, &a).unwrap();
+        assert!(
+            derivative_f64_agrees(&[m2[a] * r.exp()], &[m1[a]]),
+            "mlp a={a}"
+        );
+    }
+    // P3: exact in rationals.
+    let g = LinearGaussian::new(1, 2, common::q("1/2")).unwrap();
+    let (w, w2, x, a) = (
+        common::qs(&["1", "2"]),
+        common::qs(&["0", "-1"]),
+        common::qs(&["1/2", "1"]),
+        vec![common::q("3")],
+    );
+    // ‖a − W'φ‖² = (3 + 1)² = 16, ‖a − Wφ‖² = (3 − 5/2)² = 1/4, /(2σ²) = ·2.
+    assert_eq!(
+        g.log_likelihood_ratio(&w, &w2, &x, &a).unwrap(),
+        common::q("63/2")
+    );
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -15,7 +15,9 @@
 //! **Layout of θ**: W ∈ S^{m×n} row-major, `θ[i·n + j] = W_ij` (row i = action coordinate i,
 //! column j = feature j). Gradients use the same layout.
 
-use super::{Policy, PolicyError, check_size, check_vec, mat_vec, outer, standard_normal};
+use super::{
+    LikelihoodRatio, Policy, PolicyError, check_size, check_vec, mat_vec, outer, standard_normal,
+};
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
 
@@ -183,5 +185,18 @@ impl<S: Scalar> Policy<S> for LinearGaussian<S> {
             .into_iter()
             .map(|mu| mu + self.sigma.clone() * standard_normal::<S>(rng))
             .collect())
+    }
+}
+
+impl<S: Scalar> LikelihoodRatio<S> for LinearGaussian<S> {
+    /// Exact: [`LinearGaussian::log_ratio`].
+    fn log_likelihood_ratio(
+        &self,
+        theta: &[S],
+        theta_other: &[S],
+        phi: &[S],
+        action: &Vec<S>,
+    ) -> Result<S, PolicyError> {
+        self.log_ratio(theta, theta_other, phi, action)
     }
 }

@@ -12,7 +12,7 @@
 //! **Layout of θ**: `θ ∈ Sⁿ`, the weight of feature j at index j.
 
 use super::softmax::{check_action, sample_probs};
-use super::{Policy, PolicyError, check_size, check_vec};
+use super::{LikelihoodRatio, Policy, PolicyError, check_size, check_vec};
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
 
@@ -141,5 +141,17 @@ impl<S: Real> Policy<S> for Logistic {
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
         let p = self.prob_one(theta, phi)?;
         sample_probs(&[S::one() - &p, p], rng)
+    }
+}
+
+impl<S: Real> LikelihoodRatio<S> for Logistic {
+    fn log_likelihood_ratio(
+        &self,
+        theta: &[S],
+        theta_other: &[S],
+        phi: &[S],
+        action: &usize,
+    ) -> Result<S, PolicyError> {
+        Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
     }
 }

@@ -18,8 +18,8 @@
 
 use super::softmax::{check_action, log_softmax, sample_probs, score_logits};
 use super::{
-    Policy, PolicyError, brier_logit_gradient, check_size, check_vec, from_f64_exact, mat_vec,
-    outer, softmax_probs, standard_normal,
+    LikelihoodRatio, Policy, PolicyError, brier_logit_gradient, check_size, check_vec,
+    from_f64_exact, mat_vec, outer, softmax_probs, standard_normal,
 };
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
@@ -358,5 +358,30 @@ impl<S: Real> Policy<S> for MlpGaussian<S> {
         Ok(o.into_iter()
             .map(|m| m + self.sigma.clone() * standard_normal::<S>(rng))
             .collect())
+    }
+}
+
+impl<S: Real> LikelihoodRatio<S> for MlpSoftmax {
+    fn log_likelihood_ratio(
+        &self,
+        theta: &[S],
+        theta_other: &[S],
+        phi: &[S],
+        action: &usize,
+    ) -> Result<S, PolicyError> {
+        Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
+    }
+}
+
+impl<S: Real> LikelihoodRatio<S> for MlpGaussian<S> {
+    fn log_likelihood_ratio(
+        &self,
+        theta: &[S],
+        theta_other: &[S],
+        phi: &[S],
+        action: &Vec<S>,
+    ) -> Result<S, PolicyError> {
+        Ok(self.log_prob_unnormalised(theta, phi, action)?
+            - self.log_prob_unnormalised(theta_other, phi, action)?)
     }
 }

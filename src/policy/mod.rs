@@ -143,6 +143,23 @@ pub trait Policy<S: Scalar> {
     -> Result<Self::Action, PolicyError>;
 }
 
+/// The per-decision likelihood ratio of importance-weighted estimates (math.md §4):
+/// `log π_θ(a|s) − log π_θ'(a|s)`, so that the weight of one decision is its exponential and the
+/// trajectory weight `w_{θ→θ'}` is the exponential of the sum over decisions.
+pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
+    /// `log π_θ(a|s) − log π_{θ_other}(a|s)`.
+    ///
+    /// # Errors
+    /// As [`Policy::score`].
+    fn log_likelihood_ratio(
+        &self,
+        theta: &[S],
+        theta_other: &[S],
+        phi: &[S],
+        action: &Self::Action,
+    ) -> Result<S, PolicyError>;
+}
+
 /// Check that a slice has `expected` entries, all finite.
 pub(crate) fn check_vec<S: Scalar>(
     param: &'static str,

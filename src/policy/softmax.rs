@@ -19,7 +19,9 @@
 //!
 //! **Layout of θ**: Θ ∈ S^{A×n} row-major, `θ[a·n + j] = Θ_aj`.
 
-use super::{Policy, PolicyError, check_size, check_vec, from_f64_exact, mat_vec, outer};
+use super::{
+    LikelihoodRatio, Policy, PolicyError, check_size, check_vec, from_f64_exact, mat_vec, outer,
+};
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
 use crate::toy::{dyadic_uniform, sample_categorical};
@@ -203,5 +205,17 @@ impl<S: Real> Policy<S> for Softmax {
 
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
         sample_probs(&self.probs(theta, phi)?, rng)
+    }
+}
+
+impl<S: Real> LikelihoodRatio<S> for Softmax {
+    fn log_likelihood_ratio(
+        &self,
+        theta: &[S],
+        theta_other: &[S],
+        phi: &[S],
+        action: &usize,
+    ) -> Result<S, PolicyError> {
+        Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
     }
 }
