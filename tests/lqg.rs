@@ -16,7 +16,8 @@ use common::q;
 use ilopt::lqg::{LqgError, LqgSystem, matrix_of, theta_of};
 use ilopt::policy::LinearGaussian;
 use ilopt::problem::KitRng;
-use ilopt::scalar::{BigRational, Interval, Scalar};
+use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
+use ilopt::tolerance::{Agreement, all_agree};
 use nalgebra::DMatrix;
 use proptest::prelude::*;
 use rand::SeedableRng;
@@ -201,6 +202,37 @@ fn isserlis_expectation_equals_dual_gradient_on_hand_made_systems() {
         } else {
             assert_eq!(direct, grad, "{}: T = 2 has no score term", c.name);
         }
+    }
+}
+
+/// F, E[g] and ∇F (dual route) computed in f64, f32, intervals and `Dual<f64>` agree with the
+/// exact rational values under the kit's tolerance policy (`ilopt::tolerance`: intervals contain
+/// the exact value, f64 lies inside the interval run of the same code, f32 within 2⁻¹⁰).
+#[test]
+fn every_scalar_agrees_with_the_exact_values() {
+    fn quantities<S: Scalar>(sys: &LqgSystem<Q>, w: &DMatrix<Q>) -> Vec<S> {
+        let s = sys.try_map(S::from_rational).unwrap();
+        let w = w.map(|x| S::from_rational(&x));
+        let mut out = vec![s.objective(&w).unwrap()];
+        out.extend(theta_of(&s.expected_estimate(&w).unwrap()));
+        out.extend(theta_of(&s.gradient(&w).unwrap()));
+        out
+    }
+    fn agree<S: Agreement>(sys: &LqgSystem<Q>, w: &DMatrix<Q>, name: &str) {
+        let exact = quantities::<Q>(sys, w);
+        let enclosure = quantities::<Interval>(sys, w);
+        assert!(
+            all_agree(&quantities::<S>(sys, w), &exact, &enclosure),
+            "{name} in {}",
+            std::any::type_name::<S>()
+        );
+    }
+    for c in hand_made() {
+        agree::<Q>(&c.system, &c.w, c.name);
+        agree::<Interval>(&c.system, &c.w, c.name);
+        agree::<f64>(&c.system, &c.w, c.name);
+        agree::<f32>(&c.system, &c.w, c.name);
+        agree::<Dual<f64>>(&c.system, &c.w, c.name);
     }
 }
 
