@@ -62,3 +62,38 @@ pub fn all_agree<S: Agreement>(xs: &[S], exact: &[BigRational], enclosure: &[Int
             .zip(enclosure)
             .all(|((x, e), i)| x.agrees(e, i))
 }
+
+/// Relative tolerance for comparing two `f64` evaluations of the same derivative by different
+/// routes: an analytic gradient (hand-derived formula, back-propagation) against forward-mode
+/// [`Dual<f64>`] derivatives of the value code. Used by [`derivative_f64_agrees`].
+///
+/// Why 2⁻³⁰ (≈ 9.3·10⁻¹⁰) is justified. Neither route is exact and they round differently, so
+/// the interval rule above does not apply. Each route is a straight-line program of at most a few
+/// hundred operations on the domains tested (≤ 4 features, ≤ 6 hidden units, ≤ 4 actions,
+/// |θ|, |φ| ≤ 4), each with relative error ≤ u = 2⁻⁵³ (`exp`/`ln` within 1 ulp). Standard
+/// forward error analysis bounds each route's error by about `k·u·Σ|terms|` with k ≲ 2⁹, and
+/// the intermediate terms (probabilities in [0, 1], tanh in [−1, 1], weights and features ≤ 4,
+/// exponentials of shifted logits ≤ 1) are at most about 2⁸ times the scale
+/// `1 + max(‖a‖∞, ‖b‖∞)` by which [`derivative_f64_error`] divides. That gives ≈ 2⁻³⁶; the
+/// constant adds a factor 2⁶ of margin. It is still far below any error a wrong formula makes
+/// (a missing term changes the gradient by O(1) of the scale), and the test suite measures the
+/// largest observed error and requires it to be at least 2⁸ below this constant.
+pub const DERIVATIVE_F64_REL: f64 = 9.313_225_746_154_785e-10; // 2^-30
+
+/// The scaled disagreement `max_j |a_j − b_j| / (1 + max(‖a‖∞, ‖b‖∞))` of two `f64` gradients;
+/// `+∞` if the lengths differ or a value is not finite.
+pub fn derivative_f64_error(a: &[f64], b: &[f64]) -> f64 {
+    if a.len() != b.len() || !a.iter().chain(b).all(|x| x.is_finite()) {
+        return f64::INFINITY;
+    }
+    let scale = 1.0 + a.iter().chain(b).fold(0.0f64, |m, x| m.max(x.abs()));
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
+}
+
+/// Do two `f64` evaluations of one gradient agree within [`DERIVATIVE_F64_REL`]?
+pub fn derivative_f64_agrees(a: &[f64], b: &[f64]) -> bool {
+    derivative_f64_error(a, b) <= DERIVATIVE_F64_REL
+}
