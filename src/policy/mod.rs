@@ -87,7 +87,8 @@ pub enum PolicyError {
 
 /// The exact value of a finite `f64` in scalar `S`: every finite double is a dyadic rational
 /// `k·2ᵉ`, so `S::from_rational` of it is exact in `BigRational`, a singleton in `Interval`, and the
-/// same double again in `f64`.
+/// same double again in `f64` (and in `Dual<·>` of these). `f32` rounds it to nearest: f32 runs
+/// follow the f64 path only approximately.
 ///
 /// This is how the policies turn the RNG's `f64` draws into scalars, so that one seed gives one
 /// path in every scalar type.
