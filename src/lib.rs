@@ -21,5 +21,6 @@ pub mod lqg;
 pub mod policy;
 pub mod problem;
 pub mod scalar;
+pub mod task;
 pub mod tolerance;
 pub mod toy;

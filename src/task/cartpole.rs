@@ -1,0 +1,96 @@
+//! CartPole-v1 as an imitation-learning task (thesis §4.2): the LQR expert labels every visited
+//! state with its action; the learner sees φ(s) = (x, ẋ, θ, θ̇, 1).
+
+use super::Task;
+use crate::env::cartpole::{CartPoleDynamics, MAX_EPISODE_STEPS, sample_reset_state};
+use crate::expert::lqr::LqrExpert;
+use crate::policy::from_f64_exact;
+use crate::problem::{KitRng, OracleError};
+use crate::scalar::Real;
+
+/// Number of features: the state and a constant.
+pub const FEATURES: usize = 5;
+
+/// CartPole with an expert, episodes truncated at `max_steps` (Gymnasium: 500).
+#[derive(Debug, Clone)]
+pub struct CartPoleTask<S> {
+    dynamics: CartPoleDynamics<S>,
+    expert: LqrExpert,
+    max_steps: usize,
+}
+
+/// One episode: the state and the number of steps taken.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CartPoleEpisode<S> {
+    /// [x, ẋ, θ, θ̇].
+    pub state: [S; 4],
+    /// Steps taken so far.
+    pub steps: usize,
+}
+
+impl<S: Real> CartPoleTask<S> {
+    /// CartPole-v1 with the LQR expert and Gymnasium's 500-step truncation.
+    ///
+    /// # Errors
+    /// [`OracleError::Environment`] if the LQR design fails.
+    pub fn with_lqr() -> Result<Self, OracleError> {
+        Self::new(
+            LqrExpert::cartpole().map_err(|e| OracleError::Environment(e.to_string()))?,
+            MAX_EPISODE_STEPS as usize,
+        )
+    }
+
+    /// A task with a given expert and truncation (≥ 1 step).
+    ///
+    /// # Errors
+    /// [`OracleError::Environment`] for `max_steps = 0`.
+    pub fn new(expert: LqrExpert, max_steps: usize) -> Result<Self, OracleError> {
+        if max_steps == 0 {
+            return Err(OracleError::Environment("max_steps must be ≥ 1".into()));
+        }
+        Ok(Self {
+            dynamics: CartPoleDynamics::new(),
+            expert,
+            max_steps,
+        })
+    }
+}
+
+impl<S: Real> Task<S> for CartPoleTask<S> {
+    type Episode = CartPoleEpisode<S>;
+    type Label = usize;
+    type Action = usize;
+
+    fn start(&self, rng: &mut KitRng) -> Result<Self::Episode, OracleError> {
+        let s = sample_reset_state(rng);
+        let conv = |x: f64| {
+            from_f64_exact::<S>(x, "reset state")
+                .map_err(|e| OracleError::Environment(e.to_string()))
+        };
+        Ok(CartPoleEpisode {
+            state: [conv(s[0])?, conv(s[1])?, conv(s[2])?, conv(s[3])?],
+            steps: 0,
+        })
+    }
+
+    fn features(&self, ep: &Self::Episode) -> Vec<S> {
+        let mut f = ep.state.to_vec();
+        f.push(S::one());
+        f
+    }
+
+    fn expert(&self, ep: &Self::Episode) -> Result<(usize, usize), OracleError> {
+        let a = self.expert.action(&ep.state)?;
+        Ok((a, a))
+    }
+
+    fn advance(&self, ep: &mut Self::Episode, action: &usize) -> Result<bool, OracleError> {
+        let (next, terminated) = self
+            .dynamics
+            .step(&ep.state, *action)
+            .map_err(|e| OracleError::Environment(e.to_string()))?;
+        ep.state = next;
+        ep.steps += 1;
+        Ok(terminated || ep.steps >= self.max_steps)
+    }
+}

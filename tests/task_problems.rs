@@ -1,0 +1,136 @@
+//! The real environments as IL problems: seeded, reproducible roll-outs with expert labels, the
+//! oracle's forms and cost accounting, and errors for bad input.
+
+use ilopt::policy::LinearGaussian;
+use ilopt::policy::Softmax;
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
+use ilopt::task::TaskProblem;
+use ilopt::task::cartpole::{self, CartPoleTask};
+use ilopt::task::obstacle::{self, ObstacleTask};
+use nalgebra::DVector;
+use rand::SeedableRng;
+
+fn cartpole_problem() -> TaskProblem<CartPoleTask<f64>, Softmax> {
+    TaskProblem {
+        task: CartPoleTask::with_lqr().unwrap(),
+        policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+    }
+}
+
+fn obstacle_problem() -> TaskProblem<ObstacleTask, LinearGaussian<f64>> {
+    TaskProblem {
+        task: ObstacleTask::thesis().unwrap(),
+        policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
+    }
+}
+
+#[test]
+fn cartpole_rollouts_are_seeded_and_labelled() {
+    let p = cartpole_problem();
+    let theta = DVector::from_fn(p.dim(), |i, _| 0.1 * (i as f64 - 4.0));
+    let run = |seed| {
+        let mut rng = KitRng::seed_from_u64(seed);
+        let mut c = Cost::default();
+        (
+            p.rollout(&Behaviour::Learner(&theta), &mut rng, &mut c)
+                .unwrap(),
+            c,
+        )
+    };
+    let (a, ca) = run(1);
+    assert_eq!(a, run(1).0);
+    assert_ne!(a, run(2).0);
+    assert_eq!(ca.trajectories, 1);
+    assert_eq!(ca.env_steps as usize, a.len());
+    assert_eq!(ca.expert_queries as usize, a.len());
+    // The LQR expert balances for the full 500 steps.
+    let mut rng = KitRng::seed_from_u64(3);
+    let e = p
+        .rollout(&Behaviour::Expert, &mut rng, &mut Cost::default())
+        .unwrap();
+    assert_eq!(e.len(), 500);
+    assert_eq!(e.actions, e.labels);
+}
+
+#[test]
+fn weighted_estimate_at_the_same_point_is_the_plain_estimate() {
+    let p = cartpole_problem();
+    let theta = DVector::from_fn(p.dim(), |i, _| 0.05 * i as f64);
+    let mut rng = KitRng::seed_from_u64(9);
+    let mut c = Cost::default();
+    let t = p
+        .rollout(&Behaviour::Learner(&theta), &mut rng, &mut c)
+        .unwrap();
+    let g = p
+        .estimate(&theta, &t, EstimatorForm::Causal, &mut c)
+        .unwrap();
+    for w in [Weighting::Trajectory, Weighting::PerDecision] {
+        let gw = p.weighted_estimate(&theta, &theta, &t, w, &mut c).unwrap();
+        assert_eq!(g, gw, "{w:?}");
+    }
+    assert_eq!(c.gradient_evaluations as usize, 3 * t.len());
+    // The full form differs per trajectory (it adds mean-zero terms).
+    let f = p.estimate(&theta, &t, EstimatorForm::Full, &mut c).unwrap();
+    assert_eq!(f.len(), g.len());
+    // The trajectory loss is the sum of the supervised losses.
+    let total: f64 = p
+        .labelled_states(&t)
+        .iter()
+        .map(|ex| p.supervised(&theta, ex, &mut Cost::default()).unwrap().0)
+        .sum();
+    assert!((p.trajectory_loss(&theta, &t).unwrap() - total).abs() < 1e-12);
+}
+
+#[test]
+fn obstacle_expert_episodes_succeed_and_learner_rollouts_work() {
+    let p = obstacle_problem();
+    let mut rng = KitRng::seed_from_u64(4);
+    let mut c = Cost::default();
+    let e = p.rollout(&Behaviour::Expert, &mut rng, &mut c).unwrap();
+    assert!(e.len() > 10 && e.len() < 200, "{}", e.len());
+    // The oracle on a learner roll-out: right shape, finite.
+    let theta = DVector::from_element(p.dim(), 0.01);
+    let t = p
+        .rollout(&Behaviour::Learner(&theta), &mut rng, &mut c)
+        .unwrap();
+    let g = p
+        .estimate(&theta, &t, EstimatorForm::Causal, &mut c)
+        .unwrap();
+    assert_eq!(g.len(), 2 * obstacle::FEATURES);
+    assert!(g.iter().all(|x| x.is_finite()));
+    let b = Behaviour::Mixture {
+        expert_weight: 0.5,
+        learners: vec![(0.5, &theta)],
+    };
+    assert!(p.rollout(&b, &mut rng, &mut c).is_ok());
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let p = cartpole_problem();
+    let mut rng = KitRng::seed_from_u64(1);
+    let mut c = Cost::default();
+    let short = DVector::from_element(3, 0.0);
+    assert_eq!(
+        p.rollout(&Behaviour::Learner(&short), &mut rng, &mut c)
+            .unwrap_err(),
+        OracleError::Dimension {
+            expected: 10,
+            got: 3
+        }
+    );
+    let nan = DVector::from_element(10, f64::NAN);
+    assert!(matches!(
+        p.rollout(&Behaviour::Learner(&nan), &mut rng, &mut c),
+        Err(OracleError::NonFinite(_))
+    ));
+    let theta = DVector::from_element(10, 0.0);
+    let b = Behaviour::Mixture {
+        expert_weight: 0.7,
+        learners: vec![(0.7, &theta)],
+    };
+    assert!(matches!(
+        p.rollout(&b, &mut rng, &mut c),
+        Err(OracleError::Behaviour(_))
+    ));
+}
