@@ -8,5 +8,6 @@
 //! exact rationals, interval arithmetic, and dual numbers over any of them.
 #![warn(missing_docs)]
 
+pub mod algo;
 pub mod problem;
 pub mod scalar;
