@@ -7,7 +7,13 @@
 //! Everything numeric is generic over [`scalar::Scalar`], so the same code runs in `f64`/`f32`,
 //! exact rationals, interval arithmetic, and dual numbers over any of them.
 #![warn(missing_docs)]
+// Index loops over states and actions mirror the equations they implement (math.md §1.4).
+#![allow(clippy::needless_range_loop)]
 
 pub mod algo;
+pub mod cli;
+pub mod exact;
 pub mod problem;
 pub mod scalar;
+pub mod tolerance;
+pub mod toy;

@@ -224,6 +224,11 @@ impl<S: Scalar> Scalar for Dual<S> {
     fn is_finite(&self) -> bool {
         self.v.is_finite() && self.g.iter().all(Scalar::is_finite)
     }
+    /// `v²` through the value type's own `square` (tight for intervals), derivative `2v·g`.
+    fn square(&self) -> Self {
+        let two_v = S::from_i64(2) * &self.v;
+        self.chain(self.v.square(), two_v)
+    }
 }
 
 impl<S: Sqrt> Sqrt for Dual<S> {

@@ -15,6 +15,11 @@ macro_rules! impl_float {
             }
             fn from_ratio(num: i64, den: i64) -> Self {
                 assert!(den != 0, "from_ratio: zero denominator");
+                const EXACT: u64 = 1 << 53;
+                if num.unsigned_abs() <= EXACT && den.unsigned_abs() <= EXACT {
+                    // Both operands are exact doubles, so IEEE division rounds the true quotient once.
+                    return (num as f64 / den as f64) as $t;
+                }
                 Self::from_rational(&BigRational::new(num.into(), den.into()))
             }
             fn from_rational(q: &BigRational) -> Self {

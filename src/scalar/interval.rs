@@ -63,6 +63,12 @@ impl Scalar for Interval {
     }
     fn from_ratio(num: i64, den: i64) -> Self {
         assert!(den != 0, "from_ratio: zero denominator");
+        const EXACT: u64 = 1 << 53;
+        if num.unsigned_abs() <= EXACT && den.unsigned_abs() <= EXACT {
+            let point = |x: i64| Interval::try_from((x as f64, x as f64)).expect("exact point");
+            // Outward-rounded division of exact points encloses num/den.
+            return point(num) / point(den);
+        }
         enclose_rational(&BigRational::new(num.into(), den.into()))
     }
     fn from_rational(q: &BigRational) -> Self {
@@ -86,6 +92,10 @@ impl Scalar for Interval {
     }
     fn is_finite(&self) -> bool {
         !self.is_empty() && self.inf().is_finite() && self.sup().is_finite()
+    }
+    /// inari's `sqr`: the tight enclosure of {x² : x ∈ X} (x·x would give [−1, 1]·[−1, 1] = [−1, 1]).
+    fn square(&self) -> Self {
+        self.sqr()
     }
 }
 
@@ -140,5 +150,11 @@ mod tests {
         assert_eq!(Interval::zero().certain_cmp(&b), Some(Ordering::Less));
         assert_eq!(b.certain_cmp(&b), Some(Ordering::Equal));
         assert!(!Scalar::is_finite(&(b / Interval::zero())));
+    }
+
+    #[test]
+    fn squares_are_tight() {
+        let x = Interval::try_from((-2.0, 3.0)).unwrap();
+        assert_eq!(x.square(), Interval::try_from((0.0, 9.0)).unwrap());
     }
 }

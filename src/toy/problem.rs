@@ -1,0 +1,400 @@
+//! [`ToyProblem`]: a toy MDP as an [`IlProblem`] — sampling, expert labels, and the eq. 3.15
+//! oracle, generic over the scalar.
+//!
+//! Sampling draws a dyadic uniform u = k/2⁵³ from the RNG (the same bits for every scalar type) and
+//! picks the first category whose cumulative probability certainly exceeds u. In `f64` and in
+//! rationals this always decides; in intervals it decides unless u falls inside the enclosure of a
+//! cumulative probability, which is reported as [`OracleError::Undecidable`] — never guessed. So
+//! runs with the same seed in `f64`, rationals and intervals follow the same trajectories.
+
+use super::estimator;
+use super::table::PolicyTable;
+use super::{ToyMdp, estimator::prefix_loss};
+use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
+use crate::scalar::{Scalar, Undecidable, certainly_less};
+use nalgebra::DVector;
+use rand::{Rng, RngCore};
+
+/// A sampled trajectory τ = (s_1, a_1, …, a_{T−1}, s_T) with expert labels π*(s_t), t = 1..T−1.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ToyTrajectory {
+    /// s_1..s_T (length T).
+    pub states: Vec<usize>,
+    /// a_1..a_{T−1} (length T − 1).
+    pub actions: Vec<usize>,
+    /// π*(s_1)..π*(s_{T−1}) (length T − 1).
+    pub labels: Vec<usize>,
+}
+
+/// One supervised example: a state and its expert label.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct ToyExample {
+    /// The state.
+    pub state: usize,
+    /// The expert's action there.
+    pub label: usize,
+}
+
+/// A toy MDP instantiated in scalar `S` (its exact data enclosed/rounded once).
+#[derive(Debug, Clone)]
+pub struct ToyProblem<S> {
+    mdp: ToyMdp,
+    initial: Vec<S>,
+    transition: Vec<Vec<Vec<S>>>,
+    c: S,
+}
+
+/// A dyadic uniform k/2⁵³ ∈ [0, 1), exactly representable in every scalar type.
+pub fn dyadic_uniform<S: Scalar>(rng: &mut KitRng) -> S {
+    let k = rng.next_u64() >> 11;
+    S::from_ratio(k as i64, 1 << 53)
+}
+
+/// Sample from a categorical distribution with a given uniform `u` (see the module docs).
+///
+/// # Errors
+/// [`Undecidable`] when interval arithmetic cannot order `u` and a cumulative probability.
+pub fn sample_categorical<S: Scalar>(probs: &[S], u: &S) -> Result<usize, Undecidable> {
+    let last = probs
+        .iter()
+        .rposition(|p| !p.is_certainly_zero())
+        .unwrap_or(probs.len() - 1);
+    let mut cum = S::zero();
+    for (a, p) in probs.iter().enumerate().take(last) {
+        cum += p;
+        if !p.is_certainly_zero() && certainly_less(u, &cum, "categorical sampling")? {
+            return Ok(a);
+        }
+    }
+    Ok(last)
+}
+
+impl<S: Scalar> ToyProblem<S> {
+    /// Instantiate `mdp` in scalar `S`.
+    pub fn new(mdp: &ToyMdp) -> Self {
+        let cast = |v: &Vec<_>| v.iter().map(S::from_rational).collect::<Vec<S>>();
+        Self {
+            initial: cast(&mdp.initial),
+            transition: mdp
+                .transition
+                .iter()
+                .map(|row| row.iter().map(cast).collect())
+                .collect(),
+            c: mdp.policy.c.as_ref().map_or_else(S::zero, S::from_rational),
+            mdp: mdp.clone(),
+        }
+    }
+    /// The exact MDP.
+    pub fn mdp(&self) -> &ToyMdp {
+        &self.mdp
+    }
+    /// μ in `S`.
+    pub fn initial(&self) -> &[S] {
+        &self.initial
+    }
+    /// P(·|s, a) in `S`.
+    pub fn transition(&self, s: usize, a: usize) -> &[S] {
+        &self.transition[s][a]
+    }
+    /// The policy/loss table at θ.
+    ///
+    /// # Errors
+    /// As [`PolicyTable::new`].
+    pub fn table(&self, theta: &[S]) -> Result<PolicyTable<S>, OracleError> {
+        PolicyTable::new(&self.mdp, &self.c, theta)
+    }
+    /// The policy parameter c in `S` (zero for the direct parameterisation).
+    pub fn c(&self) -> &S {
+        &self.c
+    }
+
+    fn check(&self, t: &ToyTrajectory) -> Result<(), OracleError> {
+        let m = &self.mdp;
+        let bad = |msg: String| Err(OracleError::Trajectory(msg));
+        if t.states.len() != m.horizon || t.actions.len() + 1 != m.horizon {
+            return bad(format!(
+                "{} states and {} actions for horizon {}",
+                t.states.len(),
+                t.actions.len(),
+                m.horizon
+            ));
+        }
+        if t.labels.len() + 1 != m.horizon {
+            return bad(format!(
+                "{} labels for horizon {}",
+                t.labels.len(),
+                m.horizon
+            ));
+        }
+        if let Some(i) = t.states.iter().position(|&s| s >= m.states) {
+            return bad(format!("states[{i}] = {} ≥ {}", t.states[i], m.states));
+        }
+        if let Some(i) = t.actions.iter().position(|&a| a >= m.actions) {
+            return bad(format!("actions[{i}] = {} ≥ {}", t.actions[i], m.actions));
+        }
+        if let Some(i) = t.labels.iter().position(|&a| a >= m.actions) {
+            return bad(format!("labels[{i}] = {} ≥ {}", t.labels[i], m.actions));
+        }
+        Ok(())
+    }
+
+    fn prefix<'t>(&self, t: &'t ToyTrajectory) -> (&'t [usize], &'t [usize]) {
+        let h = self.mdp.horizon;
+        (&t.states[..h - 1], &t.actions[..h - 2])
+    }
+}
+
+/// Who acts at one step.
+enum Actor<'a, S> {
+    Expert,
+    Learner(&'a PolicyTable<S>),
+}
+
+/// The policies of a [`Behaviour`], tabulated once per roll-out, and the rule that picks one per step.
+struct Actors<S> {
+    tables: Vec<PolicyTable<S>>,
+    /// Mixture: probability of the expert, and of each learner table.
+    expert_weight: f64,
+    weights: Vec<f64>,
+    /// Non-stationary: the table index acting at each step (`None` = expert).
+    per_step: Option<Vec<Option<usize>>>,
+}
+
+impl<S: Scalar> Actors<S> {
+    fn new(problem: &ToyProblem<S>, behaviour: &Behaviour<'_, S>) -> Result<Self, OracleError> {
+        let table = |th: &DVector<S>| problem.table(th.as_slice());
+        Ok(match behaviour {
+            Behaviour::Learner(theta) => Self {
+                tables: vec![table(theta)?],
+                expert_weight: 0.0,
+                weights: vec![1.0],
+                per_step: None,
+            },
+            Behaviour::Expert => Self {
+                tables: vec![],
+                expert_weight: 1.0,
+                weights: vec![],
+                per_step: None,
+            },
+            Behaviour::Mixture {
+                expert_weight,
+                learners,
+            } => {
+                let weights: Vec<f64> = learners.iter().map(|(w, _)| *w).collect();
+                validate_weights(*expert_weight, &weights)?;
+                Self {
+                    tables: learners
+                        .iter()
+                        .map(|(_, th)| table(th))
+                        .collect::<Result<_, _>>()?,
+                    expert_weight: *expert_weight,
+                    weights,
+                    per_step: None,
+                }
+            }
+            Behaviour::NonStationary(steps) => {
+                let mut tables = Vec::new();
+                let mut idx = Vec::new();
+                for th in steps {
+                    idx.push(match th {
+                        Some(th) => {
+                            tables.push(table(th)?);
+                            Some(tables.len() - 1)
+                        }
+                        None => None,
+                    });
+                }
+                Self {
+                    tables,
+                    expert_weight: 0.0,
+                    weights: vec![],
+                    per_step: Some(idx),
+                }
+            }
+            #[allow(unreachable_patterns)]
+            _ => return Err(OracleError::Behaviour("unsupported behaviour".into())),
+        })
+    }
+
+    /// The actor at step `t`; a mixture draws one f64 uniform (the same for every scalar type).
+    fn pick(&self, t: usize, rng: &mut KitRng) -> Actor<'_, S> {
+        if let Some(steps) = &self.per_step {
+            return match steps.get(t).copied().flatten() {
+                Some(i) => Actor::Learner(&self.tables[i]),
+                None => Actor::Expert,
+            };
+        }
+        if self.weights.is_empty() {
+            return Actor::Expert;
+        }
+        if self.expert_weight == 0.0 && self.weights.len() == 1 {
+            return Actor::Learner(&self.tables[0]);
+        }
+        let x: f64 = rng.random();
+        if x < self.expert_weight {
+            return Actor::Expert;
+        }
+        let mut acc = self.expert_weight;
+        for (j, w) in self.weights.iter().enumerate() {
+            acc += w;
+            if x < acc {
+                return Actor::Learner(&self.tables[j]);
+            }
+        }
+        Actor::Learner(&self.tables[self.weights.len() - 1])
+    }
+}
+
+fn validate_weights(expert: f64, learners: &[f64]) -> Result<(), OracleError> {
+    let all = std::iter::once(expert).chain(learners.iter().copied());
+    if let Some(w) = all.clone().find(|w| !(0.0..=1.0).contains(w)) {
+        return Err(OracleError::Behaviour(format!(
+            "mixture weight {w} is not in [0, 1]"
+        )));
+    }
+    let total: f64 = all.sum();
+    if (total - 1.0).abs() > 1e-9 {
+        return Err(OracleError::Behaviour(format!(
+            "mixture weights sum to {total}, not 1"
+        )));
+    }
+    Ok(())
+}
+
+impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
+    type Trajectory = ToyTrajectory;
+    type Labelled = ToyExample;
+
+    fn dim(&self) -> usize {
+        self.mdp.policy.dim()
+    }
+
+    fn rollout(
+        &self,
+        behaviour: &Behaviour<'_, S>,
+        rng: &mut KitRng,
+        cost: &mut Cost,
+    ) -> Result<ToyTrajectory, OracleError> {
+        let h = self.mdp.horizon;
+        let actors = Actors::new(self, behaviour)?;
+        let mut states = Vec::with_capacity(h);
+        let mut actions = Vec::with_capacity(h - 1);
+        let mut labels = Vec::with_capacity(h - 1);
+        let u: S = dyadic_uniform(rng);
+        states.push(sample_categorical(&self.initial, &u)?);
+        for t in 0..h - 1 {
+            let s = states[t];
+            let label = self.mdp.expert[s];
+            let actor = actors.pick(t, rng);
+            let a = match actor {
+                Actor::Expert => label,
+                Actor::Learner(table) => {
+                    let u: S = dyadic_uniform(rng);
+                    sample_categorical(&table.probs[table.groups[s]], &u)?
+                }
+            };
+            let u: S = dyadic_uniform(rng);
+            let next = sample_categorical(&self.transition[s][a], &u)?;
+            actions.push(a);
+            labels.push(label);
+            states.push(next);
+        }
+        cost.trajectories += 1;
+        cost.env_steps += (h - 1) as u64;
+        cost.expert_queries += (h - 1) as u64;
+        Ok(ToyTrajectory {
+            states,
+            actions,
+            labels,
+        })
+    }
+
+    fn estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &ToyTrajectory,
+        form: EstimatorForm,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        self.check(trajectory)?;
+        let table = self.table(theta.as_slice())?;
+        let (states, actions) = self.prefix(trajectory);
+        let g = match form {
+            EstimatorForm::Causal => estimator::causal(&table, states, actions),
+            EstimatorForm::Full => estimator::full(&table, states, actions),
+        };
+        cost.gradient_evaluations += states.len() as u64;
+        Ok(DVector::from_vec(g))
+    }
+
+    fn weighted_estimate(
+        &self,
+        theta_old: &DVector<S>,
+        theta_new: &DVector<S>,
+        trajectory: &ToyTrajectory,
+        weighting: Weighting,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        self.check(trajectory)?;
+        let old = self.table(theta_old.as_slice())?;
+        let new = self.table(theta_new.as_slice())?;
+        let (states, actions) = self.prefix(trajectory);
+        let ratios: Vec<S> = states
+            .iter()
+            .zip(actions)
+            .map(|(&s, &a)| old.prob(s, a).clone() / new.prob(s, a))
+            .collect();
+        let g = match weighting {
+            Weighting::Trajectory => {
+                let w = ratios.iter().fold(S::one(), |acc, r| acc * r);
+                estimator::causal(&old, states, actions)
+                    .into_iter()
+                    .map(|x| x * &w)
+                    .collect()
+            }
+            Weighting::PerDecision => estimator::per_decision(&old, states, actions, &ratios),
+        };
+        cost.gradient_evaluations += states.len() as u64;
+        Ok(DVector::from_vec(g))
+    }
+
+    fn trajectory_loss(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &ToyTrajectory,
+    ) -> Result<S, OracleError> {
+        self.check(trajectory)?;
+        let table = self.table(theta.as_slice())?;
+        Ok(prefix_loss(&table, self.prefix(trajectory).0))
+    }
+
+    fn labelled_states(&self, trajectory: &ToyTrajectory) -> Vec<ToyExample> {
+        trajectory
+            .states
+            .iter()
+            .zip(&trajectory.labels)
+            .map(|(&state, &label)| ToyExample { state, label })
+            .collect()
+    }
+
+    fn supervised(
+        &self,
+        theta: &DVector<S>,
+        example: &ToyExample,
+        cost: &mut Cost,
+    ) -> Result<(S, DVector<S>), OracleError> {
+        if example.state >= self.mdp.states || example.label >= self.mdp.actions {
+            return Err(OracleError::Trajectory(format!(
+                "example (state {}, label {}) outside the MDP",
+                example.state, example.label
+            )));
+        }
+        let table = self.table(theta.as_slice())?;
+        let o = table.groups[example.state];
+        let (l, local) = super::policy::brier(&table.probs[o], &table.jacobian[o], example.label);
+        let mut g = vec![S::zero(); table.dim];
+        table.add_block_unscaled(&mut g, example.state, &local);
+        cost.gradient_evaluations += 1;
+        Ok((l, DVector::from_vec(g)))
+    }
+}

@@ -1,0 +1,165 @@
+//! `ilopt toy eval`: the output contract, exact values, negative θ in both forms, and clear errors
+//! (non-zero exit, a message naming the input, never a panic) for bad input.
+
+use serde_json::{Value, json};
+use std::process::Command;
+
+fn ilopt(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_ilopt"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
+}
+
+const M1: &str = "examples/toy/m1-tied.json";
+
+#[test]
+fn exact_output_matches_the_reference_values() {
+    // math.md §1.4 at θ = 0: F = 11/8, F′ = −1/2, E g² = 185/192.
+    let (code, out, err) = ilopt(&["toy", "eval", "--mdp", M1, "--theta", "0"]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(
+        v,
+        json!({"objective": "11/8", "gradient": ["-1/2"], "expected_estimate": ["-1/2"],
+               "second_moment": "185/192"})
+    );
+}
+
+#[test]
+fn negative_theta_works_in_both_forms() {
+    let a = ilopt(&["toy", "eval", "--mdp", M1, "--theta", "-1/2"]);
+    let b = ilopt(&["toy", "eval", "--mdp", M1, "--theta=-1/2"]);
+    assert_eq!(a.0, 0, "{}", a.2);
+    assert_eq!(a.1, b.1);
+    let three = "examples/toy/three-state.json";
+    let c = ilopt(&[
+        "toy",
+        "eval",
+        "--mdp",
+        three,
+        "--theta",
+        "-1/2,3,0.25,-7/2,0,1",
+    ]);
+    let d = ilopt(&[
+        "toy",
+        "eval",
+        "--mdp",
+        three,
+        "--theta=-1/2,3,0.25,-7/2,0,1",
+    ]);
+    assert_eq!(c.0, 0, "{}", c.2);
+    assert_eq!(c.1, d.1);
+}
+
+#[test]
+fn f64_and_interval_outputs_agree_with_exact() {
+    let (_, out, _) = ilopt(&[
+        "toy", "eval", "--mdp", M1, "--theta", "1/3", "--scalar", "f64",
+    ]);
+    let f: Value = serde_json::from_str(&out).unwrap();
+    let (_, out, _) = ilopt(&[
+        "toy", "eval", "--mdp", M1, "--theta", "1/3", "--scalar", "interval",
+    ]);
+    let i: Value = serde_json::from_str(&out).unwrap();
+    for key in ["objective", "second_moment"] {
+        let x = f[key].as_f64().unwrap();
+        let (lo, hi) = (i[key][0].as_f64().unwrap(), i[key][1].as_f64().unwrap());
+        assert!(lo <= x && x <= hi, "{key}: {x} ∉ [{lo}, {hi}]");
+    }
+    let x = f["gradient"][0].as_f64().unwrap();
+    let (lo, hi) = (
+        i["gradient"][0][0].as_f64().unwrap(),
+        i["gradient"][0][1].as_f64().unwrap(),
+    );
+    assert!(lo <= x && x <= hi);
+}
+
+#[test]
+fn bad_input_is_a_clear_error() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["toy", "eval", "--mdp", M1, "--theta", "x"],
+            "--theta entry 0",
+        ),
+        (
+            &["toy", "eval", "--mdp", M1, "--theta", ""],
+            "--theta entry 0",
+        ),
+        (
+            &["toy", "eval", "--mdp", M1, "--theta", "nan"],
+            "not an exact number",
+        ),
+        (
+            &["toy", "eval", "--mdp", M1, "--theta", "1/0"],
+            "zero denominator",
+        ),
+        (&["toy", "eval", "--mdp", M1, "--theta", "1,2"], "needs 1"),
+        (
+            &["toy", "eval", "--mdp", M1, "--theta", "1,"],
+            "--theta entry 1",
+        ),
+        (
+            &["toy", "eval", "--mdp", "/nonexistent.json", "--theta", "0"],
+            "/nonexistent.json",
+        ),
+        (
+            &["toy", "eval", "--mdp", "Cargo.toml", "--theta", "0"],
+            "not valid JSON",
+        ),
+        (
+            &[
+                "toy",
+                "eval",
+                "--mdp",
+                "examples/toy/m1-direct.json",
+                "--theta",
+                "3/2",
+            ],
+            "open simplex",
+        ),
+        (
+            &[
+                "toy", "eval", "--mdp", M1, "--theta", "0", "--scalar", "f16",
+            ],
+            "invalid value",
+        ),
+        (&["toy", "eval", "--theta", "0"], "--mdp"),
+        (&["toy", "eval", "--mdp", M1], "--theta"),
+        (&["toy"], "Usage"),
+        (&["frobnicate"], "unrecognized subcommand"),
+    ];
+    for (args, needle) in cases {
+        let (code, out, err) = ilopt(args);
+        assert_ne!(code, 0, "{args:?} succeeded");
+        assert!(
+            code == 1 || code == 2,
+            "{args:?}: exit {code} (a panic exits 101)"
+        );
+        assert!(out.is_empty(), "{args:?} printed {out}");
+        assert!(err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn overflow_in_f64_is_an_error_not_nan() {
+    // θ = 1e200: θ² overflows in f64 (the exact value is fine).
+    let (code, _, err) = ilopt(&[
+        "toy", "eval", "--mdp", M1, "--theta", "1e200", "--scalar", "f64",
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("not finite") || err.contains("non-finite"),
+        "{err}"
+    );
+    let (code, out, _) = ilopt(&["toy", "eval", "--mdp", M1, "--theta", "1e200"]);
+    assert_eq!(code, 0);
+    assert!(out.contains("objective"));
+}

@@ -1,0 +1,256 @@
+//! Constants of the bounds for toy MDPs, each computed exactly or bounded rigorously, and labelled
+//! so (math.md §7.1).
+//!
+//! * B_F = F(θ₁) − inf F: exact in rationals (X2), with inf F exact when known, else 0 (F ≥ 0).
+//! * L_F ≥ sup ‖∇²F‖₂ over a box: interval branch-and-bound on the forward DP (X2) run in nested
+//!   duals over intervals, `Dual<Dual<Interval>>` (‖H‖₂ ≤ ‖mag H‖_F).
+//! * σ²(c) ≥ sup [E‖g‖² − c‖∇F‖²], G² ≥ sup E‖g‖², G_F ≥ sup ‖∇F‖, G_∞ ≥ sup_{θ,τ} ‖g(θ, τ)‖:
+//!   branch-and-bound on the enumeration (X1) in intervals.
+//!
+//! Box bounds are only valid for a box that provably contains every iterate; [`sgd_iterate_box`]
+//! gives one from an a.s. bound on the estimator.
+
+use crate::bnb::{BnbError, SupBound, sup_bound};
+use ilopt::exact::enumerate::{moments, prefixes};
+use ilopt::exact::forward::forward;
+use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
+use ilopt::toy::{ToyMdp, ToyProblem};
+use serde::Serialize;
+
+/// How a constant was obtained.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Provenance {
+    /// Computed exactly in rationals.
+    Exact,
+    /// A rigorous upper bound (interval branch-and-bound; certificate attached).
+    Rigorous,
+    /// A statistical or sampled estimate — never a certificate.
+    Estimate,
+}
+
+/// A named constant with its value and provenance.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Constant {
+    /// Name as in math.md (L_F, σ², …).
+    pub name: String,
+    /// The value used by the bound (an upper bound unless exact).
+    pub value: f64,
+    /// The same value as an exact rational string (the f64 above is exactly this rational).
+    pub rational: String,
+    /// Exact, rigorous or estimate.
+    pub provenance: Provenance,
+    /// How it was obtained (domain, tolerance, boxes).
+    pub how: String,
+    /// The branch-and-bound certificate, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub certificate: Option<SupBound>,
+}
+
+impl Constant {
+    /// An exact rational constant.
+    pub fn exact(name: &str, q: &BigRational, how: &str) -> Self {
+        Self {
+            name: name.into(),
+            value: Scalar::to_f64(q),
+            rational: q.to_string(),
+            provenance: Provenance::Exact,
+            how: how.into(),
+            certificate: None,
+        }
+    }
+    /// A rigorous upper bound from branch-and-bound; `transform` maps the sup of the enclosed
+    /// function to the constant (e.g. a square root), and must be monotone and rounded upward.
+    fn rigorous(name: &str, bound: SupBound, value: f64, how: String) -> Self {
+        Self {
+            name: name.into(),
+            value,
+            rational: BigRational::from_float(value)
+                .map_or_else(|| "inf".into(), |q| q.to_string()),
+            provenance: Provenance::Rigorous,
+            how,
+            certificate: Some(bound),
+        }
+    }
+}
+
+fn interval_theta(b: &[Interval]) -> Vec<Interval> {
+    b.to_vec()
+}
+
+fn sqrt_up(x: f64) -> f64 {
+    // sqrt is correctly rounded; one ulp up makes it an upper bound of the exact root.
+    x.max(0.0).sqrt().next_up()
+}
+
+/// `‖mag H‖_F` of an interval matrix (an upper bound on the spectral norm of every member).
+fn frobenius_mag(h: &[Vec<Interval>]) -> Interval {
+    let mut s = Interval::try_from((0.0, 0.0)).expect("0");
+    for row in h {
+        for x in row {
+            let m = x.mag();
+            let m = Interval::try_from((m, m)).unwrap_or(Interval::ENTIRE);
+            s += m * m;
+        }
+    }
+    Interval::sqrt(s)
+}
+
+/// B_F = F(θ₁) − F_inf exactly (F_inf = 0 when not given: F ≥ 0 always).
+///
+/// # Errors
+/// If F cannot be evaluated at θ₁.
+pub fn b_f(
+    mdp: &ToyMdp,
+    theta1: &[BigRational],
+    f_inf: Option<&BigRational>,
+) -> Result<Constant, String> {
+    let f = forward(&ToyProblem::<BigRational>::new(mdp), theta1)
+        .map_err(|e| e.to_string())?
+        .objective;
+    let inf = f_inf.cloned().unwrap_or_else(<BigRational as Scalar>::zero);
+    let how = match f_inf {
+        Some(q) => format!("F(θ₁) − inf F with inf F = {q} exact"),
+        None => "F(θ₁) − 0 (F ≥ 0)".into(),
+    };
+    Ok(Constant::exact("B_F", &(f - inf), &how))
+}
+
+/// L_F ≥ sup_{θ ∈ domain} ‖∇²F(θ)‖₂ (X2 in `Dual<Dual<Interval>>`).
+///
+/// # Errors
+/// [`BnbError`] if the engine fails on a box.
+pub fn l_f(
+    mdp: &ToyMdp,
+    domain: &[[f64; 2]],
+    tol: f64,
+    max_boxes: usize,
+) -> Result<Constant, BnbError> {
+    let p = ToyProblem::<Dual<Dual<Interval>>>::new(mdp);
+    let d = domain.len();
+    let f = |b: &[Interval]| -> Result<Interval, String> {
+        let inner = Dual::variables(&interval_theta(b));
+        let theta: Vec<Dual<Dual<Interval>>> = inner
+            .into_iter()
+            .enumerate()
+            .map(|(i, x)| Dual::variable(x, i, d))
+            .collect();
+        let obj = forward(&p, &theta).map_err(|e| e.to_string())?.objective;
+        let h: Vec<Vec<Interval>> = obj
+            .gradient_padded(d)
+            .iter()
+            .map(|gi| gi.gradient_padded(d))
+            .collect();
+        Ok(if d == 1 {
+            h[0][0].abs()
+        } else {
+            frobenius_mag(&h)
+        })
+    };
+    let r = sup_bound(f, domain, tol, max_boxes)?;
+    let v = r.upper;
+    let how = format!(
+        "sup ‖∇²F‖ over {domain:?} by interval branch-and-bound ({} boxes)",
+        r.certificate.len()
+    );
+    Ok(Constant::rigorous("L_F", r, v, how))
+}
+
+/// σ²(c) ≥ sup_{θ ∈ domain} [E‖g‖² − c‖∇F‖²] (c = 1: sup Var; c = 0: sup E‖g‖² = G²).
+///
+/// # Errors
+/// [`BnbError`] if the engine fails on a box.
+pub fn sigma2(
+    mdp: &ToyMdp,
+    c: &BigRational,
+    domain: &[[f64; 2]],
+    tol: f64,
+    max_boxes: usize,
+) -> Result<Constant, BnbError> {
+    let p = ToyProblem::<Interval>::new(mdp);
+    let ci = Interval::from_rational(c);
+    let f = |b: &[Interval]| -> Result<Interval, String> {
+        let m = moments(&p, b).map_err(|e| e.to_string())?;
+        let g2 = m
+            .expected_estimate
+            .iter()
+            .fold(Interval::zero(), |a, x| a + x * x);
+        Ok(m.second_moment - ci * g2)
+    };
+    let r = sup_bound(f, domain, tol, max_boxes)?;
+    let v = r.upper.max(0.0);
+    let name = if c.is_certainly_zero() { "G²" } else { "σ²" };
+    let how = format!(
+        "sup (E‖g‖² − {c}·‖∇F‖²) over {domain:?} by interval branch-and-bound ({} boxes)",
+        r.certificate.len()
+    );
+    Ok(Constant::rigorous(name, r, v, how))
+}
+
+/// G_F ≥ sup_{θ ∈ domain} ‖∇F(θ)‖ (X2 in intervals).
+///
+/// # Errors
+/// [`BnbError`] if the engine fails on a box.
+pub fn gradient_norm(
+    mdp: &ToyMdp,
+    domain: &[[f64; 2]],
+    tol: f64,
+    max_boxes: usize,
+) -> Result<Constant, BnbError> {
+    let p = ToyProblem::<Interval>::new(mdp);
+    let f = |b: &[Interval]| -> Result<Interval, String> {
+        let g = forward(&p, b).map_err(|e| e.to_string())?.gradient;
+        Ok(g.iter().fold(Interval::zero(), |a, x| a + x * x))
+    };
+    let r = sup_bound(f, domain, tol, max_boxes)?;
+    let v = sqrt_up(r.upper);
+    let how = format!(
+        "√ sup ‖∇F‖² over {domain:?} by interval branch-and-bound ({} boxes)",
+        r.certificate.len()
+    );
+    Ok(Constant::rigorous("G_F", r, v, how))
+}
+
+/// G_∞ ≥ sup_{θ ∈ domain, τ̄} ‖g(θ, τ̄)‖: the almost-sure bound of the estimator.
+///
+/// # Errors
+/// [`BnbError`] if the engine fails on a box.
+pub fn estimator_bound(
+    mdp: &ToyMdp,
+    domain: &[[f64; 2]],
+    tol: f64,
+    max_boxes: usize,
+) -> Result<Constant, BnbError> {
+    let p = ToyProblem::<Interval>::new(mdp);
+    let f = |b: &[Interval]| -> Result<Interval, String> {
+        let pre = prefixes(&p, b).map_err(|e| e.to_string())?;
+        let mut best = Interval::zero();
+        for x in pre {
+            let n = x.estimate.iter().fold(Interval::zero(), |a, v| a + v * v);
+            best = best.convex_hull(n);
+        }
+        Ok(best)
+    };
+    let r = sup_bound(f, domain, tol, max_boxes)?;
+    let v = sqrt_up(r.upper);
+    let how = format!(
+        "√ max over prefixes of sup ‖g‖² over {domain:?} ({} boxes)",
+        r.certificate.len()
+    );
+    Ok(Constant::rigorous("G_∞", r, v, how))
+}
+
+/// A box that provably contains every SGD iterate: |θ_{k+1} − θ_k| ≤ η‖g‖ ≤ ηG_∞ a.s., so after
+/// K steps from θ₁ every coordinate stays within K·η·G_∞ (rounded up) of θ₁.
+pub fn sgd_iterate_box(theta1: &[f64], eta: f64, k: u64, g_inf: f64) -> Vec<[f64; 2]> {
+    let r = (k as f64 * eta * g_inf) * (1.0 + 1e-12);
+    theta1.iter().map(|t| [t - r, t + r]).collect()
+}
+
+/// The crude closed-form a.s. bound of math.md §7.1 for P2' with the Brier loss and n = 2 actions:
+/// `G_∞ ≤ √2 [(T−1)·4/√(nc) + (T−1)(T−2)·(1/√c + 1/√(nc))]` (the √2 is the tie's factor).
+pub fn tied_softmax_g_inf_closed_form(horizon: usize, c: f64) -> f64 {
+    let (t, n) = (horizon as f64, 2.0);
+    let psi = 1.0 / c.sqrt() + 1.0 / (n * c).sqrt();
+    (2f64.sqrt() * ((t - 1.0) * 4.0 / (n * c).sqrt() + (t - 1.0) * (t - 2.0) * psi)) * (1.0 + 1e-12)
+}

@@ -1,0 +1,177 @@
+//! The STORM schedule (3.43) and erratum E7, decided rigorously (math.md §§3.1–3.2).
+//!
+//! With y_k = (7/(k+7))^{1/3}, the schedule is η_k = y_k/(4L) and a_{k+1} = y_k². Then
+//! * (C1) Lη_k ≤ 1/2 ⟺ y_k ≤ 2;
+//! * (C2) 4L²η_k² + (1 − a_{k+1})² ≤ η_k/η_{k−1} ⟺ a/4 + (1 − a)² ≤ ((k+6)/(k+7))^{1/3};
+//! * the thesis's own route (E7) needs 1 − a/4 + a²/2 + a³/4 ≤ ((k+6)/(k+7))^{1/3}, which fails for
+//!   k = 1..23.
+//!
+//! Cube roots are enclosed in rationals by bisection (lo³ ≤ q ≤ hi³), so every verdict is a proof,
+//! not a float comparison; when the enclosure is too coarse to decide, it is refined.
+
+use num_bigint::BigInt;
+use num_rational::BigRational;
+use num_traits::{One, Zero};
+use serde::Serialize;
+
+/// Rational bounds `lo ≤ q^{1/3} ≤ hi` for q ≥ 0, of width ≤ 2^{−bits}·max(1, q).
+pub fn cbrt_enclosure(q: &BigRational, bits: u32) -> (BigRational, BigRational) {
+    let (mut lo, mut hi) = (BigRational::zero(), q.clone().max(BigRational::one()));
+    let two = BigRational::from_integer(BigInt::from(2));
+    for _ in 0..bits {
+        let mid = (lo.clone() + &hi) / &two;
+        if mid.clone() * &mid * &mid <= *q {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (lo, hi)
+}
+
+/// A decided inequality `lhs ≤ rhs`, or undecided at the precision tried.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Verdict {
+    /// Proved to hold.
+    Holds,
+    /// Proved to fail.
+    Fails,
+    /// Not decided (equality or beyond the precision tried).
+    Undecided,
+}
+
+fn ratio(n: u64, d: u64) -> BigRational {
+    BigRational::new(BigInt::from(n), BigInt::from(d))
+}
+
+/// Decide `f(a) ≤ r` where `a = (7/(k+7))^{2/3}`, `r = ((k+6)/(k+7))^{1/3}`, from a function
+/// giving (lower, upper) bounds of f over a rational interval [a_lo, a_hi] ⊂ [0, 1].
+fn decide_at(
+    k: u64,
+    bounds: impl Fn(&BigRational, &BigRational) -> (BigRational, BigRational),
+) -> Verdict {
+    for bits in [24u32, 48, 96] {
+        let (ylo, yhi) = cbrt_enclosure(&ratio(7, k + 7), bits);
+        let (rlo, rhi) = cbrt_enclosure(&ratio(k + 6, k + 7), bits);
+        let (alo, ahi) = (
+            ylo.clone() * &ylo,
+            (yhi.clone() * &yhi).min(BigRational::one()),
+        );
+        let (flo, fhi) = bounds(&alo, &ahi);
+        if fhi <= rlo {
+            return Verdict::Holds;
+        }
+        if flo > rhi {
+            return Verdict::Fails;
+        }
+    }
+    Verdict::Undecided
+}
+
+/// (C2) at step k: `a/4 + (1 − a)² ≤ ((k+6)/(k+7))^{1/3}`.
+pub fn c2(k: u64) -> Verdict {
+    let four = ratio(4, 1);
+    decide_at(k, |alo, ahi| {
+        let one = BigRational::one();
+        let lo = alo.clone() / &four + (one.clone() - ahi) * (one.clone() - ahi);
+        let hi = ahi.clone() / &four + (one.clone() - alo) * (one - alo);
+        (lo, hi)
+    })
+}
+
+/// The thesis's condition after (3.58)/(3.59) (erratum E7) at step k:
+/// `1 − a/4 + a²/2 + a³/4 ≤ ((k+6)/(k+7))^{1/3}`.
+pub fn thesis_route(k: u64) -> Verdict {
+    decide_at(k, |alo, ahi| {
+        let one = BigRational::one();
+        let (two, four) = (ratio(2, 1), ratio(4, 1));
+        let poly = |neg: &BigRational, pos: &BigRational| {
+            one.clone() - neg.clone() / &four
+                + pos.clone() * pos / &two
+                + pos.clone() * pos * pos / &four
+        };
+        (poly(ahi, alo), poly(alo, ahi))
+    })
+}
+
+/// (C1) at step k: Lη_k = y_k/4 ≤ 1/2 (y_k ≤ 1 always; proved from the upper enclosure).
+pub fn c1(k: u64) -> Verdict {
+    let (_, yhi) = cbrt_enclosure(&ratio(7, k + 7), 24);
+    if yhi / ratio(4, 1) <= ratio(1, 2) {
+        Verdict::Holds
+    } else {
+        Verdict::Undecided
+    }
+}
+
+/// What the schedule checks found for k = 1..=k_max.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct ScheduleReport {
+    /// Largest k checked.
+    pub k_max: u64,
+    /// Every k where (C1) was not proved.
+    pub c1_not_proved: Vec<u64>,
+    /// Every k where (C2) was not proved.
+    pub c2_not_proved: Vec<u64>,
+    /// Every k where the thesis's route was proved to fail.
+    pub thesis_route_fails: Vec<u64>,
+    /// Every k where the thesis's route was not decided.
+    pub thesis_route_undecided: Vec<u64>,
+}
+
+/// Check (C1), (C2) and the thesis route for k = 1..=k_max.
+pub fn check_schedule(k_max: u64) -> ScheduleReport {
+    let mut r = ScheduleReport {
+        k_max,
+        c1_not_proved: vec![],
+        c2_not_proved: vec![],
+        thesis_route_fails: vec![],
+        thesis_route_undecided: vec![],
+    };
+    for k in 1..=k_max {
+        if c1(k) != Verdict::Holds {
+            r.c1_not_proved.push(k);
+        }
+        if c2(k) != Verdict::Holds {
+            r.c2_not_proved.push(k);
+        }
+        match thesis_route(k) {
+            Verdict::Fails => r.thesis_route_fails.push(k),
+            Verdict::Undecided => r.thesis_route_undecided.push(k),
+            Verdict::Holds => {}
+        }
+    }
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cube_roots_are_enclosed() {
+        let (lo, hi) = cbrt_enclosure(&ratio(27, 8), 40);
+        assert!(lo <= ratio(3, 2) && ratio(3, 2) <= hi);
+        let (lo, hi) = cbrt_enclosure(&ratio(7, 8), 40);
+        assert!(lo.clone() * &lo * &lo <= ratio(7, 8) && ratio(7, 8) <= hi.clone() * &hi * &hi);
+        assert!(hi - lo <= ratio(1, 1 << 39));
+    }
+
+    /// E7 (math.md §3.1): the thesis route fails exactly for k = 1..23; (C1), (C2) hold throughout.
+    #[test]
+    fn erratum_e7_and_the_corrected_conditions() {
+        let r = check_schedule(400);
+        assert_eq!(r.thesis_route_fails, (1..=23).collect::<Vec<_>>());
+        assert!(r.thesis_route_undecided.is_empty());
+        assert!(r.c1_not_proved.is_empty() && r.c2_not_proved.is_empty());
+    }
+
+    /// The decision procedure can report failure: the thesis route is proved false at k = 1
+    /// (LHS ≈ 1.38 against RHS ≈ 0.956, math.md §3.1) and proved true at k = 24.
+    #[test]
+    fn the_procedure_reports_both_outcomes() {
+        assert_eq!(thesis_route(1), Verdict::Fails);
+        assert_eq!(thesis_route(24), Verdict::Holds);
+    }
+}
