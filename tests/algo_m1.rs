@@ -114,7 +114,7 @@ fn exact_rrm_contracts_with_ratio_exactly_one_quarter() {
     for th in [q(1, 7), q(1, 2), q(5, 6)] {
         let g = map(&DVector::from_element(1, th.clone())).unwrap()[0].clone();
         assert_eq!(g, q(1, 1) - fx.rrm_map(&(q(1, 1) - th.clone())));
-        let f = ilopt::exact::forward::forward(&problem, &[th.clone()])
+        let f = ilopt::exact::forward::forward(&problem, std::slice::from_ref(&th))
             .unwrap()
             .objective;
         assert_eq!(f, fx.objective(&(q(1, 1) - th)));
