@@ -250,3 +250,66 @@ fn f64_and_rational_rrm_iterates_agree() {
         assert!((tq[0].to_f64() - tf[0]).abs() <= 1e-15);
     }
 }
+
+/// Drive a STORM-type algorithm with a vanishing step (θ stays at θ₀ to within 10⁻⁹) and return
+/// the directions d_k of `steps` steps.
+fn directions(mut alg: ilopt::algo::storm::Storm<f64>, steps: usize, seed: u64) -> Vec<f64> {
+    use ilopt::algo::{Algorithm, Ctx};
+    use rand::SeedableRng;
+    let problem = ToyProblem::<f64>::new(&m1());
+    let mut rng = ilopt::problem::KitRng::seed_from_u64(seed);
+    let mut cost = ilopt::problem::Cost::default();
+    let mut ctx = Ctx {
+        rng: &mut rng,
+        cost: &mut cost,
+    };
+    alg.init(&problem, DVector::from_element(1, 0.5), &mut ctx)
+        .unwrap();
+    (0..steps)
+        .map(|_| {
+            alg.step(&problem, &mut ctx).unwrap();
+            alg.direction().unwrap()[0]
+        })
+        .collect()
+}
+
+#[test]
+fn printed_algorithm_4_does_not_track_the_gradient() {
+    // Negative control (erratum E9, math.md §4): with θ frozen, the E9-corrected recursion is an
+    // exponential average of unbiased estimates, so E d → ∇F(θ₀); the printed update is
+    // (2 − a)·g(θ₀, τ), so E d = (2 − a)∇F(θ₀). Here a = 1/2 and ∇F(1/2) = 1 (engine, exactly).
+    let grad = ilopt::exact::forward::forward(&ToyProblem::<BigRational>::new(&m1()), &[q(1, 2)])
+        .unwrap()
+        .gradient[0]
+        .clone();
+    assert_eq!(grad, q(1, 1));
+    let schedule = StormSchedule::constant(Num::Float(1e-12), Num::ratio(1, 2));
+    let corrected = ilopt::algo::storm::Storm::new(&StormConfig {
+        schedule: schedule.clone(),
+        correction: Correction::Unweighted,
+        form: EstimatorForm::Causal,
+    })
+    .unwrap();
+    let printed =
+        ilopt::algo::printed::printed_algorithm_4(&ilopt::algo::printed::PrintedAlgorithm4Config {
+            schedule,
+            form: EstimatorForm::Causal,
+        })
+        .unwrap();
+    // Per-run means over 2000 steps, 32 seeds; the same tolerance policy as above (BIAS covers
+    // the 10⁻⁹ drift of θ and the d₁ start-up of the average).
+    let runs = |alg: &ilopt::algo::storm::Storm<f64>| -> Vec<f64> {
+        (0..SEEDS)
+            .map(|s| {
+                let d = directions(alg.clone(), 2000, s);
+                d.iter().sum::<f64>() / d.len() as f64
+            })
+            .collect()
+    };
+    let (mc, sc) = mean_se(&runs(&corrected));
+    let (mp, sp) = mean_se(&runs(&printed));
+    eprintln!("corrected: E d ≈ {mc:.4} (SE {sc:.4}); printed: E d ≈ {mp:.4} (SE {sp:.4})");
+    assert!((mc - 1.0).abs() <= BIAS + STAT_Z * sc);
+    assert!((mp - 1.5).abs() <= BIAS + STAT_Z * sp);
+    assert!((mp - 1.0).abs() > BIAS + STAT_Z * sp);
+}

@@ -474,3 +474,42 @@ fn scalar_choice_does_not_change_the_interval_of_a_rational_hyper_parameter() {
     );
     assert_eq!(<f64 as Scalar>::from_rational(&f.exact("x").unwrap()), 0.1);
 }
+
+#[test]
+fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly() {
+    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let ft = field_configs().pop().unwrap();
+    let rec: RunRecord<f64> = replay(&run_config(ft, 1, 100), &problem).unwrap();
+    // M1 has T = 3: losses at t = 1, 2, so two policies.
+    assert_eq!(rec.termination, Termination::Finished);
+    assert_eq!(rec.iterations, 2);
+    assert_eq!(rec.outputs.len(), 2);
+    // π₁ is trained on s₁ ∼ μ = (1/2, 1/2) only: θ₁ = fraction of B among 10 initial states.
+    let x = rec.outputs[0][0] * 10.0;
+    assert!((x - x.round()).abs() < 1e-12, "{x}");
+
+    let cfg = SmileConfig {
+        alpha: Num::ratio(1, 3),
+        trajectories_per_iteration: 10,
+        retrain: Retrain::FromScratch,
+        inner: argmin_inner(),
+    };
+    let mut smile = ilopt::algo::smile::Smile::<f64, ToyProblem<f64>>::new(&cfg).unwrap();
+    let mut rng = KitRng::seed_from_u64(2);
+    let mut cost = Cost::default();
+    let mut ctx = Ctx {
+        rng: &mut rng,
+        cost: &mut cost,
+    };
+    smile
+        .init(&problem, DVector::from_element(1, 0.5), &mut ctx)
+        .unwrap();
+    for _ in 0..4 {
+        smile.step(&problem, &mut ctx).unwrap();
+    }
+    let w = smile.mixture_weights();
+    let q = |n: i64, d: i64| BigRational::new(n.into(), d.into());
+    // α(1−α)^{j−1}/(1 − (1−α)⁴) with α = 1/3: (1/3, 2/9, 4/27, 8/81)/(65/81).
+    assert_eq!(w, vec![q(27, 65), q(18, 65), q(12, 65), q(8, 65)]);
+    assert_eq!(smile.outputs().len(), 4);
+}
