@@ -513,3 +513,23 @@ fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly()
     assert_eq!(w, vec![q(27, 65), q(18, 65), q(12, 65), q(8, 65)]);
     assert_eq!(smile.outputs().len(), 4);
 }
+
+#[test]
+fn a_time_limit_ends_the_run() {
+    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut cfg = run_config(field_configs()[0].clone(), 1, 1);
+    cfg.stop = StoppingRule {
+        time_limit_ms: Some(5),
+        ..Default::default()
+    };
+    let mut seen_progress = false;
+    let rec = Runner::new(cfg.stop.clone())
+        .unwrap()
+        .with_observer(ilopt::algo::runner::Progress { every: u64::MAX })
+        .with_observer(|m: &IterationMetrics<f64>| seen_progress |= m.wall_time > 0.0)
+        .run_config(&cfg, &problem)
+        .unwrap();
+    assert_eq!(rec.termination, Termination::TimeOut);
+    assert!(rec.wall_time >= 0.005 && rec.iterations > 0);
+    assert!(seen_progress);
+}
