@@ -11,8 +11,13 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod algo;
+/// Command-line front ends (the `ilopt` binary's subcommands).
 pub mod cli;
+pub mod env;
 pub mod exact;
+/// Experts that label states (thesis ch. 4): the CartPole LQR controller and the velocity-obstacle
+/// expert of eq. 4.1.
+pub mod expert;
 pub mod problem;
 pub mod scalar;
 pub mod tolerance;

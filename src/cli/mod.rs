@@ -2,6 +2,8 @@
 //! dispatches. Errors go to stderr with a non-zero exit status (2 for usage errors, 1 for failures);
 //! results go to stdout as JSON.
 
+pub mod expert;
+pub mod replay;
 pub mod toy;
 
 use clap::{Parser, Subcommand};
@@ -20,6 +22,24 @@ enum Command {
     /// Toy MDPs: exact objective, gradient and oracle moments.
     #[command(subcommand)]
     Toy(toy::ToyCommand),
+    /// Experts: solve the velocity-obstacle problem of eq. 4.1 for a file of cases.
+    #[command(subcommand)]
+    Expert(ExpertCommand),
+    /// Replay an environment from a given state and action sequence.
+    #[command(subcommand)]
+    Replay(ReplayCommand),
+}
+
+#[derive(Debug, Subcommand)]
+enum ExpertCommand {
+    /// The velocity-obstacle expert (eq. 4.1, global optimum): JSON lines in, JSON lines out.
+    Vo(expert::ExpertVoArgs),
+}
+
+#[derive(Debug, Subcommand)]
+enum ReplayCommand {
+    /// CartPole-v1, step for step as Gymnasium: prints the float64 state after each step.
+    Cartpole(replay::ReplayCartpoleArgs),
 }
 
 /// Run the CLI on the process arguments; returns the exit code.
@@ -32,8 +52,22 @@ pub fn main() -> ExitCode {
             return ExitCode::from(code);
         }
     };
-    let result = match cli.command {
-        Command::Toy(cmd) => toy::run(&cmd),
+    let result: Result<serde_json::Value, String> = match cli.command {
+        Command::Toy(cmd) => toy::run(&cmd).map_err(|e| e.to_string()),
+        Command::Expert(ExpertCommand::Vo(args)) => {
+            // Streams its JSON lines itself; only errors come back.
+            let stdout = std::io::stdout();
+            return match expert::run(&args, &mut stdout.lock()) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
+        Command::Replay(ReplayCommand::Cartpole(args)) => {
+            replay::run(&args).map_err(|e| e.to_string())
+        }
     };
     match result {
         Ok(out) => {

@@ -9,6 +9,8 @@
 
 pub mod bnb;
 pub mod bounds;
+pub mod check;
+pub mod checks;
 pub mod constants;
 pub mod schedule;
 pub mod stats;

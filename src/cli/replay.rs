@@ -1,0 +1,276 @@
+//! `ilopt replay cartpole`: replay an action sequence through CartPole-v1's float64 dynamics.
+//!
+//! ```text
+//! ilopt replay cartpole --init X,XDOT,THETA,THETADOT --actions 0,1,1,…
+//! ```
+//!
+//! prints one JSON object `{"states": [[x, x_dot, theta, theta_dot], …], "terminated": [bool, …]}`:
+//! the float64 state after each step ([`cartpole_step`], bit-for-bit Gymnasium's) and whether it is
+//! terminal. Numbers are printed in the shortest form that reads back to the same float64. Stepping
+//! goes on after a terminal state, as `env.unwrapped.step` does in Gymnasium, and there is no time
+//! limit. The initial state is read as Python's `float()` reads it (correctly rounded).
+
+use crate::env::EnvError;
+#[cfg(doc)]
+use crate::env::cartpole::cartpole_step;
+use crate::env::cartpole::{CartPoleDynamics, STATE_NAMES};
+use serde_json::{Value, json};
+
+/// Arguments of `ilopt replay cartpole`.
+#[derive(Debug, Clone, PartialEq, clap::Parser)]
+#[command(
+    name = "cartpole",
+    about = "Replay actions through CartPole-v1 (Gymnasium's float64 dynamics); print the states as JSON"
+)]
+pub struct ReplayCartpoleArgs {
+    /// The initial state, four comma-separated finite numbers (negative values are fine:
+    /// `--init -0.01,0,0,0` or `--init=-0.01,0,0,0`).
+    #[arg(
+        long,
+        value_name = "X,XDOT,THETA,THETADOT",
+        allow_hyphen_values = true,
+        value_parser = parse_init_arg
+    )]
+    pub init: [f64; 4],
+    /// The actions, comma-separated, each 0 (push left) or 1 (push right); at least one.
+    #[arg(long, value_name = "A,A,…", allow_hyphen_values = true, value_parser = parse_actions_arg)]
+    pub actions: Actions,
+}
+
+/// A non-empty sequence of CartPole actions (each 0 or 1).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Actions(pub Vec<usize>);
+
+/// Why `ilopt replay cartpole` failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReplayError {
+    /// `--init` does not have exactly four components.
+    #[error("--init: expected 4 comma-separated numbers X,XDOT,THETA,THETADOT, got {count}")]
+    InitCount {
+        /// How many components were given.
+        count: usize,
+    },
+    /// A component of `--init` is not a number.
+    #[error("--init: component {index} ({name}) {text:?} is not a number")]
+    InitNotANumber {
+        /// 1-based position.
+        index: usize,
+        /// The component's name.
+        name: &'static str,
+        /// The offending text.
+        text: String,
+    },
+    /// A component of `--init` is NaN or infinite.
+    #[error("--init: component {index} ({name}) {text:?} is not finite")]
+    InitNotFinite {
+        /// 1-based position.
+        index: usize,
+        /// The component's name.
+        name: &'static str,
+        /// The offending text.
+        text: String,
+    },
+    /// `--actions` is empty.
+    #[error("--actions: at least one action is needed")]
+    NoActions,
+    /// An action is not `0` or `1`.
+    #[error("--actions: action {index} is {text:?}; expected 0 (push left) or 1 (push right)")]
+    BadAction {
+        /// 1-based position.
+        index: usize,
+        /// The offending text.
+        text: String,
+    },
+    /// The dynamics failed (the state left the finite floats).
+    #[error("step {step}: {source}")]
+    Step {
+        /// 1-based step number.
+        step: usize,
+        /// What failed.
+        source: EnvError,
+    },
+}
+
+/// Parses `X,XDOT,THETA,THETADOT` (surrounding spaces of each component ignored).
+///
+/// # Errors
+/// [`ReplayError::InitCount`], [`ReplayError::InitNotANumber`], [`ReplayError::InitNotFinite`].
+pub fn parse_init(text: &str) -> Result<[f64; 4], ReplayError> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    if parts.len() != 4 {
+        return Err(ReplayError::InitCount {
+            count: if text.trim().is_empty() {
+                0
+            } else {
+                parts.len()
+            },
+        });
+    }
+    let mut init = [0.0; 4];
+    for (i, part) in parts.iter().enumerate() {
+        let (index, name, text) = (i + 1, STATE_NAMES[i], (*part).to_owned());
+        let v: f64 = part.parse().map_err(|_| ReplayError::InitNotANumber {
+            index,
+            name,
+            text: text.clone(),
+        })?;
+        if !v.is_finite() {
+            return Err(ReplayError::InitNotFinite { index, name, text });
+        }
+        init[i] = v;
+    }
+    Ok(init)
+}
+
+/// Parses `0,1,1,…` (surrounding spaces of each action ignored).
+///
+/// # Errors
+/// [`ReplayError::NoActions`], [`ReplayError::BadAction`].
+pub fn parse_actions(text: &str) -> Result<Actions, ReplayError> {
+    if text.trim().is_empty() {
+        return Err(ReplayError::NoActions);
+    }
+    text.split(',')
+        .enumerate()
+        .map(|(i, part)| match part.trim() {
+            "0" => Ok(0),
+            "1" => Ok(1),
+            other => Err(ReplayError::BadAction {
+                index: i + 1,
+                text: other.to_owned(),
+            }),
+        })
+        .collect::<Result<Vec<_>, _>>()
+        .map(Actions)
+}
+
+fn parse_init_arg(text: &str) -> Result<[f64; 4], String> {
+    parse_init(text).map_err(|e| e.to_string())
+}
+
+fn parse_actions_arg(text: &str) -> Result<Actions, String> {
+    parse_actions(text).map_err(|e| e.to_string())
+}
+
+/// Replays the actions from the initial state and returns the JSON report (module docs).
+///
+/// # Errors
+/// [`ReplayError::NoActions`] for an empty action list (possible only when the struct is built by
+/// hand), [`ReplayError::InitNotFinite`] for a non-finite initial state, and [`ReplayError::Step`] if
+/// a state becomes non-finite or an action is invalid.
+pub fn run(args: &ReplayCartpoleArgs) -> Result<Value, ReplayError> {
+    if args.actions.0.is_empty() {
+        return Err(ReplayError::NoActions);
+    }
+    for (i, v) in args.init.iter().enumerate() {
+        if !v.is_finite() {
+            return Err(ReplayError::InitNotFinite {
+                index: i + 1,
+                name: STATE_NAMES[i],
+                text: v.to_string(),
+            });
+        }
+    }
+    let dynamics = CartPoleDynamics::<f64>::new();
+    let mut state = args.init;
+    let mut states = Vec::with_capacity(args.actions.0.len());
+    let mut terminated = Vec::with_capacity(args.actions.0.len());
+    for (i, &a) in args.actions.0.iter().enumerate() {
+        let (next, term) = dynamics
+            .step(&state, a)
+            .map_err(|source| ReplayError::Step {
+                step: i + 1,
+                source,
+            })?;
+        states.push(next.to_vec());
+        terminated.push(term);
+        state = next;
+    }
+    // Every state is finite (checked by the step), so serde_json writes plain numbers.
+    Ok(json!({ "states": states, "terminated": terminated }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    fn parse(args: &[&str]) -> Result<ReplayCartpoleArgs, clap::Error> {
+        ReplayCartpoleArgs::try_parse_from(std::iter::once("cartpole").chain(args.iter().copied()))
+    }
+
+    #[test]
+    fn negative_values_parse_in_both_forms() {
+        let a = parse(&["--init", "-0.01,0.02,-0.03,0.04", "--actions", "0,1,1"]).unwrap();
+        let b = parse(&["--init=-0.01,0.02,-0.03,0.04", "--actions=0,1,1"]).unwrap();
+        assert_eq!(a, b);
+        assert_eq!(a.init, [-0.01, 0.02, -0.03, 0.04]);
+        assert_eq!(a.actions, Actions(vec![0, 1, 1]));
+        let c = parse(&["--actions", "1", "--init", "-1e-3, -2,-3.5 ,-0"]).unwrap();
+        assert_eq!(c.init, [-1e-3, -2.0, -3.5, -0.0]);
+        assert!(c.init[3].is_sign_negative());
+    }
+
+    #[test]
+    fn bad_input_is_named() {
+        let cases: &[(&[&str], &str)] = &[
+            (&["--init", "0,0,0", "--actions", "0"], "expected 4"),
+            (&["--init", "0,0,0,0,0", "--actions", "0"], "got 5"),
+            (
+                &["--init", "0,x,0,0", "--actions", "0"],
+                "component 2 (x_dot)",
+            ),
+            (
+                &["--init", "0,0,NaN,0", "--actions", "0"],
+                "component 3 (theta)",
+            ),
+            (&["--init", "0,0,0,inf", "--actions", "0"], "not finite"),
+            (
+                &["--init", "0,0,0,-inf", "--actions", "0"],
+                "component 4 (theta_dot)",
+            ),
+            (&["--init", "0,0,0,", "--actions", "0"], "component 4"),
+            (
+                &["--init", "0,0,0,0", "--actions", "0,2"],
+                "action 2 is \"2\"",
+            ),
+            (&["--init", "0,0,0,0", "--actions", "0,,1"], "action 2"),
+            (
+                &["--init", "0,0,0,0", "--actions", "-1"],
+                "action 1 is \"-1\"",
+            ),
+            (&["--init", "0,0,0,0", "--actions", ""], "at least one"),
+            (&["--init", "0,0,0,0"], "--actions"),
+        ];
+        for (args, needle) in cases {
+            let err = parse(args).unwrap_err().to_string();
+            assert!(err.contains(needle), "{args:?}: {err}");
+        }
+    }
+
+    #[test]
+    fn replay_reports_every_step() {
+        let args = parse(&["--init=0,0,0.2,1", "--actions", "1,1,0"]).unwrap();
+        let v = run(&args).unwrap();
+        let states = v["states"].as_array().unwrap();
+        let terminated = v["terminated"].as_array().unwrap();
+        assert_eq!(states.len(), 3);
+        assert_eq!(terminated.len(), 3);
+        // θ' = θ + τ θ̇ = 0.2 + 0.02 > θ_max ≈ 0.2094 after the first step.
+        assert_eq!(terminated[0], Value::Bool(true));
+        assert_eq!(states[0][2].as_f64().unwrap(), 0.2 + 0.02 * 1.0);
+    }
+
+    #[test]
+    fn overflow_is_an_error_not_a_nan() {
+        let args = parse(&["--init=0,0,0,1e200", "--actions", "1,1"]).unwrap();
+        let err = run(&args).unwrap_err();
+        assert!(matches!(err, ReplayError::Step { step: 1, .. }), "{err}");
+        let mut bad = parse(&["--init=0,0,0,0", "--actions", "1"]).unwrap();
+        bad.actions = Actions(vec![]);
+        assert_eq!(run(&bad), Err(ReplayError::NoActions));
+        bad.actions = Actions(vec![3]);
+        assert!(matches!(run(&bad), Err(ReplayError::Step { step: 1, .. })));
+    }
+}

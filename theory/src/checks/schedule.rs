@@ -1,0 +1,73 @@
+//! Check 2 (part): the STORM schedule (3.43) satisfies the corrected conditions (C1), (C2) of
+//! Theorem S, and the thesis's own route fails for k = 1..23 (erratum E7). Proved with rational
+//! cube-root enclosures ([`crate::schedule`]).
+
+use crate::check::{Check, Method, Role, Verdict};
+use crate::schedule::check_schedule;
+
+/// The two rows: corrected conditions (holds) and the thesis route (fails for k ≤ 23).
+pub fn rows(k_max: u64) -> Vec<Check> {
+    let r = check_schedule(k_max);
+    let corrected_ok = r.c1_not_proved.is_empty() && r.c2_not_proved.is_empty();
+    let base = |id: &str, claim: String, verdict, role, details: String| Check {
+        id: id.into(),
+        result: "STORM, eq. 3.60 (schedule 3.43)".into(),
+        claim,
+        assumptions: vec!["η_k = (1/4L)(7/(k+7))^{1/3}, a_{k+1} = 16L²η_k²".into()],
+        constants: vec![],
+        bound: None,
+        measured: None,
+        tightness: None,
+        method: Method::Rigorous,
+        verdict,
+        erratum: Some("E7".into()),
+        role,
+        details,
+    };
+    vec![
+        base(
+            "2a",
+            format!(
+                "(C1) Lη_k ≤ 1/2 and (C2) 4L²η_k² + (1−a_{{k+1}})² ≤ η_k/η_{{k−1}} for k = 1..{k_max}"
+            ),
+            Verdict::from_bool(corrected_ok),
+            Role::Corrected,
+            format!(
+                "C1 not proved at {:?}; C2 not proved at {:?}",
+                r.c1_not_proved, r.c2_not_proved
+            ),
+        ),
+        base(
+            "2b",
+            format!("the thesis's e_k coefficient after (3.58)/(3.59) is ≤ 0 for k = 1..{k_max}"),
+            Verdict::from_bool(
+                r.thesis_route_fails.is_empty() && r.thesis_route_undecided.is_empty(),
+            ),
+            Role::Thesis,
+            format!(
+                "proved positive (route fails) at k = {:?}; undecided at {:?}",
+                compress(&r.thesis_route_fails),
+                r.thesis_route_undecided
+            ),
+        ),
+    ]
+}
+
+/// `[1, 2, 3, 7]` → `"1..3, 7"`.
+pub fn compress(ks: &[u64]) -> String {
+    let mut out: Vec<String> = vec![];
+    let mut i = 0;
+    while i < ks.len() {
+        let mut j = i;
+        while j + 1 < ks.len() && ks[j + 1] == ks[j] + 1 {
+            j += 1;
+        }
+        out.push(if i == j {
+            ks[i].to_string()
+        } else {
+            format!("{}..{}", ks[i], ks[j])
+        });
+        i = j + 1;
+    }
+    out.join(", ")
+}

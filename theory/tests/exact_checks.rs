@@ -1,0 +1,127 @@
+//! The exact and rigorous checks of issue 4 (checks 2 part, 3 part, 4, 5), each with a deliberately
+//! wrong claim that the same machinery flags.
+
+use ilopt::problem::Weighting;
+use ilopt::scalar::{BigRational, parse_exact};
+use ilopt::toy::ToyMdp;
+use ilopt_theory::check::{Role, Verdict};
+use ilopt_theory::checks::{o2nc_formula, schedule, thm31, unbiased};
+
+fn q(s: &str) -> BigRational {
+    parse_exact(s).unwrap()
+}
+
+fn example(name: &str) -> ToyMdp {
+    ToyMdp::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../examples/toy")
+            .join(name),
+    )
+    .unwrap()
+}
+
+fn m1_pairs() -> Vec<(ToyMdp, Vec<BigRational>, Vec<BigRational>)> {
+    let m = example("m1-tied.json");
+    ["0", "1/3", "-2", "5/2"]
+        .iter()
+        .flat_map(|a| ["1", "-1/2", "3"].iter().map(move |b| (*a, *b)))
+        .map(|(a, b)| (m.clone(), vec![q(a)], vec![q(b)]))
+        .chain(std::iter::once((
+            example("three-state.json"),
+            ["1/2", "-1", "0", "3", "2/3", "-5/4"].map(q).to_vec(),
+            ["0", "1", "1", "0", "-1/3", "2"].map(q).to_vec(),
+        )))
+        .collect()
+}
+
+#[test]
+fn check4_unbiasedness_and_its_negative_controls() {
+    let cases: Vec<_> = m1_pairs().into_iter().map(|(m, a, _)| (m, a)).collect();
+    assert_eq!(unbiased::estimator(&cases).verdict, Verdict::Holds);
+    for w in [Weighting::Trajectory, Weighting::PerDecision] {
+        assert_eq!(
+            unbiased::old_point(&m1_pairs(), Some(w)).verdict,
+            Verdict::Holds
+        );
+    }
+    // The printed Algorithm 4 / 5: biased (E10, E11) — the check must say so.
+    let printed = unbiased::old_point(&m1_pairs(), None);
+    assert_eq!(printed.verdict, Verdict::Fails);
+    assert_eq!(printed.role, Role::Thesis);
+    let single = vec![(example("m1-tied.json"), vec![q("0")], vec![q("1")])];
+    let b = unbiased::old_point(&single, None);
+    assert_eq!(
+        b.measured.unwrap().value,
+        5.0 / 12.0,
+        "bias 5/12 (math.md §1.4)"
+    );
+    assert_eq!(unbiased::printed_o2nc(&single).verdict, Verdict::Fails);
+    // E9: the printed update's mean is (2 − a)∇F.
+    let e9 = unbiased::printed_storm_update(&example("m1-tied.json"), &[q("0")], &q("1/2"));
+    assert_eq!(e9.verdict, Verdict::Fails);
+    assert!(e9.details.contains("3/2"), "{}", e9.details);
+    // With a = 1 the printed update happens to be unbiased: the check can also say Holds.
+    let a1 = unbiased::printed_storm_update(&example("m1-tied.json"), &[q("0")], &q("1"));
+    assert_eq!(a1.verdict, Verdict::Holds);
+}
+
+#[test]
+fn check5_theorem_3_1_on_the_m_family() {
+    let want = [
+        ("3/4", "2/3", "1/4"),
+        ("3/8", "2/5", "1/6"),
+        ("7/20", "5/13", "3/16"),
+    ];
+    for (inst, (po, ps, kappa)) in thm31::instances().iter().zip(want) {
+        let f = thm31::analyse(inst).unwrap();
+        // math.md §6's table, an independent hand computation.
+        assert_eq!(
+            (f.p_po.clone(), f.p_ps.clone(), f.kappa.clone()),
+            (q(po), q(ps), q(kappa))
+        );
+        assert!(f.closed_form_agrees && f.ps_closed_form_agrees);
+        for row in thm31::rows(inst) {
+            assert_eq!(
+                row.verdict,
+                Verdict::Holds,
+                "{}: {}",
+                row.claim,
+                row.details
+            );
+        }
+    }
+    let m1 = thm31::analyse(&thm31::instances()[0]).unwrap();
+    assert_eq!(m1.df_ps, q("-1/3"), "F′(p_PS) on M1");
+    assert_eq!((m1.f_po, m1.f_ps), (q("7/8"), q("8/9")));
+    // A wrong claim — "the stable point is optimal" (p_PS = p_PO) — is refuted by the same numbers.
+    assert_ne!(m1.p_ps, m1.p_po);
+    // An instance with Δ = 0 (actions do not affect the state): PS = PO, and the check says 5a fails.
+    let flat = thm31::Instance {
+        mu_a: q("1/2"),
+        p0: q("1/3"),
+        p1: q("1/3"),
+        t: 3,
+    };
+    let rows = thm31::rows(&flat);
+    assert_eq!(rows[0].verdict, Verdict::Fails, "{}", rows[0].details);
+}
+
+#[test]
+fn check2_schedule_rows() {
+    let rows = schedule::rows(100);
+    assert_eq!(rows[0].verdict, Verdict::Holds);
+    assert_eq!(rows[1].verdict, Verdict::Fails);
+    assert!(rows[1].details.contains("1..23"), "{}", rows[1].details);
+    assert_eq!(schedule::compress(&[1, 2, 3, 7, 9, 10]), "1..3, 7, 9..10");
+}
+
+#[test]
+fn check3_corollary_follows_from_the_theorem() {
+    let row = o2nc_formula::row(20_000, 1);
+    assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+    let r = o2nc_formula::ratios(20_000, 1, 1.0);
+    assert!(r.theorem <= 0.71, "math.md reports ≤ 0.70: {}", r.theorem);
+    // A corollary understated by half is violated.
+    let half = o2nc_formula::ratios(20_000, 1, 0.5);
+    assert!(half.theorem > 1.0 || half.intermediate > 1.0);
+}
