@@ -533,3 +533,62 @@ fn a_time_limit_ends_the_run() {
     assert!(rec.wall_time >= 0.005 && rec.iterations > 0);
     assert!(seen_progress);
 }
+
+#[test]
+fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
+    // With the one-step inner solver, θ = fraction of examples labelled 0 (state B) in the data:
+    // the exact minimiser of the mean Brier loss 2θ²·#A + 2(1−θ)²·#B.
+    use ilopt::algo::bc::Bc;
+    use ilopt::algo::dagger::Dagger;
+    let problem = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
+    let q = |n: usize, d: usize| BigRational::new((n as i64).into(), (d as i64).into());
+    let frac_b = |data: &[ilopt::toy::ToyExample]| {
+        q(data.iter().filter(|e| e.label == 0).count(), data.len())
+    };
+    let mut rng = KitRng::seed_from_u64(17);
+    let mut cost = Cost::default();
+    let mut ctx = Ctx {
+        rng: &mut rng,
+        cost: &mut cost,
+    };
+    let theta0 = DVector::from_element(1, q(1, 2));
+
+    let mut bc = Bc::<BigRational, ToyProblem<BigRational>>::new_field(&BcConfig {
+        trajectories_per_iteration: 25,
+        inner: argmin_inner(),
+        retrain: Retrain::FromScratch,
+    })
+    .unwrap();
+    bc.init(&problem, theta0.clone(), &mut ctx).unwrap();
+    for i in 1..=2 {
+        bc.step(&problem, &mut ctx).unwrap();
+        // 25 trajectories × (T − 1 = 2) labelled states per step, aggregated.
+        assert_eq!(bc.dataset().len(), 50 * i);
+        assert_eq!(
+            Algorithm::<BigRational, ToyProblem<BigRational>>::theta(&bc)[0],
+            frac_b(bc.dataset())
+        );
+    }
+
+    let mut dagger = Dagger::<BigRational, ToyProblem<BigRational>>::new_field(&DaggerConfig {
+        trajectories_per_iteration: 25,
+        beta: BetaSchedule::Linear { iterations: 2 },
+        aggregate: true,
+        retrain: Retrain::FromScratch,
+        inner: argmin_inner(),
+    })
+    .unwrap();
+    dagger.init(&problem, theta0, &mut ctx).unwrap();
+    // β₁ = 1 (expert only), β₂ = 1/2, β₃ = 0 = β₄.
+    let mut betas = Vec::new();
+    for i in 1..=4 {
+        betas.push(dagger.next_beta());
+        dagger.step(&problem, &mut ctx).unwrap();
+        assert_eq!(dagger.dataset().len(), 50 * i);
+        assert_eq!(
+            Algorithm::<BigRational, ToyProblem<BigRational>>::theta(&dagger)[0],
+            frac_b(dagger.dataset())
+        );
+    }
+    assert_eq!(betas, vec![q(1, 1), q(1, 2), q(0, 1), q(0, 1)]);
+}
