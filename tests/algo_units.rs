@@ -639,3 +639,116 @@ fn run_config_round_trips_through_json() {
     let back = RunConfig::from_json(&cfg.to_json().unwrap()).unwrap();
     assert_eq!(back, cfg);
 }
+
+/// Records the θ of every learner roll-out (to check where an algorithm samples).
+#[derive(Debug)]
+struct Recording {
+    inner: Scripted,
+    sampled_at: std::cell::RefCell<Vec<f64>>,
+}
+
+impl IlProblem<f64> for Recording {
+    type Trajectory = usize;
+    type Labelled = usize;
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rollout(
+        &self,
+        b: &Behaviour<'_, f64>,
+        rng: &mut KitRng,
+        cost: &mut Cost,
+    ) -> Result<usize, OracleError> {
+        if let Behaviour::Learner(th) = b {
+            self.sampled_at.borrow_mut().push(th[0]);
+        }
+        self.inner.rollout(b, rng, cost)
+    }
+    fn estimate(
+        &self,
+        th: &DVector<f64>,
+        t: &usize,
+        f: EstimatorForm,
+        c: &mut Cost,
+    ) -> Result<DVector<f64>, OracleError> {
+        self.inner.estimate(th, t, f, c)
+    }
+    fn weighted_estimate(
+        &self,
+        o: &DVector<f64>,
+        n: &DVector<f64>,
+        t: &usize,
+        w: Weighting,
+        c: &mut Cost,
+    ) -> Result<DVector<f64>, OracleError> {
+        self.inner.weighted_estimate(o, n, t, w, c)
+    }
+    fn trajectory_loss(&self, th: &DVector<f64>, t: &usize) -> Result<f64, OracleError> {
+        self.inner.trajectory_loss(th, t)
+    }
+    fn labelled_states(&self, t: &usize) -> Vec<usize> {
+        IlProblem::<f64>::labelled_states(&self.inner, t)
+    }
+    fn supervised(
+        &self,
+        th: &DVector<f64>,
+        e: &usize,
+        c: &mut Cost,
+    ) -> Result<(f64, DVector<f64>), OracleError> {
+        self.inner.supervised(th, e, c)
+    }
+}
+
+#[test]
+fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
+    use ilopt::algo::o2nc::O2nc;
+    use ilopt::algo::printed::printed_algorithm_5;
+    let cfg = O2ncConfig {
+        budget: 40,
+        delta: Num::ratio(1, 2),
+        g: Num::ratio(1, 1),
+        delta0: Num::ratio(1, 1),
+        form: EstimatorForm::Causal,
+    };
+    for printed in [false, true] {
+        let p = Recording {
+            inner: Scripted::new(vec![(1, -1), (2, 1), (-1, 3)]),
+            sampled_at: Default::default(),
+        };
+        let mut alg = if printed {
+            printed_algorithm_5::<f64>(&cfg).unwrap()
+        } else {
+            O2nc::<f64>::new(&cfg).unwrap()
+        };
+        let mut rng = KitRng::seed_from_u64(1);
+        let mut cost = Cost::default();
+        let mut ctx = Ctx {
+            rng: &mut rng,
+            cost: &mut cost,
+        };
+        alg.init(&p, v(0.0), &mut ctx).unwrap();
+        let m = alg.parameters().m;
+        let mut moved = 0;
+        for _ in 0..m {
+            let before = alg.theta()[0];
+            alg.step(&p, &mut ctx).unwrap();
+            let at = *p.sampled_at.borrow().last().unwrap();
+            let (w, th) = (alg.last_w().unwrap()[0], alg.theta()[0]);
+            // w_n = θ_{n−1} + s_n Δ_n lies between θ_{n−1} and θ_n.
+            assert!((before.min(th)..=before.max(th)).contains(&w));
+            assert_eq!(at, if printed { th } else { w });
+            moved += usize::from(w != th);
+        }
+        // Δ_n ≠ 0 within blocks, so the two sampling points differ on most steps.
+        assert!(moved > (m as usize) / 2, "{moved} of {m}");
+        let name = Algorithm::<f64, Recording>::name(&alg);
+        assert_eq!(
+            name,
+            if printed {
+                "printed-algorithm-5"
+            } else {
+                "o2nc"
+            }
+        );
+    }
+}

@@ -130,6 +130,11 @@ pub struct Adam<S> {
 }
 
 impl<S: Sqrt> Adam<S> {
+    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
+    pub fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+
     /// Validate and build.
     ///
     /// # Errors

@@ -33,6 +33,11 @@ pub struct ForwardTraining<S: Scalar> {
 }
 
 impl<S: Scalar> ForwardTraining<S> {
+    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
+    pub fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+
     /// Build with an SGD inner optimiser for any scalar.
     ///
     /// # Errors

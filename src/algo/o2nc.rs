@@ -135,6 +135,11 @@ pub struct O2nc<S> {
 }
 
 impl<S: Sqrt> O2nc<S> {
+    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
+    pub fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+
     /// Validate and build (IL-correct sampling at w_n).
     ///
     /// # Errors

@@ -106,6 +106,11 @@ pub struct RmsProp<S> {
 }
 
 impl<S: Sqrt> RmsProp<S> {
+    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
+    pub fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+
     /// Validate and build.
     ///
     /// # Errors

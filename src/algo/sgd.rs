@@ -124,6 +124,11 @@ pub struct Sgd<S> {
 }
 
 impl<S: Scalar> Sgd<S> {
+    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
+    pub fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+
     /// SGD for any scalar; `inverse-sqrt` steps are rejected ([`AlgoError::NeedsRoots`]).
     ///
     /// # Errors

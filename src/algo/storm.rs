@@ -239,6 +239,11 @@ pub struct Storm<S> {
 }
 
 impl<S: Scalar> Storm<S> {
+    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
+    pub fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+
     /// STORM for a scalar with cube roots (every schedule).
     ///
     /// # Errors

@@ -80,6 +80,11 @@ pub struct StormPlus<S> {
 }
 
 impl<S: Roots> StormPlus<S> {
+    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
+    pub fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+
     /// Validate and build.
     ///
     /// # Errors
