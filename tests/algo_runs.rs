@@ -276,6 +276,13 @@ fn a_recorded_config_replays_to_the_same_result() {
             .run_config(&cfg, &problem)
             .unwrap();
         assert_eq!(seen, original.iterations + 1);
+        let h = original.history_json();
+        assert_eq!(h.as_array().unwrap().len() as u64, original.iterations + 1);
+        assert_eq!(h[1]["iteration"], 1);
+        assert_eq!(
+            h[1]["cost"]["trajectories"].as_u64().unwrap(),
+            original.history[1].cost.trajectories
+        );
         let text = serde_json::to_string(&original.summary_json()["config"]).unwrap();
         let recorded = RunConfig::from_json(&text).unwrap();
         assert_eq!(recorded, cfg);

@@ -247,6 +247,30 @@ impl<S: Scalar> RunRecord<S> {
             "wall_time": self.wall_time,
         })
     }
+
+    /// Every recorded [`IterationMetrics`] as a JSON array.
+    pub fn history_json(&self) -> serde_json::Value
+    where
+        S: JsonScalar,
+    {
+        serde_json::Value::Array(self.history.iter().map(IterationMetrics::to_json).collect())
+    }
+}
+
+impl<S: JsonScalar> IterationMetrics<S> {
+    /// The metrics as JSON (scalars as [`JsonScalar`] writes them: exact fractions for
+    /// rationals, `[lo, hi]` for intervals).
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "iteration": self.iteration,
+            "theta": self.theta.iter().map(JsonScalar::to_json).collect::<Vec<_>>(),
+            "cost": self.cost,
+            "wall_time": self.wall_time,
+            "estimate_norm_sq": self.estimate_norm_sq.as_ref().map(JsonScalar::to_json),
+            "loss": self.loss.as_ref().map(JsonScalar::to_json),
+            "objective": self.objective.as_ref().map(JsonScalar::to_json),
+        })
+    }
 }
 
 /// A boxed objective closure.
