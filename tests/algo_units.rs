@@ -752,3 +752,63 @@ fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
         );
     }
 }
+
+#[test]
+fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
+    // M1 in the fixture's parameter p = π(1): F'(p) = 4p − 3 (math.md §6), F'(3/10) = −9/5. The
+    // plain estimate at p and the IS-weighted old-point estimates (τ drawn at p' = 3/5) must all
+    // have mean F'(p); tolerance 6 standard errors (see tests/algo_m1.rs for the policy).
+    // (At p = 1/2 the old-point estimate happens to be unbiased even without weights, since
+    // l(A) = l(B) there, so p = 3/10 is used.)
+    use ilopt::algo::fixture::AliasedTwoState;
+    let fx = AliasedTwoState::m1();
+    assert_eq!(fx.derivative(&q(3, 10)), q(-9, 5));
+    let target = -1.8;
+    let p = v(0.3);
+    let p_new = v(0.6);
+    let mut rng = KitRng::seed_from_u64(123);
+    let mut cost = Cost::default();
+    let n = 40_000;
+    let mut samples = [Vec::new(), Vec::new(), Vec::new()];
+    let mut unweighted = Vec::new();
+    for _ in 0..n {
+        let tau = fx
+            .rollout(&Behaviour::Learner(&p), &mut rng, &mut cost)
+            .unwrap();
+        samples[0].push(
+            IlProblem::<f64>::estimate(&fx, &p, &tau, EstimatorForm::Causal, &mut cost).unwrap()[0],
+        );
+        let tau = fx
+            .rollout(&Behaviour::Learner(&p_new), &mut rng, &mut cost)
+            .unwrap();
+        for (i, w) in [Weighting::Trajectory, Weighting::PerDecision]
+            .into_iter()
+            .enumerate()
+        {
+            samples[i + 1].push(
+                fx.weighted_estimate(&p, &p_new, &tau, w, &mut cost)
+                    .unwrap()[0],
+            );
+        }
+        unweighted.push(
+            IlProblem::<f64>::estimate(&fx, &p, &tau, EstimatorForm::Causal, &mut cost).unwrap()[0],
+        );
+    }
+    // Negative control (E10): without the weight the old-point estimate is biased, and the test
+    // is sharp enough to see it.
+    let m = unweighted.iter().sum::<f64>() / n as f64;
+    let se =
+        (unweighted.iter().map(|x| (x - m).powi(2)).sum::<f64>() / ((n - 1) * n) as f64).sqrt();
+    assert!(
+        (m - target).abs() > 6.0 * se,
+        "unweighted mean {m}, SE {se}"
+    );
+    for xs in &samples {
+        let m = xs.iter().sum::<f64>() / n as f64;
+        let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64;
+        let se = (var / n as f64).sqrt();
+        assert!((m - target).abs() <= 6.0 * se, "mean {m}, SE {se}");
+        assert!(se < 0.03);
+    }
+    assert_eq!(cost.trajectories, 2 * n as u64);
+}
