@@ -28,6 +28,21 @@
 //! [`dyadic_uniform`] (a 53-bit dyadic rational built exactly in every scalar), and the problem
 //! samples trajectories from the same RNG. So an interval run with the same seed follows the same
 //! trajectories as the `f64` run and its iterates enclose the `f64` iterates.
+//!
+//! # Costs
+//! Every oracle call adds to the run's [`Cost`]: trajectories and environment steps of each
+//! roll-out, expert queries for the labels, and one *gradient evaluation* per per-state ∇l or
+//! ∇log π (the problem counts them). A STORM step therefore costs one trajectory and two
+//! estimates; a dataset learner's inner update costs one gradient evaluation per example in the
+//! (mini)batch. The runner reports the cumulative cost and the wall time after every iteration.
+//!
+//! # Known limitations
+//! * Under the direct parameterisation the score 1/π is unbounded, so large steps can leave the
+//!   open simplex; the run then ends with [`runner::Termination::Failed`] (a domain error),
+//!   never with a silently clipped or NaN iterate. No algorithm projects onto the simplex.
+//! * Interval runs of Adam/RMSProp widen quickly once the gradients are small (the wrapping
+//!   effect in `m̂/√v̂`): fine for a few iterations, not for long runs.
+//! * STORM+'s constants follow the paper to the best of my recollection; see [`storm_plus`].
 
 pub mod adam;
 pub mod bc;

@@ -21,6 +21,10 @@
 //!   (needs cube roots; the clip at 1 is the released code's, the thesis has none);
 //! * `constant` and `explicit`: given η_k and a_{k+1} (field operations only, so STORM runs in
 //!   exact rationals).
+//!
+//! The new-point estimate uses the configured [`EstimatorForm`]; the importance-weighted
+//! old-point estimate is whatever [`IlProblem::weighted_estimate`] computes (the causal form in
+//! the toy engine). Both are unbiased, so mixing them keeps the recursion's mean right.
 
 use super::{
     AlgoError, Algorithm, Ctx, Num, RootOps, StepReport, axpy, check_dim, check_finite, invalid,
