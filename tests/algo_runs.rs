@@ -599,3 +599,27 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
     }
     assert_eq!(betas, vec![q(1, 1), q(1, 2), q(0, 1), q(0, 1)]);
 }
+
+#[test]
+fn the_runner_records_where_o2nc_evaluated_its_gradients() {
+    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let cfg = run_config(AlgorithmConfig::O2nc(o2nc_config()), 21, 1000);
+    let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+    let prm = o2nc_config().parameters().unwrap();
+    assert_eq!(rec.termination, Termination::Finished);
+    assert_eq!(rec.iterations, prm.m);
+    assert!(rec.history[0].evaluated_at.is_none());
+    let ws: Vec<f64> = rec.history[1..]
+        .iter()
+        .map(|m| m.evaluated_at.as_ref().unwrap()[0])
+        .collect();
+    for (k, block) in ws.chunks(prm.t as usize).enumerate() {
+        let mean = block.iter().sum::<f64>() / prm.t as f64;
+        assert!((rec.outputs[k][0] - mean).abs() <= 1e-12);
+        assert!(block.iter().all(|w| (w - mean).abs() <= 0.1));
+    }
+    // The SGD-type algorithms evaluate at θ and leave it empty.
+    let sgd: RunRecord<f64> =
+        replay(&run_config(field_configs()[0].clone(), 1, 3), &problem).unwrap();
+    assert!(sgd.history.iter().all(|m| m.evaluated_at.is_none()));
+}

@@ -288,6 +288,8 @@ pub struct StepReport<S> {
     /// The algorithm has completed its own schedule (O2NC after `M = KT` steps, forward training
     /// after `T − 1` policies).
     pub finished: bool,
+    /// Where the step's gradient was evaluated when that is not the iterate (O2NC's w_n).
+    pub evaluated_at: Option<DVector<S>>,
 }
 
 impl<S> StepReport<S> {
@@ -297,7 +299,13 @@ impl<S> StepReport<S> {
             estimate,
             loss,
             finished: false,
+            evaluated_at: None,
         }
+    }
+    /// Record where the gradient was evaluated.
+    pub fn evaluated_at(mut self, point: DVector<S>) -> Self {
+        self.evaluated_at = Some(point);
+        self
     }
     /// Mark the algorithm as finished.
     pub fn finished(mut self) -> Self {

@@ -258,8 +258,8 @@ impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
             None
         };
         self.theta = theta_n;
-        self.last_w = Some(w_n);
-        let report = StepReport::new(Some(g), loss);
+        self.last_w = Some(w_n.clone());
+        let report = StepReport::new(Some(g), loss).evaluated_at(w_n);
         Ok(if self.n == self.params.m {
             report.finished()
         } else {

@@ -17,7 +17,7 @@
 //! time limit passed. Runs with a time limit are not reproducible when the limit binds.
 
 use super::config::RunConfig;
-use super::{AlgoError, Algorithm, Ctx, Num, Roots, invalid, norm_sq};
+use super::{AlgoError, Algorithm, Ctx, Num, Roots, StepReport, invalid, norm_sq};
 use crate::problem::{Cost, IlProblem, KitRng};
 use crate::scalar::{JsonScalar, Scalar};
 use nalgebra::DVector;
@@ -139,6 +139,8 @@ pub struct IterationMetrics<S> {
     pub loss: Option<S>,
     /// The exact objective at θ, if the runner has an objective closure.
     pub objective: Option<S>,
+    /// Where the step evaluated its gradient, when that is not θ (O2NC's w_n).
+    pub evaluated_at: Option<DVector<S>>,
 }
 
 /// Receives every [`IterationMetrics`] (metrics sinks, progress bars).
@@ -225,6 +227,7 @@ impl<S: Scalar> RunRecord<S> {
                     && a.estimate_norm_sq == b.estimate_norm_sq
                     && a.loss == b.loss
                     && a.objective == b.objective
+                    && a.evaluated_at == b.evaluated_at
             })
     }
 
@@ -269,6 +272,8 @@ impl<S: JsonScalar> IterationMetrics<S> {
             "estimate_norm_sq": self.estimate_norm_sq.as_ref().map(JsonScalar::to_json),
             "loss": self.loss.as_ref().map(JsonScalar::to_json),
             "objective": self.objective.as_ref().map(JsonScalar::to_json),
+            "evaluated_at": self.evaluated_at.as_ref()
+                .map(|w| w.iter().map(JsonScalar::to_json).collect::<Vec<_>>()),
         })
     }
 }
@@ -391,7 +396,14 @@ impl<'a, S: Scalar> Runner<'a, S> {
             },
         )?;
         let mut history = Vec::new();
-        self.record(&mut history, 0, algorithm.theta(), cost, &start, None, None);
+        self.record(
+            &mut history,
+            0,
+            algorithm.theta(),
+            cost,
+            &start,
+            &StepReport::new(None, None),
+        );
         let mut iterations = 0u64;
         let termination = loop {
             let step = algorithm.step(
@@ -413,8 +425,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
                 algorithm.theta(),
                 cost,
                 &start,
-                report.estimate.as_ref(),
-                loss.clone(),
+                &report,
             );
             if !algorithm.theta().iter().all(Scalar::is_finite) {
                 break Termination::Failed(AlgoError::NonFinite("θ"));
@@ -478,13 +489,12 @@ impl<'a, S: Scalar> Runner<'a, S> {
         theta: &DVector<S>,
         cost: Cost,
         start: &Instant,
-        estimate: Option<&DVector<S>>,
-        loss: Option<S>,
+        report: &StepReport<S>,
     ) -> Option<S> {
         if !self.keep_history && self.observers.is_empty() && self.objective.is_none() {
             return None;
         }
-        let estimate_norm_sq = estimate.map(norm_sq);
+        let estimate_norm_sq = report.estimate.as_ref().map(norm_sq);
         let m = IterationMetrics {
             iteration,
             theta: theta.clone(),
@@ -492,7 +502,8 @@ impl<'a, S: Scalar> Runner<'a, S> {
             wall_time: start.elapsed().as_secs_f64(),
             estimate_norm: estimate_norm_sq.as_ref().map(|x| x.to_f64().sqrt()),
             estimate_norm_sq,
-            loss,
+            loss: report.loss.clone(),
+            evaluated_at: report.evaluated_at.clone(),
             objective: self.objective.as_ref().and_then(|f| {
                 if theta.iter().all(Scalar::is_finite) {
                     f(theta)
