@@ -812,3 +812,30 @@ fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
     }
     assert_eq!(cost.trajectories, 2 * n as u64);
 }
+
+#[test]
+fn cutkosky_orabona_constants_satisfy_their_definitions() {
+    // Theorem 1 of Cutkosky & Orabona (math.md §3.3): c = 28L² + G²/(7Lk'³) and
+    // w = max((4Lk')³, 2G², (ck'/(4L))³), with k' = bG^{2/3}/L.
+    for (b, g, l) in [(1.0, 2.0, 3.0), (0.1, 5.0, 0.5), (2.5, 0.3, 7.0)] {
+        let StormSchedule::Adaptive { k, w, c } = StormSchedule::cutkosky_orabona(b, g, l).unwrap()
+        else {
+            panic!("not adaptive");
+        };
+        let (k, w, c) = (
+            k.to::<f64>("k").unwrap(),
+            w.to::<f64>("w").unwrap(),
+            c.to::<f64>("c").unwrap(),
+        );
+        let rel = |x: f64, y: f64| (x - y).abs() <= 1e-12 * y.abs();
+        assert!(rel(k.powi(3), b.powi(3) * g * g / l.powi(3)));
+        assert!(rel(c, 28.0 * l * l + g * g / (7.0 * l * k.powi(3))));
+        let w_def = (4.0 * l * k)
+            .powi(3)
+            .max(2.0 * g * g)
+            .max((c * k / (4.0 * l)).powi(3));
+        assert!(rel(w, w_def), "{w} vs {w_def}");
+    }
+    expect_invalid(StormSchedule::cutkosky_orabona(0.0, 1.0, 1.0), "b");
+    expect_invalid(StormSchedule::cutkosky_orabona(1.0, f64::NAN, 1.0), "g");
+}

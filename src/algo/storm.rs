@@ -77,6 +77,36 @@ impl StormSchedule {
             a: a.into(),
         }
     }
+
+    /// The adaptive schedule with the constants of Cutkosky & Orabona's Theorem 1 (math.md §3.3)
+    /// for a free parameter `b > 0`, gradient bound `G` and smoothness `L`:
+    /// `k' = bG^{2/3}/L`, `c = L²(28 + 1/(7b³))`,
+    /// `w = G² max((4b)³, 2, (28b + 1/(7b²))³/64)`.
+    /// The values are computed in `f64` (they involve G^{2/3}) and stored as floats, so the
+    /// schedule is the same number in every scalar.
+    ///
+    /// # Errors
+    /// [`AlgoError::InvalidParameter`] naming `b`, `g` or `l` if not finite and > 0.
+    pub fn cutkosky_orabona(b: f64, g: f64, l: f64) -> Result<Self, AlgoError> {
+        for (name, x) in [("b", b), ("g", g), ("l", l)] {
+            if !(x.is_finite() && x > 0.0) {
+                return Err(invalid(name, format!("must be finite and > 0, got {x}")));
+            }
+        }
+        let k = b * g.powf(2.0 / 3.0) / l;
+        let c = l * l * (28.0 + 1.0 / (7.0 * b.powi(3)));
+        let w = g
+            * g
+            * (4.0 * b)
+                .powi(3)
+                .max(2.0)
+                .max((28.0 * b + 1.0 / (7.0 * b * b)).powi(3) / 64.0);
+        Ok(StormSchedule::Adaptive {
+            k: Num::Float(k),
+            w: Num::Float(w),
+            c: Num::Float(c),
+        })
+    }
 }
 
 /// The old-point term of STORM (see the module docs).
