@@ -12,5 +12,7 @@ pub mod bounds;
 pub mod check;
 pub mod checks;
 pub mod constants;
+pub mod report;
 pub mod schedule;
 pub mod stats;
+pub mod suite;

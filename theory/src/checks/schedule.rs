@@ -45,7 +45,7 @@ pub fn rows(k_max: u64) -> Vec<Check> {
             ),
             Role::Thesis,
             format!(
-                "proved positive (route fails) at k = {:?}; undecided at {:?}",
+                "proved positive (route fails) at k = {}; undecided at {:?}",
                 compress(&r.thesis_route_fails),
                 r.thesis_route_undecided
             ),

@@ -1,0 +1,98 @@
+//! The whole theorem-check suite, at a quick size (tests, the appendix's default) or the full size.
+
+use crate::check::Check;
+use crate::checks::{constants, o2nc_formula, schedule, thm31, unbiased};
+use ilopt::problem::Weighting;
+use ilopt::scalar::{BigRational, parse_exact};
+use ilopt::toy::ToyMdp;
+
+/// How large the suite runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Profile {
+    /// Minutes on 2 cores at most.
+    Quick,
+    /// The thesis's scale.
+    Full,
+}
+
+/// Sizes per profile.
+#[derive(Debug, Clone, Copy)]
+pub struct Sizes {
+    /// Largest k for the schedule conditions.
+    pub schedule_k: u64,
+    /// Random parameter sets for (3.71).
+    pub o2nc_cases: usize,
+    /// Branch-and-bound tolerance.
+    pub bnb_tol: f64,
+}
+
+impl Profile {
+    /// The sizes of this profile.
+    pub fn sizes(self) -> Sizes {
+        match self {
+            Profile::Quick => Sizes {
+                schedule_k: 2_000,
+                o2nc_cases: 20_000,
+                bnb_tol: 1e-2,
+            },
+            Profile::Full => Sizes {
+                schedule_k: 100_000,
+                o2nc_cases: 200_000,
+                bnb_tol: 1e-4,
+            },
+        }
+    }
+}
+
+fn q(s: &str) -> BigRational {
+    parse_exact(s).expect("constant")
+}
+
+/// The toy MDP M1 (P2', c = 1/2), as in `examples/toy/m1-tied.json`.
+pub fn m1_tied() -> ToyMdp {
+    ToyMdp::m_family(
+        q("1/2"),
+        q("1/2"),
+        q("1"),
+        3,
+        ilopt::toy::PolicyKind::TiedSoftmax,
+        Some(q("1/2")),
+    )
+    .expect("valid")
+}
+
+/// The exact and rigorous part of the suite (checks 2a/2b, 3c, 4, 5, 8).
+///
+/// # Errors
+/// A message if a rigorous constant cannot be enclosed.
+pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, String> {
+    let s = profile.sizes();
+    let m1 = m1_tied();
+    let mut rows = schedule::rows(s.schedule_k);
+    rows.push(o2nc_formula::row(s.o2nc_cases, 1));
+    let thetas = ["0", "1/3", "-2", "5/2", "1", "2"];
+    let cases: Vec<(ToyMdp, Vec<BigRational>)> =
+        thetas.iter().map(|t| (m1.clone(), vec![q(t)])).collect();
+    let pairs: Vec<(ToyMdp, Vec<BigRational>, Vec<BigRational>)> = thetas
+        .iter()
+        .zip(thetas.iter().rev())
+        .filter(|(a, b)| a != b)
+        .map(|(a, b)| (m1.clone(), vec![q(a)], vec![q(b)]))
+        .collect();
+    rows.push(unbiased::estimator(&cases));
+    rows.push(unbiased::old_point(&pairs, Some(Weighting::Trajectory)));
+    rows.push(unbiased::old_point(&pairs, Some(Weighting::PerDecision)));
+    rows.push(unbiased::old_point(&pairs, None));
+    rows.push(unbiased::printed_o2nc(&pairs));
+    rows.push(unbiased::printed_storm_update(&m1, &[q("0")], &q("1/2")));
+    for (i, inst) in thm31::instances().iter().enumerate() {
+        rows.extend(thm31::rows(inst).into_iter().map(|mut r| {
+            r.id = format!("{}.{}", r.id, i + 1);
+            r
+        }));
+    }
+    let k = constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
+        .map_err(|e| e.to_string())?;
+    rows.push(k.row("M1 (P2', c = 1/2, θ₁ = 0)", domain));
+    Ok(rows)
+}
