@@ -126,7 +126,8 @@ pub enum AlgoError {
 /// rationals, enclosed in intervals and correctly rounded in `f64`.
 ///
 /// In JSON it is a string holding the exact value (`"1/3"`, `"3602879701896397/36028797018963968"`
-/// for `0.1f64`); numbers and decimal strings (`0.05`, `"1e-8"`) are accepted on input.
+/// for `0.1f64`). On input, strings are parsed exactly (`"1/3"`, `"0.05"` = 1/20, `"1e-8"`) and
+/// JSON numbers are read as `f64` (`0.05` is then the float nearest 1/20).
 #[derive(Debug, Clone)]
 pub enum Num {
     /// A float; NaN and ±∞ are representable so that constructors can reject them by name.
