@@ -10,6 +10,7 @@
 // Index loops over states and actions mirror the equations they implement (math.md §1.4).
 #![allow(clippy::needless_range_loop)]
 
+pub mod algo;
 /// Command-line front ends (the `ilopt` binary's subcommands).
 pub mod cli;
 pub mod env;

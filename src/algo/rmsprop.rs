@@ -1,0 +1,143 @@
+//! RMSProp (Tieleman & Hinton 2012) as the thesis prints it, eqs. 2.14–2.15:
+//!
+//! ```text
+//! v_t = β v_{t−1} + (1 − β) g_t⊙g_t                  (2.14)
+//! θ_t = θ_{t−1} − η g_t / (√v_t + ε)   (entrywise)   (2.15, with ε)
+//! ```
+//!
+//! The thesis's eq. 2.15 has no ε (ε = 0 here reproduces it literally); a zero denominator then
+//! stops the run with [`AlgoError::NonFinite`] rather than producing NaN. `v₀ = 0`.
+
+use super::{
+    AlgoError, Algorithm, Ctx, Num, StepReport, UpdateRule, check_dim, first_order_step, in_range,
+    positive,
+};
+use crate::problem::{EstimatorForm, IlProblem};
+use crate::scalar::Sqrt;
+use nalgebra::DVector;
+use serde::{Deserialize, Serialize};
+
+/// RMSProp's hyper-parameters.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RmsPropConfig {
+    /// Step size η > 0.
+    pub eta: Num,
+    /// Decay β ∈ [0, 1).
+    pub beta: Num,
+    /// ε ≥ 0 added to √v (0 = eq. 2.15 as printed).
+    pub epsilon: Num,
+}
+
+impl RmsPropConfig {
+    /// Step size `eta` with β = 0.9, ε = 10⁻⁸.
+    pub fn with_eta(eta: impl Into<Num>) -> Self {
+        RmsPropConfig {
+            eta: eta.into(),
+            beta: Num::ratio(9, 10),
+            epsilon: Num::ratio(1, 100_000_000),
+        }
+    }
+}
+
+/// The RMSProp update as an [`UpdateRule`].
+#[derive(Debug, Clone)]
+pub struct RmsPropRule<S> {
+    eta: S,
+    beta: S,
+    epsilon: S,
+    v: Option<DVector<S>>,
+}
+
+impl<S: Sqrt> RmsPropRule<S> {
+    /// Validate and build.
+    ///
+    /// # Errors
+    /// [`AlgoError::InvalidParameter`] naming `eta`, `beta` or `epsilon`.
+    pub fn new(c: &RmsPropConfig) -> Result<Self, AlgoError> {
+        Ok(RmsPropRule {
+            eta: S::from_rational(&positive(&c.eta, "eta", true)?),
+            beta: S::from_rational(&in_range(&c.beta, "beta", (0, false), (1, true))?),
+            epsilon: S::from_rational(&positive(&c.epsilon, "epsilon", false)?),
+            v: None,
+        })
+    }
+}
+
+impl<S: Sqrt> UpdateRule<S> for RmsPropRule<S> {
+    fn reset(&mut self) {
+        self.v = None;
+    }
+    fn apply(&mut self, theta: &mut DVector<S>, g: &DVector<S>) -> Result<(), AlgoError> {
+        let v = self
+            .v
+            .take()
+            .unwrap_or_else(|| DVector::from_element(g.len(), S::zero()));
+        let v = v.zip_map(g, |vi, gi| {
+            self.beta.clone() * vi + (S::one() - &self.beta) * gi.square()
+        });
+        for i in 0..theta.len() {
+            let den = v[i].sqrt() + &self.epsilon;
+            if !den.is_certainly_positive() {
+                return Err(AlgoError::NonFinite("RMSProp's denominator √v + ε (zero)"));
+            }
+            theta[i] -= self.eta.clone() * &g[i] / den;
+        }
+        self.v = Some(v);
+        Ok(())
+    }
+}
+
+/// RMSProp configuration on the IL objective.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RmsPropOptimizerConfig {
+    /// RMSProp's hyper-parameters.
+    #[serde(flatten)]
+    pub rmsprop: RmsPropConfig,
+    /// Which form of eq. 3.15.
+    pub form: EstimatorForm,
+}
+
+/// RMSProp on the IL objective, driven by the eq. 3.15 oracle.
+#[derive(Debug, Clone)]
+pub struct RmsProp<S> {
+    rule: RmsPropRule<S>,
+    form: EstimatorForm,
+    theta: DVector<S>,
+}
+
+impl<S: Sqrt> RmsProp<S> {
+    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
+    pub fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+
+    /// Validate and build.
+    ///
+    /// # Errors
+    /// As [`RmsPropRule::new`].
+    pub fn new(config: &RmsPropOptimizerConfig) -> Result<Self, AlgoError> {
+        Ok(RmsProp {
+            rule: RmsPropRule::new(&config.rmsprop)?,
+            form: config.form,
+            theta: DVector::from_vec(Vec::new()),
+        })
+    }
+}
+
+impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for RmsProp<S> {
+    fn name(&self) -> &'static str {
+        "rmsprop"
+    }
+    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
+        check_dim(problem.dim(), &theta0)?;
+        self.rule.reset();
+        self.theta = theta0;
+        Ok(())
+    }
+    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+        first_order_step(problem, &mut self.theta, &mut self.rule, self.form, ctx)
+    }
+    fn theta(&self) -> &DVector<S> {
+        &self.theta
+    }
+}
