@@ -36,7 +36,7 @@ impl<S: Real> CartPoleTask<S> {
     pub fn with_lqr() -> Result<Self, OracleError> {
         Self::new(
             LqrExpert::cartpole().map_err(|e| OracleError::Environment(e.to_string()))?,
-            MAX_EPISODE_STEPS as usize,
+            MAX_EPISODE_STEPS,
         )
     }
 
