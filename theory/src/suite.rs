@@ -1,7 +1,9 @@
 //! The whole theorem-check suite, at a quick size (tests, the appendix's default) or the full size.
 
 use crate::check::Check;
+use crate::checks::montecarlo::{self, McSettings};
 use crate::checks::{constants, o2nc_formula, schedule, thm31, unbiased};
+use crate::stats::bonferroni;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, parse_exact};
 use ilopt::toy::ToyMdp;
@@ -24,7 +26,18 @@ pub struct Sizes {
     pub o2nc_cases: usize,
     /// Branch-and-bound tolerance.
     pub bnb_tol: f64,
+    /// Monte-Carlo runs per statistical check.
+    pub runs: usize,
+    /// SGD iterations K.
+    pub sgd_k: u64,
+    /// O2NC budget N.
+    pub o2nc_n: u64,
 }
+
+/// Family-wise false-alarm probability of the statistical checks (Bonferroni-split).
+pub const FAMILY_ALPHA: f64 = 0.01;
+/// Number of statistical claims of the thesis in the suite (for Bonferroni).
+pub const STATISTICAL_CLAIMS: usize = 2;
 
 impl Profile {
     /// The sizes of this profile.
@@ -34,11 +47,17 @@ impl Profile {
                 schedule_k: 2_000,
                 o2nc_cases: 20_000,
                 bnb_tol: 1e-2,
+                runs: 100,
+                sgd_k: 1000,
+                o2nc_n: 2000,
             },
             Profile::Full => Sizes {
                 schedule_k: 100_000,
                 o2nc_cases: 200_000,
                 bnb_tol: 1e-4,
+                runs: 1000,
+                sgd_k: 1000,
+                o2nc_n: 20_000,
             },
         }
     }
@@ -94,5 +113,11 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     let k = constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
         .map_err(|e| e.to_string())?;
     rows.push(k.row("M1 (P2', c = 1/2, θ₁ = 0)", domain));
+    let mc = McSettings {
+        runs: s.runs,
+        alpha: bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS),
+    };
+    rows.push(montecarlo::sgd(&m1, &k, 0.0, (1, 20), s.sgd_k, mc, 1.0));
+    rows.extend(montecarlo::o2nc(&m1, &k, 0.0, s.o2nc_n, (1, 10), mc, 1.0));
     Ok(rows)
 }
