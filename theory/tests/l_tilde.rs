@@ -29,16 +29,7 @@ fn rigorous_l_tilde_dominates_exact_quotients() {
     let l2 = BigRational::from_float(c.value * c.value).unwrap();
     let p = ToyProblem::<Q>::new(&m1);
     let mut worst = Q::zero();
-    for (a, b) in [
-        (-8i64, 8i64),
-        (-1, 1),
-        (0, 1),
-        (3, 4),
-        (-5, -4),
-        (7, 8),
-        (-8, -7),
-        (1, 2),
-    ] {
+    for a in [-8i64, -1, 0, 3, -5, 7, -7, 4] {
         for (c2, d2) in [(1i64, 8i64), (-1, 2), (5, 8), (0, 1)] {
             let (th, pr) = (Q::new(a.into(), 8.into()), Q::new(c2.into(), d2.into()));
             if th == pr {
