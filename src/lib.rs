@@ -17,6 +17,8 @@ pub mod exact;
 /// Experts that label states (thesis ch. 4): the CartPole LQR controller and the velocity-obstacle
 /// expert of eq. 4.1.
 pub mod expert;
+pub mod lqg;
+pub mod policy;
 pub mod problem;
 pub mod scalar;
 pub mod tolerance;

@@ -1,0 +1,145 @@
+//! The logistic policy: two actions, one parameter vector, `π_θ(1|s) = σ(θ·φ(s))`.
+//!
+//! It is the two-action softmax with logits `(0, θ·φ)` and half the parameters. With
+//! `p = σ(z)`, `z = θ·φ`, `σ′ = p(1 − p)` and the expert's label `y = 1[a*(s) = 1]`:
+//!
+//! | quantity | formula |
+//! |---|---|
+//! | Brier loss (math.md §1.2, n = 2) | `l = 2(p − y)²`, `∇_θ l = 4(p − y)p(1 − p)φ` |
+//! | score | `∇_θ log π(1\|s) = (1 − p)φ`, `∇_θ log π(0\|s) = −pφ`, i.e. `(a − p)φ` |
+//! | log-probability | `log π(1\|s) = −softplus(−z)`, `log π(0\|s) = −softplus(z)` |
+//!
+//! **Layout of θ**: `θ ∈ Sⁿ`, the weight of feature j at index j.
+
+use super::softmax::{check_action, sample_probs};
+use super::{Policy, PolicyError, check_size, check_vec};
+use crate::problem::KitRng;
+use crate::scalar::{Real, Scalar};
+
+/// The sign of the f64 approximation of `z` (decides which of two exact formulas is overflow-free).
+fn nonnegative<S: Scalar>(z: &S, param: &'static str) -> Result<bool, PolicyError> {
+    let x = z.to_f64();
+    if !z.is_finite() || !x.is_finite() {
+        return Err(PolicyError::NonFinite { param });
+    }
+    Ok(x >= 0.0)
+}
+
+/// `σ(z) = 1/(1 + e^{−z})`, evaluated as `1/(1 + e^{−z})` for `z ≥ 0` and `e^z/(1 + e^z)` otherwise.
+/// Both are exact identities, so branching on the `f64` approximation of z keeps intervals rigorous;
+/// the branch only avoids overflow.
+///
+/// # Errors
+/// [`PolicyError::NonFinite`] for a non-finite `z`.
+pub fn logistic_sigmoid<S: Real>(z: &S) -> Result<S, PolicyError> {
+    if nonnegative(z, "logit")? {
+        Ok(S::one() / (S::one() + (-z.clone()).exp()))
+    } else {
+        let e = z.exp();
+        Ok(e.clone() / (S::one() + e))
+    }
+}
+
+/// `softplus(z) = ln(1 + e^z)`, evaluated as `z + ln(1 + e^{−z})` for `z ≥ 0` (exact identity,
+/// overflow-free) and `ln(1 + e^z)` otherwise.
+///
+/// # Errors
+/// [`PolicyError::NonFinite`] for a non-finite `z`.
+pub fn softplus<S: Real>(z: &S) -> Result<S, PolicyError> {
+    if nonnegative(z, "logit")? {
+        Ok(z.clone() + (S::one() + (-z.clone()).exp()).ln())
+    } else {
+        Ok((S::one() + z.exp()).ln())
+    }
+}
+
+/// The logistic policy over `n ≥ 1` features (actions 0 and 1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Logistic {
+    features: usize,
+}
+
+impl Logistic {
+    /// A validated policy.
+    ///
+    /// # Errors
+    /// [`PolicyError::TooSmall`] for `features = 0`.
+    pub fn new(features: usize) -> Result<Self, PolicyError> {
+        check_size("features", features, 1)?;
+        Ok(Self { features })
+    }
+
+    /// The logit `z = θ·φ`.
+    ///
+    /// # Errors
+    /// [`PolicyError::Shape`] / [`PolicyError::NonFinite`] for a bad θ or φ.
+    pub fn logit<S: Scalar>(&self, theta: &[S], phi: &[S]) -> Result<S, PolicyError> {
+        check_vec("theta", theta, self.features)?;
+        check_vec("phi", phi, self.features)?;
+        Ok(crate::scalar::dot(theta, phi))
+    }
+
+    /// `p = π_θ(1|s) = σ(θ·φ)`.
+    ///
+    /// # Errors
+    /// As [`Logistic::logit`].
+    pub fn prob_one<S: Real>(&self, theta: &[S], phi: &[S]) -> Result<S, PolicyError> {
+        logistic_sigmoid(&self.logit(theta, phi)?)
+    }
+
+    /// `log π_θ(a|s)`: `−softplus(−z)` for a = 1, `−softplus(z)` for a = 0.
+    ///
+    /// # Errors
+    /// As [`Logistic::logit`], and [`PolicyError::Action`] for `a > 1`.
+    pub fn log_prob<S: Real>(&self, theta: &[S], phi: &[S], a: usize) -> Result<S, PolicyError> {
+        check_action(a, 2)?;
+        let z = self.logit(theta, phi)?;
+        Ok(if a == 1 {
+            -softplus(&-z)?
+        } else {
+            -softplus(&z)?
+        })
+    }
+}
+
+impl<S: Real> Policy<S> for Logistic {
+    type Action = usize;
+    type Label = usize;
+
+    fn param_dim(&self) -> usize {
+        self.features
+    }
+    fn feature_dim(&self) -> usize {
+        self.features
+    }
+
+    /// `l = 2(p − y)²`, `∇l = 4(p − y)p(1 − p)φ` with `y = 1[label = 1]`.
+    fn loss(&self, theta: &[S], phi: &[S], label: &usize) -> Result<(S, Vec<S>), PolicyError> {
+        check_action(*label, 2)?;
+        let p = self.prob_one(theta, phi)?;
+        let r = if *label == 1 {
+            p.clone() - S::one()
+        } else {
+            p.clone()
+        };
+        let dz = S::from_i64(4) * &r * &p * (S::one() - &p);
+        Ok((
+            S::from_i64(2) * r.square(),
+            phi.iter().map(|x| dz.clone() * x).collect(),
+        ))
+    }
+
+    /// `∇_θ log π(a|s) = (a − p)φ`.
+    fn score(&self, theta: &[S], phi: &[S], action: &usize) -> Result<Vec<S>, PolicyError> {
+        check_action(*action, 2)?;
+        let p = self.prob_one(theta, phi)?;
+        let c = if *action == 1 { S::one() - p } else { -p };
+        Ok(phi.iter().map(|x| c.clone() * x).collect())
+    }
+
+    /// One dyadic uniform `u`; action 0 if `u < 1 − p`, else 1 (as the two-action softmax).
+    fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
+        let p = self.prob_one(theta, phi)?;
+        sample_probs(&[S::one() - &p, p], rng)
+    }
+}

@@ -1,0 +1,186 @@
+//! Learner policies over feature vectors φ(s) ∈ Sⁿ (issue 5, item 4): the parameterisations the
+//! environments use, each generic over the weakest scalar layer that works, with **analytic**
+//! gradients of the loss and of the log-probability (the two ingredients of the estimator of
+//! eq. 3.15, math.md §1.1).
+//!
+//! | policy | actions | needs | loss on the output (math.md §1.2, erratum E1) |
+//! |---|---|---|---|
+//! | [`LinearGaussian`] (P3, math.md §1.3) | a ∈ Sᵐ | [`Scalar`] (log-density: [`Real`](crate::scalar::Real)) | ‖Wφ − π*(s)‖² |
+//! | [`Softmax`] | a ∈ {0..A−1} | [`Real`](crate::scalar::Real) | Brier on π = softmax(Θφ) |
+//! | [`Logistic`] | a ∈ {0, 1} | [`Real`](crate::scalar::Real) | Brier, `2(p − y)²` |
+//! | [`MlpSoftmax`], [`MlpGaussian`] | as above | [`Real`](crate::scalar::Real) | as above, through one tanh layer |
+//!
+//! The loss is always a function of the policy's deterministic **output** (mean or probabilities),
+//! never of the sampled action (erratum E1): otherwise eq. 3.15 is biased.
+//!
+//! Parameters are flat slices `θ ∈ Sᵈ` (so the algorithms can treat every policy alike); each
+//! policy documents its layout. Gradients are returned in the same layout.
+//!
+//! **Sampling draws randomness the same way for every scalar**: a standard normal or a uniform is
+//! drawn as an `f64` from the [`KitRng`](crate::problem::KitRng) and converted *exactly* with
+//! [`from_f64_exact`] (every finite `f64` is a dyadic rational). An `f64` run and an interval run
+//! with one seed therefore follow the same path, as long as interval comparisons stay decidable.
+
+mod linear_gaussian;
+mod logistic;
+mod mlp;
+mod softmax;
+
+pub use linear_gaussian::LinearGaussian;
+pub use logistic::{Logistic, logistic_sigmoid, softplus};
+pub use mlp::{Forward, Mlp, MlpGaussian, MlpSoftmax, tanh};
+pub use softmax::{Softmax, brier_logit_gradient, log_softmax, softmax_probs};
+
+use crate::problem::KitRng;
+use crate::scalar::{BigRational, Scalar, Undecidable};
+
+/// Why a policy could not be built or evaluated.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PolicyError {
+    /// A vector or matrix argument has the wrong number of entries.
+    #[error("`{param}` has {got} entries, expected {expected}")]
+    Shape {
+        /// The offending parameter.
+        param: &'static str,
+        /// Entries expected.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
+    /// A size that must be positive is zero.
+    #[error("`{param}` must be at least {min}, got {got}")]
+    TooSmall {
+        /// The offending parameter.
+        param: &'static str,
+        /// The smallest admissible value.
+        min: usize,
+        /// The value given.
+        got: usize,
+    },
+    /// A value that must be certainly > 0 is not (e.g. σ_π).
+    #[error("`{param}` must be certainly positive, got {value}")]
+    NotPositive {
+        /// The offending parameter.
+        param: &'static str,
+        /// Its (lossy) value, for the message.
+        value: f64,
+    },
+    /// A value that must be finite is NaN, ±∞ or an unbounded interval.
+    #[error("`{param}` contains a non-finite value")]
+    NonFinite {
+        /// The offending parameter (or the intermediate quantity).
+        param: &'static str,
+    },
+    /// An action index is out of range.
+    #[error("action {action} is out of range (the policy has {actions} actions)")]
+    Action {
+        /// The action given.
+        action: usize,
+        /// Number of actions.
+        actions: usize,
+    },
+    /// Interval arithmetic could not decide a branch (sampling).
+    #[error(transparent)]
+    Undecidable(#[from] Undecidable),
+}
+
+/// The exact value of a finite `f64` in scalar `S`: every finite double is a dyadic rational
+/// `k·2ᵉ`, so `S::from_rational` of it is exact in `BigRational`, a singleton in `Interval`, and the
+/// same double again in `f64`.
+///
+/// This is how the policies turn the RNG's `f64` draws into scalars, so that one seed gives one
+/// path in every scalar type.
+///
+/// # Errors
+/// [`PolicyError::NonFinite`] for NaN and ±∞ (`param` names the quantity).
+pub fn from_f64_exact<S: Scalar>(x: f64, param: &'static str) -> Result<S, PolicyError> {
+    BigRational::from_float(x)
+        .map(|q| S::from_rational(&q))
+        .ok_or(PolicyError::NonFinite { param })
+}
+
+/// A standard normal draw `ε ∼ N(0, 1)` as an exact scalar (rand_distr's ziggurat in `f64`, then
+/// [`from_f64_exact`]).
+pub fn standard_normal<S: Scalar>(rng: &mut KitRng) -> S {
+    let x: f64 = rand::Rng::sample(rng, rand_distr::StandardNormal);
+    // The ziggurat only returns finite values.
+    from_f64_exact(x, "standard normal draw").unwrap_or_else(|_| S::zero())
+}
+
+/// The interface the gradient oracle needs from a learner over features (eq. 3.15): the loss on
+/// the policy's output with its gradient, the score ∇_θ log π_θ(a|s), and sampling.
+pub trait Policy<S: Scalar> {
+    /// A sampled action.
+    type Action: Clone + std::fmt::Debug;
+    /// The expert's label at a state (a target output or an action).
+    type Label: ?Sized;
+
+    /// Number of parameters d.
+    fn param_dim(&self) -> usize;
+    /// Number of features n (length of φ).
+    fn feature_dim(&self) -> usize;
+
+    /// The loss `l(s, θ)` on the policy's output and its gradient `∇_θ l` (layout of θ).
+    ///
+    /// # Errors
+    /// [`PolicyError::Shape`] for a θ, φ or label of the wrong size; [`PolicyError::NonFinite`] if
+    /// the output is not finite.
+    fn loss(&self, theta: &[S], phi: &[S], label: &Self::Label)
+    -> Result<(S, Vec<S>), PolicyError>;
+
+    /// The score `∇_θ log π_θ(a|s)` (layout of θ).
+    ///
+    /// # Errors
+    /// As [`Policy::loss`], plus [`PolicyError::Action`] for an impossible action.
+    fn score(&self, theta: &[S], phi: &[S], action: &Self::Action) -> Result<Vec<S>, PolicyError>;
+
+    /// Sample `a ∼ π_θ(·|s)`, drawing `f64` randomness and converting it exactly.
+    ///
+    /// # Errors
+    /// As [`Policy::loss`], plus [`PolicyError::Undecidable`] when an interval cannot be ordered.
+    fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng)
+    -> Result<Self::Action, PolicyError>;
+}
+
+/// Check that a slice has `expected` entries, all finite.
+pub(crate) fn check_vec<S: Scalar>(
+    param: &'static str,
+    xs: &[S],
+    expected: usize,
+) -> Result<(), PolicyError> {
+    if xs.len() != expected {
+        return Err(PolicyError::Shape {
+            param,
+            expected,
+            got: xs.len(),
+        });
+    }
+    if !xs.iter().all(Scalar::is_finite) {
+        return Err(PolicyError::NonFinite { param });
+    }
+    Ok(())
+}
+
+/// Check a size is at least `min`.
+pub(crate) fn check_size(param: &'static str, got: usize, min: usize) -> Result<(), PolicyError> {
+    if got < min {
+        return Err(PolicyError::TooSmall { param, min, got });
+    }
+    Ok(())
+}
+
+/// `y = Mx` for a row-major `rows × x.len()` matrix `m`.
+pub(crate) fn mat_vec<S: Scalar>(m: &[S], x: &[S], rows: usize) -> Vec<S> {
+    let cols = x.len();
+    (0..rows)
+        .map(|i| crate::scalar::dot(&m[i * cols..(i + 1) * cols], x))
+        .collect()
+}
+
+/// The row-major outer product `u vᵀ` (the shape of every gradient with respect to a weight matrix).
+pub(crate) fn outer<S: Scalar>(u: &[S], v: &[S]) -> Vec<S> {
+    u.iter()
+        .flat_map(|ui| v.iter().map(move |vj| ui.clone() * vj))
+        .collect()
+}
