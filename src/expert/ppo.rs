@@ -1257,15 +1257,24 @@ mod tests {
     }
 
     #[test]
-    fn adam_first_step_moves_each_coordinate_by_the_learning_rate() {
+    fn adam_steps_by_the_learning_rate_for_a_constant_gradient() {
         // With bias correction, the first step is lr · g/(|g| + ε) per coordinate.
-        let mut adam = Adam::new(2, &PpoConfig::default());
+        let config = PpoConfig::default();
+        let mut adam = Adam::new(2, &config);
+        let g = [3.0, -0.5];
         let mut p = [1.0, -1.0];
-        adam.step(&mut p, &[3.0, -0.5], 0.1);
-        assert!(
-            (p[0] - 0.9).abs() < 1e-6 && (p[1] + 0.9).abs() < 1e-6,
-            "{p:?}"
-        );
+        adam.step(&mut p, &g, 0.1);
+        for i in 0..2 {
+            let expected = [1.0, -1.0][i] - 0.1 * g[i] / (g[i].abs() + config.adam_epsilon);
+            assert!((p[i] - expected).abs() < 1e-15, "{p:?}");
+        }
+        // A second step with the same gradient moves by the same amount (m̂ = g, v̂ = g²).
+        let before = p;
+        adam.step(&mut p, &g, 0.1);
+        for i in 0..2 {
+            let expected = before[i] - 0.1 * g[i] / (g[i].abs() + config.adam_epsilon);
+            assert!((p[i] - expected).abs() < 1e-14, "{p:?}");
+        }
     }
 
     #[test]
@@ -1280,8 +1289,10 @@ mod tests {
         assert_eq!(g, [0.3, 0.4]);
     }
 
-    /// GAE at a truncation bootstraps from the critic; at a termination from 0. With λ = 0 the
-    /// advantage of the last step of an episode is exactly `r + γ·(bootstrap) − V(s)`.
+    /// GAE at a truncation bootstraps from the critic; at a termination from 0; and the λ chain
+    /// stops at the end of the episode (the next episode's steps do not leak into it): the last
+    /// step's advantage is exactly `r + γ·(bootstrap) − V(s)`, and the one before it is
+    /// `δ + γλ·Â_last`.
     #[test]
     fn truncation_bootstraps_and_termination_does_not() {
         let config = PpoConfig {
@@ -1289,37 +1300,45 @@ mod tests {
             steps_per_env: 12,
             total_steps: 12,
             minibatch_size: 12,
-            gae_lambda: 0.0,
             ..PpoConfig::default()
         };
-        // A truncation after 5 steps from near upright, and a termination on the first step.
-        for (max_steps, start) in [(5, [0.01, -0.02, 0.03, 0.01]), (500, [0.0, 0.0, 0.2, 1.0])] {
+        let (gamma, lambda) = (config.gamma, config.gae_lambda);
+        assert!(lambda > 0.0);
+        // A truncation after 5 steps from near upright; a termination after 2 steps from a state
+        // where the pole falls whatever the actions.
+        for (max_steps, start, len) in [
+            (5, [0.01, -0.02, 0.03, 0.01], 5),
+            (500, [0.0, 0.0, 0.18, 1.0], 2),
+        ] {
             let mut t = PpoTrainer::new(&config, 3).unwrap();
             t.workers[0].env = CartPole::with_max_episode_steps(max_steps);
             t.workers[0].obs = t.workers[0].env.reset_to(start);
             let mut batch = Vec::new();
             t.rollout(1, &mut batch).unwrap();
-            // Replay the rollout's actions up to the end of the first episode.
+            // Replay the rollout's actions to the end of the first episode.
             let mut env = CartPole::<f64>::with_max_episode_steps(max_steps);
             env.reset_to(start);
-            let mut checked = 0;
-            for s in &batch {
+            let mut last_step = None;
+            for (i, s) in batch.iter().enumerate().take(len) {
                 assert_eq!(env.state(), Some(&s.obs));
                 let step = env.step(s.action).unwrap();
-                let expected = if step.terminated {
-                    1.0 - s.value
-                } else if step.truncated {
-                    1.0 + config.gamma * t.value(&step.observation, 1).unwrap() - s.value
-                } else {
-                    continue;
-                };
-                assert_eq!(s.advantage, expected);
-                assert_eq!(step.truncated, max_steps == 5);
-                assert_eq!(step.terminated, max_steps == 500);
-                checked += 1;
-                break;
+                assert_eq!(step.done(), i + 1 == len, "max_steps {max_steps}, step {i}");
+                last_step = Some(step);
             }
-            assert_eq!(checked, 1, "max_steps {max_steps}: one episode end checked");
+            let step = last_step.unwrap();
+            assert_eq!(step.truncated, max_steps == 5);
+            assert_eq!(step.terminated, max_steps == 500);
+            let (last, before) = (&batch[len - 1], &batch[len - 2]);
+            let next_value = if step.terminated {
+                0.0
+            } else {
+                t.value(&step.observation, 1).unwrap()
+            };
+            let expected_last = 1.0 + gamma * next_value - last.value;
+            assert_eq!(last.advantage, expected_last + gamma * lambda * 0.0);
+            let delta = 1.0 + gamma * last.value - before.value;
+            assert_eq!(before.advantage, delta + gamma * lambda * last.advantage);
+            assert_eq!(last.target, last.advantage + last.value);
         }
     }
 }
