@@ -6,6 +6,7 @@ use ilopt::expert::ppo::{
     EVAL_EPISODES, EVAL_FIRST_SEED, PpoConfig, PpoError, PpoExpert, PpoExpertFile, PpoTrainer,
     evaluate_cartpole, train,
 };
+use ilopt::policy::{Mlp, MlpSoftmax};
 use std::path::PathBuf;
 
 /// The threshold: mean return ≥ 495 over 100 seeded episodes.
@@ -108,11 +109,19 @@ fn corrupted_files_give_errors_naming_the_field() {
     assert_eq!(field, "critic[0]");
 
     // Shape mismatches: a weight missing, or a hidden width that does not fit the weights.
+    // One hidden layer of `hidden` units: 4·h + h + 2·h + 2 actor and 4·h + h + h + 1 critic weights.
+    let hidden = PpoExpertFile::read(committed_path()).unwrap().config.hidden;
+    let actor_dim = MlpSoftmax::new(4, hidden, 2).unwrap().net().param_dim();
+    let critic_dim = Mlp::new(4, hidden, 1).unwrap().param_dim();
+    assert_eq!((actor_dim, critic_dim), (7 * hidden + 2, 6 * hidden + 1));
     let (field, reason) = invalid_field(parse_edited(|v| {
         v["actor"].as_array_mut().unwrap().pop();
     }));
     assert_eq!(field, "actor");
-    assert!(reason.contains("expected 450 weights"), "{reason}");
+    assert!(
+        reason.contains(&format!("expected {actor_dim} weights")),
+        "{reason}"
+    );
     let (field, _) = invalid_field(parse_edited(|v| v["config"]["hidden"] = 32.into()));
     assert_eq!(field, "actor");
     let (field, _) = invalid_field(parse_edited(|v| {
@@ -152,9 +161,11 @@ fn corrupted_files_give_errors_naming_the_field() {
     assert!(matches!(missing, Err(PpoError::Io { .. })), "{missing:?}");
 
     // In-memory construction validates too.
-    assert!(PpoExpert::new(64, vec![0.0; 450], vec![0.0; 385]).is_ok());
-    assert!(PpoExpert::new(64, vec![0.0; 449], vec![0.0; 385]).is_err());
-    assert!(PpoExpert::new(64, vec![f64::NAN; 450], vec![0.0; 385]).is_err());
+    let (a, c) = (actor_dim, critic_dim);
+    assert!(PpoExpert::new(hidden, vec![0.0; a], vec![0.0; c]).is_ok());
+    assert!(PpoExpert::new(hidden, vec![0.0; a - 1], vec![0.0; c]).is_err());
+    assert!(PpoExpert::new(hidden, vec![0.0; a], vec![0.0; c + 1]).is_err());
+    assert!(PpoExpert::new(hidden, vec![f64::NAN; a], vec![0.0; c]).is_err());
     assert!(PpoExpert::new(0, vec![], vec![]).is_err());
 }
 
@@ -166,6 +177,45 @@ fn the_expert_rejects_non_finite_states() {
         Err(PpoError::Act(_))
     ));
     assert!(expert.value(&[0.0, f64::INFINITY, 0.0, 0.0]).is_err());
+    // A failing controller is an evaluation error naming the episode's seed and the step.
+    let err = evaluate_cartpole(|_| Ok::<usize, String>(2), 40, 3).unwrap_err();
+    assert!(
+        matches!(
+            err,
+            PpoError::Evaluation {
+                seed: 40,
+                step: 1,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    let mut calls = 0;
+    let err = evaluate_cartpole(
+        |s| {
+            calls += 1;
+            if calls == 3 {
+                Err("refused".to_string())
+            } else {
+                expert.action(s).map_err(|e| e.to_string())
+            }
+        },
+        7,
+        2,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            PpoError::Evaluation {
+                seed: 7,
+                step: 3,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
+    assert!(err.to_string().contains("refused"), "{err}");
 }
 
 /// A short run: 16 iterations of 256 steps.
