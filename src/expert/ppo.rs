@@ -10,7 +10,7 @@
 //! ```text
 //! rₜ(θ)   = π_θ(aₜ|sₜ) / π_θold(aₜ|sₜ)
 //! L(θ)    = Ê[ min(rₜ(θ) Âₜ, clip(rₜ(θ), 1 − ε, 1 + ε) Âₜ) ] + c_H Ê[ H(π_θ(·|sₜ)) ]      (maximised)
-//! δₜ      = rₜ₊₁ + γ V(sₜ₊₁) − V(sₜ),      Âₜ = δₜ + γλ Âₜ₊₁   (the chain restarts at episode ends)
+//! δₜ      = Rₜ + γ V(sₜ₊₁) − V(sₜ),      Âₜ = δₜ + γλ Âₜ₊₁   (Rₜ = 1 the reward of step t; the chain restarts at episode ends)
 //! V-loss  = ½ Ê[ (V_φ(sₜ) − (Âₜ + V_φold(sₜ)))² ]                                                (minimised)
 //! ```
 //!
@@ -53,10 +53,15 @@
 //! cargo run --release --example train_ppo -- --seed 1 --out experts/cartpole-ppo.json
 //! ```
 //!
-//! (the default [`PpoConfig`]; about 10 s on one core of the machine it was trained on, a 2-core
-//! x86-64 VM). [`PpoExpert::load`] validates a file: format and version, the configuration
-//! ([`PpoConfig::validate`]), the number of weights of each network (from the hidden width) and that
-//! every weight is a finite number; each failure is an error naming the field.
+//! (the default [`PpoConfig`], 100 096 environment steps in 391 iterations; 14.5 s of CPU time,
+//! 16.7 s wall, on a shared 2-core x86-64 VM, single-threaded). With the default configuration,
+//! training seeds 1 to 8 each gave a greedy mean return of 500 (every episode 500) on the
+//! standard evaluation; the stored expert is seed 1. `tests/ppo.rs` retrains it (an ignored test,
+//! run in release) and checks the weights bit for bit.
+//!
+//! [`PpoExpert::load`] validates a file: format and version, the configuration
+//! ([`PpoConfig::validate`]), the number of weights of each network (from the hidden width) and
+//! that every weight is a finite number; each failure is an error naming the field.
 //!
 //! # Evaluation
 //! [`evaluate_cartpole`] runs episode `i` of CartPole-v1 from a [`KitRng`] seeded with
