@@ -1,12 +1,17 @@
 //! The PPO expert for CartPole-v1 (issue 5, item 3): the committed weights, file validation,
 //! reproducible training, and the comparison with the LQR expert on the same seeded episodes.
 
+use ilopt::env::Env;
+use ilopt::env::cartpole::{CartPole, MAX_EPISODE_STEPS};
 use ilopt::expert::lqr::LqrExpert;
 use ilopt::expert::ppo::{
     EVAL_EPISODES, EVAL_FIRST_SEED, PpoConfig, PpoError, PpoExpert, PpoExpertFile, PpoTrainer,
     evaluate_cartpole, train,
 };
 use ilopt::policy::{Mlp, MlpSoftmax};
+use ilopt::problem::KitRng;
+use ilopt::scalar::Dual;
+use rand::SeedableRng;
 use std::path::PathBuf;
 
 /// The issue's threshold: mean return ≥ 495 over 100 seeded episodes.
@@ -53,6 +58,22 @@ fn committed_expert_reaches_495_on_100_seeded_episodes() {
         assert_eq!(expert.action(&s).unwrap(), usize::from(p1 > p0));
         assert!(expert.value(&s).unwrap().is_finite());
     }
+    // The generic greedy action agrees with the f64 one, in f64 and in dual numbers, on the
+    // states of the first evaluation episode.
+    let mut env = CartPole::<f64>::new();
+    let mut obs = env.reset(&mut KitRng::seed_from_u64(0));
+    for _ in 0..MAX_EPISODE_STEPS {
+        let a = expert.action(&obs).unwrap();
+        assert_eq!(expert.action_in(&obs).unwrap(), a);
+        let dual: [Dual<f64>; 4] = std::array::from_fn(|i| Dual::variable(obs[i], i, 4));
+        assert_eq!(expert.action_in(&dual).unwrap(), a);
+        let step = env.step(a).unwrap();
+        if step.done() {
+            break;
+        }
+        obs = step.observation;
+    }
+    assert!(expert.action_in(&[f64::NAN, 0.0, 0.0, 0.0]).is_err());
     // Pushing right when the pole leans right keeps it up (as for the LQR expert).
     assert_eq!(expert.action(&[0.0, 0.0, 0.05, 0.0]).unwrap(), 1);
     assert_eq!(expert.action(&[0.0, 0.0, -0.05, 0.0]).unwrap(), 0);
@@ -178,6 +199,7 @@ fn the_expert_rejects_non_finite_states() {
     ));
     assert!(expert.value(&[0.0, f64::INFINITY, 0.0, 0.0]).is_err());
     // A failing controller is an evaluation error naming the episode's seed and the step.
+    assert!(evaluate_cartpole(|s| expert.action(s), 0, 0).is_err());
     let err = evaluate_cartpole(|_| Ok::<usize, String>(2), 40, 3).unwrap_err();
     assert!(
         matches!(

@@ -75,11 +75,13 @@
 
 use crate::env::cartpole::{CartPole, MAX_EPISODE_STEPS};
 use crate::env::{Env, EnvError};
-use crate::policy::{Mlp, MlpSoftmax, PolicyError, log_softmax, softmax_probs};
+use crate::policy::{Mlp, MlpSoftmax, PolicyError, from_f64_exact, log_softmax, softmax_probs};
 use crate::problem::KitRng;
+use crate::scalar::{Real, Scalar, Undecidable};
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
+use std::cmp::Ordering;
 use std::fmt::Display;
 use std::path::Path;
 
@@ -934,14 +936,51 @@ impl PpoExpert {
         Ok([p[0], p[1]])
     }
 
-    /// The expert's (greedy) action: `1` if `π(1|s) > π(0|s)`, else `0` (ties go to 0, as for
+    /// The expert's (greedy) action: the argmax of `π(·|s)`, decided on the logits (softmax is
+    /// strictly increasing, so `π(1|s) > π(0|s)` ⟺ `z₁ > z₀`, and comparing logits avoids ties
+    /// made by rounding the probabilities): `1` if `z₁ > z₀`, else `0` (ties go to 0, as for
     /// [`super::lqr::LqrExpert::action`]).
     ///
     /// # Errors
-    /// As [`PpoExpert::probabilities`].
+    /// [`PpoError::Act`] for a non-finite state or activation.
     pub fn action(&self, state: &[f64; 4]) -> Result<usize, PpoError> {
-        let [p0, p1] = self.probabilities(state)?;
-        Ok(usize::from(p1 > p0))
+        let z = self
+            .actor_net
+            .net()
+            .forward(&self.actor, state)
+            .map_err(PpoError::Act)?
+            .output;
+        Ok(usize::from(z[1] > z[0]))
+    }
+
+    /// [`PpoExpert::action`] evaluated in any [`Real`] scalar (intervals, dual numbers): the
+    /// weights are converted exactly ([`from_f64_exact`]) and the logits compared with
+    /// [`Scalar::certain_cmp`]. Slower than [`PpoExpert::action`] (the conversion is per call).
+    ///
+    /// # Errors
+    /// [`PpoError::Act`] for a non-finite state or activation, and with
+    /// [`PolicyError::Undecidable`] when the scalar cannot order the two logits (an interval
+    /// straddling the decision boundary, or NaN).
+    pub fn action_in<S: Real>(&self, state: &[S; 4]) -> Result<usize, PpoError> {
+        let weights = self
+            .actor
+            .iter()
+            .map(|&w| from_f64_exact::<S>(w, "actor"))
+            .collect::<Result<Vec<S>, _>>()
+            .map_err(PpoError::Act)?;
+        let z = self
+            .actor_net
+            .net()
+            .forward(&weights, state)
+            .map_err(PpoError::Act)?
+            .output;
+        match z[1].certain_cmp(&z[0]) {
+            Some(Ordering::Greater) => Ok(1),
+            Some(_) => Ok(0),
+            None => Err(PpoError::Act(PolicyError::Undecidable(Undecidable {
+                what: "PPO expert: order of the two logits",
+            }))),
+        }
     }
 
     /// An action sampled from `π(·|s)`: `0` if `u < π(0|s)` for `u` uniform on `[0, 1)` from
@@ -1004,12 +1043,20 @@ pub struct Evaluation {
 /// rewards (1 per step).
 ///
 /// # Errors
-/// [`PpoError::Evaluation`] naming the seed and step if the controller or the environment fails.
+/// [`PpoError::Evaluation`] naming the seed and step if the controller or the environment fails
+/// (and, with step 0, for `episodes = 0`).
 pub fn evaluate_cartpole<E: Display>(
     mut act: impl FnMut(&[f64; 4]) -> Result<usize, E>,
     first_seed: u64,
     episodes: usize,
 ) -> Result<Evaluation, PpoError> {
+    if episodes == 0 {
+        return Err(PpoError::Evaluation {
+            seed: first_seed,
+            step: 0,
+            message: "no episodes to evaluate".into(),
+        });
+    }
     let mut returns = Vec::with_capacity(episodes);
     for i in 0..episodes {
         let seed = first_seed.wrapping_add(i as u64);
@@ -1033,7 +1080,7 @@ pub fn evaluate_cartpole<E: Display>(
         }
         returns.push(ret);
     }
-    let mean_return = returns.iter().sum::<f64>() / returns.len().max(1) as f64;
+    let mean_return = returns.iter().sum::<f64>() / returns.len() as f64;
     let min_return = returns.iter().copied().fold(f64::INFINITY, f64::min);
     Ok(Evaluation {
         first_seed,
