@@ -376,3 +376,28 @@ fn retraining_reproduces_the_committed_expert() {
     assert_eq!(bits(expert.actor_weights()), bits(&file.actor));
     assert_eq!(bits(expert.critic_weights()), bits(&file.critic));
 }
+
+/// `act_stochastic` samples from `π(·|s)`: over 20 000 seeded draws at a state where the actor is
+/// unsure, the frequency of action 0 is within 5 standard errors of `π(0|s)` (a fixed seed, so the
+/// test is deterministic; for a random seed it would fail with probability < 10⁻⁶).
+#[test]
+fn stochastic_actions_follow_the_probabilities() {
+    let expert = PpoExpert::load(committed_path()).unwrap();
+    // Search along θ for a state with 0.2 ≤ π(0|s) ≤ 0.8 (the greedy action flips across θ = 0).
+    let state = (-100..=100)
+        .map(|i| [0.0, 0.0, f64::from(i) * 1e-3, 0.0])
+        .find(|s| {
+            let p0 = expert.probabilities(s).unwrap()[0];
+            (0.2..=0.8).contains(&p0)
+        })
+        .expect("an undecided state near upright");
+    let p0 = expert.probabilities(&state).unwrap()[0];
+    let n = 20_000;
+    let mut rng = KitRng::seed_from_u64(11);
+    let zeros = (0..n)
+        .filter(|_| expert.act_stochastic(&state, &mut rng).unwrap() == 0)
+        .count();
+    let freq = zeros as f64 / n as f64;
+    let se = (p0 * (1.0 - p0) / n as f64).sqrt();
+    assert!((freq - p0).abs() <= 5.0 * se, "p0 {p0}, frequency {freq}");
+}
