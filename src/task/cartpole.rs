@@ -17,7 +17,7 @@ pub const FEATURES: usize = 5;
 #[derive(Debug, Clone)]
 pub enum CartPoleExpert {
     /// The LQR controller of [`crate::expert::lqr`].
-    Lqr(LqrExpert),
+    Lqr(Box<LqrExpert>),
     /// The PPO-trained policy of [`crate::expert::ppo`] (greedy).
     Ppo(PpoExpert),
 }
@@ -46,9 +46,9 @@ impl<S: Real> CartPoleTask<S> {
     /// [`OracleError::Environment`] if the LQR design fails.
     pub fn with_lqr() -> Result<Self, OracleError> {
         Self::new(
-            CartPoleExpert::Lqr(
+            CartPoleExpert::Lqr(Box::new(
                 LqrExpert::cartpole().map_err(|e| OracleError::Environment(e.to_string()))?,
-            ),
+            )),
             MAX_EPISODE_STEPS,
         )
     }
