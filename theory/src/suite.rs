@@ -119,5 +119,63 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     };
     rows.push(montecarlo::sgd(&m1, &k, 0.0, (1, 20), s.sgd_k, mc, 1.0));
     rows.extend(montecarlo::o2nc(&m1, &k, 0.0, s.o2nc_n, (1, 10), mc, 1.0));
+    rows.extend(real_environments(profile)?);
     Ok(rows)
+}
+
+/// Check 6 on CartPole (softmax learner, LQR expert) and the obstacle task (linear-Gaussian
+/// learner, velocity-obstacle expert), plus the obstacle task's negative control.
+///
+/// # Errors
+/// A message if a task cannot be built.
+pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
+    use crate::checks::real_env::{RealSizes, row};
+    use ilopt::policy::{LinearGaussian, Softmax};
+    use ilopt::task::TaskProblem;
+    use ilopt::task::cartpole::{self, CartPoleTask};
+    use ilopt::task::obstacle::{self, ObstacleTask};
+    use nalgebra::DVector;
+    let scale = if profile == Profile::Full { 10 } else { 1 };
+    let cp = TaskProblem {
+        task: CartPoleTask::with_lqr().map_err(|e| e.to_string())?,
+        policy: Softmax::new(2, cartpole::FEATURES).map_err(|e| e.to_string())?,
+    };
+    let cp_theta = DVector::from_vec(vec![0.0, 0.0, -2.0, -0.5, 0.0, 0.0, 0.0, 2.0, 0.5, 0.0]);
+    let ob = TaskProblem {
+        task: ObstacleTask::thesis().map_err(|e| e.to_string())?,
+        policy: LinearGaussian::new(2, obstacle::FEATURES, 0.05).map_err(|e| e.to_string())?,
+    };
+    let mut ob_theta = DVector::zeros(2 * obstacle::FEATURES);
+    ob_theta[0] = 0.02;
+    ob_theta[obstacle::FEATURES + 1] = 0.02;
+    let alpha = 1e-3;
+    let cs = RealSizes {
+        n_oracle: 400 * scale,
+        n_fd: 300 * scale,
+        h: 0.05,
+        alpha,
+    };
+    let os = RealSizes {
+        n_oracle: 300 * scale,
+        n_fd: 200 * scale,
+        h: 0.005,
+        alpha,
+    };
+    Ok(vec![
+        row("CartPole, softmax learner", &cp, &cp_theta, None, cs),
+        row(
+            "obstacle, linear-Gaussian learner",
+            &ob,
+            &ob_theta,
+            None,
+            os,
+        ),
+        row(
+            "obstacle, linear-Gaussian learner",
+            &ob,
+            &ob_theta,
+            Some(&DVector::zeros(ob_theta.len())),
+            os,
+        ),
+    ])
 }

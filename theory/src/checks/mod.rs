@@ -3,6 +3,7 @@
 pub mod constants;
 pub mod montecarlo;
 pub mod o2nc_formula;
+pub mod real_env;
 pub mod schedule;
 pub mod thm31;
 pub mod unbiased;
