@@ -119,7 +119,6 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     };
     rows.push(montecarlo::sgd(&m1, &k, 0.0, (1, 20), s.sgd_k, mc, 1.0));
     rows.extend(montecarlo::o2nc(&m1, &k, 0.0, s.o2nc_n, (1, 10), mc, 1.0));
-    rows.extend(real_environments(profile)?);
     Ok(rows)
 }
 
@@ -161,7 +160,30 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         h: 0.005,
         alpha,
     };
+    use crate::checks::estimated::{EstimateSizes, sgd_row};
+    let es = |rho: f64, spread: f64, eta0: f64| EstimateSizes {
+        m: 100 * scale,
+        probes: 4,
+        rho,
+        spread,
+        runs: 4 * scale,
+        k: 200,
+        stride: 20,
+        eta0,
+    };
     Ok(vec![
+        sgd_row(
+            "CartPole, softmax learner",
+            &cp,
+            &cp_theta,
+            es(0.1, 0.5, 0.01),
+        ),
+        sgd_row(
+            "obstacle, linear-Gaussian learner",
+            &ob,
+            &ob_theta,
+            es(0.005, 0.01, 0.01),
+        ),
         row("CartPole, softmax learner", &cp, &cp_theta, None, cs),
         row(
             "obstacle, linear-Gaussian learner",

@@ -111,3 +111,36 @@ fn small_sizes() {
     );
     assert_eq!(c.verdict, Verdict::Fails, "{}", c.details);
 }
+
+/// Check 7 on CartPole at a small size: the constants are labelled estimates, the row reports a
+/// finite bound and tightness.
+#[test]
+fn check7_estimated_constants_are_labelled() {
+    use ilopt_theory::check::Method;
+    use ilopt_theory::checks::estimated::{EstimateSizes, sgd_row};
+    use ilopt_theory::constants::Provenance;
+    let (p, theta) = cartpole();
+    let s = EstimateSizes {
+        m: 30,
+        probes: 2,
+        rho: 0.1,
+        spread: 0.5,
+        runs: 2,
+        k: 40,
+        stride: 10,
+        eta0: 0.01,
+    };
+    let r = sgd_row("CartPole", &p, &theta, s);
+    assert_eq!(r.method, Method::Estimate);
+    assert!(
+        r.constants
+            .iter()
+            .all(|c| c.provenance == Provenance::Estimate)
+    );
+    assert!(
+        r.bound.unwrap().is_finite() && r.tightness.unwrap().is_finite(),
+        "{}",
+        r.details
+    );
+    assert!(r.details.starts_with("ESTIMATES"));
+}
