@@ -164,7 +164,7 @@ pub fn sgd_row<P: IlProblem<f64>>(
         };
         let iterates = RefCell::new(vec![]);
         let obs = |m: &IterationMetrics<f64>| {
-            if m.iteration % s.stride == 0 {
+            if m.iteration.is_multiple_of(s.stride) {
                 iterates.borrow_mut().push(m.theta.clone());
             }
         };
