@@ -97,10 +97,7 @@ fn exact_engine(c: &mut Criterion) {
         b.iter(|| moments(&pq, black_box(&th)).unwrap())
     });
     let pf = ToyProblem::<f64>::new(&mdp);
-    let thf: Vec<f64> = th
-        .iter()
-        .map(|q| ilopt::scalar::Scalar::to_f64(q))
-        .collect();
+    let thf: Vec<f64> = th.iter().map(ilopt::scalar::Scalar::to_f64).collect();
     g.bench_function(BenchmarkId::new("moments", "f64"), |b| {
         b.iter(|| moments(&pf, black_box(&thf)).unwrap())
     });
