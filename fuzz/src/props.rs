@@ -159,10 +159,10 @@ impl MdpSpec {
                     .iter()
                     .map(|f| u32::from(f.num.unsigned_abs() % 4))
                     .collect();
-                if w.iter().all(|&x| x == 0) {
-                    if let Some(first) = w.first_mut() {
-                        *first = 1;
-                    }
+                if w.iter().all(|&x| x == 0)
+                    && let Some(first) = w.first_mut()
+                {
+                    *first = 1;
                 }
                 let sum: u32 = w.iter().sum();
                 serde_json::Value::Array(w.iter().map(|x| format!("{x}/{sum}").into()).collect())

@@ -1,0 +1,89 @@
+//! Regression tests for what the fuzz targets (`fuzz/`, issue 7) found: each crashing input is
+//! inlined and run through the target's own property (`fuzz/src/props.rs`), with a note on the
+//! cause and the fix. A target's seed corpus is replayed here too, so `cargo test` covers it.
+
+#[path = "../fuzz/src/props.rs"]
+mod props;
+
+use props::{CartpoleInput, VoInput};
+
+fn corpus(target: &str) -> Vec<Vec<u8>> {
+    let dir = format!("{}/fuzz/corpus/{target}", env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    files.iter().map(|p| std::fs::read(p).unwrap()).collect()
+}
+
+#[test]
+fn toy_parser_seed_corpus() {
+    for bytes in corpus("toy_parser") {
+        props::check_toy_parser(&bytes);
+    }
+}
+
+#[test]
+fn config_seed_corpus() {
+    for bytes in corpus("config") {
+        props::check_config(&bytes);
+    }
+}
+
+#[test]
+fn vo_expert_hand_picked_geometry() {
+    // Dead ahead (the module's worked example), huge and tiny inputs, NaN.
+    for (r, v_des, big_r) in [
+        ([1.0, 0.0], [1.0, 0.0], 0.5),
+        ([1e150, 0.0], [1e150, 1.0], 1e149),
+        ([1e-300, 0.0], [1.0, 0.0], 1e-301),
+        ([f64::NAN, 0.0], [1.0, 0.0], 0.5),
+    ] {
+        props::check_vo(&VoInput {
+            r,
+            v_o: [0.0, 0.0],
+            v_r: [0.0, 0.0],
+            v_des,
+            lam: 0.0,
+            big_r,
+            probes: [1.0, -3.0],
+        });
+    }
+}
+
+#[test]
+fn cartpole_hand_picked_states() {
+    for init in [
+        [0.0, 0.0, 0.0, 0.0],
+        [2.4, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.209_439_510_239_319_53, 0.0],
+        [0.0, 0.0, 0.0, 1e200],
+        [f64::NAN, 0.0, 0.0, 0.0],
+    ] {
+        props::check_cartpole(&CartpoleInput {
+            init,
+            actions: vec![0, 1, 1, 7, 0],
+            text: "0,1,x".into(),
+        });
+    }
+}
+
+/// `vo_expert` target, crash-275aa4c8: ‖r‖, R and the velocities ≈ 6e−154. The feasibility test
+/// `(rᵀw)² > (‖r‖² − R²)‖w‖²` underflowed to `0 > 0`, so the unconstrained minimiser u₀ was
+/// returned although it lies inside the collision cone. Fixed in `src/expert/vo.rs`
+/// (`vo_expert_cone`): inputs below 2⁻⁶⁰ are rescaled by exact powers of two, the geometry (r, R)
+/// and the velocities separately.
+#[test]
+fn vo_expert_tiny_inputs_underflow() {
+    let t = 6.013_470_016_999_068e-154;
+    props::check_vo(&VoInput {
+        r: [1.270_191_886_756_896_2e-299, 6.013_472_915_405_47e-154],
+        v_o: [t, t],
+        v_r: [t, t],
+        v_des: [t, 2.097_694_891_143_838_5e-153],
+        lam: t,
+        big_r: t,
+        probes: [-7.640_966_620_460_772e-142, 1e150],
+    });
+}
