@@ -87,3 +87,36 @@ fn vo_expert_tiny_inputs_underflow() {
         probes: [-7.640_966_620_460_772e-142, 1e150],
     });
 }
+
+/// `vo_expert` target, crash-35f91006: not a library bug — the property's own tolerance
+/// overflowed (‖r‖ ≈ 2e147 with R ≈ 6e−317 makes the slack infinite) and the exact check then
+/// converted ∞ to a rational. The property now treats an infinite slack as "no information".
+#[test]
+fn vo_expert_infinite_slack() {
+    props::check_vo(&VoInput {
+        r: [1.396_755_974_046_524_5e-304, 2.132_170_128_426_316_5e147],
+        v_o: [1_610.533_333_333_333_3, 1_509.875],
+        v_r: [3.792_128_748_738_515e146, 2.442_566_542_453_456_8e-85],
+        v_des: [1_606.666_666_666_666_7, 1_610.533_333_333_333_3],
+        lam: 0.0,
+        big_r: 5.698_719e-317,
+        probes: [0.0, 0.0],
+    });
+}
+
+/// `vo_expert` target, crash-e32e7623: not a library bug — with ‖r‖ ≈ 2e−276 and R subnormal the
+/// property's absolute tolerance `64ε(‖r‖² + R²)(…)` underflowed to 0·∞ = NaN. The tolerance is
+/// now relative to `‖r‖² + R²` and applied exactly (scale-invariant, as is the library's
+/// rescaling); the library's answer here is feasible.
+#[test]
+fn vo_expert_tiny_geometry_huge_velocity() {
+    props::check_vo(&VoInput {
+        r: [6.527_671_473_216_822e-293, -1.957_483_972_527_704e-276],
+        v_o: [8_302.0, 9.434_266_880_855_467e-136],
+        v_r: [-3.896_155_832_256_809e117, -721.181_818_181_818_1],
+        v_des: [-1_123.0, -0.0],
+        lam: 5.569_147e-318,
+        big_r: 2.815_769_747_954_16e-310,
+        probes: [0.0, 0.0],
+    });
+}

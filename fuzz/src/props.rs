@@ -594,10 +594,14 @@ fn norm(a: [f64; 2]) -> f64 {
     a[0].hypot(a[1])
 }
 
-/// Exact test of the constraint of eq. 4.1 at a float point `u`, with a slack:
-/// `(rᵀv)² − (‖r‖² − R²)‖v‖² ≤ slack·‖v‖²`, `v = v_o − v_r − u` (all in rationals).
-/// Equivalent to `c(u) ≤ slack` for `v ≠ 0`; `v = 0` is feasible by the module's convention.
-fn constraint_exact_le(inp: &VoInput, u: [f64; 2], slack: f64) -> bool {
+/// Exact test of the constraint of eq. 4.1 at a float point `u`, with a slack relative to the
+/// scale of `c`: `(rᵀv)² − (‖r‖² − R²)‖v‖² ≤ rel·(‖r‖² + R²)‖v‖²`, `v = v_o − v_r − u` (all in
+/// rationals), i.e. `c(u) ≤ rel·(‖r‖² + R²)` for `v ≠ 0`; `v = 0` is feasible by the module's
+/// convention.
+fn constraint_exact_le(inp: &VoInput, u: [f64; 2], rel: f64) -> bool {
+    if !rel.is_finite() {
+        return true; // the tolerance itself overflowed (∞ or ∞/∞): no information
+    }
     let v: Vec<BigRational> = (0..2)
         .map(|k| q(inp.v_o[k]) - q(inp.v_r[k]) - q(u[k]))
         .collect();
@@ -609,24 +613,25 @@ fn constraint_exact_le(inp: &VoInput, u: [f64; 2], slack: f64) -> bool {
     let rv = &r[0] * &v[0] + &r[1] * &v[1];
     let rr = &r[0] * &r[0] + &r[1] * &r[1];
     let rr2 = q(inp.big_r) * q(inp.big_r);
-    &rv * &rv - (rr - rr2) * &vv <= q(slack) * vv
+    &rv * &rv - (&rr - &rr2) * &vv <= q(rel) * (rr + rr2) * vv
 }
 
-/// The documented rounding tolerance of the feasibility check (fuzz/README.md): with
-/// `M = ‖v_o‖ + ‖v_r‖ + ‖v_des‖ + ‖u‖`, `c(u*) ≤ 64ε·(‖r‖² + R²)·(1 + M/‖v‖)`. The returned `u*`
-/// is the rounded image of a point on the cone's boundary; an error `e ≲ 8εM` in its position turns
-/// the line's direction by `e/‖v‖`, which moves `c` by at most `‖r‖²·e/‖v‖`; computing the
-/// boundary direction `d±` (one square root of `‖r‖² − R²`) costs another few `ε(‖r‖² + R²)`.
+/// The documented rounding tolerance of the feasibility check (fuzz/README.md), relative to the
+/// scale `‖r‖² + R²` of `c`: with `M = ‖v_o‖ + ‖v_r‖ + ‖v_des‖ + ‖u‖`,
+/// `c(u*) ≤ 64ε·(‖r‖² + R²)·(1 + M/‖v‖)`. The returned `u*` is the rounded image of a point on the
+/// cone's boundary; an error `e ≲ 8εM` in its position turns the line's direction by `e/‖v‖`,
+/// which moves `c` by at most `‖r‖²·e/‖v‖`; computing the boundary direction `d±` (one square
+/// root of `‖r‖² − R²`) costs another few `ε(‖r‖² + R²)`. Both are invariant under rescaling r
+/// and R, so the bound is stated relative to `‖r‖² + R²`.
 pub fn vo_feasibility_slack(inp: &VoInput, u: [f64; 2]) -> f64 {
     let v = [
         inp.v_o[0] - inp.v_r[0] - u[0],
         inp.v_o[1] - inp.v_r[1] - u[1],
     ];
     let m = norm(inp.v_o) + norm(inp.v_r) + norm(inp.v_des) + norm(u);
-    let scale = inp.r[0] * inp.r[0] + inp.r[1] * inp.r[1] + inp.big_r * inp.big_r;
     let nv = norm(v);
     let ratio = if nv > 0.0 { m / nv } else { f64::INFINITY };
-    64.0 * EPS * scale * (1.0 + ratio)
+    64.0 * EPS * (1.0 + ratio)
 }
 
 /// Target `vo_expert`: a finite, feasible (within [`vo_feasibility_slack`]) global optimum that is
