@@ -120,3 +120,19 @@ fn vo_expert_tiny_geometry_huge_velocity() {
         probes: [0.0, 0.0],
     });
 }
+
+/// `vo_expert` target, crash-75a69ce6: not a library bug — v_o is subnormal (6.5e−319), so the
+/// optimum u* is subnormal too and has only a few significant bits; no float is closer to the
+/// cone's boundary. The property's position error now includes the subnormal spacing 2⁻¹⁰⁷⁴.
+#[test]
+fn vo_expert_subnormal_solution() {
+    props::check_vo(&VoInput {
+        r: [0.0, 6.627_417_254_342_74e-310],
+        v_o: [0.0, 6.4758e-319],
+        v_r: [0.0, 0.0],
+        v_des: [0.0, 0.0],
+        lam: 0.0,
+        big_r: 4.617_462_841_140_43e-310,
+        probes: [0.0, 0.0],
+    });
+}

@@ -17,6 +17,7 @@ use ilopt::toy::{
     MAX_ACTIONS, MAX_HORIZON, MAX_STATES, PolicyKind, ToyMdp, ToyProblem, ToyTrajectory,
 };
 use nalgebra::DVector;
+use num_bigint::BigInt;
 use num_traits::{One, Signed, Zero};
 use rand::SeedableRng;
 
@@ -586,10 +587,6 @@ pub struct VoInput {
 
 const EPS: f64 = f64::EPSILON;
 
-fn q(x: f64) -> BigRational {
-    BigRational::from_float(x).expect("finite")
-}
-
 fn norm(a: [f64; 2]) -> f64 {
     a[0].hypot(a[1])
 }
@@ -602,24 +599,34 @@ fn constraint_exact_le(inp: &VoInput, u: [f64; 2], rel: f64) -> bool {
     if !rel.is_finite() {
         return true; // the tolerance itself overflowed (∞ or ∞/∞): no information
     }
-    let v: Vec<BigRational> = (0..2)
-        .map(|k| q(inp.v_o[k]) - q(inp.v_r[k]) - q(u[k]))
+    // Every float is an integer multiple of 2⁻¹⁰⁷⁵ (`integer_decode` reports subnormals with exponent −1075): compute with the integers x·2¹⁰⁷⁵ (exact, and
+    // much faster than rationals, which reduce by a gcd after every operation). Both sides of
+    // the inequality are homogeneous of degree 2 in (r, R) and in v, so the scale cancels; `rel`
+    // is scaled too, so the left side is multiplied by 2¹⁰⁷⁵ once more.
+    let z = |x: f64| -> BigInt {
+        let (m, e, sign) = num_traits::Float::integer_decode(x);
+        let n = BigInt::from(m) << usize::try_from(i32::from(e) + 1075).expect("e ≥ −1075");
+        if sign < 0 { -n } else { n }
+    };
+    let v: Vec<BigInt> = (0..2)
+        .map(|k| z(inp.v_o[k]) - z(inp.v_r[k]) - z(u[k]))
         .collect();
-    let r: Vec<BigRational> = inp.r.iter().map(|&x| q(x)).collect();
+    let r: Vec<BigInt> = inp.r.iter().map(|&x| z(x)).collect();
     let vv = &v[0] * &v[0] + &v[1] * &v[1];
     if vv.is_zero() {
         return true;
     }
     let rv = &r[0] * &v[0] + &r[1] * &v[1];
     let rr = &r[0] * &r[0] + &r[1] * &r[1];
-    let rr2 = q(inp.big_r) * q(inp.big_r);
-    &rv * &rv - (&rr - &rr2) * &vv <= q(rel) * (rr + rr2) * vv
+    let rr2 = z(inp.big_r) * z(inp.big_r);
+    ((&rv * &rv - (&rr - &rr2) * &vv) << 1075usize) <= z(rel) * (rr + rr2) * vv
 }
 
 /// The documented rounding tolerance of the feasibility check (fuzz/README.md), relative to the
 /// scale `‖r‖² + R²` of `c`: with `M = ‖v_o‖ + ‖v_r‖ + ‖v_des‖ + ‖u‖`,
-/// `c(u*) ≤ 64ε·(‖r‖² + R²)·(1 + M/‖v‖)`. The returned `u*` is the rounded image of a point on the
-/// cone's boundary; an error `e ≲ 8εM` in its position turns the line's direction by `e/‖v‖`,
+/// `c(u*) ≤ 64·(‖r‖² + R²)·(ε + (εM + η)/‖v‖)`, `η = 2⁻¹⁰⁷⁴` (the subnormal spacing). The
+/// returned `u*` is the rounded image of a point on the cone's boundary; an error
+/// `e ≲ 8(εM + η)` in its position turns the line's direction by `e/‖v‖`,
 /// which moves `c` by at most `‖r‖²·e/‖v‖`; computing the boundary direction `d±` (one square
 /// root of `‖r‖² − R²`) costs another few `ε(‖r‖² + R²)`. Both are invariant under rescaling r
 /// and R, so the bound is stated relative to `‖r‖² + R²`.
@@ -630,8 +637,11 @@ pub fn vo_feasibility_slack(inp: &VoInput, u: [f64; 2]) -> f64 {
     ];
     let m = norm(inp.v_o) + norm(inp.v_r) + norm(inp.v_des) + norm(u);
     let nv = norm(v);
-    let ratio = if nv > 0.0 { m / nv } else { f64::INFINITY };
-    64.0 * EPS * (1.0 + ratio)
+    // Position error of u*: a few ulps of M, but never less than the spacing of subnormals
+    // (2⁻¹⁰⁷⁴): a u* in the subnormal range has only a few significant bits.
+    let e = EPS * m + f64::from_bits(1);
+    let ratio = if nv > 0.0 { e / nv } else { f64::INFINITY };
+    64.0 * (EPS + ratio)
 }
 
 /// Target `vo_expert`: a finite, feasible (within [`vo_feasibility_slack`]) global optimum that is
