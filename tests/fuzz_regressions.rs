@@ -136,3 +136,20 @@ fn vo_expert_subnormal_solution() {
         probes: [0.0, 0.0],
     });
 }
+
+/// `vo_expert` target, crash-(r = (1.1e−308, 1e−300), R = 1e−300): not a library bug — ‖r‖
+/// exceeds R by less than an ulp (‖r‖² − R² ≈ 1.2e−616), so the library is right to solve it
+/// (after its rescaling); the property compared `hypot(r) > R` in floats, which rounds to
+/// equality. It now decides ‖r‖ > R exactly.
+#[test]
+fn vo_expert_outside_by_less_than_an_ulp() {
+    props::check_vo(&VoInput {
+        r: [1.112_596_345_135_747_7e-308, 1e-300],
+        v_o: [1e-300, 1e-300],
+        v_r: [1e150, 1e-300],
+        v_des: [1e-300, 1e-300],
+        lam: 1e-300,
+        big_r: 1e-300,
+        probes: [0.0, 0.0],
+    });
+}

@@ -27,12 +27,19 @@ fn frac() -> impl Strategy<Value = Frac> {
 
 fn mdp_spec() -> impl Strategy<Value = MdpSpec> {
     (
-        (0u8..=3, 1u8..=3, 1u8..=4),
+        (
+            prop_oneof![9 => 1u8..=3, 1 => Just(0u8)],
+            prop_oneof![9 => 2u8..=3, 1 => Just(1u8)],
+            prop_oneof![9 => 2u8..=4, 1 => Just(1u8)],
+        ),
         prop::collection::vec(frac(), 0..12),
         prop::bool::weighted(0.9),
-        prop::collection::vec(0u8..=3, 0..3),
-        0u8..=3,
-        frac(),
+        prop::collection::vec(prop_oneof![15 => 0u8..=1, 1 => 0u8..=3], 0..3),
+        prop_oneof![9 => 0u8..=2, 1 => Just(3u8)],
+        prop_oneof![
+            7 => (1i16..=8, 1u8..=8).prop_map(|(num, den)| Frac { num, den }),
+            1 => frac(),
+        ],
         prop::option::weighted(0.25, prop::collection::vec(0u8..=3, 0..3)),
     )
         .prop_map(
@@ -263,4 +270,34 @@ proptest! {
     fn run_configs_survive_mutation(bytes in mutated_config()) {
         props::check_config(&bytes);
     }
+}
+
+/// The oracle suites are not vacuous: most generated inputs parse, and most of those reach the
+/// oracle's arithmetic (an `Ok` estimate) rather than an early rejection.
+#[test]
+fn oracle_inputs_mostly_reach_the_arithmetic() {
+    use proptest::strategy::ValueTree;
+    let mut runner = proptest::test_runner::TestRunner::new(config(200));
+    let strategy = oracle_input();
+    let (mut parsed, mut ok) = (0, 0);
+    for _ in 0..200 {
+        let input = strategy.new_tree(&mut runner).unwrap().current();
+        let Some(mdp) = input.parse() else { continue };
+        parsed += 1;
+        let (th, th_new) = input.thetas(&mdp);
+        let traj = input.traj.build(mdp.states, mdp.actions, mdp.horizon);
+        let out = props::run_oracle::<ilopt::scalar::BigRational>(
+            &mdp,
+            &th,
+            &th_new,
+            &traj,
+            input.seed,
+            input.expert_weight,
+        );
+        ok += usize::from(out.estimates[0].is_ok());
+    }
+    assert!(
+        parsed >= 80 && ok >= 40,
+        "parsed {parsed}/200, Ok estimates {ok}"
+    );
 }

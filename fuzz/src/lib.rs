@@ -55,9 +55,27 @@ impl<'a> Arbitrary<'a> for MdpSpec {
             horizon,
             probs: small_vec(u, 12, frac)?,
             normalize: u.ratio(7, 8)?,
-            expert: small_vec(u, 3, |u| u.int_in_range(0..=3))?,
+            expert: small_vec(u, 3, |u| {
+                // Mostly valid for every A ≥ 2; sometimes A itself (rejected).
+                if u.ratio(1, 16)? {
+                    u.int_in_range(0..=3)
+                } else {
+                    u.int_in_range(0..=1)
+                }
+            })?,
             kind: u.int_in_range(0..=3)?,
-            c: frac(u)?,
+            c: {
+                // Mostly a valid c > 0 (a non-positive c only tests one error path).
+                let f = frac(u)?;
+                if u.ratio(7, 8)? {
+                    Frac {
+                        num: f.num.saturating_abs().max(1),
+                        den: f.den.max(1),
+                    }
+                } else {
+                    f
+                }
+            },
             groups: if u.ratio(1, 4)? {
                 Some(small_vec(u, 3, |u| u.int_in_range(0..=3))?)
             } else {

@@ -595,6 +595,14 @@ fn norm(a: [f64; 2]) -> f64 {
 /// scale of `c`: `(rᵀv)² − (‖r‖² − R²)‖v‖² ≤ rel·(‖r‖² + R²)‖v‖²`, `v = v_o − v_r − u` (all in
 /// rationals), i.e. `c(u) ≤ rel·(‖r‖² + R²)` for `v ≠ 0`; `v = 0` is feasible by the module's
 /// convention.
+/// The finite float `x` times 2¹⁰⁷⁵, an exact integer (`integer_decode` reports subnormals with
+/// exponent −1075).
+fn z(x: f64) -> BigInt {
+    let (m, e, sign) = num_traits::Float::integer_decode(x);
+    let n = BigInt::from(m) << usize::try_from(i32::from(e) + 1075).expect("e ≥ −1075");
+    if sign < 0 { -n } else { n }
+}
+
 fn constraint_exact_le(inp: &VoInput, u: [f64; 2], rel: f64) -> bool {
     if !rel.is_finite() {
         return true; // the tolerance itself overflowed (∞ or ∞/∞): no information
@@ -603,11 +611,6 @@ fn constraint_exact_le(inp: &VoInput, u: [f64; 2], rel: f64) -> bool {
     // much faster than rationals, which reduce by a gcd after every operation). Both sides of
     // the inequality are homogeneous of degree 2 in (r, R) and in v, so the scale cancels; `rel`
     // is scaled too, so the left side is multiplied by 2¹⁰⁷⁵ once more.
-    let z = |x: f64| -> BigInt {
-        let (m, e, sign) = num_traits::Float::integer_decode(x);
-        let n = BigInt::from(m) << usize::try_from(i32::from(e) + 1075).expect("e ≥ −1075");
-        if sign < 0 { -n } else { n }
-    };
     let v: Vec<BigInt> = (0..2)
         .map(|k| z(inp.v_o[k]) - z(inp.v_r[k]) - z(u[k]))
         .collect();
@@ -679,7 +682,12 @@ pub fn check_vo(inp: &VoInput) {
         "Ok for a non-finite input"
     );
     assert!(inp.lam >= 0.0 && inp.big_r > 0.0, "Ok for λ < 0 or R ≤ 0");
-    assert!(norm(inp.r) > inp.big_r, "Ok inside the obstacle");
+    // ‖r‖ > R, decided exactly (‖r‖ may exceed R by less than an ulp).
+    let (r0, r1, big) = (z(inp.r[0]), z(inp.r[1]), z(inp.big_r));
+    assert!(
+        &r0 * &r0 + &r1 * &r1 > &big * &big,
+        "Ok inside the obstacle"
+    );
     let u = sol.u;
     assert!(
         u[0].is_finite() && u[1].is_finite() && sol.j.is_finite(),
