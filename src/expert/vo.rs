@@ -84,6 +84,7 @@
 //! | `‖r‖ ≤ R` | [`VoError::InsideObstacle`]: every direction (all but one line at `‖r‖ = R`) collides |
 //! | NaN/∞ input | [`VoError::NonFinite`] |
 //! | overflow of an intermediate (inputs ≳ 1e150) | [`VoError::Overflow`]; never a NaN output |
+//! | tiny inputs (max of `‖r‖`, `R` or of the velocities below 2⁻⁶⁰) | rescaled by exact powers of two before solving ([`vo_expert_cone`]), so no product underflows; the answer is unchanged |
 //!
 //! # Reference
 //! Thesis §4.1.2, eq. 4.1 (the thesis solves it with MATLAB's `fmincon`, a local method); the
@@ -360,7 +361,8 @@ fn cmp_g<S: Scalar>(a: &S, b: &S, what: &'static str) -> Result<Ordering, VoErro
 
 /// [`vo_expert_cone`] generic over the scalar type (any [`Sqrt`] scalar: `f64`, `f32`,
 /// [`crate::scalar::Interval`], [`crate::scalar::Dual`]): the same closed form, operation for
-/// operation (for `f64` the result is bit-identical to [`vo_expert_cone`]).
+/// operation (for `f64` the result is bit-identical to [`vo_expert_cone`] when no input group
+/// is below 2⁻⁶⁰; this generic form does not rescale tiny inputs).
 ///
 /// With intervals the result *encloses* the exact minimiser for every point input in the argument
 /// intervals, provided every branch was decided; with duals it carries the derivatives of `u*` and
