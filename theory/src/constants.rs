@@ -45,6 +45,10 @@ pub struct Constant {
     /// The branch-and-bound certificate, if any.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub certificate: Option<SupBound>,
+    /// For a constant bounded over all of ℝ^d: one certificate per chart region
+    /// ([`crate::global`]); empty otherwise.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub charts: Vec<crate::global::ChartBound>,
 }
 
 impl Constant {
@@ -57,6 +61,7 @@ impl Constant {
             provenance: Provenance::Exact,
             how: how.into(),
             certificate: None,
+            charts: vec![],
         }
     }
     /// A rigorous upper bound from branch-and-bound; `transform` maps the sup of the enclosed
@@ -70,6 +75,7 @@ impl Constant {
             provenance: Provenance::Rigorous,
             how,
             certificate: Some(bound),
+            charts: vec![],
         }
     }
 }

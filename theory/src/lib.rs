@@ -12,6 +12,7 @@ pub mod bounds;
 pub mod check;
 pub mod checks;
 pub mod constants;
+pub mod global;
 pub mod report;
 pub mod schedule;
 pub mod stats;

@@ -2,7 +2,8 @@
 
 use crate::check::Check;
 use crate::checks::montecarlo::{self, McSettings};
-use crate::checks::{constants, o2nc_formula, schedule, thm31, unbiased};
+use crate::checks::{constants, o2nc_formula, schedule, storm, thm31, unbiased};
+use crate::global::{GlobalConstants, GlobalSizes};
 use crate::stats::bonferroni;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, parse_exact};
@@ -32,12 +33,18 @@ pub struct Sizes {
     pub sgd_k: u64,
     /// O2NC budget N.
     pub o2nc_n: u64,
+    /// STORM iterations K (checks 2c, 2d).
+    pub storm_k: u64,
+    /// Branch-and-bound tolerance on L̃² (½ sup |∂²V_IS/∂θ′²|).
+    pub l_tilde_tol: f64,
+    /// Branch-and-bound box budget per chart region for L̃.
+    pub l_tilde_boxes: usize,
 }
 
 /// Family-wise false-alarm probability of the statistical checks (Bonferroni-split).
 pub const FAMILY_ALPHA: f64 = 0.01;
 /// Number of statistical claims of the thesis in the suite (for Bonferroni).
-pub const STATISTICAL_CLAIMS: usize = 2;
+pub const STATISTICAL_CLAIMS: usize = 4;
 
 impl Profile {
     /// The sizes of this profile.
@@ -50,6 +57,9 @@ impl Profile {
                 runs: 100,
                 sgd_k: 1000,
                 o2nc_n: 2000,
+                storm_k: 1000,
+                l_tilde_tol: 1.0,
+                l_tilde_boxes: 20_000,
             },
             Profile::Full => Sizes {
                 schedule_k: 100_000,
@@ -58,6 +68,9 @@ impl Profile {
                 runs: 1000,
                 sgd_k: 1000,
                 o2nc_n: 20_000,
+                storm_k: 10_000,
+                l_tilde_tol: 0.25,
+                l_tilde_boxes: 200_000,
             },
         }
     }
@@ -80,7 +93,7 @@ pub fn m1_tied() -> ToyMdp {
     .expect("valid")
 }
 
-/// The exact and rigorous part of the suite (checks 2a/2b, 3c, 4, 5, 8).
+/// The exact, rigorous and toy Monte-Carlo part of the suite (checks 1, 2a–2d, 3, 4, 5, 8, 8b).
 ///
 /// # Errors
 /// A message if a rigorous constant cannot be enclosed.
@@ -119,7 +132,32 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     };
     rows.push(montecarlo::sgd(&m1, &k, 0.0, (1, 20), s.sgd_k, mc, 1.0));
     rows.extend(montecarlo::o2nc(&m1, &k, 0.0, s.o2nc_n, (1, 10), mc, 1.0));
+    let g = global_constants(&m1, s)?;
+    rows.push(g.row("M1 (P2', c = 1/2, θ₁ = 0)"));
+    rows.push(storm::fixed_schedule(&m1, &g, 0.0, s.storm_k, mc, 1.0));
+    rows.push(storm::adaptive_schedule(
+        &m1, &g, 0.0, 1.0, s.storm_k, mc, 1.0,
+    ));
     Ok(rows)
+}
+
+/// The constants of the STORM checks over all of ℝ (ℝ² for L̃), for M1 at θ₁ = 0.
+///
+/// # Errors
+/// A message if an enclosure fails.
+pub fn global_constants(m1: &ToyMdp, s: Sizes) -> Result<GlobalConstants, String> {
+    GlobalConstants::compute(
+        m1,
+        &[q("0")],
+        Some(&q("7/8")),
+        GlobalSizes {
+            tol: s.bnb_tol,
+            max_boxes: 200_000,
+            l_tilde_tol: s.l_tilde_tol,
+            l_tilde_boxes: s.l_tilde_boxes,
+        },
+    )
+    .map_err(|e| e.to_string())
 }
 
 /// Check 6 on CartPole (softmax learner, LQR expert) and the obstacle task (linear-Gaussian

@@ -81,6 +81,7 @@ fn estimate(name: &str, value: f64, how: String) -> Constant {
         provenance: Provenance::Estimate,
         how,
         certificate: None,
+        charts: vec![],
     }
 }
 

@@ -6,5 +6,6 @@ pub mod montecarlo;
 pub mod o2nc_formula;
 pub mod real_env;
 pub mod schedule;
+pub mod storm;
 pub mod thm31;
 pub mod unbiased;
