@@ -422,6 +422,68 @@ pub fn v_is_second(
     Ok(theta_second(charts[1], b[1], vx, vxx))
 }
 
+type D3 = Dual<D2>;
+
+/// A tighter enclosure of `∂²V_IS/∂θ′²` on a box, in chart coordinates (x₁, x₂): the natural
+/// interval extension intersected with the mean-value form
+/// `h(X) ⊆ h(m) + ∂₁h(X)(X₁ − m₁) + ∂₂h(X)(X₂ − m₂)`, whose overestimation shrinks
+/// quadratically with the box. The derivatives of h come from third-order nested duals (outer level
+/// in (x₁, x₂), the two inner levels in x₂); in the tail chart h = u⁴V_uu + 2u³V_u, so
+/// `∂_u h = u⁴V_uuu + 6u³V_uu + 6u²V_u` and `∂₁h = u⁴∂₁V_uu + 2u³∂₁V_u`.
+///
+/// # Errors
+/// If a table cannot be built or the prefix sets differ.
+pub fn v_is_second_mean_value(
+    mdp: &ToyMdp,
+    pi: &ToyProblem<Interval>,
+    pd: &ToyProblem<D2>,
+    p3: &ToyProblem<D3>,
+    charts: &[Chart],
+    b: &[Interval],
+) -> Result<Interval, String> {
+    let x1 = Dual::variable(lift2(&b[0]), 0, 2);
+    let x2 = Dual::variable(var2(b[1]), 1, 2);
+    let at = rows(p3, &table_at(mdp, p3, charts[0], &x1)?)?;
+    let prime = rows(p3, &table_at(mdp, p3, charts[1], &x2)?)?;
+    if at.len() != prime.len() {
+        return Err("prefix sets differ".into());
+    }
+    let mut total = D3::zero();
+    for (a, q) in at.iter().zip(&prime) {
+        if a.0 != q.0 || a.1 != q.1 {
+            return Err("prefix order differs".into());
+        }
+        let e = q.4.clone() - a.2.clone() / &q.2 * &a.4;
+        total += q.2.clone() * &e * &e;
+    }
+    let (_, v2, v22) = parts(total.value());
+    let grad = total.gradient_padded(2);
+    let (_, v12, v122) = parts(&grad[0]);
+    let (_, _, v222) = parts(&grad[1]);
+    let natural = theta_second(charts[1], b[1], v2, v22);
+    let (d1, d2) = match charts[1] {
+        Chart::Core => (v122, v222),
+        Chart::Tail => {
+            let u = b[1];
+            let (u2, six) = (u * u, Interval::from_i64(6));
+            let u3 = u2 * u;
+            (
+                u2 * u2 * v122 + Interval::from_i64(2) * u3 * v12,
+                u2 * u2 * v222 + six * u3 * v22 + six * u2 * v2,
+            )
+        }
+    };
+    let point = |x: Interval| {
+        let m = x.mid();
+        Interval::try_from((m, m)).map_err(|e| format!("{e:?}"))
+    };
+    let m = [point(b[0])?, point(b[1])?];
+    let at_mid = v_is_second(mdp, pi, pd, charts, &m)?;
+    let mv = at_mid + d1 * (b[0] - m[0]) + d2 * (b[1] - m[1]);
+    let both = natural.intersection(mv);
+    Ok(if both.is_empty() { natural } else { both })
+}
+
 /// L̃ of (A4), over all of ℝ²: `V_IS(θ, θ′) ≤ L̃² (θ′ − θ)²` for **every** θ, θ′, from
 /// `V_IS(θ, θ) = 0`, `∂V_IS/∂θ′(θ, θ) = 0` (a minimum of a non-negative smooth function) and
 /// Taylor's theorem along the segment: `L̃² ≤ ½ sup_{ℝ²} |∂²V_IS/∂θ′²|`.
@@ -436,8 +498,9 @@ pub fn l_tilde(mdp: &ToyMdp, tol: f64, max_boxes: usize) -> Result<Constant, Bnb
     is_tied_1d(mdp)?;
     let pi = ToyProblem::<Interval>::new(mdp);
     let pd = ToyProblem::<D2>::new(mdp);
+    let p3 = ToyProblem::<D3>::new(mdp);
     let f = |charts: &[Chart], b: &[Interval]| -> Result<Interval, String> {
-        Ok(v_is_second(mdp, &pi, &pd, charts, b)?.abs())
+        Ok(v_is_second_mean_value(mdp, &pi, &pd, &p3, charts, b)?.abs())
     };
     let regions = over_charts(2, &f, tol, max_boxes)?;
     Ok(global_constant(

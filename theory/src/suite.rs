@@ -69,7 +69,7 @@ impl Profile {
                 sgd_k: 1000,
                 o2nc_n: 20_000,
                 storm_k: 10_000,
-                l_tilde_tol: 0.25,
+                l_tilde_tol: 0.1,
                 l_tilde_boxes: 200_000,
             },
         }

@@ -289,8 +289,18 @@ pub fn adaptive_schedule(
         },
         "E9, E10",
         format!(
-            "θ₁ = {theta1}, k′ = {:.4}, c = {:.3}, w = {:.3}",
-            params.k_prime, params.c, params.w
+            "θ₁ = {theta1}, k′ = {:.4}, c = {:.3}, w = {:.3}{}",
+            params.k_prime,
+            params.c,
+            params.w,
+            if bound >= k.g_f.value {
+                format!(
+                    "; the bound is vacuous at this K (B ≥ sup ‖∇F‖ = G_F ≤ {:.4}): it holds trivially",
+                    k.g_f.value
+                )
+            } else {
+                String::new()
+            }
         ),
     )
 }
