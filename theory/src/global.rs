@@ -424,23 +424,17 @@ pub fn v_is_second(
 
 type D3 = Dual<D2>;
 
-/// A tighter enclosure of `∂²V_IS/∂θ′²` on a box, in chart coordinates (x₁, x₂): the natural
-/// interval extension intersected with the mean-value form
-/// `h(X) ⊆ h(m) + ∂₁h(X)(X₁ − m₁) + ∂₂h(X)(X₂ − m₂)`, whose overestimation shrinks
-/// quadratically with the box. The derivatives of h come from third-order nested duals (outer level
-/// in (x₁, x₂), the two inner levels in x₂); in the tail chart h = u⁴V_uu + 2u³V_u, so
-/// `∂_u h = u⁴V_uuu + 6u³V_uu + 6u²V_u` and `∂₁h = u⁴∂₁V_uu + 2u³∂₁V_u`.
+/// Enclosures of `h = ∂²V_IS/∂θ′²` and of its chart-coordinate derivatives `∂₁h`, `∂₂h` on a box
+/// (see [`v_is_second_mean_value`]).
 ///
 /// # Errors
 /// If a table cannot be built or the prefix sets differ.
-pub fn v_is_second_mean_value(
+pub fn v_is_second_jet(
     mdp: &ToyMdp,
-    pi: &ToyProblem<Interval>,
-    pd: &ToyProblem<D2>,
     p3: &ToyProblem<D3>,
     charts: &[Chart],
     b: &[Interval],
-) -> Result<Interval, String> {
+) -> Result<[Interval; 3], String> {
     let x1 = Dual::variable(lift2(&b[0]), 0, 2);
     let x2 = Dual::variable(var2(b[1]), 1, 2);
     let at = rows(p3, &table_at(mdp, p3, charts[0], &x1)?)?;
@@ -473,6 +467,27 @@ pub fn v_is_second_mean_value(
             )
         }
     };
+    Ok([natural, d1, d2])
+}
+
+/// A tighter enclosure of `∂²V_IS/∂θ′²` on a box, in chart coordinates (x₁, x₂): the natural
+/// interval extension intersected with the mean-value form
+/// `h(X) ⊆ h(m) + ∂₁h(X)(X₁ − m₁) + ∂₂h(X)(X₂ − m₂)`, whose overestimation shrinks
+/// quadratically with the box. The derivatives of h come from third-order nested duals (outer level
+/// in (x₁, x₂), the two inner levels in x₂); in the tail chart h = u⁴V_uu + 2u³V_u, so
+/// `∂_u h = u⁴V_uuu + 6u³V_uu + 6u²V_u` and `∂₁h = u⁴∂₁V_uu + 2u³∂₁V_u`.
+///
+/// # Errors
+/// If a table cannot be built or the prefix sets differ.
+pub fn v_is_second_mean_value(
+    mdp: &ToyMdp,
+    pi: &ToyProblem<Interval>,
+    pd: &ToyProblem<D2>,
+    p3: &ToyProblem<D3>,
+    charts: &[Chart],
+    b: &[Interval],
+) -> Result<Interval, String> {
+    let [natural, d1, d2] = v_is_second_jet(mdp, p3, charts, b)?;
     let point = |x: Interval| {
         let m = x.mid();
         Interval::try_from((m, m)).map_err(|e| format!("{e:?}"))

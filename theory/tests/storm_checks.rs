@@ -252,8 +252,98 @@ fn check2_at_full_size() {
         runs: 1000,
         alpha: 0.0025,
     };
+    for c in k.all() {
+        eprintln!("{} ≤ {} ({})", c.name, c.value, c.how);
+    }
     let row = storm::fixed_schedule(&m1, &k, 0.0, 10_000, mc, 1.0);
+    eprintln!("2c: {} (X̄/B = {:?})", row.details, row.tightness);
     assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
     let row = storm::adaptive_schedule(&m1, &k, 0.0, 1.0, 10_000, mc, 1.0);
+    eprintln!("2d: {} (X̄/B = {:?})", row.details, row.tightness);
     assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+}
+
+/// (h, ∂h/∂θ, ∂h/∂θ′) for h = ∂²V_IS/∂θ′² at rational (θ, θ′), exactly: third-order nested duals
+/// over ℚ (outer level in (θ, θ′), inner two in θ′) on the engine's own tables.
+fn v_is_second_exact(theta: &Q, prime: &Q) -> [Q; 3] {
+    type D2q = Dual<Dual<Q>>;
+    let m1 = m1_tied();
+    let p3 = ToyProblem::<Dual<D2q>>::new(&m1);
+    let c2 = |x: &Q| D2q::constant(Dual::constant(x.clone()));
+    let v2 = |x: &Q| D2q::variable(Dual::variable(x.clone(), 0, 1), 0, 1);
+    let a = prefixes(&p3, &[Dual::variable(c2(theta), 0, 2)]).unwrap();
+    let b = prefixes(&p3, &[Dual::variable(v2(prime), 1, 2)]).unwrap();
+    let mut total = Dual::<D2q>::zero();
+    for (x, y) in a.iter().zip(&b) {
+        let e = y.estimate[0].clone() - x.prob.clone() / &y.prob * &x.estimate[0];
+        total += y.prob.clone() * &e * &e;
+    }
+    let second = |d: &D2q| d.gradient_padded(1)[0].gradient_padded(1)[0].clone();
+    let g = total.gradient_padded(2);
+    [second(total.value()), second(&g[0]), second(&g[1])]
+}
+
+/// The chart enclosures of h = ∂²V_IS/∂θ′² and of its chart-coordinate derivatives contain the
+/// exact values at dyadic points of every region (degenerate boxes, so the enclosures are tight):
+/// this checks the tail chain rules h = u⁴V_uu + 2u³V_u, ∂_u h = u⁴V_uuu + 6u³V_uu + 6u²V_u
+/// (∂_u = −θ²∂_θ) used by the mean-value form. On small boxes around the points, the natural and
+/// mean-value enclosures contain the exact value too.
+#[test]
+fn chart_enclosures_contain_exact_values() {
+    use ilopt::scalar::Interval;
+    use ilopt_theory::global::{Chart, v_is_second, v_is_second_jet, v_is_second_mean_value};
+    let m1 = m1_tied();
+    let pi = ToyProblem::<Interval>::new(&m1);
+    let pd = ToyProblem::<Dual<Dual<Interval>>>::new(&m1);
+    let p3 = ToyProblem::<Dual<Dual<Dual<Interval>>>>::new(&m1);
+    // (chart, chart coordinate: dyadic, so exact in f64)
+    let cases: [(Chart, &str); 6] = [
+        (Chart::Core, "9/32"),
+        (Chart::Core, "-95/64"),
+        (Chart::Core, "97/32"),
+        (Chart::Tail, "9/64"),
+        (Chart::Tail, "-31/128"),
+        (Chart::Tail, "-1/32"),
+    ];
+    let theta_of = |c: Chart, x: &Q| match c {
+        Chart::Core => x.clone(),
+        Chart::Tail => Q::one() / x,
+    };
+    // dθ/dx: 1 in the core, −1/u² = −θ² in the tail.
+    let jac = |c: Chart, th: &Q| match c {
+        Chart::Core => Q::one(),
+        Chart::Tail => -(th.clone() * th),
+    };
+    let close = |e: Interval, x: f64, what: &str| {
+        let slack = 1e-9 * (1.0 + x.abs());
+        assert!(
+            e.inf() - slack <= x && x <= e.sup() + slack,
+            "{what}: {e:?} misses {x}"
+        );
+    };
+    for (c1, x1) in cases {
+        for (c2, x2) in cases {
+            let (x1q, x2q) = (q(x1), q(x2));
+            let (th, pr) = (theta_of(c1, &x1q), theta_of(c2, &x2q));
+            let [h, h_t, h_p] = v_is_second_exact(&th, &pr);
+            let h1 = (h_t * jac(c1, &th)).to_f64();
+            let h2 = (h_p * jac(c2, &pr)).to_f64();
+            let h = h.to_f64();
+            let pt = |x: &Q| {
+                let f = x.to_f64();
+                Interval::try_from((f, f)).unwrap()
+            };
+            let at = format!("({c1:?} {x1}, {c2:?} {x2})");
+            let [e, d1, d2] = v_is_second_jet(&m1, &p3, &[c1, c2], &[pt(&x1q), pt(&x2q)]).unwrap();
+            close(e, h, &format!("h at {at}"));
+            close(d1, h1, &format!("∂₁h at {at}"));
+            close(d2, h2, &format!("∂₂h at {at}"));
+            let b = [x1q.to_f64(), x2q.to_f64()]
+                .map(|f| Interval::try_from((f - 1.0 / 256.0, f + 1.0 / 256.0)).unwrap());
+            let nat = v_is_second(&m1, &pi, &pd, &[c1, c2], &b).unwrap();
+            let mv = v_is_second_mean_value(&m1, &pi, &pd, &p3, &[c1, c2], &b).unwrap();
+            close(nat, h, &format!("natural on a box at {at}"));
+            close(mv, h, &format!("mean-value on a box at {at}"));
+        }
+    }
 }
