@@ -22,8 +22,9 @@ use crate::bnb::{BnbError, SupBound, sup_bound, verify_certificate};
 use crate::check::{Check, Measured, Method, Role, Verdict};
 use crate::constants::{Constant, Provenance};
 use ilopt::exact::enumerate::for_each_prefix;
+use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
-use ilopt::toy::estimator::causal;
+use ilopt::toy::estimator::{causal, per_decision};
 use ilopt::toy::policy::brier;
 use ilopt::toy::{PolicyKind, PolicyTable, ToyMdp, ToyProblem};
 use serde::Serialize;
@@ -396,30 +397,56 @@ pub fn moment_constants(
 /// If a table cannot be built or the prefix sets differ.
 pub fn v_is_second(
     mdp: &ToyMdp,
-    pi: &ToyProblem<Interval>,
     pd: &ToyProblem<D2>,
+    weighting: Weighting,
     charts: &[Chart],
     b: &[Interval],
 ) -> Result<Interval, String> {
-    let at = rows(pi, &table_at(mdp, pi, charts[0], &b[0])?)?;
-    let prime = rows(pd, &table_at(mdp, pd, charts[1], &var2(b[1]))?)?;
+    let total = v_is_total(mdp, pd, weighting, charts, &lift2(&b[0]), &var2(b[1]))?;
+    let (_, vx, vxx) = parts(&total);
+    Ok(theta_second(charts[1], b[1], vx, vxx))
+}
+
+/// `V(θ, θ′) = Σ_τ̄ p(τ̄; θ′) (g(θ′, τ̄) − g̃(θ → θ′, τ̄))²` with θ at `x_old` in `charts[0]` and θ′
+/// at `x_new` in `charts[1]`, in any scalar. The old-point term g̃ is `w g(θ, τ̄)` with the
+/// prefix weight w = p(τ̄; θ)/p(τ̄; θ′) (trajectory), or the engine's per-decision form
+/// ([`per_decision`]). The factored square keeps enclosures tight near θ′ = θ, where an expanded
+/// form would cancel.
+fn v_is_total<S: Scalar>(
+    mdp: &ToyMdp,
+    problem: &ToyProblem<S>,
+    weighting: Weighting,
+    charts: &[Chart],
+    x_old: &S,
+    x_new: &S,
+) -> Result<S, String> {
+    let t_old = table_at(mdp, problem, charts[0], x_old)?;
+    let t_new = table_at(mdp, problem, charts[1], x_new)?;
+    let at = rows(problem, &t_old)?;
+    let prime = rows(problem, &t_new)?;
     if at.len() != prime.len() {
         return Err("prefix sets differ".into());
     }
-    let mut total = D2::zero();
+    let mut total = S::zero();
     for (a, q) in at.iter().zip(&prime) {
         if a.0 != q.0 || a.1 != q.1 {
             return Err("prefix order differs".into());
         }
-        // p′ (g′ − (p/p′) g)²: the factored form keeps the enclosures tight near θ′ = θ, where
-        // the expanded three terms would cancel.
-        let (p, g) = (lift2(&a.2), lift2(&a.4));
-        let (pp, gp) = (&q.2, &q.4);
-        let e = gp.clone() - p / pp * &g;
-        total += pp.clone() * &e * &e;
+        let old = match weighting {
+            Weighting::Trajectory => a.2.clone() / &q.2 * &a.4,
+            Weighting::PerDecision => {
+                let ratios: Vec<S> =
+                    a.0.iter()
+                        .zip(&a.1)
+                        .map(|(&s, &act)| t_old.prob(s, act).clone() / t_new.prob(s, act))
+                        .collect();
+                per_decision(&t_old, &a.0, &a.1, &ratios).swap_remove(0)
+            }
+        };
+        let e = q.4.clone() - old;
+        total += q.2.clone() * &e * &e;
     }
-    let (_, vx, vxx) = parts(&total);
-    Ok(theta_second(charts[1], b[1], vx, vxx))
+    Ok(total)
 }
 
 type D3 = Dual<D2>;
@@ -432,24 +459,13 @@ type D3 = Dual<D2>;
 pub fn v_is_second_jet(
     mdp: &ToyMdp,
     p3: &ToyProblem<D3>,
+    weighting: Weighting,
     charts: &[Chart],
     b: &[Interval],
 ) -> Result<[Interval; 3], String> {
     let x1 = Dual::variable(lift2(&b[0]), 0, 2);
     let x2 = Dual::variable(var2(b[1]), 1, 2);
-    let at = rows(p3, &table_at(mdp, p3, charts[0], &x1)?)?;
-    let prime = rows(p3, &table_at(mdp, p3, charts[1], &x2)?)?;
-    if at.len() != prime.len() {
-        return Err("prefix sets differ".into());
-    }
-    let mut total = D3::zero();
-    for (a, q) in at.iter().zip(&prime) {
-        if a.0 != q.0 || a.1 != q.1 {
-            return Err("prefix order differs".into());
-        }
-        let e = q.4.clone() - a.2.clone() / &q.2 * &a.4;
-        total += q.2.clone() * &e * &e;
-    }
+    let total = v_is_total(mdp, p3, weighting, charts, &x1, &x2)?;
     let (_, v2, v22) = parts(total.value());
     let grad = total.gradient_padded(2);
     let (_, v12, v122) = parts(&grad[0]);
@@ -481,19 +497,19 @@ pub fn v_is_second_jet(
 /// If a table cannot be built or the prefix sets differ.
 pub fn v_is_second_mean_value(
     mdp: &ToyMdp,
-    pi: &ToyProblem<Interval>,
     pd: &ToyProblem<D2>,
     p3: &ToyProblem<D3>,
+    weighting: Weighting,
     charts: &[Chart],
     b: &[Interval],
 ) -> Result<Interval, String> {
-    let [natural, d1, d2] = v_is_second_jet(mdp, p3, charts, b)?;
+    let [natural, d1, d2] = v_is_second_jet(mdp, p3, weighting, charts, b)?;
     let point = |x: Interval| {
         let m = x.mid();
         Interval::try_from((m, m)).map_err(|e| format!("{e:?}"))
     };
     let m = [point(b[0])?, point(b[1])?];
-    let at_mid = v_is_second(mdp, pi, pd, charts, &m)?;
+    let at_mid = v_is_second(mdp, pd, weighting, charts, &m)?;
     let mv = at_mid + d1 * (b[0] - m[0]) + d2 * (b[1] - m[1]);
     let both = natural.intersection(mv);
     Ok(if both.is_empty() { natural } else { both })
@@ -509,22 +525,68 @@ pub fn v_is_second_mean_value(
 ///
 /// # Errors
 /// [`BnbError`] if an enclosure fails, or for a policy other than the one-group tied softmax.
-pub fn l_tilde(mdp: &ToyMdp, tol: f64, max_boxes: usize) -> Result<Constant, BnbError> {
+pub fn l_tilde(
+    mdp: &ToyMdp,
+    weighting: Weighting,
+    tol: f64,
+    max_boxes: usize,
+) -> Result<Constant, BnbError> {
     is_tied_1d(mdp)?;
-    let pi = ToyProblem::<Interval>::new(mdp);
     let pd = ToyProblem::<D2>::new(mdp);
     let p3 = ToyProblem::<D3>::new(mdp);
     let f = |charts: &[Chart], b: &[Interval]| -> Result<Interval, String> {
-        Ok(v_is_second_mean_value(mdp, &pi, &pd, &p3, charts, b)?.abs())
+        Ok(v_is_second_mean_value(mdp, &pd, &p3, weighting, charts, b)?.abs())
     };
     let regions = over_charts(2, &f, tol, max_boxes)?;
+    let (name, what) = match weighting {
+        Weighting::Trajectory => ("L̃", "√(½ sup |∂²V_IS/∂θ′²|) (trajectory weights)"),
+        Weighting::PerDecision => ("L̃_PD", "√(½ sup |∂²V_PD/∂θ′²|) (per-decision weights)"),
+    };
     Ok(global_constant(
-        "L̃",
+        name,
         regions,
         2,
         |s| sqrt_up(s / 2.0 * (1.0 + 1e-15)),
-        "√(½ sup |∂²V_IS/∂θ′²|) (trajectory weights)",
+        what,
     ))
+}
+
+/// Re-check the certificate of an L̃ from [`l_tilde`] independently of the branch-and-bound run:
+/// the regions cover ℝ² ([`verify_charts`]), the enclosure of |∂²V_IS/∂θ′²| is **re-evaluated** on
+/// every certificate box and must not exceed the recorded one, and the constant must be
+/// ≥ √(½ · the re-evaluated supremum). Returns the re-evaluated supremum.
+///
+/// # Errors
+/// A message naming the first box or condition that fails.
+pub fn recheck_l_tilde(mdp: &ToyMdp, weighting: Weighting, c: &Constant) -> Result<f64, String> {
+    verify_charts(&c.charts, 2).ok_or("the regions do not cover ℝ² or a partition is invalid")?;
+    let pd = ToyProblem::<D2>::new(mdp);
+    let p3 = ToyProblem::<D3>::new(mdp);
+    let mut sup = f64::NEG_INFINITY;
+    for r in &c.charts {
+        for b in &r.bound.certificate {
+            let iv: Vec<Interval> = b
+                .bounds
+                .iter()
+                .map(|[l, h]| Interval::try_from((*l, *h)).map_err(|e| format!("{e:?}")))
+                .collect::<Result<_, _>>()?;
+            let e = v_is_second_mean_value(mdp, &pd, &p3, weighting, &r.charts, &iv)?.abs();
+            if e.sup().is_nan() || e.sup() > b.enclosure[1] {
+                return Err(format!(
+                    "box {:?} of {:?}: re-evaluated sup {} > recorded {}",
+                    b.bounds,
+                    r.charts,
+                    e.sup(),
+                    b.enclosure[1]
+                ));
+            }
+            sup = sup.max(e.sup());
+        }
+    }
+    if c.value * c.value < sup / 2.0 {
+        return Err(format!("L̃ = {} < √(½ · {sup})", c.value));
+    }
+    Ok(sup)
 }
 
 /// ∇F(θ) enclosure at a point of the tail chart (for tests): −u² F_u.
@@ -548,8 +610,10 @@ pub struct GlobalConstants {
     pub b_f: Constant,
     /// L_F ≥ sup |F″|.
     pub l_f: Constant,
-    /// L̃ of (A4).
+    /// L̃ of (A4) for trajectory weights.
     pub l_tilde: Constant,
+    /// L̃ of (A4) for per-decision weights.
+    pub l_tilde_pd: Constant,
     /// σ² ≥ sup Var g.
     pub sigma2: Constant,
     /// G_F ≥ sup |F′|.
@@ -595,16 +659,20 @@ impl GlobalConstants {
                 message: m,
             })?,
             l_f: l_f(mdp, tol, max_boxes)?,
-            l_tilde: l_tilde(mdp, l_tilde_tol, l_tilde_boxes)?,
+            l_tilde: l_tilde(mdp, Weighting::Trajectory, l_tilde_tol, l_tilde_boxes)?,
+            l_tilde_pd: l_tilde(mdp, Weighting::PerDecision, l_tilde_tol, l_tilde_boxes)?,
             sigma2,
             g_f,
             g_inf,
         })
     }
 
-    /// L = max(L_F, L̃).
-    pub fn l(&self) -> f64 {
-        self.l_f.value.max(self.l_tilde.value)
+    /// L = max(L_F, L̃) for the given weighting.
+    pub fn l(&self, weighting: Weighting) -> f64 {
+        self.l_f.value.max(match weighting {
+            Weighting::Trajectory => self.l_tilde.value,
+            Weighting::PerDecision => self.l_tilde_pd.value,
+        })
     }
 
     /// Every constant, in report order.
@@ -613,6 +681,7 @@ impl GlobalConstants {
             self.b_f.clone(),
             self.l_f.clone(),
             self.l_tilde.clone(),
+            self.l_tilde_pd.clone(),
             self.sigma2.clone(),
             self.g_f.clone(),
             self.g_inf.clone(),
@@ -640,7 +709,7 @@ impl GlobalConstants {
             id: "8b".into(),
             result: "Rigorous constants over ℝ (math.md §7.1, tails by θ = 1/u)".into(),
             claim: format!(
-                "{name}: B_F exact; L_F, σ², G_F, G_∞ over ℝ and L̃ of (A4) over ℝ² rigorous upper bounds"
+                "{name}: B_F exact; L_F, σ², G_F, G_∞ over ℝ and L̃ of (A4) (trajectory and per-decision weights) over ℝ² rigorous upper bounds"
             ),
             assumptions: vec![
                 "none on the iterates: the bounds hold for every θ (θ, θ′)".into(),
@@ -672,12 +741,13 @@ impl GlobalConstants {
         let root = |s: f64| s.max(0.0).sqrt();
         let half_root = |s: f64| (s / 2.0).max(0.0).sqrt();
         type Transform<'a> = &'a dyn Fn(f64) -> f64;
-        let checks: [(&Constant, usize, Transform<'_>); 5] = [
+        let checks: [(&Constant, usize, Transform<'_>); 6] = [
             (&self.l_f, 1, &id),
             (&self.sigma2, 1, &id),
             (&self.g_f, 1, &root),
             (&self.g_inf, 1, &root),
             (&self.l_tilde, 2, &half_root),
+            (&self.l_tilde_pd, 2, &half_root),
         ];
         self.b_f.provenance == Provenance::Exact
             && checks.iter().all(|(c, d, t)| {

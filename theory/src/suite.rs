@@ -44,7 +44,7 @@ pub struct Sizes {
 /// Family-wise false-alarm probability of the statistical checks (Bonferroni-split).
 pub const FAMILY_ALPHA: f64 = 0.01;
 /// Number of statistical claims of the thesis in the suite (for Bonferroni).
-pub const STATISTICAL_CLAIMS: usize = 4;
+pub const STATISTICAL_CLAIMS: usize = 5;
 
 impl Profile {
     /// The sizes of this profile.
@@ -134,7 +134,9 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     rows.extend(montecarlo::o2nc(&m1, &k, 0.0, s.o2nc_n, (1, 10), mc, 1.0));
     let g = global_constants(&m1, s)?;
     rows.push(g.row("M1 (P2', c = 1/2, θ₁ = 0)"));
-    rows.push(storm::fixed_schedule(&m1, &g, 0.0, s.storm_k, mc, 1.0));
+    for w in [Weighting::Trajectory, Weighting::PerDecision] {
+        rows.push(storm::fixed_schedule(&m1, &g, w, 0.0, s.storm_k, mc, 1.0));
+    }
     rows.push(storm::adaptive_schedule(
         &m1, &g, 0.0, 1.0, s.storm_k, mc, 1.0,
     ));

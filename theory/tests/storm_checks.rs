@@ -5,14 +5,18 @@
 //! * IS-STORM with schedule (3.43) satisfies (3.60*), and the adaptive (Cutkosky–Orabona) schedule
 //!   its Theorem 1 (secondary); each with a deliberately understated bound that must be flagged.
 
-use ilopt::exact::enumerate::{moments, prefixes};
+use ilopt::exact::enumerate::{for_each_prefix, moments, prefixes};
 use ilopt::exact::forward::forward;
+use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Dual, Scalar, parse_exact};
 use ilopt::toy::ToyProblem;
+use ilopt::toy::estimator::{causal, per_decision};
 use ilopt_theory::check::{Role, Verdict};
 use ilopt_theory::checks::montecarlo::McSettings;
 use ilopt_theory::checks::storm;
-use ilopt_theory::global::{GlobalConstants, GlobalSizes, tail_jet, tied_table, verify_charts};
+use ilopt_theory::global::{
+    GlobalConstants, GlobalSizes, recheck_l_tilde, tail_jet, tied_table, verify_charts,
+};
 use ilopt_theory::suite::m1_tied;
 use std::sync::OnceLock;
 
@@ -45,16 +49,38 @@ fn exact(x: f64) -> Q {
     Q::from_float(x).unwrap()
 }
 
-/// V_IS(θ, θ′) = Σ_τ̄ p(τ̄; θ′) (g(θ′, τ̄) − w g(θ, τ̄))², w = p(τ̄; θ)/p(τ̄; θ′), exactly.
-fn v_is(p: &ToyProblem<Q>, theta: &Q, prime: &Q) -> Q {
-    let a = prefixes(p, std::slice::from_ref(theta)).unwrap();
-    let b = prefixes(p, std::slice::from_ref(prime)).unwrap();
-    a.iter().zip(&b).fold(Q::zero(), |acc, (x, y)| {
-        assert_eq!((&x.states, &x.actions), (&y.states, &y.actions));
-        let w = x.prob.clone() / &y.prob;
-        let d = y.estimate[0].clone() - w * &x.estimate[0];
-        acc + y.prob.clone() * &d * &d
-    })
+/// V(θ, θ′) = Σ_τ̄ p(τ̄; θ′) (g(θ′, τ̄) − g̃(θ → θ′, τ̄))², exactly, with the trajectory weight
+/// (from the prefix probabilities) or the engine's per-decision estimator.
+fn v_is(w: Weighting, p: &ToyProblem<Q>, theta: &Q, prime: &Q) -> Q {
+    match w {
+        Weighting::Trajectory => {
+            let a = prefixes(p, std::slice::from_ref(theta)).unwrap();
+            let b = prefixes(p, std::slice::from_ref(prime)).unwrap();
+            a.iter().zip(&b).fold(Q::zero(), |acc, (x, y)| {
+                assert_eq!((&x.states, &x.actions), (&y.states, &y.actions));
+                let w = x.prob.clone() / &y.prob;
+                let d = y.estimate[0].clone() - w * &x.estimate[0];
+                acc + y.prob.clone() * &d * &d
+            })
+        }
+        Weighting::PerDecision => {
+            let t_old = p.table(std::slice::from_ref(theta)).unwrap();
+            let t_new = p.table(std::slice::from_ref(prime)).unwrap();
+            let mut total = Q::zero();
+            for_each_prefix(p, &t_new, |states, actions, prob| {
+                let ratios: Vec<Q> = states
+                    .iter()
+                    .zip(actions)
+                    .map(|(&s, &a)| t_old.prob(s, a).clone() / t_new.prob(s, a))
+                    .collect();
+                let d = causal(&t_new, states, actions)[0].clone()
+                    - &per_decision(&t_old, states, actions, &ratios)[0];
+                total += prob.clone() * &d * &d;
+            })
+            .unwrap();
+            total
+        }
+    }
 }
 
 /// Points in the core and far in both tails.
@@ -126,21 +152,26 @@ fn global_constants_dominate_exact_values() {
         let f2 = f.gradient_padded(1)[0].gradient_padded(1)[0].clone();
         assert!(f2.clone() * &f2 <= exact(k.l_f.value).square(), "F″ at {t}");
     }
-    let l2 = exact(k.l_tilde.value).square();
-    let mut worst = Q::zero();
-    for a in POINTS {
-        for b in POINTS {
-            let (th, pr) = (q(a), q(b));
-            if th == pr {
-                continue;
+    for (w, c) in [
+        (Weighting::Trajectory, &k.l_tilde),
+        (Weighting::PerDecision, &k.l_tilde_pd),
+    ] {
+        let l2 = exact(c.value).square();
+        let mut worst = Q::zero();
+        for a in POINTS {
+            for b in POINTS {
+                let (th, pr) = (q(a), q(b));
+                if th == pr {
+                    continue;
+                }
+                let d = pr.clone() - &th;
+                let r = v_is(w, &p, &th, &pr) / (d.clone() * &d);
+                assert!(r <= l2, "V/Δ² at ({a}, {b}) exceeds {}²", c.name);
+                worst = worst.max(r);
             }
-            let d = pr.clone() - &th;
-            let r = v_is(&p, &th, &pr) / (d.clone() * &d);
-            assert!(r <= l2, "V_IS/Δ² at ({a}, {b}) exceeds L̃²");
-            worst = worst.max(r);
         }
+        assert!(worst > Q::from_i64(1));
     }
-    assert!(worst > Q::from_i64(1));
 }
 
 /// An understated L̃ is refuted exactly: on the grid of eighths in [−2, 2]² some quotient
@@ -158,7 +189,7 @@ fn an_understated_l_tilde_is_refuted() {
             }
             let (th, pr) = (Q::new(i.into(), 8.into()), Q::new(j.into(), 8.into()));
             let d = pr.clone() - &th;
-            let r = v_is(&p, &th, &pr) / (d.clone() * &d);
+            let r = v_is(Weighting::Trajectory, &p, &th, &pr) / (d.clone() * &d);
             if r > best.0 {
                 best = (r, format!("({th}, {pr})"));
             }
@@ -173,12 +204,23 @@ fn an_understated_l_tilde_is_refuted() {
     assert!(best.0 <= exact(k.l_tilde.value).square());
 }
 
-/// Tampered certificates are rejected: a box removed, a region dropped, a region's domain shrunk.
+/// Tampered certificates are rejected: a box removed, a region dropped, a region's domain shrunk,
+/// a box's recorded enclosure lowered (found by re-evaluating every box), L̃ understated.
 #[test]
 fn tampered_chart_certificates_are_rejected() {
     let k = constants();
+    let m1 = m1_tied();
     let good = &k.l_tilde.charts;
     assert!(verify_charts(good, 2).is_some());
+    let sup = recheck_l_tilde(&m1, Weighting::Trajectory, &k.l_tilde).unwrap();
+    assert!(sup <= verify_charts(good, 2).unwrap());
+    let mut low = k.l_tilde.clone();
+    let top = &mut low.charts[0].bound.certificate[0];
+    top.enclosure[1] /= 2.0;
+    assert!(recheck_l_tilde(&m1, Weighting::Trajectory, &low).is_err());
+    let mut under = k.l_tilde.clone();
+    under.value = 5.0;
+    assert!(recheck_l_tilde(&m1, Weighting::Trajectory, &under).is_err());
     let mut a = good.clone();
     a[0].bound.certificate.pop();
     assert!(verify_charts(&a, 2).is_none());
@@ -196,17 +238,19 @@ fn check2c_storm_bound_holds_and_an_understated_bound_is_flagged() {
     let m1 = m1_tied();
     let mc = McSettings {
         runs: 200,
-        alpha: 0.0025,
+        alpha: 0.002,
     };
-    let row = storm::fixed_schedule(&m1, k, 0.0, 1000, mc, 1.0);
-    assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
-    assert!(row.tightness.unwrap() < 0.1, "{}", row.details);
+    for w in [Weighting::Trajectory, Weighting::PerDecision] {
+        let row = storm::fixed_schedule(&m1, k, w, 0.0, 1000, mc, 1.0);
+        assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+        assert!(row.tightness.unwrap() < 0.1, "{}", row.details);
+    }
     // The bound divided by 100 is below what IS-STORM attains: flagged.
     let mc = McSettings {
         runs: 800,
-        alpha: 0.0025,
+        alpha: 0.002,
     };
-    let wrong = storm::fixed_schedule(&m1, k, 0.0, 300, mc, 0.01);
+    let wrong = storm::fixed_schedule(&m1, k, Weighting::Trajectory, 0.0, 300, mc, 0.01);
     assert_eq!(wrong.role, Role::NegativeControl);
     assert_eq!(wrong.verdict, Verdict::Fails, "{}", wrong.details);
 }
@@ -217,13 +261,13 @@ fn check2d_adaptive_bound_holds_and_an_understated_bound_is_flagged() {
     let m1 = m1_tied();
     let mc = McSettings {
         runs: 200,
-        alpha: 0.0025,
+        alpha: 0.002,
     };
     let row = storm::adaptive_schedule(&m1, k, 0.0, 1.0, 1000, mc, 1.0);
     assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
     let mc = McSettings {
         runs: 800,
-        alpha: 0.0025,
+        alpha: 0.002,
     };
     let wrong = storm::adaptive_schedule(&m1, k, 0.0, 1.0, 300, mc, 1e-4);
     assert_eq!(wrong.verdict, Verdict::Fails, "{}", wrong.details);
@@ -247,37 +291,54 @@ fn check2_at_full_size() {
     .unwrap();
     assert!(k.verified());
     assert!(k.l_tilde.value < 5.95, "{}", k.l_tilde.value);
+    assert!(recheck_l_tilde(&m1_tied(), Weighting::PerDecision, &k.l_tilde_pd).is_ok());
     let m1 = m1_tied();
     let mc = McSettings {
         runs: 1000,
-        alpha: 0.0025,
+        alpha: 0.002,
     };
     for c in k.all() {
         eprintln!("{} ≤ {} ({})", c.name, c.value, c.how);
     }
-    let row = storm::fixed_schedule(&m1, &k, 0.0, 10_000, mc, 1.0);
-    eprintln!("2c: {} (X̄/B = {:?})", row.details, row.tightness);
-    assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+    for w in [Weighting::Trajectory, Weighting::PerDecision] {
+        let row = storm::fixed_schedule(&m1, &k, w, 0.0, 10_000, mc, 1.0);
+        eprintln!("{}: {} (X̄/B = {:?})", row.id, row.details, row.tightness);
+        assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+    }
     let row = storm::adaptive_schedule(&m1, &k, 0.0, 1.0, 10_000, mc, 1.0);
     eprintln!("2d: {} (X̄/B = {:?})", row.details, row.tightness);
     assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
 }
 
-/// (h, ∂h/∂θ, ∂h/∂θ′) for h = ∂²V_IS/∂θ′² at rational (θ, θ′), exactly: third-order nested duals
-/// over ℚ (outer level in (θ, θ′), inner two in θ′) on the engine's own tables.
-fn v_is_second_exact(theta: &Q, prime: &Q) -> [Q; 3] {
+/// (h, ∂h/∂θ, ∂h/∂θ′) for h = ∂²V/∂θ′² at rational (θ, θ′), exactly: third-order nested duals
+/// over ℚ (outer level in (θ, θ′), inner two in θ′) on the engine's own tables, with the engine's
+/// causal and per-decision estimator code.
+fn v_is_second_exact(weighting: Weighting, theta: &Q, prime: &Q) -> [Q; 3] {
     type D2q = Dual<Dual<Q>>;
+    type D3q = Dual<D2q>;
     let m1 = m1_tied();
-    let p3 = ToyProblem::<Dual<D2q>>::new(&m1);
+    let p3 = ToyProblem::<D3q>::new(&m1);
     let c2 = |x: &Q| D2q::constant(Dual::constant(x.clone()));
     let v2 = |x: &Q| D2q::variable(Dual::variable(x.clone(), 0, 1), 0, 1);
-    let a = prefixes(&p3, &[Dual::variable(c2(theta), 0, 2)]).unwrap();
-    let b = prefixes(&p3, &[Dual::variable(v2(prime), 1, 2)]).unwrap();
-    let mut total = Dual::<D2q>::zero();
-    for (x, y) in a.iter().zip(&b) {
-        let e = y.estimate[0].clone() - x.prob.clone() / &y.prob * &x.estimate[0];
-        total += y.prob.clone() * &e * &e;
-    }
+    let t_old = p3.table(&[Dual::variable(c2(theta), 0, 2)]).unwrap();
+    let t_new = p3.table(&[Dual::variable(v2(prime), 1, 2)]).unwrap();
+    let mut total = D3q::zero();
+    for_each_prefix(&p3, &t_new, |states, actions, prob| {
+        let ratios: Vec<D3q> = states
+            .iter()
+            .zip(actions)
+            .map(|(&s, &a)| t_old.prob(s, a).clone() / t_new.prob(s, a))
+            .collect();
+        let old = match weighting {
+            Weighting::Trajectory => {
+                ratios.iter().fold(D3q::one(), |w, r| w * r) * &causal(&t_old, states, actions)[0]
+            }
+            Weighting::PerDecision => per_decision(&t_old, states, actions, &ratios)[0].clone(),
+        };
+        let e = causal(&t_new, states, actions)[0].clone() - old;
+        total += prob.clone() * &e * &e;
+    })
+    .unwrap();
     let second = |d: &D2q| d.gradient_padded(1)[0].gradient_padded(1)[0].clone();
     let g = total.gradient_padded(2);
     [second(total.value()), second(&g[0]), second(&g[1])]
@@ -293,7 +354,6 @@ fn chart_enclosures_contain_exact_values() {
     use ilopt::scalar::Interval;
     use ilopt_theory::global::{Chart, v_is_second, v_is_second_jet, v_is_second_mean_value};
     let m1 = m1_tied();
-    let pi = ToyProblem::<Interval>::new(&m1);
     let pd = ToyProblem::<Dual<Dual<Interval>>>::new(&m1);
     let p3 = ToyProblem::<Dual<Dual<Dual<Interval>>>>::new(&m1);
     // (chart, chart coordinate: dyadic, so exact in f64)
@@ -321,11 +381,15 @@ fn chart_enclosures_contain_exact_values() {
             "{what}: {e:?} misses {x}"
         );
     };
-    for (c1, x1) in cases {
-        for (c2, x2) in cases {
+    for ((c1, x1), (c2, x2), w) in cases
+        .iter()
+        .flat_map(|a| cases.iter().map(move |b| (*a, *b)))
+        .flat_map(|(a, b)| [Weighting::Trajectory, Weighting::PerDecision].map(|w| (a, b, w)))
+    {
+        {
             let (x1q, x2q) = (q(x1), q(x2));
             let (th, pr) = (theta_of(c1, &x1q), theta_of(c2, &x2q));
-            let [h, h_t, h_p] = v_is_second_exact(&th, &pr);
+            let [h, h_t, h_p] = v_is_second_exact(w, &th, &pr);
             let h1 = (h_t * jac(c1, &th)).to_f64();
             let h2 = (h_p * jac(c2, &pr)).to_f64();
             let h = h.to_f64();
@@ -333,15 +397,16 @@ fn chart_enclosures_contain_exact_values() {
                 let f = x.to_f64();
                 Interval::try_from((f, f)).unwrap()
             };
-            let at = format!("({c1:?} {x1}, {c2:?} {x2})");
-            let [e, d1, d2] = v_is_second_jet(&m1, &p3, &[c1, c2], &[pt(&x1q), pt(&x2q)]).unwrap();
+            let at = format!("({c1:?} {x1}, {c2:?} {x2}, {w:?})");
+            let [e, d1, d2] =
+                v_is_second_jet(&m1, &p3, w, &[c1, c2], &[pt(&x1q), pt(&x2q)]).unwrap();
             close(e, h, &format!("h at {at}"));
             close(d1, h1, &format!("∂₁h at {at}"));
             close(d2, h2, &format!("∂₂h at {at}"));
             let b = [x1q.to_f64(), x2q.to_f64()]
                 .map(|f| Interval::try_from((f - 1.0 / 256.0, f + 1.0 / 256.0)).unwrap());
-            let nat = v_is_second(&m1, &pi, &pd, &[c1, c2], &b).unwrap();
-            let mv = v_is_second_mean_value(&m1, &pi, &pd, &p3, &[c1, c2], &b).unwrap();
+            let nat = v_is_second(&m1, &pd, w, &[c1, c2], &b).unwrap();
+            let mv = v_is_second_mean_value(&m1, &pd, &p3, w, &[c1, c2], &b).unwrap();
             close(nat, h, &format!("natural on a box at {at}"));
             close(mv, h, &format!("mean-value on a box at {at}"));
         }

@@ -21,7 +21,7 @@ use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
 use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
 use ilopt::exact::forward::forward;
-use ilopt::problem::EstimatorForm;
+use ilopt::problem::{EstimatorForm, Weighting};
 use ilopt::scalar::Interval;
 use ilopt::toy::{ToyMdp, ToyProblem};
 use std::cell::RefCell;
@@ -184,16 +184,21 @@ fn row(
 pub fn fixed_schedule(
     mdp: &ToyMdp,
     k: &GlobalConstants,
+    weighting: Weighting,
     theta1: f64,
     iterations: u64,
     mc: McSettings,
     claim_scale: f64,
 ) -> Check {
-    let l = k.l();
+    let l = k.l(weighting);
+    let (id, correction, wname, lname) = match weighting {
+        Weighting::Trajectory => ("2c", Correction::Trajectory, "trajectory", "L̃"),
+        Weighting::PerDecision => ("2c.pd", Correction::PerDecision, "per-decision", "L̃_PD"),
+    };
     let bound = storm_fixed(l, k.sigma2.value, k.b_f.value, iterations) * claim_scale;
     let algorithm = AlgorithmConfig::Storm(StormConfig {
         schedule: StormSchedule::Thesis { l: Num::Float(l) },
-        correction: Correction::Trajectory,
+        correction,
         form: EstimatorForm::Causal,
     });
     let sims = simulate(
@@ -205,17 +210,17 @@ pub fn fixed_schedule(
         Statistic::EtaWeightedSquare { l },
     );
     row(
-        "2c",
+        id,
         "STORM, eq. 3.60 → Theorem S, eq. (3.60*)",
         format!(
-            "E[Σ_k η_k‖∇F(θ_k)‖²/Σ_k η_k] ≤ {}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))]/Σ_k (7/(k+7))^{{1/3}}, IS-STORM (trajectory weights), schedule (3.43), L = max(L_F, L̃) = {l:.4}, K = {iterations}",
+            "E[Σ_k η_k‖∇F(θ_k)‖²/Σ_k η_k] ≤ {}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))]/Σ_k (7/(k+7))^{{1/3}}, IS-STORM ({wname} weights), schedule (3.43), L = max(L_F, {lname}) = {l:.4}, K = {iterations}",
             scale_prefix(claim_scale)
         ),
         vec![
             "(A1) F L_F-smooth on ℝ, inf F = 7/8 exact".into(),
             "(A2) E g = ∇F; E[w g(θ_k, τ)] = ∇F(θ_k) for τ ∼ θ_{k+1} (identity I3, checked exactly in row 4)".into(),
             "(A3) Var_θ g ≤ σ² for all θ ∈ ℝ".into(),
-            "(A4) E_{τ∼θ′}(g(θ′,τ) − w g(θ,τ))² ≤ L̃²(θ′−θ)² for all θ, θ′ ∈ ℝ (trajectory weight w = p(τ̄;θ)/p(τ̄;θ′))".into(),
+            format!("(A4) E_{{τ∼θ′}}(g(θ′,τ) − g̃(θ→θ′,τ))² ≤ {lname}²(θ′−θ)² for all θ, θ′ ∈ ℝ ({wname} weights; only consecutive iterates are needed, but it holds globally)"),
             "(C1), (C2) for schedule (3.43): row 2a".into(),
         ],
         k,
@@ -229,7 +234,16 @@ pub fn fixed_schedule(
             Role::NegativeControl
         },
         "E7, E8, E10",
-        format!("θ₁ = {theta1}, L_F ≤ {:.4}, L̃ ≤ {:.4}, σ² ≤ {:.4}, B_F = {}", k.l_f.value, k.l_tilde.value, k.sigma2.value, k.b_f.value),
+        format!(
+            "θ₁ = {theta1}, L_F ≤ {:.4}, {lname} ≤ {:.4}, σ² ≤ {:.4}, B_F = {}",
+            k.l_f.value,
+            match weighting {
+                Weighting::Trajectory => k.l_tilde.value,
+                Weighting::PerDecision => k.l_tilde_pd.value,
+            },
+            k.sigma2.value,
+            k.b_f.value
+        ),
     )
 }
 
@@ -246,7 +260,7 @@ pub fn adaptive_schedule(
     mc: McSettings,
     claim_scale: f64,
 ) -> Check {
-    let (l, g) = (k.l(), k.g_inf.value);
+    let (l, g) = (k.l(Weighting::Trajectory), k.g_inf.value);
     let params = cutkosky_orabona_params(l, g, b);
     let bound = cutkosky_orabona(l, k.sigma2.value, k.b_f.value, params, iterations) * claim_scale;
     let sims = StormSchedule::cutkosky_orabona(b, g, l)
