@@ -17,6 +17,14 @@
 //! The point of this module is that no box has to contain the iterates: the constants hold
 //! everywhere, so they apply to STORM, whose iterates have no useful a.s. box (the direction d_k
 //! has no a.s. bound that stays small as a_k → 0).
+//!
+//! **Why (A4) needs no strip here.** The proof of Theorem S uses (A4) only at consecutive iterates
+//! (θ_k, θ_{k+1}) (math.md §3.2, step 1), so a strip |θ′ − θ| ≤ δ with a certified δ ≥ η_k‖d_k‖
+//! would do. For the rational softmax it is not needed: every probability lies in
+//! [(3−√3)/6, (3+√3)/6] for all θ, so the prefix weight is ≤ 2 + √3 everywhere, V_IS is smooth
+//! and bounded on ℝ², and its θ′-derivatives decay at infinity; hence ½ sup_{ℝ²} |∂²V_IS/∂θ′²| is
+//! finite and (A4) holds as stated, for all θ, θ′. (For an exponential softmax the weights grow like
+//! e^{|θ′−θ|} and a global L̃ would be infinite; there the strip route would be required.)
 
 use crate::bnb::{BnbError, SupBound, sup_bound, verify_certificate};
 use crate::check::{Check, Measured, Method, Role, Verdict};
