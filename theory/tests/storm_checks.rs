@@ -275,7 +275,7 @@ fn check2d_adaptive_bound_holds_and_an_understated_bound_is_flagged() {
 
 /// The full-profile sizes: tighter L̃, K = 10⁴, R = 1000.
 #[test]
-#[ignore = "several minutes: L̃ with 200 000 boxes per chart region and 1000 runs of 10 000 iterations"]
+#[ignore = "about 4 minutes in release: both L̃ at tolerance 0.1 with a re-check, then 1000 runs of 10 000 iterations for 2c, 2c.pd and 2d"]
 fn check2_at_full_size() {
     let k = GlobalConstants::compute(
         &m1_tied(),
