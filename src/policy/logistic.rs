@@ -12,7 +12,7 @@
 //! **Layout of θ**: `θ ∈ Sⁿ`, the weight of feature j at index j.
 
 use super::softmax::{check_action, sample_probs};
-use super::{LikelihoodRatio, Policy, PolicyError, check_size, check_vec};
+use super::{LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec};
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
 
@@ -50,6 +50,29 @@ pub fn softplus<S: Real>(z: &S) -> Result<S, PolicyError> {
         Ok(z.clone() + (S::one() + (-z.clone()).exp()).ln())
     } else {
         Ok((S::one() + z.exp()).ln())
+    }
+}
+
+/// `l = 2(p − y)²` with `4(p − y)p(1 − p)φ` written into `grad` (the same operations, in the same
+/// order, as [`Policy::loss`] of [`Logistic`]).
+fn brier_into<S: Scalar>(p: &S, label: usize, phi: &[S], grad: &mut [S]) -> S {
+    let r = if label == 1 {
+        p.clone() - S::one()
+    } else {
+        p.clone()
+    };
+    let dz = S::from_i64(4) * &r * p * (S::one() - p);
+    for (g, x) in grad.iter_mut().zip(phi) {
+        *g = dz.clone() * x;
+    }
+    S::from_i64(2) * r.square()
+}
+
+/// `(a − p)φ` written into `score`.
+fn score_of<S: Scalar>(p: S, action: usize, phi: &[S], score: &mut [S]) {
+    let c = if action == 1 { S::one() - p } else { -p };
+    for (s, x) in score.iter_mut().zip(phi) {
+        *s = c.clone() * x;
     }
 }
 
@@ -135,6 +158,55 @@ impl<S: Real> Policy<S> for Logistic {
         let p = self.prob_one(theta, phi)?;
         let c = if *action == 1 { S::one() - p } else { -p };
         Ok(phi.iter().map(|x| c.clone() * x).collect())
+    }
+
+    /// As [`Policy::loss`], writing `4(p − y)p(1 − p)φ` into `grad`.
+    fn loss_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        grad: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(*label, 2)?;
+        check_out("grad", grad, self.features)?;
+        let p = self.prob_one(theta, phi)?;
+        Ok(brier_into(&p, *label, phi, grad))
+    }
+
+    /// As [`Policy::score`], writing `(a − p)φ` into `score`.
+    fn score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        action: &usize,
+        score: &mut [S],
+    ) -> Result<(), PolicyError> {
+        check_action(*action, 2)?;
+        check_out("score", score, self.features)?;
+        let p = self.prob_one(theta, phi)?;
+        score_of(p, *action, phi, score);
+        Ok(())
+    }
+
+    /// Loss, gradient and score with `p = σ(θ·φ)` computed once.
+    fn loss_score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        action: &usize,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(*label, 2)?;
+        check_out("grad", grad, self.features)?;
+        let p = self.prob_one(theta, phi)?;
+        let l = brier_into(&p, *label, phi, grad);
+        check_action(*action, 2)?;
+        check_out("score", score, self.features)?;
+        score_of(p, *action, phi, score);
+        Ok(l)
     }
 
     /// One dyadic uniform `u`; action 0 if `u < 1 − p`, else 1 (as the two-action softmax).

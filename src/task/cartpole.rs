@@ -101,6 +101,15 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
         f
     }
 
+    fn push_features(&self, ep: &Self::Episode, out: &mut Vec<S>) {
+        out.extend_from_slice(&ep.state);
+        out.push(S::one());
+    }
+
+    fn max_episode_steps(&self) -> Option<usize> {
+        Some(self.max_steps)
+    }
+
     fn expert(&self, ep: &Self::Episode) -> Result<(usize, usize), OracleError> {
         let a = match &self.expert {
             CartPoleExpert::Lqr(e) => e.action(&ep.state)?,
