@@ -261,18 +261,9 @@ where
             .map_err(policy_error)?;
         if per_decision {
             let w = log_w.exp();
-            let wl = w.clone() * &l;
-            for j in 0..d {
-                g[j] += w.clone() * &grad[j] + wl.clone() * &score_sum[j];
-            }
+            accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
         } else {
-            // The weight is exactly 1 here, and `1·x = x` in every scalar.
-            for j in 0..d {
-                g[j] += grad[j].clone() + l.clone() * &score_sum[j];
-            }
-        }
-        for j in 0..d {
-            score_sum[j] += &score[j];
+            accumulate(&mut g, None, &l, grad, score, score_sum);
         }
         if let Some(theta_new) = ratio
             && step + 1 < n
@@ -283,6 +274,38 @@ where
         }
     }
     Ok((g, log_w))
+}
+
+/// One decision's terms of the causal estimator: `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then
+/// `Σ_{i<t} ψ_i += ψ_t` (`w = None`: the weight is exactly 1, and `1·x = x` in every scalar, so
+/// the multiplication is skipped). A separate function so that the compiler knows the slices do
+/// not overlap.
+#[inline]
+fn accumulate<S: Scalar>(
+    g: &mut [S],
+    w: Option<&S>,
+    l: &S,
+    grad: &[S],
+    score: &[S],
+    score_sum: &mut [S],
+) {
+    let terms = g.iter_mut().zip(grad).zip(score_sum.iter());
+    match w {
+        Some(w) => {
+            let wl = w.clone() * l;
+            for ((gj, dj), sj) in terms {
+                *gj += w.clone() * dj + wl.clone() * sj;
+            }
+        }
+        None => {
+            for ((gj, dj), sj) in terms {
+                *gj += dj.clone() + l.clone() * sj;
+            }
+        }
+    }
+    for (sj, pj) in score_sum.iter_mut().zip(score) {
+        *sj += pj;
+    }
 }
 
 /// The full form `Σ_t ∇l_t + (Σ_t l_t) Σ_{i<n} ψ_i`, in two passes (the total loss first), each
@@ -312,10 +335,10 @@ where
         policy
             .loss_score_into(theta, phi, y.borrow(), a, grad, score)
             .map_err(policy_error)?;
-        for j in 0..d {
-            g[j] += &grad[j];
+        for ((gj, dj), sj) in g.iter_mut().zip(grad.iter()).zip(score.iter()) {
+            *gj += dj;
             if step + 1 < n {
-                g[j] += total.clone() * &score[j];
+                *gj += total.clone() * sj;
             }
         }
     }
