@@ -3,7 +3,8 @@
 //! 1. CartPole: the environment step; roll-out (LQR labels, logistic policy) + causal estimate of
 //!    eq. 3.15, generic `TaskProblem<CartPoleTask<f64>, Logistic>` next to the hand-specialised
 //!    `f64` version of `support/specialised.rs` (same trajectories, bit-identical gradients);
-//! 2. the obstacle task: roll-out (linear-Gaussian policy, VO expert labels) + causal estimate;
+//! 2. the obstacle task: roll-out (linear-Gaussian policy, VO expert labels) + causal estimate,
+//!    with the default `Vec<f64>` actions and with inline `[f64; 2]` actions (no allocation);
 //! 3. the VO expert alone (solves per second).
 //!
 //! Each iteration rolls out the same fixed set of seeds (re-seeded), so the throughput in steps
@@ -155,8 +156,16 @@ fn obstacle_task(c: &mut Criterion) {
     };
     g.throughput(Throughput::Elements(steps_of(&p, &theta)));
     g.bench_function(
-        "roll-out + VO labels + linear-Gaussian + causal estimate (f64)",
+        "roll-out + VO labels + linear-Gaussian + causal estimate (f64, Vec actions)",
         |b| b.iter(|| oracle_pass(&p, black_box(&theta))),
+    );
+    let inline = TaskProblem {
+        task: p.task.clone().with_actions::<[f64; 2]>(),
+        policy: p.policy.clone().with_actions::<[f64; 2]>().unwrap(),
+    };
+    g.bench_function(
+        "roll-out + VO labels + linear-Gaussian + causal estimate (f64, inline actions)",
+        |b| b.iter(|| oracle_pass(&inline, black_box(&theta))),
     );
     g.finish();
 }
