@@ -292,6 +292,42 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
         Ok(())
     }
 
+    /// Loss, gradient and score with each output `(Wφ)_i` computed once (the same numbers as
+    /// [`Policy::loss_into`] then [`Policy::score_into`]).
+    fn loss_score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        action: &A,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let action: &[S] = action.borrow();
+        check_vec("label", label, self.actions)?;
+        self.check(theta, phi)?;
+        check_out("grad", grad, self.actions * self.features)?;
+        check_vec("action", action, self.actions)?;
+        check_out("score", score, self.actions * self.features)?;
+        let n = self.features;
+        let mut loss = S::zero();
+        for (i, (y, a)) in label.iter().zip(action).enumerate() {
+            let mean = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi);
+            let r = mean.clone() - y;
+            loss += r.square();
+            let two_r = S::from_i64(2) * &r;
+            let s = (a.clone() - mean) / &self.sigma_sq;
+            let rows = grad[i * n..(i + 1) * n]
+                .iter_mut()
+                .zip(&mut score[i * n..(i + 1) * n]);
+            for ((g, sc), x) in rows.zip(phi) {
+                *g = two_r.clone() * x;
+                *sc = s.clone() * x;
+            }
+        }
+        Ok(loss)
+    }
+
     /// `a = Wφ + σ_π ε` with ε drawn as `m` f64 standard normals (coordinate by coordinate),
     /// converted exactly.
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
