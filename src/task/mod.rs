@@ -236,7 +236,9 @@ impl<S: Scalar> Scratch<S> {
 ///
 /// Per decision: one [`Policy::loss_score_into`] into preallocated buffers and O(d) field
 /// operations, no allocation. The operations and their order are those of the former
-/// two-stage computation (terms, then sums), so `f64` results are bit-for-bit unchanged.
+/// two-stage computation (terms, then sums), so `f64` results are bit-for-bit unchanged. (Only
+/// which error is reported can differ: when the loss fails at one decision and the likelihood
+/// ratio at an earlier one, the ratio's error now comes first.)
 fn causal_pass<S, P, L, A>(
     policy: &P,
     theta: &[S],
