@@ -29,6 +29,7 @@ pub const UNIFORM_DENOMINATOR: i64 = 1 << 53;
 /// `u64`), built exactly in every scalar: the same seed gives the same number in `f64`, in
 /// rationals and in intervals (a singleton). Every sampler of the kit draws through it, so runs in
 /// different scalars with one seed follow the same path.
+#[inline]
 pub fn dyadic_uniform<S: Scalar>(rng: &mut KitRng) -> S {
     use rand::RngCore;
     let k = (rng.next_u64() >> 11) as i64;

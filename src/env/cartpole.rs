@@ -166,14 +166,32 @@ impl<S: Real> CartPoleDynamics<S> {
     /// * [`EnvError::InvalidAction`] if `action ∉ {0, 1}`;
     /// * [`EnvError::NonFinite`] if a component of the next state is not finite;
     /// * [`EnvError::Undecidable`] if the termination test cannot be decided (intervals).
+    #[inline]
     pub fn step(&self, state: &[S; 4], action: usize) -> Result<([S; 4], bool), EnvError> {
+        let mut next = state.clone();
+        let terminated = self.step_in_place(&mut next, action)?;
+        Ok((next, terminated))
+    }
+
+    /// [`CartPoleDynamics::step`] that overwrites `state` with the next state (only on success;
+    /// on error `state` is unchanged) and returns whether it is terminal.
+    ///
+    /// The same numbers as [`CartPoleDynamics::step`] (which calls it); it exists for the
+    /// roll-out's hot loop, where returning the state inside a `Result` made it travel through
+    /// stack copies whose loads could not be forwarded from the stores (a stall on the
+    /// step-to-step dependency chain).
+    ///
+    /// # Errors
+    /// As [`CartPoleDynamics::step`].
+    #[inline]
+    pub fn step_in_place(&self, state: &mut [S; 4], action: usize) -> Result<bool, EnvError> {
         let p = &self.params;
         let force = match action {
             1 => p.force_mag.clone(),
             0 => -p.force_mag.clone(),
             _ => return Err(invalid_action(action)),
         };
-        let [x, x_dot, theta, theta_dot] = state;
+        let [x, x_dot, theta, theta_dot] = &*state;
         let costheta = theta.cos();
         let sintheta = theta.sin();
         // temp = (force + polemass_length * np.square(theta_dot) * sintheta) / total_mass
@@ -199,7 +217,8 @@ impl<S: Real> CartPoleDynamics<S> {
             }
         }
         let terminated = self.is_terminal(&next)?;
-        Ok((next, terminated))
+        *state = next;
+        Ok(terminated)
     }
 
     /// Gymnasium's termination test `x < −x_max ∨ x > x_max ∨ θ < −θ_max ∨ θ > θ_max` (strict).
@@ -209,6 +228,7 @@ impl<S: Real> CartPoleDynamics<S> {
     ///
     /// # Errors
     /// [`Undecidable`] otherwise (an interval straddles a threshold, or a NaN).
+    #[inline]
     pub fn is_terminal(&self, state: &[S; 4]) -> Result<bool, Undecidable> {
         let p = &self.params;
         let tests = [

@@ -279,6 +279,7 @@ impl LqrExpert {
     ///
     /// # Errors
     /// [`Undecidable`] when the sign of `−K s` cannot be decided (an interval around 0, or NaN).
+    #[inline]
     pub fn action<S: Scalar>(&self, state: &[S; 4]) -> Result<usize, Undecidable> {
         // Each gain is a finite f64 (checked at construction), so `from_binary64` is exact: the
         // exact value of the f64 gain in every scalar, without a rational round trip per call.

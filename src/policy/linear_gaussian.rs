@@ -14,21 +14,58 @@
 //!
 //! **Layout of θ**: W ∈ S^{m×n} row-major, `θ[i·n + j] = W_ij` (row i = action coordinate i,
 //! column j = feature j). Gradients use the same layout.
+//!
+//! **Action type.** An action is a `Vec<S>` by default (any m). With a fixed m known at compile
+//! time, `LinearGaussian<S, [S; M]>` ([`LinearGaussian::with_actions`]) stores actions inline, so
+//! that sampling (and a roll-out storing the actions) allocates nothing; the numbers are the same.
 
 use super::{
-    LikelihoodRatio, Policy, PolicyError, check_size, check_vec, mat_vec, outer, standard_normal,
+    LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec, mat_vec, outer,
+    standard_normal,
 };
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
+use std::borrow::Borrow;
+use std::marker::PhantomData;
+
+/// The storage of an action (or a target output) of the linear-Gaussian policy: `Vec<S>` for any
+/// number of coordinates, `[S; M]` for exactly `M` (inline, no allocation).
+pub trait ActionVector<S>: Clone + std::fmt::Debug + Borrow<[S]> {
+    /// Whether this type can hold an action of `m` coordinates.
+    fn holds(m: usize) -> bool;
+    /// The action `(f(0), …, f(m − 1))`, calling `f` in order. `m` must be accepted by
+    /// [`ActionVector::holds`].
+    fn build(m: usize, f: impl FnMut(usize) -> S) -> Self;
+}
+
+impl<S: Clone + std::fmt::Debug> ActionVector<S> for Vec<S> {
+    fn holds(_: usize) -> bool {
+        true
+    }
+    fn build(m: usize, f: impl FnMut(usize) -> S) -> Self {
+        (0..m).map(f).collect()
+    }
+}
+
+impl<S: Clone + std::fmt::Debug, const M: usize> ActionVector<S> for [S; M] {
+    fn holds(m: usize) -> bool {
+        m == M
+    }
+    fn build(m: usize, f: impl FnMut(usize) -> S) -> Self {
+        debug_assert_eq!(m, M, "an action of {m} coordinates in [S; {M}]");
+        std::array::from_fn(f)
+    }
+}
 
 /// The linear-Gaussian policy (P3) with `m` action coordinates, `n` features and exploration
-/// standard deviation σ_π > 0.
+/// standard deviation σ_π > 0; actions are stored as `A` (module docs: `Vec<S>`, or `[S; m]`).
 #[derive(Debug, Clone, PartialEq)]
-pub struct LinearGaussian<S> {
+pub struct LinearGaussian<S, A = Vec<S>> {
     actions: usize,
     features: usize,
     sigma: S,
     sigma_sq: S,
+    action_type: PhantomData<fn() -> A>,
 }
 
 impl<S: Scalar> LinearGaussian<S> {
@@ -54,6 +91,31 @@ impl<S: Scalar> LinearGaussian<S> {
             features,
             sigma_sq: sigma.square(),
             sigma,
+            action_type: PhantomData,
+        })
+    }
+}
+
+impl<S: Scalar, A> LinearGaussian<S, A> {
+    /// The same policy with actions stored as `B` (e.g. `[S; 2]` for the obstacle task: sampling
+    /// then allocates nothing).
+    ///
+    /// # Errors
+    /// [`PolicyError::Shape`] if `B` cannot hold `m` coordinates.
+    pub fn with_actions<B: ActionVector<S>>(self) -> Result<LinearGaussian<S, B>, PolicyError> {
+        if !B::holds(self.actions) {
+            return Err(PolicyError::Shape {
+                param: "action type",
+                expected: self.actions,
+                got: std::mem::size_of::<B>() / std::mem::size_of::<S>().max(1),
+            });
+        }
+        Ok(LinearGaussian {
+            actions: self.actions,
+            features: self.features,
+            sigma: self.sigma,
+            sigma_sq: self.sigma_sq,
+            action_type: PhantomData,
         })
     }
 
@@ -98,16 +160,20 @@ impl<S: Scalar> LinearGaussian<S> {
         action: &[S],
     ) -> Result<S, PolicyError> {
         check_vec("action", action, self.actions)?;
-        let r = residual(action, &self.mean(theta, phi)?);
-        let r_other = residual(action, &self.mean(theta_other, phi)?);
-        Ok(
-            (crate::scalar::norm_sq(&r_other) - crate::scalar::norm_sq(&r))
-                / (S::from_i64(2) * &self.sigma_sq),
-        )
+        self.check(theta, phi)?;
+        self.check(theta_other, phi)?;
+        // ‖a − Wφ‖² row by row (the operations of `norm_sq(residual(a, mean))`, no temporaries).
+        let n = self.features;
+        let residual_sq = |w: &[S]| {
+            action.iter().enumerate().fold(S::zero(), |acc, (i, a)| {
+                acc + (a.clone() - crate::scalar::dot(&w[i * n..(i + 1) * n], phi)).square()
+            })
+        };
+        Ok((residual_sq(theta_other) - residual_sq(theta)) / (S::from_i64(2) * &self.sigma_sq))
     }
 }
 
-impl<S: Real> LinearGaussian<S> {
+impl<S: Real, A> LinearGaussian<S, A> {
     /// The log-density without its constant: `log π_W(a|s) + (m/2) ln 2π
     /// = −‖a − Wφ‖²/(2σ_π²) − m ln σ_π`.
     ///
@@ -149,8 +215,8 @@ fn residual<S: Scalar>(a: &[S], b: &[S]) -> Vec<S> {
     a.iter().zip(b).map(|(x, y)| x.clone() - y).collect()
 }
 
-impl<S: Scalar> Policy<S> for LinearGaussian<S> {
-    type Action = Vec<S>;
+impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
+    type Action = A;
     type Label = [S];
 
     fn param_dim(&self) -> usize {
@@ -169,7 +235,8 @@ impl<S: Scalar> Policy<S> for LinearGaussian<S> {
     }
 
     /// `∇_W log π(a|s) = (a − Wφ)φᵀ/σ_π²` (math.md §1.3, P3).
-    fn score(&self, theta: &[S], phi: &[S], action: &Vec<S>) -> Result<Vec<S>, PolicyError> {
+    fn score(&self, theta: &[S], phi: &[S], action: &A) -> Result<Vec<S>, PolicyError> {
+        let action: &[S] = action.borrow();
         check_vec("action", action, self.actions)?;
         let r: Vec<S> = residual(action, &self.mean(theta, phi)?)
             .into_iter()
@@ -178,25 +245,110 @@ impl<S: Scalar> Policy<S> for LinearGaussian<S> {
         Ok(outer(&r, phi))
     }
 
-    /// `a = Wφ + σ_π ε` with ε drawn as `m` f64 standard normals, converted exactly.
-    fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<Vec<S>, PolicyError> {
-        let mean = self.mean(theta, phi)?;
-        Ok(mean
-            .into_iter()
-            .map(|mu| mu + self.sigma.clone() * standard_normal::<S>(rng))
-            .collect())
+    /// As [`Policy::loss`], row by row of W without a temporary for the mean.
+    fn loss_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        grad: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_vec("label", label, self.actions)?;
+        self.check(theta, phi)?;
+        check_out("grad", grad, self.actions * self.features)?;
+        let n = self.features;
+        let mut loss = S::zero();
+        for (i, y) in label.iter().enumerate() {
+            let r = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi) - y;
+            loss += r.square();
+            let two_r = S::from_i64(2) * &r;
+            for (g, x) in grad[i * n..(i + 1) * n].iter_mut().zip(phi) {
+                *g = two_r.clone() * x;
+            }
+        }
+        Ok(loss)
+    }
+
+    /// As [`Policy::score`], row by row of W without a temporary for the mean.
+    fn score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        action: &A,
+        score: &mut [S],
+    ) -> Result<(), PolicyError> {
+        let action: &[S] = action.borrow();
+        check_vec("action", action, self.actions)?;
+        self.check(theta, phi)?;
+        check_out("score", score, self.actions * self.features)?;
+        let n = self.features;
+        for (i, a) in action.iter().enumerate() {
+            let r =
+                (a.clone() - crate::scalar::dot(&theta[i * n..(i + 1) * n], phi)) / &self.sigma_sq;
+            for (s, x) in score[i * n..(i + 1) * n].iter_mut().zip(phi) {
+                *s = r.clone() * x;
+            }
+        }
+        Ok(())
+    }
+
+    /// Loss, gradient and score with each output `(Wφ)_i` computed once (the same numbers as
+    /// [`Policy::loss_into`] then [`Policy::score_into`]).
+    fn loss_score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        action: &A,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let action: &[S] = action.borrow();
+        check_vec("label", label, self.actions)?;
+        self.check(theta, phi)?;
+        check_out("grad", grad, self.actions * self.features)?;
+        check_vec("action", action, self.actions)?;
+        check_out("score", score, self.actions * self.features)?;
+        let n = self.features;
+        let mut loss = S::zero();
+        for (i, (y, a)) in label.iter().zip(action).enumerate() {
+            let mean = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi);
+            let r = mean.clone() - y;
+            loss += r.square();
+            let two_r = S::from_i64(2) * &r;
+            let s = (a.clone() - mean) / &self.sigma_sq;
+            let rows = grad[i * n..(i + 1) * n]
+                .iter_mut()
+                .zip(&mut score[i * n..(i + 1) * n]);
+            for ((g, sc), x) in rows.zip(phi) {
+                *g = two_r.clone() * x;
+                *sc = s.clone() * x;
+            }
+        }
+        Ok(loss)
+    }
+
+    /// `a = Wφ + σ_π ε` with ε drawn as `m` f64 standard normals (coordinate by coordinate),
+    /// converted exactly.
+    fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
+        self.check(theta, phi)?;
+        let n = self.features;
+        Ok(A::build(self.actions, |i| {
+            crate::scalar::dot(&theta[i * n..(i + 1) * n], phi)
+                + self.sigma.clone() * standard_normal::<S>(rng)
+        }))
     }
 }
 
-impl<S: Scalar> LikelihoodRatio<S> for LinearGaussian<S> {
+impl<S: Scalar, A: ActionVector<S>> LikelihoodRatio<S> for LinearGaussian<S, A> {
     /// Exact: [`LinearGaussian::log_ratio`].
     fn log_likelihood_ratio(
         &self,
         theta: &[S],
         theta_other: &[S],
         phi: &[S],
-        action: &Vec<S>,
+        action: &A,
     ) -> Result<S, PolicyError> {
-        self.log_ratio(theta, theta_other, phi, action)
+        self.log_ratio(theta, theta_other, phi, action.borrow())
     }
 }

@@ -11,12 +11,13 @@
 //!
 //! **Layout of θ**: `θ ∈ Sⁿ`, the weight of feature j at index j.
 
-use super::softmax::{check_action, sample_probs};
-use super::{LikelihoodRatio, Policy, PolicyError, check_size, check_vec};
+use super::softmax::check_action;
+use super::{LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec};
 use crate::problem::KitRng;
-use crate::scalar::{Real, Scalar};
+use crate::scalar::{Real, Scalar, Undecidable, certainly_less};
 
 /// The sign of the f64 approximation of `z` (decides which of two exact formulas is overflow-free).
+#[inline]
 fn nonnegative<S: Scalar>(z: &S, param: &'static str) -> Result<bool, PolicyError> {
     let x = z.to_f64();
     if !z.is_finite() || !x.is_finite() {
@@ -31,6 +32,7 @@ fn nonnegative<S: Scalar>(z: &S, param: &'static str) -> Result<bool, PolicyErro
 ///
 /// # Errors
 /// [`PolicyError::NonFinite`] for a non-finite `z`.
+#[inline]
 pub fn logistic_sigmoid<S: Real>(z: &S) -> Result<S, PolicyError> {
     if nonnegative(z, "logit")? {
         Ok(S::one() / (S::one() + (-z.clone()).exp()))
@@ -53,6 +55,45 @@ pub fn softplus<S: Real>(z: &S) -> Result<S, PolicyError> {
     }
 }
 
+/// `l = 2(p − y)²` with `4(p − y)p(1 − p)φ` written into `grad` (the same operations, in the same
+/// order, as [`Policy::loss`] of [`Logistic`]).
+#[inline]
+fn brier_into<S: Scalar>(p: &S, label: usize, phi: &[S], grad: &mut [S]) -> S {
+    let r = if label == 1 {
+        p.clone() - S::one()
+    } else {
+        p.clone()
+    };
+    let dz = S::from_i64(4) * &r * p * (S::one() - p);
+    for (g, x) in grad.iter_mut().zip(phi) {
+        *g = dz.clone() * x;
+    }
+    S::from_i64(2) * r.square()
+}
+
+/// `(a − p)φ` written into `score`.
+#[inline]
+fn score_of<S: Scalar>(p: S, action: usize, phi: &[S], score: &mut [S]) {
+    let c = if action == 1 { S::one() - p } else { -p };
+    for (s, x) in score.iter_mut().zip(phi) {
+        *s = c.clone() * x;
+    }
+}
+
+/// [`sample_categorical`](crate::toy::sample_categorical) on the two probabilities `[q, p]`,
+/// written out for two actions (the same decisions and errors, with fewer branches in the
+/// roll-out's hot loop): the last action of positive probability is the fallback, and action 0
+/// is taken when `u < 0 + q` certainly.
+#[inline]
+fn sample_two<S: Scalar>(u: &S, q: S, p: &S) -> Result<usize, Undecidable> {
+    let q_zero = q.is_certainly_zero();
+    let last = usize::from(!p.is_certainly_zero() || q_zero);
+    if last == 1 && !q_zero && certainly_less(u, &(S::zero() + &q), "categorical sampling")? {
+        return Ok(0);
+    }
+    Ok(last)
+}
+
 /// The logistic policy over `n ≥ 1` features (actions 0 and 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Logistic {
@@ -73,6 +114,7 @@ impl Logistic {
     ///
     /// # Errors
     /// [`PolicyError::Shape`] / [`PolicyError::NonFinite`] for a bad θ or φ.
+    #[inline]
     pub fn logit<S: Scalar>(&self, theta: &[S], phi: &[S]) -> Result<S, PolicyError> {
         check_vec("theta", theta, self.features)?;
         check_vec("phi", phi, self.features)?;
@@ -83,6 +125,7 @@ impl Logistic {
     ///
     /// # Errors
     /// As [`Logistic::logit`].
+    #[inline]
     pub fn prob_one<S: Real>(&self, theta: &[S], phi: &[S]) -> Result<S, PolicyError> {
         logistic_sigmoid(&self.logit(theta, phi)?)
     }
@@ -137,10 +180,64 @@ impl<S: Real> Policy<S> for Logistic {
         Ok(phi.iter().map(|x| c.clone() * x).collect())
     }
 
+    /// As [`Policy::loss`], writing `4(p − y)p(1 − p)φ` into `grad`.
+    #[inline]
+    fn loss_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        grad: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(*label, 2)?;
+        check_out("grad", grad, self.features)?;
+        let p = self.prob_one(theta, phi)?;
+        Ok(brier_into(&p, *label, phi, grad))
+    }
+
+    /// As [`Policy::score`], writing `(a − p)φ` into `score`.
+    #[inline]
+    fn score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        action: &usize,
+        score: &mut [S],
+    ) -> Result<(), PolicyError> {
+        check_action(*action, 2)?;
+        check_out("score", score, self.features)?;
+        let p = self.prob_one(theta, phi)?;
+        score_of(p, *action, phi, score);
+        Ok(())
+    }
+
+    /// Loss, gradient and score with `p = σ(θ·φ)` computed once.
+    #[inline]
+    fn loss_score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        action: &usize,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(*label, 2)?;
+        check_out("grad", grad, self.features)?;
+        let p = self.prob_one(theta, phi)?;
+        let l = brier_into(&p, *label, phi, grad);
+        check_action(*action, 2)?;
+        check_out("score", score, self.features)?;
+        score_of(p, *action, phi, score);
+        Ok(l)
+    }
+
     /// One dyadic uniform `u`; action 0 if `u < 1 − p`, else 1 (as the two-action softmax).
+    #[inline]
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
         let p = self.prob_one(theta, phi)?;
-        sample_probs(&[S::one() - &p, p], rng)
+        let u: S = crate::problem::dyadic_uniform(rng);
+        Ok(sample_two(&u, S::one() - &p, &p)?)
     }
 }
 
@@ -153,5 +250,52 @@ impl<S: Real> LikelihoodRatio<S> for Logistic {
         action: &usize,
     ) -> Result<S, PolicyError> {
         Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::Interval;
+    use crate::toy::sample_categorical;
+
+    /// `sample_two` is `sample_categorical` on `[q, p]`: same actions, same errors.
+    #[test]
+    fn sample_two_is_the_two_action_categorical() {
+        let points = [
+            0.0,
+            0.25,
+            0.5,
+            0.75,
+            1.0,
+            f64::MIN_POSITIVE,
+            1.0 - f64::EPSILON / 2.0,
+        ];
+        for &p in &points {
+            for &u in &points {
+                let q = 1.0 - p;
+                assert_eq!(
+                    sample_two(&u, q, &p),
+                    sample_categorical(&[q, p], &u),
+                    "p = {p}, u = {u}"
+                );
+            }
+        }
+        // Both probabilities zero, and intervals: decided, undecidable.
+        assert_eq!(
+            sample_two(&0.5, 0.0, &0.0),
+            sample_categorical(&[0.0, 0.0], &0.5)
+        );
+        let iv = |a: f64, b: f64| Interval::try_from((a, b)).unwrap();
+        for (u, q) in [
+            (iv(0.1, 0.1), iv(0.4, 0.5)),
+            (iv(0.45, 0.45), iv(0.4, 0.5)),
+            (iv(0.6, 0.6), iv(0.4, 0.5)),
+            (iv(0.3, 0.3), iv(0.0, 0.0)),
+        ] {
+            let p = Interval::one() - q;
+            assert_eq!(sample_two(&u, q, &p), sample_categorical(&[q, p], &u));
+        }
+        assert!(sample_two(&iv(0.45, 0.45), iv(0.4, 0.5), &iv(0.5, 0.6)).is_err());
     }
 }

@@ -26,7 +26,7 @@ mod logistic;
 mod mlp;
 mod softmax;
 
-pub use linear_gaussian::LinearGaussian;
+pub use linear_gaussian::{ActionVector, LinearGaussian};
 pub use logistic::{Logistic, logistic_sigmoid, softplus};
 pub use mlp::{Forward, Mlp, MlpGaussian, MlpSoftmax, tanh};
 pub use softmax::{Softmax, brier_logit_gradient, log_softmax, softmax_probs};
@@ -140,6 +140,94 @@ pub trait Policy<S: Scalar> {
     /// As [`Policy::loss`], plus [`PolicyError::Undecidable`] when an interval cannot be ordered.
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng)
     -> Result<Self::Action, PolicyError>;
+
+    /// [`Policy::loss`] without allocating: writes `∇_θ l` into `grad` (length
+    /// [`Policy::param_dim`]) and returns `l`. Bit-for-bit the values of [`Policy::loss`].
+    ///
+    /// The default calls [`Policy::loss`] and copies; the policies of this module override it
+    /// with a version that allocates nothing (the hot loop of the oracle, issue 8).
+    ///
+    /// # Errors
+    /// As [`Policy::loss`], and [`PolicyError::Shape`] for a `grad` of the wrong length.
+    fn loss_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &Self::Label,
+        grad: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let (l, g) = self.loss(theta, phi, label)?;
+        copy_into("grad", &g, grad)?;
+        Ok(l)
+    }
+
+    /// [`Policy::score`] without allocating: writes `∇_θ log π_θ(a|s)` into `score` (length
+    /// [`Policy::param_dim`]). Bit-for-bit the values of [`Policy::score`]; the default calls it
+    /// and copies.
+    ///
+    /// # Errors
+    /// As [`Policy::score`], and [`PolicyError::Shape`] for a `score` of the wrong length.
+    fn score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        action: &Self::Action,
+        score: &mut [S],
+    ) -> Result<(), PolicyError> {
+        let s = self.score(theta, phi, action)?;
+        copy_into("score", &s, score)
+    }
+
+    /// Both per-decision terms of eq. 3.15 at one state: `l` (returned), `∇_θ l` into `grad` and
+    /// `∇_θ log π_θ(a|s)` into `score`, as [`Policy::loss_into`] then [`Policy::score_into`] (the
+    /// default). A policy may override it to share work between the two (the logistic policy
+    /// computes `σ(θ·φ)` once); the values stay bit-for-bit those of the separate calls.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_into`] and [`Policy::score_into`], the loss's error first.
+    fn loss_score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &Self::Label,
+        action: &Self::Action,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let l = self.loss_into(theta, phi, label, grad)?;
+        self.score_into(theta, phi, action, score)?;
+        Ok(l)
+    }
+}
+
+/// Copy `src` into `dst`, checking the length (the default `*_into` methods of [`Policy`]).
+fn copy_into<S: Scalar>(param: &'static str, src: &[S], dst: &mut [S]) -> Result<(), PolicyError> {
+    if src.len() != dst.len() {
+        return Err(PolicyError::Shape {
+            param,
+            expected: src.len(),
+            got: dst.len(),
+        });
+    }
+    dst.clone_from_slice(src);
+    Ok(())
+}
+
+/// Check that an output buffer of a `*_into` method has `expected` entries.
+#[inline]
+pub(crate) fn check_out<S>(
+    param: &'static str,
+    out: &[S],
+    expected: usize,
+) -> Result<(), PolicyError> {
+    if out.len() != expected {
+        return Err(PolicyError::Shape {
+            param,
+            expected,
+            got: out.len(),
+        });
+    }
+    Ok(())
 }
 
 /// The per-decision likelihood ratio of importance-weighted estimates (math.md §4):
@@ -160,6 +248,7 @@ pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
 }
 
 /// Check that a slice has `expected` entries, all finite.
+#[inline]
 pub(crate) fn check_vec<S: Scalar>(
     param: &'static str,
     xs: &[S],
@@ -172,7 +261,8 @@ pub(crate) fn check_vec<S: Scalar>(
             got: xs.len(),
         });
     }
-    if !xs.iter().all(Scalar::is_finite) {
+    // Without early exit: a branch-free pass over the (short) vectors of the hot loop.
+    if !xs.iter().fold(true, |ok, x| ok & x.is_finite()) {
         return Err(PolicyError::NonFinite { param });
     }
     Ok(())

@@ -114,11 +114,13 @@ pub(crate) fn score_logits<S: Scalar>(probs: &[S], a: usize) -> Vec<S> {
 
 /// Sample a category: one dyadic uniform `u = k/2⁵³` (the toy engine's draw), then the first
 /// action whose cumulative probability certainly exceeds `u`.
+#[inline]
 pub(crate) fn sample_probs<S: Scalar>(probs: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
     let u: S = dyadic_uniform(rng);
     Ok(sample_categorical(probs, &u)?)
 }
 
+#[inline]
 pub(crate) fn check_action(a: usize, actions: usize) -> Result<(), PolicyError> {
     if a >= actions {
         return Err(PolicyError::Action { action: a, actions });

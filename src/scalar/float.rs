@@ -7,12 +7,15 @@ use std::cmp::Ordering;
 macro_rules! impl_float {
     ($t:ty) => {
         impl Scalar for $t {
+            #[inline]
             fn zero() -> Self {
                 0.0
             }
+            #[inline]
             fn one() -> Self {
                 1.0
             }
+            #[inline]
             fn from_ratio(num: i64, den: i64) -> Self {
                 assert!(den != 0, "from_ratio: zero denominator");
                 const EXACT: u64 = 1 << 53;
@@ -22,40 +25,50 @@ macro_rules! impl_float {
                 }
                 Self::from_rational(&BigRational::new(num.into(), den.into()))
             }
+            #[inline]
             fn from_rational(q: &BigRational) -> Self {
                 // num-rational's to_f64 is correctly rounded for large numerators/denominators too.
                 ToPrimitive::to_f64(q).unwrap_or(f64::NAN) as $t
             }
+            #[inline]
             fn to_f64(&self) -> f64 {
                 f64::from(*self)
             }
+            #[inline]
             fn from_binary64(x: f64) -> Option<Self> {
                 x.is_finite().then_some(x as $t)
             }
+            #[inline]
             fn certain_cmp(&self, other: &Self) -> Option<Ordering> {
                 self.partial_cmp(other)
             }
+            #[inline]
             fn is_finite(&self) -> bool {
                 <$t>::is_finite(*self)
             }
         }
 
         impl Sqrt for $t {
+            #[inline]
             fn sqrt(&self) -> Self {
                 <$t>::sqrt(*self)
             }
         }
 
         impl Real for $t {
+            #[inline]
             fn exp(&self) -> Self {
                 <$t>::exp(*self)
             }
+            #[inline]
             fn ln(&self) -> Self {
                 <$t>::ln(*self)
             }
+            #[inline]
             fn sin(&self) -> Self {
                 <$t>::sin(*self)
             }
+            #[inline]
             fn cos(&self) -> Self {
                 <$t>::cos(*self)
             }

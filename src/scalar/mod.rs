@@ -145,6 +145,7 @@ pub struct Undecidable {
 ///
 /// # Errors
 /// [`Undecidable`] when [`Scalar::certain_cmp`] cannot order the operands.
+#[inline]
 pub fn certainly_less<S: Scalar>(a: &S, b: &S, what: &'static str) -> Result<bool, Undecidable> {
     match a.certain_cmp(b) {
         Some(o) => Ok(o == Ordering::Less),
@@ -161,6 +162,7 @@ pub fn sum<'a, S: Scalar>(xs: impl IntoIterator<Item = &'a S>) -> S {
 ///
 /// # Panics
 /// If the lengths differ.
+#[inline]
 pub fn dot<S: Scalar>(x: &[S], y: &[S]) -> S {
     assert_eq!(x.len(), y.len(), "dot: length mismatch");
     x.iter()

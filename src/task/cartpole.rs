@@ -101,6 +101,22 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
         f
     }
 
+    #[inline]
+    fn push_features(&self, ep: &Self::Episode, out: &mut Vec<S>) {
+        // Element by element: a block copy would load the state (just written by the previous
+        // step, component by component) as one wide load, which the CPU cannot forward from the
+        // narrow stores — a stall on the step-to-step dependency chain.
+        for x in &ep.state {
+            out.push(x.clone());
+        }
+        out.push(S::one());
+    }
+
+    fn max_episode_steps(&self) -> Option<usize> {
+        Some(self.max_steps)
+    }
+
+    #[inline]
     fn expert(&self, ep: &Self::Episode) -> Result<(usize, usize), OracleError> {
         let a = match &self.expert {
             CartPoleExpert::Lqr(e) => e.action(&ep.state)?,
@@ -111,12 +127,12 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
         Ok((a, a))
     }
 
+    #[inline]
     fn advance(&self, ep: &mut Self::Episode, action: &usize) -> Result<bool, OracleError> {
-        let (next, terminated) = self
+        let terminated = self
             .dynamics
-            .step(&ep.state, *action)
+            .step_in_place(&mut ep.state, *action)
             .map_err(|e| OracleError::Environment(e.to_string()))?;
-        ep.state = next;
         ep.steps += 1;
         Ok(terminated || ep.steps >= self.max_steps)
     }

@@ -40,6 +40,22 @@ pub trait Task<S: Scalar> {
     fn start(&self, rng: &mut KitRng) -> Result<Self::Episode, OracleError>;
     /// The learner's features φ(s) of the current state.
     fn features(&self, episode: &Self::Episode) -> Vec<S>;
+    /// Append φ(s) of the current state to `out` (the same values as [`Task::features`]).
+    ///
+    /// The roll-out stores the features of a trajectory in one flat buffer through this method;
+    /// the default calls [`Task::features`] (one allocation), the kit's tasks override it with a
+    /// version that writes in place (with the capacity reserved from
+    /// [`Task::max_episode_steps`], a step then allocates nothing).
+    fn push_features(&self, episode: &Self::Episode, out: &mut Vec<S>) {
+        out.extend(self.features(episode));
+    }
+    /// An upper bound on the number of decisions of an episode, if the task has one (a time
+    /// limit). The roll-out reserves the trajectory's storage for that many steps up front, so
+    /// that the per-step loop never grows a buffer. `None` (the default): buffers grow
+    /// geometrically as usual.
+    fn max_episode_steps(&self) -> Option<usize> {
+        None
+    }
     /// The expert's label and the action the expert would take at the current state.
     ///
     /// # Errors
@@ -57,10 +73,19 @@ pub trait Task<S: Scalar> {
 }
 
 /// A trajectory on a task: per decision, the features, the action taken and the expert's label.
+///
+/// The features are stored flat, row after row (`feature_dim` entries per decision), so that a
+/// roll-out fills one buffer instead of allocating a vector per step; [`TaskTrajectory::feature`]
+/// and [`TaskTrajectory::feature_rows`] read them, [`TaskTrajectory::features`] returns the old
+/// `Vec<Vec<S>>` form (a copy).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TaskTrajectory<S, L, A> {
-    /// φ(s_t), t = 1..n.
-    pub features: Vec<Vec<S>>,
+    /// φ(s_1), …, φ(s_n) concatenated.
+    feature_data: Vec<S>,
+    /// Entries of one φ(s_t).
+    feature_dim: usize,
+    /// Number of feature rows stored.
+    rows: usize,
     /// a_t.
     pub actions: Vec<A>,
     /// π*(s_t).
@@ -75,6 +100,59 @@ impl<S, L, A> TaskTrajectory<S, L, A> {
     /// `true` for an empty trajectory.
     pub fn is_empty(&self) -> bool {
         self.actions.is_empty()
+    }
+    /// Entries of one feature vector φ(s_t) (0 for an empty trajectory built without features).
+    pub fn feature_dim(&self) -> usize {
+        self.feature_dim
+    }
+    /// φ(s_t) (0-based `t`).
+    ///
+    /// # Panics
+    /// If `t` is not below the number of stored feature rows.
+    pub fn feature(&self, t: usize) -> &[S] {
+        assert!(t < self.rows, "feature row {t} of {}", self.rows);
+        &self.feature_data[t * self.feature_dim..(t + 1) * self.feature_dim]
+    }
+    /// φ(s_1), …, φ(s_n) in order.
+    pub fn feature_rows(&self) -> impl ExactSizeIterator<Item = &[S]> + '_ {
+        (0..self.rows).map(|t| self.feature(t))
+    }
+    /// All features, concatenated (`feature_dim` entries per decision).
+    pub fn feature_data(&self) -> &[S] {
+        &self.feature_data
+    }
+}
+
+impl<S: Clone, L, A> TaskTrajectory<S, L, A> {
+    /// A trajectory from its per-decision parts (features, actions, labels), e.g. one read back
+    /// from a file. The three lists may differ in length (the oracle rejects such a trajectory).
+    ///
+    /// # Errors
+    /// [`OracleError::Trajectory`] if the feature vectors do not all have the same length.
+    pub fn from_parts(
+        features: Vec<Vec<S>>,
+        actions: Vec<A>,
+        labels: Vec<L>,
+    ) -> Result<Self, OracleError> {
+        let feature_dim = features.first().map_or(0, Vec::len);
+        if features.iter().any(|f| f.len() != feature_dim) {
+            return Err(OracleError::Trajectory(
+                "feature vectors of different lengths".into(),
+            ));
+        }
+        Ok(Self {
+            rows: features.len(),
+            feature_data: features.into_iter().flatten().collect(),
+            feature_dim,
+            actions,
+            labels,
+        })
+    }
+
+    /// φ(s_1), …, φ(s_n) as one vector per decision (a copy; the form of the field this struct had
+    /// before the features were stored flat).
+    pub fn features(&self) -> Vec<Vec<S>> {
+        self.feature_rows().map(<[S]>::to_vec).collect()
     }
 }
 
@@ -116,35 +194,11 @@ fn check_theta<S: Scalar>(theta: &DVector<S>, dim: usize) -> Result<(), OracleEr
     Ok(())
 }
 
-/// Per-decision losses, loss gradients and scores at θ on a trajectory.
-#[allow(clippy::type_complexity)]
-fn terms<S, P, L, A>(
-    policy: &P,
-    theta: &[S],
-    t: &TaskTrajectory<S, L, A>,
-) -> Result<(Vec<S>, Vec<Vec<S>>, Vec<Vec<S>>), OracleError>
-where
-    S: Scalar,
-    P: Policy<S, Action = A>,
-    L: Borrow<P::Label>,
-{
-    let mut losses = Vec::with_capacity(t.len());
-    let mut grads = Vec::with_capacity(t.len());
-    let mut scores = Vec::with_capacity(t.len());
-    for ((phi, a), y) in t.features.iter().zip(&t.actions).zip(&t.labels) {
-        let (l, g) = policy.loss(theta, phi, y.borrow()).map_err(policy_error)?;
-        losses.push(l);
-        grads.push(g);
-        scores.push(policy.score(theta, phi, a).map_err(policy_error)?);
-    }
-    Ok((losses, grads, scores))
-}
-
 fn check_trajectory<S, L, A>(t: &TaskTrajectory<S, L, A>) -> Result<(), OracleError> {
-    if t.features.len() != t.len() || t.labels.len() != t.len() || t.is_empty() {
+    if t.rows != t.len() || t.labels.len() != t.len() || t.is_empty() {
         return Err(OracleError::Trajectory(format!(
             "{} features, {} actions, {} labels",
-            t.features.len(),
+            t.rows,
             t.len(),
             t.labels.len()
         )));
@@ -152,28 +206,145 @@ fn check_trajectory<S, L, A>(t: &TaskTrajectory<S, L, A>) -> Result<(), OracleEr
     Ok(())
 }
 
-/// `Σ_t ∇l_t + Σ_{i<n} ψ_i Σ_{t>i} l_t` (causal) with optional per-decision weights
-/// (`w_{1:t−1}` on term t; math.md §4).
-fn causal_weighted<S: Scalar>(
+/// Working storage of one estimate: the per-decision ∇l_t and ψ_t and the running `Σ_{i<t} ψ_i`,
+/// allocated once per call (one allocation), never per decision.
+struct Scratch<S> {
+    buf: Vec<S>,
     d: usize,
-    losses: &[S],
-    grads: &[Vec<S>],
-    scores: &[Vec<S>],
-    prefix_weights: Option<&[S]>,
-) -> Vec<S> {
-    let mut g = vec![S::zero(); d];
-    let mut score_sum = vec![S::zero(); d];
-    for t in 0..losses.len() {
-        let w = prefix_weights.map_or_else(S::one, |w| w[t].clone());
-        let wl = w.clone() * &losses[t];
-        for j in 0..d {
-            g[j] += w.clone() * &grads[t][j] + wl.clone() * &score_sum[j];
-        }
-        for j in 0..d {
-            score_sum[j] += &scores[t][j];
+}
+
+impl<S: Scalar> Scratch<S> {
+    fn new(d: usize) -> Self {
+        Self {
+            buf: vec![S::zero(); 3 * d],
+            d,
         }
     }
-    g
+    /// `(∇l_t, ψ_t, Σ_{i<t} ψ_i)`.
+    fn parts(&mut self) -> (&mut [S], &mut [S], &mut [S]) {
+        let (grad, rest) = self.buf.split_at_mut(self.d);
+        let (score, score_sum) = rest.split_at_mut(self.d);
+        (grad, score, score_sum)
+    }
+}
+
+/// The causal estimator `Σ_t [w_{1:t−1} ∇l_t + w_{1:t−1} l_t Σ_{i<t} ψ_i]` in one pass over the
+/// trajectory (math.md §4 for the weights): with `ratio = None` every weight is 1 (eq. 3.15);
+/// with `Some(θ_new)` the per-decision prefix weights `w_{1:t−1} = exp(Σ_{i<t} log π_θ(a_i|s_i) −
+/// log π_θnew(a_i|s_i))` are accumulated along the way. Returns `g` and the log of the whole
+/// trajectory's weight `Σ_{i<n−1} (log π_θ − log π_θnew)(a_i|s_i)` (zero without `ratio`).
+///
+/// Per decision: one [`Policy::loss_score_into`] into preallocated buffers and O(d) field
+/// operations, no allocation. The operations and their order are those of the former
+/// two-stage computation (terms, then sums), so `f64` results are bit-for-bit unchanged. (Only
+/// which error is reported can differ: when the loss fails at one decision and the likelihood
+/// ratio at an earlier one, the ratio's error now comes first.)
+fn causal_pass<S, P, L, A>(
+    policy: &P,
+    theta: &[S],
+    ratio: Option<&[S]>,
+    per_decision: bool,
+    t: &TaskTrajectory<S, L, A>,
+) -> Result<(Vec<S>, S), OracleError>
+where
+    S: Real,
+    P: LikelihoodRatio<S, Action = A>,
+    L: Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    let n = t.len();
+    let mut g = vec![S::zero(); d];
+    let mut scratch = Scratch::new(d);
+    let (grad, score, score_sum) = scratch.parts();
+    let mut log_w = S::zero();
+    for (step, ((phi, a), y)) in t.feature_rows().zip(&t.actions).zip(&t.labels).enumerate() {
+        let l = policy
+            .loss_score_into(theta, phi, y.borrow(), a, grad, score)
+            .map_err(policy_error)?;
+        if per_decision {
+            let w = log_w.exp();
+            accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
+        } else {
+            accumulate(&mut g, None, &l, grad, score, score_sum);
+        }
+        if let Some(theta_new) = ratio
+            && step + 1 < n
+        {
+            log_w += policy
+                .log_likelihood_ratio(theta, theta_new, phi, a)
+                .map_err(policy_error)?;
+        }
+    }
+    Ok((g, log_w))
+}
+
+/// One decision's terms of the causal estimator: `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then
+/// `Σ_{i<t} ψ_i += ψ_t` (`w = None`: the weight is exactly 1, and `1·x = x` in every scalar, so
+/// the multiplication is skipped). A separate function so that the compiler knows the slices do
+/// not overlap.
+#[inline]
+fn accumulate<S: Scalar>(
+    g: &mut [S],
+    w: Option<&S>,
+    l: &S,
+    grad: &[S],
+    score: &[S],
+    score_sum: &mut [S],
+) {
+    let terms = g.iter_mut().zip(grad).zip(score_sum.iter());
+    match w {
+        Some(w) => {
+            let wl = w.clone() * l;
+            for ((gj, dj), sj) in terms {
+                *gj += w.clone() * dj + wl.clone() * sj;
+            }
+        }
+        None => {
+            for ((gj, dj), sj) in terms {
+                *gj += dj.clone() + l.clone() * sj;
+            }
+        }
+    }
+    for (sj, pj) in score_sum.iter_mut().zip(score) {
+        *sj += pj;
+    }
+}
+
+/// The full form `Σ_t ∇l_t + (Σ_t l_t) Σ_{i<n} ψ_i`, in two passes (the total loss first), each
+/// without per-decision allocation.
+fn full_pass<S, P, L, A>(
+    policy: &P,
+    theta: &[S],
+    t: &TaskTrajectory<S, L, A>,
+) -> Result<Vec<S>, OracleError>
+where
+    S: Scalar,
+    P: Policy<S, Action = A>,
+    L: Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    let n = t.len();
+    let mut scratch = Scratch::new(d);
+    let (grad, score, _) = scratch.parts();
+    let mut total = S::zero();
+    for ((phi, a), y) in t.feature_rows().zip(&t.actions).zip(&t.labels) {
+        total += policy
+            .loss_score_into(theta, phi, y.borrow(), a, grad, score)
+            .map_err(policy_error)?;
+    }
+    let mut g = vec![S::zero(); d];
+    for (step, ((phi, a), y)) in t.feature_rows().zip(&t.actions).zip(&t.labels).enumerate() {
+        policy
+            .loss_score_into(theta, phi, y.borrow(), a, grad, score)
+            .map_err(policy_error)?;
+        for ((gj, dj), sj) in g.iter_mut().zip(grad.iter()).zip(score.iter()) {
+            *gj += dj;
+            if step + 1 < n {
+                *gj += total.clone() * sj;
+            }
+        }
+    }
+    Ok(g)
 }
 
 impl<S, T, P> IlProblem<S> for TaskProblem<T, P>
@@ -223,13 +394,31 @@ where
             _ => {}
         }
         let mut ep = self.task.start(rng)?;
+        // Storage for the whole episode, reserved once: with the task's time limit known, the
+        // per-step loop below allocates nothing (for tasks and policies whose features, labels
+        // and actions are written in place).
+        let steps = self.task.max_episode_steps().unwrap_or(0);
         let mut t = TaskTrajectory {
-            features: vec![],
-            actions: vec![],
-            labels: vec![],
+            feature_data: Vec::with_capacity(steps * self.policy.feature_dim()),
+            feature_dim: 0,
+            rows: 0,
+            actions: Vec::with_capacity(steps),
+            labels: Vec::with_capacity(steps),
         };
         loop {
-            let phi = self.task.features(&ep);
+            let start = t.feature_data.len();
+            self.task.push_features(&ep, &mut t.feature_data);
+            let dim = t.feature_data.len() - start;
+            if t.rows == 0 {
+                t.feature_dim = dim;
+            } else if dim != t.feature_dim {
+                return Err(OracleError::Environment(format!(
+                    "the task's features changed length from {} to {dim}",
+                    t.feature_dim
+                )));
+            }
+            t.rows += 1;
+            let phi = &t.feature_data[start..];
             let (label, expert_action) = self.task.expert(&ep)?;
             let step = t.len();
             let learner: Option<&DVector<S>> = match behaviour {
@@ -260,12 +449,11 @@ where
             let action = match learner {
                 Some(th) => self
                     .policy
-                    .sample(th.as_slice(), &phi, rng)
+                    .sample(th.as_slice(), phi, rng)
                     .map_err(policy_error)?,
                 None => expert_action,
             };
             let done = self.task.advance(&mut ep, &action)?;
-            t.features.push(phi);
             t.actions.push(action);
             t.labels.push(label);
             if done {
@@ -287,24 +475,10 @@ where
     ) -> Result<DVector<S>, OracleError> {
         check_theta(theta, self.dim())?;
         check_trajectory(trajectory)?;
-        let (losses, grads, scores) = terms(&self.policy, theta.as_slice(), trajectory)?;
-        let d = self.dim();
+        let th = theta.as_slice();
         let g = match form {
-            EstimatorForm::Causal => causal_weighted(d, &losses, &grads, &scores, None),
-            EstimatorForm::Full => {
-                let total = losses.iter().fold(S::zero(), |a, l| a + l);
-                let n = losses.len();
-                let mut g = vec![S::zero(); d];
-                for t in 0..n {
-                    for j in 0..d {
-                        g[j] += &grads[t][j];
-                        if t + 1 < n {
-                            g[j] += total.clone() * &scores[t][j];
-                        }
-                    }
-                }
-                g
-            }
+            EstimatorForm::Causal => causal_pass(&self.policy, th, None, false, trajectory)?.0,
+            EstimatorForm::Full => full_pass(&self.policy, th, trajectory)?,
         };
         cost.gradient_evaluations += trajectory.len() as u64;
         if !g.iter().all(Scalar::is_finite) {
@@ -324,37 +498,20 @@ where
         check_theta(theta_old, self.dim())?;
         check_theta(theta_new, self.dim())?;
         check_trajectory(trajectory)?;
-        let (losses, grads, scores) = terms(&self.policy, theta_old.as_slice(), trajectory)?;
-        let n = trajectory.len();
-        // prefix[t] = Π_{i<t} π_old(a_i|s_i)/π_new(a_i|s_i); the last decision never weighs a loss.
-        let mut prefix = Vec::with_capacity(n);
-        let mut log_w = S::zero();
-        for t in 0..n {
-            prefix.push(log_w.exp());
-            if t + 1 < n {
-                log_w += self
-                    .policy
-                    .log_likelihood_ratio(
-                        theta_old.as_slice(),
-                        theta_new.as_slice(),
-                        &trajectory.features[t],
-                        &trajectory.actions[t],
-                    )
-                    .map_err(policy_error)?;
-            }
-        }
-        let d = self.dim();
+        // Term t carries w_{1:t−1} = Π_{i<t} π_old(a_i|s_i)/π_new(a_i|s_i); the last decision
+        // never weighs a loss.
+        let (old, new) = (theta_old.as_slice(), theta_new.as_slice());
         let g = match weighting {
-            Weighting::PerDecision => causal_weighted(d, &losses, &grads, &scores, Some(&prefix)),
+            Weighting::PerDecision => {
+                causal_pass(&self.policy, old, Some(new), true, trajectory)?.0
+            }
             Weighting::Trajectory => {
+                let (g, log_w) = causal_pass(&self.policy, old, Some(new), false, trajectory)?;
                 let w = log_w.exp();
-                causal_weighted(d, &losses, &grads, &scores, None)
-                    .into_iter()
-                    .map(|x| x * &w)
-                    .collect()
+                g.into_iter().map(|x| x * &w).collect()
             }
         };
-        cost.gradient_evaluations += n as u64;
+        cost.gradient_evaluations += trajectory.len() as u64;
         if !g.iter().all(Scalar::is_finite) {
             return Err(OracleError::NonFinite("the weighted gradient estimate"));
         }
@@ -369,23 +526,22 @@ where
         check_theta(theta, self.dim())?;
         check_trajectory(trajectory)?;
         let mut total = S::zero();
-        for (phi, y) in trajectory.features.iter().zip(&trajectory.labels) {
+        let mut grad = vec![S::zero(); self.dim()];
+        for (phi, y) in trajectory.feature_rows().zip(&trajectory.labels) {
             total += self
                 .policy
-                .loss(theta.as_slice(), phi, y.borrow())
-                .map_err(policy_error)?
-                .0;
+                .loss_into(theta.as_slice(), phi, y.borrow(), &mut grad)
+                .map_err(policy_error)?;
         }
         Ok(total)
     }
 
     fn labelled_states(&self, trajectory: &Self::Trajectory) -> Vec<Self::Labelled> {
         trajectory
-            .features
-            .iter()
+            .feature_rows()
             .zip(&trajectory.labels)
             .map(|(f, l)| TaskExample {
-                features: f.clone(),
+                features: f.to_vec(),
                 label: l.clone(),
             })
             .collect()

@@ -3,22 +3,31 @@
 //! a linear-Gaussian policy (P3) over
 //! φ(s) = (goal − agent, obstacle − agent, obstacle velocity, agent velocity, 1) ∈ ℝ⁹.
 //! Actions are velocities; the environment clips them to the maximum speed.
+//!
+//! Actions and labels are `Vec<f64>` by default (the action type of
+//! [`LinearGaussian<f64>`](crate::policy::LinearGaussian)); `ObstacleTask<[f64; 2]>` with
+//! `LinearGaussian<f64, [f64; 2]>` ([`ObstacleTask::with_actions`],
+//! [`LinearGaussian::with_actions`](crate::policy::LinearGaussian::with_actions)) stores them
+//! inline, so that a roll-out allocates nothing per step. Both give the same numbers.
 
 use super::Task;
 use crate::env::obstacle::{
     ObstacleConfig, ObstacleEnv, ObstacleObs, VoExpertParams, VoExpertPolicy,
 };
+use crate::policy::ActionVector;
 use crate::problem::{KitRng, OracleError};
+use std::marker::PhantomData;
 
 /// Number of features.
 pub const FEATURES: usize = 9;
 
-/// The obstacle task with its expert.
+/// The obstacle task with its expert; actions and labels are stored as `A` (module docs).
 #[derive(Debug, Clone)]
-pub struct ObstacleTask {
+pub struct ObstacleTask<A = Vec<f64>> {
     env: ObstacleEnv,
     expert: VoExpertPolicy,
     goal: [f64; 2],
+    action_type: PhantomData<fn() -> A>,
 }
 
 /// One episode: the environment and its last observation.
@@ -42,6 +51,7 @@ impl ObstacleTask {
             env: ObstacleEnv::new(config).map_err(env_err)?,
             expert,
             goal,
+            action_type: PhantomData,
         })
     }
 
@@ -54,9 +64,26 @@ impl ObstacleTask {
     }
 }
 
+impl<A> ObstacleTask<A> {
+    /// The same task with actions and labels stored as `B` (e.g. `[f64; 2]`, inline).
+    pub fn with_actions<B: ActionVector<f64>>(self) -> ObstacleTask<B> {
+        ObstacleTask {
+            env: self.env,
+            expert: self.expert,
+            goal: self.goal,
+            action_type: PhantomData,
+        }
+    }
+}
+
 /// φ(s) of the module docs.
 pub fn features(obs: &ObstacleObs, goal: [f64; 2]) -> Vec<f64> {
-    vec![
+    feature_array(obs, goal).to_vec()
+}
+
+/// φ(s) of the module docs, on the stack.
+pub fn feature_array(obs: &ObstacleObs, goal: [f64; 2]) -> [f64; FEATURES] {
+    [
         goal[0] - obs.agent_pos[0],
         goal[1] - obs.agent_pos[1],
         obs.obstacle_pos[0] - obs.agent_pos[0],
@@ -69,10 +96,10 @@ pub fn features(obs: &ObstacleObs, goal: [f64; 2]) -> Vec<f64> {
     ]
 }
 
-impl Task<f64> for ObstacleTask {
+impl<A: ActionVector<f64>> Task<f64> for ObstacleTask<A> {
     type Episode = ObstacleEpisode;
-    type Label = Vec<f64>;
-    type Action = Vec<f64>;
+    type Label = A;
+    type Action = A;
 
     fn start(&self, rng: &mut KitRng) -> Result<ObstacleEpisode, OracleError> {
         let mut env = self.env.clone();
@@ -84,15 +111,24 @@ impl Task<f64> for ObstacleTask {
         features(&ep.obs, self.goal)
     }
 
-    fn expert(&self, ep: &ObstacleEpisode) -> Result<(Vec<f64>, Vec<f64>), OracleError> {
+    fn push_features(&self, ep: &ObstacleEpisode, out: &mut Vec<f64>) {
+        out.extend_from_slice(&feature_array(&ep.obs, self.goal));
+    }
+
+    fn max_episode_steps(&self) -> Option<usize> {
+        Some(self.env.config().max_steps as usize)
+    }
+
+    fn expert(&self, ep: &ObstacleEpisode) -> Result<(A, A), OracleError> {
         let v = self
             .expert
             .act(&ep.obs)
             .map_err(|e| OracleError::Environment(e.to_string()))?;
-        Ok((v.to_vec(), v.to_vec()))
+        Ok((A::build(2, |i| v[i]), A::build(2, |i| v[i])))
     }
 
-    fn advance(&self, ep: &mut ObstacleEpisode, action: &Vec<f64>) -> Result<bool, OracleError> {
+    fn advance(&self, ep: &mut ObstacleEpisode, action: &A) -> Result<bool, OracleError> {
+        let action: &[f64] = action.borrow();
         if action.len() != 2 {
             return Err(OracleError::Environment(format!(
                 "a velocity has 2 components, got {}",

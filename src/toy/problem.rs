@@ -50,6 +50,7 @@ pub use crate::problem::dyadic_uniform;
 ///
 /// # Errors
 /// [`Undecidable`] when interval arithmetic cannot order `u` and a cumulative probability.
+#[inline]
 pub fn sample_categorical<S: Scalar>(probs: &[S], u: &S) -> Result<usize, Undecidable> {
     let last = probs
         .iter()

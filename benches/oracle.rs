@@ -1,0 +1,206 @@
+//! Issue 8's benchmarks of the oracle hot paths, in trajectory-steps per second:
+//!
+//! 1. CartPole: the environment step; roll-out (LQR labels, logistic policy) + causal estimate of
+//!    eq. 3.15, generic `TaskProblem<CartPoleTask<f64>, Logistic>` next to the hand-specialised
+//!    `f64` version of `support/specialised.rs` (same trajectories, bit-identical gradients);
+//! 2. the obstacle task: roll-out (linear-Gaussian policy, VO expert labels) + causal estimate,
+//!    with the default `Vec<f64>` actions and with inline `[f64; 2]` actions (no allocation);
+//! 3. the VO expert alone (solves per second).
+//!
+//! Each iteration rolls out the same fixed set of seeds (re-seeded), so the throughput in steps
+//! is exact. Run with `cargo bench --bench oracle`.
+
+#[path = "support/specialised.rs"]
+mod specialised;
+
+use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
+use ilopt::env::obstacle::{ObstacleEnv, VoExpertPolicy};
+use ilopt::expert::lqr::LqrExpert;
+use ilopt::policy::{LinearGaussian, Logistic};
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
+use ilopt::task::TaskProblem;
+use ilopt::task::cartpole::{self, CartPoleTask};
+use ilopt::task::obstacle::{self, ObstacleTask};
+use nalgebra::DVector;
+use rand::SeedableRng;
+use specialised::{D, Specialised, Trajectory};
+
+/// Seeds rolled out per benchmark iteration.
+const SEEDS: u64 = 16;
+
+/// The logistic θ of the CartPole benchmarks: it balances for a while (episodes of every length
+/// up to the 500-step limit).
+const CARTPOLE_THETA: [f64; D] = [0.3, 1.0, 8.0, 2.0, 0.1];
+
+fn steps_of<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>) -> u64 {
+    let mut cost = Cost::default();
+    for seed in 0..SEEDS {
+        let mut rng = KitRng::seed_from_u64(seed);
+        p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+            .unwrap();
+    }
+    cost.env_steps
+}
+
+/// Roll out and estimate (causal) on every seed; returns a sum so nothing is optimised away.
+fn oracle_pass<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>) -> f64 {
+    let mut cost = Cost::default();
+    let mut acc = 0.0;
+    for seed in 0..SEEDS {
+        let mut rng = KitRng::seed_from_u64(seed);
+        let t = p
+            .rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+            .unwrap();
+        acc += p
+            .estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+            .unwrap()[0];
+    }
+    acc
+}
+
+fn cartpole(c: &mut Criterion) {
+    let mut g = c.benchmark_group("cartpole");
+    g.throughput(Throughput::Elements(1));
+    g.bench_function("env step (f64)", |b| {
+        let dynamics = ilopt::env::cartpole::CartPoleDynamics::<f64>::new();
+        let mut s = [0.01, -0.02, 0.03, 0.04];
+        let mut a = 0usize;
+        b.iter(|| {
+            let (next, term) = dynamics.step(black_box(&s), a).unwrap();
+            s = if term {
+                [0.01, -0.02, 0.03, 0.04]
+            } else {
+                next
+            };
+            a ^= 1;
+        })
+    });
+
+    let generic = TaskProblem {
+        task: CartPoleTask::<f64>::with_lqr().unwrap(),
+        policy: Logistic::new(cartpole::FEATURES).unwrap(),
+    };
+    let theta = DVector::from_column_slice(&CARTPOLE_THETA);
+    g.throughput(Throughput::Elements(steps_of(&generic, &theta)));
+    g.bench_function("roll-out + causal estimate, generic (f64)", |b| {
+        b.iter(|| oracle_pass(&generic, black_box(&theta)))
+    });
+    g.bench_function("roll-out only, generic (f64)", |b| {
+        b.iter(|| {
+            let mut cost = Cost::default();
+            for seed in 0..SEEDS {
+                let mut rng = KitRng::seed_from_u64(seed);
+                black_box(
+                    generic
+                        .rollout(&Behaviour::Learner(black_box(&theta)), &mut rng, &mut cost)
+                        .unwrap(),
+                );
+            }
+        })
+    });
+    let trajectories: Vec<_> = (0..SEEDS)
+        .map(|seed| {
+            let mut rng = KitRng::seed_from_u64(seed);
+            generic
+                .rollout(&Behaviour::Learner(&theta), &mut rng, &mut Cost::default())
+                .unwrap()
+        })
+        .collect();
+    g.bench_function("causal estimate only, generic (f64)", |b| {
+        b.iter(|| {
+            let mut cost = Cost::default();
+            for t in &trajectories {
+                black_box(
+                    generic
+                        .estimate(black_box(&theta), t, EstimatorForm::Causal, &mut cost)
+                        .unwrap(),
+                );
+            }
+        })
+    });
+
+    let gain = *LqrExpert::cartpole().unwrap().gain();
+    let fast = Specialised {
+        k: std::array::from_fn(|i| gain[i]),
+        max_steps: ilopt::env::cartpole::MAX_EPISODE_STEPS,
+    };
+    g.bench_function("roll-out + causal estimate, hand-specialised (f64)", |b| {
+        let mut t = Trajectory::default();
+        b.iter(|| {
+            let mut acc = 0.0;
+            for seed in 0..SEEDS {
+                let mut rng = KitRng::seed_from_u64(seed);
+                fast.rollout(black_box(&CARTPOLE_THETA), &mut rng, &mut t);
+                acc += Specialised::estimate(black_box(&CARTPOLE_THETA), &t)[0];
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
+/// W with a proportional pull towards the goal (paper-checks' quick profile).
+fn obstacle_theta() -> DVector<f64> {
+    let mut w = vec![0.0; 2 * obstacle::FEATURES];
+    w[0] = 0.05;
+    w[obstacle::FEATURES + 1] = 0.05;
+    DVector::from_vec(w)
+}
+
+fn obstacle_task(c: &mut Criterion) {
+    let mut g = c.benchmark_group("obstacle");
+    let theta = obstacle_theta();
+    let p = TaskProblem {
+        task: ObstacleTask::thesis().unwrap(),
+        policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
+    };
+    g.throughput(Throughput::Elements(steps_of(&p, &theta)));
+    g.bench_function(
+        "roll-out + VO labels + linear-Gaussian + causal estimate (f64, Vec actions)",
+        |b| b.iter(|| oracle_pass(&p, black_box(&theta))),
+    );
+    let inline = TaskProblem {
+        task: p.task.clone().with_actions::<[f64; 2]>(),
+        policy: p.policy.clone().with_actions::<[f64; 2]>().unwrap(),
+    };
+    g.bench_function(
+        "roll-out + VO labels + linear-Gaussian + causal estimate (f64, inline actions)",
+        |b| b.iter(|| oracle_pass(&inline, black_box(&theta))),
+    );
+    g.finish();
+}
+
+fn vo_expert(c: &mut Criterion) {
+    let mut g = c.benchmark_group("vo expert");
+    // The states of real episodes (the expert driving), cycled.
+    let config = ilopt::env::obstacle::ObstacleConfig::default();
+    let expert = VoExpertPolicy::new(&config, Default::default()).unwrap();
+    let mut env = ObstacleEnv::new(config).unwrap();
+    let mut states = vec![];
+    for seed in 0..SEEDS {
+        let mut rng = KitRng::seed_from_u64(seed);
+        let mut obs = env.reset(&mut rng);
+        loop {
+            states.push(obs);
+            let s = env.step(expert.act(&obs).unwrap()).unwrap();
+            obs = s.obs;
+            if s.terminated || s.truncated {
+                break;
+            }
+        }
+    }
+    g.throughput(Throughput::Elements(states.len() as u64));
+    g.bench_function("solve (policy act on visited states)", |b| {
+        b.iter(|| {
+            let mut acc = 0.0;
+            for s in &states {
+                acc += expert.act(black_box(s)).unwrap()[0];
+            }
+            acc
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, cartpole, obstacle_task, vo_expert);
+criterion_main!(benches);

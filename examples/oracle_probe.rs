@@ -1,0 +1,124 @@
+//! Min-of-rounds timing of the CartPole + logistic oracle, generic against hand-specialised
+//! (issue 8), for machines too noisy for criterion's means: each mode runs `rounds` times,
+//! interleaved, and the fastest round is reported (interference only ever slows a round down).
+//!
+//! `cargo run --release --example oracle_probe -- generic,spec,rollout,specroll,estimate,specest 2 300`
+//! (modes, repetitions of the 16 seeds per round, rounds).
+
+#[path = "../benches/support/specialised.rs"]
+mod specialised;
+
+use ilopt::expert::lqr::LqrExpert;
+use ilopt::policy::Logistic;
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
+use ilopt::task::TaskProblem;
+use ilopt::task::cartpole::{self, CartPoleTask};
+use nalgebra::DVector;
+use rand::SeedableRng;
+use specialised::{D, Specialised, Trajectory};
+use std::collections::BTreeMap;
+use std::hint::black_box;
+use std::time::Instant;
+
+const SEEDS: u64 = 16;
+const THETA: [f64; D] = [0.3, 1.0, 8.0, 2.0, 0.1];
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let modes = args
+        .next()
+        .unwrap_or_else(|| "generic,spec,rollout,specroll,estimate,specest".into());
+    let reps: u64 = args.next().map_or(2, |x| x.parse().expect("repetitions"));
+    let rounds: u64 = args.next().map_or(300, |x| x.parse().expect("rounds"));
+
+    let p = TaskProblem {
+        task: CartPoleTask::<f64>::with_lqr().expect("LQR design"),
+        policy: Logistic::new(cartpole::FEATURES).expect("policy"),
+    };
+    let theta = DVector::from_column_slice(&THETA);
+    let gain = *LqrExpert::cartpole().expect("LQR design").gain();
+    let fast = Specialised {
+        k: std::array::from_fn(|i| gain[i]),
+        max_steps: ilopt::env::cartpole::MAX_EPISODE_STEPS,
+    };
+    let generic_trajectories: Vec<_> = (0..SEEDS)
+        .map(|seed| {
+            let mut rng = KitRng::seed_from_u64(seed);
+            p.rollout(&Behaviour::Learner(&theta), &mut rng, &mut Cost::default())
+                .expect("roll-out")
+        })
+        .collect();
+    let fast_trajectories: Vec<_> = (0..SEEDS)
+        .map(|seed| {
+            let mut t = Trajectory::default();
+            fast.rollout(&THETA, &mut KitRng::seed_from_u64(seed), &mut t);
+            t
+        })
+        .collect();
+
+    let mut t = Trajectory::default();
+    let mut best: BTreeMap<&str, f64> = BTreeMap::new();
+    for _ in 0..rounds {
+        for mode in modes.split(',') {
+            let mut steps = 0u64;
+            let mut acc = 0.0;
+            let start = Instant::now();
+            for _ in 0..reps {
+                for seed in 0..SEEDS {
+                    let mut rng = KitRng::seed_from_u64(seed);
+                    let mut cost = Cost::default();
+                    let th = black_box(&theta);
+                    match mode {
+                        "generic" => {
+                            let tr = p
+                                .rollout(&Behaviour::Learner(th), &mut rng, &mut cost)
+                                .expect("roll-out");
+                            steps += tr.len() as u64;
+                            acc += p
+                                .estimate(th, &tr, EstimatorForm::Causal, &mut cost)
+                                .expect("estimate")[0];
+                        }
+                        "rollout" => {
+                            let tr = p
+                                .rollout(&Behaviour::Learner(th), &mut rng, &mut cost)
+                                .expect("roll-out");
+                            steps += tr.len() as u64;
+                        }
+                        "estimate" => {
+                            let tr = &generic_trajectories[seed as usize];
+                            steps += tr.len() as u64;
+                            acc += p
+                                .estimate(th, tr, EstimatorForm::Causal, &mut cost)
+                                .expect("estimate")[0];
+                        }
+                        "spec" => {
+                            fast.rollout(black_box(&THETA), &mut rng, &mut t);
+                            steps += t.actions.len() as u64;
+                            acc += Specialised::estimate(black_box(&THETA), &t)[0];
+                        }
+                        "specroll" => {
+                            fast.rollout(black_box(&THETA), &mut rng, &mut t);
+                            steps += t.actions.len() as u64;
+                        }
+                        "specest" => {
+                            let tr = &fast_trajectories[seed as usize];
+                            steps += tr.actions.len() as u64;
+                            acc += Specialised::estimate(black_box(&THETA), tr)[0];
+                        }
+                        other => panic!("unknown mode {other}"),
+                    }
+                }
+            }
+            let ns = start.elapsed().as_secs_f64() * 1e9 / steps as f64;
+            black_box(acc);
+            let e = best.entry(mode).or_insert(f64::INFINITY);
+            *e = e.min(ns);
+        }
+    }
+    for (mode, ns) in best {
+        println!(
+            "{mode:>9}: {ns:6.1} ns/step = {:5.2} M trajectory-steps/s",
+            1e3 / ns
+        );
+    }
+}

@@ -1,0 +1,290 @@
+//! No heap allocation per step in the hot loops of a roll-out and of the oracle (issue 8).
+//!
+//! A counting global allocator counts, per thread, every `alloc`/`alloc_zeroed`/`realloc`. The
+//! definition checked here: **the number of allocations of a roll-out or an estimate does not
+//! depend on the number of steps** — a call allocates its result storage once (reserved from the
+//! task's time limit for a roll-out; the returned vector and one scratch buffer for an estimate)
+//! and the per-step loop allocates nothing, so an episode of 500 steps costs as many allocations
+//! as one of 10. The per-step primitives (features, expert, sampling, environment step, loss and
+//! score) are also checked directly: zero allocations over many steps.
+
+use ilopt::policy::{LinearGaussian, Logistic, Policy};
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
+use ilopt::task::cartpole::{self, CartPoleTask};
+use ilopt::task::obstacle::{self, ObstacleTask};
+use ilopt::task::{Task, TaskProblem};
+use nalgebra::DVector;
+use rand::SeedableRng;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+struct Counting;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+fn bump() {
+    // `try_with`: the allocator may run while the thread-local is being torn down.
+    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+}
+
+// SAFETY: forwards every call to the system allocator unchanged; only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        bump();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        bump();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc_zeroed(layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        bump();
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// Allocations made by `f` on this thread, and its result.
+fn count<R>(f: impl FnOnce() -> R) -> (u64, R) {
+    let before = ALLOCATIONS.with(Cell::get);
+    let r = f();
+    (ALLOCATIONS.with(Cell::get) - before, r)
+}
+
+#[test]
+fn the_counter_counts() {
+    let (n, v) = count(|| vec![1u8; 10]);
+    assert_eq!(n, 1, "one Vec, one allocation");
+    let (n, _) = count(|| {
+        let mut w = Vec::new();
+        for i in 0..100u32 {
+            w.push(i);
+        }
+        w
+    });
+    assert!(n >= 5, "a growing Vec reallocates: {n}");
+    let (n, _) = count(|| v.len());
+    assert_eq!(n, 0);
+}
+
+fn cartpole() -> TaskProblem<CartPoleTask<f64>, Logistic> {
+    TaskProblem {
+        task: CartPoleTask::with_lqr().unwrap(),
+        policy: Logistic::new(cartpole::FEATURES).unwrap(),
+    }
+}
+
+/// θ for which the logistic policy balances the pole for a while (about the LQR gain).
+fn balancing() -> DVector<f64> {
+    DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1])
+}
+
+#[test]
+fn cartpole_step_primitives_allocate_nothing() {
+    let p = cartpole();
+    let theta = balancing();
+    let th = theta.as_slice();
+    let mut rng = KitRng::seed_from_u64(7);
+    let mut features = Vec::with_capacity(5 * 10_000);
+    let mut grad = vec![0.0; 5];
+    let mut score = vec![0.0; 5];
+    let mut ep = p.task.start(&mut rng).unwrap();
+    let mut steps = 0;
+    let (n, ()) = count(|| {
+        while steps < 10_000 {
+            let start = features.len();
+            p.task.push_features(&ep, &mut features);
+            let phi = &features[start..];
+            let (label, _) = p.task.expert(&ep).unwrap();
+            let a = p.policy.sample(th, phi, &mut rng).unwrap();
+            p.policy
+                .loss_score_into(th, phi, &label, &a, &mut grad, &mut score)
+                .unwrap();
+            steps += 1;
+            if p.task.advance(&mut ep, &a).unwrap() {
+                ep = p.task.start(&mut rng).unwrap();
+            }
+        }
+    });
+    assert_eq!(n, 0, "allocations over {steps} CartPole steps");
+}
+
+/// Roll-outs and estimates of many lengths: the allocation count of each call is one constant.
+#[test]
+fn cartpole_rollout_and_oracle_allocate_per_call_not_per_step() {
+    let p = cartpole();
+    let mut rng = KitRng::seed_from_u64(11);
+    let mut cost = Cost::default();
+    let thetas = [
+        balancing(),
+        DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
+        DVector::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.0]),
+    ];
+    let mut lengths = std::collections::BTreeSet::new();
+    let (mut rollout_counts, mut estimate_counts, mut weighted_counts, mut full_counts) =
+        (vec![], vec![], vec![], vec![]);
+    for _ in 0..30 {
+        for theta in &thetas {
+            let (n, t) = count(|| {
+                p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                    .unwrap()
+            });
+            rollout_counts.push(n);
+            lengths.insert(t.len());
+            let (n, _) = count(|| {
+                p.estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+                    .unwrap()
+            });
+            estimate_counts.push(n);
+            let (n, _) = count(|| {
+                p.estimate(theta, &t, EstimatorForm::Full, &mut cost)
+                    .unwrap()
+            });
+            full_counts.push(n);
+            let (n, _) = count(|| {
+                p.weighted_estimate(&thetas[1], theta, &t, Weighting::PerDecision, &mut cost)
+                    .unwrap()
+            });
+            weighted_counts.push(n);
+        }
+    }
+    assert!(
+        lengths.len() >= 10 && lengths.first() < Some(&50) && lengths.last() == Some(&500),
+        "episode lengths should vary widely: {lengths:?}"
+    );
+    for (what, counts, max) in [
+        ("roll-out", &rollout_counts, 3),
+        ("causal estimate", &estimate_counts, 2),
+        ("full estimate", &full_counts, 2),
+        ("per-decision weighted estimate", &weighted_counts, 2),
+    ] {
+        assert!(
+            counts.iter().all(|&n| n == counts[0] && n <= max),
+            "{what}: allocations per call {counts:?} (must be one constant ≤ {max})"
+        );
+    }
+}
+
+/// The obstacle task with inline actions and labels (`[f64; 2]`; the default `Vec<f64>` allocates
+/// one vector per stored action and label).
+fn obstacle_inline() -> TaskProblem<ObstacleTask<[f64; 2]>, LinearGaussian<f64, [f64; 2]>> {
+    TaskProblem {
+        task: ObstacleTask::thesis().unwrap().with_actions(),
+        policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02)
+            .unwrap()
+            .with_actions()
+            .unwrap(),
+    }
+}
+
+/// W with a proportional pull towards the goal.
+fn pull() -> DVector<f64> {
+    let mut w = DVector::zeros(2 * obstacle::FEATURES);
+    w[0] = 0.05;
+    w[obstacle::FEATURES + 1] = 0.05;
+    w
+}
+
+#[test]
+fn obstacle_step_primitives_allocate_nothing() {
+    let p = obstacle_inline();
+    let theta = pull();
+    let th = theta.as_slice();
+    let mut rng = KitRng::seed_from_u64(7);
+    let mut features = Vec::with_capacity(obstacle::FEATURES * 5_000);
+    let mut grad = vec![0.0; 2 * obstacle::FEATURES];
+    let mut score = vec![0.0; 2 * obstacle::FEATURES];
+    let mut ep = p.task.start(&mut rng).unwrap();
+    let mut steps = 0;
+    let mut episodes = 0;
+    let (n, ()) = count(|| {
+        while steps < 5_000 {
+            let start = features.len();
+            p.task.push_features(&ep, &mut features);
+            let phi = &features[start..];
+            let (label, _) = p.task.expert(&ep).unwrap();
+            let a = p.policy.sample(th, phi, &mut rng).unwrap();
+            p.policy
+                .loss_score_into(th, phi, &label, &a, &mut grad, &mut score)
+                .unwrap();
+            steps += 1;
+            if p.task.advance(&mut ep, &a).unwrap() {
+                episodes += 1;
+                // `start` clones the environment (no heap data).
+                ep = p.task.start(&mut rng).unwrap();
+            }
+        }
+    });
+    assert!(episodes > 10, "{episodes} episodes");
+    assert_eq!(n, 0, "allocations over {steps} obstacle steps");
+}
+
+#[test]
+fn obstacle_rollout_and_oracle_allocate_per_call_not_per_step() {
+    let p = obstacle_inline();
+    let mut rng = KitRng::seed_from_u64(5);
+    let mut cost = Cost::default();
+    let thetas = [pull(), DVector::zeros(2 * obstacle::FEATURES)];
+    let mut lengths = std::collections::BTreeSet::new();
+    let (mut rollouts, mut estimates) = (vec![], vec![]);
+    for _ in 0..20 {
+        for theta in &thetas {
+            let (n, t) = count(|| {
+                p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                    .unwrap()
+            });
+            rollouts.push(n);
+            lengths.insert(t.len());
+            let (n, _) = count(|| {
+                p.estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+                    .unwrap()
+            });
+            estimates.push(n);
+            let (n, _) = count(|| {
+                p.weighted_estimate(&thetas[1], theta, &t, Weighting::PerDecision, &mut cost)
+                    .unwrap()
+            });
+            estimates.push(n);
+        }
+    }
+    assert!(lengths.len() >= 5, "episode lengths {lengths:?}");
+    assert!(
+        rollouts.iter().all(|&n| n == rollouts[0] && n <= 3),
+        "{rollouts:?}"
+    );
+    assert!(
+        estimates.iter().all(|&n| n == estimates[0] && n <= 2),
+        "{estimates:?}"
+    );
+}
+
+/// The default `Vec<f64>` actions do allocate per step: the counter sees it (so the tests above
+/// could fail).
+#[test]
+fn vec_actions_allocate_per_step() {
+    let p = TaskProblem {
+        task: ObstacleTask::thesis().unwrap(),
+        policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
+    };
+    let mut rng = KitRng::seed_from_u64(5);
+    let (n, t) = count(|| {
+        p.rollout(&Behaviour::Learner(&pull()), &mut rng, &mut Cost::default())
+            .unwrap()
+    });
+    assert!(
+        n as usize >= 2 * t.len(),
+        "{n} allocations for {} steps",
+        t.len()
+    );
+}
