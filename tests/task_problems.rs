@@ -53,6 +53,21 @@ fn cartpole_rollouts_are_seeded_and_labelled() {
 }
 
 #[test]
+fn cartpole_with_the_ppo_expert_balances() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json");
+    let p = TaskProblem {
+        task: CartPoleTask::<f64>::with_ppo(&path).unwrap(),
+        policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+    };
+    let mut rng = KitRng::seed_from_u64(5);
+    let e = p
+        .rollout(&Behaviour::Expert, &mut rng, &mut Cost::default())
+        .unwrap();
+    assert_eq!(e.len(), 500);
+    assert!(CartPoleTask::<f64>::with_ppo(std::path::Path::new("/nonexistent.json")).is_err());
+}
+
+#[test]
 fn weighted_estimate_at_the_same_point_is_the_plain_estimate() {
     let p = cartpole_problem();
     let theta = DVector::from_fn(p.dim(), |i, _| 0.05 * i as f64);

@@ -64,7 +64,6 @@ pub mod storm_plus;
 use crate::problem::{Cost, IlProblem, KitRng, OracleError};
 use crate::scalar::{BigRational, Interval, Scalar, Sqrt, Undecidable, parse_exact};
 use nalgebra::DVector;
-use rand::RngCore;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::cmp::Ordering;
 
@@ -412,16 +411,7 @@ impl Roots for Interval {
     }
 }
 
-/// `2⁵³`: the denominator of [`dyadic_uniform`].
-pub const UNIFORM_DENOMINATOR: i64 = 1 << 53;
-
-/// A uniform draw on `[0, 1)` as the dyadic rational `k / 2⁵³` (k from the top 53 bits of one
-/// `u64`), built exactly in every scalar: the same seed gives the same number in `f64`, in
-/// rationals and in intervals (a singleton).
-pub fn dyadic_uniform<S: Scalar>(rng: &mut KitRng) -> S {
-    let k = (rng.next_u64() >> 11) as i64;
-    S::from_ratio(k, UNIFORM_DENOMINATOR)
-}
+pub use crate::problem::{UNIFORM_DENOMINATOR, dyadic_uniform};
 
 /// `a·x + y`, entrywise.
 pub(crate) fn axpy<S: Scalar>(a: &S, x: &DVector<S>, y: &DVector<S>) -> DVector<S> {

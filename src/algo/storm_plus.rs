@@ -20,8 +20,16 @@
 //! these are exposed as `a0`, `b0`, `c`, `eta_scale` (the released PyTorch code initialises both
 //! accumulators at 1, i.e. `b₀ = 1`). The exponents −2/3 and −1/3 and the order of the updates
 //! (a_{t+1} from gradients up to t, η_t from d_i/a_{i+1} up to t) are the parts I am confident
-//! of; the clip `a ≤ 1` is a no-op for `a₀ ≥ c^{3/2}`. Check against the paper before citing
-//! numbers from this implementation as "STORM+".
+//! of; the clip `a ≤ 1` is a no-op for `a₀ ≥ c^{3/2}`.
+//!
+//! **Checked against released code** (a public PyTorch `STORMplus` optimiser, read while this
+//! was reviewed): it keeps `grad_accumulator` and `estimator_accumulator`, both initialised to
+//! `init_accumulator = 1`, sets `a = c / grad_accumulator^{2/3}` after adding ‖g_t‖², then
+//! `estimator_accumulator += ‖d_t‖²/a` and `η = lr / estimator_accumulator^{1/3}`, and forms
+//! `d_{t+1} = g_{t+1} + (1 − a)(d_t − g(θ_t; ξ_{t+1}))` — the same exponents, update order and
+//! recursion as above, with `b₀ = 1` ([`StormPlusConfig::released_code`]). The paper's own
+//! statement of the constants was not available; cite [`StormPlusConfig::released_code`] as
+//! "STORM+ (released code)".
 
 use super::{
     AlgoError, Algorithm, Ctx, Num, Roots, StepReport, axpy, check_dim, check_finite, min_one,
@@ -59,6 +67,18 @@ impl StormPlusConfig {
             eta_scale: Num::ratio(1, 1),
             correction,
             form,
+        }
+    }
+}
+
+impl StormPlusConfig {
+    /// The constants of the authors' released optimiser: both accumulators start at 1
+    /// (a₀ = b₀ = 1), c = 1, and the step-size scale `lr` (s).
+    pub fn released_code(lr: Num, correction: Correction, form: EstimatorForm) -> Self {
+        StormPlusConfig {
+            b0: Num::ratio(1, 1),
+            eta_scale: lr,
+            ..StormPlusConfig::paper(correction, form)
         }
     }
 }

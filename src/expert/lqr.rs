@@ -41,7 +41,7 @@
 //! `r + bᵀPb > 0`. Ties (`K s = 0`) go to action 0.
 
 use crate::env::cartpole::CartPoleParams;
-use crate::scalar::{BigRational, Scalar, Undecidable};
+use crate::scalar::{Scalar, Undecidable};
 use nalgebra::{Matrix4, RowVector4, Vector4};
 use std::cmp::Ordering;
 
@@ -206,7 +206,6 @@ pub struct LqrExpert {
     b: Vector4<f64>,
     p: Matrix4<f64>,
     k: RowVector4<f64>,
-    k_exact: [BigRational; 4],
     iterations: usize,
 }
 
@@ -246,13 +245,11 @@ impl LqrExpert {
         if spectral_radius.is_nan() || spectral_radius >= 1.0 || k.iter().any(|v| !v.is_finite()) {
             return Err(LqrError::NotStabilising { spectral_radius });
         }
-        let k_exact = std::array::from_fn(|i| BigRational::from_float(k[i]).expect("finite gain"));
         Ok(LqrExpert {
             a,
             b,
             p,
             k,
-            k_exact,
             iterations,
         })
     }
@@ -283,11 +280,11 @@ impl LqrExpert {
     /// # Errors
     /// [`Undecidable`] when the sign of `−K s` cannot be decided (an interval around 0, or NaN).
     pub fn action<S: Scalar>(&self, state: &[S; 4]) -> Result<usize, Undecidable> {
-        let u = self
-            .k_exact
-            .iter()
-            .zip(state)
-            .fold(S::zero(), |acc, (k, s)| acc - S::from_rational(k) * s);
+        // Each gain is a finite f64 (checked at construction), so `from_binary64` is exact: the
+        // exact value of the f64 gain in every scalar, without a rational round trip per call.
+        let u = self.k.iter().zip(state).fold(S::zero(), |acc, (k, s)| {
+            acc - S::from_binary64(*k).expect("finite gain") * s
+        });
         match u.certain_cmp(&S::zero()) {
             Some(Ordering::Greater) => Ok(1),
             Some(_) => Ok(0),

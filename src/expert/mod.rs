@@ -1,3 +1,5 @@
 pub mod lqr;
 
+pub mod ppo;
+
 pub mod vo;

@@ -84,6 +84,7 @@
 //! | `‖r‖ ≤ R` | [`VoError::InsideObstacle`]: every direction (all but one line at `‖r‖ = R`) collides |
 //! | NaN/∞ input | [`VoError::NonFinite`] |
 //! | overflow of an intermediate (inputs ≳ 1e150) | [`VoError::Overflow`]; never a NaN output |
+//! | tiny inputs (max of `‖r‖`, `R` or of the velocities below 2⁻⁶⁰) | rescaled by exact powers of two before solving ([`vo_expert_cone`]), so no product underflows; the answer is unchanged |
 //!
 //! # Reference
 //! Thesis §4.1.2, eq. 4.1 (the thesis solves it with MATLAB's `fmincon`, a local method); the
@@ -156,6 +157,23 @@ fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
     a[0] * b[0] + a[1] * b[1]
 }
 
+/// The power of two `2^k` (`k ≥ 0`) that brings `m ∈ (0, 2⁻⁶⁰)` to at least `2⁻⁶⁰`; 1 otherwise.
+/// At most `2^1014`, so it and its inverse are normal floats.
+fn upscale(m: f64) -> f64 {
+    const FLOOR: f64 = 8.673_617_379_884_035e-19; // 2^-60
+    let (mut x, mut s) = (m, 1.0f64);
+    while x > 0.0 && x < FLOOR {
+        let step = if x < FLOOR * FLOOR {
+            2f64.powi(60)
+        } else {
+            2.0
+        };
+        x *= step;
+        s *= step;
+    }
+    s
+}
+
 #[inline]
 fn check_finite(x: &[f64], name: &'static str) -> Result<(), VoError> {
     if x.iter().all(|v| v.is_finite()) {
@@ -215,6 +233,45 @@ pub fn vo_expert_cone(
     }
     if big_r <= 0.0 {
         return Err(VoError::NonPositiveRadius(big_r));
+    }
+    // Tiny inputs are rescaled by powers of two (exact) so that the squares and products below
+    // cannot underflow: the geometry (r, R) and the velocities separately, as the cone depends only
+    // on the direction of r and R/‖r‖ and the solution u* is linear in the velocities. Inputs at
+    // or above 2⁻⁶⁰ are not rescaled, so for them the result is bit-identical to
+    // [`vo_expert_generic`] at `f64`. (Found by the `vo_expert` fuzz target: with ‖r‖, R and the
+    // velocities ≈ 6e−154 the products of the feasibility test underflowed to 0 and an infeasible
+    // u₀ was returned.)
+    let sr = upscale(r[0].abs().max(r[1].abs()).max(big_r));
+    let velocities = [v_o[0], v_o[1], v_r[0], v_r[1], v_des[0], v_des[1]];
+    let sv = upscale(velocities.iter().fold(0.0f64, |m, x| m.max(x.abs())));
+    if sr != 1.0 || sv != 1.0 {
+        let scale = |a: [f64; 2], s: f64| [a[0] * s, a[1] * s];
+        let scaled = vo_expert_cone(
+            cone,
+            scale(r, sr),
+            scale(v_o, sv),
+            scale(v_r, sv),
+            scale(v_des, sv),
+            lam,
+            big_r * sr,
+        )
+        .map_err(|e| match e {
+            VoError::InsideObstacle { distance, .. } => VoError::InsideObstacle {
+                distance: distance / sr,
+                radius: big_r,
+            },
+            e => e,
+        })?;
+        let u = scale(scaled.u, 1.0 / sv);
+        let j = objective(u, v_r, v_des, lam);
+        if !(u[0].is_finite() && u[1].is_finite() && j.is_finite()) {
+            return Err(VoError::Overflow);
+        }
+        return Ok(VoSolution {
+            u,
+            j,
+            active: scaled.active,
+        });
     }
     let rr = dot(r, r);
     let big_r2 = big_r * big_r;
@@ -304,7 +361,8 @@ fn cmp_g<S: Scalar>(a: &S, b: &S, what: &'static str) -> Result<Ordering, VoErro
 
 /// [`vo_expert_cone`] generic over the scalar type (any [`Sqrt`] scalar: `f64`, `f32`,
 /// [`crate::scalar::Interval`], [`crate::scalar::Dual`]): the same closed form, operation for
-/// operation (for `f64` the result is bit-identical to [`vo_expert_cone`]).
+/// operation (for `f64` the result is bit-identical to [`vo_expert_cone`] when no input group
+/// is below 2⁻⁶⁰; this generic form does not rescale tiny inputs).
 ///
 /// With intervals the result *encloses* the exact minimiser for every point input in the argument
 /// intervals, provided every branch was decided; with duals it carries the derivatives of `u*` and

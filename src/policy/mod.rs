@@ -32,7 +32,7 @@ pub use mlp::{Forward, Mlp, MlpGaussian, MlpSoftmax, tanh};
 pub use softmax::{Softmax, brier_logit_gradient, log_softmax, softmax_probs};
 
 use crate::problem::KitRng;
-use crate::scalar::{BigRational, Scalar, Undecidable};
+use crate::scalar::{Scalar, Undecidable};
 
 /// Why a policy could not be built or evaluated.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -96,9 +96,7 @@ pub enum PolicyError {
 /// # Errors
 /// [`PolicyError::NonFinite`] for NaN and ±∞ (`param` names the quantity).
 pub fn from_f64_exact<S: Scalar>(x: f64, param: &'static str) -> Result<S, PolicyError> {
-    BigRational::from_float(x)
-        .map(|q| S::from_rational(&q))
-        .ok_or(PolicyError::NonFinite { param })
+    S::from_binary64(x).ok_or(PolicyError::NonFinite { param })
 }
 
 /// A standard normal draw `ε ∼ N(0, 1)` as an exact scalar (rand_distr's ziggurat in `f64`, then

@@ -217,6 +217,9 @@ impl<S: Scalar> Scalar for Dual<S> {
     fn to_f64(&self) -> f64 {
         self.v.to_f64()
     }
+    fn from_binary64(x: f64) -> Option<Self> {
+        S::from_binary64(x).map(Self::constant)
+    }
     /// Orders by value only (the gradient does not take part).
     fn certain_cmp(&self, other: &Self) -> Option<Ordering> {
         self.v.certain_cmp(&other.v)

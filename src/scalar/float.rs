@@ -29,6 +29,9 @@ macro_rules! impl_float {
             fn to_f64(&self) -> f64 {
                 f64::from(*self)
             }
+            fn from_binary64(x: f64) -> Option<Self> {
+                x.is_finite().then_some(x as $t)
+            }
             fn certain_cmp(&self, other: &Self) -> Option<Ordering> {
                 self.partial_cmp(other)
             }

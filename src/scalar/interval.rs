@@ -77,6 +77,13 @@ impl Scalar for Interval {
     fn to_f64(&self) -> f64 {
         self.mid()
     }
+    fn from_binary64(x: f64) -> Option<Self> {
+        if x.is_finite() {
+            Interval::try_from((x, x)).ok()
+        } else {
+            None
+        }
+    }
     fn certain_cmp(&self, other: &Self) -> Option<Ordering> {
         if self.is_empty() || other.is_empty() {
             None

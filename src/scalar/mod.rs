@@ -82,6 +82,13 @@ pub trait Scalar:
     /// reported as a number.
     fn is_finite(&self) -> bool;
 
+    /// The value of a finite binary64 number (a random draw, a datum read as `f64`, a trained
+    /// weight) — never for decimal literals, which are not what they look like. Exact in `f64`,
+    /// rationals, intervals (a singleton) and duals over them; rounded in `f32`. `None` for NaN
+    /// or ±∞. The default goes through [`BigRational::from_float`]; fast types override it.
+    fn from_binary64(x: f64) -> Option<Self> {
+        BigRational::from_float(x).map(|q| Self::from_rational(&q))
+    }
     /// An integer, exactly where the type can hold it.
     fn from_i64(n: i64) -> Self {
         Self::from_ratio(n, 1)

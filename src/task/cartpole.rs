@@ -1,9 +1,11 @@
-//! CartPole-v1 as an imitation-learning task (thesis §4.2): the LQR expert labels every visited
-//! state with its action; the learner sees φ(s) = (x, ẋ, θ, θ̇, 1).
+//! CartPole-v1 as an imitation-learning task (thesis §4.2): an expert (the LQR controller, or the
+//! kit's PPO-trained policy as in the thesis) labels every visited state with its action; the
+//! learner sees φ(s) = (x, ẋ, θ, θ̇, 1).
 
 use super::Task;
 use crate::env::cartpole::{CartPoleDynamics, MAX_EPISODE_STEPS, sample_reset_state};
 use crate::expert::lqr::LqrExpert;
+use crate::expert::ppo::PpoExpert;
 use crate::policy::from_f64_exact;
 use crate::problem::{KitRng, OracleError};
 use crate::scalar::Real;
@@ -11,11 +13,20 @@ use crate::scalar::Real;
 /// Number of features: the state and a constant.
 pub const FEATURES: usize = 5;
 
+/// The expert that labels CartPole states.
+#[derive(Debug, Clone)]
+pub enum CartPoleExpert {
+    /// The LQR controller of [`crate::expert::lqr`].
+    Lqr(Box<LqrExpert>),
+    /// The PPO-trained policy of [`crate::expert::ppo`] (greedy).
+    Ppo(PpoExpert),
+}
+
 /// CartPole with an expert, episodes truncated at `max_steps` (Gymnasium: 500).
 #[derive(Debug, Clone)]
 pub struct CartPoleTask<S> {
     dynamics: CartPoleDynamics<S>,
-    expert: LqrExpert,
+    expert: CartPoleExpert,
     max_steps: usize,
 }
 
@@ -35,16 +46,27 @@ impl<S: Real> CartPoleTask<S> {
     /// [`OracleError::Environment`] if the LQR design fails.
     pub fn with_lqr() -> Result<Self, OracleError> {
         Self::new(
-            LqrExpert::cartpole().map_err(|e| OracleError::Environment(e.to_string()))?,
+            CartPoleExpert::Lqr(Box::new(
+                LqrExpert::cartpole().map_err(|e| OracleError::Environment(e.to_string()))?,
+            )),
             MAX_EPISODE_STEPS,
         )
+    }
+
+    /// CartPole-v1 with the PPO expert stored at `path` (e.g. `experts/cartpole-ppo.json`).
+    ///
+    /// # Errors
+    /// [`OracleError::Environment`] if the file cannot be loaded.
+    pub fn with_ppo(path: &std::path::Path) -> Result<Self, OracleError> {
+        let e = PpoExpert::load(path).map_err(|e| OracleError::Environment(e.to_string()))?;
+        Self::new(CartPoleExpert::Ppo(e), MAX_EPISODE_STEPS)
     }
 
     /// A task with a given expert and truncation (≥ 1 step).
     ///
     /// # Errors
     /// [`OracleError::Environment`] for `max_steps = 0`.
-    pub fn new(expert: LqrExpert, max_steps: usize) -> Result<Self, OracleError> {
+    pub fn new(expert: CartPoleExpert, max_steps: usize) -> Result<Self, OracleError> {
         if max_steps == 0 {
             return Err(OracleError::Environment("max_steps must be ≥ 1".into()));
         }
@@ -80,7 +102,12 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
     }
 
     fn expert(&self, ep: &Self::Episode) -> Result<(usize, usize), OracleError> {
-        let a = self.expert.action(&ep.state)?;
+        let a = match &self.expert {
+            CartPoleExpert::Lqr(e) => e.action(&ep.state)?,
+            CartPoleExpert::Ppo(e) => e
+                .action_in(&ep.state)
+                .map_err(|e| OracleError::Environment(e.to_string()))?,
+        };
         Ok((a, a))
     }
 

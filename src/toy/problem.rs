@@ -13,7 +13,7 @@ use super::{ToyMdp, estimator::prefix_loss};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::{Scalar, Undecidable, certainly_less};
 use nalgebra::DVector;
-use rand::{Rng, RngCore};
+use rand::Rng;
 
 /// A sampled trajectory τ = (s_1, a_1, …, a_{T−1}, s_T) with expert labels π*(s_t), t = 1..T−1.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -44,11 +44,7 @@ pub struct ToyProblem<S> {
     c: S,
 }
 
-/// A dyadic uniform k/2⁵³ ∈ [0, 1), exactly representable in every scalar type.
-pub fn dyadic_uniform<S: Scalar>(rng: &mut KitRng) -> S {
-    let k = rng.next_u64() >> 11;
-    S::from_ratio(k as i64, 1 << 53)
-}
+pub use crate::problem::dyadic_uniform;
 
 /// Sample from a categorical distribution with a given uniform `u` (see the module docs).
 ///

@@ -109,7 +109,7 @@ pub fn sup_bound<E: std::fmt::Display>(
             })
             .collect();
         let v = eval(&mid)?;
-        Ok(if v.is_empty() {
+        Ok(if v.is_empty() || v.inf().is_nan() {
             f64::NEG_INFINITY
         } else {
             v.inf()
@@ -117,8 +117,10 @@ pub fn sup_bound<E: std::fmt::Display>(
     };
     let node = |b: Vec<[f64; 2]>| -> Result<Node, BnbError> {
         let e = eval(&b)?;
-        let (inf, sup) = if e.is_empty() {
-            (f64::INFINITY, f64::NEG_INFINITY)
+        // An empty or NaN enclosure says nothing about f on the box: count it as unbounded, so
+        // it is split further and, if it never resolves, the bound is +∞ (never silently dropped).
+        let (inf, sup) = if e.is_empty() || e.inf().is_nan() || e.sup().is_nan() {
+            (f64::NEG_INFINITY, f64::INFINITY)
         } else {
             (e.inf(), e.sup())
         };
@@ -167,6 +169,7 @@ pub fn sup_bound<E: std::fmt::Display>(
             enclosure: [n.inf, n.sup],
         })
         .collect();
+    // NaN never reaches here (mapped to +∞ above); the bound is the max over the boxes' sups.
     let upper = certificate
         .iter()
         .map(|b| b.enclosure[1])
@@ -222,6 +225,22 @@ mod tests {
         let mut bad = r.clone();
         bad.certificate.remove(bad.certificate.len() / 2);
         assert!(!verify_certificate(&bad, &[[0.0, 1.0]]) || bad.certificate.len() < 2);
+    }
+
+    /// A box whose enclosure is empty is never dropped: the bound becomes +∞ rather than
+    /// ignoring it.
+    #[test]
+    fn empty_enclosures_make_the_bound_infinite() {
+        let f = |x: &[Interval]| {
+            let y = if x[0].sup() > 0.5 {
+                Interval::EMPTY
+            } else {
+                x[0]
+            };
+            Ok::<_, Infallible>(y)
+        };
+        let r = sup_bound(f, &[[0.0, 1.0]], 1e-3, 64).unwrap();
+        assert_eq!(r.upper, f64::INFINITY);
     }
 
     #[test]

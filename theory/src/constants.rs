@@ -254,3 +254,70 @@ pub fn tied_softmax_g_inf_closed_form(horizon: usize, c: f64) -> f64 {
     let psi = 1.0 / c.sqrt() + 1.0 / (n * c).sqrt();
     (2f64.sqrt() * ((t - 1.0) * 4.0 / (n * c).sqrt() + (t - 1.0) * (t - 2.0) * psi)) * (1.0 + 1e-12)
 }
+
+/// L̃ of assumption (A4) for IS-STORM with per-decision or trajectory weights (math.md §7.1):
+/// `V_IS(θ, θ′) = Σ_τ̄ [p(τ̄;θ′)‖g(θ′)‖² − 2p(τ̄;θ)⟨g(θ′), g(θ)⟩ + p(τ̄;θ)²/p(τ̄;θ′)‖g(θ)‖²]`
+/// vanishes with zero gradient at θ′ = θ, so by Taylor `L̃² ≤ ½ sup_{θ,ϑ ∈ box} ‖∇²_{θ′}V_IS(θ, ϑ)‖`.
+/// The supremum is enclosed by 2-D branch-and-bound (1-D θ), with θ′ in `Dual<Dual<Interval>>`.
+/// (This is the whole-trajectory form of (A4), the one of math.md §3.2.)
+///
+/// # Errors
+/// [`BnbError`] if the engine fails on a box, or for a policy with more than one parameter.
+pub fn l_tilde(
+    mdp: &ToyMdp,
+    domain: [f64; 2],
+    tol: f64,
+    max_boxes: usize,
+) -> Result<Constant, BnbError> {
+    if mdp.policy.dim() != 1 {
+        return Err(BnbError::Evaluation {
+            bounds: vec![],
+            message: "L̃ is implemented for one parameter".into(),
+        });
+    }
+    let pi = ToyProblem::<Interval>::new(mdp);
+    let pd = ToyProblem::<Dual<Dual<Interval>>>::new(mdp);
+    let f = |b: &[Interval]| -> Result<Interval, String> {
+        let at_theta = prefixes(&pi, &b[..1]).map_err(|e| e.to_string())?;
+        let v = Dual::variable(Dual::variable(b[1], 0, 1), 0, 1);
+        let at_prime = prefixes(&pd, std::slice::from_ref(&v)).map_err(|e| e.to_string())?;
+        if at_theta.len() != at_prime.len() {
+            return Err("prefix sets differ".into());
+        }
+        let lift = |x: &Interval| Dual::constant(Dual::constant(*x));
+        let mut total = Dual::<Dual<Interval>>::zero();
+        for (a, b) in at_theta.iter().zip(&at_prime) {
+            if a.states != b.states || a.actions != b.actions {
+                return Err("prefix order differs".into());
+            }
+            let (p, g) = (lift(&a.prob), lift(&a.estimate[0]));
+            let (pp, gp) = (&b.prob, &b.estimate[0]);
+            total += pp.clone() * gp * gp - Dual::from_i64(2) * &p * gp * &g
+                + p.clone() * &p / pp * &g * &g;
+        }
+        Ok(total.gradient_padded(1)[0].gradient_padded(1)[0].abs())
+    };
+    let r = sup_bound(f, &[domain, domain], tol, max_boxes)?;
+    let v = sqrt_up(r.upper / 2.0 * (1.0 + 1e-15));
+    let how = format!(
+        "√(½ sup |∂²V_IS/∂θ′²|) over {:?}² by 2-D interval branch-and-bound ({} boxes)",
+        domain,
+        r.certificate.len()
+    );
+    Ok(Constant::rigorous("L̃", r, v, how))
+}
+
+/// A box that provably contains every IS-STORM iterate under schedule (3.43) for K steps from θ₁:
+/// ‖d_1‖ ≤ G_∞ and ‖d_{k+1}‖ ≤ G_∞ + (1 − a_{k+1})(‖d_k‖ + W G_∞), W ≥ the largest importance
+/// weight, so |θ_{K+1} − θ₁| ≤ Σ_k η_k ‖d_k‖ (computed with upward-rounded margins).
+pub fn storm_iterate_box(theta1: f64, l: f64, k: u64, g_inf: f64, w_max: f64) -> [f64; 2] {
+    let up = |x: f64| x * (1.0 + 1e-12);
+    let mut d = g_inf;
+    let mut radius = 0.0;
+    for i in 1..=k {
+        let (eta, a) = crate::bounds::storm_schedule(l, i);
+        radius = up(radius + up(eta * 1.000_001) * d);
+        d = up(g_inf + (1.0 - a * 0.999_999).max(0.0) * (d + w_max * g_inf));
+    }
+    [theta1 - radius, theta1 + radius]
+}

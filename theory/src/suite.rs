@@ -1,7 +1,9 @@
 //! The whole theorem-check suite, at a quick size (tests, the appendix's default) or the full size.
 
 use crate::check::Check;
+use crate::checks::montecarlo::{self, McSettings};
 use crate::checks::{constants, o2nc_formula, schedule, thm31, unbiased};
+use crate::stats::bonferroni;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, parse_exact};
 use ilopt::toy::ToyMdp;
@@ -24,7 +26,18 @@ pub struct Sizes {
     pub o2nc_cases: usize,
     /// Branch-and-bound tolerance.
     pub bnb_tol: f64,
+    /// Monte-Carlo runs per statistical check.
+    pub runs: usize,
+    /// SGD iterations K.
+    pub sgd_k: u64,
+    /// O2NC budget N.
+    pub o2nc_n: u64,
 }
+
+/// Family-wise false-alarm probability of the statistical checks (Bonferroni-split).
+pub const FAMILY_ALPHA: f64 = 0.01;
+/// Number of statistical claims of the thesis in the suite (for Bonferroni).
+pub const STATISTICAL_CLAIMS: usize = 2;
 
 impl Profile {
     /// The sizes of this profile.
@@ -34,11 +47,17 @@ impl Profile {
                 schedule_k: 2_000,
                 o2nc_cases: 20_000,
                 bnb_tol: 1e-2,
+                runs: 100,
+                sgd_k: 1000,
+                o2nc_n: 2000,
             },
             Profile::Full => Sizes {
                 schedule_k: 100_000,
                 o2nc_cases: 200_000,
                 bnb_tol: 1e-4,
+                runs: 1000,
+                sgd_k: 1000,
+                o2nc_n: 20_000,
             },
         }
     }
@@ -94,5 +113,91 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     let k = constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
         .map_err(|e| e.to_string())?;
     rows.push(k.row("M1 (P2', c = 1/2, θ₁ = 0)", domain));
+    let mc = McSettings {
+        runs: s.runs,
+        alpha: bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS),
+    };
+    rows.push(montecarlo::sgd(&m1, &k, 0.0, (1, 20), s.sgd_k, mc, 1.0));
+    rows.extend(montecarlo::o2nc(&m1, &k, 0.0, s.o2nc_n, (1, 10), mc, 1.0));
     Ok(rows)
+}
+
+/// Check 6 on CartPole (softmax learner, LQR expert) and the obstacle task (linear-Gaussian
+/// learner, velocity-obstacle expert), plus the obstacle task's negative control.
+///
+/// # Errors
+/// A message if a task cannot be built.
+pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
+    use crate::checks::real_env::{RealSizes, row};
+    use ilopt::policy::{LinearGaussian, Softmax};
+    use ilopt::task::TaskProblem;
+    use ilopt::task::cartpole::{self, CartPoleTask};
+    use ilopt::task::obstacle::{self, ObstacleTask};
+    use nalgebra::DVector;
+    let scale = if profile == Profile::Full { 10 } else { 1 };
+    let cp = TaskProblem {
+        task: CartPoleTask::with_lqr().map_err(|e| e.to_string())?,
+        policy: Softmax::new(2, cartpole::FEATURES).map_err(|e| e.to_string())?,
+    };
+    let cp_theta = DVector::from_vec(vec![0.0, 0.0, -2.0, -0.5, 0.0, 0.0, 0.0, 2.0, 0.5, 0.0]);
+    let ob = TaskProblem {
+        task: ObstacleTask::thesis().map_err(|e| e.to_string())?,
+        policy: LinearGaussian::new(2, obstacle::FEATURES, 0.05).map_err(|e| e.to_string())?,
+    };
+    let mut ob_theta = DVector::zeros(2 * obstacle::FEATURES);
+    ob_theta[0] = 0.02;
+    ob_theta[obstacle::FEATURES + 1] = 0.02;
+    let alpha = 1e-3;
+    let cs = RealSizes {
+        n_oracle: 400 * scale,
+        n_fd: 300 * scale,
+        h: 0.05,
+        alpha,
+    };
+    let os = RealSizes {
+        n_oracle: 300 * scale,
+        n_fd: 200 * scale,
+        h: 0.005,
+        alpha,
+    };
+    use crate::checks::estimated::{EstimateSizes, sgd_row};
+    let es = |rho: f64, spread: f64, eta0: f64| EstimateSizes {
+        m: 100 * scale,
+        probes: 4,
+        rho,
+        spread,
+        runs: 4 * scale,
+        k: 200,
+        stride: 20,
+        eta0,
+    };
+    Ok(vec![
+        sgd_row(
+            "CartPole, softmax learner",
+            &cp,
+            &cp_theta,
+            es(0.1, 0.5, 0.01),
+        ),
+        sgd_row(
+            "obstacle, linear-Gaussian learner",
+            &ob,
+            &ob_theta,
+            es(0.005, 0.01, 0.01),
+        ),
+        row("CartPole, softmax learner", &cp, &cp_theta, None, cs),
+        row(
+            "obstacle, linear-Gaussian learner",
+            &ob,
+            &ob_theta,
+            None,
+            os,
+        ),
+        row(
+            "obstacle, linear-Gaussian learner",
+            &ob,
+            &ob_theta,
+            Some(&DVector::zeros(ob_theta.len())),
+            os,
+        ),
+    ])
 }

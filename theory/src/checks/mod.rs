@@ -1,7 +1,10 @@
 //! The checks of issue 4, each a function returning [`crate::check::Check`] rows.
 
 pub mod constants;
+pub mod estimated;
+pub mod montecarlo;
 pub mod o2nc_formula;
+pub mod real_env;
 pub mod schedule;
 pub mod thm31;
 pub mod unbiased;
