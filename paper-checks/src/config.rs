@@ -17,7 +17,7 @@ pub struct Profile {
     pub name: String,
     /// Seeds per configuration (≥ 2 for a confidence interval; issue 6 asks for ≥ 10).
     pub seeds: u32,
-    /// Which size of the theorem-check suite to run: `"quick"` or `"full"`.
+    /// Which size of the theorem-check suite to run: `"quick"`, `"full"` or `"none"` (skip it).
     pub theory_profile: String,
     /// Fig. 4.2.
     pub gradient_error: GradientError,
@@ -128,10 +128,18 @@ impl Profile {
 
     fn validate(&self, file: &Path) -> Result<(), Error> {
         if self.seeds < 2 {
-            return Err(field(file, "seeds", "must be at least 2 (a CI needs 2 seeds)"));
+            return Err(field(
+                file,
+                "seeds",
+                "must be at least 2 (a CI needs 2 seeds)",
+            ));
         }
-        if !matches!(self.theory_profile.as_str(), "quick" | "full") {
-            return Err(field(file, "theory_profile", "must be \"quick\" or \"full\""));
+        if !matches!(self.theory_profile.as_str(), "quick" | "full" | "none") {
+            return Err(field(
+                file,
+                "theory_profile",
+                "must be \"quick\", \"full\" or \"none\"",
+            ));
         }
         let g = &self.gradient_error;
         if g.ns.is_empty() || g.ns.contains(&0) || g.ns.windows(2).any(|w| w[0] >= w[1]) {
@@ -149,13 +157,22 @@ impl Profile {
             ));
         }
         if !(g.sigma.is_finite() && g.sigma > 0.0) {
-            return Err(field(file, "gradient_error.sigma", "must be finite and > 0"));
+            return Err(field(
+                file,
+                "gradient_error.sigma",
+                "must be finite and > 0",
+            ));
         }
-        if g.theta.len() != 2 * ilopt::task::obstacle::FEATURES || g.theta.iter().any(|x| !x.is_finite()) {
+        if g.theta.len() != 2 * ilopt::task::obstacle::FEATURES
+            || g.theta.iter().any(|x| !x.is_finite())
+        {
             return Err(field(
                 file,
                 "gradient_error.theta",
-                format!("must hold {} finite numbers", 2 * ilopt::task::obstacle::FEATURES),
+                format!(
+                    "must hold {} finite numbers",
+                    2 * ilopt::task::obstacle::FEATURES
+                ),
             ));
         }
         for (name, t) in [("obstacle", &self.obstacle), ("cartpole", &self.cartpole)] {
@@ -179,7 +196,11 @@ impl Profile {
                 ));
             }
             if t.algorithms.is_empty() {
-                return Err(field(file, &format!("{name}.algorithms"), "must not be empty"));
+                return Err(field(
+                    file,
+                    &format!("{name}.algorithms"),
+                    "must not be empty",
+                ));
             }
             let mut labels = std::collections::BTreeSet::new();
             for (i, a) in t.algorithms.iter().enumerate() {

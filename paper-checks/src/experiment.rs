@@ -114,6 +114,8 @@ pub struct SeedTiming {
 }
 
 /// A task with its learner, expert and evaluation settings.
+// Two instances exist per run, so the size difference between the variants costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub enum Bench {
     /// The obstacle task.
@@ -273,7 +275,12 @@ impl Bench {
 
     /// Norms of the x and y rows of the mean eq. 3.15 estimate over `n` learner roll-outs
     /// (obstacle task only).
-    fn gradient_xy(&self, theta: &DVector<f64>, n: u32, seed: u64) -> Result<Option<(f64, f64)>, Error> {
+    fn gradient_xy(
+        &self,
+        theta: &DVector<f64>,
+        n: u32,
+        seed: u64,
+    ) -> Result<Option<(f64, f64)>, Error> {
         let Bench::Obstacle { problem, .. } = self else {
             return Ok(None);
         };
@@ -372,7 +379,10 @@ pub fn run_seed(
         let grad = bench.gradient_xy(
             &m.theta,
             task.grad_trajectories,
-            derive_seed(&format!("{key}|grad"), m.iteration * 1000 + u64::from(seed_index)),
+            derive_seed(
+                &format!("{key}|grad"),
+                m.iteration * 1000 + u64::from(seed_index),
+            ),
         )?;
         let score = match kind {
             TaskKind::Obstacle => f64::from(ev.successes) / f64::from(task.eval_episodes),
@@ -431,7 +441,10 @@ pub fn gradient_error_seed(
         return Err(Error::experiment("gradient error", "not the obstacle task"));
     };
     let theta = DVector::from_vec(g.theta.clone());
-    let key = format!("gradient-error|{}", serde_json::to_string(g).unwrap_or_default());
+    let key = format!(
+        "gradient-error|{}",
+        serde_json::to_string(g).unwrap_or_default()
+    );
     let mut rng = KitRng::seed_from_u64(derive_seed(&key, u64::from(seed_index)));
     let mut cost = Cost::default();
     let mut sum = DVector::zeros(theta.len());
@@ -462,7 +475,10 @@ pub fn gradient_reference(g: &GradientError) -> Result<DVector<f64>, Error> {
         return Err(Error::experiment("gradient error", "not the obstacle task"));
     };
     use rayon::prelude::*;
-    let key = format!("gradient-reference|{}", serde_json::to_string(g).unwrap_or_default());
+    let key = format!(
+        "gradient-reference|{}",
+        serde_json::to_string(g).unwrap_or_default()
+    );
     let theta = DVector::from_vec(g.theta.clone());
     // Chunks of 64 trajectories, each with its own derived seed, summed in chunk order: the same
     // number whatever the thread count.

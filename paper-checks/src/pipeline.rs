@@ -61,6 +61,9 @@ pub struct ConfigTiming {
     pub wall_seconds: f64,
 }
 
+/// A configuration's results with its timings (absent when reused without a timing file).
+pub type ConfigWithTiming = (ConfigResult, Option<ConfigTiming>);
+
 /// Fig. 4.2 data.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GradientErrorResult {
@@ -193,7 +196,12 @@ fn task_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEnt
     });
     format!(
         "{:016x}",
-        fnv1a(&format!("{}|{}|{}", run_key(kind, e), section, profile.seeds))
+        fnv1a(&format!(
+            "{}|{}|{}",
+            run_key(kind, e),
+            section,
+            profile.seeds
+        ))
     )
 }
 
@@ -212,7 +220,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     ];
     // Which configurations are already done?
     let mut todo = Vec::new();
-    let mut results: Vec<Vec<Option<(ConfigResult, Option<ConfigTiming>)>>> = Vec::new();
+    let mut results: Vec<Vec<Option<ConfigWithTiming>>> = Vec::new();
     for (kind, t) in tasks {
         let mut row = Vec::new();
         for e in &t.algorithms {
@@ -255,7 +263,11 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     };
 
     let total = todo.len() * profile.seeds as usize
-        + if gcached.is_none() { profile.seeds as usize } else { 0 };
+        + if gcached.is_none() {
+            profile.seeds as usize
+        } else {
+            0
+        };
     let progress = Progress::new(total, opts.progress);
     let benches = [
         Bench::new(TaskKind::Obstacle, profile.obstacle.sigma)?,
@@ -266,6 +278,9 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     let theory_job = || -> Result<String, Error> {
         if let Some(t) = theory_cached.clone() {
             return Ok(t);
+        }
+        if profile.theory_profile == "none" {
+            return Ok("*Not run: the profile sets `theory_profile = \"none\"`. Run `cargo run --release -p ilopt-theory` or a profile with `theory_profile = \"quick\"`.*\n".into());
         }
         let p = if profile.theory_profile == "full" {
             ilopt_theory::suite::Profile::Full
@@ -366,7 +381,9 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
             results[ti][i] = Some((c, Some(tm)));
         }
     }
-    let mut it = results.into_iter().map(|row| row.into_iter().flatten().collect::<Vec<_>>());
+    let mut it = results
+        .into_iter()
+        .map(|row| row.into_iter().flatten().collect::<Vec<_>>());
     Ok(Results {
         gradient_error,
         obstacle: it.next().unwrap_or_default(),

@@ -50,6 +50,9 @@ const COLORS: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
+/// A transformed point: (x, mean, band low, band high).
+type BandPoint = (f64, f64, f64, f64);
+
 fn tr(v: f64, log: bool) -> Option<f64> {
     if !v.is_finite() {
         return None;
@@ -98,7 +101,7 @@ impl Figure {
 
     fn draw(&self, out: &mut String) -> Result<(), Box<dyn std::error::Error + '_>> {
         // Transformed data and ranges.
-        let mut pts: Vec<(usize, Vec<(f64, f64, f64, f64)>)> = Vec::new();
+        let mut pts: Vec<(usize, Vec<BandPoint>)> = Vec::new();
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
         for (i, s) in self.series.iter().enumerate() {
             let mut v = Vec::new();
@@ -194,12 +197,18 @@ pub fn render_png(svg: &str) -> Result<Vec<u8>, String> {
     let db = opt.fontdb_mut();
     db.load_system_fonts();
     // plotters writes `font-family="sans-serif"`; map it to a font that exists.
-    let family = ["DejaVu Sans", "Liberation Sans", "Arial", "Helvetica", "Noto Sans"]
-        .into_iter()
-        .find(|f| {
-            db.faces()
-                .any(|face| face.families.iter().any(|(n, _)| n == f))
-        });
+    let family = [
+        "DejaVu Sans",
+        "Liberation Sans",
+        "Arial",
+        "Helvetica",
+        "Noto Sans",
+    ]
+    .into_iter()
+    .find(|f| {
+        db.faces()
+            .any(|face| face.families.iter().any(|(n, _)| n == f))
+    });
     match family {
         Some(f) => db.set_sans_serif_family(f),
         None => {

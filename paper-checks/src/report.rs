@@ -47,24 +47,104 @@ pub const THESIS_T44: [(&str, f64); 4] = [
 
 /// The errata of math.md §0: (id, where, problem, correction).
 pub const ERRATA: [(&str, &str, &str, &str); 18] = [
-    ("E1", "(3.2), (3.5)", "l_t must not depend on the sampled action a_t; otherwise (3.15) is biased", "define l_t on the policy output (math.md §1.2)"),
-    ("E2", "(3.41)", "\"f L-smooth implies F L-smooth\" is false in IL (the sampling law depends on θ); the estimator field is not a gradient field", "assume L_F-smoothness of F directly, plus (A4)"),
-    ("E3", "(3.44) Lemma 3.3", "the Δ_k term lacks η_k²", "4(1−a_{k+1})²L²η_k²Δ_k"),
+    (
+        "E1",
+        "(3.2), (3.5)",
+        "l_t must not depend on the sampled action a_t; otherwise (3.15) is biased",
+        "define l_t on the policy output (math.md §1.2)",
+    ),
+    (
+        "E2",
+        "(3.41)",
+        "\"f L-smooth implies F L-smooth\" is false in IL (the sampling law depends on θ); the estimator field is not a gradient field",
+        "assume L_F-smoothness of F directly, plus (A4)",
+    ),
+    (
+        "E3",
+        "(3.44) Lemma 3.3",
+        "the Δ_k term lacks η_k²",
+        "4(1−a_{k+1})²L²η_k²Δ_k",
+    ),
     ("E4", "(3.46), (3.47)", "f written for ∇f", "typo"),
-    ("E5", "(3.54)–(3.56)", "L²/2 in the quadratic upper bound", "L/2"),
-    ("E6", "(3.58)", "both coefficients wrong; needs ηL ≤ 1/4, not ηL < 2", "−(η/2)(1−2Lη)Δ + (η/2)(1+2Lη)e ≤ −(η/4)Δ + (3η/4)e for Lη ≤ 1/4"),
-    ("E7", "after (3.58)/(3.59)", "\"these choices make the first term negative\" is false for k = 1..23; the telescoping is invalid as written", "a different potential; the same step sizes then work"),
-    ("E8", "(3.60)", "O(·) hides constants, mixes T and K", "explicit bound (3.60*)"),
-    ("E9", "Alg. 4", "d_{k+1} = ∇f(θ_{k+1}, τ_{k+1}) + (1−a_{k+1})∇f(θ_k, τ_{k+1})", "d_{k+1} = ∇f(θ_{k+1}, τ_{k+1}) + (1−a_{k+1})(d_k − ∇f(θ_k, τ_{k+1})), as (3.40)"),
-    ("E10", "Alg. 4 / Lemma 3.3 in IL", "∇f(θ_k, τ_{k+1}) with τ_{k+1} ∼ p(·; θ_{k+1}) is biased for ∇F(θ_k)", "importance weight w = p(τ; θ_k)/p(τ; θ_{k+1}) (IS-STORM)"),
-    ("E11", "Alg. 5", "τ_n ∼ p(τ; θ_n) while the gradient is taken at w_n", "τ_n ∼ p(τ; w_n)"),
+    (
+        "E5",
+        "(3.54)–(3.56)",
+        "L²/2 in the quadratic upper bound",
+        "L/2",
+    ),
+    (
+        "E6",
+        "(3.58)",
+        "both coefficients wrong; needs ηL ≤ 1/4, not ηL < 2",
+        "−(η/2)(1−2Lη)Δ + (η/2)(1+2Lη)e ≤ −(η/4)Δ + (3η/4)e for Lη ≤ 1/4",
+    ),
+    (
+        "E7",
+        "after (3.58)/(3.59)",
+        "\"these choices make the first term negative\" is false for k = 1..23; the telescoping is invalid as written",
+        "a different potential; the same step sizes then work",
+    ),
+    (
+        "E8",
+        "(3.60)",
+        "O(·) hides constants, mixes T and K",
+        "explicit bound (3.60*)",
+    ),
+    (
+        "E9",
+        "Alg. 4",
+        "d_{k+1} = ∇f(θ_{k+1}, τ_{k+1}) + (1−a_{k+1})∇f(θ_k, τ_{k+1})",
+        "d_{k+1} = ∇f(θ_{k+1}, τ_{k+1}) + (1−a_{k+1})(d_k − ∇f(θ_k, τ_{k+1})), as (3.40)",
+    ),
+    (
+        "E10",
+        "Alg. 4 / Lemma 3.3 in IL",
+        "∇f(θ_k, τ_{k+1}) with τ_{k+1} ∼ p(·; θ_{k+1}) is biased for ∇F(θ_k)",
+        "importance weight w = p(τ; θ_k)/p(τ; θ_{k+1}) (IS-STORM)",
+    ),
+    (
+        "E11",
+        "Alg. 5",
+        "τ_n ∼ p(τ; θ_n) while the gradient is taken at w_n",
+        "τ_n ∼ p(τ; w_n)",
+    ),
     ("E12", "(3.64), (3.67)", "F(θ_1)", "F(θ_0)"),
-    ("E13", "Thm 3.8 proof", "u_n = u^{mod(n,T)+1}; \"dividing by KDT = KM\"; (3.69) bounds a sum of norms by √T σ", "u_n = u^{⌈n/T⌉}; divide by DM; bound ‖Σ_t X_t‖, not Σ_t ‖X_t‖"),
-    ("E14", "(3.72)", "+s_n Δ_{n'}", "−s_{n'} Δ_{n'} (bound unaffected)"),
-    ("E15", "Thm 3.1", "statement has ‖θ_i − θ'‖; convergence needs βε/γ < 1 (unstated); Lemma 3.2 garbled", "‖θ_i − θ'_i‖; math.md §6"),
-    ("E16", "§3.2.1 end", "\"‖θ_k − θ_PO‖ ≤ α⁻¹‖∇F‖ ≤ E‖∇F‖\": the last inequality is false", "only E‖θ_k − θ_PO‖ ≤ α⁻¹ E‖∇F(θ_k)‖"),
-    ("E17", "Alg. 3, 4", "return θ_K", "guarantees are for a random / best iterate, not θ_K"),
-    ("E18", "(3.29), (3.30) vs (3.1)", "sums to T vs T−1", "use T−1 throughout"),
+    (
+        "E13",
+        "Thm 3.8 proof",
+        "u_n = u^{mod(n,T)+1}; \"dividing by KDT = KM\"; (3.69) bounds a sum of norms by √T σ",
+        "u_n = u^{⌈n/T⌉}; divide by DM; bound ‖Σ_t X_t‖, not Σ_t ‖X_t‖",
+    ),
+    (
+        "E14",
+        "(3.72)",
+        "+s_n Δ_{n'}",
+        "−s_{n'} Δ_{n'} (bound unaffected)",
+    ),
+    (
+        "E15",
+        "Thm 3.1",
+        "statement has ‖θ_i − θ'‖; convergence needs βε/γ < 1 (unstated); Lemma 3.2 garbled",
+        "‖θ_i − θ'_i‖; math.md §6",
+    ),
+    (
+        "E16",
+        "§3.2.1 end",
+        "\"‖θ_k − θ_PO‖ ≤ α⁻¹‖∇F‖ ≤ E‖∇F‖\": the last inequality is false",
+        "only E‖θ_k − θ_PO‖ ≤ α⁻¹ E‖∇F(θ_k)‖",
+    ),
+    (
+        "E17",
+        "Alg. 3, 4",
+        "return θ_K",
+        "guarantees are for a random / best iterate, not θ_K",
+    ),
+    (
+        "E18",
+        "(3.29), (3.30) vs (3.1)",
+        "sums to T vs T−1",
+        "use T−1 throughout",
+    ),
 ];
 
 /// A claim's verdict.
@@ -154,7 +234,10 @@ fn convergence_row(c: &ConfigResult) -> ConvergenceRow {
     let calls: Vec<f64> = c
         .runs
         .iter()
-        .filter_map(|r| r.converged.map(|i| r.checkpoints[i].gradient_evaluations as f64))
+        .filter_map(|r| {
+            r.converged
+                .map(|i| r.checkpoints[i].gradient_evaluations as f64)
+        })
         .collect();
     ConvergenceRow {
         label: c.label.clone(),
@@ -220,7 +303,12 @@ fn band(
     xf: impl Fn(&Checkpoint) -> f64,
     yf: impl Fn(&Checkpoint) -> Option<f64>,
 ) -> Series {
-    let k = c.runs.iter().map(|r| r.checkpoints.len()).max().unwrap_or(0);
+    let k = c
+        .runs
+        .iter()
+        .map(|r| r.checkpoints.len())
+        .max()
+        .unwrap_or(0);
     let mut s = Series {
         label: c.label.clone(),
         x: vec![],
@@ -231,7 +319,11 @@ fn band(
     };
     for i in 0..k {
         let cps: Vec<&Checkpoint> = c.runs.iter().filter_map(|r| r.checkpoints.get(i)).collect();
-        let ys: Vec<f64> = cps.iter().filter_map(|c| yf(c)).filter(|y| y.is_finite()).collect();
+        let ys: Vec<f64> = cps
+            .iter()
+            .filter_map(|c| yf(c))
+            .filter(|y| y.is_finite())
+            .collect();
         if ys.is_empty() {
             continue;
         }
@@ -239,8 +331,16 @@ fn band(
         let sm = Summary::of(&ys);
         s.x.push(x);
         s.mean.push(sm.mean);
-        s.lo.push(if sm.half_width.is_finite() { sm.lo() } else { sm.mean });
-        s.hi.push(if sm.half_width.is_finite() { sm.hi() } else { sm.mean });
+        s.lo.push(if sm.half_width.is_finite() {
+            sm.lo()
+        } else {
+            sm.mean
+        });
+        s.hi.push(if sm.half_width.is_finite() {
+            sm.hi()
+        } else {
+            sm.mean
+        });
     }
     s
 }
@@ -267,7 +367,10 @@ fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
 /// The Fig. 4.2 bands (x, y) over seeds.
 fn gradient_error_series(r: &Results) -> (Series, Series) {
     let seeds = &r.gradient_error.seeds;
-    let ns: Vec<u64> = seeds.first().map(|s| s.iter().map(|t| t.0).collect()).unwrap_or_default();
+    let ns: Vec<u64> = seeds
+        .first()
+        .map(|s| s.iter().map(|t| t.0).collect())
+        .unwrap_or_default();
     let mk = |label: &str, pick: &dyn Fn(&(u64, f64, f64)) -> f64| {
         let mut s = Series {
             label: label.into(),
@@ -318,16 +421,17 @@ fn within(v: f64, lo: f64, hi: f64) -> bool {
 /// The computed claims (deterministic ones; runtime claims are in [`timing_claims`]).
 pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec<Claim> {
     let mut out = Vec::new();
-    let mut push = |id: &str, source: &str, claim: &str, rule: String, evidence: String, v: Verdict| {
-        out.push(Claim {
-            id: id.into(),
-            source: source.into(),
-            claim: claim.into(),
-            rule,
-            evidence,
-            verdict: v,
-        })
-    };
+    let mut push =
+        |id: &str, source: &str, claim: &str, rule: String, evidence: String, v: Verdict| {
+            out.push(Claim {
+                id: id.into(),
+                source: source.into(),
+                claim: claim.into(),
+                rule,
+                evidence,
+                verdict: v,
+            })
+        };
     // Fig. 4.2.
     let (gx, gy) = gradient_error_series(r);
     let (sx, sy) = (loglog_slope(&gx.x, &gx.mean), loglog_slope(&gy.x, &gy.mean));
@@ -335,7 +439,8 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
         "O1",
         "§4.1.3, Fig. 4.2",
         "the gradient-estimate error decays at ≈ 1/√N",
-        "least-squares log-log slope of the mean error vs N in [−0.7, −0.3], for x and for y".into(),
+        "least-squares log-log slope of the mean error vs N in [−0.7, −0.3], for x and for y"
+            .into(),
         format!("slope x = {}, slope y = {}", num(sx), num(sy)),
         Verdict::of(&[within(sx, -0.7, -0.3), within(sy, -0.7, -0.3)]),
     );
@@ -343,13 +448,12 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
     // BC ≈ 70%, constant.
     if let Some(bc) = r.obstacle.iter().find(|c| c.0.label == "BC") {
         let s = band(&bc.0, |c| c.iteration as f64, |c| Some(c.score));
-        let later: Vec<f64> = s
-            .x
-            .iter()
-            .zip(&s.mean)
-            .filter(|(x, _)| **x >= 1.0)
-            .map(|p| *p.1)
-            .collect();
+        let later: Vec<f64> =
+            s.x.iter()
+                .zip(&s.mean)
+                .filter(|(x, _)| **x >= 1.0)
+                .map(|p| *p.1)
+                .collect();
         let spread = later.iter().cloned().fold(f64::MIN, f64::max)
             - later.iter().cloned().fold(f64::MAX, f64::min);
         let f = score("BC");
@@ -392,14 +496,22 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
             .map(|(l, v)| format!("{l} {}%", num(100.0 * v)))
             .collect::<Vec<_>>()
             .join(", "),
-        Verdict::of(&vals.iter().map(|v| within(*v, 0.8, 1.0)).collect::<Vec<_>>()),
+        Verdict::of(
+            &vals
+                .iter()
+                .map(|v| within(*v, 0.8, 1.0))
+                .collect::<Vec<_>>(),
+        ),
     );
     let crashes: Vec<(String, f64)> = obs
         .iter()
         .map(|x| (x.label.clone(), x.final_crashes.mean))
         .collect();
     let max_crash = crashes.iter().map(|c| c.1).fold(f64::MIN, f64::max);
-    let bc_crash = crashes.iter().find(|c| c.0 == "BC").map_or(f64::NAN, |c| c.1);
+    let bc_crash = crashes
+        .iter()
+        .find(|c| c.0 == "BC")
+        .map_or(f64::NAN, |c| c.1);
     push(
         "O6",
         "§4.1.3, Fig. 4.4",
@@ -417,11 +529,17 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
         r.obstacle
             .iter()
             .find(|c| c.0.label == l)
-            .map_or(f64::NAN, |c| summarise(&c.0, |k| k.grad_x.unwrap_or(f64::NAN)).mean)
+            .map_or(f64::NAN, |c| {
+                summarise(&c.0, |k| k.grad_x.unwrap_or(f64::NAN)).mean
+            })
     };
     let opt = ["SGD", "Adam", "RMSProp", "STORM"];
     let gv: Vec<f64> = opt.iter().map(|l| gfinal(l)).collect();
-    let gmin = gv.iter().cloned().filter(|v| v.is_finite()).fold(f64::MAX, f64::min);
+    let gmin = gv
+        .iter()
+        .cloned()
+        .filter(|v| v.is_finite())
+        .fold(f64::MAX, f64::min);
     push(
         "O7",
         "§4.1.3, Fig. 4.5",
@@ -434,9 +552,19 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
             .join(", "),
         Verdict::of(&[gv[3].is_finite() && gv[3] <= gmin]),
     );
-    let losses: Vec<(String, f64)> = obs.iter().map(|x| (x.label.clone(), x.final_loss.mean)).collect();
-    let lmin = losses.iter().map(|l| l.1).filter(|v| v.is_finite()).fold(f64::MAX, f64::min);
-    let dl = losses.iter().find(|l| l.0 == "DAgger").map_or(f64::NAN, |l| l.1);
+    let losses: Vec<(String, f64)> = obs
+        .iter()
+        .map(|x| (x.label.clone(), x.final_loss.mean))
+        .collect();
+    let lmin = losses
+        .iter()
+        .map(|l| l.1)
+        .filter(|v| v.is_finite())
+        .fold(f64::MAX, f64::min);
+    let dl = losses
+        .iter()
+        .find(|l| l.0 == "DAgger")
+        .map_or(f64::NAN, |l| l.1);
     push(
         "O8",
         "§4.1.3, Fig. 4.6",
@@ -449,12 +577,25 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
             .join(", "),
         Verdict::of(&[dl.is_finite() && dl <= lmin]),
     );
-    order_claims(&mut push, obs, "O9", "O10", "Table 4.1", &["STORM", "SGD", "RMSProp", "DAgger", "Adam"]);
+    order_claims(
+        &mut push,
+        obs,
+        "O9",
+        "O10",
+        "Table 4.1",
+        &["STORM", "SGD", "RMSProp", "DAgger", "Adam"],
+    );
     // CartPole.
-    order_claims(&mut push, cp, "C1", "C0", "Table 4.3", &["STORM", "RMSProp", "DAgger", "Adam"]);
-    let calls = |l: &str| {
-        row_of(cp, l).and_then(|x| (x.converged > 0).then_some(x.gradient_calls.mean))
-    };
+    order_claims(
+        &mut push,
+        cp,
+        "C1",
+        "C0",
+        "Table 4.3",
+        &["STORM", "RMSProp", "DAgger", "Adam"],
+    );
+    let calls =
+        |l: &str| row_of(cp, l).and_then(|x| (x.converged > 0).then_some(x.gradient_calls.mean));
     let (st, ad, rm) = (calls("STORM"), calls("Adam"), calls("RMSProp"));
     push(
         "C2",
@@ -472,7 +613,10 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
             matches!((st, rm), (Some(s), Some(m)) if s > m),
         ]),
     );
-    let rewards: Vec<(String, f64)> = cp.iter().map(|x| (x.label.clone(), x.final_reward.mean)).collect();
+    let rewards: Vec<(String, f64)> = cp
+        .iter()
+        .map(|x| (x.label.clone(), x.final_reward.mean))
+        .collect();
     push(
         "C3",
         "§4.2.2, Fig. 4.10",
@@ -486,11 +630,19 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
         Verdict::of(&rewards.iter().map(|r| r.1 >= 475.0).collect::<Vec<_>>()),
     );
     let sd = |l: &str| {
-        r.cartpole.iter().find(|c| c.0.label == l).map_or(f64::NAN, |c| {
-            let xs: Vec<f64> = c.0.runs.iter().filter_map(last).map(|k| f64::from(k.crashes)).collect();
-            let s = Summary::of(&xs);
-            s.half_width
-        })
+        r.cartpole
+            .iter()
+            .find(|c| c.0.label == l)
+            .map_or(f64::NAN, |c| {
+                let xs: Vec<f64> =
+                    c.0.runs
+                        .iter()
+                        .filter_map(last)
+                        .map(|k| f64::from(k.crashes))
+                        .collect();
+                let s = Summary::of(&xs);
+                s.half_width
+            })
     };
     let (a, b, c) = (sd("STORM"), sd("Adam"), sd("RMSProp"));
     push(
@@ -498,7 +650,12 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
         "§4.2.2, Fig. 4.9",
         "among STORM, Adam and RMSProp the variance of STORM's crashes is the lowest",
         "STORM's CI half-width of the final crashes ≤ Adam's and ≤ RMSProp's".into(),
-        format!("half-widths: STORM {}, Adam {}, RMSProp {}", num(a), num(b), num(c)),
+        format!(
+            "half-widths: STORM {}, Adam {}, RMSProp {}",
+            num(a),
+            num(b),
+            num(c)
+        ),
         Verdict::of(&[a <= b, a <= c]),
     );
     out
@@ -535,13 +692,19 @@ fn order_claims(
             id_fewest,
             table,
             "STORM needs the fewest gradient calls to converge",
-            format!("STORM's mean gradient calls to converge (converged seeds) is the smallest among {}; never converging = not reproduced", labels.join(", ")),
+            format!(
+                "STORM's mean gradient calls to converge (converged seeds) is the smallest among {}; never converging = not reproduced",
+                labels.join(", ")
+            ),
             evidence.clone(),
             Verdict::of(&[s.is_some_and(|s| conv.iter().all(|v| s <= *v))]),
         );
     }
     let d = get("DAgger");
-    let others_never = vals.iter().filter(|v| v.0 != "DAgger" && v.1.is_none()).count();
+    let others_never = vals
+        .iter()
+        .filter(|v| v.0 != "DAgger" && v.1.is_none())
+        .count();
     push(
         if id_fewest == "C1" { id_fewest } else { id_most },
         table,
@@ -566,17 +729,33 @@ fn order_claims(
 fn timing_claims(r: &Results) -> Vec<Claim> {
     let mut out = Vec::new();
     for (id, table, set, labels) in [
-        ("T1", "Table 4.2", &r.obstacle, vec!["STORM", "SGD", "RMSProp", "DAgger", "Adam"]),
-        ("T2", "Table 4.4", &r.cartpole, vec!["STORM", "RMSProp", "DAgger", "Adam"]),
+        (
+            "T1",
+            "Table 4.2",
+            &r.obstacle,
+            vec!["STORM", "SGD", "RMSProp", "DAgger", "Adam"],
+        ),
+        (
+            "T2",
+            "Table 4.4",
+            &r.cartpole,
+            vec!["STORM", "RMSProp", "DAgger", "Adam"],
+        ),
     ] {
         let vals: Vec<(String, f64)> = labels
             .iter()
             .map(|l| {
-                let t = set.iter().find(|c| c.0.label == *l).and_then(|c| c.1.as_ref());
+                let t = set
+                    .iter()
+                    .find(|c| c.0.label == *l)
+                    .and_then(|c| c.1.as_ref());
                 ((*l).to_string(), runtime(t).1.mean)
             })
             .collect();
-        let d = vals.iter().find(|v| v.0 == "DAgger").map_or(f64::NAN, |v| v.1);
+        let d = vals
+            .iter()
+            .find(|v| v.0 == "DAgger")
+            .map_or(f64::NAN, |v| v.1);
         out.push(Claim {
             id: id.into(),
             source: table.into(),
@@ -587,7 +766,7 @@ fn timing_claims(r: &Results) -> Vec<Claim> {
                 .map(|(l, v)| format!("{l} {} s", num(*v)))
                 .collect::<Vec<_>>()
                 .join(", "),
-            verdict: Verdict::of(&[d.is_finite() && vals.iter().all(|v| !(v.1 > d))]),
+            verdict: Verdict::of(&[d.is_finite() && vals.iter().all(|v| v.1 <= d || v.1.is_nan())]),
         });
     }
     out
@@ -684,7 +863,10 @@ pub fn write(
     // Figures.
     let mut figs: Vec<(&str, &str, Figure)> = Vec::new();
     let (gx, gy) = gradient_error_series(r);
-    for (name, s, lab) in [("fig4-2a-gradient-error-x", &gx, "x"), ("fig4-2b-gradient-error-y", &gy, "y")] {
+    for (name, s, lab) in [
+        ("fig4-2a-gradient-error-x", &gx, "x"),
+        ("fig4-2b-gradient-error-y", &gy, "y"),
+    ] {
         figs.push((
             name,
             "Fig. 4.2",
@@ -700,7 +882,11 @@ pub fn write(
     }
     let it = |c: &Checkpoint| c.iteration as f64;
     let gc = |c: &Checkpoint| c.gradient_evaluations as f64;
-    let obstacle_fig = |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>, skip_dataset: bool| Figure {
+    let obstacle_fig = |title: &str,
+                        y: &str,
+                        log_y: bool,
+                        f: &dyn Fn(&Checkpoint) -> Option<f64>,
+                        skip_dataset: bool| Figure {
         title: title.into(),
         x_label: "iteration (= trajectories sampled per algorithm step)".into(),
         y_label: y.into(),
@@ -714,24 +900,112 @@ pub fn write(
             .collect(),
     };
     let n_obs = f64::from(profile.obstacle.eval_episodes);
-    figs.push(("fig4-3-success", "Fig. 4.3", obstacle_fig("Fig. 4.3: success rate (obstacle)", "success rate", false, &|c| Some(c.score), false)));
-    figs.push(("fig4-4-crashes", "Fig. 4.4", obstacle_fig(&format!("Fig. 4.4: crashes out of {n_obs} episodes (obstacle)"), "crashes", false, &|c| Some(f64::from(c.crashes)), false)));
-    figs.push(("fig4-5a-gradient-x", "Fig. 4.5", obstacle_fig("Fig. 4.5(a): ‖x-row of the gradient estimate‖", "norm (log)", true, &|c| c.grad_x, true)));
-    figs.push(("fig4-5b-gradient-y", "Fig. 4.5", obstacle_fig("Fig. 4.5(b): ‖y-row of the gradient estimate‖", "norm (log)", true, &|c| c.grad_y, true)));
-    figs.push(("fig4-6a-loss-x", "Fig. 4.6", obstacle_fig("Fig. 4.6(a): loss, x coordinate (per decision)", "loss (log)", true, &|c| c.loss_x, false)));
-    figs.push(("fig4-6b-loss-y", "Fig. 4.6", obstacle_fig("Fig. 4.6(b): loss, y coordinate (per decision)", "loss (log)", true, &|c| c.loss_y, false)));
-    let cart_fig = |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| Figure {
-        title: title.into(),
-        x_label: "gradient calls (log; mean over seeds at each checkpoint)".into(),
-        y_label: y.into(),
-        log_x: true,
-        log_y,
-        series: r.cartpole.iter().map(|c| band(&c.0, gc, f)).collect(),
-    };
+    figs.push((
+        "fig4-3-success",
+        "Fig. 4.3",
+        obstacle_fig(
+            "Fig. 4.3: success rate (obstacle)",
+            "success rate",
+            false,
+            &|c| Some(c.score),
+            false,
+        ),
+    ));
+    figs.push((
+        "fig4-4-crashes",
+        "Fig. 4.4",
+        obstacle_fig(
+            &format!("Fig. 4.4: crashes out of {n_obs} episodes (obstacle)"),
+            "crashes",
+            false,
+            &|c| Some(f64::from(c.crashes)),
+            false,
+        ),
+    ));
+    figs.push((
+        "fig4-5a-gradient-x",
+        "Fig. 4.5",
+        obstacle_fig(
+            "Fig. 4.5(a): ‖x-row of the gradient estimate‖",
+            "norm (log)",
+            true,
+            &|c| c.grad_x,
+            true,
+        ),
+    ));
+    figs.push((
+        "fig4-5b-gradient-y",
+        "Fig. 4.5",
+        obstacle_fig(
+            "Fig. 4.5(b): ‖y-row of the gradient estimate‖",
+            "norm (log)",
+            true,
+            &|c| c.grad_y,
+            true,
+        ),
+    ));
+    figs.push((
+        "fig4-6a-loss-x",
+        "Fig. 4.6",
+        obstacle_fig(
+            "Fig. 4.6(a): loss, x coordinate (per decision)",
+            "loss (log)",
+            true,
+            &|c| c.loss_x,
+            false,
+        ),
+    ));
+    figs.push((
+        "fig4-6b-loss-y",
+        "Fig. 4.6",
+        obstacle_fig(
+            "Fig. 4.6(b): loss, y coordinate (per decision)",
+            "loss (log)",
+            true,
+            &|c| c.loss_y,
+            false,
+        ),
+    ));
+    let cart_fig =
+        |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| Figure {
+            title: title.into(),
+            x_label: "gradient calls (log; mean over seeds at each checkpoint)".into(),
+            y_label: y.into(),
+            log_x: true,
+            log_y,
+            series: r.cartpole.iter().map(|c| band(&c.0, gc, f)).collect(),
+        };
     let n_cp = f64::from(profile.cartpole.eval_episodes);
-    figs.push(("fig4-8-loss", "Fig. 4.8", cart_fig("Fig. 4.8: CartPole loss (per decision)", "Brier loss", false, &|c| Some(c.loss))));
-    figs.push(("fig4-9-crashes", "Fig. 4.9", cart_fig(&format!("Fig. 4.9: CartPole crashes out of {n_cp} episodes"), "crashes", false, &|c| Some(f64::from(c.crashes)))));
-    figs.push(("fig4-10-reward", "Fig. 4.10", cart_fig("Fig. 4.10: CartPole mean episode reward", "reward", false, &|c| Some(c.reward))));
+    figs.push((
+        "fig4-8-loss",
+        "Fig. 4.8",
+        cart_fig(
+            "Fig. 4.8: CartPole loss (per decision)",
+            "Brier loss",
+            false,
+            &|c| Some(c.loss),
+        ),
+    ));
+    figs.push((
+        "fig4-9-crashes",
+        "Fig. 4.9",
+        cart_fig(
+            &format!("Fig. 4.9: CartPole crashes out of {n_cp} episodes"),
+            "crashes",
+            false,
+            &|c| Some(f64::from(c.crashes)),
+        ),
+    ));
+    figs.push((
+        "fig4-10-reward",
+        "Fig. 4.10",
+        cart_fig(
+            "Fig. 4.10: CartPole mean episode reward",
+            "reward",
+            false,
+            &|c| Some(c.reward),
+        ),
+    ));
     let mut png_ok = png;
     for (name, _, f) in &figs {
         match f.write(&fig_dir.join(format!("{name}.svg")), png_ok) {
@@ -745,7 +1019,17 @@ pub fn write(
         }
     }
 
-    let md = markdown(profile, profile_text, r, &obs, &cp, &cl, &tcl, &figs, png_ok);
+    let md = markdown(
+        profile,
+        profile_text,
+        r,
+        &obs,
+        &cp,
+        &cl,
+        &tcl,
+        &figs,
+        png_ok,
+    );
     write_atomic(&out.join("appendix.md"), md.as_bytes())?;
     let tex = latex(profile, r, &obs, &cp, &cl, &tcl, &figs, png_ok);
     write_atomic(&out.join("appendix.tex"), tex.as_bytes())?;
@@ -764,7 +1048,10 @@ fn checks_by_erratum(theory_md: &str) -> std::collections::BTreeMap<String, Vec<
             continue;
         }
         let id = cols[0].trim_start_matches("| ").trim().to_string();
-        let e = cols[cols.len() - 1].trim_end_matches(" |").trim().to_string();
+        let e = cols[cols.len() - 1]
+            .trim_end_matches(" |")
+            .trim()
+            .to_string();
         if e.starts_with('E') {
             m.entry(e).or_default().push(id);
         }
@@ -794,7 +1081,10 @@ fn calls_table(rows: &[ConvergenceRow], thesis: &[(&str, f64, f64)]) -> Vec<[Str
     out
 }
 
-fn runtime_table(set: &[(ConfigResult, Option<ConfigTiming>)], thesis: &[(&str, f64)]) -> Vec<[String; 4]> {
+fn runtime_table(
+    set: &[(ConfigResult, Option<ConfigTiming>)],
+    thesis: &[(&str, f64)],
+) -> Vec<[String; 4]> {
     set.iter()
         .filter(|c| c.0.label != "BC")
         .map(|(c, t)| {
@@ -828,11 +1118,11 @@ fn final_rows(rows: &[ConvergenceRow], obstacle: bool) -> Vec<Vec<String>> {
             vec![
                 r.label.clone(),
                 if obstacle {
-                    format!("{}", ci(&Summary {
+                    ci(&Summary {
                         mean: 100.0 * r.final_score.mean,
                         half_width: 100.0 * r.final_score.half_width,
                         n: r.final_score.n,
-                    }))
+                    })
                 } else {
                     ci(&r.final_reward)
                 },
@@ -869,7 +1159,11 @@ fn markdown(
          Every number below is computed from the per-seed data in this directory (`checkpoints.csv`, \
          `runs/*.json`, `gradient_error.csv`); configurations and seeds are in `provenance.json`, wall \
          times in `timings.json` / `timings.csv`.\n",
-        if profile.name == "full" { " -- --full" } else { "" },
+        if profile.name == "full" {
+            " -- --full"
+        } else {
+            ""
+        },
         profile.name,
         profile.seeds
     );
@@ -932,15 +1226,41 @@ fn markdown(
     o += "**Final checkpoint** (all seeds):\n\n";
     md_table(
         &mut o,
-        &["algorithm", "success rate (%)", "crashes", "loss", "failed runs"],
+        &[
+            "algorithm",
+            "success rate (%)",
+            "crashes",
+            "loss",
+            "failed runs",
+        ],
         &final_rows(obs, true),
     );
     o += "**Table 4.1: gradient calls to converge** (kit vs thesis):\n\n";
-    let t41: Vec<Vec<String>> = calls_table(obs, &THESIS_T41).into_iter().map(|a| a.to_vec()).collect();
-    md_table(&mut o, &["algorithm", "kit: gradient calls to converge", "kit: converged", "kit: gradient calls of the whole run", "thesis"], &t41);
+    let t41: Vec<Vec<String>> = calls_table(obs, &THESIS_T41)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        &mut o,
+        &[
+            "algorithm",
+            "kit: gradient calls to converge",
+            "kit: converged",
+            "kit: gradient calls of the whole run",
+            "thesis",
+        ],
+        &t41,
+    );
     o += "**Table 4.2: runtime in seconds** (kit vs thesis; machine-dependent):\n\n";
-    let t42: Vec<Vec<String>> = runtime_table(&r.obstacle, &THESIS_T42).into_iter().map(|a| a.to_vec()).collect();
-    md_table(&mut o, &["algorithm", "kit: to converge", "kit: whole run", "thesis"], &t42);
+    let t42: Vec<Vec<String>> = runtime_table(&r.obstacle, &THESIS_T42)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        &mut o,
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &t42,
+    );
 
     o += "## CartPole (§4.2): Figs. 4.8–4.10, Tables 4.3–4.4\n\n\
           The expert is the kit's LQR controller (the thesis uses PPO).\n\n";
@@ -956,11 +1276,31 @@ fn markdown(
         &final_rows(cp, false),
     );
     o += "**Table 4.3: gradient calls to converge** (kit vs thesis):\n\n";
-    let t43: Vec<Vec<String>> = calls_table(cp, &THESIS_T43).into_iter().map(|a| a.to_vec()).collect();
-    md_table(&mut o, &["algorithm", "kit: gradient calls to converge", "kit: converged", "kit: gradient calls of the whole run", "thesis"], &t43);
+    let t43: Vec<Vec<String>> = calls_table(cp, &THESIS_T43)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        &mut o,
+        &[
+            "algorithm",
+            "kit: gradient calls to converge",
+            "kit: converged",
+            "kit: gradient calls of the whole run",
+            "thesis",
+        ],
+        &t43,
+    );
     o += "**Table 4.4: runtime in seconds** (kit vs thesis; machine-dependent):\n\n";
-    let t44: Vec<Vec<String>> = runtime_table(&r.cartpole, &THESIS_T44).into_iter().map(|a| a.to_vec()).collect();
-    md_table(&mut o, &["algorithm", "kit: to converge", "kit: whole run", "thesis"], &t44);
+    let t44: Vec<Vec<String>> = runtime_table(&r.cartpole, &THESIS_T44)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        &mut o,
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &t44,
+    );
 
     o += "## Claims of chapter 4 and verdicts\n\nEach verdict is computed from the numbers by the stated rule.\n\n";
     let rows: Vec<Vec<String>> = cl
@@ -977,7 +1317,11 @@ fn markdown(
             ]
         })
         .collect();
-    md_table(&mut o, &["#", "where", "claim", "rule", "numbers", "verdict"], &rows);
+    md_table(
+        &mut o,
+        &["#", "where", "claim", "rule", "numbers", "verdict"],
+        &rows,
+    );
 
     o += "## Theorem checks (`ilopt-theory`)\n\n";
     o += &r.theory_markdown;
@@ -991,11 +1335,16 @@ fn markdown(
                 (*w).into(),
                 (*p).into(),
                 (*c).into(),
-                by.get(*id).map_or("— (no numerical check)".into(), |v| v.join(", ")),
+                by.get(*id)
+                    .map_or("— (no numerical check)".into(), |v| v.join(", ")),
             ]
         })
         .collect();
-    md_table(&mut o, &["#", "thesis statement", "problem", "correction", "check"], &rows);
+    md_table(
+        &mut o,
+        &["#", "thesis statement", "problem", "correction", "check"],
+        &rows,
+    );
     o
 }
 
@@ -1049,12 +1398,37 @@ fn tex_escape(s: &str) -> String {
     o
 }
 
-fn tex_table(o: &mut String, caption: &str, label: &str, head: &[&str], rows: &[Vec<String>], spec: &str) {
-    let _ = writeln!(o, "\\begin{{table}}[htbp]\n\\centering\\small\n\\caption{{{}}}\\label{{{label}}}", tex_escape(caption));
+fn tex_table(
+    o: &mut String,
+    caption: &str,
+    label: &str,
+    head: &[&str],
+    rows: &[Vec<String>],
+    spec: &str,
+) {
+    let _ = writeln!(
+        o,
+        "\\begin{{table}}[htbp]\n\\centering\\small\n\\caption{{{}}}\\label{{{label}}}",
+        tex_escape(caption)
+    );
     let _ = writeln!(o, "\\begin{{tabular}}{{{spec}}}\n\\toprule");
-    let _ = writeln!(o, "{} \\\\\n\\midrule", head.iter().map(|h| tex_escape(h)).collect::<Vec<_>>().join(" & "));
+    let _ = writeln!(
+        o,
+        "{} \\\\\n\\midrule",
+        head.iter()
+            .map(|h| tex_escape(h))
+            .collect::<Vec<_>>()
+            .join(" & ")
+    );
     for r in rows {
-        let _ = writeln!(o, "{} \\\\", r.iter().map(|c| tex_escape(&c.replace("**", ""))).collect::<Vec<_>>().join(" & "));
+        let _ = writeln!(
+            o,
+            "{} \\\\",
+            r.iter()
+                .map(|c| tex_escape(&c.replace("**", "")))
+                .collect::<Vec<_>>()
+                .join(" & ")
+        );
     }
     let _ = writeln!(o, "\\bottomrule\n\\end{{tabular}}\n\\end{{table}}\n");
 }
@@ -1094,30 +1468,116 @@ fn latex(
         let _ = writeln!(
             o,
             "\\begin{{figure}}[htbp]\n\\centering\n{}\\includegraphics[width=0.8\\linewidth]{{{file}}}\n\\caption{{{}}}\n\\end{{figure}}\n",
-            if png { "" } else { "% SVG: needs the svg package or a conversion to PDF\n" },
+            if png {
+                ""
+            } else {
+                "% SVG: needs the svg package or a conversion to PDF\n"
+            },
             tex_escape(&f.title)
         );
     }
-    let t41: Vec<Vec<String>> = calls_table(obs, &THESIS_T41).into_iter().map(|a| a.to_vec()).collect();
-    tex_table(&mut o, "Table 4.1: gradient calls to converge, obstacle avoidance (kit vs thesis)", "tab:pc-4-1", &["algorithm", "kit: to converge", "converged", "kit: whole run", "thesis"], &t41, "lrrrr");
-    let t42: Vec<Vec<String>> = runtime_table(&r.obstacle, &THESIS_T42).into_iter().map(|a| a.to_vec()).collect();
-    tex_table(&mut o, "Table 4.2: runtime in seconds, obstacle avoidance (kit vs thesis)", "tab:pc-4-2", &["algorithm", "kit: to converge", "kit: whole run", "thesis"], &t42, "lrrr");
-    let t43: Vec<Vec<String>> = calls_table(cp, &THESIS_T43).into_iter().map(|a| a.to_vec()).collect();
-    tex_table(&mut o, "Table 4.3: gradient calls to converge, CartPole (kit vs thesis)", "tab:pc-4-3", &["algorithm", "kit: to converge", "converged", "kit: whole run", "thesis"], &t43, "lrrrr");
-    let t44: Vec<Vec<String>> = runtime_table(&r.cartpole, &THESIS_T44).into_iter().map(|a| a.to_vec()).collect();
-    tex_table(&mut o, "Table 4.4: runtime in seconds, CartPole (kit vs thesis)", "tab:pc-4-4", &["algorithm", "kit: to converge", "kit: whole run", "thesis"], &t44, "lrrr");
+    let t41: Vec<Vec<String>> = calls_table(obs, &THESIS_T41)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    tex_table(
+        &mut o,
+        "Table 4.1: gradient calls to converge, obstacle avoidance (kit vs thesis)",
+        "tab:pc-4-1",
+        &[
+            "algorithm",
+            "kit: to converge",
+            "converged",
+            "kit: whole run",
+            "thesis",
+        ],
+        &t41,
+        "lrrrr",
+    );
+    let t42: Vec<Vec<String>> = runtime_table(&r.obstacle, &THESIS_T42)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    tex_table(
+        &mut o,
+        "Table 4.2: runtime in seconds, obstacle avoidance (kit vs thesis)",
+        "tab:pc-4-2",
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &t42,
+        "lrrr",
+    );
+    let t43: Vec<Vec<String>> = calls_table(cp, &THESIS_T43)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    tex_table(
+        &mut o,
+        "Table 4.3: gradient calls to converge, CartPole (kit vs thesis)",
+        "tab:pc-4-3",
+        &[
+            "algorithm",
+            "kit: to converge",
+            "converged",
+            "kit: whole run",
+            "thesis",
+        ],
+        &t43,
+        "lrrrr",
+    );
+    let t44: Vec<Vec<String>> = runtime_table(&r.cartpole, &THESIS_T44)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    tex_table(
+        &mut o,
+        "Table 4.4: runtime in seconds, CartPole (kit vs thesis)",
+        "tab:pc-4-4",
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &t44,
+        "lrrr",
+    );
     let rows: Vec<Vec<String>> = cl
         .iter()
         .chain(tcl)
-        .map(|c| vec![c.id.clone(), c.source.clone(), c.claim.clone(), c.evidence.clone(), c.verdict.text().into()])
+        .map(|c| {
+            vec![
+                c.id.clone(),
+                c.source.clone(),
+                c.claim.clone(),
+                c.evidence.clone(),
+                c.verdict.text().into(),
+            ]
+        })
         .collect();
-    tex_table(&mut o, "Claims of chapter 4 and verdicts (rules in appendix.md)", "tab:pc-claims", &["#", "where", "claim", "numbers", "verdict"], &rows, "llp{4.5cm}p{5cm}l");
+    tex_table(
+        &mut o,
+        "Claims of chapter 4 and verdicts (rules in appendix.md)",
+        "tab:pc-claims",
+        &["#", "where", "claim", "numbers", "verdict"],
+        &rows,
+        "llp{4.5cm}p{5cm}l",
+    );
     let by = checks_by_erratum(&r.theory_markdown);
     let rows: Vec<Vec<String>> = ERRATA
         .iter()
-        .map(|(id, w, p, c)| vec![(*id).into(), (*w).into(), (*p).into(), (*c).into(), by.get(*id).map_or("—".into(), |v| v.join(", "))])
+        .map(|(id, w, p, c)| {
+            vec![
+                (*id).into(),
+                (*w).into(),
+                (*p).into(),
+                (*c).into(),
+                by.get(*id).map_or("—".into(), |v| v.join(", ")),
+            ]
+        })
         .collect();
-    tex_table(&mut o, "Errata of chapter 3 (math.md §0) and the checks that show them", "tab:pc-errata", &["#", "where", "problem", "correction", "check"], &rows, "llp{4.5cm}p{4.5cm}l");
+    tex_table(
+        &mut o,
+        "Errata of chapter 3 (math.md §0) and the checks that show them",
+        "tab:pc-errata",
+        &["#", "where", "problem", "correction", "check"],
+        &rows,
+        "llp{4.5cm}p{4.5cm}l",
+    );
     let _ = slug("");
     o
 }
