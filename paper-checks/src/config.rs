@@ -1,0 +1,226 @@
+//! The committed TOML profiles (`configs/quick.toml`, `configs/full.toml`): every size, seed count,
+//! hyper-parameter and convergence threshold of the appendix, read once and validated.
+//!
+//! Algorithms are given as ilopt's own [`AlgorithmConfig`] (the same JSON/serde format the core's
+//! `replay` uses), written as TOML tables, so the appendix runs exactly what a user can replay.
+
+use crate::error::Error;
+use ilopt::algo::AlgorithmConfig;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// A whole profile.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Profile {
+    /// A short name (`"quick"`, `"full"`); recorded in the provenance.
+    pub name: String,
+    /// Seeds per configuration (≥ 2 for a confidence interval; issue 6 asks for ≥ 10).
+    pub seeds: u32,
+    /// Which size of the theorem-check suite to run: `"quick"`, `"full"` or `"none"` (skip it).
+    pub theory_profile: String,
+    /// Fig. 4.2.
+    pub gradient_error: GradientError,
+    /// Figs. 4.3–4.6, Tables 4.1/4.2.
+    pub obstacle: TaskSection,
+    /// Figs. 4.8–4.10, Tables 4.3/4.4.
+    pub cartpole: TaskSection,
+}
+
+/// Fig. 4.2: error of the oracle's mean over N trajectories against a high-N reference.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GradientError {
+    /// The sample sizes N (each ≥ 1, increasing).
+    pub ns: Vec<u64>,
+    /// Trajectories of the reference mean (≥ the largest N).
+    pub reference_trajectories: u64,
+    /// σ_π of the linear-Gaussian learner.
+    pub sigma: f64,
+    /// The policy parameter θ at which the gradient is estimated (2 × 9 = 18 entries, row-major:
+    /// x-row then y-row).
+    pub theta: Vec<f64>,
+}
+
+/// One task's experiment: the learner, the evaluation, the convergence criterion, the algorithms.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskSection {
+    /// σ_π of the linear-Gaussian learner (obstacle task only; ignored for CartPole).
+    #[serde(default)]
+    pub sigma: Option<f64>,
+    /// Iterations per run (each algorithm may override).
+    pub iterations: u64,
+    /// Evaluate every this many iterations (each algorithm may override).
+    pub eval_every: u64,
+    /// Deterministic evaluation episodes per checkpoint.
+    pub eval_episodes: u32,
+    /// Learner trajectories for the checkpoint gradient estimate (Fig. 4.5; 0 = skip).
+    #[serde(default)]
+    pub grad_trajectories: u32,
+    /// The convergence threshold on the evaluation score (success rate for the obstacle task,
+    /// mean episode reward / 500 for CartPole), in [0, 1].
+    pub converge_score: f64,
+    /// The algorithms, in table order.
+    pub algorithms: Vec<AlgorithmEntry>,
+}
+
+/// One algorithm of a task.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlgorithmEntry {
+    /// The label in tables and figures (`"STORM"`, `"IS-STORM"`, …).
+    pub label: String,
+    /// Overrides the task's `iterations`.
+    #[serde(default)]
+    pub iterations: Option<u64>,
+    /// Overrides the task's `eval_every`.
+    #[serde(default)]
+    pub eval_every: Option<u64>,
+    /// The algorithm and its hyper-parameters (ilopt's [`AlgorithmConfig`]).
+    pub config: AlgorithmConfig,
+}
+
+impl AlgorithmEntry {
+    /// Iterations of this algorithm's runs.
+    pub fn iterations(&self, task: &TaskSection) -> u64 {
+        self.iterations.unwrap_or(task.iterations)
+    }
+    /// Evaluation period of this algorithm's runs.
+    pub fn eval_every(&self, task: &TaskSection) -> u64 {
+        self.eval_every.unwrap_or(task.eval_every)
+    }
+}
+
+fn field(file: &Path, name: &str, reason: impl Into<String>) -> Error {
+    Error::Config {
+        file: file.display().to_string(),
+        message: format!("field `{name}`: {}", reason.into()),
+    }
+}
+
+impl Profile {
+    /// Parse and validate a profile from TOML text; `file` names it in errors.
+    ///
+    /// # Errors
+    /// [`Error::Config`] naming the file and the field (TOML syntax, unknown or missing fields,
+    /// wrong types, invalid values, and the algorithm's own hyper-parameter checks).
+    pub fn from_toml(text: &str, file: &Path) -> Result<Self, Error> {
+        let p: Profile = toml::from_str(text).map_err(|e| Error::Config {
+            file: file.display().to_string(),
+            message: e.to_string(),
+        })?;
+        p.validate(file)?;
+        Ok(p)
+    }
+
+    /// Read a profile from a file.
+    ///
+    /// # Errors
+    /// [`Error::Io`] if unreadable, else as [`Profile::from_toml`].
+    pub fn load(file: &Path) -> Result<Self, Error> {
+        let text = std::fs::read_to_string(file).map_err(|e| Error::Io {
+            path: file.display().to_string(),
+            source: e,
+        })?;
+        Self::from_toml(&text, file)
+    }
+
+    fn validate(&self, file: &Path) -> Result<(), Error> {
+        if self.seeds < 2 {
+            return Err(field(
+                file,
+                "seeds",
+                "must be at least 2 (a CI needs 2 seeds)",
+            ));
+        }
+        if !matches!(self.theory_profile.as_str(), "quick" | "full" | "none") {
+            return Err(field(
+                file,
+                "theory_profile",
+                "must be \"quick\", \"full\" or \"none\"",
+            ));
+        }
+        let g = &self.gradient_error;
+        if g.ns.is_empty() || g.ns.contains(&0) || g.ns.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(field(
+                file,
+                "gradient_error.ns",
+                "must be a non-empty increasing list of positive integers",
+            ));
+        }
+        if g.reference_trajectories < *g.ns.last().unwrap_or(&1) {
+            return Err(field(
+                file,
+                "gradient_error.reference_trajectories",
+                "must be at least the largest N",
+            ));
+        }
+        if !(g.sigma.is_finite() && g.sigma > 0.0) {
+            return Err(field(
+                file,
+                "gradient_error.sigma",
+                "must be finite and > 0",
+            ));
+        }
+        if g.theta.len() != 2 * ilopt::task::obstacle::FEATURES
+            || g.theta.iter().any(|x| !x.is_finite())
+        {
+            return Err(field(
+                file,
+                "gradient_error.theta",
+                format!(
+                    "must hold {} finite numbers",
+                    2 * ilopt::task::obstacle::FEATURES
+                ),
+            ));
+        }
+        for (name, t) in [("obstacle", &self.obstacle), ("cartpole", &self.cartpole)] {
+            if name == "obstacle" && !t.sigma.is_some_and(|s| s.is_finite() && s > 0.0) {
+                return Err(field(file, "obstacle.sigma", "must be set, finite and > 0"));
+            }
+            if t.iterations == 0 {
+                return Err(field(file, &format!("{name}.iterations"), "must be ≥ 1"));
+            }
+            if t.eval_every == 0 {
+                return Err(field(file, &format!("{name}.eval_every"), "must be ≥ 1"));
+            }
+            if t.eval_episodes == 0 {
+                return Err(field(file, &format!("{name}.eval_episodes"), "must be ≥ 1"));
+            }
+            if !(0.0..=1.0).contains(&t.converge_score) {
+                return Err(field(
+                    file,
+                    &format!("{name}.converge_score"),
+                    "must lie in [0, 1]",
+                ));
+            }
+            if t.algorithms.is_empty() {
+                return Err(field(
+                    file,
+                    &format!("{name}.algorithms"),
+                    "must not be empty",
+                ));
+            }
+            let mut labels = std::collections::BTreeSet::new();
+            for (i, a) in t.algorithms.iter().enumerate() {
+                let here = format!("{name}.algorithms[{i}] ({})", a.label);
+                if !labels.insert(a.label.clone()) {
+                    return Err(field(file, &format!("{here}.label"), "duplicate label"));
+                }
+                if a.iterations == Some(0) || a.eval_every == Some(0) {
+                    return Err(field(file, &here, "iterations and eval_every must be ≥ 1"));
+                }
+                // The algorithm's own validation (names the hyper-parameter).
+                type Obs = ilopt::task::TaskProblem<
+                    ilopt::task::obstacle::ObstacleTask,
+                    ilopt::policy::LinearGaussian<f64>,
+                >;
+                a.config
+                    .build::<f64, Obs>()
+                    .map_err(|e| field(file, &format!("{here}.config"), e.to_string()))?;
+            }
+        }
+        Ok(())
+    }
+}

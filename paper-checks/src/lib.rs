@@ -1,0 +1,48 @@
+//! `paper-checks`: regenerates the thesis's chapter 4 (Figs. 4.2–4.10, Tables 4.1–4.4) with many
+//! seeds and 95% confidence intervals, next to the thesis's own numbers, plus the theorem-check
+//! table of `ilopt-theory` and the errata table, as a reproducible appendix (Markdown, LaTeX,
+//! SVG/PNG figures, per-seed CSV/JSON, provenance).
+//!
+//! The binary (`cargo run --release -p paper-checks`) reads a committed TOML profile
+//! ([`config::Profile`]), runs the [`experiment`]s through the [`pipeline`] (seeds in parallel,
+//! results independent of the thread count, finished configurations reused) and writes the
+//! [`report`].
+
+pub mod config;
+pub mod error;
+pub mod experiment;
+pub mod pipeline;
+pub mod plots;
+pub mod provenance;
+pub mod report;
+pub mod stats;
+
+pub use error::Error;
+
+use std::path::Path;
+
+/// Run the whole appendix: load nothing, run the pipeline for `profile`, write data, figures,
+/// reports and provenance into `opts.out`. Returns the results.
+///
+/// # Errors
+/// Any failure of the pipeline, the report or the provenance.
+pub fn regenerate(
+    profile: &config::Profile,
+    profile_file: &Path,
+    profile_text: &str,
+    opts: &pipeline::Options,
+    png: bool,
+) -> Result<pipeline::Results, Error> {
+    let start = std::time::Instant::now();
+    let r = pipeline::run(profile, opts)?;
+    report::write(profile, profile_text, &r, &opts.out, png)?;
+    provenance::write(
+        profile,
+        profile_file,
+        profile_text,
+        &r,
+        &opts.out,
+        start.elapsed().as_secs_f64(),
+    )?;
+    Ok(r)
+}

@@ -1,0 +1,394 @@
+//! The pipeline: run (or reuse) every configuration, then write the data, figures and reports.
+//!
+//! Every configuration's per-seed results are written atomically (temporary file + rename) to
+//! `runs/<task>-<algorithm>.json` together with a hash of everything that determines them; a
+//! rerun reuses a file whose hash matches unless `redo` is set. Wall times go to `timings/` and
+//! `timings.json` only, so every other CSV/JSON file is byte-identical across runs and thread
+//! counts (each seed's RNG is derived from the configuration and the seed index alone, and
+//! parallel results are collected in seed order).
+
+use crate::config::{AlgorithmEntry, Profile, TaskSection};
+use crate::error::Error;
+use crate::experiment::{
+    Bench, SeedRun, SeedTiming, TaskKind, gradient_error_seed, gradient_reference, run_key,
+    run_seed,
+};
+use crate::stats::fnv1a;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+/// How to run.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Recompute configurations even if their results exist.
+    pub redo: bool,
+    /// Show progress (bars on a terminal, plain lines otherwise); `false` = silent.
+    pub progress: bool,
+}
+
+/// All results of one algorithm on one task.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConfigResult {
+    /// The task.
+    pub task: TaskKind,
+    /// The algorithm's label.
+    pub label: String,
+    /// Hash of everything that determines the results (reuse key).
+    pub key_hash: String,
+    /// The algorithm entry as configured.
+    pub entry: AlgorithmEntry,
+    /// Per-seed results, in seed order.
+    pub runs: Vec<SeedRun>,
+}
+
+/// Wall times of one configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConfigTiming {
+    /// The task.
+    pub task: TaskKind,
+    /// The algorithm's label.
+    pub label: String,
+    /// Per-seed timings, in seed order.
+    pub runs: Vec<SeedTiming>,
+    /// Wall time of the whole configuration (all seeds, evaluation included).
+    pub wall_seconds: f64,
+}
+
+/// A configuration's results with its timings (absent when reused without a timing file).
+pub type ConfigWithTiming = (ConfigResult, Option<ConfigTiming>);
+
+/// Fig. 4.2 data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GradientErrorResult {
+    /// Reuse key.
+    pub key_hash: String,
+    /// The reference mean estimate.
+    pub reference: Vec<f64>,
+    /// Per seed: (N, error x, error y).
+    pub seeds: Vec<Vec<(u64, f64, f64)>>,
+}
+
+/// Everything the reports need.
+#[derive(Debug, Clone)]
+pub struct Results {
+    /// Fig. 4.2.
+    pub gradient_error: GradientErrorResult,
+    /// Obstacle configurations in table order.
+    pub obstacle: Vec<(ConfigResult, Option<ConfigTiming>)>,
+    /// CartPole configurations in table order.
+    pub cartpole: Vec<(ConfigResult, Option<ConfigTiming>)>,
+    /// The theorem-check table (Markdown).
+    pub theory_markdown: String,
+    /// Configurations computed in this run (the others were reused).
+    pub computed: Vec<String>,
+}
+
+/// Write `bytes` to `path` atomically (a temporary file in the same directory, then rename).
+///
+/// # Errors
+/// [`Error::Io`].
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    let tmp = path.with_extension(format!(
+        "{}.tmp",
+        path.extension().and_then(|e| e.to_str()).unwrap_or("")
+    ));
+    std::fs::write(&tmp, bytes).map_err(|e| Error::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+/// Serialise as pretty JSON with a trailing newline.
+///
+/// # Errors
+/// [`Error::Serialise`].
+pub fn to_json<T: Serialize>(what: &str, v: &T) -> Result<Vec<u8>, Error> {
+    let mut s = serde_json::to_string_pretty(v).map_err(|e| Error::Serialise {
+        what: what.into(),
+        message: e.to_string(),
+    })?;
+    s.push('\n');
+    Ok(s.into_bytes())
+}
+
+fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Option<T> {
+    let text = std::fs::read_to_string(path).ok()?;
+    serde_json::from_str(&text).ok()
+}
+
+/// A file-name-safe slug of a label.
+pub fn slug(label: &str) -> String {
+    label
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() {
+                c.to_ascii_lowercase()
+            } else {
+                '-'
+            }
+        })
+        .collect()
+}
+
+fn mkdir(p: &Path) -> Result<(), Error> {
+    std::fs::create_dir_all(p).map_err(|e| Error::io(p, e))
+}
+
+struct Progress {
+    bar: Option<ProgressBar>,
+    plain: bool,
+    done: AtomicUsize,
+    total: usize,
+}
+
+impl Progress {
+    fn new(total: usize, enabled: bool) -> Self {
+        let tty = std::io::stderr().is_terminal();
+        let bar = (enabled && tty).then(|| {
+            let b = ProgressBar::new(total as u64);
+            if let Ok(style) = ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:40}] {pos}/{len} seed runs  {msg}",
+            ) {
+                b.set_style(style.progress_chars("=> "));
+            }
+            b
+        });
+        Progress {
+            bar,
+            plain: enabled && !tty,
+            done: AtomicUsize::new(0),
+            total,
+        }
+    }
+    fn seed_done(&self, what: &str) {
+        let k = self.done.fetch_add(1, Ordering::Relaxed) + 1;
+        if let Some(b) = &self.bar {
+            b.set_message(what.to_string());
+            b.inc(1);
+        } else if self.plain && (k == self.total || k.is_multiple_of(10)) {
+            eprintln!("[{k}/{}] seed runs done (last: {what})", self.total);
+        }
+    }
+    fn line(&self, msg: &str) {
+        if let Some(b) = &self.bar {
+            b.println(msg);
+        } else if self.plain {
+            eprintln!("{msg}");
+        }
+    }
+    fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
+        }
+    }
+}
+
+fn task_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEntry) -> String {
+    let section = serde_json::json!({
+        "sigma": t.sigma, "eval_episodes": t.eval_episodes,
+        "grad_trajectories": t.grad_trajectories, "converge_score": t.converge_score,
+        "iterations": e.iterations(t), "eval_every": e.eval_every(t),
+    });
+    format!(
+        "{:016x}",
+        fnv1a(&format!(
+            "{}|{}|{}",
+            run_key(kind, e),
+            section,
+            profile.seeds
+        ))
+    )
+}
+
+/// Run everything the profile asks for (reusing finished configurations) and collect the results.
+///
+/// # Errors
+/// Any experiment, I/O or theory failure.
+pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
+    let runs_dir = opts.out.join("runs");
+    let timings_dir = opts.out.join("timings");
+    mkdir(&runs_dir)?;
+    mkdir(&timings_dir)?;
+    let tasks = [
+        (TaskKind::Obstacle, &profile.obstacle),
+        (TaskKind::Cartpole, &profile.cartpole),
+    ];
+    // Which configurations are already done?
+    let mut todo = Vec::new();
+    let mut results: Vec<Vec<Option<ConfigWithTiming>>> = Vec::new();
+    for (kind, t) in tasks {
+        let mut row = Vec::new();
+        for e in &t.algorithms {
+            let file = runs_dir.join(format!("{}-{}.json", kind.name(), slug(&e.label)));
+            let key = task_key(profile, kind, t, e);
+            let cached: Option<ConfigResult> = if opts.redo { None } else { read_json(&file) };
+            match cached {
+                Some(c) if c.key_hash == key => {
+                    let timing = read_json(&timings_dir.join(format!(
+                        "{}-{}.json",
+                        kind.name(),
+                        slug(&e.label)
+                    )));
+                    row.push(Some((c, timing)));
+                }
+                _ => {
+                    todo.push((kind, t, e.clone(), key, file));
+                    row.push(None);
+                }
+            }
+        }
+        results.push(row);
+    }
+    let gfile = runs_dir.join("gradient-error.json");
+    let gkey = format!(
+        "{:016x}",
+        fnv1a(&format!(
+            "{}|{}",
+            serde_json::to_string(&profile.gradient_error).unwrap_or_default(),
+            profile.seeds
+        ))
+    );
+    let gcached: Option<GradientErrorResult> = if opts.redo { None } else { read_json(&gfile) };
+    let gcached = gcached.filter(|g| g.key_hash == gkey);
+    let theory_file = opts.out.join("theory.md");
+    let theory_cached = if opts.redo {
+        None
+    } else {
+        std::fs::read_to_string(&theory_file).ok()
+    };
+
+    let total = todo.len() * profile.seeds as usize
+        + if gcached.is_none() {
+            profile.seeds as usize
+        } else {
+            0
+        };
+    let progress = Progress::new(total, opts.progress);
+    let benches = [
+        Bench::new(TaskKind::Obstacle, profile.obstacle.sigma)?,
+        Bench::new(TaskKind::Cartpole, None)?,
+    ];
+    let seeds: Vec<u32> = (0..profile.seeds).collect();
+
+    let theory_job = || -> Result<String, Error> {
+        if let Some(t) = theory_cached.clone() {
+            return Ok(t);
+        }
+        if profile.theory_profile == "none" {
+            return Ok("*Not run: the profile sets `theory_profile = \"none\"`. Run `cargo run --release -p ilopt-theory` or a profile with `theory_profile = \"quick\"`.*\n".into());
+        }
+        let p = if profile.theory_profile == "full" {
+            ilopt_theory::suite::Profile::Full
+        } else {
+            ilopt_theory::suite::Profile::Quick
+        };
+        // The box holding every SGD iterate of the SGD check (as `ilopt-theory`'s binary).
+        let r = 1000.0 * 0.05 * ilopt_theory::constants::tied_softmax_g_inf_closed_form(3, 0.5);
+        let rows = ilopt_theory::suite::exact_suite(p, &[[-r, r]]).map_err(Error::Theory)?;
+        let md = ilopt_theory::report::markdown(&rows);
+        write_atomic(
+            &opts.out.join("theory.json"),
+            &to_json("theory", &ilopt_theory::report::json(&rows))?,
+        )?;
+        write_atomic(&theory_file, md.as_bytes())?;
+        progress.line("theorem-check table done");
+        Ok(md)
+    };
+
+    let gradient_job = || -> Result<GradientErrorResult, Error> {
+        if let Some(g) = gcached.clone() {
+            return Ok(g);
+        }
+        let reference = gradient_reference(&profile.gradient_error)?;
+        let per_seed = seeds
+            .par_iter()
+            .map(|&s| {
+                let r = gradient_error_seed(&profile.gradient_error, &reference, s);
+                progress.seed_done("Fig. 4.2");
+                r
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        let g = GradientErrorResult {
+            key_hash: gkey.clone(),
+            reference: reference.iter().copied().collect(),
+            seeds: per_seed,
+        };
+        write_atomic(&gfile, &to_json("gradient error", &g)?)?;
+        Ok(g)
+    };
+
+    let configs_job = || -> Result<Vec<(TaskKind, String, ConfigResult, ConfigTiming)>, Error> {
+        todo.par_iter()
+            .map(|(kind, t, e, key, file)| {
+                let start = Instant::now();
+                let bench = &benches[usize::from(*kind == TaskKind::Cartpole)];
+                let pairs = seeds
+                    .par_iter()
+                    .map(|&s| {
+                        let r = run_seed(bench, *kind, t, e, s);
+                        progress.seed_done(&format!("{} / {}", kind.name(), e.label));
+                        r
+                    })
+                    .collect::<Result<Vec<_>, Error>>()?;
+                let (runs, timings): (Vec<_>, Vec<_>) = pairs.into_iter().unzip();
+                let c = ConfigResult {
+                    task: *kind,
+                    label: e.label.clone(),
+                    key_hash: key.clone(),
+                    entry: e.clone(),
+                    runs,
+                };
+                let tm = ConfigTiming {
+                    task: *kind,
+                    label: e.label.clone(),
+                    runs: timings,
+                    wall_seconds: start.elapsed().as_secs_f64(),
+                };
+                write_atomic(
+                    &timings_dir.join(format!("{}-{}.json", kind.name(), slug(&e.label))),
+                    &to_json("timings", &tm)?,
+                )?;
+                write_atomic(file, &to_json("results", &c)?)?;
+                progress.line(&format!(
+                    "done: {} / {} ({} seeds, {:.1} s)",
+                    kind.name(),
+                    e.label,
+                    profile.seeds,
+                    tm.wall_seconds
+                ));
+                Ok((*kind, e.label.clone(), c, tm))
+            })
+            .collect()
+    };
+
+    let (theory, (gradient, computed)) =
+        rayon::join(theory_job, || rayon::join(gradient_job, configs_job));
+    progress.finish();
+    let theory_markdown = theory?;
+    let gradient_error = gradient?;
+    let computed = computed?;
+    let mut names = Vec::new();
+    for (kind, label, c, tm) in computed {
+        names.push(format!("{} / {label}", kind.name()));
+        let ti = usize::from(kind == TaskKind::Cartpole);
+        let t = tasks[ti].1;
+        if let Some(i) = t.algorithms.iter().position(|e| e.label == label) {
+            results[ti][i] = Some((c, Some(tm)));
+        }
+    }
+    let mut it = results
+        .into_iter()
+        .map(|row| row.into_iter().flatten().collect::<Vec<_>>());
+    Ok(Results {
+        gradient_error,
+        obstacle: it.next().unwrap_or_default(),
+        cartpole: it.next().unwrap_or_default(),
+        theory_markdown,
+        computed: names,
+    })
+}

@@ -1,0 +1,1583 @@
+//! The appendix: aggregated tables (kit vs thesis), claim verdicts, figures, CSV/JSON data, the
+//! theorem-check and errata tables, Markdown and LaTeX.
+//!
+//! Confidence intervals are Student-t 95% intervals over seeds ([`Summary`]). Verdicts are
+//! computed from the numbers by the rules stated next to each claim; nothing is tuned.
+
+use crate::config::Profile;
+use crate::error::Error;
+use crate::experiment::{Checkpoint, SeedRun};
+use crate::pipeline::{ConfigResult, ConfigTiming, Results, slug, to_json, write_atomic};
+use crate::plots::{Figure, Series};
+use crate::stats::Summary;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// The thesis's Table 4.1 (gradient calls, mean ± spread) and 4.2 (runtime, s).
+pub const THESIS_T41: [(&str, f64, f64); 5] = [
+    ("STORM", 2764.0, 1300.0),
+    ("SGD", 9450.0, 2886.0),
+    ("RMSProp", 6411.0, 1880.0),
+    ("DAgger", 53704.0, 4233.0),
+    ("Adam", 10785.0, 3460.0),
+];
+/// Table 4.2 (runtime in seconds).
+pub const THESIS_T42: [(&str, f64); 5] = [
+    ("STORM", 561.37),
+    ("SGD", 786.64),
+    ("RMSProp", 594.49),
+    ("DAgger", 1064.589),
+    ("Adam", 1734.45),
+];
+/// Table 4.3 (gradient calls, mean ± spread).
+pub const THESIS_T43: [(&str, f64, f64); 4] = [
+    ("STORM", 4_472_049.0, 11031.0),
+    ("RMSProp", 1_903_548.0, 9866.0),
+    ("DAgger", 31_905_600.0, 4263.0),
+    ("Adam", 2_467_044.0, 11636.0),
+];
+/// Table 4.4 (runtime in seconds).
+pub const THESIS_T44: [(&str, f64); 4] = [
+    ("STORM", 8233.7),
+    ("RMSProp", 3328.4),
+    ("DAgger", 39340.1),
+    ("Adam", 4717.6),
+];
+
+/// The errata of math.md §0: (id, where, problem, correction).
+pub const ERRATA: [(&str, &str, &str, &str); 18] = [
+    (
+        "E1",
+        "(3.2), (3.5)",
+        "l_t must not depend on the sampled action a_t; otherwise (3.15) is biased",
+        "define l_t on the policy output (math.md §1.2)",
+    ),
+    (
+        "E2",
+        "(3.41)",
+        "\"f L-smooth implies F L-smooth\" is false in IL (the sampling law depends on θ); the estimator field is not a gradient field",
+        "assume L_F-smoothness of F directly, plus (A4)",
+    ),
+    (
+        "E3",
+        "(3.44) Lemma 3.3",
+        "the Δ_k term lacks η_k²",
+        "4(1−a_{k+1})²L²η_k²Δ_k",
+    ),
+    ("E4", "(3.46), (3.47)", "f written for ∇f", "typo"),
+    (
+        "E5",
+        "(3.54)–(3.56)",
+        "L²/2 in the quadratic upper bound",
+        "L/2",
+    ),
+    (
+        "E6",
+        "(3.58)",
+        "both coefficients wrong; needs ηL ≤ 1/4, not ηL < 2",
+        "−(η/2)(1−2Lη)Δ + (η/2)(1+2Lη)e ≤ −(η/4)Δ + (3η/4)e for Lη ≤ 1/4",
+    ),
+    (
+        "E7",
+        "after (3.58)/(3.59)",
+        "\"these choices make the first term negative\" is false for k = 1..23; the telescoping is invalid as written",
+        "a different potential; the same step sizes then work",
+    ),
+    (
+        "E8",
+        "(3.60)",
+        "O(·) hides constants, mixes T and K",
+        "explicit bound (3.60*)",
+    ),
+    (
+        "E9",
+        "Alg. 4",
+        "d_{k+1} = ∇f(θ_{k+1}, τ_{k+1}) + (1−a_{k+1})∇f(θ_k, τ_{k+1})",
+        "d_{k+1} = ∇f(θ_{k+1}, τ_{k+1}) + (1−a_{k+1})(d_k − ∇f(θ_k, τ_{k+1})), as (3.40)",
+    ),
+    (
+        "E10",
+        "Alg. 4 / Lemma 3.3 in IL",
+        "∇f(θ_k, τ_{k+1}) with τ_{k+1} ∼ p(·; θ_{k+1}) is biased for ∇F(θ_k)",
+        "importance weight w = p(τ; θ_k)/p(τ; θ_{k+1}) (IS-STORM)",
+    ),
+    (
+        "E11",
+        "Alg. 5",
+        "τ_n ∼ p(τ; θ_n) while the gradient is taken at w_n",
+        "τ_n ∼ p(τ; w_n)",
+    ),
+    ("E12", "(3.64), (3.67)", "F(θ_1)", "F(θ_0)"),
+    (
+        "E13",
+        "Thm 3.8 proof",
+        "u_n = u^{mod(n,T)+1}; \"dividing by KDT = KM\"; (3.69) bounds a sum of norms by √T σ",
+        "u_n = u^{⌈n/T⌉}; divide by DM; bound ‖Σ_t X_t‖, not Σ_t ‖X_t‖",
+    ),
+    (
+        "E14",
+        "(3.72)",
+        "+s_n Δ_{n'}",
+        "−s_{n'} Δ_{n'} (bound unaffected)",
+    ),
+    (
+        "E15",
+        "Thm 3.1",
+        "statement has ‖θ_i − θ'‖; convergence needs βε/γ < 1 (unstated); Lemma 3.2 garbled",
+        "‖θ_i − θ'_i‖; math.md §6",
+    ),
+    (
+        "E16",
+        "§3.2.1 end",
+        "\"‖θ_k − θ_PO‖ ≤ α⁻¹‖∇F‖ ≤ E‖∇F‖\": the last inequality is false",
+        "only E‖θ_k − θ_PO‖ ≤ α⁻¹ E‖∇F(θ_k)‖",
+    ),
+    (
+        "E17",
+        "Alg. 3, 4",
+        "return θ_K",
+        "guarantees are for a random / best iterate, not θ_K",
+    ),
+    (
+        "E18",
+        "(3.29), (3.30) vs (3.1)",
+        "sums to T vs T−1",
+        "use T−1 throughout",
+    ),
+];
+
+/// A claim's verdict.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Verdict {
+    /// The numbers support the claim.
+    Reproduced,
+    /// Part of the claim holds.
+    Partially,
+    /// The numbers contradict it (or the needed event never happened).
+    NotReproduced,
+}
+
+impl Verdict {
+    fn text(self) -> &'static str {
+        match self {
+            Verdict::Reproduced => "reproduced",
+            Verdict::Partially => "partially",
+            Verdict::NotReproduced => "not reproduced",
+        }
+    }
+    fn of(parts: &[bool]) -> Verdict {
+        let k = parts.iter().filter(|b| **b).count();
+        if k == parts.len() && k > 0 {
+            Verdict::Reproduced
+        } else if k > 0 {
+            Verdict::Partially
+        } else {
+            Verdict::NotReproduced
+        }
+    }
+}
+
+/// A qualitative claim of chapter 4 with its verdict.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Claim {
+    /// Identifier.
+    pub id: String,
+    /// Where in the thesis.
+    pub source: String,
+    /// The claim.
+    pub claim: String,
+    /// The rule applied.
+    pub rule: String,
+    /// The numbers.
+    pub evidence: String,
+    /// The verdict.
+    pub verdict: Verdict,
+}
+
+/// Gradient calls (or runtime) to converge of one configuration.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ConvergenceRow {
+    /// Algorithm.
+    pub label: String,
+    /// Seeds that converged.
+    pub converged: usize,
+    /// Seeds.
+    pub seeds: usize,
+    /// Over the converged seeds.
+    pub gradient_calls: Summary,
+    /// Gradient calls of the whole run (all seeds).
+    pub total_gradient_calls: Summary,
+    /// Final score (all seeds).
+    pub final_score: Summary,
+    /// Final crashes (all seeds).
+    pub final_crashes: Summary,
+    /// Final mean reward (all seeds).
+    pub final_reward: Summary,
+    /// Final evaluation loss (all seeds).
+    pub final_loss: Summary,
+    /// Runs that ended with a failure (non-finite iterate).
+    pub failed_runs: usize,
+}
+
+fn last(r: &SeedRun) -> Option<&Checkpoint> {
+    r.checkpoints.last()
+}
+
+fn summarise(c: &ConfigResult, f: impl Fn(&Checkpoint) -> f64) -> Summary {
+    let xs: Vec<f64> = c.runs.iter().filter_map(last).map(f).collect();
+    Summary::of(&xs)
+}
+
+fn convergence_row(c: &ConfigResult) -> ConvergenceRow {
+    let calls: Vec<f64> = c
+        .runs
+        .iter()
+        .filter_map(|r| {
+            r.converged
+                .map(|i| r.checkpoints[i].gradient_evaluations as f64)
+        })
+        .collect();
+    ConvergenceRow {
+        label: c.label.clone(),
+        converged: calls.len(),
+        seeds: c.runs.len(),
+        gradient_calls: Summary::of(&calls),
+        total_gradient_calls: summarise(c, |k| k.gradient_evaluations as f64),
+        final_score: summarise(c, |k| k.score),
+        final_crashes: summarise(c, |k| f64::from(k.crashes)),
+        final_reward: summarise(c, |k| k.reward),
+        final_loss: summarise(c, |k| k.loss),
+        failed_runs: c
+            .runs
+            .iter()
+            .filter(|r| r.termination.starts_with("failed"))
+            .count(),
+    }
+}
+
+fn runtime(t: Option<&ConfigTiming>) -> (Summary, Summary) {
+    let Some(t) = t else {
+        return (Summary::of(&[]), Summary::of(&[]));
+    };
+    let conv: Vec<f64> = t.runs.iter().filter_map(|r| r.converge_seconds).collect();
+    let total: Vec<f64> = t.runs.iter().map(|r| r.train_seconds).collect();
+    (Summary::of(&conv), Summary::of(&total))
+}
+
+/// Four significant digits.
+pub fn num(v: f64) -> String {
+    if !v.is_finite() {
+        return "—".into();
+    }
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e6).contains(&a) {
+        let digits = (3 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.digits$}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+fn ci(s: &Summary) -> String {
+    if s.n == 0 {
+        "—".into()
+    } else if s.half_width.is_finite() {
+        format!("{} ± {}", num(s.mean), num(s.half_width))
+    } else {
+        num(s.mean)
+    }
+}
+
+fn row_of<'a>(rows: &'a [ConvergenceRow], label: &str) -> Option<&'a ConvergenceRow> {
+    rows.iter().find(|r| r.label == label)
+}
+
+/// Per-checkpoint band of a metric across seeds: (x = mean of `xf`, summary of `yf`).
+fn band(
+    c: &ConfigResult,
+    xf: impl Fn(&Checkpoint) -> f64,
+    yf: impl Fn(&Checkpoint) -> Option<f64>,
+) -> Series {
+    let k = c
+        .runs
+        .iter()
+        .map(|r| r.checkpoints.len())
+        .max()
+        .unwrap_or(0);
+    let mut s = Series {
+        label: c.label.clone(),
+        x: vec![],
+        mean: vec![],
+        lo: vec![],
+        hi: vec![],
+        reference: false,
+    };
+    for i in 0..k {
+        let cps: Vec<&Checkpoint> = c.runs.iter().filter_map(|r| r.checkpoints.get(i)).collect();
+        let ys: Vec<f64> = cps
+            .iter()
+            .filter_map(|c| yf(c))
+            .filter(|y| y.is_finite())
+            .collect();
+        if ys.is_empty() {
+            continue;
+        }
+        let x = cps.iter().map(|c| xf(c)).sum::<f64>() / cps.len() as f64;
+        let sm = Summary::of(&ys);
+        s.x.push(x);
+        s.mean.push(sm.mean);
+        s.lo.push(if sm.half_width.is_finite() {
+            sm.lo()
+        } else {
+            sm.mean
+        });
+        s.hi.push(if sm.half_width.is_finite() {
+            sm.hi()
+        } else {
+            sm.mean
+        });
+    }
+    s
+}
+
+/// Least-squares slope of log10(y) on log10(x).
+fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
+    let pts: Vec<(f64, f64)> = x
+        .iter()
+        .zip(y)
+        .filter(|(a, b)| **a > 0.0 && **b > 0.0)
+        .map(|(a, b)| (a.log10(), b.log10()))
+        .collect();
+    let n = pts.len() as f64;
+    if pts.len() < 2 {
+        return f64::NAN;
+    }
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+/// The Fig. 4.2 bands (x, y) over seeds.
+fn gradient_error_series(r: &Results) -> (Series, Series) {
+    let seeds = &r.gradient_error.seeds;
+    let ns: Vec<u64> = seeds
+        .first()
+        .map(|s| s.iter().map(|t| t.0).collect())
+        .unwrap_or_default();
+    let mk = |label: &str, pick: &dyn Fn(&(u64, f64, f64)) -> f64| {
+        let mut s = Series {
+            label: label.into(),
+            x: vec![],
+            mean: vec![],
+            lo: vec![],
+            hi: vec![],
+            reference: false,
+        };
+        for (i, n) in ns.iter().enumerate() {
+            let ys: Vec<f64> = seeds.iter().filter_map(|v| v.get(i)).map(pick).collect();
+            let sm = Summary::of(&ys);
+            s.x.push(*n as f64);
+            s.mean.push(sm.mean);
+            s.lo.push(sm.lo());
+            s.hi.push(sm.hi());
+        }
+        s
+    };
+    (mk("x-row error", &|t| t.1), mk("y-row error", &|t| t.2))
+}
+
+fn reference_line(s: &Series) -> Series {
+    let c = s.mean.first().copied().unwrap_or(1.0) * s.x.first().copied().unwrap_or(1.0).sqrt();
+    Series {
+        label: "c/√N".into(),
+        x: s.x.clone(),
+        mean: s.x.iter().map(|n| c / n.sqrt()).collect(),
+        lo: vec![],
+        hi: vec![],
+        reference: true,
+    }
+    .with_band_from_mean()
+}
+
+impl Series {
+    fn with_band_from_mean(mut self) -> Self {
+        self.lo = self.mean.clone();
+        self.hi = self.mean.clone();
+        self
+    }
+}
+
+fn within(v: f64, lo: f64, hi: f64) -> bool {
+    v.is_finite() && v >= lo && v <= hi
+}
+
+/// The computed claims (deterministic ones; runtime claims are in [`timing_claims`]).
+pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec<Claim> {
+    let mut out = Vec::new();
+    let mut push =
+        |id: &str, source: &str, claim: &str, rule: String, evidence: String, v: Verdict| {
+            out.push(Claim {
+                id: id.into(),
+                source: source.into(),
+                claim: claim.into(),
+                rule,
+                evidence,
+                verdict: v,
+            })
+        };
+    // Fig. 4.2.
+    let (gx, gy) = gradient_error_series(r);
+    let (sx, sy) = (loglog_slope(&gx.x, &gx.mean), loglog_slope(&gy.x, &gy.mean));
+    push(
+        "O1",
+        "§4.1.3, Fig. 4.2",
+        "the gradient-estimate error decays at ≈ 1/√N",
+        "least-squares log-log slope of the mean error vs N in [−0.7, −0.3], for x and for y"
+            .into(),
+        format!("slope x = {}, slope y = {}", num(sx), num(sy)),
+        Verdict::of(&[within(sx, -0.7, -0.3), within(sy, -0.7, -0.3)]),
+    );
+    let score = |l: &str| row_of(obs, l).map_or(f64::NAN, |x| x.final_score.mean);
+    // BC ≈ 70%, constant.
+    if let Some(bc) = r.obstacle.iter().find(|c| c.0.label == "BC") {
+        let s = band(&bc.0, |c| c.iteration as f64, |c| Some(c.score));
+        let later: Vec<f64> =
+            s.x.iter()
+                .zip(&s.mean)
+                .filter(|(x, _)| **x >= 1.0)
+                .map(|p| *p.1)
+                .collect();
+        let spread = later.iter().cloned().fold(f64::MIN, f64::max)
+            - later.iter().cloned().fold(f64::MAX, f64::min);
+        let f = score("BC");
+        push(
+            "O2",
+            "§4.1.3, Fig. 4.3",
+            "BC's success rate is ≈ 70% and stays constant as expert trajectories increase",
+            "final mean success within 70% ± 10 pp; and the mean success over checkpoints ≥ 1 varies by ≤ 10 pp".into(),
+            format!("final {}%, spread over checkpoints {} pp", num(100.0 * f), num(100.0 * spread)),
+            Verdict::of(&[within(f, 0.6, 0.8), spread <= 0.1]),
+        );
+    }
+    let f = score("SGD");
+    push(
+        "O3",
+        "§4.1.3, Fig. 4.3",
+        "SGD's success rate is ≈ 82.5%",
+        "final mean success within 82.5% ± 10 pp".into(),
+        format!("final {}%", num(100.0 * f)),
+        Verdict::of(&[within(f, 0.725, 0.925)]),
+    );
+    let f = score("RMSProp");
+    push(
+        "O4",
+        "§4.1.3, Fig. 4.3",
+        "RMSProp's success rate lies between 72% and 85%",
+        "final mean success in [67%, 90%] (the range ± 5 pp)".into(),
+        format!("final {}%", num(100.0 * f)),
+        Verdict::of(&[within(f, 0.67, 0.90)]),
+    );
+    let trio = ["STORM", "DAgger", "Adam"];
+    let vals: Vec<f64> = trio.iter().map(|l| score(l)).collect();
+    push(
+        "O5",
+        "§4.1.3, Fig. 4.3",
+        "STORM, DAgger and Adam reach ≈ 90% success for many expert trajectories",
+        "each final mean success within 90% ± 10 pp (all: reproduced; some: partially)".into(),
+        trio.iter()
+            .zip(&vals)
+            .map(|(l, v)| format!("{l} {}%", num(100.0 * v)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Verdict::of(
+            &vals
+                .iter()
+                .map(|v| within(*v, 0.8, 1.0))
+                .collect::<Vec<_>>(),
+        ),
+    );
+    let crashes: Vec<(String, f64)> = obs
+        .iter()
+        .map(|x| (x.label.clone(), x.final_crashes.mean))
+        .collect();
+    let max_crash = crashes.iter().map(|c| c.1).fold(f64::MIN, f64::max);
+    let bc_crash = crashes
+        .iter()
+        .find(|c| c.0 == "BC")
+        .map_or(f64::NAN, |c| c.1);
+    push(
+        "O6",
+        "§4.1.3, Fig. 4.4",
+        "BC has the most crashes",
+        "BC's final mean number of crashes is the largest of all algorithms".into(),
+        crashes
+            .iter()
+            .map(|(l, v)| format!("{l} {}", num(*v)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Verdict::of(&[bc_crash.is_finite() && bc_crash >= max_crash]),
+    );
+    // Fig. 4.5: STORM's x-gradient lowest at the end.
+    let gfinal = |l: &str| {
+        r.obstacle
+            .iter()
+            .find(|c| c.0.label == l)
+            .map_or(f64::NAN, |c| {
+                summarise(&c.0, |k| k.grad_x.unwrap_or(f64::NAN)).mean
+            })
+    };
+    let opt = ["SGD", "Adam", "RMSProp", "STORM"];
+    let gv: Vec<f64> = opt.iter().map(|l| gfinal(l)).collect();
+    let gmin = gv
+        .iter()
+        .cloned()
+        .filter(|v| v.is_finite())
+        .fold(f64::MAX, f64::min);
+    push(
+        "O7",
+        "§4.1.3, Fig. 4.5",
+        "in the x direction STORM converges faster than the other optimisers (lowest gradient norm)",
+        "STORM's final mean ‖x-row of the gradient estimate‖ is the lowest of SGD, Adam, RMSProp, STORM".into(),
+        opt.iter()
+            .zip(&gv)
+            .map(|(l, v)| format!("{l} {}", num(*v)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Verdict::of(&[gv[3].is_finite() && gv[3] <= gmin]),
+    );
+    let losses: Vec<(String, f64)> = obs
+        .iter()
+        .map(|x| (x.label.clone(), x.final_loss.mean))
+        .collect();
+    let lmin = losses
+        .iter()
+        .map(|l| l.1)
+        .filter(|v| v.is_finite())
+        .fold(f64::MAX, f64::min);
+    let dl = losses
+        .iter()
+        .find(|l| l.0 == "DAgger")
+        .map_or(f64::NAN, |l| l.1);
+    push(
+        "O8",
+        "§4.1.3, Fig. 4.6",
+        "DAgger's loss is very low at every iteration",
+        "DAgger's final mean evaluation loss is the lowest of all algorithms".into(),
+        losses
+            .iter()
+            .map(|(l, v)| format!("{l} {}", num(*v)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Verdict::of(&[dl.is_finite() && dl <= lmin]),
+    );
+    order_claims(
+        &mut push,
+        obs,
+        "O9",
+        "O10",
+        "Table 4.1",
+        &["STORM", "SGD", "RMSProp", "DAgger", "Adam"],
+    );
+    // CartPole.
+    order_claims(
+        &mut push,
+        cp,
+        "C1",
+        "C0",
+        "Table 4.3",
+        &["STORM", "RMSProp", "DAgger", "Adam"],
+    );
+    let calls =
+        |l: &str| row_of(cp, l).and_then(|x| (x.converged > 0).then_some(x.gradient_calls.mean));
+    let (st, ad, rm) = (calls("STORM"), calls("Adam"), calls("RMSProp"));
+    push(
+        "C2",
+        "§4.2.2, Fig. 4.8, Table 4.3",
+        "STORM takes more gradient calls to converge than Adam and RMSProp",
+        "mean gradient calls to converge (converged seeds) of STORM > Adam's and > RMSProp's; an algorithm that never converged counts as not ordered".into(),
+        format!(
+            "STORM {}, Adam {}, RMSProp {}",
+            st.map_or("never converged".into(), num),
+            ad.map_or("never converged".into(), num),
+            rm.map_or("never converged".into(), num)
+        ),
+        Verdict::of(&[
+            matches!((st, ad), (Some(s), Some(a)) if s > a),
+            matches!((st, rm), (Some(s), Some(m)) if s > m),
+        ]),
+    );
+    let rewards: Vec<(String, f64)> = cp
+        .iter()
+        .map(|x| (x.label.clone(), x.final_reward.mean))
+        .collect();
+    push(
+        "C3",
+        "§4.2.2, Fig. 4.10",
+        "rewards increase to the maximum episode reward of 500",
+        "final mean reward ≥ 475 (CartPole-v1's solved threshold) for every algorithm (all: reproduced; some: partially)".into(),
+        rewards
+            .iter()
+            .map(|(l, v)| format!("{l} {}", num(*v)))
+            .collect::<Vec<_>>()
+            .join(", "),
+        Verdict::of(&rewards.iter().map(|r| r.1 >= 475.0).collect::<Vec<_>>()),
+    );
+    let sd = |l: &str| {
+        r.cartpole
+            .iter()
+            .find(|c| c.0.label == l)
+            .map_or(f64::NAN, |c| {
+                let xs: Vec<f64> =
+                    c.0.runs
+                        .iter()
+                        .filter_map(last)
+                        .map(|k| f64::from(k.crashes))
+                        .collect();
+                let s = Summary::of(&xs);
+                s.half_width
+            })
+    };
+    let (a, b, c) = (sd("STORM"), sd("Adam"), sd("RMSProp"));
+    push(
+        "C4",
+        "§4.2.2, Fig. 4.9",
+        "among STORM, Adam and RMSProp the variance of STORM's crashes is the lowest",
+        "STORM's CI half-width of the final crashes ≤ Adam's and ≤ RMSProp's".into(),
+        format!(
+            "half-widths: STORM {}, Adam {}, RMSProp {}",
+            num(a),
+            num(b),
+            num(c)
+        ),
+        Verdict::of(&[a <= b, a <= c]),
+    );
+    out
+}
+
+#[allow(clippy::type_complexity)]
+fn order_claims(
+    push: &mut dyn FnMut(&str, &str, &str, String, String, Verdict),
+    rows: &[ConvergenceRow],
+    id_fewest: &str,
+    id_most: &str,
+    table: &str,
+    labels: &[&str],
+) {
+    let vals: Vec<(String, Option<f64>)> = labels
+        .iter()
+        .map(|l| {
+            (
+                (*l).to_string(),
+                row_of(rows, l).and_then(|x| (x.converged > 0).then_some(x.gradient_calls.mean)),
+            )
+        })
+        .collect();
+    let evidence = vals
+        .iter()
+        .map(|(l, v)| format!("{l} {}", v.map_or("never converged".into(), num)))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let conv: Vec<f64> = vals.iter().filter_map(|v| v.1).collect();
+    let get = |l: &str| vals.iter().find(|v| v.0 == l).and_then(|v| v.1);
+    if id_fewest != "C0" && labels.contains(&"STORM") {
+        let s = get("STORM");
+        push(
+            id_fewest,
+            table,
+            "STORM needs the fewest gradient calls to converge",
+            format!(
+                "STORM's mean gradient calls to converge (converged seeds) is the smallest among {}; never converging = not reproduced",
+                labels.join(", ")
+            ),
+            evidence.clone(),
+            Verdict::of(&[s.is_some_and(|s| conv.iter().all(|v| s <= *v))]),
+        );
+    }
+    let d = get("DAgger");
+    let others_never = vals
+        .iter()
+        .filter(|v| v.0 != "DAgger" && v.1.is_none())
+        .count();
+    push(
+        if id_fewest == "C1" { id_fewest } else { id_most },
+        table,
+        "DAgger needs the most gradient calls to converge",
+        "DAgger's mean gradient calls to converge (converged seeds) is the largest among the table's algorithms; partially if larger than every algorithm that converged while some never converged".into(),
+        evidence,
+        match d {
+            None => Verdict::NotReproduced,
+            Some(dv) if conv.iter().all(|v| dv >= *v) => {
+                if others_never == 0 {
+                    Verdict::Reproduced
+                } else {
+                    Verdict::Partially
+                }
+            }
+            _ => Verdict::NotReproduced,
+        },
+    );
+}
+
+/// Runtime claims (depend on wall time; written to appendix.md only).
+fn timing_claims(r: &Results) -> Vec<Claim> {
+    let mut out = Vec::new();
+    for (id, table, set, labels) in [
+        (
+            "T1",
+            "Table 4.2",
+            &r.obstacle,
+            vec!["STORM", "SGD", "RMSProp", "DAgger", "Adam"],
+        ),
+        (
+            "T2",
+            "Table 4.4",
+            &r.cartpole,
+            vec!["STORM", "RMSProp", "DAgger", "Adam"],
+        ),
+    ] {
+        let vals: Vec<(String, f64)> = labels
+            .iter()
+            .map(|l| {
+                let t = set
+                    .iter()
+                    .find(|c| c.0.label == *l)
+                    .and_then(|c| c.1.as_ref());
+                ((*l).to_string(), runtime(t).1.mean)
+            })
+            .collect();
+        let d = vals
+            .iter()
+            .find(|v| v.0 == "DAgger")
+            .map_or(f64::NAN, |v| v.1);
+        out.push(Claim {
+            id: id.into(),
+            source: table.into(),
+            claim: "DAgger's runtime is much higher than the other algorithms'".into(),
+            rule: "DAgger's mean training wall time per run is the largest of the table's algorithms (runs of each algorithm's configured length)".into(),
+            evidence: vals
+                .iter()
+                .map(|(l, v)| format!("{l} {} s", num(*v)))
+                .collect::<Vec<_>>()
+                .join(", "),
+            verdict: Verdict::of(&[d.is_finite() && vals.iter().all(|v| v.1 <= d || v.1.is_nan())]),
+        });
+    }
+    out
+}
+
+/// Write everything: CSV/JSON data, figures, appendix.md and appendix.tex.
+///
+/// # Errors
+/// I/O, serialisation or plotting failures.
+pub fn write(
+    profile: &Profile,
+    profile_text: &str,
+    r: &Results,
+    out: &Path,
+    png: bool,
+) -> Result<(), Error> {
+    let fig_dir = out.join("figures");
+    std::fs::create_dir_all(&fig_dir).map_err(|e| Error::io(&fig_dir, e))?;
+    // Raw data.
+    let mut csv = String::from(
+        "task,algorithm,seed_index,seed,iteration,trajectories,gradient_evaluations,expert_queries,score,successes,crashes,timeouts,reward,loss,loss_x,loss_y,grad_x,grad_y,converged_here\n",
+    );
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
+    for (c, _) in r.obstacle.iter().chain(&r.cartpole) {
+        for run in &c.runs {
+            for (i, k) in run.checkpoints.iter().enumerate() {
+                let _ = writeln!(
+                    csv,
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    c.task.name(),
+                    c.label,
+                    run.seed_index,
+                    run.seed,
+                    k.iteration,
+                    k.trajectories,
+                    k.gradient_evaluations,
+                    k.expert_queries,
+                    k.score,
+                    k.successes,
+                    k.crashes,
+                    k.timeouts,
+                    k.reward,
+                    k.loss,
+                    opt(k.loss_x),
+                    opt(k.loss_y),
+                    opt(k.grad_x),
+                    opt(k.grad_y),
+                    run.converged == Some(i)
+                );
+            }
+        }
+    }
+    write_atomic(&out.join("checkpoints.csv"), csv.as_bytes())?;
+    let mut g = String::from("seed_index,n,error_x,error_y\n");
+    for (s, rows) in r.gradient_error.seeds.iter().enumerate() {
+        for (n, x, y) in rows {
+            let _ = writeln!(g, "{s},{n},{x},{y}");
+        }
+    }
+    write_atomic(&out.join("gradient_error.csv"), g.as_bytes())?;
+    let mut t = String::from("task,algorithm,seed_index,train_seconds,converge_seconds\n");
+    for (c, tm) in r.obstacle.iter().chain(&r.cartpole) {
+        if let Some(tm) = tm {
+            for s in &tm.runs {
+                let _ = writeln!(
+                    t,
+                    "{},{},{},{},{}",
+                    c.task.name(),
+                    c.label,
+                    s.seed_index,
+                    s.train_seconds,
+                    opt(s.converge_seconds)
+                );
+            }
+        }
+    }
+    write_atomic(&out.join("timings.csv"), t.as_bytes())?;
+
+    let obs: Vec<ConvergenceRow> = r.obstacle.iter().map(|c| convergence_row(&c.0)).collect();
+    let cp: Vec<ConvergenceRow> = r.cartpole.iter().map(|c| convergence_row(&c.0)).collect();
+    let cl = claims(r, &obs, &cp);
+    let tcl = timing_claims(r);
+    write_atomic(
+        &out.join("tables.json"),
+        &to_json(
+            "tables",
+            &serde_json::json!({
+                "confidence_interval": "95% Student-t over seeds: mean ± t(0.975, n−1)·s/√n",
+                "obstacle": obs, "cartpole": cp, "claims": cl,
+            }),
+        )?,
+    )?;
+
+    // Figures.
+    let mut figs: Vec<(&str, &str, Figure)> = Vec::new();
+    let (gx, gy) = gradient_error_series(r);
+    for (name, s, lab) in [
+        ("fig4-2a-gradient-error-x", &gx, "x"),
+        ("fig4-2b-gradient-error-y", &gy, "y"),
+    ] {
+        figs.push((
+            name,
+            "Fig. 4.2",
+            Figure {
+                title: format!("Fig. 4.2 ({lab}): ‖mean of N estimates − reference‖"),
+                x_label: "N (sampled trajectories)".into(),
+                y_label: format!("error, {lab}-row of ∇"),
+                log_x: true,
+                log_y: true,
+                series: vec![s.clone(), reference_line(s)],
+            },
+        ));
+    }
+    let it = |c: &Checkpoint| c.iteration as f64;
+    let gc = |c: &Checkpoint| c.gradient_evaluations as f64;
+    let obstacle_fig = |title: &str,
+                        y: &str,
+                        log_y: bool,
+                        f: &dyn Fn(&Checkpoint) -> Option<f64>,
+                        skip_dataset: bool| Figure {
+        title: title.into(),
+        x_label: "iteration (= trajectories sampled per algorithm step)".into(),
+        y_label: y.into(),
+        log_x: false,
+        log_y,
+        series: r
+            .obstacle
+            .iter()
+            .filter(|c| !(skip_dataset && matches!(c.0.label.as_str(), "BC" | "DAgger")))
+            .map(|c| band(&c.0, it, f))
+            .collect(),
+    };
+    let n_obs = f64::from(profile.obstacle.eval_episodes);
+    figs.push((
+        "fig4-3-success",
+        "Fig. 4.3",
+        obstacle_fig(
+            "Fig. 4.3: success rate (obstacle)",
+            "success rate",
+            false,
+            &|c| Some(c.score),
+            false,
+        ),
+    ));
+    figs.push((
+        "fig4-4-crashes",
+        "Fig. 4.4",
+        obstacle_fig(
+            &format!("Fig. 4.4: crashes out of {n_obs} episodes (obstacle)"),
+            "crashes",
+            false,
+            &|c| Some(f64::from(c.crashes)),
+            false,
+        ),
+    ));
+    figs.push((
+        "fig4-5a-gradient-x",
+        "Fig. 4.5",
+        obstacle_fig(
+            "Fig. 4.5(a): ‖x-row of the gradient estimate‖",
+            "norm (log)",
+            true,
+            &|c| c.grad_x,
+            true,
+        ),
+    ));
+    figs.push((
+        "fig4-5b-gradient-y",
+        "Fig. 4.5",
+        obstacle_fig(
+            "Fig. 4.5(b): ‖y-row of the gradient estimate‖",
+            "norm (log)",
+            true,
+            &|c| c.grad_y,
+            true,
+        ),
+    ));
+    figs.push((
+        "fig4-6a-loss-x",
+        "Fig. 4.6",
+        obstacle_fig(
+            "Fig. 4.6(a): loss, x coordinate (per decision)",
+            "loss (log)",
+            true,
+            &|c| c.loss_x,
+            false,
+        ),
+    ));
+    figs.push((
+        "fig4-6b-loss-y",
+        "Fig. 4.6",
+        obstacle_fig(
+            "Fig. 4.6(b): loss, y coordinate (per decision)",
+            "loss (log)",
+            true,
+            &|c| c.loss_y,
+            false,
+        ),
+    ));
+    let cart_fig =
+        |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| Figure {
+            title: title.into(),
+            x_label: "gradient calls (log; mean over seeds at each checkpoint)".into(),
+            y_label: y.into(),
+            log_x: true,
+            log_y,
+            series: r.cartpole.iter().map(|c| band(&c.0, gc, f)).collect(),
+        };
+    let n_cp = f64::from(profile.cartpole.eval_episodes);
+    figs.push((
+        "fig4-8-loss",
+        "Fig. 4.8",
+        cart_fig(
+            "Fig. 4.8: CartPole loss (per decision)",
+            "Brier loss",
+            false,
+            &|c| Some(c.loss),
+        ),
+    ));
+    figs.push((
+        "fig4-9-crashes",
+        "Fig. 4.9",
+        cart_fig(
+            &format!("Fig. 4.9: CartPole crashes out of {n_cp} episodes"),
+            "crashes",
+            false,
+            &|c| Some(f64::from(c.crashes)),
+        ),
+    ));
+    figs.push((
+        "fig4-10-reward",
+        "Fig. 4.10",
+        cart_fig(
+            "Fig. 4.10: CartPole mean episode reward",
+            "reward",
+            false,
+            &|c| Some(c.reward),
+        ),
+    ));
+    let mut png_ok = png;
+    for (name, _, f) in &figs {
+        match f.write(&fig_dir.join(format!("{name}.svg")), png_ok) {
+            Ok(()) => {}
+            Err(e) if png_ok => {
+                eprintln!("warning: PNG rendering failed ({e}); writing SVG only");
+                png_ok = false;
+                f.write(&fig_dir.join(format!("{name}.svg")), false)?;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+
+    let md = markdown(
+        profile,
+        profile_text,
+        r,
+        &obs,
+        &cp,
+        &cl,
+        &tcl,
+        &figs,
+        png_ok,
+    );
+    write_atomic(&out.join("appendix.md"), md.as_bytes())?;
+    let tex = latex(profile, r, &obs, &cp, &cl, &tcl, &figs, png_ok);
+    write_atomic(&out.join("appendix.tex"), tex.as_bytes())?;
+    Ok(())
+}
+
+/// Check ids of the theorem table per erratum (parsed from its Markdown: first and last column).
+fn checks_by_erratum(theory_md: &str) -> std::collections::BTreeMap<String, Vec<String>> {
+    let mut m: std::collections::BTreeMap<String, Vec<String>> = Default::default();
+    for line in theory_md.lines() {
+        if !line.starts_with("| ") || line.starts_with("| #") {
+            continue;
+        }
+        let cols: Vec<&str> = line.split(" | ").collect();
+        if cols.len() < 3 {
+            continue;
+        }
+        let id = cols[0].trim_start_matches("| ").trim().to_string();
+        let e = cols[cols.len() - 1]
+            .trim_end_matches(" |")
+            .trim()
+            .to_string();
+        if e.starts_with('E') {
+            m.entry(e).or_default().push(id);
+        }
+    }
+    m
+}
+
+/// Kit-vs-thesis rows of a gradient-call table.
+fn calls_table(rows: &[ConvergenceRow], thesis: &[(&str, f64, f64)]) -> Vec<[String; 5]> {
+    let mut out = Vec::new();
+    for row in rows {
+        if row.label == "BC" {
+            continue;
+        }
+        let th = thesis
+            .iter()
+            .find(|t| t.0 == row.label)
+            .map_or("—".into(), |t| format!("{} ± {}", num(t.1), num(t.2)));
+        out.push([
+            row.label.clone(),
+            ci(&row.gradient_calls),
+            format!("{}/{}", row.converged, row.seeds),
+            ci(&row.total_gradient_calls),
+            th,
+        ]);
+    }
+    out
+}
+
+fn runtime_table(
+    set: &[(ConfigResult, Option<ConfigTiming>)],
+    thesis: &[(&str, f64)],
+) -> Vec<[String; 4]> {
+    set.iter()
+        .filter(|c| c.0.label != "BC")
+        .map(|(c, t)| {
+            let (conv, total) = runtime(t.as_ref());
+            [
+                c.label.clone(),
+                ci(&conv),
+                ci(&total),
+                thesis
+                    .iter()
+                    .find(|x| x.0 == c.label)
+                    .map_or("—".into(), |x| num(x.1)),
+            ]
+        })
+        .collect()
+}
+
+fn md_table(out: &mut String, head: &[&str], rows: &[Vec<String>]) {
+    let _ = writeln!(out, "| {} |", head.join(" | "));
+    let _ = writeln!(out, "|{}", "---|".repeat(head.len()));
+    for r in rows {
+        let cells: Vec<String> = r.iter().map(|c| c.replace('|', "\\|")).collect();
+        let _ = writeln!(out, "| {} |", cells.join(" | "));
+    }
+    out.push('\n');
+}
+
+fn final_rows(rows: &[ConvergenceRow], obstacle: bool) -> Vec<Vec<String>> {
+    rows.iter()
+        .map(|r| {
+            vec![
+                r.label.clone(),
+                if obstacle {
+                    ci(&Summary {
+                        mean: 100.0 * r.final_score.mean,
+                        half_width: 100.0 * r.final_score.half_width,
+                        n: r.final_score.n,
+                    })
+                } else {
+                    ci(&r.final_reward)
+                },
+                ci(&r.final_crashes),
+                ci(&r.final_loss),
+                format!("{}", r.failed_runs),
+            ]
+        })
+        .collect()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn markdown(
+    profile: &Profile,
+    profile_text: &str,
+    r: &Results,
+    obs: &[ConvergenceRow],
+    cp: &[ConvergenceRow],
+    cl: &[Claim],
+    tcl: &[Claim],
+    figs: &[(&str, &str, Figure)],
+    png: bool,
+) -> String {
+    let _ = profile_text;
+    let mut o = String::new();
+    let img = |o: &mut String, name: &str, alt: &str| {
+        let ext = if png { "png" } else { "svg" };
+        let _ = writeln!(o, "![{alt}](figures/{name}.{ext})\n");
+    };
+    let _ = writeln!(
+        o,
+        "# Appendix: thesis chapter 4, regenerated\n\n\
+         Generated by `cargo run --release -p paper-checks{}` (profile `{}`, {} seeds per configuration). \
+         Every number below is computed from the per-seed data in this directory (`checkpoints.csv`, \
+         `runs/*.json`, `gradient_error.csv`); configurations and seeds are in `provenance.json`, wall \
+         times in `timings.json` / `timings.csv`.\n",
+        if profile.name == "full" {
+            " -- --full"
+        } else {
+            ""
+        },
+        profile.name,
+        profile.seeds
+    );
+    o += "## Definitions (applied to every algorithm alike)\n\n";
+    let _ = writeln!(
+        o,
+        "- **Evaluation.** At each checkpoint (every `eval_every` iterations and at the last one) the learned \
+         policy acts deterministically — the linear-Gaussian mean `Wφ(s)` (obstacle), the most probable \
+         action of the softmax (CartPole) — on {} (obstacle) / {} (CartPole) seeded episodes, the same \
+         episodes for every algorithm and checkpoint of a seed. Crash (obstacle) = the discs overlap; \
+         crash (CartPole) = the episode terminates before 500 steps. Loss = mean per-decision supervised \
+         loss on the states the deterministic policy visits (obstacle: squared error of the velocity, \
+         split into x and y; CartPole: Brier loss against the LQR action).\n\
+         - **Converge.** A run converges at the first checkpoint whose score is ≥ the task's threshold: \
+         score = success rate (obstacle, threshold {}) or mean episode reward / 500 (CartPole, threshold \
+         {}). *Gradient calls to converge* = cumulative per-state gradient evaluations (`Cost::gradient_evaluations`, \
+         the same unit for the oracle methods and the dataset learners' inner updates) at that checkpoint; \
+         *runtime* = training wall time up to it (evaluation excluded). Means of gradient calls are over \
+         the seeds that converged (their number is given).\n\
+         - **Confidence intervals.** Mean ± half-width of the 95% Student-t interval over seeds, \
+         `t(0.975, n−1)·s/√n`, in every table; figures shade the same interval at each checkpoint. \
+         The thesis's ± values are its own (their meaning is not stated).\n\
+         - **Hyper-parameters** are the profile's defaults, chosen once and not tuned (see `provenance.json`).\n",
+        profile.obstacle.eval_episodes,
+        profile.cartpole.eval_episodes,
+        profile.obstacle.converge_score,
+        profile.cartpole.converge_score,
+    );
+    o += "## Fig. 4.2: gradient-estimate error vs number of trajectories\n\n";
+    let _ = writeln!(
+        o,
+        "Obstacle task, linear-Gaussian learner (σ = {}) at a fixed θ; error = ‖(mean of N eq. 3.15 \
+         estimates) − (mean of {} independent estimates)‖ for the x and y rows of the gradient. The \
+         reference has its own noise, so the error floors near its standard error.\n",
+        profile.gradient_error.sigma, profile.gradient_error.reference_trajectories
+    );
+    for (name, fig, f) in figs {
+        if *fig == "Fig. 4.2" {
+            img(&mut o, name, &f.title);
+        }
+    }
+    let (gx, gy) = gradient_error_series(r);
+    let rows: Vec<Vec<String>> = (0..gx.x.len())
+        .map(|i| {
+            vec![
+                num(gx.x[i]),
+                format!("{} ± {}", num(gx.mean[i]), num(gx.hi[i] - gx.mean[i])),
+                format!("{} ± {}", num(gy.mean[i]), num(gy.hi[i] - gy.mean[i])),
+            ]
+        })
+        .collect();
+    md_table(&mut o, &["N", "error x", "error y"], &rows);
+
+    o += "## Obstacle avoidance (§4.1): Figs. 4.3–4.6, Tables 4.1–4.2\n\n";
+    for (name, fig, f) in figs {
+        if matches!(*fig, "Fig. 4.3" | "Fig. 4.4" | "Fig. 4.5" | "Fig. 4.6") {
+            img(&mut o, name, &f.title);
+        }
+    }
+    o += "**Final checkpoint** (all seeds):\n\n";
+    md_table(
+        &mut o,
+        &[
+            "algorithm",
+            "success rate (%)",
+            "crashes",
+            "loss",
+            "failed runs",
+        ],
+        &final_rows(obs, true),
+    );
+    o += "**Table 4.1: gradient calls to converge** (kit vs thesis):\n\n";
+    let t41: Vec<Vec<String>> = calls_table(obs, &THESIS_T41)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        &mut o,
+        &[
+            "algorithm",
+            "kit: gradient calls to converge",
+            "kit: converged",
+            "kit: gradient calls of the whole run",
+            "thesis",
+        ],
+        &t41,
+    );
+    o += "**Table 4.2: runtime in seconds** (kit vs thesis; machine-dependent):\n\n";
+    let t42: Vec<Vec<String>> = runtime_table(&r.obstacle, &THESIS_T42)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        &mut o,
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &t42,
+    );
+
+    o += "## CartPole (§4.2): Figs. 4.8–4.10, Tables 4.3–4.4\n\n\
+          The expert is the kit's LQR controller (the thesis uses PPO).\n\n";
+    for (name, fig, f) in figs {
+        if matches!(*fig, "Fig. 4.8" | "Fig. 4.9" | "Fig. 4.10") {
+            img(&mut o, name, &f.title);
+        }
+    }
+    o += "**Final checkpoint** (all seeds):\n\n";
+    md_table(
+        &mut o,
+        &["algorithm", "mean reward", "crashes", "loss", "failed runs"],
+        &final_rows(cp, false),
+    );
+    o += "**Table 4.3: gradient calls to converge** (kit vs thesis):\n\n";
+    let t43: Vec<Vec<String>> = calls_table(cp, &THESIS_T43)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        &mut o,
+        &[
+            "algorithm",
+            "kit: gradient calls to converge",
+            "kit: converged",
+            "kit: gradient calls of the whole run",
+            "thesis",
+        ],
+        &t43,
+    );
+    o += "**Table 4.4: runtime in seconds** (kit vs thesis; machine-dependent):\n\n";
+    let t44: Vec<Vec<String>> = runtime_table(&r.cartpole, &THESIS_T44)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        &mut o,
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &t44,
+    );
+
+    o += "## Claims of chapter 4 and verdicts\n\nEach verdict is computed from the numbers by the stated rule.\n\n";
+    let rows: Vec<Vec<String>> = cl
+        .iter()
+        .chain(tcl)
+        .map(|c| {
+            vec![
+                c.id.clone(),
+                c.source.clone(),
+                c.claim.clone(),
+                c.rule.clone(),
+                c.evidence.clone(),
+                format!("**{}**", c.verdict.text()),
+            ]
+        })
+        .collect();
+    md_table(
+        &mut o,
+        &["#", "where", "claim", "rule", "numbers", "verdict"],
+        &rows,
+    );
+
+    o += "## Theorem checks (`ilopt-theory`)\n\n";
+    o += &r.theory_markdown;
+    o += "\n## Errata (math.md §0)\n\n";
+    let by = checks_by_erratum(&r.theory_markdown);
+    let rows: Vec<Vec<String>> = ERRATA
+        .iter()
+        .map(|(id, w, p, c)| {
+            vec![
+                (*id).into(),
+                (*w).into(),
+                (*p).into(),
+                (*c).into(),
+                by.get(*id)
+                    .map_or("— (no numerical check)".into(), |v| v.join(", ")),
+            ]
+        })
+        .collect();
+    md_table(
+        &mut o,
+        &["#", "thesis statement", "problem", "correction", "check"],
+        &rows,
+    );
+    o
+}
+
+fn tex_escape(s: &str) -> String {
+    let mut o = String::new();
+    for ch in s.chars() {
+        match ch {
+            '\\' => o += "\\textbackslash{}",
+            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
+                o.push('\\');
+                o.push(ch);
+            }
+            '~' => o += "\\textasciitilde{}",
+            '^' => o += "\\textasciicircum{}",
+            '±' => o += "$\\pm$",
+            '≥' => o += "$\\geq$",
+            '≤' => o += "$\\leq$",
+            '≈' => o += "$\\approx$",
+            '√' => o += "$\\surd$",
+            '−' => o.push('-'),
+            '‖' => o += "$\\|$",
+            '∇' => o += "$\\nabla$",
+            'θ' => o += "$\\theta$",
+            'σ' => o += "$\\sigma$",
+            'τ' => o += "$\\tau$",
+            'η' => o += "$\\eta$",
+            'Δ' => o += "$\\Delta$",
+            'φ' => o += "$\\phi$",
+            'π' => o += "$\\pi$",
+            'β' => o += "$\\beta$",
+            'ε' => o += "$\\varepsilon$",
+            'γ' => o += "$\\gamma$",
+            'α' => o += "$\\alpha$",
+            '∼' => o += "$\\sim$",
+            '·' => o += "$\\cdot$",
+            '…' => o += "\\ldots{}",
+            '⌈' => o += "$\\lceil$",
+            '⌉' => o += "$\\rceil$",
+            '⁻' => o += "$^{-}$",
+            '¹' => o += "$^{1}$",
+            '²' => o += "$^{2}$",
+            '³' => o += "$^{3}$",
+            '→' => o += "$\\to$",
+            '∈' => o += "$\\in$",
+            '≠' => o += "$\\neq$",
+            '§' => o += "\\S{}",
+            c if c.is_ascii() => o.push(c),
+            c => o.push(c),
+        }
+    }
+    o
+}
+
+fn tex_table(
+    o: &mut String,
+    caption: &str,
+    label: &str,
+    head: &[&str],
+    rows: &[Vec<String>],
+    spec: &str,
+) {
+    let _ = writeln!(
+        o,
+        "\\begin{{table}}[htbp]\n\\centering\\small\n\\caption{{{}}}\\label{{{label}}}",
+        tex_escape(caption)
+    );
+    let _ = writeln!(o, "\\begin{{tabular}}{{{spec}}}\n\\toprule");
+    let _ = writeln!(
+        o,
+        "{} \\\\\n\\midrule",
+        head.iter()
+            .map(|h| tex_escape(h))
+            .collect::<Vec<_>>()
+            .join(" & ")
+    );
+    for r in rows {
+        let _ = writeln!(
+            o,
+            "{} \\\\",
+            r.iter()
+                .map(|c| tex_escape(&c.replace("**", "")))
+                .collect::<Vec<_>>()
+                .join(" & ")
+        );
+    }
+    let _ = writeln!(o, "\\bottomrule\n\\end{{tabular}}\n\\end{{table}}\n");
+}
+
+#[allow(clippy::too_many_arguments)]
+fn latex(
+    profile: &Profile,
+    r: &Results,
+    obs: &[ConvergenceRow],
+    cp: &[ConvergenceRow],
+    cl: &[Claim],
+    tcl: &[Claim],
+    figs: &[(&str, &str, Figure)],
+    png: bool,
+) -> String {
+    let mut o = String::from(
+        "% Generated by paper-checks. \\input{} into a document that loads booktabs, graphicx and\n\
+         % (for long tables) longtable. Figures are referenced relative to this file's directory.\n",
+    );
+    let _ = writeln!(
+        o,
+        "\\section*{{Appendix: chapter 4 regenerated (profile {}, {} seeds)}}\n\
+         Means $\\pm$ half-widths of 95\\% Student-$t$ intervals over seeds. A run converges at the first \
+         checkpoint whose deterministic-policy score (obstacle: success rate; CartPole: mean reward / 500) \
+         reaches the threshold ({} / {}); gradient calls are cumulative per-state gradient evaluations.\n",
+        tex_escape(&profile.name),
+        profile.seeds,
+        profile.obstacle.converge_score,
+        profile.cartpole.converge_score
+    );
+    for (name, _, f) in figs {
+        let file = if png {
+            format!("figures/{name}.png")
+        } else {
+            format!("figures/{name}.svg")
+        };
+        let _ = writeln!(
+            o,
+            "\\begin{{figure}}[htbp]\n\\centering\n{}\\includegraphics[width=0.8\\linewidth]{{{file}}}\n\\caption{{{}}}\n\\end{{figure}}\n",
+            if png {
+                ""
+            } else {
+                "% SVG: needs the svg package or a conversion to PDF\n"
+            },
+            tex_escape(&f.title)
+        );
+    }
+    let t41: Vec<Vec<String>> = calls_table(obs, &THESIS_T41)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    tex_table(
+        &mut o,
+        "Table 4.1: gradient calls to converge, obstacle avoidance (kit vs thesis)",
+        "tab:pc-4-1",
+        &[
+            "algorithm",
+            "kit: to converge",
+            "converged",
+            "kit: whole run",
+            "thesis",
+        ],
+        &t41,
+        "lrrrr",
+    );
+    let t42: Vec<Vec<String>> = runtime_table(&r.obstacle, &THESIS_T42)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    tex_table(
+        &mut o,
+        "Table 4.2: runtime in seconds, obstacle avoidance (kit vs thesis)",
+        "tab:pc-4-2",
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &t42,
+        "lrrr",
+    );
+    let t43: Vec<Vec<String>> = calls_table(cp, &THESIS_T43)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    tex_table(
+        &mut o,
+        "Table 4.3: gradient calls to converge, CartPole (kit vs thesis)",
+        "tab:pc-4-3",
+        &[
+            "algorithm",
+            "kit: to converge",
+            "converged",
+            "kit: whole run",
+            "thesis",
+        ],
+        &t43,
+        "lrrrr",
+    );
+    let t44: Vec<Vec<String>> = runtime_table(&r.cartpole, &THESIS_T44)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    tex_table(
+        &mut o,
+        "Table 4.4: runtime in seconds, CartPole (kit vs thesis)",
+        "tab:pc-4-4",
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &t44,
+        "lrrr",
+    );
+    let rows: Vec<Vec<String>> = cl
+        .iter()
+        .chain(tcl)
+        .map(|c| {
+            vec![
+                c.id.clone(),
+                c.source.clone(),
+                c.claim.clone(),
+                c.evidence.clone(),
+                c.verdict.text().into(),
+            ]
+        })
+        .collect();
+    tex_table(
+        &mut o,
+        "Claims of chapter 4 and verdicts (rules in appendix.md)",
+        "tab:pc-claims",
+        &["#", "where", "claim", "numbers", "verdict"],
+        &rows,
+        "llp{4.5cm}p{5cm}l",
+    );
+    let by = checks_by_erratum(&r.theory_markdown);
+    let rows: Vec<Vec<String>> = ERRATA
+        .iter()
+        .map(|(id, w, p, c)| {
+            vec![
+                (*id).into(),
+                (*w).into(),
+                (*p).into(),
+                (*c).into(),
+                by.get(*id).map_or("—".into(), |v| v.join(", ")),
+            ]
+        })
+        .collect();
+    tex_table(
+        &mut o,
+        "Errata of chapter 3 (math.md §0) and the checks that show them",
+        "tab:pc-errata",
+        &["#", "where", "problem", "correction", "check"],
+        &rows,
+        "llp{4.5cm}p{4.5cm}l",
+    );
+    let _ = slug("");
+    o
+}
