@@ -418,7 +418,7 @@ fn within(v: f64, lo: f64, hi: f64) -> bool {
     v.is_finite() && v >= lo && v <= hi
 }
 
-/// The computed claims (deterministic ones; runtime claims are in [`timing_claims`]).
+/// The computed claims (deterministic ones; runtime claims are in `timing_claims`).
 pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec<Claim> {
     let mut out = Vec::new();
     let mut push =
