@@ -1102,6 +1102,45 @@ fn runtime_table(
         .collect()
 }
 
+/// One task's pair of cost tables (gradient calls to converge; runtime), kit next to thesis.
+fn cost_tables(
+    o: &mut String,
+    (calls_no, runtime_no): (&str, &str),
+    rows: &[ConvergenceRow],
+    configs: &[(ConfigResult, Option<ConfigTiming>)],
+    thesis_calls: &[(&str, f64, f64)],
+    thesis_runtime: &[(&str, f64)],
+) {
+    *o += &format!("**Table {calls_no}: gradient calls to converge** (kit vs thesis):\n\n");
+    let calls: Vec<Vec<String>> = calls_table(rows, thesis_calls)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        o,
+        &[
+            "algorithm",
+            "kit: gradient calls to converge",
+            "kit: converged",
+            "kit: gradient calls of the whole run",
+            "thesis",
+        ],
+        &calls,
+    );
+    *o += &format!(
+        "**Table {runtime_no}: runtime in seconds** (kit vs thesis; machine-dependent):\n\n"
+    );
+    let runtime: Vec<Vec<String>> = runtime_table(configs, thesis_runtime)
+        .into_iter()
+        .map(|a| a.to_vec())
+        .collect();
+    md_table(
+        o,
+        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
+        &runtime,
+    );
+}
+
 fn md_table(out: &mut String, head: &[&str], rows: &[Vec<String>]) {
     let _ = writeln!(out, "| {} |", head.join(" | "));
     let _ = writeln!(out, "|{}", "---|".repeat(head.len()));
@@ -1235,31 +1274,13 @@ fn markdown(
         ],
         &final_rows(obs, true),
     );
-    o += "**Table 4.1: gradient calls to converge** (kit vs thesis):\n\n";
-    let t41: Vec<Vec<String>> = calls_table(obs, &THESIS_T41)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    md_table(
+    cost_tables(
         &mut o,
-        &[
-            "algorithm",
-            "kit: gradient calls to converge",
-            "kit: converged",
-            "kit: gradient calls of the whole run",
-            "thesis",
-        ],
-        &t41,
-    );
-    o += "**Table 4.2: runtime in seconds** (kit vs thesis; machine-dependent):\n\n";
-    let t42: Vec<Vec<String>> = runtime_table(&r.obstacle, &THESIS_T42)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    md_table(
-        &mut o,
-        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
-        &t42,
+        ("4.1", "4.2"),
+        obs,
+        &r.obstacle,
+        &THESIS_T41,
+        &THESIS_T42,
     );
 
     o += "## CartPole (§4.2): Figs. 4.8–4.10, Tables 4.3–4.4\n\n\
@@ -1275,31 +1296,13 @@ fn markdown(
         &["algorithm", "mean reward", "crashes", "loss", "failed runs"],
         &final_rows(cp, false),
     );
-    o += "**Table 4.3: gradient calls to converge** (kit vs thesis):\n\n";
-    let t43: Vec<Vec<String>> = calls_table(cp, &THESIS_T43)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    md_table(
+    cost_tables(
         &mut o,
-        &[
-            "algorithm",
-            "kit: gradient calls to converge",
-            "kit: converged",
-            "kit: gradient calls of the whole run",
-            "thesis",
-        ],
-        &t43,
-    );
-    o += "**Table 4.4: runtime in seconds** (kit vs thesis; machine-dependent):\n\n";
-    let t44: Vec<Vec<String>> = runtime_table(&r.cartpole, &THESIS_T44)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    md_table(
-        &mut o,
-        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
-        &t44,
+        ("4.3", "4.4"),
+        cp,
+        &r.cartpole,
+        &THESIS_T43,
+        &THESIS_T44,
     );
 
     o += "## Claims of chapter 4 and verdicts\n\nEach verdict is computed from the numbers by the stated rule.\n\n";
