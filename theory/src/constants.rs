@@ -49,6 +49,12 @@ pub struct Constant {
     /// ([`crate::global`]); empty otherwise.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub charts: Vec<crate::global::ChartBound>,
+    /// For a rigorous constant: the largest value of the quantity actually attained at a point the
+    /// branch-and-bound evaluated, in the constant's own units (e.g. `√ sup ‖g‖²` for G_∞, not the
+    /// squared quantity the search bounds). It is a lower bound on the true supremum, so
+    /// `attained ≤ value` and the gap shows how tight the bound is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub attained: Option<f64>,
 }
 
 impl Constant {
@@ -62,11 +68,21 @@ impl Constant {
             how: how.into(),
             certificate: None,
             charts: vec![],
+            attained: None,
         }
     }
     /// A rigorous upper bound from branch-and-bound; `transform` maps the sup of the enclosed
     /// function to the constant (e.g. a square root), and must be monotone and rounded upward.
-    fn rigorous(name: &str, bound: SupBound, value: f64, how: String) -> Self {
+    /// A rigorous constant `value = transform(bound.upper)` (rounded up by the caller); the
+    /// attained value is `transform` applied to the branch-and-bound's best lower value.
+    fn rigorous(
+        name: &str,
+        bound: SupBound,
+        value: f64,
+        transform: impl Fn(f64) -> f64,
+        how: String,
+    ) -> Self {
+        let attained = Some(transform(bound.lower));
         Self {
             name: name.into(),
             value,
@@ -76,8 +92,14 @@ impl Constant {
             how,
             certificate: Some(bound),
             charts: vec![],
+            attained,
         }
     }
+}
+
+/// `√max(x, 0)`, for attained values (lower bounds: no upward rounding).
+pub(crate) fn attained_sqrt(x: f64) -> f64 {
+    x.max(0.0).sqrt()
 }
 
 fn interval_theta(b: &[Interval]) -> Vec<Interval> {
@@ -159,7 +181,7 @@ pub fn l_f(
         "sup ‖∇²F‖ over {domain:?} by interval branch-and-bound ({} boxes)",
         r.certificate.len()
     );
-    Ok(Constant::rigorous("L_F", r, v, how))
+    Ok(Constant::rigorous("L_F", r, v, |s| s, how))
 }
 
 /// σ²(c) ≥ sup_{θ ∈ domain} [E‖g‖² − c‖∇F‖²] (c = 1: sup Var; c = 0: sup E‖g‖² = G²).
@@ -190,7 +212,7 @@ pub fn sigma2(
         "sup (E‖g‖² − {c}·‖∇F‖²) over {domain:?} by interval branch-and-bound ({} boxes)",
         r.certificate.len()
     );
-    Ok(Constant::rigorous(name, r, v, how))
+    Ok(Constant::rigorous(name, r, v, |s| s.max(0.0), how))
 }
 
 /// G_F ≥ sup_{θ ∈ domain} ‖∇F(θ)‖ (X2 in intervals).
@@ -214,7 +236,7 @@ pub fn gradient_norm(
         "√ sup ‖∇F‖² over {domain:?} by interval branch-and-bound ({} boxes)",
         r.certificate.len()
     );
-    Ok(Constant::rigorous("G_F", r, v, how))
+    Ok(Constant::rigorous("G_F", r, v, attained_sqrt, how))
 }
 
 /// G_∞ ≥ sup_{θ ∈ domain, τ̄} ‖g(θ, τ̄)‖: the almost-sure bound of the estimator.
@@ -246,7 +268,7 @@ pub fn estimator_bound(
         "√ max over prefixes of sup ‖g‖² over {domain:?} ({} boxes)",
         r.certificate.len()
     );
-    Ok(Constant::rigorous("G_∞", r, v, how))
+    Ok(Constant::rigorous("G_∞", r, v, attained_sqrt, how))
 }
 
 /// A box that provably contains every SGD iterate: |θ_{k+1} − θ_k| ≤ η‖g‖ ≤ ηG_∞ a.s., so after
@@ -314,7 +336,13 @@ pub fn l_tilde(
         domain,
         r.certificate.len()
     );
-    Ok(Constant::rigorous("L̃", r, v, how))
+    Ok(Constant::rigorous(
+        "L̃",
+        r,
+        v,
+        |s| attained_sqrt(s / 2.0),
+        how,
+    ))
 }
 
 /// A box that provably contains every IS-STORM iterate under schedule (3.43) for K steps from θ₁:

@@ -28,7 +28,7 @@
 
 use crate::bnb::{BnbError, SupBound, sup_bound, verify_certificate};
 use crate::check::{Check, Measured, Method, Role, Verdict};
-use crate::constants::{Constant, Provenance};
+use crate::constants::{Constant, Provenance, attained_sqrt};
 use ilopt::exact::enumerate::for_each_prefix;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
@@ -267,6 +267,7 @@ fn global_constant(
     regions: Vec<ChartBound>,
     dims: usize,
     transform: impl Fn(f64) -> f64,
+    attained: impl Fn(f64) -> f64,
     what: &str,
 ) -> Constant {
     let sup = regions
@@ -280,11 +281,11 @@ fn global_constant(
     let boxes: usize = regions.iter().map(|r| r.bound.certificate.len()).sum();
     let value = transform(sup);
     let how = format!(
-        "{what} over {} by interval branch-and-bound on {} chart region(s) (core |θ| ≤ {CORE_RADIUS}, tail θ = 1/u, |u| ≤ {}; {boxes} boxes; attained ≥ {:.6} before the transform)",
+        "{what} over {} by interval branch-and-bound on {} chart region(s) (core |θ| ≤ {CORE_RADIUS}, tail θ = 1/u, |u| ≤ {}; {boxes} boxes; attained ≥ {:.6})",
         if dims == 1 { "ℝ" } else { "ℝ²" },
         regions.len(),
         1.0 / CORE_RADIUS,
-        lower
+        attained(lower)
     );
     Constant {
         name: name.into(),
@@ -294,6 +295,7 @@ fn global_constant(
         how,
         certificate: None,
         charts: regions,
+        attained: Some(attained(lower)),
     }
 }
 
@@ -322,6 +324,7 @@ pub fn l_f(mdp: &ToyMdp, tol: f64, max_boxes: usize) -> Result<Constant, BnbErro
         "L_F",
         regions,
         1,
+        |s| s,
         |s| s,
         "sup |F″| (F = Σ p·L in second-order duals)",
     ))
@@ -378,6 +381,7 @@ pub fn moment_constants(
             over_charts(1, &var, tol, max_boxes)?,
             1,
             |s| s.max(0.0),
+            |s| s.max(0.0),
             "sup Var g = sup (E g² − (E g)²)",
         ),
         global_constant(
@@ -385,6 +389,7 @@ pub fn moment_constants(
             over_charts(1, &gf, tol, max_boxes)?,
             1,
             sqrt_up,
+            attained_sqrt,
             "√ sup (E g)² = √ sup F′²",
         ),
         global_constant(
@@ -392,6 +397,7 @@ pub fn moment_constants(
             over_charts(1, &ginf, tol, max_boxes)?,
             1,
             sqrt_up,
+            attained_sqrt,
             "√ sup over prefixes of g²",
         ),
     ))
@@ -555,6 +561,7 @@ pub fn l_tilde(
         regions,
         2,
         |s| sqrt_up(s / 2.0 * (1.0 + 1e-15)),
+        |s| attained_sqrt(s / 2.0),
         what,
     ))
 }

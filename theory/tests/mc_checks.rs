@@ -50,6 +50,18 @@ fn check8_constants_are_rigorous_and_certified() {
             c.value
         );
         assert!(cert.lower <= cert.upper);
+        // The attained value is reported in the constant's own units (G_F and G_∞ are square
+        // roots of the searched quantity): a lower bound below the upper bound, near the
+        // orientation value.
+        let a = c
+            .attained
+            .expect("rigorous constants report what they attained");
+        assert!(a <= c.value, "{}: attained {a} > bound {}", c.name, c.value);
+        assert!(
+            (a - approx).abs() <= 0.02 * approx,
+            "{}: attained {a}",
+            c.name
+        );
     }
     // An understated constant is refuted by the certified attained value: claiming L_F = 2 is
     // wrong because F″ attains more than 2 somewhere (lower bound of the B&B).

@@ -134,6 +134,25 @@ fn global_constants_dominate_exact_values() {
         .map(|r| r.bound.lower)
         .fold(0.0, f64::max);
     assert!(k.l_tilde.value < 6.0 && k.l_tilde.value - (attained / 2.0).sqrt() < 0.1);
+    assert_eq!(k.l_tilde.attained, Some((attained / 2.0).sqrt()));
+    for c in [
+        &k.l_f,
+        &k.sigma2,
+        &k.g_f,
+        &k.g_inf,
+        &k.l_tilde,
+        &k.l_tilde_pd,
+    ] {
+        let a = c
+            .attained
+            .expect("rigorous constants report what they attained");
+        assert!(
+            0.0 < a && a <= c.value,
+            "{}: attained {a}, bound {}",
+            c.name,
+            c.value
+        );
+    }
     let m1 = m1_tied();
     let p = ToyProblem::<Q>::new(&m1);
     let pd = ToyProblem::<Dual<Dual<Q>>>::new(&m1);

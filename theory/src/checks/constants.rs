@@ -83,13 +83,12 @@ impl ToyConstants {
             details: all
                 .iter()
                 .map(|c| {
-                    let gap = c.certificate.as_ref().map_or(String::new(), |b| {
-                        format!(
-                            " (attained ≥ {:.6}, {} boxes)",
-                            b.lower,
-                            b.certificate.len()
-                        )
-                    });
+                    let gap = match (&c.certificate, c.attained) {
+                        (Some(b), Some(a)) => {
+                            format!(" (attained ≥ {a:.6}, {} boxes)", b.certificate.len())
+                        }
+                        _ => String::new(),
+                    };
                     format!("{} ≤ {:.6}{gap}", c.name, c.value)
                 })
                 .collect::<Vec<_>>()

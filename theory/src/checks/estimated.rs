@@ -82,6 +82,7 @@ fn estimate(name: &str, value: f64, how: String) -> Constant {
         how,
         certificate: None,
         charts: vec![],
+        attained: None,
     }
 }
 
