@@ -46,9 +46,13 @@ pub struct GradientError {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TaskSection {
-    /// σ_π of the linear-Gaussian learner (obstacle task only; ignored for CartPole).
+    /// σ_π of the linear-Gaussian learner (obstacle task only; must be absent for CartPole).
     #[serde(default)]
     pub sigma: Option<f64>,
+    /// CartPole's expert (must be absent for the obstacle task, whose expert is the
+    /// velocity-obstacle expert of eq. 4.1): `"ppo"` (the thesis's, default) or `"lqr"`.
+    #[serde(default)]
+    pub expert: Option<CartPoleExpertChoice>,
     /// Iterations per run (each algorithm may override).
     pub iterations: u64,
     /// Evaluate every this many iterations (each algorithm may override).
@@ -63,6 +67,47 @@ pub struct TaskSection {
     pub converge_score: f64,
     /// The algorithms, in table order.
     pub algorithms: Vec<AlgorithmEntry>,
+}
+
+/// Which expert labels CartPole's states.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CartPoleExpertChoice {
+    /// The committed PPO expert `experts/cartpole-ppo.json` (thesis §4.2.1: "We use PPO as
+    /// expert"), acting greedily.
+    #[default]
+    Ppo,
+    /// The kit's LQR controller on the linearised dynamics.
+    Lqr,
+}
+
+impl CartPoleExpertChoice {
+    /// The committed PPO expert's file (in the repository, next to this package).
+    pub fn ppo_file() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../experts/cartpole-ppo.json")
+    }
+
+    /// `"PPO"` / `"LQR"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            CartPoleExpertChoice::Ppo => "PPO",
+            CartPoleExpertChoice::Lqr => "LQR",
+        }
+    }
+
+    /// What determines the expert's labels, for the reuse key: the choice and, for PPO, a hash
+    /// of the expert file's bytes (a retrained expert invalidates the cached results).
+    pub fn identity(self) -> String {
+        match self {
+            CartPoleExpertChoice::Lqr => "lqr".into(),
+            CartPoleExpertChoice::Ppo => format!(
+                "ppo:{:016x}",
+                std::fs::read_to_string(Self::ppo_file())
+                    .map(|t| crate::stats::fnv1a(&t))
+                    .unwrap_or(0)
+            ),
+        }
+    }
 }
 
 /// One algorithm of a task.
@@ -178,6 +223,20 @@ impl Profile {
         for (name, t) in [("obstacle", &self.obstacle), ("cartpole", &self.cartpole)] {
             if name == "obstacle" && !t.sigma.is_some_and(|s| s.is_finite() && s > 0.0) {
                 return Err(field(file, "obstacle.sigma", "must be set, finite and > 0"));
+            }
+            if name == "obstacle" && t.expert.is_some() {
+                return Err(field(
+                    file,
+                    "obstacle.expert",
+                    "the obstacle task's expert is the velocity-obstacle expert; remove the field",
+                ));
+            }
+            if name == "cartpole" && t.sigma.is_some() {
+                return Err(field(
+                    file,
+                    "cartpole.sigma",
+                    "CartPole's learner is a softmax (no σ); remove the field",
+                ));
             }
             if t.iterations == 0 {
                 return Err(field(file, &format!("{name}.iterations"), "must be ≥ 1"));

@@ -16,14 +16,16 @@
 //! calls to converge" are the cumulative per-state gradient evaluations ([`Cost`]) at that
 //! checkpoint, its runtime the training wall time up to it (evaluation excluded).
 
-use crate::config::{AlgorithmEntry, GradientError, TaskSection};
+use crate::config::{AlgorithmEntry, CartPoleExpertChoice, GradientError, TaskSection};
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::algo::{Num, RunConfig, Runner, StoppingRule};
-use ilopt::env::obstacle::{ObstacleConfig, ObstacleEnv, Outcome, VoExpertParams, VoExpertPolicy};
+use ilopt::env::obstacle::{
+    ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome, VoExpertParams, VoExpertPolicy,
+};
 use ilopt::policy::{LinearGaussian, Policy, Softmax};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
-use ilopt::task::cartpole::{self, CartPoleTask};
+use ilopt::task::cartpole::{self, CartPoleEpisode, CartPoleTask};
 use ilopt::task::obstacle::{self, ObstacleTask};
 use ilopt::task::{Task, TaskProblem};
 use nalgebra::DVector;
@@ -36,7 +38,7 @@ use serde::{Deserialize, Serialize};
 pub enum TaskKind {
     /// §4.1, linear-Gaussian learner, velocity-obstacle expert.
     Obstacle,
-    /// §4.2, softmax learner, LQR expert.
+    /// §4.2, softmax learner, PPO or LQR expert.
     Cartpole,
 }
 
@@ -83,6 +85,39 @@ pub struct Checkpoint {
     pub grad_y: Option<f64>,
 }
 
+impl Checkpoint {
+    /// A checkpoint from an evaluation and the run's cost so far.
+    fn from_eval(
+        ev: &Eval,
+        kind: TaskKind,
+        episodes: u32,
+        iteration: u64,
+        cost: &Cost,
+        grad: Option<(f64, f64)>,
+    ) -> Self {
+        let score = match kind {
+            TaskKind::Obstacle => f64::from(ev.successes) / f64::from(episodes),
+            TaskKind::Cartpole => ev.reward / cartpole_max_steps() as f64,
+        };
+        Checkpoint {
+            iteration,
+            trajectories: cost.trajectories,
+            gradient_evaluations: cost.gradient_evaluations,
+            expert_queries: cost.expert_queries,
+            score,
+            successes: ev.successes,
+            crashes: ev.crashes,
+            timeouts: ev.timeouts,
+            reward: ev.reward,
+            loss: ev.loss,
+            loss_x: ev.loss_xy.map(|l| l.0),
+            loss_y: ev.loss_xy.map(|l| l.1),
+            grad_x: grad.map(|g| g.0),
+            grad_y: grad.map(|g| g.1),
+        }
+    }
+}
+
 /// One seeded run (deterministic part).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SeedRun {
@@ -120,8 +155,8 @@ pub struct SeedTiming {
 pub enum Bench {
     /// The obstacle task.
     Obstacle {
-        /// The IL problem.
-        problem: TaskProblem<ObstacleTask, LinearGaussian<f64>>,
+        /// The IL problem (velocities stored inline: no allocation per step).
+        problem: ObstacleProblem,
         /// The environment configuration.
         env: ObstacleConfig,
         /// The expert (for the evaluation loss).
@@ -131,10 +166,56 @@ pub enum Bench {
     Cartpole {
         /// The IL problem.
         problem: TaskProblem<CartPoleTask<f64>, Softmax>,
+        /// Which expert labels the states.
+        expert: CartPoleExpertChoice,
     },
 }
 
+/// The obstacle task's IL problem: linear-Gaussian learner, velocities as inline `[f64; 2]`.
+pub type ObstacleProblem = TaskProblem<ObstacleTask<[f64; 2]>, LinearGaussian<f64, [f64; 2]>>;
+
+/// A reference policy evaluated on the same episodes as the learners, without training: the
+/// appendix's baseline rows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Baseline {
+    /// The task's expert (the velocity-obstacle expert; CartPole's PPO or LQR expert).
+    Expert,
+    /// Obstacle task: full speed straight at the goal, ignoring the obstacle,
+    /// `v = v_max·(g − p)/‖g − p‖`.
+    StraightToGoal,
+}
+
+impl Baseline {
+    /// Its label in tables and figures.
+    pub fn label(self, bench: &Bench) -> String {
+        match (self, bench) {
+            (Baseline::Expert, Bench::Obstacle { .. }) => "Expert (VO)".into(),
+            (Baseline::Expert, Bench::Cartpole { expert, .. }) => {
+                format!("Expert ({})", expert.name())
+            }
+            (Baseline::StraightToGoal, _) => "Straight to goal".into(),
+        }
+    }
+
+    /// The baselines of a task, in table order.
+    pub fn of(kind: TaskKind) -> &'static [Baseline] {
+        match kind {
+            TaskKind::Obstacle => &[Baseline::Expert, Baseline::StraightToGoal],
+            TaskKind::Cartpole => &[Baseline::Expert],
+        }
+    }
+}
+
+/// An obstacle-task policy for evaluation: (observation, φ(s)) ↦ velocity.
+type ObstacleAct<'a> = dyn FnMut(&ObstacleObs, &[f64]) -> Result<[f64; 2], Error> + 'a;
+
+/// A CartPole policy for evaluation: (episode, φ(s), expert's action) ↦ (action, its loss).
+type CartPoleAct<'a> =
+    dyn FnMut(&CartPoleEpisode<f64>, &[f64], usize) -> Result<(usize, f64), Error> + 'a;
+
 /// What one evaluation gives.
+#[derive(Default)]
 struct Eval {
     successes: u32,
     crashes: u32,
@@ -149,126 +230,212 @@ impl Bench {
     ///
     /// # Errors
     /// [`Error::Experiment`] if the environment, expert or policy cannot be built.
-    pub fn new(kind: TaskKind, sigma: Option<f64>) -> Result<Self, Error> {
+    pub fn new(kind: TaskKind, task: &TaskSection) -> Result<Self, Error> {
         let e = |x: &dyn std::fmt::Display| Error::experiment(kind.name(), x);
         Ok(match kind {
-            TaskKind::Obstacle => {
-                let env = ObstacleConfig::default();
-                let params = VoExpertParams::default();
-                Bench::Obstacle {
+            TaskKind::Obstacle => Self::obstacle(task.sigma.unwrap_or(0.02))?,
+            TaskKind::Cartpole => {
+                let choice = task.expert.unwrap_or_default();
+                let t = match choice {
+                    CartPoleExpertChoice::Lqr => CartPoleTask::with_lqr(),
+                    CartPoleExpertChoice::Ppo => {
+                        CartPoleTask::with_ppo(&CartPoleExpertChoice::ppo_file())
+                    }
+                }
+                .map_err(|x| e(&x))?;
+                Bench::Cartpole {
                     problem: TaskProblem {
-                        task: ObstacleTask::new(env.clone(), params).map_err(|x| e(&x))?,
-                        policy: LinearGaussian::new(2, obstacle::FEATURES, sigma.unwrap_or(0.02))
-                            .map_err(|x| e(&x))?,
+                        task: t,
+                        policy: Softmax::new(2, cartpole::FEATURES).map_err(|x| e(&x))?,
                     },
-                    expert: VoExpertPolicy::new(&env, params).map_err(|x| e(&x))?,
-                    env,
+                    expert: choice,
                 }
             }
-            TaskKind::Cartpole => Bench::Cartpole {
-                problem: TaskProblem {
-                    task: CartPoleTask::with_lqr().map_err(|x| e(&x))?,
-                    policy: Softmax::new(2, cartpole::FEATURES).map_err(|x| e(&x))?,
-                },
+        })
+    }
+
+    /// The obstacle task's bench with a linear-Gaussian learner of standard deviation `sigma`.
+    ///
+    /// # Errors
+    /// [`Error::Experiment`] if the environment, expert or policy cannot be built.
+    pub fn obstacle(sigma: f64) -> Result<Self, Error> {
+        let e = |x: &dyn std::fmt::Display| Error::experiment("obstacle", x);
+        let env = ObstacleConfig::default();
+        let params = VoExpertParams::default();
+        Ok(Bench::Obstacle {
+            problem: TaskProblem {
+                task: ObstacleTask::new(env.clone(), params)
+                    .map_err(|x| e(&x))?
+                    .with_actions::<[f64; 2]>(),
+                policy: LinearGaussian::new(2, obstacle::FEATURES, sigma)
+                    .and_then(LinearGaussian::with_actions::<[f64; 2]>)
+                    .map_err(|x| e(&x))?,
             },
+            expert: VoExpertPolicy::new(&env, params).map_err(|x| e(&x))?,
+            env,
         })
     }
 
     /// Number of policy parameters.
     pub fn dim(&self) -> usize {
         match self {
-            Bench::Obstacle { problem, .. } => problem.dim(),
-            Bench::Cartpole { problem } => IlProblem::<f64>::dim(problem),
+            Bench::Obstacle { problem, .. } => IlProblem::<f64>::dim(problem),
+            Bench::Cartpole { problem, .. } => IlProblem::<f64>::dim(problem),
         }
     }
 
+    /// Evaluate the learner at θ (deterministic: the Gaussian mean, the most probable action).
     fn evaluate(&self, theta: &[f64], episodes: u32, key: &str) -> Result<Eval, Error> {
         let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
-        let mut ev = Eval {
-            successes: 0,
-            crashes: 0,
-            timeouts: 0,
-            reward: 0.0,
-            loss: 0.0,
-            loss_xy: None,
-        };
-        let mut decisions = 0u64;
         match self {
-            Bench::Obstacle {
-                problem,
-                env,
-                expert,
-            } => {
-                let (mut lx, mut ly) = (0.0, 0.0);
-                for j in 0..episodes {
-                    let mut rng = KitRng::seed_from_u64(derive_seed(key, u64::from(j)));
-                    let mut e = ObstacleEnv::new(env.clone()).map_err(|x| err(&x))?;
-                    let mut obs = e.reset(&mut rng);
-                    loop {
-                        let phi = obstacle::features(&obs, env.goal);
-                        let m = problem.policy.mean(theta, &phi).map_err(|x| err(&x))?;
-                        let star = expert.act(&obs).map_err(|x| err(&x))?;
-                        lx += (m[0] - star[0]).powi(2);
-                        ly += (m[1] - star[1]).powi(2);
-                        decisions += 1;
-                        let a = [m[0], m[1]];
-                        let a = if a.iter().all(|v| v.is_finite()) {
-                            a
-                        } else {
-                            [0.0, 0.0]
-                        };
-                        let s = e.step(a).map_err(|x| err(&x))?;
-                        ev.reward += s.reward;
-                        obs = s.obs;
-                        match s.outcome {
-                            Outcome::Running => {}
-                            Outcome::Success => {
-                                ev.successes += 1;
-                                break;
-                            }
-                            Outcome::Crash => {
-                                ev.crashes += 1;
-                                break;
-                            }
-                            _ => {
-                                ev.timeouts += 1;
-                                break;
-                            }
-                        }
-                    }
-                }
-                let n = decisions.max(1) as f64;
-                ev.loss_xy = Some((lx / n, ly / n));
-                ev.loss = (lx + ly) / n;
-            }
-            Bench::Cartpole { problem } => {
-                let task = &problem.task;
-                for j in 0..episodes {
-                    let mut rng = KitRng::seed_from_u64(derive_seed(key, u64::from(j)));
-                    let mut ep = task.start(&mut rng).map_err(|x| err(&x))?;
-                    loop {
-                        let phi = task.features(&ep);
-                        let (label, _) = task.expert(&ep).map_err(|x| err(&x))?;
-                        let (l, _) = Policy::<f64>::loss(&problem.policy, theta, &phi, &label)
-                            .map_err(|x| err(&x))?;
-                        ev.loss += l;
-                        decisions += 1;
-                        let z = problem.policy.logits(theta, &phi).map_err(|x| err(&x))?;
-                        let a = usize::from(z[1] > z[0]);
-                        if task.advance(&mut ep, &a).map_err(|x| err(&x))? {
-                            break;
-                        }
-                    }
-                    ev.reward += ep.steps as f64;
-                    if ep.steps >= cartpole_max_steps() {
-                        ev.successes += 1;
+            Bench::Obstacle { problem, .. } => self.evaluate_obstacle(
+                &mut |_, phi| {
+                    let m = problem.policy.mean(theta, phi).map_err(|x| err(&x))?;
+                    Ok([m[0], m[1]])
+                },
+                episodes,
+                key,
+            ),
+            Bench::Cartpole { problem, .. } => self.evaluate_cartpole(
+                &mut |_, phi, label| {
+                    let (l, _) = Policy::<f64>::loss(&problem.policy, theta, phi, &label)
+                        .map_err(|x| err(&x))?;
+                    let z = problem.policy.logits(theta, phi).map_err(|x| err(&x))?;
+                    Ok((usize::from(z[1] > z[0]), l))
+                },
+                episodes,
+                key,
+            ),
+        }
+    }
+
+    /// Evaluate a baseline policy on the same episodes as the learners.
+    fn evaluate_baseline(&self, b: Baseline, episodes: u32, key: &str) -> Result<Eval, Error> {
+        let err = |x: &dyn std::fmt::Display| Error::experiment(format!("baseline ({key})"), x);
+        match (self, b) {
+            (Bench::Obstacle { expert, .. }, Baseline::Expert) => self.evaluate_obstacle(
+                &mut |obs, _| expert.act(obs).map_err(|x| err(&x)),
+                episodes,
+                key,
+            ),
+            (Bench::Obstacle { env, .. }, Baseline::StraightToGoal) => self.evaluate_obstacle(
+                &mut |obs, _| {
+                    let d = [
+                        env.goal[0] - obs.agent_pos[0],
+                        env.goal[1] - obs.agent_pos[1],
+                    ];
+                    let n = d[0].hypot(d[1]);
+                    Ok(if n > 0.0 {
+                        let v = env.agent_max_speed / n;
+                        [d[0] * v, d[1] * v]
                     } else {
+                        [0.0, 0.0]
+                    })
+                },
+                episodes,
+                key,
+            ),
+            (Bench::Cartpole { .. }, Baseline::Expert) => {
+                self.evaluate_cartpole(&mut |_, _, label| Ok((label, 0.0)), episodes, key)
+            }
+            (Bench::Cartpole { .. }, Baseline::StraightToGoal) => Err(err(&"CartPole has no goal")),
+        }
+    }
+
+    /// Obstacle episodes driven by `act(observation, φ(s))`; non-finite velocities are replaced
+    /// by zero (the episode then times out) and counted in the loss as they are.
+    fn evaluate_obstacle(
+        &self,
+        act: &mut ObstacleAct<'_>,
+        episodes: u32,
+        key: &str,
+    ) -> Result<Eval, Error> {
+        let Bench::Obstacle { env, expert, .. } = self else {
+            return Err(Error::experiment(key, "not the obstacle task"));
+        };
+        let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
+        let mut ev = Eval::default();
+        let mut decisions = 0u64;
+        let (mut lx, mut ly) = (0.0, 0.0);
+        for j in 0..episodes {
+            let mut rng = KitRng::seed_from_u64(derive_seed(key, u64::from(j)));
+            let mut e = ObstacleEnv::new(env.clone()).map_err(|x| err(&x))?;
+            let mut obs = e.reset(&mut rng);
+            loop {
+                let phi = obstacle::feature_array(&obs, env.goal);
+                let m = act(&obs, &phi)?;
+                let star = expert.act(&obs).map_err(|x| err(&x))?;
+                lx += (m[0] - star[0]).powi(2);
+                ly += (m[1] - star[1]).powi(2);
+                decisions += 1;
+                let a = if m.iter().all(|v| v.is_finite()) {
+                    m
+                } else {
+                    [0.0, 0.0]
+                };
+                let s = e.step(a).map_err(|x| err(&x))?;
+                ev.reward += s.reward;
+                obs = s.obs;
+                match s.outcome {
+                    Outcome::Running => {}
+                    Outcome::Success => {
+                        ev.successes += 1;
+                        break;
+                    }
+                    Outcome::Crash => {
                         ev.crashes += 1;
+                        break;
+                    }
+                    _ => {
+                        ev.timeouts += 1;
+                        break;
                     }
                 }
-                ev.loss /= decisions.max(1) as f64;
             }
         }
+        let n = decisions.max(1) as f64;
+        ev.loss_xy = Some((lx / n, ly / n));
+        ev.loss = (lx + ly) / n;
+        ev.reward /= f64::from(episodes);
+        Ok(ev)
+    }
+
+    /// CartPole episodes driven by `act(episode, φ(s), expert's action) = (action, loss)`; the
+    /// loss is the learner's per-decision supervised loss (the expert's own is 0).
+    fn evaluate_cartpole(
+        &self,
+        act: &mut CartPoleAct<'_>,
+        episodes: u32,
+        key: &str,
+    ) -> Result<Eval, Error> {
+        let Bench::Cartpole { problem, .. } = self else {
+            return Err(Error::experiment(key, "not CartPole"));
+        };
+        let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
+        let task = &problem.task;
+        let mut ev = Eval::default();
+        let mut decisions = 0u64;
+        for j in 0..episodes {
+            let mut rng = KitRng::seed_from_u64(derive_seed(key, u64::from(j)));
+            let mut ep = task.start(&mut rng).map_err(|x| err(&x))?;
+            loop {
+                let phi = task.features(&ep);
+                let (label, _) = task.expert(&ep).map_err(|x| err(&x))?;
+                let (a, l) = act(&ep, &phi, label)?;
+                ev.loss += l;
+                decisions += 1;
+                if task.advance(&mut ep, &a).map_err(|x| err(&x))? {
+                    break;
+                }
+            }
+            ev.reward += ep.steps as f64;
+            if ep.steps >= cartpole_max_steps() {
+                ev.successes += 1;
+            } else {
+                ev.crashes += 1;
+            }
+        }
+        ev.loss /= decisions.max(1) as f64;
         ev.reward /= f64::from(episodes);
         Ok(ev)
     }
@@ -360,11 +527,11 @@ pub fn run_seed(
         Bench::Obstacle { problem, .. } => Runner::new(rc.stop.clone())
             .and_then(|mut r| r.run_config(&rc, problem))
             .map_err(|e| Error::experiment(&what, e))?,
-        Bench::Cartpole { problem } => Runner::new(rc.stop.clone())
+        Bench::Cartpole { problem, .. } => Runner::new(rc.stop.clone())
             .and_then(|mut r| r.run_config(&rc, problem))
             .map_err(|e| Error::experiment(&what, e))?,
     };
-    let eval_key = format!("{}-eval|{seed_index}", kind.name());
+    let eval_key = eval_key(kind, seed_index);
     let last = rec.history.last().map_or(0, |m| m.iteration);
     let mut checkpoints = Vec::new();
     let mut seconds = Vec::new();
@@ -384,26 +551,14 @@ pub fn run_seed(
                 m.iteration * 1000 + u64::from(seed_index),
             ),
         )?;
-        let score = match kind {
-            TaskKind::Obstacle => f64::from(ev.successes) / f64::from(task.eval_episodes),
-            TaskKind::Cartpole => ev.reward / cartpole_max_steps() as f64,
-        };
-        checkpoints.push(Checkpoint {
-            iteration: m.iteration,
-            trajectories: m.cost.trajectories,
-            gradient_evaluations: m.cost.gradient_evaluations,
-            expert_queries: m.cost.expert_queries,
-            score,
-            successes: ev.successes,
-            crashes: ev.crashes,
-            timeouts: ev.timeouts,
-            reward: ev.reward,
-            loss: ev.loss,
-            loss_x: ev.loss_xy.map(|l| l.0),
-            loss_y: ev.loss_xy.map(|l| l.1),
-            grad_x: grad.map(|g| g.0),
-            grad_y: grad.map(|g| g.1),
-        });
+        checkpoints.push(Checkpoint::from_eval(
+            &ev,
+            kind,
+            task.eval_episodes,
+            m.iteration,
+            &m.cost,
+            grad,
+        ));
         seconds.push(m.wall_time);
     }
     let converged = checkpoints
@@ -427,6 +582,34 @@ pub fn run_seed(
     ))
 }
 
+/// The key of a seed's evaluation episodes: the same episodes for every algorithm, checkpoint
+/// and baseline of that seed (common random numbers).
+fn eval_key(kind: TaskKind, seed_index: u32) -> String {
+    format!("{}-eval|{seed_index}", kind.name())
+}
+
+/// A baseline evaluated on seed `seed_index`'s evaluation episodes (no training, zero cost).
+///
+/// # Errors
+/// [`Error::Experiment`] if an episode fails.
+pub fn baseline_seed(
+    bench: &Bench,
+    kind: TaskKind,
+    task: &TaskSection,
+    baseline: Baseline,
+    seed_index: u32,
+) -> Result<Checkpoint, Error> {
+    let ev = bench.evaluate_baseline(baseline, task.eval_episodes, &eval_key(kind, seed_index))?;
+    Ok(Checkpoint::from_eval(
+        &ev,
+        kind,
+        task.eval_episodes,
+        0,
+        &Cost::default(),
+        None,
+    ))
+}
+
 /// Fig. 4.2 for one seed: for each N, the norms of the x and y rows of
 /// (mean of the first N estimates) − reference.
 ///
@@ -437,7 +620,7 @@ pub fn gradient_error_seed(
     reference: &DVector<f64>,
     seed_index: u32,
 ) -> Result<Vec<(u64, f64, f64)>, Error> {
-    let Bench::Obstacle { problem, .. } = Bench::new(TaskKind::Obstacle, Some(g.sigma))? else {
+    let Bench::Obstacle { problem, .. } = Bench::obstacle(g.sigma)? else {
         return Err(Error::experiment("gradient error", "not the obstacle task"));
     };
     let theta = DVector::from_vec(g.theta.clone());
@@ -471,7 +654,7 @@ pub fn gradient_error_seed(
 /// # Errors
 /// As [`gradient_error_seed`].
 pub fn gradient_reference(g: &GradientError) -> Result<DVector<f64>, Error> {
-    let Bench::Obstacle { problem, .. } = Bench::new(TaskKind::Obstacle, Some(g.sigma))? else {
+    let Bench::Obstacle { problem, .. } = Bench::obstacle(g.sigma)? else {
         return Err(Error::experiment("gradient error", "not the obstacle task"));
     };
     use rayon::prelude::*;

@@ -10,8 +10,8 @@
 use crate::config::{AlgorithmEntry, Profile, TaskSection};
 use crate::error::Error;
 use crate::experiment::{
-    Bench, SeedRun, SeedTiming, TaskKind, gradient_error_seed, gradient_reference, run_key,
-    run_seed,
+    Baseline, Bench, Checkpoint, SeedRun, SeedTiming, TaskKind, baseline_seed, gradient_error_seed,
+    gradient_reference, run_key, run_seed,
 };
 use crate::stats::fnv1a;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -75,6 +75,20 @@ pub struct GradientErrorResult {
     pub seeds: Vec<Vec<(u64, f64, f64)>>,
 }
 
+/// A baseline policy's evaluation on every seed's evaluation episodes (the episodes the learners'
+/// checkpoints of that seed meet).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BaselineResult {
+    /// The task.
+    pub task: TaskKind,
+    /// Which baseline.
+    pub baseline: Baseline,
+    /// Its label in tables and figures.
+    pub label: String,
+    /// One evaluation per seed, in seed order (iteration 0, zero cost).
+    pub runs: Vec<Checkpoint>,
+}
+
 /// Everything the reports need.
 #[derive(Debug, Clone)]
 pub struct Results {
@@ -84,6 +98,8 @@ pub struct Results {
     pub obstacle: Vec<(ConfigResult, Option<ConfigTiming>)>,
     /// CartPole configurations in table order.
     pub cartpole: Vec<(ConfigResult, Option<ConfigTiming>)>,
+    /// The baselines of both tasks (obstacle first, table order).
+    pub baselines: Vec<BaselineResult>,
     /// The theorem-check table (Markdown).
     pub theory_markdown: String,
     /// Configurations computed in this run (the others were reused).
@@ -189,8 +205,9 @@ impl Progress {
 }
 
 fn task_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEntry) -> String {
+    let expert = (kind == TaskKind::Cartpole).then(|| t.expert.unwrap_or_default().identity());
     let section = serde_json::json!({
-        "sigma": t.sigma, "eval_episodes": t.eval_episodes,
+        "sigma": t.sigma, "expert": expert, "eval_episodes": t.eval_episodes,
         "grad_trajectories": t.grad_trajectories, "converge_score": t.converge_score,
         "iterations": e.iterations(t), "eval_every": e.eval_every(t),
     });
@@ -270,8 +287,8 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         };
     let progress = Progress::new(total, opts.progress);
     let benches = [
-        Bench::new(TaskKind::Obstacle, profile.obstacle.sigma)?,
-        Bench::new(TaskKind::Cartpole, None)?,
+        Bench::new(TaskKind::Obstacle, &profile.obstacle)?,
+        Bench::new(TaskKind::Cartpole, &profile.cartpole)?,
     ];
     let seeds: Vec<u32> = (0..profile.seeds).collect();
 
@@ -381,6 +398,11 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
             results[ti][i] = Some((c, Some(tm)));
         }
     }
+    let baselines = baselines_job(profile, &benches, &seeds)?;
+    write_atomic(
+        &opts.out.join("baselines.json"),
+        &to_json("baselines", &baselines)?,
+    )?;
     let mut it = results
         .into_iter()
         .map(|row| row.into_iter().flatten().collect::<Vec<_>>());
@@ -388,7 +410,36 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         gradient_error,
         obstacle: it.next().unwrap_or_default(),
         cartpole: it.next().unwrap_or_default(),
+        baselines,
         theory_markdown,
         computed: names,
     })
+}
+
+/// Evaluate every task's baselines on every seed's evaluation episodes (cheap: no training, so
+/// never cached).
+fn baselines_job(
+    profile: &Profile,
+    benches: &[Bench; 2],
+    seeds: &[u32],
+) -> Result<Vec<BaselineResult>, Error> {
+    let mut out = Vec::new();
+    for (kind, t, bench) in [
+        (TaskKind::Obstacle, &profile.obstacle, &benches[0]),
+        (TaskKind::Cartpole, &profile.cartpole, &benches[1]),
+    ] {
+        for &b in Baseline::of(kind) {
+            let runs = seeds
+                .par_iter()
+                .map(|&s| baseline_seed(bench, kind, t, b, s))
+                .collect::<Result<Vec<_>, Error>>()?;
+            out.push(BaselineResult {
+                task: kind,
+                baseline: b,
+                label: b.label(bench),
+                runs,
+            });
+        }
+    }
+    Ok(out)
 }

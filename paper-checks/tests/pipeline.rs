@@ -115,6 +115,30 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
     assert!(fa.contains_key("checkpoints.csv"), "{:?}", fa.keys());
     assert!(fa.contains_key("tables.json"), "{:?}", fa.keys());
     assert!(fa.contains_key("gradient_error.csv"), "{:?}", fa.keys());
+    assert!(fa.contains_key("baselines.json"), "{:?}", fa.keys());
+    // The baselines are evaluated on the learners' episodes: the experts succeed on every one
+    // (the VO expert reaches the goal, PPO balances 500 steps) with zero loss against
+    // themselves, and ignoring the obstacle does not beat the expert.
+    let baselines: Vec<paper_checks::pipeline::BaselineResult> =
+        serde_json::from_slice(&fa["baselines.json"]).expect("baselines.json parses");
+    let labels: Vec<&str> = baselines.iter().map(|b| b.label.as_str()).collect();
+    assert_eq!(labels, ["Expert (VO)", "Straight to goal", "Expert (PPO)"]);
+    for b in &baselines {
+        assert_eq!(b.runs.len(), 2, "{}: one evaluation per seed", b.label);
+        if b.label.starts_with("Expert") {
+            assert!(
+                b.runs.iter().all(|c| c.score == 1.0 && c.loss == 0.0),
+                "{}",
+                b.label
+            );
+        } else {
+            assert!(
+                b.runs.iter().all(|c| c.score <= 1.0 && c.loss > 0.0),
+                "{}",
+                b.label
+            );
+        }
+    }
     assert!(fa.keys().any(|k| k.ends_with(".svg")), "{:?}", fa.keys());
     assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>());
     for (k, v) in &fa {
@@ -241,6 +265,24 @@ fn bad_profiles_are_rejected_naming_file_and_field() {
             "duplicate label",
             TINY.replace("label = \"DAgger\"", "label = \"SGD\""),
             "duplicate label",
+        ),
+        (
+            "an expert for the obstacle task",
+            TINY.replace(
+                "grad_trajectories = 1",
+                "grad_trajectories = 1\nexpert = \"ppo\"",
+            ),
+            "obstacle.expert",
+        ),
+        (
+            "a σ for CartPole's softmax",
+            TINY.replace("[cartpole]\n", "[cartpole]\nsigma = 0.1\n"),
+            "cartpole.sigma",
+        ),
+        (
+            "an unknown CartPole expert",
+            TINY.replace("[cartpole]\n", "[cartpole]\nexpert = \"pid\"\n"),
+            "expert",
         ),
         (
             "theory profile",
