@@ -49,6 +49,9 @@ pub struct TaskSection {
     /// σ_π of the linear-Gaussian learner (obstacle task only; must be absent for CartPole).
     #[serde(default)]
     pub sigma: Option<f64>,
+    /// The obstacle learner's features (obstacle task only; default: the 9 basic features).
+    #[serde(default)]
+    pub features: Option<ilopt::task::obstacle::ObstacleFeatures>,
     /// CartPole's expert (must be absent for the obstacle task, whose expert is the
     /// velocity-obstacle expert of eq. 4.1): `"ppo"` (the thesis's, default) or `"lqr"`.
     #[serde(default)]
@@ -230,6 +233,17 @@ impl Profile {
                     "obstacle.expert",
                     "the obstacle task's expert is the velocity-obstacle expert; remove the field",
                 ));
+            }
+            if name == "cartpole" && t.features.is_some() {
+                return Err(field(
+                    file,
+                    "cartpole.features",
+                    "CartPole's features are the state and a bias; remove the field",
+                ));
+            }
+            if let Some(f) = &t.features {
+                f.validate()
+                    .map_err(|e| field(file, &format!("{name}.features"), e.to_string()))?;
             }
             if name == "cartpole" && t.sigma.is_some() {
                 return Err(field(

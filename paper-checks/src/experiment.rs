@@ -23,10 +23,10 @@ use ilopt::algo::{Num, RunConfig, Runner, StoppingRule};
 use ilopt::env::obstacle::{
     ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome, VoExpertParams, VoExpertPolicy,
 };
-use ilopt::policy::{LinearGaussian, Policy, Softmax};
+use ilopt::policy::{LinearGaussian, Policy, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use ilopt::task::cartpole::{self, CartPoleEpisode, CartPoleTask};
-use ilopt::task::obstacle::{self, ObstacleTask};
+use ilopt::task::obstacle::{ObstacleFeatures, ObstacleTask};
 use ilopt::task::{Task, TaskProblem};
 use nalgebra::DVector;
 use rand::SeedableRng;
@@ -171,8 +171,10 @@ pub enum Bench {
     },
 }
 
-/// The obstacle task's IL problem: linear-Gaussian learner, velocities as inline `[f64; 2]`.
-pub type ObstacleProblem = TaskProblem<ObstacleTask<[f64; 2]>, LinearGaussian<f64, [f64; 2]>>;
+/// The obstacle task's IL problem: linear-Gaussian learner (P3) over the profile's features, with
+/// the loss of the executed (speed-clipped) velocity ([`SpeedLimitedGaussian`]); velocities
+/// stored inline as `[f64; 2]`.
+pub type ObstacleProblem = TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGaussian<f64, [f64; 2]>>;
 
 /// A reference policy evaluated on the same episodes as the learners, without training: the
 /// appendix's baseline rows.
@@ -233,7 +235,10 @@ impl Bench {
     pub fn new(kind: TaskKind, task: &TaskSection) -> Result<Self, Error> {
         let e = |x: &dyn std::fmt::Display| Error::experiment(kind.name(), x);
         Ok(match kind {
-            TaskKind::Obstacle => Self::obstacle(task.sigma.unwrap_or(0.02))?,
+            TaskKind::Obstacle => Self::obstacle(
+                task.sigma.unwrap_or(0.02),
+                task.features.unwrap_or_default(),
+            )?,
             TaskKind::Cartpole => {
                 let choice = task.expert.unwrap_or_default();
                 let t = match choice {
@@ -254,22 +259,26 @@ impl Bench {
         })
     }
 
-    /// The obstacle task's bench with a linear-Gaussian learner of standard deviation `sigma`.
+    /// The obstacle task's bench: the linear-Gaussian learner of standard deviation `sigma` over
+    /// `features`, trained on the loss of the executed velocity.
     ///
     /// # Errors
     /// [`Error::Experiment`] if the environment, expert or policy cannot be built.
-    pub fn obstacle(sigma: f64) -> Result<Self, Error> {
+    pub fn obstacle(sigma: f64, features: ObstacleFeatures) -> Result<Self, Error> {
         let e = |x: &dyn std::fmt::Display| Error::experiment("obstacle", x);
         let env = ObstacleConfig::default();
         let params = VoExpertParams::default();
+        let task = ObstacleTask::new(env.clone(), params)
+            .and_then(|t| t.with_features(features))
+            .map_err(|x| e(&x))?
+            .with_actions::<[f64; 2]>();
+        let inner = LinearGaussian::new(2, task.feature_dim(), sigma)
+            .and_then(LinearGaussian::with_actions::<[f64; 2]>)
+            .map_err(|x| e(&x))?;
         Ok(Bench::Obstacle {
             problem: TaskProblem {
-                task: ObstacleTask::new(env.clone(), params)
-                    .map_err(|x| e(&x))?
-                    .with_actions::<[f64; 2]>(),
-                policy: LinearGaussian::new(2, obstacle::FEATURES, sigma)
-                    .and_then(LinearGaussian::with_actions::<[f64; 2]>)
-                    .map_err(|x| e(&x))?,
+                policy: SpeedLimitedGaussian::new(inner, env.agent_max_speed).map_err(|x| e(&x))?,
+                task,
             },
             expert: VoExpertPolicy::new(&env, params).map_err(|x| e(&x))?,
             env,
@@ -290,7 +299,10 @@ impl Bench {
         match self {
             Bench::Obstacle { problem, .. } => self.evaluate_obstacle(
                 &mut |_, phi| {
-                    let m = problem.policy.mean(theta, phi).map_err(|x| err(&x))?;
+                    let m = problem
+                        .policy
+                        .executed_mean(theta, phi)
+                        .map_err(|x| err(&x))?;
                     Ok([m[0], m[1]])
                 },
                 episodes,
@@ -350,7 +362,12 @@ impl Bench {
         episodes: u32,
         key: &str,
     ) -> Result<Eval, Error> {
-        let Bench::Obstacle { env, expert, .. } = self else {
+        let Bench::Obstacle {
+            env,
+            expert,
+            problem,
+        } = self
+        else {
             return Err(Error::experiment(key, "not the obstacle task"));
         };
         let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
@@ -362,7 +379,7 @@ impl Bench {
             let mut e = ObstacleEnv::new(env.clone()).map_err(|x| err(&x))?;
             let mut obs = e.reset(&mut rng);
             loop {
-                let phi = obstacle::feature_array(&obs, env.goal);
+                let phi = problem.task.observation_features(&obs);
                 let m = act(&obs, &phi)?;
                 let star = expert.act(&obs).map_err(|x| err(&x))?;
                 lx += (m[0] - star[0]).powi(2);
@@ -465,7 +482,7 @@ pub fn cartpole_max_steps() -> usize {
 }
 
 fn row_norms(g: &DVector<f64>) -> (f64, f64) {
-    let n = obstacle::FEATURES;
+    let n = g.len() / 2;
     let x = g.rows(0, n).norm();
     let y = g.rows(n, n).norm();
     (x, y)
@@ -620,7 +637,7 @@ pub fn gradient_error_seed(
     reference: &DVector<f64>,
     seed_index: u32,
 ) -> Result<Vec<(u64, f64, f64)>, Error> {
-    let Bench::Obstacle { problem, .. } = Bench::obstacle(g.sigma)? else {
+    let Bench::Obstacle { problem, .. } = Bench::obstacle(g.sigma, ObstacleFeatures::Basic)? else {
         return Err(Error::experiment("gradient error", "not the obstacle task"));
     };
     let theta = DVector::from_vec(g.theta.clone());
@@ -654,7 +671,7 @@ pub fn gradient_error_seed(
 /// # Errors
 /// As [`gradient_error_seed`].
 pub fn gradient_reference(g: &GradientError) -> Result<DVector<f64>, Error> {
-    let Bench::Obstacle { problem, .. } = Bench::obstacle(g.sigma)? else {
+    let Bench::Obstacle { problem, .. } = Bench::obstacle(g.sigma, ObstacleFeatures::Basic)? else {
         return Err(Error::experiment("gradient error", "not the obstacle task"));
     };
     use rayon::prelude::*;

@@ -207,7 +207,8 @@ impl Progress {
 fn task_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEntry) -> String {
     let expert = (kind == TaskKind::Cartpole).then(|| t.expert.unwrap_or_default().identity());
     let section = serde_json::json!({
-        "sigma": t.sigma, "expert": expert, "eval_episodes": t.eval_episodes,
+        "sigma": t.sigma, "features": t.features, "expert": expert,
+        "eval_episodes": t.eval_episodes,
         "grad_trajectories": t.grad_trajectories, "converge_score": t.converge_score,
         "iterations": e.iterations(t), "eval_every": e.eval_every(t),
     });

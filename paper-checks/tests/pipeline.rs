@@ -280,6 +280,19 @@ fn bad_profiles_are_rejected_naming_file_and_field() {
             "cartpole.sigma",
         ),
         (
+            "a one-centre RBF grid",
+            TINY.replace(
+                "grad_trajectories = 1",
+                "grad_trajectories = 1\nfeatures = { kind = \"rbf\", per_axis = 1, width = 0.2, x_range = [0, 1], y_range = [0, 1] }",
+            ),
+            "obstacle.features",
+        ),
+        (
+            "features for CartPole",
+            TINY.replace("[cartpole]\n", "[cartpole]\nfeatures = { kind = \"basic\" }\n"),
+            "cartpole.features",
+        ),
+        (
             "an unknown CartPole expert",
             TINY.replace("[cartpole]\n", "[cartpole]\nexpert = \"pid\"\n"),
             "expert",

@@ -25,11 +25,13 @@ mod linear_gaussian;
 mod logistic;
 mod mlp;
 mod softmax;
+mod speed_limited;
 
 pub use linear_gaussian::{ActionVector, LinearGaussian};
 pub use logistic::{Logistic, logistic_sigmoid, softplus};
 pub use mlp::{Forward, Mlp, MlpGaussian, MlpSoftmax, tanh};
 pub use softmax::{Softmax, brier_logit_gradient, log_softmax, softmax_probs};
+pub use speed_limited::SpeedLimitedGaussian;
 
 use crate::problem::KitRng;
 use crate::scalar::{Scalar, Undecidable};
