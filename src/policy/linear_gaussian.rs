@@ -20,8 +20,8 @@
 //! that sampling (and a roll-out storing the actions) allocates nothing; the numbers are the same.
 
 use super::{
-    LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec, mat_vec, outer,
-    standard_normal,
+    LikelihoodRatio, Policy, PolicyError, check_out, check_positive, check_size, check_vec,
+    mat_vec, outer, standard_normal,
 };
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
@@ -77,15 +77,7 @@ impl<S: Scalar> LinearGaussian<S> {
     pub fn new(actions: usize, features: usize, sigma: S) -> Result<Self, PolicyError> {
         check_size("actions", actions, 1)?;
         check_size("features", features, 1)?;
-        if !sigma.is_finite() {
-            return Err(PolicyError::NonFinite { param: "sigma" });
-        }
-        if !sigma.is_certainly_positive() {
-            return Err(PolicyError::NotPositive {
-                param: "sigma",
-                value: sigma.to_f64(),
-            });
-        }
+        check_positive("sigma", &sigma)?;
         Ok(Self {
             actions,
             features,

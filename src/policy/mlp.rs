@@ -18,8 +18,8 @@
 
 use super::softmax::{check_action, log_softmax, sample_probs, score_logits};
 use super::{
-    LikelihoodRatio, Policy, PolicyError, brier_logit_gradient, check_size, check_vec,
-    from_f64_exact, mat_vec, outer, softmax_probs, standard_normal,
+    LikelihoodRatio, Policy, PolicyError, brier_logit_gradient, check_positive, check_size,
+    check_vec, from_f64_exact, mat_vec, outer, softmax_probs, standard_normal,
 };
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
@@ -271,15 +271,7 @@ impl<S: Scalar> MlpGaussian<S> {
         sigma: S,
     ) -> Result<Self, PolicyError> {
         let net = Mlp::new(features, hidden, actions)?;
-        if !sigma.is_finite() {
-            return Err(PolicyError::NonFinite { param: "sigma" });
-        }
-        if !sigma.is_certainly_positive() {
-            return Err(PolicyError::NotPositive {
-                param: "sigma",
-                value: sigma.to_f64(),
-            });
-        }
+        check_positive("sigma", &sigma)?;
         Ok(Self {
             net,
             sigma_sq: sigma.square(),

@@ -215,6 +215,23 @@ fn copy_into<S: Scalar>(param: &'static str, src: &[S], dst: &mut [S]) -> Result
     Ok(())
 }
 
+/// Check that a parameter (σ_π, a speed limit) is finite and certainly > 0.
+///
+/// # Errors
+/// [`PolicyError::NonFinite`] or [`PolicyError::NotPositive`] naming `param`.
+pub(crate) fn check_positive<S: Scalar>(param: &'static str, x: &S) -> Result<(), PolicyError> {
+    if !x.is_finite() {
+        return Err(PolicyError::NonFinite { param });
+    }
+    if !x.is_certainly_positive() {
+        return Err(PolicyError::NotPositive {
+            param,
+            value: x.to_f64(),
+        });
+    }
+    Ok(())
+}
+
 /// Check that an output buffer of a `*_into` method has `expected` entries.
 #[inline]
 pub(crate) fn check_out<S>(

@@ -17,7 +17,7 @@
 //! so plain SGD on it can run away. Here `l ≤ (v + ‖π*(s)‖)²` for every W.
 
 use super::linear_gaussian::{ActionVector, LinearGaussian};
-use super::{LikelihoodRatio, Policy, PolicyError, check_out, check_vec};
+use super::{LikelihoodRatio, Policy, PolicyError, check_out, check_positive, check_vec};
 use crate::problem::KitRng;
 use crate::scalar::{Scalar, Sqrt, certainly_less};
 
@@ -35,15 +35,7 @@ impl<S: Scalar, A> SpeedLimitedGaussian<S, A> {
     /// # Errors
     /// [`PolicyError::NonFinite`] or [`PolicyError::NotPositive`] for a bad `v_max`.
     pub fn new(inner: LinearGaussian<S, A>, v_max: S) -> Result<Self, PolicyError> {
-        if !v_max.is_finite() {
-            return Err(PolicyError::NonFinite { param: "v_max" });
-        }
-        if !v_max.is_certainly_positive() {
-            return Err(PolicyError::NotPositive {
-                param: "v_max",
-                value: v_max.to_f64(),
-            });
-        }
+        check_positive("v_max", &v_max)?;
         Ok(Self {
             inner,
             v_max_sq: v_max.square(),
