@@ -182,7 +182,8 @@ pub fn speedup_intro(m: &Machine) -> String {
         "Speed-up = thesis seconds / kit mean seconds. The kit's time is the mean training wall \
          time per run (evaluation excluded) to the convergence checkpoint over the seeds that \
          converged, or of the whole run when no seed converged (column \"kit time is\"); the \
-         thesis does not say which of the two its runtimes are. {} The thesis does not describe \
+         thesis does not say which of the two its runtimes are. BC, absent from the thesis's \
+         tables, is left out; totals sum the algorithms that have both times. {} The thesis does not describe \
          the machine its runtimes were measured on, so each ratio compares machines as well as \
          implementations (and runs of different lengths).",
         machine_sentence(m)
