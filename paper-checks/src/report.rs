@@ -7,12 +7,17 @@
 use crate::config::Profile;
 use crate::error::Error;
 use crate::experiment::{Checkpoint, SeedRun};
-use crate::pipeline::{ConfigResult, ConfigTiming, Results, slug, to_json, write_atomic};
+use crate::pipeline::{ConfigResult, ConfigTiming, Results, to_json, write_atomic};
 use crate::plots::{Figure, Series};
 use crate::stats::Summary;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::path::Path;
+
+pub mod doc;
+pub mod speedup;
+
+use doc::{Block, Table};
 
 /// The thesis's Table 4.1 (gradient calls, mean ± spread) and 4.2 (runtime, s).
 pub const THESIS_T41: [(&str, f64, f64); 5] = [
@@ -303,27 +308,30 @@ fn band(
     xf: impl Fn(&Checkpoint) -> f64,
     yf: impl Fn(&Checkpoint) -> Option<f64>,
 ) -> Series {
-    let k = c
+    // Checkpoints are aligned by iteration, on the schedule of the longest run: a run that
+    // failed stops at an off-schedule iteration, and its last checkpoint is left out (counted).
+    let schedule: Vec<u64> = c
         .runs
         .iter()
-        .map(|r| r.checkpoints.len())
-        .max()
-        .unwrap_or(0);
-    let mut s = Series {
-        label: c.label.clone(),
-        x: vec![],
-        mean: vec![],
-        lo: vec![],
-        hi: vec![],
-        reference: false,
-    };
-    for i in 0..k {
-        let cps: Vec<&Checkpoint> = c.runs.iter().filter_map(|r| r.checkpoints.get(i)).collect();
-        let ys: Vec<f64> = cps
+        .max_by_key(|r| r.checkpoints.len())
+        .map(|r| r.checkpoints.iter().map(|k| k.iteration).collect())
+        .unwrap_or_default();
+    let mut s = Series::new(c.label.clone());
+    s.off_schedule = c
+        .runs
+        .iter()
+        .flat_map(|r| &r.checkpoints)
+        .filter(|k| !schedule.contains(&k.iteration))
+        .count();
+    for it in schedule {
+        let cps: Vec<&Checkpoint> = c
+            .runs
             .iter()
-            .filter_map(|c| yf(c))
-            .filter(|y| y.is_finite())
+            .filter_map(|r| r.checkpoints.iter().find(|k| k.iteration == it))
             .collect();
+        let all: Vec<f64> = cps.iter().filter_map(|c| yf(c)).collect();
+        let ys: Vec<f64> = all.iter().copied().filter(|y| y.is_finite()).collect();
+        s.non_finite += all.len() - ys.len();
         if ys.is_empty() {
             continue;
         }
@@ -372,14 +380,7 @@ fn gradient_error_series(r: &Results) -> (Series, Series) {
         .map(|s| s.iter().map(|t| t.0).collect())
         .unwrap_or_default();
     let mk = |label: &str, pick: &dyn Fn(&(u64, f64, f64)) -> f64| {
-        let mut s = Series {
-            label: label.into(),
-            x: vec![],
-            mean: vec![],
-            lo: vec![],
-            hi: vec![],
-            reference: false,
-        };
+        let mut s = Series::new(label);
         for (i, n) in ns.iter().enumerate() {
             let ys: Vec<f64> = seeds.iter().filter_map(|v| v.get(i)).map(pick).collect();
             let sm = Summary::of(&ys);
@@ -402,6 +403,8 @@ fn reference_line(s: &Series) -> Series {
         lo: vec![],
         hi: vec![],
         reference: true,
+        non_finite: 0,
+        off_schedule: 0,
     }
     .with_band_from_mean()
 }
@@ -580,17 +583,18 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
     order_claims(
         &mut push,
         obs,
-        "O9",
+        Some("O9"),
         "O10",
         "Table 4.1",
         &["STORM", "SGD", "RMSProp", "DAgger", "Adam"],
     );
-    // CartPole.
+    // CartPole: the thesis claims only DAgger's maximum for Table 4.3 (§4.2.2); its numbers
+    // put RMSProp, not STORM, lowest, so no "STORM fewest" claim is checked here.
     order_claims(
         &mut push,
         cp,
+        None,
         "C1",
-        "C0",
         "Table 4.3",
         &["STORM", "RMSProp", "DAgger", "Adam"],
     );
@@ -665,7 +669,7 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
 fn order_claims(
     push: &mut dyn FnMut(&str, &str, &str, String, String, Verdict),
     rows: &[ConvergenceRow],
-    id_fewest: &str,
+    id_fewest: Option<&str>,
     id_most: &str,
     table: &str,
     labels: &[&str],
@@ -686,7 +690,7 @@ fn order_claims(
         .join(", ");
     let conv: Vec<f64> = vals.iter().filter_map(|v| v.1).collect();
     let get = |l: &str| vals.iter().find(|v| v.0 == l).and_then(|v| v.1);
-    if id_fewest != "C0" && labels.contains(&"STORM") {
+    if let Some(id_fewest) = id_fewest.filter(|_| labels.contains(&"STORM")) {
         let s = get("STORM");
         push(
             id_fewest,
@@ -706,7 +710,7 @@ fn order_claims(
         .filter(|v| v.0 != "DAgger" && v.1.is_none())
         .count();
     push(
-        if id_fewest == "C1" { id_fewest } else { id_most },
+        id_most,
         table,
         "DAgger needs the most gradient calls to converge",
         "DAgger's mean gradient calls to converge (converged seeds) is the largest among the table's algorithms; partially if larger than every algorithm that converged while some never converged".into(),
@@ -876,6 +880,7 @@ pub fn write(
                 y_label: format!("error, {lab}-row of ∇"),
                 log_x: true,
                 log_y: true,
+                y_range: Some((0.0, f64::INFINITY)),
                 series: vec![s.clone(), reference_line(s)],
             },
         ));
@@ -892,6 +897,7 @@ pub fn write(
         y_label: y.into(),
         log_x: false,
         log_y,
+        y_range: None,
         series: r
             .obstacle
             .iter()
@@ -909,7 +915,8 @@ pub fn write(
             false,
             &|c| Some(c.score),
             false,
-        ),
+        )
+        .clamped((0.0, 1.0)),
     ));
     figs.push((
         "fig4-4-crashes",
@@ -920,7 +927,8 @@ pub fn write(
             false,
             &|c| Some(f64::from(c.crashes)),
             false,
-        ),
+        )
+        .clamped((0.0, n_obs)),
     ));
     figs.push((
         "fig4-5a-gradient-x",
@@ -931,7 +939,8 @@ pub fn write(
             true,
             &|c| c.grad_x,
             true,
-        ),
+        )
+        .clamped((0.0, f64::INFINITY)),
     ));
     figs.push((
         "fig4-5b-gradient-y",
@@ -942,7 +951,8 @@ pub fn write(
             true,
             &|c| c.grad_y,
             true,
-        ),
+        )
+        .clamped((0.0, f64::INFINITY)),
     ));
     figs.push((
         "fig4-6a-loss-x",
@@ -953,7 +963,8 @@ pub fn write(
             true,
             &|c| c.loss_x,
             false,
-        ),
+        )
+        .clamped((0.0, f64::INFINITY)),
     ));
     figs.push((
         "fig4-6b-loss-y",
@@ -964,7 +975,8 @@ pub fn write(
             true,
             &|c| c.loss_y,
             false,
-        ),
+        )
+        .clamped((0.0, f64::INFINITY)),
     ));
     let cart_fig =
         |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| Figure {
@@ -973,6 +985,7 @@ pub fn write(
             y_label: y.into(),
             log_x: true,
             log_y,
+            y_range: None,
             series: r.cartpole.iter().map(|c| band(&c.0, gc, f)).collect(),
         };
     let n_cp = f64::from(profile.cartpole.eval_episodes);
@@ -984,7 +997,8 @@ pub fn write(
             "Brier loss",
             false,
             &|c| Some(c.loss),
-        ),
+        )
+        .clamped((0.0, f64::INFINITY)),
     ));
     figs.push((
         "fig4-9-crashes",
@@ -994,7 +1008,8 @@ pub fn write(
             "crashes",
             false,
             &|c| Some(f64::from(c.crashes)),
-        ),
+        )
+        .clamped((0.0, n_cp)),
     ));
     figs.push((
         "fig4-10-reward",
@@ -1004,7 +1019,8 @@ pub fn write(
             "reward",
             false,
             &|c| Some(c.reward),
-        ),
+        )
+        .clamped((0.0, 500.0)),
     ));
     let mut png_ok = png;
     for (name, _, f) in &figs {
@@ -1019,21 +1035,35 @@ pub fn write(
         }
     }
 
-    let md = markdown(
+    let machine = crate::provenance::Machine::current();
+    let blocks = document(&Inputs {
         profile,
-        profile_text,
         r,
-        &obs,
-        &cp,
-        &cl,
-        &tcl,
-        &figs,
-        png_ok,
-    );
-    write_atomic(&out.join("appendix.md"), md.as_bytes())?;
-    let tex = latex(profile, r, &obs, &cp, &cl, &tcl, &figs, png_ok);
-    write_atomic(&out.join("appendix.tex"), tex.as_bytes())?;
+        obs: &obs,
+        cp: &cp,
+        cl: &cl,
+        tcl: &tcl,
+        figs: &figs,
+        png: png_ok,
+        machine: &machine,
+    });
+    let _ = profile_text;
+    write_atomic(&out.join("appendix.md"), doc::markdown(&blocks).as_bytes())?;
+    write_atomic(
+        &out.join("appendix.tex"),
+        doc::latex(&blocks, LATEX_PREAMBLE).as_bytes(),
+    )?;
     Ok(())
+}
+
+/// Both tasks' speed-up rows (Table 4.2's, then Table 4.4's, each with its total).
+fn speedup_all_cells(r: &Results) -> Vec<Vec<String>> {
+    let mut rows = speedup::speedup_cells("4.2", &speedup::speedup_rows(&r.obstacle, &THESIS_T42));
+    rows.extend(speedup::speedup_cells(
+        "4.4",
+        &speedup::speedup_rows(&r.cartpole, &THESIS_T44),
+    ));
+    rows
 }
 
 /// Check ids of the theorem table per erratum (parsed from its Markdown: first and last column).
@@ -1102,55 +1132,6 @@ fn runtime_table(
         .collect()
 }
 
-/// One task's pair of cost tables (gradient calls to converge; runtime), kit next to thesis.
-fn cost_tables(
-    o: &mut String,
-    (calls_no, runtime_no): (&str, &str),
-    rows: &[ConvergenceRow],
-    configs: &[(ConfigResult, Option<ConfigTiming>)],
-    thesis_calls: &[(&str, f64, f64)],
-    thesis_runtime: &[(&str, f64)],
-) {
-    *o += &format!("**Table {calls_no}: gradient calls to converge** (kit vs thesis):\n\n");
-    let calls: Vec<Vec<String>> = calls_table(rows, thesis_calls)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    md_table(
-        o,
-        &[
-            "algorithm",
-            "kit: gradient calls to converge",
-            "kit: converged",
-            "kit: gradient calls of the whole run",
-            "thesis",
-        ],
-        &calls,
-    );
-    *o += &format!(
-        "**Table {runtime_no}: runtime in seconds** (kit vs thesis; machine-dependent):\n\n"
-    );
-    let runtime: Vec<Vec<String>> = runtime_table(configs, thesis_runtime)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    md_table(
-        o,
-        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
-        &runtime,
-    );
-}
-
-fn md_table(out: &mut String, head: &[&str], rows: &[Vec<String>]) {
-    let _ = writeln!(out, "| {} |", head.join(" | "));
-    let _ = writeln!(out, "|{}", "---|".repeat(head.len()));
-    for r in rows {
-        let cells: Vec<String> = r.iter().map(|c| c.replace('|', "\\|")).collect();
-        let _ = writeln!(out, "| {} |", cells.join(" | "));
-    }
-    out.push('\n');
-}
-
 fn final_rows(rows: &[ConvergenceRow], obstacle: bool) -> Vec<Vec<String>> {
     rows.iter()
         .map(|r| {
@@ -1173,31 +1154,93 @@ fn final_rows(rows: &[ConvergenceRow], obstacle: bool) -> Vec<Vec<String>> {
         .collect()
 }
 
-#[allow(clippy::too_many_arguments)]
-fn markdown(
-    profile: &Profile,
-    profile_text: &str,
-    r: &Results,
-    obs: &[ConvergenceRow],
-    cp: &[ConvergenceRow],
-    cl: &[Claim],
-    tcl: &[Claim],
-    figs: &[(&str, &str, Figure)],
+/// A task's two cost tables (gradient calls to converge; runtime), kit next to thesis.
+fn cost_tables(
+    (calls_no, runtime_no): (&str, &str),
+    rows: &[ConvergenceRow],
+    configs: &[(ConfigResult, Option<ConfigTiming>)],
+    thesis_calls: &[(&str, f64, f64)],
+    thesis_runtime: &[(&str, f64)],
+) -> [Block; 2] {
+    [
+        Block::Table(Table {
+            caption: Some(format!(
+                "**Table {calls_no}: gradient calls to converge** (kit vs thesis):"
+            )),
+            label: format!("tab:pc-{}", calls_no.replace('.', "-")),
+            header: strings(&[
+                "algorithm",
+                "kit: gradient calls to converge",
+                "kit: converged",
+                "kit: gradient calls of the whole run",
+                "thesis",
+            ]),
+            rows: calls_table(rows, thesis_calls)
+                .into_iter()
+                .map(|a| a.to_vec())
+                .collect(),
+            spec: "lrrrr".into(),
+        }),
+        Block::Table(Table {
+            caption: Some(format!(
+                "**Table {runtime_no}: runtime in seconds** (kit vs thesis; machine-dependent):"
+            )),
+            label: format!("tab:pc-{}", runtime_no.replace('.', "-")),
+            header: strings(&["algorithm", "kit: to converge", "kit: whole run", "thesis"]),
+            rows: runtime_table(configs, thesis_runtime)
+                .into_iter()
+                .map(|a| a.to_vec())
+                .collect(),
+            spec: "lrrr".into(),
+        }),
+    ]
+}
+
+fn strings(v: &[&str]) -> Vec<String> {
+    v.iter().map(|s| (*s).to_string()).collect()
+}
+
+/// Everything the appendix needs to say, in order.
+struct Inputs<'a> {
+    profile: &'a Profile,
+    r: &'a Results,
+    obs: &'a [ConvergenceRow],
+    cp: &'a [ConvergenceRow],
+    cl: &'a [Claim],
+    tcl: &'a [Claim],
+    figs: &'a [(&'a str, &'a str, Figure)],
     png: bool,
-) -> String {
-    let _ = profile_text;
-    let mut o = String::new();
-    let img = |o: &mut String, name: &str, alt: &str| {
-        let ext = if png { "png" } else { "svg" };
-        let _ = writeln!(o, "![{alt}](figures/{name}.{ext})\n");
+    machine: &'a crate::provenance::Machine,
+}
+
+/// The appendix as blocks, rendered by [`doc::markdown`] and [`doc::latex`].
+fn document(x: &Inputs<'_>) -> Vec<Block> {
+    let (profile, r) = (x.profile, x.r);
+    let mut d = Vec::new();
+    let h = |text: &str| Block::Heading {
+        level: 2,
+        text: text.into(),
     };
-    let _ = writeln!(
-        o,
-        "# Appendix: thesis chapter 4, regenerated\n\n\
-         Generated by `cargo run --release -p paper-checks{}` (profile `{}`, {} seeds per configuration). \
+    let figures = |d: &mut Vec<Block>, which: &[&str]| {
+        let ext = if x.png { "png" } else { "svg" };
+        for (name, fig, f) in x.figs {
+            if which.contains(fig) {
+                d.push(Block::Figure {
+                    path: format!("figures/{name}.{ext}"),
+                    caption: f.title.clone(),
+                });
+            }
+        }
+    };
+    d.push(Block::Heading {
+        level: 1,
+        text: "Appendix: thesis chapter 4, regenerated".into(),
+    });
+    d.push(Block::Para(format!(
+        "Generated by `cargo run --release -p paper-checks{}` (profile `{}`, {} seeds per configuration). \
          Every number below is computed from the per-seed data in this directory (`checkpoints.csv`, \
          `runs/*.json`, `gradient_error.csv`); configurations and seeds are in `provenance.json`, wall \
-         times in `timings.json` / `timings.csv`.\n",
+         times in `timings.json` / `timings.csv`.",
         if profile.name == "full" {
             " -- --full"
         } else {
@@ -1205,382 +1248,171 @@ fn markdown(
         },
         profile.name,
         profile.seeds
-    );
-    o += "## Definitions (applied to every algorithm alike)\n\n";
-    let _ = writeln!(
-        o,
-        "- **Evaluation.** At each checkpoint (every `eval_every` iterations and at the last one) the learned \
-         policy acts deterministically — the linear-Gaussian mean `Wφ(s)` (obstacle), the most probable \
-         action of the softmax (CartPole) — on {} (obstacle) / {} (CartPole) seeded episodes, the same \
-         episodes for every algorithm and checkpoint of a seed. Crash (obstacle) = the discs overlap; \
-         crash (CartPole) = the episode terminates before 500 steps. Loss = mean per-decision supervised \
-         loss on the states the deterministic policy visits (obstacle: squared error of the velocity, \
-         split into x and y; CartPole: Brier loss against the LQR action).\n\
-         - **Converge.** A run converges at the first checkpoint whose score is ≥ the task's threshold: \
-         score = success rate (obstacle, threshold {}) or mean episode reward / 500 (CartPole, threshold \
-         {}). *Gradient calls to converge* = cumulative per-state gradient evaluations (`Cost::gradient_evaluations`, \
-         the same unit for the oracle methods and the dataset learners' inner updates) at that checkpoint; \
-         *runtime* = training wall time up to it (evaluation excluded). Means of gradient calls are over \
-         the seeds that converged (their number is given).\n\
-         - **Confidence intervals.** Mean ± half-width of the 95% Student-t interval over seeds, \
+    )));
+    d.push(h("Definitions (applied to every algorithm alike)"));
+    d.push(Block::List(vec![
+        format!(
+            "**Evaluation.** At each checkpoint (every `eval_every` iterations and at the last one) the learned \
+             policy acts deterministically — the linear-Gaussian mean `Wφ(s)` (obstacle), the most probable \
+             action of the softmax (CartPole) — on {} (obstacle) / {} (CartPole) seeded episodes, the same \
+             episodes for every algorithm and checkpoint of a seed. Crash (obstacle) = the discs overlap; \
+             crash (CartPole) = the episode terminates before 500 steps. Loss = mean per-decision supervised \
+             loss on the states the deterministic policy visits (obstacle: squared error of the velocity, \
+             split into x and y; CartPole: Brier loss against the LQR action).",
+            profile.obstacle.eval_episodes, profile.cartpole.eval_episodes,
+        ),
+        format!(
+            "**Converge.** A run converges at the first checkpoint whose score is ≥ the task's threshold: \
+             score = success rate (obstacle, threshold {}) or mean episode reward / 500 (CartPole, threshold \
+             {}). *Gradient calls to converge* = cumulative per-state gradient evaluations (`Cost::gradient_evaluations`, \
+             the same unit for the oracle methods and the dataset learners' inner updates) at that checkpoint; \
+             *runtime* = training wall time up to it (evaluation excluded). Means of gradient calls are over \
+             the seeds that converged (their number is given).",
+            profile.obstacle.converge_score, profile.cartpole.converge_score,
+        ),
+        "**Confidence intervals.** Mean ± half-width of the 95% Student-t interval over seeds, \
          `t(0.975, n−1)·s/√n`, in every table; figures shade the same interval at each checkpoint. \
-         The thesis's ± values are its own (their meaning is not stated).\n\
-         - **Hyper-parameters** are the profile's defaults, chosen once and not tuned (see `provenance.json`).\n",
-        profile.obstacle.eval_episodes,
-        profile.cartpole.eval_episodes,
-        profile.obstacle.converge_score,
-        profile.cartpole.converge_score,
-    );
-    o += "## Fig. 4.2: gradient-estimate error vs number of trajectories\n\n";
-    let _ = writeln!(
-        o,
+         The thesis's ± values are its own (their meaning is not stated)."
+            .into(),
+        "**Hyper-parameters** are the profile's defaults, chosen once and not tuned (see `provenance.json`)."
+            .into(),
+    ]));
+
+    d.push(h(
+        "Fig. 4.2: gradient-estimate error vs number of trajectories",
+    ));
+    d.push(Block::Para(format!(
         "Obstacle task, linear-Gaussian learner (σ = {}) at a fixed θ; error = ‖(mean of N eq. 3.15 \
          estimates) − (mean of {} independent estimates)‖ for the x and y rows of the gradient. The \
-         reference has its own noise, so the error floors near its standard error.\n",
+         reference has its own noise, so the error floors near its standard error.",
         profile.gradient_error.sigma, profile.gradient_error.reference_trajectories
-    );
-    for (name, fig, f) in figs {
-        if *fig == "Fig. 4.2" {
-            img(&mut o, name, &f.title);
-        }
-    }
+    )));
+    figures(&mut d, &["Fig. 4.2"]);
     let (gx, gy) = gradient_error_series(r);
-    let rows: Vec<Vec<String>> = (0..gx.x.len())
-        .map(|i| {
-            vec![
-                num(gx.x[i]),
-                format!("{} ± {}", num(gx.mean[i]), num(gx.hi[i] - gx.mean[i])),
-                format!("{} ± {}", num(gy.mean[i]), num(gy.hi[i] - gy.mean[i])),
-            ]
-        })
-        .collect();
-    md_table(&mut o, &["N", "error x", "error y"], &rows);
+    d.push(Block::Table(Table {
+        caption: None,
+        label: "tab:pc-fig-4-2".into(),
+        header: strings(&["N", "error x", "error y"]),
+        rows: (0..gx.x.len())
+            .map(|i| {
+                vec![
+                    format!("{:.0}", gx.x[i]),
+                    format!("{} ± {}", num(gx.mean[i]), num(gx.hi[i] - gx.mean[i])),
+                    format!("{} ± {}", num(gy.mean[i]), num(gy.hi[i] - gy.mean[i])),
+                ]
+            })
+            .collect(),
+        spec: "rrr".into(),
+    }));
 
-    o += "## Obstacle avoidance (§4.1): Figs. 4.3–4.6, Tables 4.1–4.2\n\n";
-    for (name, fig, f) in figs {
-        if matches!(*fig, "Fig. 4.3" | "Fig. 4.4" | "Fig. 4.5" | "Fig. 4.6") {
-            img(&mut o, name, &f.title);
-        }
-    }
-    o += "**Final checkpoint** (all seeds):\n\n";
-    md_table(
-        &mut o,
-        &[
-            "algorithm",
+    for (heading, para, figs, task, head1, obstacle, rows, configs, nos, tc, tr) in [
+        (
+            "Obstacle avoidance (§4.1): Figs. 4.3–4.6, Tables 4.1–4.2",
+            None,
+            &["Fig. 4.3", "Fig. 4.4", "Fig. 4.5", "Fig. 4.6"][..],
+            "obstacle",
             "success rate (%)",
-            "crashes",
-            "loss",
-            "failed runs",
-        ],
-        &final_rows(obs, true),
-    );
-    cost_tables(
-        &mut o,
-        ("4.1", "4.2"),
-        obs,
-        &r.obstacle,
-        &THESIS_T41,
-        &THESIS_T42,
-    );
-
-    o += "## CartPole (§4.2): Figs. 4.8–4.10, Tables 4.3–4.4\n\n\
-          The expert is the kit's LQR controller (the thesis uses PPO).\n\n";
-    for (name, fig, f) in figs {
-        if matches!(*fig, "Fig. 4.8" | "Fig. 4.9" | "Fig. 4.10") {
-            img(&mut o, name, &f.title);
+            true,
+            x.obs,
+            &r.obstacle,
+            ("4.1", "4.2"),
+            &THESIS_T41[..],
+            &THESIS_T42[..],
+        ),
+        (
+            "CartPole (§4.2): Figs. 4.8–4.10, Tables 4.3–4.4",
+            Some("The expert is the kit's LQR controller (the thesis uses PPO)."),
+            &["Fig. 4.8", "Fig. 4.9", "Fig. 4.10"][..],
+            "cartpole",
+            "mean reward",
+            false,
+            x.cp,
+            &r.cartpole,
+            ("4.3", "4.4"),
+            &THESIS_T43[..],
+            &THESIS_T44[..],
+        ),
+    ] {
+        d.push(h(heading));
+        if let Some(p) = para {
+            d.push(Block::Para(p.into()));
         }
+        figures(&mut d, figs);
+        d.push(Block::Table(Table {
+            caption: Some("**Final checkpoint** (all seeds):".into()),
+            label: format!("tab:pc-final-{task}"),
+            header: strings(&["algorithm", head1, "crashes", "loss", "failed runs"]),
+            rows: final_rows(rows, obstacle),
+            spec: "lrrrr".into(),
+        }));
+        d.extend(cost_tables(nos, rows, configs, tc, tr));
     }
-    o += "**Final checkpoint** (all seeds):\n\n";
-    md_table(
-        &mut o,
-        &["algorithm", "mean reward", "crashes", "loss", "failed runs"],
-        &final_rows(cp, false),
-    );
-    cost_tables(
-        &mut o,
-        ("4.3", "4.4"),
-        cp,
-        &r.cartpole,
-        &THESIS_T43,
-        &THESIS_T44,
-    );
 
-    o += "## Claims of chapter 4 and verdicts\n\nEach verdict is computed from the numbers by the stated rule.\n\n";
-    let rows: Vec<Vec<String>> = cl
-        .iter()
-        .chain(tcl)
-        .map(|c| {
-            vec![
-                c.id.clone(),
-                c.source.clone(),
-                c.claim.clone(),
-                c.rule.clone(),
-                c.evidence.clone(),
-                format!("**{}**", c.verdict.text()),
-            ]
-        })
-        .collect();
-    md_table(
-        &mut o,
-        &["#", "where", "claim", "rule", "numbers", "verdict"],
-        &rows,
-    );
+    d.push(h("Kit time vs thesis (Tables 4.2 and 4.4)"));
+    d.push(Block::Para(speedup::speedup_intro(x.machine)));
+    d.push(Block::Table(Table {
+        caption: None,
+        label: "tab:pc-speedup".into(),
+        header: strings(&speedup::SPEEDUP_HEAD),
+        rows: speedup_all_cells(r),
+        spec: "llrlrr".into(),
+    }));
 
-    o += "## Theorem checks (`ilopt-theory`)\n\n";
-    o += &r.theory_markdown;
-    o += "\n## Errata (math.md §0)\n\n";
+    d.push(h("Claims of chapter 4 and verdicts"));
+    d.push(Block::Para(
+        "Each verdict is computed from the numbers by the stated rule.".into(),
+    ));
+    d.push(Block::Table(Table {
+        caption: None,
+        label: "tab:pc-claims".into(),
+        header: strings(&["#", "where", "claim", "rule", "numbers", "verdict"]),
+        rows: x
+            .cl
+            .iter()
+            .chain(x.tcl)
+            .map(|c| {
+                vec![
+                    c.id.clone(),
+                    c.source.clone(),
+                    c.claim.clone(),
+                    c.rule.clone(),
+                    c.evidence.clone(),
+                    format!("**{}**", c.verdict.text()),
+                ]
+            })
+            .collect(),
+        spec: "llp{3cm}p{3.5cm}p{3.5cm}l".into(),
+    }));
+
+    d.push(h("Theorem checks (`ilopt-theory`)"));
+    d.push(Block::Raw {
+        markdown: format!("{}\n", r.theory_markdown),
+        latex: doc::latex(&doc::from_markdown(&r.theory_markdown, "tab:pc-theory"), ""),
+    });
+    d.push(h("Errata (math.md §0)"));
     let by = checks_by_erratum(&r.theory_markdown);
-    let rows: Vec<Vec<String>> = ERRATA
-        .iter()
-        .map(|(id, w, p, c)| {
-            vec![
-                (*id).into(),
-                (*w).into(),
-                (*p).into(),
-                (*c).into(),
-                by.get(*id)
-                    .map_or("— (no numerical check)".into(), |v| v.join(", ")),
-            ]
-        })
-        .collect();
-    md_table(
-        &mut o,
-        &["#", "thesis statement", "problem", "correction", "check"],
-        &rows,
-    );
-    o
+    d.push(Block::Table(Table {
+        caption: None,
+        label: "tab:pc-errata".into(),
+        header: strings(&["#", "thesis statement", "problem", "correction", "check"]),
+        rows: ERRATA
+            .iter()
+            .map(|(id, w, p, c)| {
+                vec![
+                    (*id).into(),
+                    (*w).into(),
+                    (*p).into(),
+                    (*c).into(),
+                    by.get(*id)
+                        .map_or("— (no numerical check)".into(), |v| v.join(", ")),
+                ]
+            })
+            .collect(),
+        spec: "llp{4.5cm}p{4.5cm}l".into(),
+    }));
+    d
 }
 
-fn tex_escape(s: &str) -> String {
-    let mut o = String::new();
-    for ch in s.chars() {
-        match ch {
-            '\\' => o += "\\textbackslash{}",
-            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
-                o.push('\\');
-                o.push(ch);
-            }
-            '~' => o += "\\textasciitilde{}",
-            '^' => o += "\\textasciicircum{}",
-            '±' => o += "$\\pm$",
-            '≥' => o += "$\\geq$",
-            '≤' => o += "$\\leq$",
-            '≈' => o += "$\\approx$",
-            '√' => o += "$\\surd$",
-            '−' => o.push('-'),
-            '‖' => o += "$\\|$",
-            '∇' => o += "$\\nabla$",
-            'θ' => o += "$\\theta$",
-            'σ' => o += "$\\sigma$",
-            'τ' => o += "$\\tau$",
-            'η' => o += "$\\eta$",
-            'Δ' => o += "$\\Delta$",
-            'φ' => o += "$\\phi$",
-            'π' => o += "$\\pi$",
-            'β' => o += "$\\beta$",
-            'ε' => o += "$\\varepsilon$",
-            'γ' => o += "$\\gamma$",
-            'α' => o += "$\\alpha$",
-            '∼' => o += "$\\sim$",
-            '·' => o += "$\\cdot$",
-            '…' => o += "\\ldots{}",
-            '⌈' => o += "$\\lceil$",
-            '⌉' => o += "$\\rceil$",
-            '⁻' => o += "$^{-}$",
-            '¹' => o += "$^{1}$",
-            '²' => o += "$^{2}$",
-            '³' => o += "$^{3}$",
-            '→' => o += "$\\to$",
-            '∈' => o += "$\\in$",
-            '≠' => o += "$\\neq$",
-            '§' => o += "\\S{}",
-            c if c.is_ascii() => o.push(c),
-            c => o.push(c),
-        }
-    }
-    o
-}
-
-fn tex_table(
-    o: &mut String,
-    caption: &str,
-    label: &str,
-    head: &[&str],
-    rows: &[Vec<String>],
-    spec: &str,
-) {
-    let _ = writeln!(
-        o,
-        "\\begin{{table}}[htbp]\n\\centering\\small\n\\caption{{{}}}\\label{{{label}}}",
-        tex_escape(caption)
-    );
-    let _ = writeln!(o, "\\begin{{tabular}}{{{spec}}}\n\\toprule");
-    let _ = writeln!(
-        o,
-        "{} \\\\\n\\midrule",
-        head.iter()
-            .map(|h| tex_escape(h))
-            .collect::<Vec<_>>()
-            .join(" & ")
-    );
-    for r in rows {
-        let _ = writeln!(
-            o,
-            "{} \\\\",
-            r.iter()
-                .map(|c| tex_escape(&c.replace("**", "")))
-                .collect::<Vec<_>>()
-                .join(" & ")
-        );
-    }
-    let _ = writeln!(o, "\\bottomrule\n\\end{{tabular}}\n\\end{{table}}\n");
-}
-
-#[allow(clippy::too_many_arguments)]
-fn latex(
-    profile: &Profile,
-    r: &Results,
-    obs: &[ConvergenceRow],
-    cp: &[ConvergenceRow],
-    cl: &[Claim],
-    tcl: &[Claim],
-    figs: &[(&str, &str, Figure)],
-    png: bool,
-) -> String {
-    let mut o = String::from(
-        "% Generated by paper-checks. \\input{} into a document that loads booktabs, graphicx and\n\
-         % (for long tables) longtable. Figures are referenced relative to this file's directory.\n",
-    );
-    let _ = writeln!(
-        o,
-        "\\section*{{Appendix: chapter 4 regenerated (profile {}, {} seeds)}}\n\
-         Means $\\pm$ half-widths of 95\\% Student-$t$ intervals over seeds. A run converges at the first \
-         checkpoint whose deterministic-policy score (obstacle: success rate; CartPole: mean reward / 500) \
-         reaches the threshold ({} / {}); gradient calls are cumulative per-state gradient evaluations.\n",
-        tex_escape(&profile.name),
-        profile.seeds,
-        profile.obstacle.converge_score,
-        profile.cartpole.converge_score
-    );
-    for (name, _, f) in figs {
-        let file = if png {
-            format!("figures/{name}.png")
-        } else {
-            format!("figures/{name}.svg")
-        };
-        let _ = writeln!(
-            o,
-            "\\begin{{figure}}[htbp]\n\\centering\n{}\\includegraphics[width=0.8\\linewidth]{{{file}}}\n\\caption{{{}}}\n\\end{{figure}}\n",
-            if png {
-                ""
-            } else {
-                "% SVG: needs the svg package or a conversion to PDF\n"
-            },
-            tex_escape(&f.title)
-        );
-    }
-    let t41: Vec<Vec<String>> = calls_table(obs, &THESIS_T41)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    tex_table(
-        &mut o,
-        "Table 4.1: gradient calls to converge, obstacle avoidance (kit vs thesis)",
-        "tab:pc-4-1",
-        &[
-            "algorithm",
-            "kit: to converge",
-            "converged",
-            "kit: whole run",
-            "thesis",
-        ],
-        &t41,
-        "lrrrr",
-    );
-    let t42: Vec<Vec<String>> = runtime_table(&r.obstacle, &THESIS_T42)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    tex_table(
-        &mut o,
-        "Table 4.2: runtime in seconds, obstacle avoidance (kit vs thesis)",
-        "tab:pc-4-2",
-        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
-        &t42,
-        "lrrr",
-    );
-    let t43: Vec<Vec<String>> = calls_table(cp, &THESIS_T43)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    tex_table(
-        &mut o,
-        "Table 4.3: gradient calls to converge, CartPole (kit vs thesis)",
-        "tab:pc-4-3",
-        &[
-            "algorithm",
-            "kit: to converge",
-            "converged",
-            "kit: whole run",
-            "thesis",
-        ],
-        &t43,
-        "lrrrr",
-    );
-    let t44: Vec<Vec<String>> = runtime_table(&r.cartpole, &THESIS_T44)
-        .into_iter()
-        .map(|a| a.to_vec())
-        .collect();
-    tex_table(
-        &mut o,
-        "Table 4.4: runtime in seconds, CartPole (kit vs thesis)",
-        "tab:pc-4-4",
-        &["algorithm", "kit: to converge", "kit: whole run", "thesis"],
-        &t44,
-        "lrrr",
-    );
-    let rows: Vec<Vec<String>> = cl
-        .iter()
-        .chain(tcl)
-        .map(|c| {
-            vec![
-                c.id.clone(),
-                c.source.clone(),
-                c.claim.clone(),
-                c.evidence.clone(),
-                c.verdict.text().into(),
-            ]
-        })
-        .collect();
-    tex_table(
-        &mut o,
-        "Claims of chapter 4 and verdicts (rules in appendix.md)",
-        "tab:pc-claims",
-        &["#", "where", "claim", "numbers", "verdict"],
-        &rows,
-        "llp{4.5cm}p{5cm}l",
-    );
-    let by = checks_by_erratum(&r.theory_markdown);
-    let rows: Vec<Vec<String>> = ERRATA
-        .iter()
-        .map(|(id, w, p, c)| {
-            vec![
-                (*id).into(),
-                (*w).into(),
-                (*p).into(),
-                (*c).into(),
-                by.get(*id).map_or("—".into(), |v| v.join(", ")),
-            ]
-        })
-        .collect();
-    tex_table(
-        &mut o,
-        "Errata of chapter 3 (math.md §0) and the checks that show them",
-        "tab:pc-errata",
-        &["#", "where", "problem", "correction", "check"],
-        &rows,
-        "llp{4.5cm}p{4.5cm}l",
-    );
-    let _ = slug("");
-    o
-}
+/// The LaTeX file's opening comment.
+const LATEX_PREAMBLE: &str = "% Generated by paper-checks. \\input{} into a document that loads booktabs, graphicx and\n\
+     % (for long tables) longtable. Figures are referenced relative to this file's directory.\n";

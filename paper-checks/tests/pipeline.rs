@@ -154,6 +154,31 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
     let ma = std::fs::read_to_string(a.join("appendix.md")).expect("appendix.md");
     let mb = std::fs::read_to_string(b.join("appendix.md")).expect("appendix.md");
     assert_eq!(ma.lines().count(), mb.lines().count());
+    // The speed-up table (thesis / kit) is in both renderings, with the machine above it.
+    assert!(
+        ma.contains("## Kit time vs thesis (Tables 4.2 and 4.4)"),
+        "{ma}"
+    );
+    assert!(ma.contains("| 4.2 | SGD |"), "{ma}");
+    assert!(ma.contains("logical cores"), "{ma}");
+    assert!(ma.contains("does not describe the machine"), "{ma}");
+    let ta = std::fs::read_to_string(a.join("appendix.tex")).expect("appendix.tex");
+    assert!(ta.contains("tab:pc-speedup"), "{ta}");
+    // Claim ids are unique.
+    let tables: serde_json::Value = serde_json::from_slice(&fa["tables.json"]).expect("json");
+    let ids: Vec<&str> = tables["claims"]
+        .as_array()
+        .expect("claims")
+        .iter()
+        .filter_map(|c| c["id"].as_str())
+        .collect();
+    let mut unique = ids.clone();
+    unique.sort_unstable();
+    unique.dedup();
+    assert_eq!(unique.len(), ids.len(), "{ids:?}");
+    // Fig. 4.2's N is an integer.
+    assert!(ma.contains("\n| 1 | "), "{ma}");
+    assert!(ma.contains("\n| 4 | "), "{ma}");
     let _ = std::fs::remove_dir_all(&a);
     let _ = std::fs::remove_dir_all(&b);
 }
