@@ -77,7 +77,10 @@ const COLORS: [RGBColor; 8] = [
 ];
 
 /// Width of the legend panel right of the plot, in pixels.
-const LEGEND_WIDTH: u32 = 170;
+const LEGEND_WIDTH: u32 = 200;
+
+/// Colours of the dashed reference lines, in order (black, mid grey, dark teal).
+const REFERENCE_COLORS: [RGBColor; 3] = [BLACK, RGBColor(140, 140, 140), RGBColor(0, 110, 110)];
 
 /// A transformed point: (x, mean, band low, band high); a band low of `None` runs to the
 /// bottom of the axis (a lower end ≤ 0 on a log axis).
@@ -302,10 +305,12 @@ impl Figure {
                 .axis_desc_style(("sans-serif", 16))
                 .draw()?;
             let mut legend = Vec::new();
+            let mut references = 0;
             for (i, v) in pts.iter().enumerate() {
                 let s = &self.series[i];
                 let color = if s.reference {
-                    BLACK
+                    references += 1;
+                    REFERENCE_COLORS[(references - 1) % REFERENCE_COLORS.len()]
                 } else {
                     COLORS[i % COLORS.len()]
                 };

@@ -6,7 +6,7 @@
 
 use crate::config::Profile;
 use crate::error::Error;
-use crate::experiment::{Checkpoint, SeedRun};
+use crate::experiment::{Checkpoint, SeedRun, TaskKind};
 use crate::pipeline::{ConfigResult, ConfigTiming, Results, to_json, write_atomic};
 use crate::plots::{Figure, Series};
 use crate::stats::Summary;
@@ -415,6 +415,75 @@ impl Series {
         self.hi = self.mean.clone();
         self
     }
+}
+
+/// Horizontal dashed lines at the mean of `f` over each baseline of `task` (reference policies,
+/// no training), across the x range of the figure's learner curves.
+fn baseline_lines(
+    r: &Results,
+    task: TaskKind,
+    f: impl Fn(&Checkpoint) -> f64,
+    over: &[Series],
+) -> Vec<Series> {
+    let xs = || {
+        over.iter()
+            .flat_map(|s| s.x.iter().copied())
+            .filter(|x| *x > 0.0)
+    };
+    let (Some(x0), Some(x1)) = (xs().reduce(f64::min), xs().reduce(f64::max)) else {
+        return vec![];
+    };
+    r.baselines
+        .iter()
+        .filter(|b| b.task == task)
+        .map(|b| {
+            let m = b.runs.iter().map(&f).sum::<f64>() / b.runs.len().max(1) as f64;
+            Series {
+                label: format!("{} (ref.)", b.label),
+                x: vec![x0, x1],
+                mean: vec![m, m],
+                lo: vec![],
+                hi: vec![],
+                reference: true,
+                non_finite: 0,
+                off_schedule: 0,
+            }
+            .with_band_from_mean()
+        })
+        .collect()
+}
+
+/// A success-rate summary in percent.
+fn percent(s: &Summary) -> Summary {
+    Summary {
+        mean: 100.0 * s.mean,
+        half_width: 100.0 * s.half_width,
+        n: s.n,
+    }
+}
+
+/// The final-checkpoint table's rows of a task's baselines (evaluated on every seed's episodes).
+fn baseline_rows(r: &Results, task: TaskKind) -> Vec<Vec<String>> {
+    r.baselines
+        .iter()
+        .filter(|b| b.task == task)
+        .map(|b| {
+            let s = |f: &dyn Fn(&Checkpoint) -> f64| {
+                Summary::of(&b.runs.iter().map(f).collect::<Vec<_>>())
+            };
+            vec![
+                format!("*{}* (reference, no training)", b.label),
+                if task == TaskKind::Obstacle {
+                    ci(&percent(&s(&|c| c.score)))
+                } else {
+                    ci(&s(&|c| c.reward))
+                },
+                ci(&s(&|c| f64::from(c.crashes))),
+                ci(&s(&|c| c.loss)),
+                "—".into(),
+            ]
+        })
+        .collect()
 }
 
 fn within(v: f64, lo: f64, hi: f64) -> bool {
@@ -886,24 +955,35 @@ pub fn write(
         ));
     }
     let it = |c: &Checkpoint| c.iteration as f64;
+    let traj = |c: &Checkpoint| c.trajectories as f64;
     let gc = |c: &Checkpoint| c.gradient_evaluations as f64;
+    let by_iteration: (&str, &dyn Fn(&Checkpoint) -> f64) = ("iteration", &it);
+    let by_trajectories: (&str, &dyn Fn(&Checkpoint) -> f64) = (
+        "trajectories rolled out, each labelled by the expert (cumulative)",
+        &traj,
+    );
     let obstacle_fig = |title: &str,
                         y: &str,
                         log_y: bool,
                         f: &dyn Fn(&Checkpoint) -> Option<f64>,
-                        skip_dataset: bool| Figure {
-        title: title.into(),
-        x_label: "iteration (= trajectories sampled per algorithm step)".into(),
-        y_label: y.into(),
-        log_x: false,
-        log_y,
-        y_range: None,
-        series: r
+                        skip_dataset: bool,
+                        (x_label, xf): (&str, &dyn Fn(&Checkpoint) -> f64)| {
+        let series: Vec<Series> = r
             .obstacle
             .iter()
             .filter(|c| !(skip_dataset && matches!(c.0.label.as_str(), "BC" | "DAgger")))
-            .map(|c| band(&c.0, it, f))
-            .collect(),
+            .map(|c| band(&c.0, xf, f))
+            .collect();
+        let lines = baseline_lines(r, TaskKind::Obstacle, |c| f(c).unwrap_or(f64::NAN), &series);
+        Figure {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y.into(),
+            log_x: false,
+            log_y,
+            y_range: None,
+            series: series.into_iter().chain(lines).collect(),
+        }
     };
     let n_obs = f64::from(profile.obstacle.eval_episodes);
     figs.push((
@@ -915,6 +995,7 @@ pub fn write(
             false,
             &|c| Some(c.score),
             false,
+            by_trajectories,
         )
         .clamped((0.0, 1.0)),
     ));
@@ -927,67 +1008,69 @@ pub fn write(
             false,
             &|c| Some(f64::from(c.crashes)),
             false,
+            by_trajectories,
         )
         .clamped((0.0, n_obs)),
     ));
-    figs.push((
-        "fig4-5a-gradient-x",
-        "Fig. 4.5",
-        obstacle_fig(
-            "Fig. 4.5(a): ‖x-row of the gradient estimate‖",
-            "norm (log)",
-            true,
-            &|c| c.grad_x,
-            true,
-        )
-        .clamped((0.0, f64::INFINITY)),
-    ));
-    figs.push((
-        "fig4-5b-gradient-y",
-        "Fig. 4.5",
-        obstacle_fig(
-            "Fig. 4.5(b): ‖y-row of the gradient estimate‖",
-            "norm (log)",
-            true,
-            &|c| c.grad_y,
-            true,
-        )
-        .clamped((0.0, f64::INFINITY)),
-    ));
-    figs.push((
-        "fig4-6a-loss-x",
-        "Fig. 4.6",
-        obstacle_fig(
-            "Fig. 4.6(a): loss, x coordinate (per decision)",
-            "loss (log)",
-            true,
-            &|c| c.loss_x,
-            false,
-        )
-        .clamped((0.0, f64::INFINITY)),
-    ));
-    figs.push((
-        "fig4-6b-loss-y",
-        "Fig. 4.6",
-        obstacle_fig(
-            "Fig. 4.6(b): loss, y coordinate (per decision)",
-            "loss (log)",
-            true,
-            &|c| c.loss_y,
-            false,
-        )
-        .clamped((0.0, f64::INFINITY)),
-    ));
-    let cart_fig =
-        |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| Figure {
+    for (name, part, row, g) in [
+        (
+            "fig4-5a-gradient-x",
+            "(a)",
+            "x",
+            &(|c: &Checkpoint| c.grad_x) as &dyn Fn(&Checkpoint) -> Option<f64>,
+        ),
+        ("fig4-5b-gradient-y", "(b)", "y", &|c: &Checkpoint| c.grad_y),
+    ] {
+        figs.push((
+            name,
+            "Fig. 4.5",
+            obstacle_fig(
+                &format!("Fig. 4.5{part}: ‖{row}-row of the gradient estimate‖"),
+                "norm (log)",
+                true,
+                g,
+                true,
+                by_iteration,
+            )
+            .clamped((0.0, f64::INFINITY)),
+        ));
+    }
+    for (name, part, row, l) in [
+        (
+            "fig4-6a-loss-x",
+            "(a)",
+            "x",
+            &(|c: &Checkpoint| c.loss_x) as &dyn Fn(&Checkpoint) -> Option<f64>,
+        ),
+        ("fig4-6b-loss-y", "(b)", "y", &|c: &Checkpoint| c.loss_y),
+    ] {
+        figs.push((
+            name,
+            "Fig. 4.6",
+            obstacle_fig(
+                &format!("Fig. 4.6{part}: loss, {row} coordinate (per decision)"),
+                "loss (log)",
+                true,
+                l,
+                false,
+                by_iteration,
+            )
+            .clamped((0.0, f64::INFINITY)),
+        ));
+    }
+    let cart_fig = |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| {
+        let series: Vec<Series> = r.cartpole.iter().map(|c| band(&c.0, gc, f)).collect();
+        let lines = baseline_lines(r, TaskKind::Cartpole, |c| f(c).unwrap_or(f64::NAN), &series);
+        Figure {
             title: title.into(),
             x_label: "gradient calls (log; mean over seeds at each checkpoint)".into(),
             y_label: y.into(),
             log_x: true,
             log_y,
             y_range: None,
-            series: r.cartpole.iter().map(|c| band(&c.0, gc, f)).collect(),
-        };
+            series: series.into_iter().chain(lines).collect(),
+        }
+    };
     let n_cp = f64::from(profile.cartpole.eval_episodes);
     figs.push((
         "fig4-8-loss",
@@ -1138,11 +1221,7 @@ fn final_rows(rows: &[ConvergenceRow], obstacle: bool) -> Vec<Vec<String>> {
             vec![
                 r.label.clone(),
                 if obstacle {
-                    ci(&Summary {
-                        mean: 100.0 * r.final_score.mean,
-                        half_width: 100.0 * r.final_score.half_width,
-                        n: r.final_score.n,
-                    })
+                    ci(&percent(&r.final_score))
                 } else {
                     ci(&r.final_reward)
                 },
@@ -1200,6 +1279,41 @@ fn strings(v: &[&str]) -> Vec<String> {
     v.iter().map(|s| (*s).to_string()).collect()
 }
 
+/// The obstacle section's description of the learner (from the profile).
+fn obstacle_learner_text(profile: &Profile) -> String {
+    use ilopt::task::obstacle::ObstacleFeatures;
+    let features = match profile.obstacle.features.unwrap_or_default() {
+        ObstacleFeatures::Basic => {
+            "the 9 basic features (goal − agent, obstacle − agent, obstacle \
+             velocity, agent velocity, 1)"
+                .to_string()
+        }
+        f @ ObstacleFeatures::Rbf {
+            per_axis,
+            width,
+            x_range,
+            y_range,
+        } => format!(
+            "{} features: the 9 basic ones (goal − agent, obstacle − agent, obstacle velocity, agent \
+             velocity, 1), the unit vector to the goal, and for each of {per_axis} × {per_axis} centres c \
+             over the obstacle's relative position r (x in [{}, {}], y in [{}, {}]) the bump \
+             exp(−‖r − c‖²/(2·{width}²)) and its products with the obstacle's velocity \
+             (`ObstacleFeatures::Rbf`)",
+            f.dim(),
+            x_range[0],
+            x_range[1],
+            y_range[0],
+            y_range[1]
+        ),
+    };
+    format!(
+        "The learner (the thesis does not state one) is linear-Gaussian (P3, σ_π = {}) over {features}; \
+         its loss is that of the executed velocity, ‖clip(Wφ) − π*(s)‖², bounded by (v_max + ‖π*‖)² \
+         (`SpeedLimitedGaussian`). The expert is the velocity-obstacle expert of eq. 4.1.",
+        profile.obstacle.sigma.unwrap_or(0.02)
+    )
+}
+
 /// Everything the appendix needs to say, in order.
 struct Inputs<'a> {
     profile: &'a Profile,
@@ -1253,14 +1367,23 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     d.push(Block::List(vec![
         format!(
             "**Evaluation.** At each checkpoint (every `eval_every` iterations and at the last one) the learned \
-             policy acts deterministically — the linear-Gaussian mean `Wφ(s)` (obstacle), the most probable \
-             action of the softmax (CartPole) — on {} (obstacle) / {} (CartPole) seeded episodes, the same \
-             episodes for every algorithm and checkpoint of a seed. Crash (obstacle) = the discs overlap; \
-             crash (CartPole) = the episode terminates before 500 steps. Loss = mean per-decision supervised \
-             loss on the states the deterministic policy visits (obstacle: squared error of the velocity, \
-             split into x and y; CartPole: Brier loss against the LQR action).",
-            profile.obstacle.eval_episodes, profile.cartpole.eval_episodes,
+             policy acts deterministically — the linear-Gaussian mean `Wφ(s)` as the environment executes it \
+             (clipped to the maximum speed) (obstacle), the most probable action of the softmax (CartPole) — \
+             on {} (obstacle) / {} (CartPole) seeded episodes, the same episodes for every algorithm, \
+             checkpoint and reference policy of a seed. Crash (obstacle) = the discs overlap; crash \
+             (CartPole) = the episode terminates before 500 steps. Loss = mean per-decision supervised loss on \
+             the states the deterministic policy visits (obstacle: squared error of the executed velocity \
+             against the velocity-obstacle expert's, split into x and y; CartPole: Brier loss against the \
+             {} expert's action).",
+            profile.obstacle.eval_episodes,
+            profile.cartpole.eval_episodes,
+            profile.cartpole.expert.unwrap_or_default().name(),
         ),
+        "**Reference policies** (no training; rows in *italics*, dashed lines in the figures): the \
+         task's expert, and on the obstacle task *straight to goal* — full speed at the goal, ignoring \
+         the obstacle. They are evaluated on the same episodes as the learners and bracket what \
+         imitation achieves."
+            .into(),
         format!(
             "**Converge.** A run converges at the first checkpoint whose score is ≥ the task's threshold: \
              score = success rate (obstacle, threshold {}) or mean episode reward / 500 (CartPole, threshold \
@@ -1282,7 +1405,8 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
         "Fig. 4.2: gradient-estimate error vs number of trajectories",
     ));
     d.push(Block::Para(format!(
-        "Obstacle task, linear-Gaussian learner (σ = {}) at a fixed θ; error = ‖(mean of N eq. 3.15 \
+        "Obstacle task, linear-Gaussian learner (σ = {}) over the 9 basic features, with the loss of the \
+         executed velocity, at a fixed θ; error = ‖(mean of N eq. 3.15 \
          estimates) − (mean of {} independent estimates)‖ for the x and y rows of the gradient. The \
          reference has its own noise, so the error floors near its standard error.",
         profile.gradient_error.sigma, profile.gradient_error.reference_trajectories
@@ -1308,7 +1432,7 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     for (heading, para, figs, task, head1, obstacle, rows, configs, nos, tc, tr) in [
         (
             "Obstacle avoidance (§4.1): Figs. 4.3–4.6, Tables 4.1–4.2",
-            None,
+            Some(obstacle_learner_text(profile)),
             &["Fig. 4.3", "Fig. 4.4", "Fig. 4.5", "Fig. 4.6"][..],
             "obstacle",
             "success rate (%)",
@@ -1321,7 +1445,15 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
         ),
         (
             "CartPole (§4.2): Figs. 4.8–4.10, Tables 4.3–4.4",
-            Some("The expert is the kit's LQR controller (the thesis uses PPO)."),
+            Some(match profile.cartpole.expert.unwrap_or_default() {
+                crate::config::CartPoleExpertChoice::Ppo => "The expert is the committed PPO policy \
+                    (`experts/cartpole-ppo.json`, acting greedily), as in the thesis; the learner is a \
+                    linear softmax over the state and a bias."
+                    .to_string(),
+                crate::config::CartPoleExpertChoice::Lqr => "The expert is the kit's LQR controller \
+                    (the thesis uses PPO); the learner is a linear softmax over the state and a bias."
+                    .to_string(),
+            }),
             &["Fig. 4.8", "Fig. 4.9", "Fig. 4.10"][..],
             "cartpole",
             "mean reward",
@@ -1335,14 +1467,24 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     ] {
         d.push(h(heading));
         if let Some(p) = para {
-            d.push(Block::Para(p.into()));
+            d.push(Block::Para(p));
         }
         figures(&mut d, figs);
         d.push(Block::Table(Table {
             caption: Some("**Final checkpoint** (all seeds):".into()),
             label: format!("tab:pc-final-{task}"),
             header: strings(&["algorithm", head1, "crashes", "loss", "failed runs"]),
-            rows: final_rows(rows, obstacle),
+            rows: final_rows(rows, obstacle)
+                .into_iter()
+                .chain(baseline_rows(
+                    r,
+                    if obstacle {
+                        TaskKind::Obstacle
+                    } else {
+                        TaskKind::Cartpole
+                    },
+                ))
+                .collect(),
             spec: "lrrrr".into(),
         }));
         d.extend(cost_tables(nos, rows, configs, tc, tr));

@@ -154,6 +154,15 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
     let ma = std::fs::read_to_string(a.join("appendix.md")).expect("appendix.md");
     let mb = std::fs::read_to_string(b.join("appendix.md")).expect("appendix.md");
     assert_eq!(ma.lines().count(), mb.lines().count());
+    // The reference policies are rows of the final-checkpoint tables in both renderings.
+    let ta = std::fs::read_to_string(a.join("appendix.tex")).expect("appendix.tex");
+    for label in ["Expert (VO)", "Straight to goal", "Expert (PPO)"] {
+        assert!(
+            ma.contains(&format!("| *{label}* (reference, no training) |")),
+            "{label}"
+        );
+        assert!(ta.contains(label), "{label} missing from appendix.tex");
+    }
     // The speed-up table (thesis / kit) is in both renderings, with the machine above it.
     assert!(
         ma.contains("## Kit time vs thesis (Tables 4.2 and 4.4)"),
