@@ -12,7 +12,9 @@
 //! **Layout of θ**: `θ ∈ Sⁿ`, the weight of feature j at index j.
 
 use super::softmax::check_action;
-use super::{LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec};
+use super::{
+    LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec, check_vec_scalar,
+};
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar, Undecidable, certainly_less};
 
@@ -83,12 +85,16 @@ fn score_of<S: Scalar>(p: S, action: usize, phi: &[S], score: &mut [S]) {
 /// [`sample_categorical`](crate::toy::sample_categorical) on the two probabilities `[q, p]`,
 /// written out for two actions (the same decisions and errors, with fewer branches in the
 /// roll-out's hot loop): the last action of positive probability is the fallback, and action 0
-/// is taken when `u < 0 + q` certainly.
+/// is taken when `u < q` certainly. (`sample_categorical` compares `u` with the running sum
+/// `0 + q`; adding an exact zero changes no comparison in any of the kit's scalars — `f64`
+/// comparisons treat `−0` and `+0` alike, interval and rational sums with 0 are exact, a dual
+/// compares its value — so the sum, a dependent addition on the roll-out's latency chain, is
+/// left out.)
 #[inline]
 fn sample_two<S: Scalar>(u: &S, q: S, p: &S) -> Result<usize, Undecidable> {
     let q_zero = q.is_certainly_zero();
     let last = usize::from(!p.is_certainly_zero() || q_zero);
-    if last == 1 && !q_zero && certainly_less(u, &(S::zero() + &q), "categorical sampling")? {
+    if last == 1 && !q_zero && certainly_less(u, &q, "categorical sampling")? {
         return Ok(0);
     }
     Ok(last)
@@ -238,6 +244,55 @@ impl<S: Real> Policy<S> for Logistic {
         let p = self.prob_one(theta, phi)?;
         let u: S = crate::problem::dyadic_uniform(rng);
         Ok(sample_two(&u, S::one() - &p, &p)?)
+    }
+
+    /// As [`Policy::sample`] without the θ check (θ validated once by the caller).
+    #[inline]
+    fn sample_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<usize, PolicyError> {
+        check_vec_scalar("phi", phi, self.features)?;
+        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+        let u: S = crate::problem::dyadic_uniform(rng);
+        Ok(sample_two(&u, S::one() - &p, &p)?)
+    }
+
+    /// With `∇_θ l_t = 4(p − y)p(1 − p)φ` and `ψ_t = (a − p)φ` used entry by entry, never stored:
+    /// `g_j += 4(p − y)p(1 − p)φ_j + l_t Σ_j`, `Σ_j += (a − p)φ_j` (the same operations in the same
+    /// order as the default).
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        action: &usize,
+        _grad: &mut [S],
+        _score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(*label, 2)?;
+        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+        let r = if *label == 1 {
+            p.clone() - S::one()
+        } else {
+            p.clone()
+        };
+        let dz = S::from_i64(4) * &r * &p * (S::one() - &p);
+        let l = S::from_i64(2) * r.square();
+        check_action(*action, 2)?;
+        let c = if *action == 1 { S::one() - p } else { -p };
+        check_out("g", g, self.features)?;
+        check_out("score_sum", score_sum, self.features)?;
+        for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+            *gj += dz.clone() * x + l.clone() * &*sj;
+            *sj += c.clone() * x;
+        }
+        Ok(l)
     }
 }
 

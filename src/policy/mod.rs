@@ -198,6 +198,77 @@ pub trait Policy<S: Scalar> {
         self.score_into(theta, phi, action, score)?;
         Ok(l)
     }
+
+    /// [`Policy::sample`] for a θ the caller has already validated — `theta` has
+    /// [`Policy::param_dim`] entries, all finite, as the oracle checks once per roll-out — so that
+    /// a policy may skip its per-call θ check in the roll-out's hot loop (φ is still checked).
+    ///
+    /// For such a θ the action, the random draws and the errors are exactly those of
+    /// [`Policy::sample`]; for any other θ the outcome is unspecified (an error, a panic or a
+    /// meaningless action, never undefined behaviour). The default calls [`Policy::sample`].
+    ///
+    /// # Errors
+    /// As [`Policy::sample`].
+    #[inline]
+    fn sample_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<Self::Action, PolicyError> {
+        self.sample(theta, phi, rng)
+    }
+
+    /// One decision of the causal estimator of eq. 3.15 with unit weight, for inputs the caller
+    /// has already validated (θ as in [`Policy::sample_trusted`], and φ with
+    /// [`Policy::feature_dim`] entries, all finite — the oracle checks a whole trajectory once):
+    /// returns `l_t` and updates `g += ∇_θ l_t + l_t Σ_{i<t} ψ_i` entry by entry, then
+    /// `score_sum += ψ_t` (`score_sum` holds `Σ_{i<t} ψ_i` on entry). `grad` and `score` are
+    /// scratch of length [`Policy::param_dim`] that the default fills with `∇_θ l_t` and `ψ_t`.
+    ///
+    /// The default is [`Policy::loss_score_into`] followed by those two loops; a policy may fuse
+    /// them (the logistic policy never materialises `∇_θ l_t` and `ψ_t`, both multiples of φ).
+    /// For validated inputs the results are bit-for-bit those of the default and the errors
+    /// those of [`Policy::loss_score_into`]; for other inputs the outcome is unspecified (never
+    /// undefined behaviour).
+    ///
+    /// # Errors
+    /// As [`Policy::loss_score_into`].
+    #[allow(clippy::too_many_arguments)] // the estimator's whole per-decision state
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &Self::Label,
+        action: &Self::Action,
+        grad: &mut [S],
+        score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let l = self.loss_score_into(theta, phi, label, action, grad, score)?;
+        causal_accumulate(g, &l, grad, score, score_sum);
+        Ok(l)
+    }
+}
+
+/// `g += ∇l_t + l_t Σ_{i<t} ψ_i` entry by entry, then `Σ_{i<t} ψ_i += ψ_t`: the unit-weight update
+/// of the causal estimator (the default [`Policy::causal_step_trusted`]).
+#[inline]
+pub(crate) fn causal_accumulate<S: Scalar>(
+    g: &mut [S],
+    l: &S,
+    grad: &[S],
+    score: &[S],
+    score_sum: &mut [S],
+) {
+    for ((gj, dj), sj) in g.iter_mut().zip(grad).zip(score_sum.iter()) {
+        *gj += dj.clone() + l.clone() * sj;
+    }
+    for (sj, pj) in score_sum.iter_mut().zip(score) {
+        *sj += pj;
+    }
 }
 
 /// Copy `src` into `dst`, checking the length (the default `*_into` methods of [`Policy`]).
@@ -263,6 +334,29 @@ pub(crate) fn check_vec<S: Scalar>(
     }
     // Without early exit: a branch-free pass over the (short) vectors of the hot loop.
     if !xs.iter().fold(true, |ok, x| ok & x.is_finite()) {
+        return Err(PolicyError::NonFinite { param });
+    }
+    Ok(())
+}
+
+/// [`check_vec`] (the same result) reading the entries one by one, with an early exit: for a
+/// vector that was written entry by entry just before (the features of the roll-out's current
+/// state), a vectorised pass would load it with wide loads that the CPU cannot forward from the
+/// narrow stores, a stall on the roll-out's step-to-step dependency chain.
+#[inline]
+pub(crate) fn check_vec_scalar<S: Scalar>(
+    param: &'static str,
+    xs: &[S],
+    expected: usize,
+) -> Result<(), PolicyError> {
+    if xs.len() != expected {
+        return Err(PolicyError::Shape {
+            param,
+            expected,
+            got: xs.len(),
+        });
+    }
+    if !xs.iter().all(Scalar::is_finite) {
         return Err(PolicyError::NonFinite { param });
     }
     Ok(())
