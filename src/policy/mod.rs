@@ -251,6 +251,63 @@ pub trait Policy<S: Scalar> {
         causal_accumulate(g, &l, grad, score, score_sum);
         Ok(l)
     }
+
+    /// The whole unit-weight causal estimator of eq. 3.15 over one trajectory, for validated
+    /// inputs (θ as in [`Policy::sample_trusted`]; `features` holds φ(s_1), …, φ(s_n) row after
+    /// row, each with [`Policy::feature_dim`] finite entries; `labels` and `actions` have one entry
+    /// per row): adds `Σ_t [∇_θ l_t + l_t Σ_{i<t} ψ_i]` to `g`. `scratch` has
+    /// `3 ·` [`Policy::param_dim`] entries, all zero on entry.
+    ///
+    /// The default runs [`Policy::causal_step_trusted`] decision after decision (`scratch` holds
+    /// `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`); a policy may override it with a faster loop (the logistic
+    /// policy runs it with a compile-time dimension for up to 8 features). For validated inputs
+    /// the results are bit-for-bit those of the default and the error is the default's (the first
+    /// failing decision's); for other inputs the outcome is unspecified (never undefined
+    /// behaviour).
+    ///
+    /// # Errors
+    /// As [`Policy::causal_step_trusted`] at the first failing decision.
+    #[inline]
+    fn causal_sum_trusted<L: std::borrow::Borrow<Self::Label>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[Self::Action],
+        g: &mut [S],
+        scratch: &mut [S],
+    ) -> Result<(), PolicyError> {
+        causal_sum_by_steps(self, theta, features, labels, actions, g, scratch)
+    }
+}
+
+/// The default [`Policy::causal_sum_trusted`]: [`Policy::causal_step_trusted`] decision after
+/// decision, with `scratch` split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`.
+#[allow(clippy::too_many_arguments)] // the method's arguments and the policy
+#[inline]
+pub(crate) fn causal_sum_by_steps<S, P, L>(
+    policy: &P,
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[P::Action],
+    g: &mut [S],
+    scratch: &mut [S],
+) -> Result<(), PolicyError>
+where
+    S: Scalar,
+    P: Policy<S> + ?Sized,
+    L: std::borrow::Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    check_out("scratch", scratch, 3 * d)?;
+    let (grad, rest) = scratch.split_at_mut(d);
+    let (score, score_sum) = rest.split_at_mut(d);
+    let rows = features.chunks_exact(policy.feature_dim().max(1));
+    for ((phi, y), a) in rows.zip(labels).zip(actions) {
+        policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+    }
+    Ok(())
 }
 
 /// `g += ∇l_t + l_t Σ_{i<t} ψ_i` entry by entry, then `Σ_{i<t} ψ_i += ψ_t`: the unit-weight update

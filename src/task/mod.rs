@@ -255,12 +255,20 @@ where
     let n = t.len();
     let mut g = vec![S::zero(); d];
     let mut scratch = Scratch::new(d);
-    let (grad, score, score_sum) = scratch.parts();
     let mut log_w = S::zero();
     // θ has been checked by the caller; with every φ checked here once, the per-decision calls can
     // skip the policy's own checks (`causal_step_trusted`). Otherwise the checked calls below
     // report the first failure exactly as before.
     let trusted = !per_decision && features_valid(policy, t);
+    if trusted && ratio.is_none() {
+        // The plain causal estimator: the whole pass in the policy (one loop it may specialise).
+        let (rows, actions, labels) = (&t.feature_data, &t.actions, &t.labels);
+        policy
+            .causal_sum_trusted(theta, rows, labels, actions, &mut g, &mut scratch.buf)
+            .map_err(policy_error)?;
+        return Ok((g, log_w));
+    }
+    let (grad, score, score_sum) = scratch.parts();
     for (step, ((phi, a), y)) in t.feature_rows().zip(&t.actions).zip(&t.labels).enumerate() {
         if trusted {
             policy
