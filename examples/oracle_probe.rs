@@ -3,13 +3,14 @@
 //! interleaved, and the fastest round is reported (interference only ever slows a round down).
 //!
 //! `cargo run --release --example oracle_probe -- generic,spec,rollout,specroll,estimate,specest 2 300`
-//! (modes, repetitions of the 16 seeds per round, rounds).
+//! (modes, repetitions of the 16 seeds per round, rounds). Mode `softmax`: the same roll-out and
+//! causal estimate with the two-action softmax policy (rows `(−θ/2, θ/2)`, the same `π(1|s)`).
 
 #[path = "../benches/support/specialised.rs"]
 mod specialised;
 
 use ilopt::expert::lqr::LqrExpert;
-use ilopt::policy::Logistic;
+use ilopt::policy::{Logistic, Softmax};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use ilopt::task::TaskProblem;
 use ilopt::task::cartpole::{self, CartPoleTask};
@@ -36,6 +37,17 @@ fn main() {
         policy: Logistic::new(cartpole::FEATURES).expect("policy"),
     };
     let theta = DVector::from_column_slice(&THETA);
+    let soft = TaskProblem {
+        task: CartPoleTask::<f64>::with_lqr().expect("LQR design"),
+        policy: Softmax::new(2, cartpole::FEATURES).expect("policy"),
+    };
+    let soft_theta: DVector<f64> = DVector::from_iterator(
+        2 * D,
+        THETA
+            .iter()
+            .map(|x| -x / 2.0)
+            .chain(THETA.iter().map(|x| x / 2.0)),
+    );
     let gain = *LqrExpert::cartpole().expect("LQR design").gain();
     let fast = Specialised {
         k: std::array::from_fn(|i| gain[i]),
@@ -75,6 +87,16 @@ fn main() {
                                 .expect("roll-out");
                             steps += tr.len() as u64;
                             acc += p
+                                .estimate(th, &tr, EstimatorForm::Causal, &mut cost)
+                                .expect("estimate")[0];
+                        }
+                        "softmax" => {
+                            let th = black_box(&soft_theta);
+                            let tr = soft
+                                .rollout(&Behaviour::Learner(th), &mut rng, &mut cost)
+                                .expect("roll-out");
+                            steps += tr.len() as u64;
+                            acc += soft
                                 .estimate(th, &tr, EstimatorForm::Causal, &mut cost)
                                 .expect("estimate")[0];
                         }

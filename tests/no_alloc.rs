@@ -6,9 +6,10 @@
 //! task's time limit for a roll-out; the returned vector and one scratch buffer for an estimate)
 //! and the per-step loop allocates nothing, so an episode of 500 steps costs as many allocations
 //! as one of 10. The per-step primitives (features, expert, sampling, environment step, loss and
-//! score) are also checked directly: zero allocations over many steps.
+//! score) are also checked directly: zero allocations over many steps. CartPole is checked with
+//! both the logistic and the softmax policy.
 
-use ilopt::policy::{LinearGaussian, Logistic, Policy};
+use ilopt::policy::{LikelihoodRatio, LinearGaussian, Logistic, Policy, Softmax};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::task::cartpole::{self, CartPoleTask};
 use ilopt::task::obstacle::{self, ObstacleTask};
@@ -90,15 +91,38 @@ fn balancing() -> DVector<f64> {
     DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1])
 }
 
-#[test]
-fn cartpole_step_primitives_allocate_nothing() {
-    let p = cartpole();
-    let theta = balancing();
+/// The CartPole task with the two-action softmax policy.
+fn cartpole_softmax() -> TaskProblem<CartPoleTask<f64>, Softmax> {
+    TaskProblem {
+        task: CartPoleTask::with_lqr().unwrap(),
+        policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+    }
+}
+
+/// The softmax policy with rows `(−θ/2, θ/2)`: `π(1|s) = σ(θ·φ)`, the logistic policy θ.
+fn as_softmax(theta: &DVector<f64>) -> DVector<f64> {
+    let half: Vec<f64> = theta.iter().map(|x| x / 2.0).collect();
+    DVector::from_vec(
+        half.iter()
+            .map(|x| -x)
+            .chain(half.iter().copied())
+            .collect(),
+    )
+}
+
+/// 10 000 CartPole steps of the per-step primitives (features, expert, sampling, loss and score,
+/// likelihood ratio, environment step) with policy `P`: zero allocations.
+fn cartpole_step_primitives<P>(p: &TaskProblem<CartPoleTask<f64>, P>, theta: &DVector<f64>)
+where
+    P: LikelihoodRatio<f64, Action = usize, Label = usize>,
+{
     let th = theta.as_slice();
+    let other: Vec<f64> = th.iter().map(|x| 0.5 * x).collect();
+    let d = p.policy.param_dim();
     let mut rng = KitRng::seed_from_u64(7);
     let mut features = Vec::with_capacity(5 * 10_000);
-    let mut grad = vec![0.0; 5];
-    let mut score = vec![0.0; 5];
+    let mut grad = vec![0.0; d];
+    let mut score = vec![0.0; d];
     let mut ep = p.task.start(&mut rng).unwrap();
     let mut steps = 0;
     let (n, ()) = count(|| {
@@ -111,6 +135,9 @@ fn cartpole_step_primitives_allocate_nothing() {
             p.policy
                 .loss_score_into(th, phi, &label, &a, &mut grad, &mut score)
                 .unwrap();
+            p.policy.loss_into(th, phi, &label, &mut grad).unwrap();
+            p.policy.score_into(th, phi, &a, &mut score).unwrap();
+            p.policy.log_likelihood_ratio(th, &other, phi, &a).unwrap();
             steps += 1;
             if p.task.advance(&mut ep, &a).unwrap() {
                 ep = p.task.start(&mut rng).unwrap();
@@ -120,22 +147,38 @@ fn cartpole_step_primitives_allocate_nothing() {
     assert_eq!(n, 0, "allocations over {steps} CartPole steps");
 }
 
-/// Roll-outs and estimates of many lengths: the allocation count of each call is one constant.
 #[test]
-fn cartpole_rollout_and_oracle_allocate_per_call_not_per_step() {
-    let p = cartpole();
+fn cartpole_step_primitives_allocate_nothing() {
+    cartpole_step_primitives(&cartpole(), &balancing());
+    cartpole_step_primitives(&cartpole_softmax(), &as_softmax(&balancing()));
+}
+
+/// The allocating `Policy::loss` and `Policy::score` of the softmax policy are seen by the counter
+/// (so the softmax cases above and below could fail).
+#[test]
+fn softmax_loss_and_score_allocate() {
+    let p = cartpole_softmax();
+    let theta = as_softmax(&balancing());
+    let phi = [0.01, -0.02, 0.03, 0.0, 1.0];
+    let (n, _) = count(|| p.policy.loss(theta.as_slice(), &phi, &1).unwrap());
+    assert!(n >= 2, "{n}");
+    let (n, _) = count(|| p.policy.score(theta.as_slice(), &phi, &1).unwrap());
+    assert!(n >= 2, "{n}");
+}
+
+/// Roll-outs and estimates of many lengths with policy `P`: the allocation count of each call is
+/// one constant.
+fn cartpole_per_call<P>(p: &TaskProblem<CartPoleTask<f64>, P>, thetas: &[DVector<f64>; 3])
+where
+    P: LikelihoodRatio<f64, Action = usize, Label = usize>,
+{
     let mut rng = KitRng::seed_from_u64(11);
     let mut cost = Cost::default();
-    let thetas = [
-        balancing(),
-        DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
-        DVector::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.0]),
-    ];
     let mut lengths = std::collections::BTreeSet::new();
     let (mut rollout_counts, mut estimate_counts, mut weighted_counts, mut full_counts) =
         (vec![], vec![], vec![], vec![]);
     for _ in 0..30 {
-        for theta in &thetas {
+        for theta in thetas {
             let (n, t) = count(|| {
                 p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
                     .unwrap()
@@ -174,6 +217,18 @@ fn cartpole_rollout_and_oracle_allocate_per_call_not_per_step() {
             "{what}: allocations per call {counts:?} (must be one constant ≤ {max})"
         );
     }
+}
+
+/// Roll-outs and estimates of many lengths: the allocation count of each call is one constant.
+#[test]
+fn cartpole_rollout_and_oracle_allocate_per_call_not_per_step() {
+    let thetas = [
+        balancing(),
+        DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
+        DVector::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.0]),
+    ];
+    cartpole_per_call(&cartpole(), &thetas);
+    cartpole_per_call(&cartpole_softmax(), &thetas.map(|t| as_softmax(&t)));
 }
 
 /// The obstacle task with inline actions and labels (`[f64; 2]`; the default `Vec<f64>` allocates

@@ -12,9 +12,13 @@
 //! **Layout of θ**: `θ ∈ Sⁿ`, the weight of feature j at index j.
 
 use super::softmax::check_action;
-use super::{LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec};
+use super::{
+    LikelihoodRatio, Policy, PolicyError, causal_sum_by_steps, check_out, check_size, check_vec,
+    check_vec_scalar,
+};
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar, Undecidable, certainly_less};
+use std::borrow::Borrow;
 
 /// The sign of the f64 approximation of `z` (decides which of two exact formulas is overflow-free).
 #[inline]
@@ -83,15 +87,61 @@ fn score_of<S: Scalar>(p: S, action: usize, phi: &[S], score: &mut [S]) {
 /// [`sample_categorical`](crate::toy::sample_categorical) on the two probabilities `[q, p]`,
 /// written out for two actions (the same decisions and errors, with fewer branches in the
 /// roll-out's hot loop): the last action of positive probability is the fallback, and action 0
-/// is taken when `u < 0 + q` certainly.
+/// is taken when `u < q` certainly. (`sample_categorical` compares `u` with the running sum
+/// `0 + q`; adding an exact zero changes no comparison in any of the kit's scalars — `f64`
+/// comparisons treat `−0` and `+0` alike, interval and rational sums with 0 are exact, a dual
+/// compares its value — so the sum, a dependent addition on the roll-out's latency chain, is
+/// left out.)
 #[inline]
 fn sample_two<S: Scalar>(u: &S, q: S, p: &S) -> Result<usize, Undecidable> {
     let q_zero = q.is_certainly_zero();
     let last = usize::from(!p.is_certainly_zero() || q_zero);
-    if last == 1 && !q_zero && certainly_less(u, &(S::zero() + &q), "categorical sampling")? {
+    if last == 1 && !q_zero && certainly_less(u, &q, "categorical sampling")? {
         return Ok(0);
     }
     Ok(last)
+}
+
+/// [`Policy::causal_sum_trusted`] of [`Logistic`] with `N` features known at compile time: the
+/// operations of [`Policy::causal_step_trusted`] in the same order, with `g` and `Σ_{i<t} ψ_i` in
+/// `[S; N]` locals (registers for `f64`) and fully unrolled loops.
+#[inline]
+fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    g: &mut [S],
+) -> Result<(), PolicyError> {
+    let theta: &[S; N] = theta.try_into().map_err(|_| PolicyError::Shape {
+        param: "theta",
+        expected: N,
+        got: theta.len(),
+    })?;
+    check_out("g", g, N)?;
+    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
+    let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
+    let (rows, _) = features.as_chunks::<N>();
+    for ((phi, label), action) in rows.iter().zip(labels).zip(actions) {
+        let label = *label.borrow();
+        check_action(label, 2)?;
+        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+        let r = if label == 1 {
+            p.clone() - S::one()
+        } else {
+            p.clone()
+        };
+        let dz = S::from_i64(4) * &r * &p * (S::one() - &p);
+        let l = S::from_i64(2) * r.square();
+        check_action(*action, 2)?;
+        let c = if *action == 1 { S::one() - p } else { -p };
+        for ((gj, sj), x) in acc.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+            *gj += dz.clone() * x + l.clone() * &*sj;
+            *sj += c.clone() * x;
+        }
+    }
+    g.clone_from_slice(&acc);
+    Ok(())
 }
 
 /// The logistic policy over `n ≥ 1` features (actions 0 and 1).
@@ -239,6 +289,78 @@ impl<S: Real> Policy<S> for Logistic {
         let u: S = crate::problem::dyadic_uniform(rng);
         Ok(sample_two(&u, S::one() - &p, &p)?)
     }
+
+    /// As [`Policy::sample`] without the θ check (θ validated once by the caller).
+    #[inline]
+    fn sample_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<usize, PolicyError> {
+        check_vec_scalar("phi", phi, self.features)?;
+        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+        let u: S = crate::problem::dyadic_uniform(rng);
+        Ok(sample_two(&u, S::one() - &p, &p)?)
+    }
+
+    /// With `∇_θ l_t = 4(p − y)p(1 − p)φ` and `ψ_t = (a − p)φ` used entry by entry, never stored:
+    /// `g_j += 4(p − y)p(1 − p)φ_j + l_t Σ_j`, `Σ_j += (a − p)φ_j` (the same operations in the same
+    /// order as the default).
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        action: &usize,
+        _grad: &mut [S],
+        _score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(*label, 2)?;
+        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+        let r = if *label == 1 {
+            p.clone() - S::one()
+        } else {
+            p.clone()
+        };
+        let dz = S::from_i64(4) * &r * &p * (S::one() - &p);
+        let l = S::from_i64(2) * r.square();
+        check_action(*action, 2)?;
+        let c = if *action == 1 { S::one() - p } else { -p };
+        check_out("g", g, self.features)?;
+        check_out("score_sum", score_sum, self.features)?;
+        for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+            *gj += dz.clone() * x + l.clone() * &*sj;
+            *sj += c.clone() * x;
+        }
+        Ok(l)
+    }
+
+    /// With a compile-time dimension for 1 to 8 features (`causal_sum_fixed`), else the default
+    /// loop over [`Policy::causal_step_trusted`].
+    #[inline]
+    fn causal_sum_trusted<L: Borrow<usize>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[usize],
+        g: &mut [S],
+        scratch: &mut [S],
+    ) -> Result<(), PolicyError> {
+        macro_rules! fixed {
+            ($($n:literal)*) => {
+                match self.features {
+                    $($n => causal_sum_fixed::<S, L, $n>(theta, features, labels, actions, g),)*
+                    _ => causal_sum_by_steps(self, theta, features, labels, actions, g, scratch),
+                }
+            };
+        }
+        fixed!(1 2 3 4 5 6 7 8)
+    }
 }
 
 impl<S: Real> LikelihoodRatio<S> for Logistic {
@@ -258,6 +380,58 @@ mod tests {
     use super::*;
     use crate::scalar::Interval;
     use crate::toy::sample_categorical;
+
+    /// The fixed-dimension causal pass (1 to 8 features) and the fallback (more features) against
+    /// the default decision-by-decision pass: bit-for-bit, and the same first error.
+    #[test]
+    fn causal_sum_matches_the_default_bit_for_bit() {
+        use crate::policy::causal_sum_by_steps;
+        use rand::{Rng, SeedableRng};
+        let mut rng = KitRng::seed_from_u64(9);
+        for n in 1..=10 {
+            let pi = Logistic::new(n).unwrap();
+            for steps in [1, 2, 7, 60] {
+                let theta: Vec<f64> = (0..n).map(|_| 4.0 * rng.random::<f64>() - 2.0).collect();
+                let features: Vec<f64> = (0..n * steps)
+                    .map(|_| 2.0 * rng.random::<f64>() - 1.0)
+                    .collect();
+                let labels: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let mut actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let run = |actions: &[usize], fast: bool| {
+                    let mut g = vec![0.0; n];
+                    let mut scratch = vec![0.0; 3 * n];
+                    let r = if fast {
+                        pi.causal_sum_trusted(
+                            &theta,
+                            &features,
+                            &labels,
+                            actions,
+                            &mut g,
+                            &mut scratch,
+                        )
+                    } else {
+                        causal_sum_by_steps(
+                            &pi,
+                            &theta,
+                            &features,
+                            &labels,
+                            actions,
+                            &mut g,
+                            &mut scratch,
+                        )
+                    };
+                    r.map(|()| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                };
+                let fast = run(&actions, true);
+                assert!(fast.is_ok());
+                assert_eq!(fast, run(&actions, false), "n = {n}, {steps} steps");
+                actions[steps / 2] = 2;
+                let err = run(&actions, true);
+                assert!(matches!(err, Err(PolicyError::Action { action: 2, .. })));
+                assert_eq!(err, run(&actions, false));
+            }
+        }
+    }
 
     /// `sample_two` is `sample_categorical` on `[q, p]`: same actions, same errors.
     #[test]

@@ -200,6 +200,134 @@ pub trait Policy<S: Scalar> {
         self.score_into(theta, phi, action, score)?;
         Ok(l)
     }
+
+    /// [`Policy::sample`] for a θ the caller has already validated — `theta` has
+    /// [`Policy::param_dim`] entries, all finite, as the oracle checks once per roll-out — so that
+    /// a policy may skip its per-call θ check in the roll-out's hot loop (φ is still checked).
+    ///
+    /// For such a θ the action, the random draws and the errors are exactly those of
+    /// [`Policy::sample`]; for any other θ the outcome is unspecified (an error, a panic or a
+    /// meaningless action, never undefined behaviour). The default calls [`Policy::sample`].
+    ///
+    /// # Errors
+    /// As [`Policy::sample`].
+    #[inline]
+    fn sample_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<Self::Action, PolicyError> {
+        self.sample(theta, phi, rng)
+    }
+
+    /// One decision of the causal estimator of eq. 3.15 with unit weight, for inputs the caller
+    /// has already validated (θ as in [`Policy::sample_trusted`], and φ with
+    /// [`Policy::feature_dim`] entries, all finite — the oracle checks a whole trajectory once):
+    /// returns `l_t` and updates `g += ∇_θ l_t + l_t Σ_{i<t} ψ_i` entry by entry, then
+    /// `score_sum += ψ_t` (`score_sum` holds `Σ_{i<t} ψ_i` on entry). `grad` and `score` are
+    /// scratch of length [`Policy::param_dim`] that the default fills with `∇_θ l_t` and `ψ_t`.
+    ///
+    /// The default is [`Policy::loss_score_into`] followed by those two loops; a policy may fuse
+    /// them (the logistic policy never materialises `∇_θ l_t` and `ψ_t`, both multiples of φ).
+    /// For validated inputs the results are bit-for-bit those of the default and the errors
+    /// those of [`Policy::loss_score_into`]; for other inputs the outcome is unspecified (never
+    /// undefined behaviour).
+    ///
+    /// # Errors
+    /// As [`Policy::loss_score_into`].
+    #[allow(clippy::too_many_arguments)] // the estimator's whole per-decision state
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &Self::Label,
+        action: &Self::Action,
+        grad: &mut [S],
+        score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let l = self.loss_score_into(theta, phi, label, action, grad, score)?;
+        causal_accumulate(g, &l, grad, score, score_sum);
+        Ok(l)
+    }
+
+    /// The whole unit-weight causal estimator of eq. 3.15 over one trajectory, for validated
+    /// inputs (θ as in [`Policy::sample_trusted`]; `features` holds φ(s_1), …, φ(s_n) row after
+    /// row, each with [`Policy::feature_dim`] finite entries; `labels` and `actions` have one entry
+    /// per row): adds `Σ_t [∇_θ l_t + l_t Σ_{i<t} ψ_i]` to `g`. `scratch` has
+    /// `3 ·` [`Policy::param_dim`] entries, all zero on entry.
+    ///
+    /// The default runs [`Policy::causal_step_trusted`] decision after decision (`scratch` holds
+    /// `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`); a policy may override it with a faster loop (the logistic
+    /// policy runs it with a compile-time dimension for up to 8 features). For validated inputs
+    /// the results are bit-for-bit those of the default and the error is the default's (the first
+    /// failing decision's); for other inputs the outcome is unspecified (never undefined
+    /// behaviour).
+    ///
+    /// # Errors
+    /// As [`Policy::causal_step_trusted`] at the first failing decision.
+    #[inline]
+    fn causal_sum_trusted<L: std::borrow::Borrow<Self::Label>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[Self::Action],
+        g: &mut [S],
+        scratch: &mut [S],
+    ) -> Result<(), PolicyError> {
+        causal_sum_by_steps(self, theta, features, labels, actions, g, scratch)
+    }
+}
+
+/// The default [`Policy::causal_sum_trusted`]: [`Policy::causal_step_trusted`] decision after
+/// decision, with `scratch` split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`.
+#[allow(clippy::too_many_arguments)] // the method's arguments and the policy
+#[inline]
+pub(crate) fn causal_sum_by_steps<S, P, L>(
+    policy: &P,
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[P::Action],
+    g: &mut [S],
+    scratch: &mut [S],
+) -> Result<(), PolicyError>
+where
+    S: Scalar,
+    P: Policy<S> + ?Sized,
+    L: std::borrow::Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    check_out("scratch", scratch, 3 * d)?;
+    let (grad, rest) = scratch.split_at_mut(d);
+    let (score, score_sum) = rest.split_at_mut(d);
+    let rows = features.chunks_exact(policy.feature_dim().max(1));
+    for ((phi, y), a) in rows.zip(labels).zip(actions) {
+        policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+    }
+    Ok(())
+}
+
+/// `g += ∇l_t + l_t Σ_{i<t} ψ_i` entry by entry, then `Σ_{i<t} ψ_i += ψ_t`: the unit-weight update
+/// of the causal estimator (the default [`Policy::causal_step_trusted`]).
+#[inline]
+pub(crate) fn causal_accumulate<S: Scalar>(
+    g: &mut [S],
+    l: &S,
+    grad: &[S],
+    score: &[S],
+    score_sum: &mut [S],
+) {
+    for ((gj, dj), sj) in g.iter_mut().zip(grad).zip(score_sum.iter()) {
+        *gj += dj.clone() + l.clone() * sj;
+    }
+    for (sj, pj) in score_sum.iter_mut().zip(score) {
+        *sj += pj;
+    }
 }
 
 /// Copy `src` into `dst`, checking the length (the default `*_into` methods of [`Policy`]).
@@ -282,6 +410,29 @@ pub(crate) fn check_vec<S: Scalar>(
     }
     // Without early exit: a branch-free pass over the (short) vectors of the hot loop.
     if !xs.iter().fold(true, |ok, x| ok & x.is_finite()) {
+        return Err(PolicyError::NonFinite { param });
+    }
+    Ok(())
+}
+
+/// [`check_vec`] (the same result) reading the entries one by one, with an early exit: for a
+/// vector that was written entry by entry just before (the features of the roll-out's current
+/// state), a vectorised pass would load it with wide loads that the CPU cannot forward from the
+/// narrow stores, a stall on the roll-out's step-to-step dependency chain.
+#[inline]
+pub(crate) fn check_vec_scalar<S: Scalar>(
+    param: &'static str,
+    xs: &[S],
+    expected: usize,
+) -> Result<(), PolicyError> {
+    if xs.len() != expected {
+        return Err(PolicyError::Shape {
+            param,
+            expected,
+            got: xs.len(),
+        });
+    }
+    if !xs.iter().all(Scalar::is_finite) {
         return Err(PolicyError::NonFinite { param });
     }
     Ok(())

@@ -20,7 +20,8 @@
 //! **Layout of θ**: Θ ∈ S^{A×n} row-major, `θ[a·n + j] = Θ_aj`.
 
 use super::{
-    LikelihoodRatio, Policy, PolicyError, check_size, check_vec, from_f64_exact, mat_vec, outer,
+    LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec, from_f64_exact,
+    mat_vec, outer,
 };
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar};
@@ -120,6 +121,88 @@ pub(crate) fn sample_probs<S: Scalar>(probs: &[S], rng: &mut KitRng) -> Result<u
     Ok(sample_categorical(probs, &u)?)
 }
 
+/// Up to this many actions, the per-call scratch of [`Softmax`] (logits, then probabilities) lives
+/// on the stack: its `*_into` methods, [`Policy::sample`] and [`Softmax::log_prob`] then allocate
+/// nothing (more actions: one scratch vector per call).
+const INLINE_ACTIONS: usize = 16;
+
+/// Run `f` on `len` zeros of scratch: on the stack for `len ≤ INLINE_ACTIONS`, else in a vector.
+#[inline]
+fn with_scratch<S: Scalar, R>(len: usize, f: impl FnOnce(&mut [S]) -> R) -> R {
+    if len <= INLINE_ACTIONS {
+        let mut buf: [S; INLINE_ACTIONS] = std::array::from_fn(|_| S::zero());
+        f(&mut buf[..len])
+    } else {
+        f(&mut vec![S::zero(); len])
+    }
+}
+
+/// [`softmax_probs`] in place: the logits in `z` become the probabilities (the same operations in
+/// the same order, so the same values and errors).
+#[inline]
+fn softmax_in_place<S: Real>(z: &mut [S]) -> Result<(), PolicyError> {
+    if z.is_empty() {
+        return Err(PolicyError::NonFinite { param: "logits" });
+    }
+    let c = shift(z)?;
+    for x in z.iter_mut() {
+        *x = (x.clone() - &c).exp();
+    }
+    let total = crate::scalar::sum(&*z);
+    for x in z.iter_mut() {
+        *x = x.clone() / &total;
+    }
+    if !z.iter().all(Scalar::is_finite) {
+        return Err(PolicyError::NonFinite { param: "softmax" });
+    }
+    Ok(())
+}
+
+/// [`brier_logit_gradient`] followed by the outer product with φ, written into `grad` (row-major
+/// `A × n`) without intermediate vectors; returns the loss. The same operations in the same order.
+#[inline]
+fn brier_into<S: Scalar>(probs: &[S], expert: usize, phi: &[S], grad: &mut [S]) -> S {
+    let r = |a: usize, p: &S| {
+        if a == expert {
+            p.clone() - S::one()
+        } else {
+            p.clone()
+        }
+    };
+    let mut loss = S::zero();
+    let mut mean_r = S::zero();
+    for (a, p) in probs.iter().enumerate() {
+        loss += r(a, p).square();
+    }
+    for (a, p) in probs.iter().enumerate() {
+        mean_r += r(a, p) * p;
+    }
+    let n = phi.len();
+    for ((a, p), row) in probs.iter().enumerate().zip(grad.chunks_exact_mut(n)) {
+        let dz = S::from_i64(2) * p * (r(a, p) - &mean_r);
+        for (g, x) in row.iter_mut().zip(phi) {
+            *g = dz.clone() * x;
+        }
+    }
+    loss
+}
+
+/// `(e_a − π)φᵀ` written into `score` (row-major `A × n`), as [`Policy::score`] of [`Softmax`].
+#[inline]
+fn score_into_rows<S: Scalar>(probs: &[S], action: usize, phi: &[S], score: &mut [S]) {
+    let n = phi.len();
+    for ((b, p), row) in probs.iter().enumerate().zip(score.chunks_exact_mut(n)) {
+        let c = if action == b {
+            S::one() - p
+        } else {
+            -p.clone()
+        };
+        for (s, x) in row.iter_mut().zip(phi) {
+            *s = c.clone() * x;
+        }
+    }
+}
+
 #[inline]
 pub(crate) fn check_action(a: usize, actions: usize) -> Result<(), PolicyError> {
     if a >= actions {
@@ -169,12 +252,38 @@ impl Softmax {
         softmax_probs(&self.logits(theta, phi)?)
     }
 
-    /// `log π_Θ(a|s)` (for importance weights).
+    /// `log π_Θ(a|s)` (for importance weights). Allocates nothing for up to 16 actions.
     ///
     /// # Errors
-    /// As [`log_softmax`].
+    /// As [`Softmax::logits`] and [`log_softmax`].
     pub fn log_prob<S: Real>(&self, theta: &[S], phi: &[S], a: usize) -> Result<S, PolicyError> {
-        log_softmax(&self.logits(theta, phi)?, a)
+        with_scratch(self.actions, |z| {
+            self.logits_into(theta, phi, z)?;
+            log_softmax(z, a)
+        })
+    }
+
+    /// [`Softmax::logits`] into `z` (length A).
+    #[inline]
+    fn logits_into<S: Scalar>(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        z: &mut [S],
+    ) -> Result<(), PolicyError> {
+        check_vec("theta", theta, self.actions * self.features)?;
+        check_vec("phi", phi, self.features)?;
+        for (zi, row) in z.iter_mut().zip(theta.chunks_exact(self.features)) {
+            *zi = crate::scalar::dot(row, phi);
+        }
+        Ok(())
+    }
+
+    /// [`Softmax::probs`] into `p` (length A).
+    #[inline]
+    fn probs_into<S: Real>(&self, theta: &[S], phi: &[S], p: &mut [S]) -> Result<(), PolicyError> {
+        self.logits_into(theta, phi, p)?;
+        softmax_in_place(p)
     }
 }
 
@@ -205,8 +314,73 @@ impl<S: Real> Policy<S> for Softmax {
         Ok(outer(&score_logits(&p, *action), phi))
     }
 
+    /// Allocates nothing for up to 16 actions (the probabilities in stack scratch).
+    #[inline]
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
-        sample_probs(&self.probs(theta, phi)?, rng)
+        with_scratch(self.actions, |p| {
+            self.probs_into(theta, phi, p)?;
+            sample_probs(p, rng)
+        })
+    }
+
+    /// As [`Policy::loss`], writing `∇_Θ l` into `grad`; allocates nothing for up to 16 actions.
+    #[inline]
+    fn loss_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        grad: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(*label, self.actions)?;
+        with_scratch(self.actions, |p| {
+            self.probs_into(theta, phi, p)?;
+            check_out("grad", grad, self.actions * self.features)?;
+            Ok(brier_into(p, *label, phi, grad))
+        })
+    }
+
+    /// As [`Policy::score`], writing `(e_a − π)φᵀ` into `score`; allocates nothing for up to 16
+    /// actions.
+    #[inline]
+    fn score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        action: &usize,
+        score: &mut [S],
+    ) -> Result<(), PolicyError> {
+        check_action(*action, self.actions)?;
+        with_scratch(self.actions, |p| {
+            self.probs_into(theta, phi, p)?;
+            check_out("score", score, self.actions * self.features)?;
+            score_into_rows(p, *action, phi, score);
+            Ok(())
+        })
+    }
+
+    /// Loss, gradient and score with the probabilities computed once (the values and the order of
+    /// the errors of [`Policy::loss_into`] then [`Policy::score_into`]).
+    #[inline]
+    fn loss_score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        action: &usize,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(*label, self.actions)?;
+        with_scratch(self.actions, |p| {
+            self.probs_into(theta, phi, p)?;
+            check_out("grad", grad, self.actions * self.features)?;
+            let l = brier_into(p, *label, phi, grad);
+            check_action(*action, self.actions)?;
+            check_out("score", score, self.actions * self.features)?;
+            score_into_rows(p, *action, phi, score);
+            Ok(l)
+        })
     }
 }
 
@@ -219,5 +393,118 @@ impl<S: Real> LikelihoodRatio<S> for Softmax {
         action: &usize,
     ) -> Result<S, PolicyError> {
         Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::Dual;
+    use rand::{Rng, SeedableRng};
+
+    fn bits(v: &[f64]) -> Vec<u64> {
+        v.iter().map(|x| x.to_bits()).collect()
+    }
+
+    /// The allocation-free methods against the allocating computation they replaced (`loss`,
+    /// `score`, `sample_categorical` on `probs`, `log_softmax` on `logits`): bit-for-bit, on random
+    /// inputs, for action counts on both sides of the stack scratch's size.
+    #[test]
+    fn in_place_methods_match_the_allocating_computation_bit_for_bit() {
+        let mut rng = KitRng::seed_from_u64(3);
+        let mut checked = 0;
+        for &(actions, features) in &[(2, 5), (2, 1), (3, 4), (16, 2), (17, 3), (40, 1)] {
+            let pi = Softmax::new(actions, features).unwrap();
+            let d = actions * features;
+            for trial in 0..50 {
+                let scale = [0.1, 1.0, 30.0, 400.0][trial % 4];
+                let theta: Vec<f64> = (0..d)
+                    .map(|_| scale * (rng.random::<f64>() - 0.5))
+                    .collect();
+                let phi: Vec<f64> = (0..features)
+                    .map(|_| rng.random::<f64>() * 2.0 - 1.0)
+                    .collect();
+                let label = rng.random_range(0..actions);
+                let action = rng.random_range(0..actions);
+                let (l, g) = pi.loss(&theta, &phi, &label).unwrap();
+                let s = pi.score(&theta, &phi, &action).unwrap();
+                let mut grad = vec![f64::NAN; d];
+                let mut score = vec![f64::NAN; d];
+                let l2 = pi.loss_into(&theta, &phi, &label, &mut grad).unwrap();
+                assert_eq!((l.to_bits(), bits(&g)), (l2.to_bits(), bits(&grad)));
+                pi.score_into(&theta, &phi, &action, &mut score).unwrap();
+                assert_eq!(bits(&s), bits(&score));
+                grad.fill(f64::NAN);
+                score.fill(f64::NAN);
+                let l3 = pi
+                    .loss_score_into(&theta, &phi, &label, &action, &mut grad, &mut score)
+                    .unwrap();
+                assert_eq!((l.to_bits(), bits(&g)), (l3.to_bits(), bits(&grad)));
+                assert_eq!(bits(&s), bits(&score));
+                let old = log_softmax(&pi.logits(&theta, &phi).unwrap(), action).unwrap();
+                assert_eq!(
+                    old.to_bits(),
+                    pi.log_prob(&theta, &phi, action).unwrap().to_bits()
+                );
+                let mut r1 = KitRng::seed_from_u64(trial as u64);
+                let mut r2 = r1.clone();
+                let probs = pi.probs(&theta, &phi).unwrap();
+                let u: f64 = dyadic_uniform(&mut r1);
+                let a_old = sample_categorical(&probs, &u).unwrap();
+                assert_eq!(a_old, Policy::sample(&pi, &theta, &phi, &mut r2).unwrap());
+                assert_eq!(r1, r2, "the same draws");
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 300);
+    }
+
+    /// The same errors as the allocating computation, and dual numbers through the same path.
+    #[test]
+    fn in_place_methods_keep_the_errors_and_work_in_dual_numbers() {
+        let pi = Softmax::new(3, 2).unwrap();
+        let theta = [0.5, -1.0, 2.0, 0.25, -0.75, 1.5];
+        let mut grad = [0.0; 6];
+        let mut score = [0.0; 6];
+        for phi in [[f64::NAN, 1.0], [1.0, f64::INFINITY], [1e308, 1e308]] {
+            let old = pi.loss(&theta, &phi, &0).unwrap_err();
+            assert_eq!(pi.loss_into(&theta, &phi, &0, &mut grad), Err(old.clone()));
+            assert_eq!(
+                pi.loss_score_into(&theta, &phi, &0, &1, &mut grad, &mut score),
+                Err(old.clone())
+            );
+            assert_eq!(
+                pi.score_into(&theta, &phi, &1, &mut score),
+                Err(old.clone())
+            );
+            let mut rng = KitRng::seed_from_u64(1);
+            assert_eq!(Policy::sample(&pi, &theta, &phi, &mut rng), Err(old));
+        }
+        let phi = [0.5, -0.5];
+        assert_eq!(
+            pi.loss_into(&theta, &phi, &3, &mut grad),
+            pi.loss(&theta, &phi, &3).map(|(l, _)| l)
+        );
+        assert!(matches!(
+            pi.loss_into(&theta, &phi, &1, &mut grad[..5]),
+            Err(PolicyError::Shape { param: "grad", .. })
+        ));
+        assert_eq!(pi.log_prob(&theta, &phi, 3), log_softmax(&[0.0; 3], 3));
+        // Dual numbers (derivatives with respect to θ): the in-place values are the allocating
+        // ones, derivatives included.
+        let th: Vec<Dual<f64>> = theta
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| Dual::variable(x, i, 6))
+            .collect();
+        let ph: Vec<Dual<f64>> = phi.iter().map(|&x| Dual::constant(x)).collect();
+        let (l, g) = pi.loss(&th, &ph, &2).unwrap();
+        let mut gi = vec![Dual::zero(); 6];
+        let mut si = vec![Dual::zero(); 6];
+        let li = pi
+            .loss_score_into(&th, &ph, &2, &0, &mut gi, &mut si)
+            .unwrap();
+        assert_eq!((l, g), (li, gi));
+        assert_eq!(pi.score(&th, &ph, &0).unwrap(), si);
     }
 }

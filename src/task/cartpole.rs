@@ -120,9 +120,13 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
     fn expert(&self, ep: &Self::Episode) -> Result<(usize, usize), OracleError> {
         let a = match &self.expert {
             CartPoleExpert::Lqr(e) => e.action(&ep.state)?,
-            CartPoleExpert::Ppo(e) => e
-                .action_in(&ep.state)
-                .map_err(|e| OracleError::Environment(e.to_string()))?,
+            // A copy: the network is not inlined, and passing it the episode's own state would
+            // keep that state in memory (its address escapes) in every caller's hot loop.
+            CartPoleExpert::Ppo(e) => {
+                let state = ep.state.clone();
+                e.action_in(&state)
+                    .map_err(|e| OracleError::Environment(e.to_string()))?
+            }
         };
         Ok((a, a))
     }

@@ -255,17 +255,35 @@ where
     let n = t.len();
     let mut g = vec![S::zero(); d];
     let mut scratch = Scratch::new(d);
-    let (grad, score, score_sum) = scratch.parts();
     let mut log_w = S::zero();
-    for (step, ((phi, a), y)) in t.feature_rows().zip(&t.actions).zip(&t.labels).enumerate() {
-        let l = policy
-            .loss_score_into(theta, phi, y.borrow(), a, grad, score)
+    // θ has been checked by the caller; with every φ checked here once, the per-decision calls can
+    // skip the policy's own checks (`causal_step_trusted`). Otherwise the checked calls below
+    // report the first failure exactly as before.
+    let trusted = !per_decision && features_valid(policy, t);
+    if trusted && ratio.is_none() {
+        // The plain causal estimator: the whole pass in the policy (one loop it may specialise).
+        let (rows, actions, labels) = (&t.feature_data, &t.actions, &t.labels);
+        policy
+            .causal_sum_trusted(theta, rows, labels, actions, &mut g, &mut scratch.buf)
             .map_err(policy_error)?;
-        if per_decision {
-            let w = log_w.exp();
-            accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
+        return Ok((g, log_w));
+    }
+    let (grad, score, score_sum) = scratch.parts();
+    for (step, ((phi, a), y)) in t.feature_rows().zip(&t.actions).zip(&t.labels).enumerate() {
+        if trusted {
+            policy
+                .causal_step_trusted(theta, phi, y.borrow(), a, grad, score, &mut g, score_sum)
+                .map_err(policy_error)?;
         } else {
-            accumulate(&mut g, None, &l, grad, score, score_sum);
+            let l = policy
+                .loss_score_into(theta, phi, y.borrow(), a, grad, score)
+                .map_err(policy_error)?;
+            if per_decision {
+                let w = log_w.exp();
+                accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
+            } else {
+                accumulate(&mut g, None, &l, grad, score, score_sum);
+            }
         }
         if let Some(theta_new) = ratio
             && step + 1 < n
@@ -276,6 +294,19 @@ where
         }
     }
     Ok((g, log_w))
+}
+
+/// Whether every feature vector of `t` has the policy's length and only finite entries (the
+/// per-call φ check of the policies, done once for the whole trajectory).
+fn features_valid<S, P, L, A>(policy: &P, t: &TaskTrajectory<S, L, A>) -> bool
+where
+    S: Scalar,
+    P: Policy<S>,
+{
+    t.feature_dim == policy.feature_dim()
+        && t.feature_data
+            .iter()
+            .fold(true, |ok, x| ok & Scalar::is_finite(x))
 }
 
 /// One decision's terms of the causal estimator: `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then
@@ -447,9 +478,10 @@ where
                 Behaviour::NonStationary(steps) => steps.get(step).copied().flatten(),
             };
             let action = match learner {
+                // Every learner θ of `behaviour` was checked above.
                 Some(th) => self
                     .policy
-                    .sample(th.as_slice(), phi, rng)
+                    .sample_trusted(th.as_slice(), phi, rng)
                     .map_err(policy_error)?,
                 None => expert_action,
             };
