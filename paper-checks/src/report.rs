@@ -1281,6 +1281,44 @@ fn strings(v: &[&str]) -> Vec<String> {
     v.iter().map(|s| (*s).to_string()).collect()
 }
 
+/// What the objective does with episodes that end early, with CartPole's numbers: the loss at
+/// θ₀ and at the last checkpoint, and the final reward, of every algorithm that descends F
+/// directly (all but BC and DAgger).
+fn episode_length_note(r: &Results) -> String {
+    let mean_at =
+        |c: &ConfigResult, pick: fn(&SeedRun) -> Option<&Checkpoint>, f: fn(&Checkpoint) -> f64| {
+            let xs: Vec<f64> = c.runs.iter().filter_map(pick).map(f).collect();
+            xs.iter().sum::<f64>() / xs.len().max(1) as f64
+        };
+    let rows: Vec<String> = r
+        .cartpole
+        .iter()
+        .filter(|(c, _)| !matches!(c.label.as_str(), "BC" | "DAgger"))
+        .map(|(c, _)| {
+            format!(
+                "{}: loss {} → {}, reward {} → {}",
+                c.label,
+                num(mean_at(c, |s| s.checkpoints.first(), |k| k.loss)),
+                num(mean_at(c, last, |k| k.loss)),
+                num(mean_at(c, |s| s.checkpoints.first(), |k| k.reward)),
+                num(mean_at(c, last, |k| k.reward)),
+            )
+        })
+        .collect();
+    format!(
+        "**Episode length.** F sums the per-decision loss over the episode's own length (Gymnasium \
+         semantics: a crash or a fallen pole terminates it), not over a fixed horizon T as in the \
+         thesis's analysis. A policy that ends episodes early therefore lowers F, and the methods that \
+         descend F directly can learn to fail fast. CartPole, mean evaluation loss and reward at θ₀ → at \
+         the last checkpoint: {}.",
+        if rows.is_empty() {
+            "no such algorithm in this profile".to_string()
+        } else {
+            rows.join("; ")
+        }
+    )
+}
+
 /// The obstacle section's description of the learner (from the profile).
 fn obstacle_learner_text(profile: &Profile) -> String {
     use ilopt::task::obstacle::ObstacleFeatures;
@@ -1401,6 +1439,7 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
             .into(),
         "**Hyper-parameters** are the profile's defaults, chosen once and not tuned (see `provenance.json`)."
             .into(),
+        episode_length_note(r),
     ]));
 
     d.push(h(
