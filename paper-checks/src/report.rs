@@ -616,13 +616,24 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
         "O7",
         "§4.1.3, Fig. 4.5",
         "in the x direction STORM converges faster than the other optimisers (lowest gradient norm)",
-        "STORM's final mean ‖x-row of the gradient estimate‖ is the lowest of SGD, Adam, RMSProp, STORM".into(),
+        "STORM's final mean ‖x-row of the gradient estimate‖ is the lowest of SGD, Adam, RMSProp, \
+         STORM, and no STORM run failed (a failed run's last finite checkpoint is not a converged one)"
+            .into(),
         opt.iter()
             .zip(&gv)
-            .map(|(l, v)| format!("{l} {}", num(*v)))
+            .map(|(l, v)| {
+                let failed = row_of(obs, l).map_or(0, |x| x.failed_runs);
+                if failed > 0 {
+                    format!("{l} {} ({failed} runs failed)", num(*v))
+                } else {
+                    format!("{l} {}", num(*v))
+                }
+            })
             .collect::<Vec<_>>()
             .join(", "),
-        Verdict::of(&[gv[3].is_finite() && gv[3] <= gmin]),
+        Verdict::of(&[gv[3].is_finite()
+            && gv[3] <= gmin
+            && row_of(obs, "STORM").is_some_and(|x| x.failed_runs == 0)]),
     );
     let losses: Vec<(String, f64)> = obs
         .iter()
