@@ -612,6 +612,9 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
         .cloned()
         .filter(|v| v.is_finite())
         .fold(f64::MAX, f64::min);
+    let storm_lowest = gv[3].is_finite()
+        && gv[3] <= gmin
+        && row_of(obs, "STORM").is_some_and(|x| x.failed_runs == 0);
     push(
         "O7",
         "§4.1.3, Fig. 4.5",
@@ -631,9 +634,7 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
             })
             .collect::<Vec<_>>()
             .join(", "),
-        Verdict::of(&[gv[3].is_finite()
-            && gv[3] <= gmin
-            && row_of(obs, "STORM").is_some_and(|x| x.failed_runs == 0)]),
+        Verdict::of(&[storm_lowest]),
     );
     let losses: Vec<(String, f64)> = obs
         .iter()
