@@ -78,6 +78,17 @@ impl<S: Real> CartPoleTask<S> {
     }
 }
 
+/// The PPO expert's action, out of line: the network is not inlined anyway, and keeping its call
+/// (and the copy of the state it gets) out of [`Task::expert`] leaves the roll-out's hot loop with
+/// the LQR expert alone. The copy: passing the episode's own state would let its address escape.
+#[cold]
+#[inline(never)]
+fn ppo_action<S: Real>(e: &PpoExpert, state: &[S; 4]) -> Result<usize, OracleError> {
+    let state = state.clone();
+    e.action_in(&state)
+        .map_err(|e| OracleError::Environment(e.to_string()))
+}
+
 impl<S: Real> Task<S> for CartPoleTask<S> {
     type Episode = CartPoleEpisode<S>;
     type Label = usize;
@@ -120,13 +131,7 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
     fn expert(&self, ep: &Self::Episode) -> Result<(usize, usize), OracleError> {
         let a = match &self.expert {
             CartPoleExpert::Lqr(e) => e.action(&ep.state)?,
-            // A copy: the network is not inlined, and passing it the episode's own state would
-            // keep that state in memory (its address escapes) in every caller's hot loop.
-            CartPoleExpert::Ppo(e) => {
-                let state = ep.state.clone();
-                e.action_in(&state)
-                    .map_err(|e| OracleError::Environment(e.to_string()))?
-            }
+            CartPoleExpert::Ppo(e) => ppo_action(e, &ep.state)?,
         };
         Ok((a, a))
     }
