@@ -9,10 +9,12 @@
 //! score) are also checked directly: zero allocations over many steps. CartPole is checked with
 //! both the logistic and the softmax policy.
 
-use ilopt::policy::{LikelihoodRatio, LinearGaussian, Logistic, Policy, Softmax};
+use ilopt::policy::{
+    LikelihoodRatio, LinearGaussian, Logistic, Policy, Softmax, SpeedLimitedGaussian,
+};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::task::cartpole::{self, CartPoleTask};
-use ilopt::task::obstacle::{self, ObstacleTask};
+use ilopt::task::obstacle::{self, ObstacleFeatures, ObstacleTask};
 use ilopt::task::{Task, TaskProblem};
 use nalgebra::DVector;
 use rand::SeedableRng;
@@ -245,10 +247,7 @@ fn obstacle_inline() -> TaskProblem<ObstacleTask<[f64; 2]>, LinearGaussian<f64, 
 
 /// W with a proportional pull towards the goal.
 fn pull() -> DVector<f64> {
-    let mut w = DVector::zeros(2 * obstacle::FEATURES);
-    w[0] = 0.05;
-    w[obstacle::FEATURES + 1] = 0.05;
-    w
+    pull_n(obstacle::FEATURES)
 }
 
 #[test]
@@ -285,12 +284,40 @@ fn obstacle_step_primitives_allocate_nothing() {
     assert_eq!(n, 0, "allocations over {steps} obstacle steps");
 }
 
-#[test]
-fn obstacle_rollout_and_oracle_allocate_per_call_not_per_step() {
-    let p = obstacle_inline();
+/// The appendix's obstacle learner: RBF features and the loss of the executed velocity.
+fn obstacle_rbf() -> TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGaussian<f64, [f64; 2]>> {
+    let task = ObstacleTask::thesis()
+        .unwrap()
+        .with_features(ObstacleFeatures::rbf_default())
+        .unwrap()
+        .with_actions();
+    let inner = LinearGaussian::new(2, task.feature_dim(), 0.02)
+        .unwrap()
+        .with_actions()
+        .unwrap();
+    TaskProblem {
+        task,
+        policy: SpeedLimitedGaussian::new(inner, 0.1).unwrap(),
+    }
+}
+
+/// W (`n` features per row) with a proportional pull towards the goal.
+fn pull_n(n: usize) -> DVector<f64> {
+    let mut w = DVector::zeros(2 * n);
+    w[0] = 0.05;
+    w[n + 1] = 0.05;
+    w
+}
+
+/// Roll-outs, causal and per-decision-weighted estimates: allocation counts equal for every
+/// episode length and at most 3 (roll-out) / 2 (estimate).
+fn obstacle_per_call<P>(p: &TaskProblem<ObstacleTask<[f64; 2]>, P>, n: usize)
+where
+    P: LikelihoodRatio<f64, Action = [f64; 2], Label = [f64]>,
+{
     let mut rng = KitRng::seed_from_u64(5);
     let mut cost = Cost::default();
-    let thetas = [pull(), DVector::zeros(2 * obstacle::FEATURES)];
+    let thetas = [pull_n(n), DVector::zeros(2 * n)];
     let mut lengths = std::collections::BTreeSet::new();
     let (mut rollouts, mut estimates) = (vec![], vec![]);
     for _ in 0..20 {
@@ -322,6 +349,18 @@ fn obstacle_rollout_and_oracle_allocate_per_call_not_per_step() {
         estimates.iter().all(|&n| n == estimates[0] && n <= 2),
         "{estimates:?}"
     );
+}
+
+#[test]
+fn obstacle_rollout_and_oracle_allocate_per_call_not_per_step() {
+    obstacle_per_call(&obstacle_inline(), obstacle::FEATURES);
+}
+
+#[test]
+fn rbf_speed_limited_obstacle_allocates_per_call_not_per_step() {
+    let p = obstacle_rbf();
+    let n = p.task.feature_dim();
+    obstacle_per_call(&p, n);
 }
 
 /// The default `Vec<f64>` actions do allocate per step: the counter sees it (so the tests above
