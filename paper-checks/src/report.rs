@@ -1026,47 +1026,53 @@ pub fn write(
         )
         .clamped((0.0, n_obs)),
     ));
-    for (name, part, row, g) in [
+    // Figs. 4.5 (gradient-estimate rows, oracle methods only) and 4.6 (loss rows), against
+    // iterations on a log y axis.
+    type Metric<'a> = &'a dyn Fn(&Checkpoint) -> Option<f64>;
+    let rows: [(&str, &str, String, &str, Metric<'_>, bool); 4] = [
         (
             "fig4-5a-gradient-x",
-            "(a)",
-            "x",
-            &(|c: &Checkpoint| c.grad_x) as &dyn Fn(&Checkpoint) -> Option<f64>,
-        ),
-        ("fig4-5b-gradient-y", "(b)", "y", &|c: &Checkpoint| c.grad_y),
-    ] {
-        figs.push((
-            name,
             "Fig. 4.5",
-            obstacle_fig(
-                &format!("Fig. 4.5{part}: ‖{row}-row of the gradient estimate‖"),
-                "norm (log)",
-                true,
-                g,
-                true,
-                by_iteration,
-            )
-            .clamped((0.0, f64::INFINITY)),
-        ));
-    }
-    for (name, part, row, l) in [
+            "(a): ‖x-row of the gradient estimate‖".into(),
+            "norm (log)",
+            &|c| c.grad_x,
+            true,
+        ),
+        (
+            "fig4-5b-gradient-y",
+            "Fig. 4.5",
+            "(b): ‖y-row of the gradient estimate‖".into(),
+            "norm (log)",
+            &|c| c.grad_y,
+            true,
+        ),
         (
             "fig4-6a-loss-x",
-            "(a)",
-            "x",
-            &(|c: &Checkpoint| c.loss_x) as &dyn Fn(&Checkpoint) -> Option<f64>,
+            "Fig. 4.6",
+            "(a): loss, x coordinate (per decision)".into(),
+            "loss (log)",
+            &|c| c.loss_x,
+            false,
         ),
-        ("fig4-6b-loss-y", "(b)", "y", &|c: &Checkpoint| c.loss_y),
-    ] {
+        (
+            "fig4-6b-loss-y",
+            "Fig. 4.6",
+            "(b): loss, y coordinate (per decision)".into(),
+            "loss (log)",
+            &|c| c.loss_y,
+            false,
+        ),
+    ];
+    for (name, fig, what, y, f, oracle_only) in rows {
         figs.push((
             name,
-            "Fig. 4.6",
+            fig,
             obstacle_fig(
-                &format!("Fig. 4.6{part}: loss, {row} coordinate (per decision)"),
-                "loss (log)",
+                &format!("{fig}{what}"),
+                y,
                 true,
-                l,
-                false,
+                f,
+                oracle_only,
                 by_iteration,
             )
             .clamped((0.0, f64::INFINITY)),

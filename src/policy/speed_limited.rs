@@ -122,35 +122,28 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
             n2 += m.square();
             grad[i * n] = m;
         }
+        if !certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
+            // Inside the limit the loss is P3's.
+            return self.inner.loss_into(theta, phi, label, grad);
+        }
+        // Clipped: c = s·m with s = v/‖m‖; ∂l/∂m = 2s(r − m (mᵀr)/‖m‖²).
         let two = S::from_i64(2);
+        let s = self.v_max.clone() / n2.sqrt();
         let mut loss = S::zero();
-        if certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
-            // Clipped: c = s·m with s = v/‖m‖; ∂l/∂m = 2s(r − m (mᵀr)/‖m‖²).
-            let s = self.v_max.clone() / n2.sqrt();
-            let mut m_dot_r = S::zero();
-            for (i, y) in label.iter().enumerate() {
-                let m = &grad[i * n];
-                let r = s.clone() * m - y;
-                loss += r.square();
-                m_dot_r += r * m;
-            }
-            let q = m_dot_r / &n2;
-            for (i, y) in label.iter().enumerate() {
-                let m = grad[i * n].clone();
-                let r = s.clone() * &m - y;
-                let d = two.clone() * &s * (r - m * &q);
-                for (g, x) in grad[i * n..(i + 1) * n].iter_mut().zip(phi) {
-                    *g = d.clone() * x;
-                }
-            }
-        } else {
-            for (i, y) in label.iter().enumerate() {
-                let r = grad[i * n].clone() - y;
-                loss += r.square();
-                let d = two.clone() * &r;
-                for (g, x) in grad[i * n..(i + 1) * n].iter_mut().zip(phi) {
-                    *g = d.clone() * x;
-                }
+        let mut m_dot_r = S::zero();
+        for (i, y) in label.iter().enumerate() {
+            let m = &grad[i * n];
+            let r = s.clone() * m - y;
+            loss += r.square();
+            m_dot_r += r * m;
+        }
+        let q = m_dot_r / &n2;
+        for (i, y) in label.iter().enumerate() {
+            let m = grad[i * n].clone();
+            let r = s.clone() * &m - y;
+            let d = two.clone() * &s * (r - m * &q);
+            for (g, x) in grad[i * n..(i + 1) * n].iter_mut().zip(phi) {
+                *g = d.clone() * x;
             }
         }
         if !loss.is_finite() {
