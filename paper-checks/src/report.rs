@@ -1326,9 +1326,10 @@ fn episode_length_note(r: &Results) -> String {
     format!(
         "**Episode length.** F sums the per-decision loss over the episode's own length (Gymnasium \
          semantics: a crash or a fallen pole terminates it), not over a fixed horizon T as in the \
-         thesis's analysis. A policy that ends episodes early therefore lowers F, and the methods that \
-         descend F directly can learn to fail fast. CartPole, mean evaluation loss and reward at θ₀ → at \
-         the last checkpoint: {}.",
+         thesis's analysis; with the per-decision loss fixed, a shorter episode has a smaller F, so F \
+         does not reward imitation alone. Whether this is what stops the oracle methods here is not \
+         tested by the appendix. CartPole, mean evaluation loss and reward at θ₀ → at the last \
+         checkpoint (deterministic policy): {}.",
         if rows.is_empty() {
             "no such algorithm in this profile".to_string()
         } else {
