@@ -396,24 +396,24 @@ fn gradient_error_series(r: &Results) -> (Series, Series) {
 
 fn reference_line(s: &Series) -> Series {
     let c = s.mean.first().copied().unwrap_or(1.0) * s.x.first().copied().unwrap_or(1.0).sqrt();
+    reference_series(
+        "c/√N".into(),
+        s.x.clone(),
+        s.x.iter().map(|n| c / n.sqrt()).collect(),
+    )
+}
+
+/// A dashed reference line (no band: its band is the line itself).
+fn reference_series(label: String, x: Vec<f64>, mean: Vec<f64>) -> Series {
     Series {
-        label: "c/√N".into(),
-        x: s.x.clone(),
-        mean: s.x.iter().map(|n| c / n.sqrt()).collect(),
-        lo: vec![],
-        hi: vec![],
+        label,
+        x,
+        lo: mean.clone(),
+        hi: mean.clone(),
+        mean,
         reference: true,
         non_finite: 0,
         off_schedule: 0,
-    }
-    .with_band_from_mean()
-}
-
-impl Series {
-    fn with_band_from_mean(mut self) -> Self {
-        self.lo = self.mean.clone();
-        self.hi = self.mean.clone();
-        self
     }
 }
 
@@ -438,17 +438,7 @@ fn baseline_lines(
         .filter(|b| b.task == task)
         .map(|b| {
             let m = b.runs.iter().map(&f).sum::<f64>() / b.runs.len().max(1) as f64;
-            Series {
-                label: format!("{} (ref.)", b.label),
-                x: vec![x0, x1],
-                mean: vec![m, m],
-                lo: vec![],
-                hi: vec![],
-                reference: true,
-                non_finite: 0,
-                off_schedule: 0,
-            }
-            .with_band_from_mean()
+            reference_series(format!("{} (ref.)", b.label), vec![x0, x1], vec![m, m])
         })
         .collect()
 }
