@@ -360,7 +360,7 @@ pub(crate) fn check_positive<S: Scalar>(param: &'static str, x: &S) -> Result<()
     Ok(())
 }
 
-/// Check that an output buffer of a `*_into` method has `expected` entries.
+/// Check that a slice (an input, or an output buffer of a `*_into` method) has `expected` entries.
 #[inline]
 pub(crate) fn check_out<S>(
     param: &'static str,
@@ -401,13 +401,7 @@ pub(crate) fn check_vec<S: Scalar>(
     xs: &[S],
     expected: usize,
 ) -> Result<(), PolicyError> {
-    if xs.len() != expected {
-        return Err(PolicyError::Shape {
-            param,
-            expected,
-            got: xs.len(),
-        });
-    }
+    check_out(param, xs, expected)?;
     // Without early exit: a branch-free pass over the (short) vectors of the hot loop.
     if !xs.iter().fold(true, |ok, x| ok & x.is_finite()) {
         return Err(PolicyError::NonFinite { param });
@@ -425,13 +419,7 @@ pub(crate) fn check_vec_scalar<S: Scalar>(
     xs: &[S],
     expected: usize,
 ) -> Result<(), PolicyError> {
-    if xs.len() != expected {
-        return Err(PolicyError::Shape {
-            param,
-            expected,
-            got: xs.len(),
-        });
-    }
+    check_out(param, xs, expected)?;
     if !xs.iter().all(Scalar::is_finite) {
         return Err(PolicyError::NonFinite { param });
     }

@@ -1,25 +1,15 @@
 //! The rigorous L̃ of (A4) dominates the exact mean-square smoothness quotient
 //! V_IS(θ, θ′)/(θ′ − θ)², computed independently in rationals from the prefix enumeration.
 
-use ilopt::exact::enumerate::prefixes;
+mod common;
+
+use common::v_is_trajectory;
 use ilopt::scalar::{BigRational, Scalar};
 use ilopt::toy::ToyProblem;
 use ilopt_theory::constants::l_tilde;
 use ilopt_theory::suite::m1_tied;
 
 type Q = BigRational;
-
-/// V_IS(θ, θ′) = Σ_τ̄ p(τ̄; θ′) ‖g(θ′, τ̄) − w g(θ, τ̄)‖², w = p(τ̄; θ)/p(τ̄; θ′), exactly.
-fn v_is(p: &ToyProblem<Q>, theta: &Q, prime: &Q) -> Q {
-    let a = prefixes(p, std::slice::from_ref(theta)).unwrap();
-    let b = prefixes(p, std::slice::from_ref(prime)).unwrap();
-    a.iter().zip(&b).fold(Q::zero(), |acc, (x, y)| {
-        assert_eq!((&x.states, &x.actions), (&y.states, &y.actions));
-        let w = x.prob.clone() / &y.prob;
-        let d = y.estimate[0].clone() - w * &x.estimate[0];
-        acc + y.prob.clone() * &d * &d
-    })
-}
 
 #[test]
 fn rigorous_l_tilde_dominates_exact_quotients() {
@@ -35,7 +25,7 @@ fn rigorous_l_tilde_dominates_exact_quotients() {
             if th == pr {
                 continue;
             }
-            let q = v_is(&p, &th, &pr) / ((pr.clone() - &th) * (pr - &th));
+            let q = v_is_trajectory(&p, &th, &pr) / ((pr.clone() - &th) * (pr - &th));
             assert!(
                 q <= l2,
                 "V_IS/Δ² = {} exceeds L̃² = {}",

@@ -5,6 +5,8 @@
 //! * IS-STORM with schedule (3.43) satisfies (3.60*), and the adaptive (Cutkosky–Orabona) schedule
 //!   its Theorem 1 (secondary); each with a deliberately understated bound that must be flagged.
 
+mod common;
+
 use ilopt::exact::enumerate::{for_each_prefix, moments, prefixes};
 use ilopt::exact::forward::forward;
 use ilopt::problem::Weighting;
@@ -53,16 +55,7 @@ fn exact(x: f64) -> Q {
 /// (from the prefix probabilities) or the engine's per-decision estimator.
 fn v_is(w: Weighting, p: &ToyProblem<Q>, theta: &Q, prime: &Q) -> Q {
     match w {
-        Weighting::Trajectory => {
-            let a = prefixes(p, std::slice::from_ref(theta)).unwrap();
-            let b = prefixes(p, std::slice::from_ref(prime)).unwrap();
-            a.iter().zip(&b).fold(Q::zero(), |acc, (x, y)| {
-                assert_eq!((&x.states, &x.actions), (&y.states, &y.actions));
-                let w = x.prob.clone() / &y.prob;
-                let d = y.estimate[0].clone() - w * &x.estimate[0];
-                acc + y.prob.clone() * &d * &d
-            })
-        }
+        Weighting::Trajectory => common::v_is_trajectory(p, theta, prime),
         Weighting::PerDecision => {
             let t_old = p.table(std::slice::from_ref(theta)).unwrap();
             let t_new = p.table(std::slice::from_ref(prime)).unwrap();
