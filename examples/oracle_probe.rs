@@ -70,7 +70,10 @@ fn main() {
 
     let mut t = Trajectory::default();
     let mut best: BTreeMap<&str, f64> = BTreeMap::new();
+    // Per round, each mode's time: ratios within a round are immune to the machine's slow phases.
+    let mut per_round: Vec<BTreeMap<&str, f64>> = Vec::new();
     for _ in 0..rounds {
+        let mut this_round = BTreeMap::new();
         for mode in modes.split(',') {
             let mut steps = 0u64;
             let mut acc = 0.0;
@@ -118,6 +121,19 @@ fn main() {
                             steps += t.actions.len() as u64;
                             acc += Specialised::estimate(black_box(&THETA), &t)[0];
                         }
+                        "specfresh" => {
+                            // The hand-specialised roll-out into fresh storage, reserved as the
+                            // generic roll-out reserves it (the generic API returns an owned
+                            // trajectory).
+                            let max = fast.max_steps;
+                            let mut fresh = Trajectory {
+                                features: Vec::with_capacity(max),
+                                actions: Vec::with_capacity(max),
+                                labels: Vec::with_capacity(max),
+                            };
+                            fast.rollout(black_box(&THETA), &mut rng, &mut fresh);
+                            steps += fresh.actions.len() as u64;
+                        }
                         "specroll" => {
                             fast.rollout(black_box(&THETA), &mut rng, &mut t);
                             steps += t.actions.len() as u64;
@@ -135,12 +151,36 @@ fn main() {
             black_box(acc);
             let e = best.entry(mode).or_insert(f64::INFINITY);
             *e = e.min(ns);
+            this_round.insert(mode, ns);
         }
+        per_round.push(this_round);
     }
     for (mode, ns) in best {
         println!(
             "{mode:>9}: {ns:6.1} ns/step = {:5.2} M trajectory-steps/s",
             1e3 / ns
+        );
+    }
+    for (a, b) in [
+        ("generic", "spec"),
+        ("rollout", "specroll"),
+        ("estimate", "specest"),
+        ("softmax", "spec"),
+    ] {
+        let mut ratios: Vec<f64> = per_round
+            .iter()
+            .filter_map(|r| Some(r.get(a)? / r.get(b)?))
+            .collect();
+        if ratios.is_empty() {
+            continue;
+        }
+        ratios.sort_by(f64::total_cmp);
+        let q = |f: f64| ratios[((ratios.len() - 1) as f64 * f).round() as usize];
+        println!(
+            "{a:>9} / {b}: median of per-round ratios {:.3} (quartiles {:.3}–{:.3})",
+            q(0.5),
+            q(0.25),
+            q(0.75)
         );
     }
 }

@@ -261,6 +261,59 @@ fn contract_errors() {
     assert_eq!(env.step(1), Err(EnvError::EpisodeOver));
 }
 
+/// The non-finite error names the first non-finite component of the next state — found here by
+/// evaluating Gymnasium's update in plain `f64` arithmetic, independently of the kit's step — and
+/// leaves the state unchanged.
+#[test]
+fn non_finite_error_names_the_first_non_finite_component() {
+    let names = ["x", "x_dot", "theta", "theta_dot"];
+    let reference_next = |s: [f64; 4], force: f64| {
+        let [x, x_dot, th, th_dot] = s;
+        let (total_mass, pml) = (1.1, 0.05);
+        let temp = (force + pml * (th_dot * th_dot) * th.sin()) / total_mass;
+        let ta = (9.8 * th.sin() - th.cos() * temp)
+            / (0.5 * (4.0 / 3.0 - 0.1 * (th.cos() * th.cos()) / total_mass));
+        let xa = temp - pml * ta * th.cos() / total_mass;
+        [
+            x + 0.02 * x_dot,
+            x_dot + 0.02 * xa,
+            th + 0.02 * th_dot,
+            th_dot + 0.02 * ta,
+        ]
+    };
+    let dynamics = CartPoleDynamics::<f64>::new();
+    let big = f64::MAX;
+    let mut seen = std::collections::BTreeSet::new();
+    for state in [
+        [big, big, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 1e200],
+        [0.0, 0.0, big, big],
+        [0.0, 0.0, 0.0, big],
+        [f64::NAN, 0.0, 0.0, 0.0],
+        [0.0, 0.0, f64::INFINITY, 0.0],
+    ] {
+        for action in [0, 1] {
+            let next = reference_next(state, if action == 1 { 10.0 } else { -10.0 });
+            let expected = names
+                .iter()
+                .zip(next)
+                .find(|(_, v)| !v.is_finite())
+                .map(|(name, _)| *name)
+                .expect("the reference step overflows too");
+            let mut s = state;
+            assert_eq!(
+                dynamics.step_in_place(&mut s, action),
+                Err(EnvError::NonFinite { what: expected }),
+                "{state:?}, action {action}"
+            );
+            assert_eq!(s.map(f64::to_bits), state.map(f64::to_bits));
+            seen.insert(expected);
+        }
+    }
+    // Both components that can fail first (x alone; every other overflow runs through ẍ into ẋ).
+    assert!(seen.contains("x") && seen.contains("x_dot"), "{seen:?}");
+}
+
 #[test]
 fn reset_is_in_range_and_seeded() {
     let mut rng = KitRng::seed_from_u64(2025);

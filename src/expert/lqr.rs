@@ -281,11 +281,39 @@ impl LqrExpert {
     /// [`Undecidable`] when the sign of `−K s` cannot be decided (an interval around 0, or NaN).
     #[inline]
     pub fn action<S: Scalar>(&self, state: &[S; 4]) -> Result<usize, Undecidable> {
+        self.gain_in::<S>().action(state)
+    }
+
+    /// The gain `K` converted to `S` once, for many actions (a roll-out's labels).
+    pub fn gain_in<S: Scalar>(&self) -> LqrGain<S> {
         // Each gain is a finite f64 (checked at construction), so `from_binary64` is exact: the
-        // exact value of the f64 gain in every scalar, without a rational round trip per call.
-        let u = self.k.iter().zip(state).fold(S::zero(), |acc, (k, s)| {
-            acc - S::from_binary64(*k).expect("finite gain") * s
-        });
+        // exact value of the f64 gain in every scalar, without a rational round trip.
+        LqrGain {
+            k: std::array::from_fn(|i| S::from_binary64(self.k[i]).expect("finite gain")),
+        }
+    }
+}
+
+/// An LQR gain `K` in the scalar `S` ([`LqrExpert::gain_in`]): the expert's action without
+/// converting `K` at every call.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LqrGain<S> {
+    k: [S; 4],
+}
+
+impl<S: Scalar> LqrGain<S> {
+    /// [`LqrExpert::action`]: `1` if `−K s > 0`, else `0`, with `−K s = 0 − k₀s₀ − k₁s₁ − k₂s₂ − k₃s₃`
+    /// evaluated left to right.
+    ///
+    /// # Errors
+    /// [`Undecidable`] when the sign of `−K s` cannot be decided (an interval around 0, or NaN).
+    #[inline]
+    pub fn action(&self, state: &[S; 4]) -> Result<usize, Undecidable> {
+        let u = self
+            .k
+            .iter()
+            .zip(state)
+            .fold(S::zero(), |acc, (k, s)| acc - k.clone() * s);
         match u.certain_cmp(&S::zero()) {
             Some(Ordering::Greater) => Ok(1),
             Some(_) => Ok(0),

@@ -17,7 +17,7 @@ use super::{
     check_vec_scalar,
 };
 use crate::problem::KitRng;
-use crate::scalar::{Real, Scalar, Undecidable, certainly_less};
+use crate::scalar::{Real, Scalar, Undecidable};
 use std::borrow::Borrow;
 
 /// The sign of the f64 approximation of `z` (decides which of two exact formulas is overflow-free).
@@ -84,10 +84,44 @@ fn score_of<S: Scalar>(p: S, action: usize, phi: &[S], score: &mut [S]) {
     }
 }
 
+/// `z = θ·φ` with θ trusted (checked by the caller) and φ checked: its length, and its entries'
+/// finiteness — where non-finite numbers propagate through sums and products
+/// ([`Scalar::NON_FINITE_PROPAGATES`]: floats, rationals), by one test of `z` instead of one per
+/// entry, the entries being looked at only to name the culprit. The same result and errors as
+/// `check_vec_scalar("phi", …)` followed by the dot product and the sigmoid's test of `z`.
+#[inline]
+fn trusted_logit<S: Scalar>(theta: &[S], phi: &[S], features: usize) -> Result<S, PolicyError> {
+    if S::NON_FINITE_PROPAGATES {
+        check_out("phi", phi, features)?;
+    } else {
+        check_vec_scalar("phi", phi, features)?;
+    }
+    let z = crate::scalar::dot(theta, phi);
+    if S::NON_FINITE_PROPAGATES && !z.is_finite() {
+        return Err(non_finite_logit(phi));
+    }
+    Ok(z)
+}
+
+/// The error for a non-finite `θ·φ` with a finite θ: φ's if one of its entries is non-finite,
+/// else the logit's (an overflow).
+#[cold]
+#[inline(never)]
+fn non_finite_logit<S: Scalar>(phi: &[S]) -> PolicyError {
+    let param = if phi.iter().all(Scalar::is_finite) {
+        "logit"
+    } else {
+        "phi"
+    };
+    PolicyError::NonFinite { param }
+}
+
 /// [`sample_categorical`](crate::toy::sample_categorical) on the two probabilities `[q, p]`,
 /// written out for two actions (the same decisions and errors, with fewer branches in the
-/// roll-out's hot loop): the last action of positive probability is the fallback, and action 0
-/// is taken when `u < q` certainly. (`sample_categorical` compares `u` with the running sum
+/// roll-out's hot loop): action 0 iff `q ≠ 0` and (`p = 0` or certainly `u < q`), otherwise 1
+/// — i.e. the last action of positive probability is the fallback, and action 0 is taken when
+/// `u < q` certainly; the comparison is undecidable (an error) only when it is needed, with both
+/// probabilities non-zero. (`sample_categorical` compares `u` with the running sum
 /// `0 + q`; adding an exact zero changes no comparison in any of the kit's scalars — `f64`
 /// comparisons treat `−0` and `+0` alike, interval and rational sums with 0 are exact, a dual
 /// compares its value — so the sum, a dependent addition on the roll-out's latency chain, is
@@ -95,11 +129,23 @@ fn score_of<S: Scalar>(p: S, action: usize, phi: &[S], score: &mut [S]) {
 #[inline]
 fn sample_two<S: Scalar>(u: &S, q: S, p: &S) -> Result<usize, Undecidable> {
     let q_zero = q.is_certainly_zero();
-    let last = usize::from(!p.is_certainly_zero() || q_zero);
-    if last == 1 && !q_zero && certainly_less(u, &q, "categorical sampling")? {
-        return Ok(0);
+    let p_zero = p.is_certainly_zero();
+    // Compared unconditionally (the result is used only when both are non-zero): the decision is
+    // one expression of three flags, with no branch but the error's.
+    let cmp = u.certain_cmp(&q);
+    if cmp.is_none() & !q_zero & !p_zero {
+        return Err(undecidable_sample());
     }
-    Ok(last)
+    let zero = !q_zero & (p_zero | (cmp == Some(std::cmp::Ordering::Less)));
+    Ok(usize::from(!zero))
+}
+
+#[cold]
+#[inline(never)]
+fn undecidable_sample() -> Undecidable {
+    Undecidable {
+        what: "categorical sampling",
+    }
 }
 
 /// [`Policy::causal_sum_trusted`] of [`Logistic`] with `N` features known at compile time: the
@@ -298,8 +344,7 @@ impl<S: Real> Policy<S> for Logistic {
         phi: &[S],
         rng: &mut KitRng,
     ) -> Result<usize, PolicyError> {
-        check_vec_scalar("phi", phi, self.features)?;
-        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+        let p = logistic_sigmoid(&trusted_logit(theta, phi, self.features)?)?;
         let u: S = crate::problem::dyadic_uniform(rng);
         Ok(sample_two(&u, S::one() - &p, &p)?)
     }
@@ -434,6 +479,78 @@ mod tests {
     }
 
     /// `sample_two` is `sample_categorical` on `[q, p]`: same actions, same errors.
+    /// `sample_trusted` of `pi` against `sample` (φ checked entry by entry): the same result.
+    fn assert_trusted_as_checked<S: Real>(pi: &Logistic, theta: &[S], phi: &[S]) {
+        use rand::SeedableRng;
+        let run = |trusted: bool| {
+            let mut rng = KitRng::seed_from_u64(3);
+            if trusted {
+                pi.sample_trusted(theta, phi, &mut rng)
+            } else {
+                pi.sample(theta, phi, &mut rng)
+            }
+        };
+        assert_eq!(run(true), run(false), "phi = {phi:?}");
+    }
+
+    /// `sample_trusted` (φ's finiteness checked through the logit, for floats) fails exactly as
+    /// `sample` does: a non-finite feature is φ's error, an overflowing logit the logit's — in
+    /// `f64`, and in duals (entry by entry, as in intervals, where `[0, 0]·[1, ∞]` is finite; see
+    /// `sample_trusted_checks_unbounded_interval_features`).
+    #[test]
+    fn sample_trusted_fails_as_sample_does() {
+        use crate::scalar::Dual;
+        use rand::SeedableRng;
+        let pi = Logistic::new(3).unwrap();
+        let theta = [0.0, 2.0, -1.0];
+        let big = f64::MAX;
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, big, 0.5] {
+            for j in 0..3 {
+                let mut phi = [0.25, -0.5, 1.0];
+                phi[j] = bad;
+                assert_trusted_as_checked(&pi, &theta, &phi);
+                assert_trusted_as_checked(
+                    &pi,
+                    &theta.map(Dual::constant),
+                    &phi.map(Dual::constant),
+                );
+            }
+        }
+        // The three outcomes occur: φ's error, the logit's, and a sample.
+        let sample = |phi: [f64; 3]| pi.sample_trusted(&theta, &phi, &mut KitRng::seed_from_u64(3));
+        assert_eq!(
+            sample([0.0, f64::NAN, 0.0]),
+            Err(PolicyError::NonFinite { param: "phi" })
+        );
+        assert_eq!(
+            sample([f64::INFINITY, 0.0, 0.0]),
+            Err(PolicyError::NonFinite { param: "phi" })
+        );
+        assert_eq!(
+            sample([0.0, big, -big]),
+            Err(PolicyError::NonFinite { param: "logit" })
+        );
+        assert!(sample([0.0; 3]).is_ok());
+    }
+
+    /// An unbounded interval feature with a zero weight gives a finite logit (`[0, 0]·[1, ∞] =
+    /// [0, 0]`), and is still φ's error.
+    #[cfg(feature = "mpfr")]
+    #[test]
+    fn sample_trusted_checks_unbounded_interval_features() {
+        use rand::SeedableRng;
+        let pi = Logistic::new(3).unwrap();
+        let theta = [0.0, 2.0, -1.0].map(|x| Interval::from_binary64(x).unwrap());
+        let unbounded = Interval::try_from((1.0, f64::INFINITY)).unwrap();
+        let phi = [unbounded, Interval::one(), Interval::one()];
+        assert!((theta[0] * unbounded).is_finite());
+        assert_eq!(
+            pi.sample_trusted(&theta, &phi, &mut KitRng::seed_from_u64(3)),
+            Err(PolicyError::NonFinite { param: "phi" })
+        );
+        assert_trusted_as_checked(&pi, &theta, &phi);
+    }
+
     #[test]
     fn sample_two_is_the_two_action_categorical() {
         let points = [

@@ -7,6 +7,7 @@ use std::cmp::Ordering;
 macro_rules! impl_float {
     ($t:ty) => {
         impl Scalar for $t {
+            const NON_FINITE_PROPAGATES: bool = true;
             #[inline]
             fn zero() -> Self {
                 0.0

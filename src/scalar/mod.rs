@@ -61,6 +61,12 @@ pub trait Scalar:
     + for<'a> MulAssign<&'a Self>
     + for<'a> DivAssign<&'a Self>
 {
+    /// Whether `a + b`, `a − b` and `a · b` are non-finite whenever `a` or `b` is (so that a dot
+    /// product `θ·φ` with a finite θ is non-finite whenever some φⱼ is, and one test of the result
+    /// checks the whole of φ). True for IEEE floats (∞ and NaN propagate through sums and
+    /// products, `∞ − ∞` and `0·∞` are NaN) and, vacuously, for rationals (always finite); false
+    /// for intervals (`[0, 0]·[1, +∞] = [0, 0]`) and, conservatively, the default.
+    const NON_FINITE_PROPAGATES: bool = false;
     /// The additive identity.
     fn zero() -> Self;
     /// The multiplicative identity.

@@ -10,6 +10,7 @@ use num_traits::{One, ToPrimitive, Zero};
 use std::cmp::Ordering;
 
 impl Scalar for BigRational {
+    const NON_FINITE_PROPAGATES: bool = true;
     fn zero() -> Self {
         <BigRational as Zero>::zero()
     }

@@ -174,6 +174,9 @@ pub struct TaskProblem<T, P> {
     pub policy: P,
 }
 
+/// A policy's error as an oracle error (out of line: the hot loops only branch to it).
+#[cold]
+#[inline(never)]
 fn policy_error(e: PolicyError) -> OracleError {
     match e {
         PolicyError::Undecidable(u) => OracleError::Undecidable(u),
@@ -378,6 +381,66 @@ where
     Ok(g)
 }
 
+/// The error of a task whose feature vectors changed length during an episode.
+#[cold]
+#[inline(never)]
+fn features_changed_length(before: usize, now: usize) -> OracleError {
+    OracleError::Environment(format!(
+        "the task's features changed length from {before} to {now}"
+    ))
+}
+
+impl<T, P> TaskProblem<T, P> {
+    /// One episode of the task from a fresh start, acting with `choose(step, φ(s), a*(s), rng)` at
+    /// every decision, recording features, actions and the expert's labels.
+    ///
+    /// The storage for the whole episode is reserved once: with the task's time limit known, the
+    /// per-step loop allocates nothing (for tasks and policies whose features, labels and actions
+    /// are written in place). `#[inline(always)]`: each behaviour of [`IlProblem::rollout`] gets
+    /// its own copy of the loop with its action choice compiled in.
+    #[inline(always)]
+    fn rollout_with<S, F>(
+        &self,
+        rng: &mut KitRng,
+        mut choose: F,
+    ) -> Result<TaskTrajectory<S, T::Label, T::Action>, OracleError>
+    where
+        S: Scalar,
+        T: Task<S>,
+        P: Policy<S>,
+        F: FnMut(usize, &[S], T::Action, &mut KitRng) -> Result<T::Action, OracleError>,
+    {
+        let mut ep = self.task.start(rng)?;
+        let steps = self.task.max_episode_steps().unwrap_or(0);
+        let mut t = TaskTrajectory {
+            feature_data: Vec::with_capacity(steps * self.policy.feature_dim()),
+            feature_dim: 0,
+            rows: 0,
+            actions: Vec::with_capacity(steps),
+            labels: Vec::with_capacity(steps),
+        };
+        loop {
+            let start = t.feature_data.len();
+            self.task.push_features(&ep, &mut t.feature_data);
+            let dim = t.feature_data.len() - start;
+            if t.rows == 0 {
+                t.feature_dim = dim;
+            } else if dim != t.feature_dim {
+                return Err(features_changed_length(t.feature_dim, dim));
+            }
+            t.rows += 1;
+            let (label, expert_action) = self.task.expert(&ep)?;
+            let action = choose(t.len(), &t.feature_data[start..], expert_action, rng)?;
+            let done = self.task.advance(&mut ep, &action)?;
+            t.actions.push(action);
+            t.labels.push(label);
+            if done {
+                return Ok(t);
+            }
+        }
+    }
+}
+
 impl<S, T, P> IlProblem<S> for TaskProblem<T, P>
 where
     S: Real,
@@ -424,74 +487,50 @@ where
             }
             _ => {}
         }
-        let mut ep = self.task.start(rng)?;
-        // Storage for the whole episode, reserved once: with the task's time limit known, the
-        // per-step loop below allocates nothing (for tasks and policies whose features, labels
-        // and actions are written in place).
-        let steps = self.task.max_episode_steps().unwrap_or(0);
-        let mut t = TaskTrajectory {
-            feature_data: Vec::with_capacity(steps * self.policy.feature_dim()),
-            feature_dim: 0,
-            rows: 0,
-            actions: Vec::with_capacity(steps),
-            labels: Vec::with_capacity(steps),
+        // One loop per kind of behaviour, each with its action choice compiled in: the learner's
+        // roll-out (the oracle's hot loop) carries no mixture or schedule code. Every learner θ
+        // of `behaviour` was checked above.
+        let sample = |th: &DVector<S>, phi: &[S], rng: &mut KitRng| {
+            self.policy
+                .sample_trusted(th.as_slice(), phi, rng)
+                .map_err(policy_error)
         };
-        loop {
-            let start = t.feature_data.len();
-            self.task.push_features(&ep, &mut t.feature_data);
-            let dim = t.feature_data.len() - start;
-            if t.rows == 0 {
-                t.feature_dim = dim;
-            } else if dim != t.feature_dim {
-                return Err(OracleError::Environment(format!(
-                    "the task's features changed length from {} to {dim}",
-                    t.feature_dim
-                )));
+        let act = |learner: Option<&DVector<S>>, phi: &[S], expert, rng: &mut KitRng| match learner
+        {
+            Some(th) => sample(th, phi, rng),
+            None => Ok(expert),
+        };
+        let t = match behaviour {
+            Behaviour::Learner(th) => {
+                self.rollout_with(rng, |_, phi, _, rng| sample(th, phi, rng))?
             }
-            t.rows += 1;
-            let phi = &t.feature_data[start..];
-            let (label, expert_action) = self.task.expert(&ep)?;
-            let step = t.len();
-            let learner: Option<&DVector<S>> = match behaviour {
-                Behaviour::Learner(th) => Some(th),
-                Behaviour::Expert => None,
-                Behaviour::Mixture {
-                    expert_weight,
-                    learners,
-                } => {
-                    let x: f64 = rng.random();
-                    if x < *expert_weight {
-                        None
-                    } else {
-                        let mut acc = *expert_weight;
-                        let mut pick = learners.last().map(|l| l.1);
-                        for (w, th) in learners {
-                            acc += w;
-                            if x < acc {
-                                pick = Some(*th);
-                                break;
-                            }
+            Behaviour::Expert => self.rollout_with(rng, |_, _, expert, _| Ok(expert))?,
+            Behaviour::Mixture {
+                expert_weight,
+                learners,
+            } => self.rollout_with(rng, |_, phi, expert, rng| {
+                let x: f64 = rng.random();
+                let learner = if x < *expert_weight {
+                    None
+                } else {
+                    let mut acc = *expert_weight;
+                    let mut pick = learners.last().map(|l| l.1);
+                    for (w, th) in learners {
+                        acc += w;
+                        if x < acc {
+                            pick = Some(*th);
+                            break;
                         }
-                        pick
                     }
-                }
-                Behaviour::NonStationary(steps) => steps.get(step).copied().flatten(),
-            };
-            let action = match learner {
-                // Every learner θ of `behaviour` was checked above.
-                Some(th) => self
-                    .policy
-                    .sample_trusted(th.as_slice(), phi, rng)
-                    .map_err(policy_error)?,
-                None => expert_action,
-            };
-            let done = self.task.advance(&mut ep, &action)?;
-            t.actions.push(action);
-            t.labels.push(label);
-            if done {
-                break;
-            }
-        }
+                    pick
+                };
+                act(learner, phi, expert, rng)
+            })?,
+            Behaviour::NonStationary(steps) => self
+                .rollout_with(rng, |step, phi, expert, rng| {
+                    act(steps.get(step).copied().flatten(), phi, expert, rng)
+                })?,
+        };
         cost.trajectories += 1;
         cost.env_steps += t.len() as u64;
         cost.expert_queries += t.len() as u64;
