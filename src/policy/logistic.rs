@@ -20,14 +20,31 @@ use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar, Undecidable};
 use std::borrow::Borrow;
 
+/// Whether the logit `z` and its `f64` approximation are finite (the check of
+/// [`logistic_sigmoid`] and [`softplus`]).
+#[inline]
+fn finite_logit<S: Scalar>(z: &S) -> bool {
+    z.is_finite() & z.to_f64().is_finite()
+}
+
 /// The sign of the f64 approximation of `z` (decides which of two exact formulas is overflow-free).
 #[inline]
 fn nonnegative<S: Scalar>(z: &S, param: &'static str) -> Result<bool, PolicyError> {
-    let x = z.to_f64();
-    if !z.is_finite() || !x.is_finite() {
+    if !finite_logit(z) {
         return Err(PolicyError::NonFinite { param });
     }
-    Ok(x >= 0.0)
+    Ok(z.to_f64() >= 0.0)
+}
+
+/// [`logistic_sigmoid`] without its check (for a `z` checked with [`finite_logit`]).
+#[inline]
+fn sigmoid_of_finite<S: Real>(z: &S) -> S {
+    if z.to_f64() >= 0.0 {
+        S::one() / (S::one() + (-z.clone()).exp())
+    } else {
+        let e = z.exp();
+        e.clone() / (S::one() + e)
+    }
 }
 
 /// `σ(z) = 1/(1 + e^{−z})`, evaluated as `1/(1 + e^{−z})` for `z ≥ 0` and `e^z/(1 + e^z)` otherwise.
@@ -38,12 +55,10 @@ fn nonnegative<S: Scalar>(z: &S, param: &'static str) -> Result<bool, PolicyErro
 /// [`PolicyError::NonFinite`] for a non-finite `z`.
 #[inline]
 pub fn logistic_sigmoid<S: Real>(z: &S) -> Result<S, PolicyError> {
-    if nonnegative(z, "logit")? {
-        Ok(S::one() / (S::one() + (-z.clone()).exp()))
-    } else {
-        let e = z.exp();
-        Ok(e.clone() / (S::one() + e))
+    if !finite_logit(z) {
+        return Err(PolicyError::NonFinite { param: "logit" });
     }
+    Ok(sigmoid_of_finite(z))
 }
 
 /// `softplus(z) = ln(1 + e^z)`, evaluated as `z + ln(1 + e^{−z})` for `z ≥ 0` (exact identity,
@@ -151,6 +166,10 @@ fn undecidable_sample() -> Undecidable {
 /// [`Policy::causal_sum_trusted`] of [`Logistic`] with `N` features known at compile time: the
 /// operations of [`Policy::causal_step_trusted`] in the same order, with `g` and `Σ_{i<t} ψ_i` in
 /// `[S; N]` locals (registers for `f64`) and fully unrolled loops.
+///
+/// The per-decision checks (label and action in {0, 1}, a finite logit) are not branches: their
+/// failures are collected in a flag, and `Ok(false)` (with `g` untouched) tells the caller that
+/// some decision failed, for the default pass to find and report the first failure.
 #[inline]
 fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     theta: &[S],
@@ -158,7 +177,7 @@ fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     labels: &[L],
     actions: &[usize],
     g: &mut [S],
-) -> Result<(), PolicyError> {
+) -> Result<bool, PolicyError> {
     let theta: &[S; N] = theta.try_into().map_err(|_| PolicyError::Shape {
         param: "theta",
         expected: N,
@@ -168,10 +187,12 @@ fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
     let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
     let (rows, _) = features.as_chunks::<N>();
+    let mut failed = false;
     for ((phi, label), action) in rows.iter().zip(labels).zip(actions) {
         let label = *label.borrow();
-        check_action(label, 2)?;
-        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+        let z = crate::scalar::dot(theta, phi);
+        failed |= (label > 1) | (*action > 1) | !finite_logit(&z);
+        let p = sigmoid_of_finite(&z);
         let r = if label == 1 {
             p.clone() - S::one()
         } else {
@@ -179,15 +200,17 @@ fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
         };
         let dz = S::from_i64(4) * &r * &p * (S::one() - &p);
         let l = S::from_i64(2) * r.square();
-        check_action(*action, 2)?;
         let c = if *action == 1 { S::one() - p } else { -p };
         for ((gj, sj), x) in acc.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
             *gj += dz.clone() * x + l.clone() * &*sj;
             *sj += c.clone() * x;
         }
     }
+    if failed {
+        return Ok(false);
+    }
     g.clone_from_slice(&acc);
-    Ok(())
+    Ok(true)
 }
 
 /// The logistic policy over `n ≥ 1` features (actions 0 and 1).
@@ -399,7 +422,14 @@ impl<S: Real> Policy<S> for Logistic {
         macro_rules! fixed {
             ($($n:literal)*) => {
                 match self.features {
-                    $($n => causal_sum_fixed::<S, L, $n>(theta, features, labels, actions, g),)*
+                    $($n => {
+                        if causal_sum_fixed::<S, L, $n>(theta, features, labels, actions, g)? {
+                            Ok(())
+                        } else {
+                            // Some decision failed a check: the default pass reports the first.
+                            causal_sum_by_steps(self, theta, features, labels, actions, g, scratch)
+                        }
+                    })*
                     _ => causal_sum_by_steps(self, theta, features, labels, actions, g, scratch),
                 }
             };
@@ -441,15 +471,15 @@ mod tests {
                     .map(|_| 2.0 * rng.random::<f64>() - 1.0)
                     .collect();
                 let labels: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
-                let mut actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
-                let run = |actions: &[usize], fast: bool| {
+                let actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let run = |features: &[f64], labels: &[usize], actions: &[usize], fast: bool| {
                     let mut g = vec![0.0; n];
                     let mut scratch = vec![0.0; 3 * n];
                     let r = if fast {
                         pi.causal_sum_trusted(
                             &theta,
-                            &features,
-                            &labels,
+                            features,
+                            labels,
                             actions,
                             &mut g,
                             &mut scratch,
@@ -458,8 +488,8 @@ mod tests {
                         causal_sum_by_steps(
                             &pi,
                             &theta,
-                            &features,
-                            &labels,
+                            features,
+                            labels,
                             actions,
                             &mut g,
                             &mut scratch,
@@ -467,18 +497,62 @@ mod tests {
                     };
                     r.map(|()| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
                 };
-                let fast = run(&actions, true);
-                assert!(fast.is_ok());
-                assert_eq!(fast, run(&actions, false), "n = {n}, {steps} steps");
-                actions[steps / 2] = 2;
-                let err = run(&actions, true);
+                let both = |features: &[f64], labels: &[usize], actions: &[usize]| {
+                    let fast = run(features, labels, actions, true);
+                    assert_eq!(
+                        fast,
+                        run(features, labels, actions, false),
+                        "n = {n}, {steps} steps"
+                    );
+                    fast
+                };
+                assert!(both(&features, &labels, &actions).is_ok());
+                // Failing decisions: a bad action, a bad label, an overflowing logit, and two of
+                // them (the first is reported, in the default's order within a decision: label,
+                // logit, action).
+                let (early, late) = (steps / 3, steps / 2);
+                let mut bad_actions = actions.clone();
+                bad_actions[late] = 2;
+                let mut bad_labels = labels.clone();
+                bad_labels[early] = 7;
+                let mut overflow = features.clone();
+                for (j, x) in overflow[late * n..(late + 1) * n].iter_mut().enumerate() {
+                    *x = f64::MAX.copysign(theta[j]);
+                }
+                let err = both(&features, &labels, &bad_actions);
                 assert!(matches!(err, Err(PolicyError::Action { action: 2, .. })));
-                assert_eq!(err, run(&actions, false));
+                let err = both(&features, &bad_labels, &actions);
+                assert!(matches!(err, Err(PolicyError::Action { action: 7, .. })));
+                // The row's logit Σ|θ_j|·MAX overflows unless Σ|θ_j| < 1 (then both passes
+                // agree on an infinite gradient instead).
+                let overflows = !theta
+                    .iter()
+                    .fold(0.0, |z, t| z + t.abs() * f64::MAX)
+                    .is_finite();
+                let logit = PolicyError::NonFinite { param: "logit" };
+                let err = both(&overflow, &labels, &actions);
+                assert_eq!(err.is_err(), overflows);
+                if overflows {
+                    assert_eq!(err, Err(logit.clone()));
+                }
+                let err = both(&overflow, &bad_labels, &bad_actions);
+                assert!(matches!(err, Err(PolicyError::Action { action: 7, .. })));
+                let mut same_step = bad_actions.clone();
+                same_step[early] = 3;
+                let err = both(&overflow, &labels, &same_step);
+                let first = if early == late && overflows {
+                    logit
+                } else {
+                    PolicyError::Action {
+                        action: 3,
+                        actions: 2,
+                    }
+                };
+                assert_eq!(err, Err(first));
             }
         }
     }
 
-    /// `sample_two` is `sample_categorical` on `[q, p]`: same actions, same errors.
     /// `sample_trusted` of `pi` against `sample` (φ checked entry by entry): the same result.
     fn assert_trusted_as_checked<S: Real>(pi: &Logistic, theta: &[S], phi: &[S]) {
         use rand::SeedableRng;
@@ -551,6 +625,7 @@ mod tests {
         assert_trusted_as_checked(&pi, &theta, &phi);
     }
 
+    /// `sample_two` is `sample_categorical` on `[q, p]`: same actions, same errors.
     #[test]
     fn sample_two_is_the_two_action_categorical() {
         let points = [
