@@ -149,3 +149,46 @@ fn bad_input_is_an_error() {
         Err(OracleError::Behaviour(_))
     ));
 }
+
+/// A learner's roll-out knows its features are finite (each φ went through the policy's checked
+/// sampling) and the estimators skip their pass over them; the same data rebuilt from its parts
+/// (features not known finite) gives bit-for-bit the same estimates and compares equal, and a
+/// non-finite feature in rebuilt data is reported as φ's error.
+#[test]
+fn learner_rollouts_skip_the_feature_check_with_the_same_results() {
+    use ilopt::policy::Logistic;
+    use ilopt::task::TaskTrajectory;
+    let p = TaskProblem {
+        task: CartPoleTask::<f64>::with_lqr().unwrap(),
+        policy: Logistic::new(cartpole::FEATURES).unwrap(),
+    };
+    let theta = DVector::from_column_slice(&[0.3, 1.0, 8.0, 2.0, 0.1]);
+    let mut c = Cost::default();
+    for seed in 0..8 {
+        let t = p
+            .rollout(
+                &Behaviour::Learner(&theta),
+                &mut KitRng::seed_from_u64(seed),
+                &mut c,
+            )
+            .unwrap();
+        let rebuilt =
+            TaskTrajectory::from_parts(t.features(), t.actions.clone(), t.labels.clone()).unwrap();
+        assert_eq!(rebuilt, t);
+        for form in [EstimatorForm::Causal, EstimatorForm::Full] {
+            let bits = |t: &TaskTrajectory<f64, usize, usize>| {
+                p.estimate(&theta, t, form, &mut Cost::default())
+                    .map(|g| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+            };
+            assert_eq!(bits(&t), bits(&rebuilt));
+        }
+        let mut features = t.features();
+        features[t.len() / 2][1] = f64::NAN;
+        let bad =
+            TaskTrajectory::from_parts(features, t.actions.clone(), t.labels.clone()).unwrap();
+        let err = p
+            .estimate(&theta, &bad, EstimatorForm::Causal, &mut Cost::default())
+            .unwrap_err();
+        assert!(err.to_string().contains("phi"), "{err}");
+    }
+}

@@ -360,7 +360,8 @@ impl<S: Real> Policy<S> for Logistic {
     }
 
     /// As [`Policy::sample`] without the θ check (θ validated once by the caller).
-    #[inline]
+    /// `#[inline(always)]`: it is the policy's part of the roll-out's hot loop.
+    #[inline(always)]
     fn sample_trusted(
         &self,
         theta: &[S],

@@ -78,7 +78,7 @@ pub trait Task<S: Scalar> {
 /// roll-out fills one buffer instead of allocating a vector per step; [`TaskTrajectory::feature`]
 /// and [`TaskTrajectory::feature_rows`] read them, [`TaskTrajectory::features`] returns the old
 /// `Vec<Vec<S>>` form (a copy).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct TaskTrajectory<S, L, A> {
     /// φ(s_1), …, φ(s_n) concatenated.
     feature_data: Vec<S>,
@@ -86,10 +86,26 @@ pub struct TaskTrajectory<S, L, A> {
     feature_dim: usize,
     /// Number of feature rows stored.
     rows: usize,
+    /// `true` when every feature entry is known to be finite: a learner's roll-out, where every φ
+    /// went through [`Policy::sample_trusted`], which checks φ. The estimators then skip their own
+    /// pass over the features. `false`: unknown (checked when needed).
+    features_finite: bool,
     /// a_t.
     pub actions: Vec<A>,
     /// π*(s_t).
     pub labels: Vec<L>,
+}
+
+/// Equal data (features, actions, labels); how the features came to be known finite is not part
+/// of it.
+impl<S: PartialEq, L: PartialEq, A: PartialEq> PartialEq for TaskTrajectory<S, L, A> {
+    fn eq(&self, other: &Self) -> bool {
+        self.feature_data == other.feature_data
+            && self.feature_dim == other.feature_dim
+            && self.rows == other.rows
+            && self.actions == other.actions
+            && self.labels == other.labels
+    }
 }
 
 impl<S, L, A> TaskTrajectory<S, L, A> {
@@ -144,6 +160,7 @@ impl<S: Clone, L, A> TaskTrajectory<S, L, A> {
             rows: features.len(),
             feature_data: features.into_iter().flatten().collect(),
             feature_dim,
+            features_finite: false,
             actions,
             labels,
         })
@@ -307,9 +324,10 @@ where
     P: Policy<S>,
 {
     t.feature_dim == policy.feature_dim()
-        && t.feature_data
-            .iter()
-            .fold(true, |ok, x| ok & Scalar::is_finite(x))
+        && (t.features_finite
+            || t.feature_data
+                .iter()
+                .fold(true, |ok, x| ok & Scalar::is_finite(x)))
 }
 
 /// One decision's terms of the causal estimator: `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then
@@ -381,6 +399,19 @@ where
     Ok(g)
 }
 
+/// The learner θ's action at φ (θ checked by the caller), inlined into each roll-out loop.
+#[inline(always)]
+fn sample_learner<S: Scalar, P: Policy<S>>(
+    policy: &P,
+    theta: &DVector<S>,
+    phi: &[S],
+    rng: &mut KitRng,
+) -> Result<P::Action, OracleError> {
+    policy
+        .sample_trusted(theta.as_slice(), phi, rng)
+        .map_err(policy_error)
+}
+
 /// The error of a task whose feature vectors changed length during an episode.
 #[cold]
 #[inline(never)]
@@ -416,6 +447,7 @@ impl<T, P> TaskProblem<T, P> {
             feature_data: Vec::with_capacity(steps * self.policy.feature_dim()),
             feature_dim: 0,
             rows: 0,
+            features_finite: false,
             actions: Vec::with_capacity(steps),
             labels: Vec::with_capacity(steps),
         };
@@ -490,19 +522,19 @@ where
         // One loop per kind of behaviour, each with its action choice compiled in: the learner's
         // roll-out (the oracle's hot loop) carries no mixture or schedule code. Every learner θ
         // of `behaviour` was checked above.
-        let sample = |th: &DVector<S>, phi: &[S], rng: &mut KitRng| {
-            self.policy
-                .sample_trusted(th.as_slice(), phi, rng)
-                .map_err(policy_error)
-        };
         let act = |learner: Option<&DVector<S>>, phi: &[S], expert, rng: &mut KitRng| match learner
         {
-            Some(th) => sample(th, phi, rng),
+            Some(th) => sample_learner(&self.policy, th, phi, rng),
             None => Ok(expert),
         };
         let t = match behaviour {
             Behaviour::Learner(th) => {
-                self.rollout_with(rng, |_, phi, _, rng| sample(th, phi, rng))?
+                let mut t = self.rollout_with(rng, |_, phi, _, rng| {
+                    sample_learner(&self.policy, th, phi, rng)
+                })?;
+                // Every φ was checked by `sample_trusted`.
+                t.features_finite = true;
+                t
             }
             Behaviour::Expert => self.rollout_with(rng, |_, _, expert, _| Ok(expert))?,
             Behaviour::Mixture {
