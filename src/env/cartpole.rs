@@ -150,7 +150,7 @@ impl<S: Scalar> CartPoleParams<S> {
 ///
 /// The constants ([`CartPoleParams::gymnasium`]) are built at every step rather than stored: in
 /// `f64` they are then compile-time constants, which made the roll-out's hot loop about 7% faster
-/// than reading them from a stored struct (issue 8, `examples/oracle_probe.rs`), and in the other
+/// than reading them from a stored struct (issue 8, `benches/oracle_probe.rs`), and in the other
 /// scalars building them costs little next to the step's sine and cosine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CartPoleDynamics<S> {
