@@ -418,7 +418,7 @@ impl<S: Real> Policy<S> for Logistic {
         labels: &[L],
         actions: &[usize],
         g: &mut [S],
-        scratch: &mut [S],
+        scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
         macro_rules! fixed {
             ($($n:literal)*) => {
@@ -475,7 +475,7 @@ mod tests {
                 let actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
                 let run = |features: &[f64], labels: &[usize], actions: &[usize], fast: bool| {
                     let mut g = vec![0.0; n];
-                    let mut scratch = vec![0.0; 3 * n];
+                    let mut scratch = Vec::new();
                     let r = if fast {
                         pi.causal_sum_trusted(
                             &theta,

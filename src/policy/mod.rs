@@ -257,8 +257,10 @@ pub trait Policy<S: Scalar> {
     /// The whole unit-weight causal estimator of eq. 3.15 over one trajectory, for validated
     /// inputs (θ as in [`Policy::sample_trusted`]; `features` holds φ(s_1), …, φ(s_n) row after
     /// row, each with [`Policy::feature_dim`] finite entries; `labels` and `actions` have one entry
-    /// per row): adds `Σ_t [∇_θ l_t + l_t Σ_{i<t} ψ_i]` to `g`. `scratch` has
-    /// `3 ·` [`Policy::param_dim`] entries, all zero on entry.
+    /// per row): adds `Σ_t [∇_θ l_t + l_t Σ_{i<t} ψ_i]` to `g`. `scratch` is working storage
+    /// that an implementation sizes as it needs (the default: `3 ·` [`Policy::param_dim`] zeros;
+    /// the logistic policy's fixed-dimension loop needs none and leaves it empty, so the caller
+    /// allocates nothing for it).
     ///
     /// The default runs [`Policy::causal_step_trusted`] decision after decision (`scratch` holds
     /// `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`); a policy may override it with a faster loop (the logistic
@@ -277,14 +279,15 @@ pub trait Policy<S: Scalar> {
         labels: &[L],
         actions: &[Self::Action],
         g: &mut [S],
-        scratch: &mut [S],
+        scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
         causal_sum_by_steps(self, theta, features, labels, actions, g, scratch)
     }
 }
 
 /// The default [`Policy::causal_sum_trusted`]: [`Policy::causal_step_trusted`] decision after
-/// decision, with `scratch` split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`.
+/// decision, with `scratch` resized to `3 · param_dim` zeros and split into `∇l_t`, `ψ_t` and
+/// `Σ_{i<t} ψ_i`.
 #[allow(clippy::too_many_arguments)] // the method's arguments and the policy
 #[inline]
 pub(crate) fn causal_sum_by_steps<S, P, L>(
@@ -294,7 +297,7 @@ pub(crate) fn causal_sum_by_steps<S, P, L>(
     labels: &[L],
     actions: &[P::Action],
     g: &mut [S],
-    scratch: &mut [S],
+    scratch: &mut Vec<S>,
 ) -> Result<(), PolicyError>
 where
     S: Scalar,
@@ -302,7 +305,8 @@ where
     L: std::borrow::Borrow<P::Label>,
 {
     let d = policy.param_dim();
-    check_out("scratch", scratch, 3 * d)?;
+    scratch.clear();
+    scratch.resize(3 * d, S::zero());
     let (grad, rest) = scratch.split_at_mut(d);
     let (score, score_sum) = rest.split_at_mut(d);
     let rows = features.chunks_exact(policy.feature_dim().max(1));

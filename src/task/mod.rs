@@ -274,7 +274,6 @@ where
     let d = policy.param_dim();
     let n = t.len();
     let mut g = vec![S::zero(); d];
-    let mut scratch = Scratch::new(d);
     let mut log_w = S::zero();
     // θ has been checked by the caller; with every φ checked here once, the per-decision calls can
     // skip the policy's own checks (`causal_step_trusted`). Otherwise the checked calls below
@@ -283,11 +282,14 @@ where
     if trusted && ratio.is_none() {
         // The plain causal estimator: the whole pass in the policy (one loop it may specialise).
         let (rows, actions, labels) = (&t.feature_data, &t.actions, &t.labels);
+        // Scratch only if the policy's pass asks for it (the logistic policy's does not).
+        let mut scratch = Vec::new();
         policy
-            .causal_sum_trusted(theta, rows, labels, actions, &mut g, &mut scratch.buf)
+            .causal_sum_trusted(theta, rows, labels, actions, &mut g, &mut scratch)
             .map_err(policy_error)?;
         return Ok((g, log_w));
     }
+    let mut scratch = Scratch::new(d);
     let (grad, score, score_sum) = scratch.parts();
     for (step, ((phi, a), y)) in t.feature_rows().zip(&t.actions).zip(&t.labels).enumerate() {
         if trusted {
