@@ -29,6 +29,25 @@ use std::time::Instant;
 const SEEDS: u64 = 16;
 const THETA: [f64; D] = [0.3, 1.0, 8.0, 2.0, 0.1];
 
+/// One roll-out of the learner θ and its causal estimate: the steps taken and the gradient's first
+/// entry (so that nothing is optimised away).
+fn oracle_once<P: IlProblem<f64>>(
+    p: &P,
+    theta: &DVector<f64>,
+    rng: &mut KitRng,
+    cost: &mut Cost,
+) -> (u64, f64) {
+    let before = cost.env_steps;
+    let tr = p
+        .rollout(&Behaviour::Learner(theta), rng, cost)
+        .expect("roll-out");
+    let steps = cost.env_steps - before;
+    let g = p
+        .estimate(theta, &tr, EstimatorForm::Causal, cost)
+        .expect("estimate");
+    (steps, g[0])
+}
+
 fn main() {
     // `cargo bench` passes `--bench` (and criterion-style flags) to every bench binary.
     let mut args = std::env::args().skip(1).filter(|a| !a.starts_with("--"));
@@ -91,23 +110,15 @@ fn main() {
                     let th = black_box(&theta);
                     match mode {
                         "generic" => {
-                            let tr = p
-                                .rollout(&Behaviour::Learner(th), &mut rng, &mut cost)
-                                .expect("roll-out");
-                            steps += tr.len() as u64;
-                            acc += p
-                                .estimate(th, &tr, EstimatorForm::Causal, &mut cost)
-                                .expect("estimate")[0];
+                            let (n, x) = oracle_once(&p, th, &mut rng, &mut cost);
+                            steps += n;
+                            acc += x;
                         }
                         "softmax" => {
                             let th = black_box(&soft_theta);
-                            let tr = soft
-                                .rollout(&Behaviour::Learner(th), &mut rng, &mut cost)
-                                .expect("roll-out");
-                            steps += tr.len() as u64;
-                            acc += soft
-                                .estimate(th, &tr, EstimatorForm::Causal, &mut cost)
-                                .expect("estimate")[0];
+                            let (n, x) = oracle_once(&soft, th, &mut rng, &mut cost);
+                            steps += n;
+                            acc += x;
                         }
                         "rollout" => {
                             let tr = p
