@@ -203,7 +203,9 @@ pub trait Policy<S: Scalar> {
 
     /// [`Policy::sample`] for a θ the caller has already validated — `theta` has
     /// [`Policy::param_dim`] entries, all finite, as the oracle checks once per roll-out — so that
-    /// a policy may skip its per-call θ check in the roll-out's hot loop (φ is still checked).
+    /// a policy may skip its per-call θ check in the roll-out's hot loop. φ is still checked, length
+    /// and finiteness, exactly as [`Policy::sample`] checks it: the oracle relies on this to mark a
+    /// learner's roll-out as having finite features and to skip its own pass over them.
     ///
     /// For such a θ the action, the random draws and the errors are exactly those of
     /// [`Policy::sample`]; for any other θ the outcome is unspecified (an error, a panic or a

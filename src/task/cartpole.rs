@@ -91,10 +91,8 @@ impl<S: Real> CartPoleTask<S> {
 
 /// The PPO expert's action, out of line: the network is not inlined anyway, and keeping its call
 /// out of [`Task::expert`] leaves the roll-out's hot loop with the LQR expert alone. The state
-/// comes by value, copied at the call: passing a reference to the episode's own state would let
-/// its address escape, and the roll-out would keep the state in memory instead of registers (a
-/// store-to-load round trip on the step-to-step dependency chain, measured at about 12% of the
-/// LQR roll-out, issue 8).
+/// comes by value, copied at the call (only on this cold path), so that the episode's own state
+/// is never handed to an opaque function by reference.
 #[cold]
 #[inline(never)]
 fn ppo_action<S: Real>(e: &PpoExpert, state: [S; 4]) -> Result<usize, OracleError> {
