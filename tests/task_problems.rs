@@ -192,3 +192,76 @@ fn learner_rollouts_skip_the_feature_check_with_the_same_results() {
         assert!(err.to_string().contains("phi"), "{err}");
     }
 }
+
+/// A task whose features grow by one entry at the third decision: the roll-out stops with an
+/// error naming both lengths, whoever acts (the expert, or a learner whose policy would otherwise
+/// reject φ's length itself).
+#[test]
+fn features_that_change_length_are_an_error() {
+    use ilopt::policy::Logistic;
+    use ilopt::task::Task;
+    #[derive(Debug, Clone)]
+    struct Growing;
+    impl Task<f64> for Growing {
+        type Episode = usize;
+        type Label = usize;
+        type Action = usize;
+        fn start(&self, _: &mut KitRng) -> Result<usize, OracleError> {
+            Ok(0)
+        }
+        fn features(&self, step: &usize) -> Vec<f64> {
+            vec![0.5; if *step < 2 { 1 } else { 2 }]
+        }
+        fn expert(&self, _: &usize) -> Result<(usize, usize), OracleError> {
+            Ok((1, 1))
+        }
+        fn advance(&self, step: &mut usize, _: &usize) -> Result<bool, OracleError> {
+            *step += 1;
+            Ok(*step == 5)
+        }
+    }
+    let p = TaskProblem {
+        task: Growing,
+        policy: Logistic::new(1).unwrap(),
+    };
+    let theta = DVector::from_element(1, 0.25);
+    for behaviour in [Behaviour::Expert, Behaviour::Learner(&theta)] {
+        let err = p
+            .rollout(
+                &behaviour,
+                &mut KitRng::seed_from_u64(1),
+                &mut Cost::default(),
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&err, OracleError::Environment(m) if m.contains("from 1 to 2")),
+            "{err}"
+        );
+    }
+}
+
+/// CartPole builds φ once, in a local array: what it appends, what it hands on, and
+/// [`Task::features`] are the same values, `(x, ẋ, θ, θ̇, 1)` of the episode's state.
+#[test]
+fn cartpole_features_are_the_state_and_one_wherever_they_go() {
+    use ilopt::task::Task;
+    let task = CartPoleTask::<f64>::with_lqr().unwrap();
+    let mut rng = KitRng::seed_from_u64(9);
+    let mut ep = task.start(&mut rng).unwrap();
+    let mut stored = vec![-7.0];
+    for _ in 0..20 {
+        let expected = [ep.state[0], ep.state[1], ep.state[2], ep.state[3], 1.0];
+        let before = stored.len();
+        let handed = task.push_features_then(&ep, &mut stored, <[f64]>::to_vec);
+        assert_eq!(handed, expected);
+        assert_eq!(stored[before..], expected);
+        assert_eq!(task.features(&ep), expected);
+        let mut pushed = Vec::new();
+        task.push_features(&ep, &mut pushed);
+        assert_eq!(pushed, expected);
+        if task.advance(&mut ep, &1).unwrap() {
+            break;
+        }
+    }
+    assert_eq!(stored[0], -7.0);
+}

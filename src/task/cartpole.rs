@@ -125,21 +125,35 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
     }
 
     fn features(&self, ep: &Self::Episode) -> Vec<S> {
-        let mut f = ep.state.to_vec();
-        f.push(S::one());
+        let mut f = Vec::with_capacity(FEATURES);
+        self.push_features(ep, &mut f);
         f
     }
 
     #[inline]
     fn push_features(&self, ep: &Self::Episode, out: &mut Vec<S>) {
+        self.push_features_then(ep, out, |_| ());
+    }
+
+    /// φ(s) built in a local array, appended to `out` and handed to `f` from the array (so that
+    /// the learner's `θ·φ` reads it from registers; see [`Task::push_features_then`]).
+    #[inline(always)]
+    fn push_features_then<R>(
+        &self,
+        ep: &Self::Episode,
+        out: &mut Vec<S>,
+        f: impl FnOnce(&[S]) -> R,
+    ) -> R {
         let [x, x_dot, theta, theta_dot] = &ep.state;
-        out.extend([
+        let phi: [S; FEATURES] = [
             x.clone(),
             x_dot.clone(),
             theta.clone(),
             theta_dot.clone(),
             S::one(),
-        ]);
+        ];
+        out.extend_from_slice(&phi);
+        f(&phi)
     }
 
     fn max_episode_steps(&self) -> Option<usize> {

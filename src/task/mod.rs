@@ -49,6 +49,24 @@ pub trait Task<S: Scalar> {
     fn push_features(&self, episode: &Self::Episode, out: &mut Vec<S>) {
         out.extend(self.features(episode));
     }
+    /// Append φ(s) to `out` as [`Task::push_features`] does, and hand the same values to `f`
+    /// (the roll-out's learner acts on them).
+    ///
+    /// The default hands `f` the entries just appended. A task whose φ has a length known at
+    /// compile time should override it to build φ in a local array, append a copy and hand `f`
+    /// the array (see [`cartpole::CartPoleTask`]): inlined into the roll-out, the policy's `θ·φ`
+    /// then reads φ from registers instead of loading back what was just stored, a store-to-load
+    /// round trip on the roll-out's critical path (issue 8: about 8 % of the CartPole roll-out).
+    fn push_features_then<R>(
+        &self,
+        episode: &Self::Episode,
+        out: &mut Vec<S>,
+        f: impl FnOnce(&[S]) -> R,
+    ) -> R {
+        let start = out.len();
+        self.push_features(episode, out);
+        f(&out[start..])
+    }
     /// An upper bound on the number of decisions of an episode, if the task has one (a time
     /// limit). The roll-out reserves the trajectory's storage for that many steps up front, so
     /// that the per-step loop never grows a buffer. `None` (the default): buffers grow
@@ -471,17 +489,21 @@ impl<T, P> TaskProblem<T, P> {
     {
         let mut ep = self.task.start(rng)?;
         loop {
-            let start = t.feature_data.len();
-            self.task.push_features(&ep, &mut t.feature_data);
-            let dim = t.feature_data.len() - start;
-            if t.rows == 0 {
-                t.feature_dim = dim;
-            } else if dim != t.feature_dim {
-                return Err(features_changed_length(t.feature_dim, dim));
-            }
-            t.rows += 1;
             let (label, expert_action) = self.task.expert(&ep)?;
-            let action = choose(t.len(), &t.feature_data[start..], expert_action, rng)?;
+            let step = t.actions.len();
+            let (rows, feature_dim) = (&mut t.rows, &mut t.feature_dim);
+            // φ is stored and handed to `choose` by the task (by value where it can).
+            let action = self
+                .task
+                .push_features_then(&ep, &mut t.feature_data, |phi| {
+                    if *rows == 0 {
+                        *feature_dim = phi.len();
+                    } else if phi.len() != *feature_dim {
+                        return Err(features_changed_length(*feature_dim, phi.len()));
+                    }
+                    *rows += 1;
+                    choose(step, phi, expert_action, rng)
+                })?;
             let done = self.task.advance(&mut ep, &action)?;
             t.actions.push(action);
             t.labels.push(label);
