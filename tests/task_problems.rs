@@ -193,9 +193,10 @@ fn learner_rollouts_skip_the_feature_check_with_the_same_results() {
     }
 }
 
-/// A task whose features grow by one entry at the third decision: the roll-out stops with an
-/// error naming both lengths, whoever acts (the expert, or a learner whose policy would otherwise
-/// reject φ's length itself).
+/// A task whose features grow by one entry at the third decision, where its expert fails too:
+/// the roll-out stops with the features' error, naming both lengths (it is checked first, as
+/// before φ was handed on by value), whoever acts (the expert, or a learner whose policy would
+/// otherwise reject φ's length itself).
 #[test]
 fn features_that_change_length_are_an_error() {
     use ilopt::policy::Logistic;
@@ -212,8 +213,12 @@ fn features_that_change_length_are_an_error() {
         fn features(&self, step: &usize) -> Vec<f64> {
             vec![0.5; if *step < 2 { 1 } else { 2 }]
         }
-        fn expert(&self, _: &usize) -> Result<(usize, usize), OracleError> {
-            Ok((1, 1))
+        fn expert(&self, step: &usize) -> Result<(usize, usize), OracleError> {
+            if *step < 2 {
+                Ok((1, 1))
+            } else {
+                Err(OracleError::Environment("no label after two steps".into()))
+            }
         }
         fn advance(&self, step: &mut usize, _: &usize) -> Result<bool, OracleError> {
             *step += 1;

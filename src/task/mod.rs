@@ -489,21 +489,22 @@ impl<T, P> TaskProblem<T, P> {
     {
         let mut ep = self.task.start(rng)?;
         loop {
-            let (label, expert_action) = self.task.expert(&ep)?;
             let step = t.actions.len();
             let (rows, feature_dim) = (&mut t.rows, &mut t.feature_dim);
-            // φ is stored and handed to `choose` by the task (by value where it can).
-            let action = self
-                .task
-                .push_features_then(&ep, &mut t.feature_data, |phi| {
-                    if *rows == 0 {
-                        *feature_dim = phi.len();
-                    } else if phi.len() != *feature_dim {
-                        return Err(features_changed_length(*feature_dim, phi.len()));
-                    }
-                    *rows += 1;
-                    choose(step, phi, expert_action, rng)
-                })?;
+            // φ is stored and handed on by the task (by value where it can): its length is
+            // checked, then the expert labels the state and `choose` acts on φ.
+            let (label, action) =
+                self.task
+                    .push_features_then(&ep, &mut t.feature_data, |phi| {
+                        if *rows == 0 {
+                            *feature_dim = phi.len();
+                        } else if phi.len() != *feature_dim {
+                            return Err(features_changed_length(*feature_dim, phi.len()));
+                        }
+                        *rows += 1;
+                        let (label, expert_action) = self.task.expert(&ep)?;
+                        Ok((label, choose(step, phi, expert_action, rng)?))
+                    })?;
             let done = self.task.advance(&mut ep, &action)?;
             t.actions.push(action);
             t.labels.push(label);
