@@ -173,7 +173,7 @@ fn main() {
                         }
                         "spec" => {
                             fast.rollout(black_box(&THETA), &mut rng, &mut t);
-                            acc += Specialised::estimate(black_box(&THETA), &t)[0];
+                            acc += black_box(Specialised::estimate(black_box(&THETA), &t))[0];
                             t.actions.len() as u64
                         }
                         "specfresh" => {
@@ -195,7 +195,7 @@ fn main() {
                         }
                         "specest" => {
                             let tr = &fast_trajectories[seed as usize];
-                            acc += Specialised::estimate(black_box(&THETA), tr)[0];
+                            acc += black_box(Specialised::estimate(black_box(&THETA), tr))[0];
                             tr.actions.len() as u64
                         }
                         other => unreachable!("mode {other} was checked"),

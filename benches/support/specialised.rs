@@ -62,13 +62,16 @@ fn sigmoid(z: f64) -> f64 {
     }
 }
 
-/// The roll-out's text, expanded into [`Specialised::rollout`] and [`Specialised::rollout_inlined`]:
-/// one text, compiled as two plain functions (a shared `#[inline(always)]` helper would change how
-/// each is optimised — measured: it vectorised the state's update with 4-wide blends, ≈ 10 %
-/// slower than this scalar code, issue 8).
-macro_rules! rollout_body {
-    ($s:ident, $theta:ident, $rng:ident, $t:ident) => {{
-        let (theta, rng, t): (&[f64; D], &mut KitRng, &mut Trajectory) = ($theta, $rng, $t);
+impl Specialised {
+    /// Roll out the logistic policy θ from a seeded reset into `t` (cleared first).
+    ///
+    /// A function of its own (`#[inline(never)]`), as the generic roll-out loop
+    /// (`TaskProblem::rollout_into`) is, so that both benchmarks compile and call the same code.
+    /// (Measured, issue 8: inlined into criterion's closure it runs no faster, once the closure
+    /// uses the whole gradient; a variant compiled through an `#[inline(always)]` helper was
+    /// vectorised differently and ran 11–12 % slower.)
+    #[inline(never)]
+    pub fn rollout(&self, theta: &[f64; D], rng: &mut KitRng, t: &mut Trajectory) {
         t.features.clear();
         t.actions.clear();
         t.labels.clear();
@@ -84,7 +87,7 @@ macro_rules! rollout_body {
             let phi = [s[0], s[1], s[2], s[3], 1.0];
             let mut u = 0.0;
             for i in 0..4 {
-                u -= $s.k[i] * s[i];
+                u -= self.k[i] * s[i];
             }
             let label = u8::from(u > 0.0);
             let p = sigmoid(dot(theta, &phi));
@@ -116,18 +119,18 @@ macro_rules! rollout_body {
                 || s[0] > X_THRESHOLD
                 || s[2] < -theta_threshold
                 || s[2] > theta_threshold;
-            if terminated || steps >= $s.max_steps {
+            if terminated || steps >= self.max_steps {
                 break;
             }
         }
-    }};
-}
+    }
 
-/// The estimate's text, expanded into [`Specialised::estimate`] and
-/// [`Specialised::estimate_inlined`] (as [`rollout_body`]).
-macro_rules! estimate_body {
-    ($theta:ident, $t:ident) => {{
-        let (theta, t): (&[f64; D], &Trajectory) = ($theta, $t);
+    /// The causal estimator of eq. 3.15 with the Brier loss `2(p − y)²` and the score `(a − p)φ`;
+    /// a function of its own, as the generic estimate's fixed-length pass is. Callers that use
+    /// only part of the result must still pass all of it through `black_box`: inlined, the
+    /// arithmetic of unused entries is dropped (measured, issue 8: only `g[0]` was computed).
+    #[inline(never)]
+    pub fn estimate(theta: &[f64; D], t: &Trajectory) -> [f64; D] {
         let mut g = [0.0; D];
         let mut score_sum = [0.0; D];
         for ((phi, &a), &y) in t.features.iter().zip(&t.actions).zip(&t.labels) {
@@ -142,38 +145,5 @@ macro_rules! estimate_body {
             }
         }
         g
-    }};
-}
-
-impl Specialised {
-    /// Roll out the logistic policy θ from a seeded reset into `t` (cleared first).
-    ///
-    /// The yardstick: a function of its own (`#[inline(never)]`), as the generic roll-out's loop
-    /// is (`TaskProblem::rollout_into`) and as a hand-specialised oracle in the library would be
-    /// to its callers (a non-generic function is not inlined across crates without LTO).
-    #[inline(never)]
-    pub fn rollout(&self, theta: &[f64; D], rng: &mut KitRng, t: &mut Trajectory) {
-        rollout_body!(self, theta, rng, t)
-    }
-
-    /// The same text as [`Specialised::rollout`] as a plain function, which the compiler inlines
-    /// into `benches/oracle.rs`'s closure (its one call site), as it did with the yardstick
-    /// until 2026-11-30: reported next to the yardstick, the difference being the call site's.
-    #[allow(dead_code)] // only `benches/oracle.rs` calls it
-    pub fn rollout_inlined(&self, theta: &[f64; D], rng: &mut KitRng, t: &mut Trajectory) {
-        rollout_body!(self, theta, rng, t)
-    }
-
-    /// The causal estimator of eq. 3.15 with the Brier loss `2(p − y)²` and the score `(a − p)φ`;
-    /// a function of its own, as the generic estimate's fixed-length pass is.
-    #[inline(never)]
-    pub fn estimate(theta: &[f64; D], t: &Trajectory) -> [f64; D] {
-        estimate_body!(theta, t)
-    }
-
-    /// [`Specialised::estimate`] as a plain function (see [`Specialised::rollout_inlined`]).
-    #[allow(dead_code)] // only `benches/oracle.rs` calls it
-    pub fn estimate_inlined(theta: &[f64; D], t: &Trajectory) -> [f64; D] {
-        estimate_body!(theta, t)
     }
 }
