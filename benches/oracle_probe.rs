@@ -50,7 +50,7 @@ fn oracle_once<P: IlProblem<f64>>(
     let g = p
         .estimate(theta, &tr, EstimatorForm::Causal, cost)
         .expect("estimate");
-    (steps, g[0])
+    (steps, black_box(g)[0])
 }
 
 /// Every mode the probe knows.
@@ -166,9 +166,10 @@ fn main() {
                             .len() as u64,
                         "estimate" => {
                             let tr = &generic_trajectories[seed as usize];
-                            acc += p
-                                .estimate(th, tr, EstimatorForm::Causal, &mut cost)
-                                .expect("estimate")[0];
+                            acc += black_box(
+                                p.estimate(th, tr, EstimatorForm::Causal, &mut cost)
+                                    .expect("estimate"),
+                            )[0];
                             tr.len() as u64
                         }
                         "spec" => {
