@@ -57,6 +57,7 @@ fn end_to_end(c: &mut Criterion) {
     let obstacle_vec = TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let obstacle_inline = TaskProblem {
         task: ObstacleTask::thesis().unwrap().with_actions::<[f64; 2]>(),
@@ -64,6 +65,7 @@ fn end_to_end(c: &mut Criterion) {
             .unwrap()
             .with_actions::<[f64; 2]>()
             .unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let cfg = storm("1e-8", obstacle_vec.dim(), 40);
     let rec = record(&cfg, &obstacle_vec);
@@ -86,6 +88,7 @@ fn end_to_end(c: &mut Criterion) {
     let cartpole = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let cfg = storm("0.01", cartpole.dim(), 200);
     let rec = record(&cfg, &cartpole);

@@ -111,6 +111,7 @@ fn cartpole_oracle(c: &mut Criterion) {
     let p = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let theta = DVector::from_vec(vec![0.0, 0.0, -2.0, -0.5, 0.0, 0.0, 0.0, 2.0, 0.5, 0.0]);
     // Measure the mean episode length once, to report trajectory-steps per second.

@@ -81,6 +81,7 @@ fn cartpole(c: &mut Criterion) {
     let generic = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let theta = DVector::from_column_slice(&CARTPOLE_THETA);
     g.throughput(Throughput::Elements(steps_of(&generic, &theta)));
@@ -160,6 +161,7 @@ fn obstacle_task(c: &mut Criterion) {
     let p = TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     g.throughput(Throughput::Elements(steps_of(&p, &theta)));
     g.bench_function(
@@ -169,6 +171,7 @@ fn obstacle_task(c: &mut Criterion) {
     let inline = TaskProblem {
         task: p.task.clone().with_actions::<[f64; 2]>(),
         policy: p.policy.clone().with_actions::<[f64; 2]>().unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     g.bench_function(
         "roll-out + VO labels + linear-Gaussian + causal estimate (f64, inline actions)",

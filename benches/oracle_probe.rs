@@ -96,11 +96,13 @@ fn main() {
     let p = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().expect("LQR design"),
         policy: Logistic::new(cartpole::FEATURES).expect("policy"),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let theta = DVector::from_column_slice(&THETA);
     let soft = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().expect("LQR design"),
         policy: Softmax::new(2, cartpole::FEATURES).expect("policy"),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let soft_theta: DVector<f64> = DVector::from_iterator(
         2 * D,

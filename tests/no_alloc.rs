@@ -85,6 +85,7 @@ fn cartpole() -> TaskProblem<CartPoleTask<f64>, Logistic> {
     TaskProblem {
         task: CartPoleTask::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -98,6 +99,7 @@ fn cartpole_softmax() -> TaskProblem<CartPoleTask<f64>, Softmax> {
     TaskProblem {
         task: CartPoleTask::with_lqr().unwrap(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -242,6 +244,7 @@ fn obstacle_inline() -> TaskProblem<ObstacleTask<[f64; 2]>, LinearGaussian<f64, 
             .unwrap()
             .with_actions()
             .unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -298,6 +301,7 @@ fn obstacle_rbf() -> TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGaussian<f6
     TaskProblem {
         task,
         policy: SpeedLimitedGaussian::new(inner, 0.1).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -370,6 +374,7 @@ fn vec_actions_allocate_per_step() {
     let p = TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let mut rng = KitRng::seed_from_u64(5);
     let (n, t) = count(|| {

@@ -140,6 +140,7 @@ fn logistic() -> TaskProblem<CartPoleTask<f64>, Logistic> {
     TaskProblem {
         task: CartPoleTask::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -147,6 +148,7 @@ fn softmax() -> TaskProblem<CartPoleTask<f64>, Softmax> {
     TaskProblem {
         task: CartPoleTask::with_lqr().unwrap(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -154,6 +156,7 @@ fn obstacle_problem() -> TaskProblem<ObstacleTask, LinearGaussian<f64>> {
     TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.05).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -205,6 +208,7 @@ fn obstacle_inline() -> TaskProblem<ObstacleTask<[f64; 2]>, LinearGaussian<f64, 
     TaskProblem {
         task: p.task.with_actions(),
         policy: p.policy.with_actions().unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 

@@ -20,6 +20,7 @@ fn specialised_and_generic_agree_bit_for_bit() {
     let generic = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let gain = *LqrExpert::cartpole().unwrap().gain();
     let fast = Specialised {

@@ -14,6 +14,7 @@ fn cartpole_problem() -> TaskProblem<CartPoleTask<f64>, Softmax> {
     TaskProblem {
         task: CartPoleTask::with_lqr().unwrap(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -21,6 +22,7 @@ fn obstacle_problem() -> TaskProblem<ObstacleTask, LinearGaussian<f64>> {
     TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     }
 }
 
@@ -58,6 +60,7 @@ fn cartpole_with_the_ppo_expert_balances() {
     let p = TaskProblem {
         task: CartPoleTask::<f64>::with_ppo(&path).unwrap(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let mut rng = KitRng::seed_from_u64(5);
     let e = p
@@ -161,6 +164,7 @@ fn learner_rollouts_skip_the_feature_check_with_the_same_results() {
     let p = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let theta = DVector::from_column_slice(&[0.3, 1.0, 8.0, 2.0, 0.1]);
     let mut c = Cost::default();
@@ -228,6 +232,7 @@ fn features_that_change_length_are_an_error() {
     let p = TaskProblem {
         task: Growing,
         policy: Logistic::new(1).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let theta = DVector::from_element(1, 0.25);
     for behaviour in [Behaviour::Expert, Behaviour::Learner(&theta)] {

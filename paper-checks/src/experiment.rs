@@ -252,6 +252,7 @@ impl Bench {
                     problem: TaskProblem {
                         task: t,
                         policy: Softmax::new(2, cartpole::FEATURES).map_err(|x| e(&x))?,
+                        horizon: ilopt::task::Horizon::Episodic,
                     },
                     expert: choice,
                 }
@@ -279,6 +280,7 @@ impl Bench {
             problem: TaskProblem {
                 policy: SpeedLimitedGaussian::new(inner, env.agent_max_speed).map_err(|x| e(&x))?,
                 task,
+                horizon: ilopt::task::Horizon::Episodic,
             },
             expert: VoExpertPolicy::new(&env, params).map_err(|x| e(&x))?,
             env,

@@ -169,6 +169,13 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
         Ok((a, a))
     }
 
+    /// 2 per remaining step: every end is a failure (the pole fell or the cart left the track;
+    /// the time limit is the horizon), and 2 is the supremum of the Brier loss
+    /// `Σ_a (π(a|s) − 1[a = a*(s)])²` over two actions that the kit's CartPole policies use.
+    fn absorbing_loss(&self, _episode: &Self::Episode) -> Option<S> {
+        Some(S::from_i64(2))
+    }
+
     #[inline(always)]
     fn advance(&self, ep: &mut Self::Episode, action: &usize) -> Result<bool, OracleError> {
         let terminated = self

@@ -10,12 +10,28 @@
 //! * the importance-weighted old-point estimates of math.md §4, with per-decision ratios
 //!   `π_old(a_i|s_i)/π_new(a_i|s_i) = exp(log π_old − log π_new)` ([`LikelihoodRatio`]).
 //!
-//! Episodes end when the task says so (termination or truncation); the objective is
-//! F(θ) = E Σ_{t=1}^{n} l(s_t, θ) with the random episode length n (a stopping time of the state
-//! process), for which eq. 3.15 is still unbiased (states after the end carry no loss).
+//! What one trajectory is, and so which objective the estimators are unbiased for, is the
+//! problem's [`Horizon`]:
+//!
+//! * [`Horizon::Fixed`] (the thesis's F, eqs. 3.1–3.16): a stream of exactly `steps` decisions.
+//!   When an episode ends early the stream either **resets** (a fresh start from the task's reset
+//!   law; the thesis's CartPole protocol) and goes on, with eq. 3.15 unchanged and its score sum
+//!   running across resets (the reset time depends on earlier actions), or **absorbs**: the
+//!   remaining steps take no decision and each costs the task's [`Task::absorbing_loss`] of the
+//!   end state (obstacle task: 0 after reaching the goal, the loss's supremum after a crash).
+//!   The absorbing losses enter the loss-to-go of every decision before them, the last one
+//!   included (its action caused the end); absorbing steps cost no gradient evaluation. Both are
+//!   the thesis's setting on an augmented MDP.
+//! * [`Horizon::Episodic`]: one episode, ending when the task says so; F(θ) = E Σ_{t=1}^{n} l(s_t, θ)
+//!   with the random episode length n. Eq. 3.15 is unbiased for it too, but a short episode is
+//!   cheap, so its minimisers include policies that end the episode at once (a labelled control,
+//!   not the thesis's objective).
 
 pub mod cartpole;
+mod horizon;
 pub mod obstacle;
+
+pub use horizon::{AfterEnd, Horizon};
 
 use crate::policy::{LikelihoodRatio, Policy, PolicyError};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -79,6 +95,14 @@ pub trait Task<S: Scalar> {
     /// # Errors
     /// [`OracleError`] if the expert cannot decide (undecidable comparison, no solution).
     fn expert(&self, episode: &Self::Episode) -> Result<(Self::Label, Self::Action), OracleError>;
+    /// The loss per remaining step when a [`Horizon::Fixed`] stream with [`AfterEnd::Absorb`]
+    /// ends in this state (called after [`Task::advance`] returned `true`): 0 for an end that
+    /// is a success, the per-step loss's supremum for a failure. `None` (the default): the task
+    /// defines no absorbing loss, and an absorbing roll-out is an error.
+    fn absorbing_loss(&self, episode: &Self::Episode) -> Option<S> {
+        let _ = episode;
+        None
+    }
     /// Apply an action; `Ok(true)` when the episode is over (terminated or truncated).
     ///
     /// # Errors
@@ -112,6 +136,13 @@ pub struct TaskTrajectory<S, L, A> {
     pub actions: Vec<A>,
     /// π*(s_t).
     pub labels: Vec<L>,
+    /// The absorbing losses after the last decision, `Σ_{t>n} l_t` (a [`Horizon::Fixed`] stream
+    /// with [`AfterEnd::Absorb`] whose episode ended at decision n before the horizon; zero for
+    /// an end with zero loss). `None`: the trajectory did not absorb.
+    pub absorbed: Option<S>,
+    /// Episodes that ended inside the stream and were followed by a reset
+    /// ([`AfterEnd::Reset`]; 0 otherwise).
+    pub resets: usize,
 }
 
 /// Equal data (features, actions, labels); how the features came to be known finite is not part
@@ -123,6 +154,8 @@ impl<S: PartialEq, L: PartialEq, A: PartialEq> PartialEq for TaskTrajectory<S, L
             && self.rows == other.rows
             && self.actions == other.actions
             && self.labels == other.labels
+            && self.absorbed == other.absorbed
+            && self.resets == other.resets
     }
 }
 
@@ -181,6 +214,8 @@ impl<S: Clone, L, A> TaskTrajectory<S, L, A> {
             features_finite: false,
             actions,
             labels,
+            absorbed: None,
+            resets: 0,
         })
     }
 
@@ -207,6 +242,41 @@ pub struct TaskProblem<T, P> {
     pub task: T,
     /// The learner's policy class.
     pub policy: P,
+    /// What one trajectory is (the objective).
+    pub horizon: Horizon,
+}
+
+impl<T, P> TaskProblem<T, P> {
+    /// The task and policy with one episode per trajectory ([`Horizon::Episodic`]).
+    pub fn episodic(task: T, policy: P) -> Self {
+        Self {
+            task,
+            policy,
+            horizon: Horizon::Episodic,
+        }
+    }
+
+    /// The task and policy under the thesis's fixed-horizon objective.
+    ///
+    /// # Errors
+    /// [`OracleError::Environment`] if `steps` is 0.
+    pub fn fixed(
+        task: T,
+        policy: P,
+        steps: usize,
+        after_end: AfterEnd,
+    ) -> Result<Self, OracleError> {
+        if steps == 0 {
+            return Err(OracleError::Environment(
+                "a fixed horizon needs at least 1 decision, got 0".into(),
+            ));
+        }
+        Ok(Self {
+            task,
+            policy,
+            horizon: Horizon::fixed(steps, after_end),
+        })
+    }
 }
 
 /// A policy's error as an oracle error (out of line: the hot loops only branch to it).
@@ -270,7 +340,12 @@ impl<S: Scalar> Scratch<S> {
 /// trajectory (math.md §4 for the weights): with `ratio = None` every weight is 1 (eq. 3.15);
 /// with `Some(θ_new)` the per-decision prefix weights `w_{1:t−1} = exp(Σ_{i<t} log π_θ(a_i|s_i) −
 /// log π_θnew(a_i|s_i))` are accumulated along the way. Returns `g` and the log of the whole
-/// trajectory's weight `Σ_{i<n−1} (log π_θ − log π_θnew)(a_i|s_i)` (zero without `ratio`).
+/// trajectory's weight: the sum of the log-ratios of every decision that weighs a loss
+/// (decisions 1..n−1; 1..n when the trajectory absorbed), zero without `ratio`.
+///
+/// An absorbed trajectory adds its absorbing losses `L_abs = Σ_{t>n} l_t` to the loss-to-go of
+/// every decision: `+ w_{1:n} L_abs Σ_{i≤n} ψ_i` (they carry no `∇l`: they do not depend on θ
+/// but through the law of the end state).
 ///
 /// Per decision: one [`Policy::loss_score_into`] into preallocated buffers and O(d) field
 /// operations, no allocation. The operations and their order are those of the former
@@ -297,7 +372,8 @@ where
     // skip the policy's own checks (`causal_step_trusted`). Otherwise the checked calls below
     // report the first failure exactly as before.
     let trusted = !per_decision && features_valid(policy, t);
-    if trusted && ratio.is_none() {
+    let tail = t.absorbed.as_ref();
+    if trusted && ratio.is_none() && tail.is_none() {
         // The plain causal estimator: the whole pass in the policy (one loop it may specialise).
         let (rows, actions, labels) = (&t.feature_data, &t.actions, &t.labels);
         // Scratch only if the policy's pass asks for it (the logistic policy's does not).
@@ -326,11 +402,22 @@ where
             }
         }
         if let Some(theta_new) = ratio
-            && step + 1 < n
+            && (step + 1 < n || tail.is_some())
         {
             log_w += policy
                 .log_likelihood_ratio(theta, theta_new, phi, a)
                 .map_err(policy_error)?;
+        }
+    }
+    if let Some(tail) = tail {
+        // `score_sum` now holds Σ_{i≤n} ψ_i.
+        let wl = if per_decision {
+            log_w.exp() * tail
+        } else {
+            tail.clone()
+        };
+        for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
+            *gj += wl.clone() * sj;
         }
     }
     Ok((g, log_w))
@@ -383,7 +470,8 @@ fn accumulate<S: Scalar>(
 }
 
 /// The full form `Σ_t ∇l_t + (Σ_t l_t) Σ_{i<n} ψ_i`, in two passes (the total loss first), each
-/// without per-decision allocation.
+/// without per-decision allocation. An absorbed trajectory adds its absorbing losses to the total
+/// and its last decision's score to the sum (`Σ_{i≤n} ψ_i`: that action caused the end).
 fn full_pass<S, P, L, A>(
     policy: &P,
     theta: &[S],
@@ -398,12 +486,13 @@ where
     let n = t.len();
     let mut scratch = Scratch::new(d);
     let (grad, score, _) = scratch.parts();
-    let mut total = S::zero();
+    let mut total = t.absorbed.clone().unwrap_or_else(S::zero);
     for ((phi, a), y) in t.feature_rows().zip(&t.actions).zip(&t.labels) {
         total += policy
             .loss_score_into(theta, phi, y.borrow(), a, grad, score)
             .map_err(policy_error)?;
     }
+    let scored = if t.absorbed.is_some() { n } else { n - 1 };
     let mut g = vec![S::zero(); d];
     for (step, ((phi, a), y)) in t.feature_rows().zip(&t.actions).zip(&t.labels).enumerate() {
         policy
@@ -411,7 +500,7 @@ where
             .map_err(policy_error)?;
         for ((gj, dj), sj) in g.iter_mut().zip(grad.iter()).zip(score.iter()) {
             *gj += dj;
-            if step + 1 < n {
+            if step < scored {
                 *gj += total.clone() * sj;
             }
         }
@@ -439,6 +528,16 @@ fn features_changed_length(before: usize, now: usize) -> OracleError {
     ))
 }
 
+/// The error of an absorbing roll-out on a task without an absorbing loss.
+#[cold]
+#[inline(never)]
+fn no_absorbing_loss() -> OracleError {
+    OracleError::Environment(
+        "the horizon absorbs at the end of an episode, but the task defines no absorbing loss"
+            .into(),
+    )
+}
+
 impl<T, P> TaskProblem<T, P> {
     /// One episode of the task from a fresh start, acting with `choose(step, φ(s), a*(s), rng)` at
     /// every decision, recording features, actions and the expert's labels.
@@ -457,7 +556,10 @@ impl<T, P> TaskProblem<T, P> {
         P: Policy<S>,
         F: FnMut(usize, &[S], T::Action, &mut KitRng) -> Result<T::Action, OracleError>,
     {
-        let steps = self.task.max_episode_steps().unwrap_or(0);
+        let steps = match self.horizon {
+            Horizon::Episodic => self.task.max_episode_steps().unwrap_or(0),
+            Horizon::Fixed { steps, .. } => steps,
+        };
         let mut t = TaskTrajectory {
             feature_data: Vec::with_capacity(steps * self.policy.feature_dim()),
             feature_dim: 0,
@@ -465,15 +567,18 @@ impl<T, P> TaskProblem<T, P> {
             features_finite: false,
             actions: Vec::with_capacity(steps),
             labels: Vec::with_capacity(steps),
+            absorbed: None,
+            resets: 0,
         };
         self.rollout_into(rng, &mut t, choose)?;
         Ok(t)
     }
 
-    /// The loop of [`TaskProblem::rollout_with`], into the empty trajectory `t`. A function of
+    /// The loop of [`TaskProblem::rollout_with`], into the empty trajectory `t`: one episode, or
+    /// a stream of the fixed horizon's decisions with resets or an absorbing end. A function of
     /// its own, not inlined: writing through `&mut t` measured a few per cent faster than into a
-    /// local that is then returned (issue 8). Each behaviour of [`IlProblem::rollout`] gets its
-    /// own copy, with its action choice compiled in.
+    /// local that is then returned. Each behaviour of [`IlProblem::rollout`] gets its own copy,
+    /// with its action choice compiled in.
     #[inline(never)]
     fn rollout_into<S, F>(
         &self,
@@ -487,6 +592,10 @@ impl<T, P> TaskProblem<T, P> {
         P: Policy<S>,
         F: FnMut(usize, &[S], T::Action, &mut KitRng) -> Result<T::Action, OracleError>,
     {
+        let (limit, after_end) = match self.horizon {
+            Horizon::Episodic => (usize::MAX, None),
+            Horizon::Fixed { steps, after_end } => (steps, Some(after_end)),
+        };
         let mut ep = self.task.start(rng)?;
         loop {
             let step = t.actions.len();
@@ -508,8 +617,26 @@ impl<T, P> TaskProblem<T, P> {
             let done = self.task.advance(&mut ep, &action)?;
             t.actions.push(action);
             t.labels.push(label);
-            if done {
+            let n = t.actions.len();
+            if n >= limit {
                 return Ok(());
+            }
+            if done {
+                match after_end {
+                    None => return Ok(()),
+                    Some(AfterEnd::Reset) => {
+                        t.resets += 1;
+                        ep = self.task.start(rng)?;
+                    }
+                    Some(AfterEnd::Absorb) => {
+                        let c = self
+                            .task
+                            .absorbing_loss(&ep)
+                            .ok_or_else(no_absorbing_loss)?;
+                        t.absorbed = Some(S::from_i64((limit - n) as i64) * c);
+                        return Ok(());
+                    }
+                }
             }
         }
     }
@@ -672,7 +799,7 @@ where
     ) -> Result<S, OracleError> {
         check_theta(theta, self.dim())?;
         check_trajectory(trajectory)?;
-        let mut total = S::zero();
+        let mut total = trajectory.absorbed.clone().unwrap_or_else(S::zero);
         let mut grad = vec![S::zero(); self.dim()];
         for (phi, y) in trajectory.feature_rows().zip(&trajectory.labels) {
             total += self

@@ -14,7 +14,7 @@
 
 use super::Task;
 use crate::env::obstacle::{
-    ObstacleConfig, ObstacleEnv, ObstacleObs, VoExpertParams, VoExpertPolicy,
+    ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome, VoExpertParams, VoExpertPolicy,
 };
 use crate::policy::ActionVector;
 use crate::problem::{KitRng, OracleError};
@@ -148,11 +148,12 @@ pub struct ObstacleTask<A = Vec<f64>> {
     action_type: PhantomData<fn() -> A>,
 }
 
-/// One episode: the environment and its last observation.
+/// One episode: the environment, its last observation and how its last step ended.
 #[derive(Debug, Clone)]
 pub struct ObstacleEpisode {
     env: ObstacleEnv,
     obs: ObstacleObs,
+    outcome: Outcome,
 }
 
 impl ObstacleTask {
@@ -255,7 +256,11 @@ impl<A: ActionVector<f64>> Task<f64> for ObstacleTask<A> {
     fn start(&self, rng: &mut KitRng) -> Result<ObstacleEpisode, OracleError> {
         let mut env = self.env.clone();
         let obs = env.reset(rng);
-        Ok(ObstacleEpisode { env, obs })
+        Ok(ObstacleEpisode {
+            env,
+            obs,
+            outcome: Outcome::Running,
+        })
     }
 
     fn features(&self, ep: &ObstacleEpisode) -> Vec<f64> {
@@ -279,6 +284,16 @@ impl<A: ActionVector<f64>> Task<f64> for ObstacleTask<A> {
         Ok((A::build(2, |i| v[i]), A::build(2, |i| v[i])))
     }
 
+    /// 0 per remaining step after reaching the goal; `(2 v_max)²` after a crash or a time-out,
+    /// the supremum of the squared distance between two velocities of norm ≤ `v_max` (the
+    /// speed-limited learner's loss and the clipped expert's).
+    fn absorbing_loss(&self, ep: &ObstacleEpisode) -> Option<f64> {
+        Some(match ep.outcome {
+            Outcome::Success => 0.0,
+            _ => (2.0 * self.env.config().agent_max_speed).powi(2),
+        })
+    }
+
     fn advance(&self, ep: &mut ObstacleEpisode, action: &A) -> Result<bool, OracleError> {
         let action: &[f64] = action.borrow();
         if action.len() != 2 {
@@ -292,6 +307,7 @@ impl<A: ActionVector<f64>> Task<f64> for ObstacleTask<A> {
             .step([action[0], action[1]])
             .map_err(|e| OracleError::Environment(e.to_string()))?;
         ep.obs = s.obs;
+        ep.outcome = s.outcome;
         Ok(s.terminated || s.truncated)
     }
 }
@@ -400,6 +416,7 @@ mod tests {
         let p = TaskProblem {
             task,
             policy: LinearGaussian::new(2, d, 0.02).unwrap(),
+            horizon: crate::task::Horizon::Episodic,
         };
         let theta = nalgebra::DVector::zeros(2 * d);
         let mut rng = KitRng::seed_from_u64(5);

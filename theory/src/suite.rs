@@ -178,11 +178,13 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
     let cp = TaskProblem {
         task: CartPoleTask::with_lqr().map_err(|e| e.to_string())?,
         policy: Softmax::new(2, cartpole::FEATURES).map_err(|e| e.to_string())?,
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let cp_theta = DVector::from_vec(vec![0.0, 0.0, -2.0, -0.5, 0.0, 0.0, 0.0, 2.0, 0.5, 0.0]);
     let ob = TaskProblem {
         task: ObstacleTask::thesis().map_err(|e| e.to_string())?,
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.05).map_err(|e| e.to_string())?,
+        horizon: ilopt::task::Horizon::Episodic,
     };
     let mut ob_theta = DVector::zeros(2 * obstacle::FEATURES);
     ob_theta[0] = 0.02;

@@ -13,6 +13,7 @@ fn cartpole() -> (TaskProblem<CartPoleTask<f64>, Softmax>, DVector<f64>) {
     let p = TaskProblem {
         task: CartPoleTask::with_lqr().unwrap(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     // A partly competent learner: push right when the pole leans right.
     let theta = DVector::from_vec(vec![0.0, 0.0, -2.0, -0.5, 0.0, 0.0, 0.0, 2.0, 0.5, 0.0]);
@@ -23,6 +24,7 @@ fn obstacle() -> (TaskProblem<ObstacleTask, LinearGaussian<f64>>, DVector<f64>) 
     let p = TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.05).unwrap(),
+        horizon: ilopt::task::Horizon::Episodic,
     };
     // Head for the goal: v ≈ 0.02·(goal − agent).
     let mut theta = DVector::zeros(2 * obstacle::FEATURES);
