@@ -17,6 +17,7 @@ use common::{example, q, terminating_mdp_and_two_thetas};
 use ilopt::exact::backward::backward;
 use ilopt::exact::enumerate::{for_each_prefix, gradient_by_duals, moments};
 use ilopt::exact::forward::forward;
+use ilopt::exact::rrm::rrm_map;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
 use ilopt::scalar::{BigRational, Dual, Scalar};
 use ilopt::toy::estimator::causal;
@@ -552,5 +553,16 @@ fn no_terminal_state_changes_nothing() {
                 .unwrap();
             assert_eq!(ta, tb);
         }
+    }
+}
+
+/// The RRM map (eq. 3.29) fits the expert's labels where decisions are taken: absorbing states,
+/// whose loss does not depend on the policy, carry no label mass. In the absorbing example every
+/// decision is taken in `run`, whose label is action 1, so G(θ) = π(0|·) = 0 whatever θ.
+#[test]
+fn rrm_map_ignores_absorbing_states() {
+    let p = ToyProblem::<Q>::new(&with_horizon("terminal-absorb.json", 5));
+    for theta in thetas() {
+        assert_eq!(rrm_map(&p, &[theta]).unwrap(), vec![q("0")]);
     }
 }
