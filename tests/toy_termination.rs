@@ -8,7 +8,8 @@
 //! * mutations are caught: an estimator that forgets the scores before each reset, and one that
 //!   drops the absorbing tail from the loss-to-go, are biased by exactly −(1 − θ)² and −3/4;
 //! * the sampler follows the same law (prefix frequencies, the estimator's mean), takes no
-//!   decision at absorbing states and charges them nothing;
+//!   decision at absorbing states and charges them nothing, and follows one path per seed in
+//!   f64, rationals and intervals;
 //! * terminal flags that are all false change nothing.
 
 mod common;
@@ -19,7 +20,7 @@ use ilopt::exact::enumerate::{for_each_prefix, gradient_by_duals, moments};
 use ilopt::exact::forward::forward;
 use ilopt::exact::rrm::rrm_map;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
-use ilopt::scalar::{BigRational, Dual, Scalar};
+use ilopt::scalar::{BigRational, Dual, Interval, Scalar, interval_contains_rational};
 use ilopt::toy::estimator::causal;
 use ilopt::toy::{PolicyTable, Termination, ToyMdp, ToyProblem, ToyTrajectory};
 use nalgebra::DVector;
@@ -564,5 +565,48 @@ fn rrm_map_ignores_absorbing_states() {
     let p = ToyProblem::<Q>::new(&with_horizon("terminal-absorb.json", 5));
     for theta in thetas() {
         assert_eq!(rrm_map(&p, &[theta]).unwrap(), vec![q("0")]);
+    }
+}
+
+fn seeded_rollouts<S: Scalar>(
+    mdp: &ToyMdp,
+    theta: &[Q],
+    seed: u64,
+) -> Result<Vec<ToyTrajectory>, OracleError> {
+    let p = ToyProblem::<S>::new(mdp);
+    let th = DVector::from_iterator(theta.len(), theta.iter().map(S::from_rational));
+    let mut rng = KitRng::seed_from_u64(seed);
+    let mut cost = Cost::default();
+    (0..20)
+        .map(|_| p.rollout(&Behaviour::Learner(&th), &mut rng, &mut cost))
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// With resets and absorption the sampler still follows the same path in f64, rationals and
+    /// intervals for one seed (intervals may only decline, as undecidable), and the interval
+    /// estimates on those paths enclose the exact ones.
+    #[test]
+    fn same_seed_same_paths_in_every_scalar(
+        (mdp, theta, _) in terminating_mdp_and_two_thetas(),
+        seed in 0u64..1000,
+    ) {
+        let exact = seeded_rollouts::<Q>(&mdp, &theta, seed).unwrap();
+        prop_assert_eq!(&seeded_rollouts::<f64>(&mdp, &theta, seed).unwrap(), &exact);
+        match seeded_rollouts::<Interval>(&mdp, &theta, seed) {
+            Ok(paths) => prop_assert_eq!(&paths, &exact),
+            Err(e) => prop_assert!(matches!(e, OracleError::Undecidable(_)), "{}", e),
+        }
+        let (pq, pi) = (ToyProblem::<Q>::new(&mdp), ToyProblem::<Interval>::new(&mdp));
+        let tq = DVector::from_vec(theta.clone());
+        let ti = DVector::from_iterator(theta.len(), theta.iter().map(Interval::from_rational));
+        let mut cost = Cost::default();
+        for tau in &exact {
+            let gq = pq.estimate(&tq, tau, EstimatorForm::Causal, &mut cost).unwrap();
+            let gi = pi.estimate(&ti, tau, EstimatorForm::Causal, &mut cost).unwrap();
+            prop_assert!((0..gq.len()).all(|j| interval_contains_rational(gi[j], &gq[j])));
+        }
     }
 }
