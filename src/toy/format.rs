@@ -479,7 +479,7 @@ fn termination(
                     return Err(termination_error(
                         format!("{field}[{s}]"),
                         format!(
-                            "= {} puts mass on terminal state {s}; under a reset the chain never occupies a terminal state",
+                            "mass {} on terminal state {s}; under a reset the chain never occupies a terminal state",
                             dist[s]
                         ),
                     ));
@@ -501,7 +501,7 @@ fn termination(
                 if q.is_negative() {
                     Err(termination_error(
                         field,
-                        format!("= {q} is negative; an absorbing loss is ≥ 0"),
+                        format!("{q} is negative; an absorbing loss is ≥ 0"),
                     ))
                 } else {
                     Ok(q)
