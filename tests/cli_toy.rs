@@ -163,3 +163,71 @@ fn overflow_in_f64_is_an_error_not_nan() {
     assert_eq!(code, 0);
     assert!(out.contains("objective"));
 }
+
+/// The termination examples (math.md §8) at θ = 1/3, against values derived by hand from their
+/// descriptions: reset F = θ + 2θ², F′ = 1 + 4θ; absorb F = −θ³/2 + 7θ²/2 + 3θ/4,
+/// F′ = −3θ²/2 + 7θ + 3/4; E‖g‖² summed over the four prefixes of each file by hand.
+#[test]
+fn terminating_examples_evaluate_exactly() {
+    for (file, want) in [
+        (
+            "examples/toy/terminal-reset.json",
+            json!({"objective": "5/9", "gradient": ["7/3"], "expected_estimate": ["7/3"],
+                   "second_moment": "52/9"}),
+        ),
+        (
+            "examples/toy/terminal-absorb.json",
+            json!({"objective": "67/108", "gradient": ["35/12"], "expected_estimate": ["35/12"],
+                   "second_moment": "253/24"}),
+        ),
+    ] {
+        let (code, out, err) = ilopt(&["toy", "eval", "--mdp", file, "--theta", "1/3"]);
+        assert_eq!(code, 0, "{file}: {err}");
+        let v: Value = serde_json::from_str(&out).unwrap();
+        assert_eq!(v, want, "{file}");
+        let (code, out, err) = ilopt(&[
+            "toy", "eval", "--mdp", file, "--theta", "1/3", "--scalar", "interval",
+        ]);
+        assert_eq!(code, 0, "{file}: {err}");
+        let i: Value = serde_json::from_str(&out).unwrap();
+        let exact = |s: &str| {
+            let (n, d) = s.split_once('/').unwrap();
+            n.parse::<f64>().unwrap() / d.parse::<f64>().unwrap()
+        };
+        let (lo, hi) = (
+            i["objective"][0].as_f64().unwrap(),
+            i["objective"][1].as_f64().unwrap(),
+        );
+        let x = exact(want["objective"].as_str().unwrap());
+        assert!(lo <= x && x <= hi, "{file}: {x} ∉ [{lo}, {hi}]");
+    }
+}
+
+#[test]
+fn terminal_flags_without_a_rule_are_a_clear_error() {
+    let dir = std::env::temp_dir().join(format!("ilopt-cli-toy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/toy/terminal-absorb.json"),
+    )
+    .unwrap();
+    let mut doc: Value = serde_json::from_str(&text).unwrap();
+    doc.as_object_mut().unwrap().remove("on_terminal");
+    let path = dir.join("no-rule.json");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let (code, out, err) = ilopt(&[
+        "toy",
+        "eval",
+        "--mdp",
+        path.to_str().unwrap(),
+        "--theta",
+        "1/3",
+    ]);
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(code, 1, "{err}");
+    assert!(out.is_empty());
+    assert!(
+        err.contains("`terminal`: terminal states need `on_terminal`"),
+        "{err}"
+    );
+}

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{example, mdp_and_two_thetas, q, qs};
+use common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
 use ilopt::exact::backward::backward;
 use ilopt::exact::enumerate::{gradient_by_duals, moments, prefixes};
 use ilopt::exact::forward::forward;
@@ -211,5 +211,24 @@ fn m_family_objectives() {
                 "T = {t}, p = {pp}"
             );
         }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 256,
+        failure_persistence: Some(Box::new(
+            proptest::test_runner::FileFailurePersistence::WithSource("regressions"),
+        )),
+        ..ProptestConfig::default()
+    })]
+
+    /// I1–I3 hold exactly on random MDPs with terminal states (math.md §8), reset and absorbing:
+    /// the fixed-horizon estimators are unbiased and every route agrees on the augmented chain.
+    #[test]
+    fn identities_hold_exactly_on_random_terminating_mdps(
+        (mdp, theta, theta_prime) in terminating_mdp_and_two_thetas()
+    ) {
+        prop_assert_eq!(identities(&mdp, &theta, &theta_prime), Ok(()));
     }
 }

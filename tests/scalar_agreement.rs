@@ -55,6 +55,9 @@ fn cases() -> Vec<(ToyMdp, Vec<BigRational>, Vec<BigRational>)> {
             v(&["1/2", "-1", "0.1", "3", "2/3", "-5/4"]),
             v(&["0", "1", "1", "0", "-1/3", "2"]),
         ),
+        // Termination (math.md §8): reset and absorbing semantics.
+        (example("terminal-reset.json"), v(&["1/3"]), v(&["1/5"])),
+        (example("terminal-absorb.json"), v(&["2/7"]), v(&["0.9"])),
     ]
 }
 

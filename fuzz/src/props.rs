@@ -14,7 +14,8 @@ use ilopt::expert::vo::{VoError, objective, vo_expert};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::scalar::{BigRational, Interval, Scalar, interval_contains_rational};
 use ilopt::toy::{
-    MAX_ACTIONS, MAX_HORIZON, MAX_STATES, PolicyKind, ToyMdp, ToyProblem, ToyTrajectory,
+    MAX_ACTIONS, MAX_HORIZON, MAX_STATES, PolicyKind, Termination, ToyMdp, ToyProblem,
+    ToyTrajectory,
 };
 use nalgebra::DVector;
 use num_bigint::BigInt;
@@ -26,7 +27,7 @@ use rand::SeedableRng;
 // ---------------------------------------------------------------------------------------------
 
 /// Arbitrary bytes → [`ToyMdp::from_json_str`]: never a panic; an error has a message; an accepted
-/// MDP satisfies every invariant of `shared/formats/toy-mdp.md`.
+/// MDP satisfies every invariant of `docs/formats/toy-mdp.md`.
 pub fn check_toy_parser(bytes: &[u8]) {
     let Ok(text) = std::str::from_utf8(bytes) else {
         return;
@@ -88,6 +89,33 @@ pub fn check_mdp_invariants(m: &ToyMdp) {
         assert_eq!(a, 2, "tied-softmax with {a} actions");
     }
     assert_eq!(p.dim(), g * p.block());
+    match &m.termination {
+        Termination::Reset { terminal, law } => {
+            assert_eq!(terminal.len(), s, "terminal: length");
+            dist(law, "on_terminal.law");
+            for (z, _) in terminal.iter().enumerate().filter(|(_, t)| **t) {
+                assert!(law[z].is_zero(), "reset law has mass on terminal state {z}");
+                assert!(
+                    m.initial[z].is_zero(),
+                    "initial law has mass on terminal state {z}"
+                );
+            }
+        }
+        Termination::Absorb { loss } => {
+            assert_eq!(loss.len(), s, "on_terminal.loss: length");
+            assert!(
+                loss.iter().flatten().all(|c| !c.is_negative()),
+                "negative absorbing loss"
+            );
+        }
+        _ => {}
+    }
+    // The augmented chain (math.md §8) is a Markov kernel.
+    for (i, row) in m.chain_transition().iter().enumerate() {
+        for (j, d) in row.iter().enumerate() {
+            dist(d, &format!("chain_transition[{i}][{j}]"));
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -35,7 +35,7 @@ pub enum ScalarChoice {
 /// Arguments of `ilopt toy eval`.
 #[derive(Debug, Args)]
 pub struct EvalArgs {
-    /// Toy-MDP file (JSON, shared/formats/toy-mdp.md).
+    /// Toy-MDP file (JSON, docs/formats/toy-mdp.md).
     #[arg(long, value_name = "FILE")]
     pub mdp: PathBuf,
     /// θ as comma-separated exact numbers, e.g. "1/2,-3,0.25".

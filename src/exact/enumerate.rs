@@ -3,6 +3,12 @@
 //! `p(τ̄; θ) = μ(s_1) Π_{t=1}^{T−2} π_θ(a_t|s_t) P(s_{t+1}|s_t, a_t)`; zero-probability branches are
 //! dropped. For every prefix the engine evaluates the oracle's own estimator code
 //! ([`crate::toy::estimator`]), so E\[g\] = ∇F checks the oracle itself.
+//!
+//! With termination (math.md §8) the enumeration runs on the augmented chain P′
+//! ([`ToyProblem::transition`]): under a reset, P′ already carries the reset law; at an absorbing
+//! state no decision is taken, so the prefix continues in one branch (the state repeated, the
+//! placeholder action 0, probability factor 1) and the estimator takes the scores of
+//! [`ToyProblem::scored_actions`] only.
 
 use super::{ExactError, MAX_PREFIXES};
 use crate::scalar::{Dual, Scalar, norm_sq};
@@ -17,7 +23,7 @@ pub type Visitor<'a, S> = dyn FnMut(&[usize], &[usize], &S) + 'a;
 pub struct Prefix<S> {
     /// s_1..s_{T−1}.
     pub states: Vec<usize>,
-    /// a_1..a_{T−2}.
+    /// a_1..a_{T−2} (the placeholder 0 at absorbing steps).
     pub actions: Vec<usize>,
     /// p(τ̄; θ).
     pub prob: S,
@@ -82,6 +88,15 @@ pub fn for_each_prefix<S: Scalar>(
             return Ok(());
         }
         let s = *states.last().expect("non-empty");
+        if problem.is_absorbing(s) {
+            // No decision at an absorbing state: one branch, the state repeats.
+            states.push(s);
+            actions.push(0);
+            rec(problem, table, len, states, actions, prob, count, visit)?;
+            states.pop();
+            actions.pop();
+            return Ok(());
+        }
         for a in 0..problem.mdp().actions {
             let pa = prob.clone() * table.prob(s, a);
             if pa.is_certainly_zero() {
@@ -145,8 +160,8 @@ pub fn prefixes<S: Scalar>(
             actions: actions.to_vec(),
             prob: prob.clone(),
             loss: prefix_loss(&table, states),
-            estimate: causal(&table, states, actions),
-            estimate_full: full(&table, states, actions),
+            estimate: causal(&table, states, problem.scored_actions(states, actions)),
+            estimate_full: full(&table, states, problem.scored_actions(states, actions)),
         });
     })?;
     Ok(out)
@@ -168,6 +183,7 @@ pub fn moments<S: Scalar>(
     let mut m2 = S::zero();
     let n = for_each_prefix(problem, &table, |states, actions, p| {
         objective += p.clone() * prefix_loss(&table, states);
+        let actions = problem.scored_actions(states, actions);
         let g = causal(&table, states, actions);
         m2 += p.clone() * norm_sq(&g);
         for (e, x) in eg.iter_mut().zip(&g) {

@@ -76,6 +76,7 @@ pub fn unweighted_expectation<S: Scalar>(
     let table_old = problem.table(theta_old)?;
     let mut acc = vec![S::zero(); table_old.dim];
     for_each_prefix(problem, &table_new, |states, actions, p| {
+        let actions = problem.scored_actions(states, actions);
         for (a, x) in acc.iter_mut().zip(causal(&table_old, states, actions)) {
             *a += p.clone() * x;
         }

@@ -10,6 +10,11 @@
 //!
 //! The identities (I1) F_X1 = F_X2 = F_X3 and (I2) ∇F_X2 = ∇F_X3 = ∇F_enum = E\[g\] = E\[g_full\] are
 //! the thesis's unbiasedness claim (eqs. 3.16/3.18) proved exactly.
+//!
+//! With termination (math.md §8) every route runs on the augmented chain P′ of
+//! [`crate::toy::ToyMdp::chain_transition`] (reset: terminal transitions redirected to the reset
+//! law; absorb: terminal states absorbing, with their constant loss in the policy table), so the
+//! same identities state the unbiasedness of the fixed-horizon estimators.
 
 pub mod backward;
 pub mod enumerate;

@@ -4,7 +4,8 @@
 //! RRM picks `θ_{k+1} = argmin_φ Σ_{t=1}^{T−1} E_{s∼d_t^{θ_k}} l(s, φ)`. Under P1 with groups, the
 //! Brier loss of group o is minimised by the visitation-weighted frequency of the expert's labels:
 //! `G(θ)_o = Σ_t Σ_{s: o(s)=o} d_t^θ(s) e_{a*(s)} / Σ_t Σ_{s: o(s)=o} d_t^θ(s)`
-//! (the block keeps the first A − 1 entries).
+//! (the block keeps the first A − 1 entries). Absorbing states (math.md §8) take no decision and
+//! their loss does not depend on φ, so they are left out of the sums.
 
 use super::ExactError;
 use super::forward::visitation;
@@ -30,6 +31,10 @@ pub fn rrm_map<S: Scalar>(problem: &ToyProblem<S>, theta: &[S]) -> Result<Vec<S>
     let mut label_mass = vec![vec![S::zero(); m.actions]; groups];
     for dt in &d {
         for (s, w) in dt.iter().enumerate() {
+            if problem.is_absorbing(s) {
+                // No decision there: its constant loss does not depend on the policy.
+                continue;
+            }
             let o = m.policy.groups[s];
             mass[o] += w;
             label_mass[o][m.expert[s]] += w;

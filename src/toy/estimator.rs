@@ -2,15 +2,24 @@
 //!
 //! Only the prefix τ̄ = (s_1, a_1, …, a_{T−2}, s_{T−1}) matters: losses are paid at t = 1..T−1 and
 //! the score of a_{T−1} multiplies no later loss. `states` holds s_1..s_{T−1} and `actions` holds
-//! a_1..a_{T−2} (0-based arrays).
+//! the actions whose scores count, a_1..a_n (0-based arrays):
+//!
+//! * without absorption n = T − 2, every decision but the last;
+//! * when the chain absorbs (math.md §8) at s_{n+1}, n is the number of decisions taken: the
+//!   decision a_n that caused the termination is included, and the absorbing steps s_{n+1}..s_{T−1}
+//!   take none. Their losses (the table's constant absorbing loss, with zero gradient) stay in
+//!   `states`, so they enter the loss-to-go Σ_{t>i} l_t of every earlier decision.
+//!
+//! Dropping the scores of absorbing steps is exact: at an absorbing s_i the later losses are a
+//! function of s_i alone, so E[ψ_i Σ_{t>i} l_t] = E[E[ψ_i | s_i] Σ_{t>i} l_t] = 0.
 
 use super::table::PolicyTable;
 use crate::scalar::Scalar;
 
-/// Causal form (eq. 3.15): `g = Σ_t ∇l_t + Σ_{i=1}^{T−2} ψ_i Σ_{t=i+1}^{T−1} l_t`, which equals
-/// `Σ_t [∇l_t + l_t Σ_{i<t} ψ_i]`.
+/// Causal form (eq. 3.15): `g = Σ_t ∇l_t + Σ_{i=1}^{n} ψ_i Σ_{t=i+1}^{T−1} l_t` with n = `actions.len()`
+/// (T − 2 without absorption), which equals `Σ_t [∇l_t + l_t Σ_{i<t, i≤n} ψ_i]`.
 pub fn causal<S: Scalar>(table: &PolicyTable<S>, states: &[usize], actions: &[usize]) -> Vec<S> {
-    debug_assert_eq!(states.len(), actions.len() + 1);
+    debug_assert!(actions.len() <= states.len());
     let mut g = vec![S::zero(); table.dim];
     let mut tail = S::zero(); // Σ_{t>i} l_t, built backwards
     for i in (0..states.len()).rev() {
@@ -24,7 +33,7 @@ pub fn causal<S: Scalar>(table: &PolicyTable<S>, states: &[usize], actions: &[us
     g
 }
 
-/// Full (non-causal) form: `g_full = Σ_t ∇l_t + (Σ_t l_t) Σ_{i=1}^{T−2} ψ_i`; same mean as
+/// Full (non-causal) form: `g_full = Σ_t ∇l_t + (Σ_t l_t) Σ_{i=1}^{n} ψ_i`; same mean as
 /// [`causal`] because E[l_t ψ_i] = 0 for i ≥ t.
 pub fn full<S: Scalar>(table: &PolicyTable<S>, states: &[usize], actions: &[usize]) -> Vec<S> {
     let total = states
@@ -40,7 +49,7 @@ pub fn full<S: Scalar>(table: &PolicyTable<S>, states: &[usize], actions: &[usiz
     g
 }
 
-/// Σ_{t=1}^{T−1} l(s_t): the prefix's loss.
+/// Σ_{t=1}^{T−1} l(s_t): the prefix's loss (absorbing steps included).
 pub fn prefix_loss<S: Scalar>(table: &PolicyTable<S>, states: &[usize]) -> S {
     states
         .iter()
@@ -50,7 +59,8 @@ pub fn prefix_loss<S: Scalar>(table: &PolicyTable<S>, states: &[usize]) -> S {
 /// The per-decision importance-weighted causal form (math.md §4):
 /// `g̃ = Σ_t w_{1:t−1} [∇l_t(θ) + l_t(θ) Σ_{i<t} ψ_θ(a_i|s_i)]`,
 /// `w_{1:t−1} = Π_{i<t} π_θ(a_i|s_i)/π_θ′(a_i|s_i)`, where the prefix was sampled at θ′.
-/// `ratios[i]` must hold π_θ(a_i|s_i)/π_θ′(a_i|s_i).
+/// `ratios[i]` must hold π_θ(a_i|s_i)/π_θ′(a_i|s_i) for the decisions i < n = `actions.len()`
+/// (absorbing steps take no decision, so their ratio is 1).
 pub fn per_decision<S: Scalar>(
     table: &PolicyTable<S>,
     states: &[usize],

@@ -1,4 +1,4 @@
-//! The toy-MDP JSON format (`shared/formats/toy-mdp.md`), read exactly.
+//! The toy-MDP JSON format (`docs/formats/toy-mdp.md`), read exactly.
 //!
 //! Numbers are exact decimal or fraction strings (`"0.25"`, `"1/3"`, `"-7/2"`); plain JSON numbers
 //! are accepted only where they are integers. Every violation is a [`ToyError`] that names the
@@ -9,6 +9,12 @@
 //! parameter per group). Every kind takes an optional `groups` array (the observation map o(s) of
 //! §1.3: states in one group share parameters); without it every state is its own group, which is
 //! the format's `θ[s·A + a]` layout for `rational-softmax`.
+//!
+//! Termination (math.md §8) is a further extension: an optional `terminal` array flags states, and
+//! `on_terminal` says what happens on entering one — `{"kind": "reset", "law": […]}` (the stream
+//! of decisions continues from a reset law) or `{"kind": "absorb", "loss": …}` (the state absorbs
+//! and pays a stated loss per remaining step). A file without both fields is the format's fixed
+//! horizon MDP, unchanged. See [`Termination`].
 
 use super::policy::{PolicyKind, PolicySpec};
 use crate::scalar::{BigRational, ParseExactError, parse_exact};
@@ -40,6 +46,56 @@ pub struct ToyMdp {
     pub expert: Vec<usize>,
     /// The learner's policy class.
     pub policy: PolicySpec,
+    /// What happens when the chain enters a terminal state ([`Termination::None`] for files
+    /// without the `terminal`/`on_terminal` extension).
+    pub termination: Termination,
+}
+
+/// Fixed-horizon semantics for MDPs that terminate early (math.md §8). Both keep the thesis's
+/// objective F(θ) = E Σ_{t=1}^{T−1} l_t (eq. 3.1) on an augmented chain whose kernel is
+/// [`ToyMdp::chain_transition`].
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum Termination {
+    /// No terminal states: the format's MDP as written.
+    None,
+    /// Reset: a transition into a terminal state is replaced by a draw from `law`, so the
+    /// trajectory is a stream of exactly T − 1 decisions over non-terminal states and eq. 3.15
+    /// applies unchanged (its score sum runs across resets). The chain never occupies a terminal
+    /// state: `initial` and `law` put no mass on one.
+    Reset {
+        /// `terminal[s]`: whether s is terminal.
+        terminal: Vec<bool>,
+        /// The reset law μ (a distribution over non-terminal states).
+        law: Vec<BigRational>,
+    },
+    /// Absorbing: a terminal state z keeps the chain for every remaining step whatever the
+    /// action, and each of those steps pays `loss[z]` (≥ 0, constant in θ) instead of the Brier
+    /// loss. No decision is taken at z: no action, no score, no gradient evaluation.
+    Absorb {
+        /// `loss[s]`: `Some(c)` for a terminal state (its loss per remaining step), `None` for
+        /// a non-terminal one.
+        loss: Vec<Option<BigRational>>,
+    },
+}
+
+impl Termination {
+    /// Whether state `s` is terminal.
+    pub fn is_terminal(&self, s: usize) -> bool {
+        match self {
+            Self::None => false,
+            Self::Reset { terminal, .. } => terminal.get(s).copied().unwrap_or(false),
+            Self::Absorb { loss } => loss.get(s).is_some_and(Option::is_some),
+        }
+    }
+    /// The loss per remaining step of an absorbing state (`None` unless `s` is terminal under
+    /// [`Termination::Absorb`]).
+    pub fn absorbing_loss(&self, s: usize) -> Option<&BigRational> {
+        match self {
+            Self::Absorb { loss } => loss.get(s).and_then(Option::as_ref),
+            _ => None,
+        }
+    }
 }
 
 /// Why a toy-MDP file was rejected.
@@ -152,6 +208,16 @@ pub enum ToyError {
     /// map with an unused group).
     #[error("`{field}`: {message}")]
     Policy {
+        /// Field path.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// Terminal states and `on_terminal` that do not fit together or with the MDP (one without
+    /// the other, an unknown kind, a reset law or initial law with mass on a terminal state, an
+    /// absorbing loss missing, misplaced or negative).
+    #[error("`{field}`: {message}")]
+    Termination {
         /// Field path.
         field: String,
         /// What is wrong.
@@ -357,6 +423,133 @@ fn policy(v: &Value, states: usize, actions: usize) -> Result<PolicySpec, ToyErr
     Ok(PolicySpec::new(kind, c, groups, actions))
 }
 
+fn termination_error(field: impl Into<String>, message: impl Into<String>) -> ToyError {
+    ToyError::Termination {
+        field: field.into(),
+        message: message.into(),
+    }
+}
+
+/// The `terminal` flags (length S, booleans).
+fn terminal_flags(v: &Value, states: usize) -> Result<Vec<bool>, ToyError> {
+    let flags = sized_array(v, "terminal", states)?;
+    flags
+        .iter()
+        .enumerate()
+        .map(|(i, x)| {
+            x.as_bool().ok_or_else(|| ToyError::Type {
+                field: format!("terminal[{i}]"),
+                expected: "a boolean",
+            })
+        })
+        .collect()
+}
+
+/// `on_terminal` given the `terminal` flags; `initial` is checked against a reset (the chain
+/// never occupies a terminal state).
+fn termination(
+    v: &Value,
+    terminal: Vec<bool>,
+    initial: &[BigRational],
+) -> Result<Termination, ToyError> {
+    let obj = object(v, "on_terminal")?;
+    if let Some(k) = obj
+        .keys()
+        .find(|k| !matches!(k.as_str(), "kind" | "law" | "loss"))
+    {
+        return Err(ToyError::Unknown(format!("on_terminal.{k}")));
+    }
+    let states = terminal.len();
+    match obj.get("kind") {
+        None => Err(ToyError::Missing("on_terminal.kind".into())),
+        Some(Value::String(k)) if k == "reset" => {
+            if obj.contains_key("loss") {
+                return Err(termination_error(
+                    "on_terminal.loss",
+                    "a reset has no absorbing loss (use \"kind\": \"absorb\" for that)",
+                ));
+            }
+            // The reset law defaults to the initial law (an environment's reset).
+            let law = match obj.get("law") {
+                Some(l) => distribution(l, "on_terminal.law", states)?,
+                None => initial.to_vec(),
+            };
+            for (field, dist) in [("initial", initial), ("on_terminal.law", &law)] {
+                if let Some(s) = (0..states).find(|&s| terminal[s] && !dist[s].is_zero()) {
+                    return Err(termination_error(
+                        format!("{field}[{s}]"),
+                        format!(
+                            "mass {} on terminal state {s}; under a reset the chain never occupies a terminal state",
+                            dist[s]
+                        ),
+                    ));
+                }
+            }
+            Ok(Termination::Reset { terminal, law })
+        }
+        Some(Value::String(k)) if k == "absorb" => {
+            if obj.contains_key("law") {
+                return Err(termination_error(
+                    "on_terminal.law",
+                    "an absorbing state has no reset law (use \"kind\": \"reset\" for that)",
+                ));
+            }
+            let raw = obj
+                .get("loss")
+                .ok_or_else(|| ToyError::Missing("on_terminal.loss".into()))?;
+            let check = |q: BigRational, field: &str| {
+                if q.is_negative() {
+                    Err(termination_error(
+                        field,
+                        format!("{q} is negative; an absorbing loss is ≥ 0"),
+                    ))
+                } else {
+                    Ok(q)
+                }
+            };
+            let loss = match raw {
+                Value::Array(_) => {
+                    let items = sized_array(raw, "on_terminal.loss", states)?;
+                    let mut out = Vec::with_capacity(states);
+                    for (s, (x, &term)) in items.iter().zip(&terminal).enumerate() {
+                        let f = format!("on_terminal.loss[{s}]");
+                        out.push(match (x, term) {
+                            (Value::Null, false) => None,
+                            (Value::Null, true) => {
+                                return Err(termination_error(
+                                    f,
+                                    format!("terminal state {s} needs its loss per remaining step"),
+                                ));
+                            }
+                            (_, false) => {
+                                return Err(termination_error(
+                                    f,
+                                    format!("state {s} is not terminal; write null"),
+                                ));
+                            }
+                            (x, true) => Some(check(exact_number(x, &f)?, &f)?),
+                        });
+                    }
+                    out
+                }
+                x => {
+                    let c = check(exact_number(x, "on_terminal.loss")?, "on_terminal.loss")?;
+                    terminal.iter().map(|&t| t.then(|| c.clone())).collect()
+                }
+            };
+            Ok(Termination::Absorb { loss })
+        }
+        Some(Value::String(k)) => Err(termination_error(
+            "on_terminal.kind",
+            format!("{k:?} is not one of reset, absorb"),
+        )),
+        Some(_) => Err(ToyError::Type {
+            field: "on_terminal.kind".into(),
+            expected: "a string",
+        }),
+    }
+}
+
 impl ToyMdp {
     /// Parse and validate a toy MDP from JSON text.
     ///
@@ -385,7 +578,7 @@ impl ToyMdp {
     /// As [`ToyMdp::from_json_str`].
     pub fn from_json(v: &Value) -> Result<Self, ToyError> {
         let obj = object(v, "the top level")?;
-        const FIELDS: [&str; 10] = [
+        const FIELDS: [&str; 12] = [
             "states",
             "actions",
             "horizon",
@@ -393,6 +586,8 @@ impl ToyMdp {
             "transition",
             "expert",
             "policy",
+            "terminal",
+            "on_terminal",
             "name",
             "description",
             "comment",
@@ -437,6 +632,24 @@ impl ToyMdp {
             expert.push(a);
         }
         let policy = policy(get("policy")?, states, actions)?;
+        let termination = match (obj.get("terminal"), obj.get("on_terminal")) {
+            (None, None) => Termination::None,
+            (Some(_), None) => {
+                return Err(termination_error(
+                    "terminal",
+                    "terminal states need `on_terminal` to say what happens on entering one (\"kind\": \"reset\" or \"absorb\")",
+                ));
+            }
+            (None, Some(_)) => {
+                return Err(termination_error(
+                    "on_terminal",
+                    "there is no `terminal` array marking which states are terminal",
+                ));
+            }
+            (Some(flags), Some(rule)) => {
+                termination(rule, terminal_flags(flags, states)?, &initial)?
+            }
+        };
         Ok(Self {
             states,
             actions,
@@ -445,7 +658,68 @@ impl ToyMdp {
             transition,
             expert,
             policy,
+            termination,
         })
+    }
+
+    /// The kernel P′(s′|s, a) of the chain the learner runs in (math.md §8), as
+    /// `chain_transition()[s][a][s′]`:
+    ///
+    /// * [`Termination::None`]: P itself;
+    /// * [`Termination::Reset`]: `P′(s′|s,a) = 1[s′ not terminal] P(s′|s,a) + P(terminal|s,a) μ(s′)`,
+    ///   a terminal transition replaced by a draw from the reset law μ;
+    /// * [`Termination::Absorb`]: `P′(·|z,a) = δ_z` for every terminal z and action a; the other
+    ///   rows are P's.
+    ///
+    /// Every row is a distribution, exactly. X1 enumeration and the X2/X3 dynamic programmes run
+    /// on this chain unchanged.
+    pub fn chain_transition(&self) -> Vec<Vec<Vec<BigRational>>> {
+        match &self.termination {
+            Termination::None => self.transition.clone(),
+            Termination::Reset { terminal, law } => self
+                .transition
+                .iter()
+                .map(|row| {
+                    row.iter()
+                        .map(|p| {
+                            let ended = p
+                                .iter()
+                                .zip(terminal)
+                                .filter(|(_, t)| **t)
+                                .fold(BigRational::zero(), |acc, (x, _)| acc + x);
+                            p.iter()
+                                .zip(terminal)
+                                .zip(law)
+                                .map(|((x, &t), m)| {
+                                    let kept = if t { BigRational::zero() } else { x.clone() };
+                                    kept + ended.clone() * m
+                                })
+                                .collect()
+                        })
+                        .collect()
+                })
+                .collect(),
+            Termination::Absorb { loss } => self
+                .transition
+                .iter()
+                .enumerate()
+                .map(|(z, row)| match loss[z] {
+                    None => row.clone(),
+                    Some(_) => {
+                        let stay: Vec<BigRational> = (0..self.states)
+                            .map(|s| {
+                                if s == z {
+                                    BigRational::one()
+                                } else {
+                                    BigRational::zero()
+                                }
+                            })
+                            .collect();
+                        vec![stay; self.actions]
+                    }
+                })
+                .collect(),
+        }
     }
 
     /// The M-family of math.md §6: states A = 0, B = 1; expert a*(A) = 1, a*(B) = 0;

@@ -6,16 +6,26 @@
 //! rationals this always decides; in intervals it decides unless u falls inside the enclosure of a
 //! cumulative probability, which is reported as [`OracleError::Undecidable`] — never guessed. So
 //! runs with the same seed in `f64`, rationals and intervals follow the same trajectories.
+//!
+//! Termination (math.md §8, [`Termination`]): under a reset, a transition drawn into a terminal
+//! state is followed by a second draw from the reset law, and the stream of decisions goes on;
+//! under absorption, a terminal state repeats for the remaining steps, with no decision, no draw
+//! and no expert query there (the recorded action is the placeholder 0). The estimators take the
+//! scores of the decisions only (see [`estimator`]); the absorbing losses enter the loss-to-go of
+//! every earlier decision, and absorbing steps cost no gradient evaluation. Without termination
+//! every draw is as before, so results are unchanged.
 
 use super::estimator;
 use super::table::PolicyTable;
-use super::{ToyMdp, estimator::prefix_loss};
+use super::{Termination, ToyMdp, estimator::prefix_loss};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::{Scalar, Undecidable, certainly_less};
 use nalgebra::DVector;
 use rand::Rng;
 
 /// A sampled trajectory τ = (s_1, a_1, …, a_{T−1}, s_T) with expert labels π*(s_t), t = 1..T−1.
+/// At an absorbing step (math.md §8) no decision is taken: the action recorded there is the
+/// placeholder 0 and the state repeats.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ToyTrajectory {
     /// s_1..s_T (length T).
@@ -40,7 +50,12 @@ pub struct ToyExample {
 pub struct ToyProblem<S> {
     mdp: ToyMdp,
     initial: Vec<S>,
+    /// The environment's kernel P, as the file gives it (what the sampler draws from).
     transition: Vec<Vec<Vec<S>>>,
+    /// The augmented chain's kernel P′ ([`ToyMdp::chain_transition`]) when it differs from P.
+    chain: Option<Vec<Vec<Vec<S>>>>,
+    /// The reset law (empty unless the MDP resets).
+    reset_law: Vec<S>,
     c: S,
 }
 
@@ -70,13 +85,22 @@ impl<S: Scalar> ToyProblem<S> {
     /// Instantiate `mdp` in scalar `S`.
     pub fn new(mdp: &ToyMdp) -> Self {
         let cast = |v: &Vec<_>| v.iter().map(S::from_rational).collect::<Vec<S>>();
+        let kernel = |p: &Vec<Vec<Vec<_>>>| {
+            p.iter()
+                .map(|row| row.iter().map(cast).collect())
+                .collect::<Vec<_>>()
+        };
         Self {
             initial: cast(&mdp.initial),
-            transition: mdp
-                .transition
-                .iter()
-                .map(|row| row.iter().map(cast).collect())
-                .collect(),
+            transition: kernel(&mdp.transition),
+            chain: match mdp.termination {
+                Termination::None => None,
+                _ => Some(kernel(&mdp.chain_transition())),
+            },
+            reset_law: match &mdp.termination {
+                Termination::Reset { law, .. } => cast(law),
+                _ => Vec::new(),
+            },
             c: mdp.policy.c.as_ref().map_or_else(S::zero, S::from_rational),
             mdp: mdp.clone(),
         }
@@ -89,9 +113,36 @@ impl<S: Scalar> ToyProblem<S> {
     pub fn initial(&self) -> &[S] {
         &self.initial
     }
-    /// P(·|s, a) in `S`.
+    /// The chain's kernel P′(·|s, a) in `S` ([`ToyMdp::chain_transition`]: P itself without
+    /// termination), on which the exact routes run.
     pub fn transition(&self, s: usize, a: usize) -> &[S] {
-        &self.transition[s][a]
+        match &self.chain {
+            Some(chain) => &chain[s][a],
+            None => &self.transition[s][a],
+        }
+    }
+    /// Whether `s` is an absorbing state (terminal under [`Termination::Absorb`]): no decision is
+    /// taken there.
+    #[inline]
+    pub fn is_absorbing(&self, s: usize) -> bool {
+        self.mdp.termination.absorbing_loss(s).is_some()
+    }
+    /// The number of decisions along `states`: the states before the first absorbing one (all of
+    /// them if none absorbs).
+    pub fn decision_count(&self, states: &[usize]) -> usize {
+        match self.mdp.termination {
+            Termination::Absorb { .. } => states
+                .iter()
+                .position(|&s| self.is_absorbing(s))
+                .unwrap_or(states.len()),
+            _ => states.len(),
+        }
+    }
+    /// The actions of a prefix (s_1..s_{T−1}, a_1..a_{T−2}) whose scores enter eq. 3.15: all of
+    /// them without absorption, otherwise the decisions before the first absorbing state,
+    /// including the one that led into it (see [`estimator`]).
+    pub fn scored_actions<'t>(&self, states: &[usize], actions: &'t [usize]) -> &'t [usize] {
+        &actions[..self.decision_count(states).min(actions.len())]
     }
     /// The policy/loss table at θ.
     ///
@@ -132,12 +183,34 @@ impl<S: Scalar> ToyProblem<S> {
         if let Some(i) = t.labels.iter().position(|&a| a >= m.actions) {
             return bad(format!("labels[{i}] = {} ≥ {}", t.labels[i], m.actions));
         }
+        match &m.termination {
+            Termination::None => {}
+            Termination::Reset { terminal, .. } => {
+                if let Some(i) = t.states.iter().position(|&s| terminal[s]) {
+                    return bad(format!(
+                        "states[{i}] = {} is terminal; under a reset the chain never occupies a terminal state",
+                        t.states[i]
+                    ));
+                }
+            }
+            Termination::Absorb { .. } => {
+                let n = self.decision_count(&t.states);
+                if let Some(i) = (n..t.states.len()).find(|&i| t.states[i] != t.states[n]) {
+                    return bad(format!(
+                        "states[{i}] = {} follows the absorbing state {} at states[{n}]",
+                        t.states[i], t.states[n]
+                    ));
+                }
+            }
+        }
         Ok(())
     }
 
+    /// The prefix's states s_1..s_{T−1} and the actions whose scores count.
     fn prefix<'t>(&self, t: &'t ToyTrajectory) -> (&'t [usize], &'t [usize]) {
         let h = self.mdp.horizon;
-        (&t.states[..h - 1], &t.actions[..h - 2])
+        let states = &t.states[..h - 1];
+        (states, self.scored_actions(states, &t.actions[..h - 2]))
     }
 }
 
@@ -279,9 +352,18 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         let mut labels = Vec::with_capacity(h - 1);
         let u: S = dyadic_uniform(rng);
         states.push(sample_categorical(&self.initial, &u)?);
+        let mut decisions = 0u64;
         for t in 0..h - 1 {
             let s = states[t];
             let label = self.mdp.expert[s];
+            if self.is_absorbing(s) {
+                // No decision: the state absorbs whatever the action, and nothing is drawn.
+                actions.push(0);
+                labels.push(label);
+                states.push(s);
+                continue;
+            }
+            decisions += 1;
             let actor = actors.pick(t, rng);
             let a = match actor {
                 Actor::Expert => label,
@@ -291,14 +373,19 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
                 }
             };
             let u: S = dyadic_uniform(rng);
-            let next = sample_categorical(&self.transition[s][a], &u)?;
+            let mut next = sample_categorical(&self.transition[s][a], &u)?;
+            if !self.reset_law.is_empty() && self.mdp.termination.is_terminal(next) {
+                // A reset: the stream continues from a draw of the reset law.
+                let u: S = dyadic_uniform(rng);
+                next = sample_categorical(&self.reset_law, &u)?;
+            }
             actions.push(a);
             labels.push(label);
             states.push(next);
         }
         cost.trajectories += 1;
-        cost.env_steps += (h - 1) as u64;
-        cost.expert_queries += (h - 1) as u64;
+        cost.env_steps += decisions;
+        cost.expert_queries += decisions;
         Ok(ToyTrajectory {
             states,
             actions,
@@ -320,7 +407,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
             EstimatorForm::Causal => estimator::causal(&table, states, actions),
             EstimatorForm::Full => estimator::full(&table, states, actions),
         };
-        cost.gradient_evaluations += states.len() as u64;
+        cost.gradient_evaluations += self.decision_count(states) as u64;
         Ok(DVector::from_vec(g))
     }
 
@@ -351,7 +438,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
             }
             Weighting::PerDecision => estimator::per_decision(&old, states, actions, &ratios),
         };
-        cost.gradient_evaluations += states.len() as u64;
+        cost.gradient_evaluations += self.decision_count(states) as u64;
         Ok(DVector::from_vec(g))
     }
 
@@ -365,11 +452,14 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         Ok(prefix_loss(&table, self.prefix(trajectory).0))
     }
 
+    /// The states s_1..s_{T−1} with their labels, absorbing states left out (no decision is
+    /// taken there, so they are no supervised example).
     fn labelled_states(&self, trajectory: &ToyTrajectory) -> Vec<ToyExample> {
         trajectory
             .states
             .iter()
             .zip(&trajectory.labels)
+            .filter(|(s, _)| !self.is_absorbing(**s))
             .map(|(&state, &label)| ToyExample { state, label })
             .collect()
     }

@@ -1,5 +1,6 @@
 //! Everything the oracle and the exact engine need at one θ, computed once: π(·|o), ∇π, the scores
-//! ψ = ∇π/π, and per state the Brier loss l(s, θ) and ∇l(s, θ) (math.md §§1.2–1.3).
+//! ψ = ∇π/π, and per state the Brier loss l(s, θ) and ∇l(s, θ) (math.md §§1.2–1.3); an absorbing
+//! state (math.md §8) carries its constant loss and a zero gradient instead.
 //!
 //! Gradients are stored per group block (length `block`); [`PolicyTable::add_block`] scatters a
 //! block into a full d-vector at the state's offset.
@@ -18,9 +19,10 @@ pub struct PolicyTable<S> {
     pub jacobian: Vec<Vec<Vec<S>>>,
     /// ψ(a|o) = ∇log π(a|o) as `score[o][a][j]`.
     pub score: Vec<Vec<Vec<S>>>,
-    /// l(s, θ) per state.
+    /// l(s, θ) per state: the Brier loss, or at an absorbing state (math.md §8) its stated loss
+    /// per step, which does not depend on θ.
     pub loss: Vec<S>,
-    /// ∇l(s, θ) per state, in the block of o(s).
+    /// ∇l(s, θ) per state, in the block of o(s) (zero at an absorbing state).
     pub loss_grad: Vec<Vec<S>>,
     /// o(s).
     pub groups: Vec<usize>,
@@ -72,6 +74,12 @@ impl<S: Scalar> PolicyTable<S> {
         }
         let (mut loss, mut loss_grad) = (Vec::new(), Vec::new());
         for (s, &o) in spec.groups.iter().enumerate() {
+            if let Some(c) = mdp.termination.absorbing_loss(s) {
+                // An absorbing state pays its stated loss, a constant in θ (math.md §8).
+                loss.push(S::from_rational(c));
+                loss_grad.push(vec![S::zero(); block]);
+                continue;
+            }
             let (l, g) = brier(&probs[o], &jacobian[o], mdp.expert[s]);
             loss.push(l);
             loss_grad.push(g);

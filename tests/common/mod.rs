@@ -35,6 +35,11 @@ fn distribution(n: usize) -> impl Strategy<Value = Vec<String>> {
 
 /// A random toy MDP, generated as a JSON document and read through `ToyMdp::from_json`.
 pub fn toy_mdp() -> impl Strategy<Value = ToyMdp> {
+    toy_mdp_document().prop_map(|doc| ToyMdp::from_json(&doc).expect("generated MDPs are valid"))
+}
+
+/// A random toy-MDP document (see [`toy_mdp`]).
+pub fn toy_mdp_document() -> impl Strategy<Value = Value> {
     (1usize..=3, 2usize..=3, 2usize..=4, 0u8..3).prop_flat_map(|(s, a, h, kind)| {
         let kind = match (kind, a) {
             (0, _) => "rational-softmax",
@@ -66,13 +71,86 @@ pub fn toy_mdp() -> impl Strategy<Value = ToyMdp> {
                 if kind != "direct" {
                     policy["c"] = Value::String(format!("{cn}/{cd}"));
                 }
-                let doc = json!({
+                json!({
                     "states": s, "actions": a, "horizon": h,
                     "initial": initial, "transition": transition, "expert": expert,
                     "policy": policy,
-                });
-                ToyMdp::from_json(&doc).expect("generated MDPs are valid")
+                })
             })
+    })
+}
+
+/// Exact fraction strings from integer weights, with the mass of `excluded` entries moved away
+/// (if nothing is left, all mass goes to the first entry not excluded).
+fn weights_to_distribution(weights: &[u32], excluded: &[bool]) -> Vec<String> {
+    let mut w: Vec<u32> = weights
+        .iter()
+        .zip(excluded)
+        .map(|(&x, &e)| if e { 0 } else { x })
+        .collect();
+    if w.iter().all(|&x| x == 0) {
+        let first = excluded.iter().position(|e| !e).expect("a state is kept");
+        w[first] = 1;
+    }
+    let total: u32 = w.iter().sum();
+    w.iter().map(|x| format!("{x}/{total}")).collect()
+}
+
+/// A random toy MDP with terminal states and either reset or absorbing semantics (math.md §8),
+/// generated as JSON from [`toy_mdp_document`] and read through `ToyMdp::from_json`.
+///
+/// Reset: the initial law and the reset law (given, or defaulted to the initial law) put no mass on
+/// terminal states, and at least one state is not terminal. Absorb: the initial law may start in a
+/// terminal state; losses are small non-negative fractions, given per state or as one number.
+pub fn terminating_toy_mdp() -> impl Strategy<Value = ToyMdp> {
+    toy_mdp_document().prop_flat_map(|doc| {
+        let s = doc["states"].as_u64().unwrap() as usize;
+        (
+            Just(doc),
+            prop::collection::vec(any::<bool>(), s),
+            0u8..4,
+            prop::collection::vec(0u32..4, s),
+            prop::collection::vec(0u32..4, s),
+            prop::collection::vec((0i64..5, 1i64..4), s),
+        )
+            .prop_map(move |(mut doc, mut terminal, mode, w_init, w_law, losses)| {
+                let reset = mode < 2;
+                if terminal.iter().all(|&t| !t) {
+                    terminal[s - 1] = true;
+                }
+                if reset {
+                    if terminal.iter().all(|&t| t) {
+                        terminal[0] = false;
+                    }
+                    doc["initial"] = json!(weights_to_distribution(&w_init, &terminal));
+                    doc["on_terminal"] = if mode == 0 {
+                        json!({"kind": "reset", "law": weights_to_distribution(&w_law, &terminal)})
+                    } else {
+                        json!({"kind": "reset"})
+                    };
+                } else if mode == 2 {
+                    let per_state: Vec<Value> = terminal
+                        .iter()
+                        .zip(&losses)
+                        .map(|(&t, (n, d))| if t { json!(format!("{n}/{d}")) } else { Value::Null })
+                        .collect();
+                    doc["on_terminal"] = json!({"kind": "absorb", "loss": per_state});
+                } else {
+                    let (n, d) = losses[0];
+                    doc["on_terminal"] = json!({"kind": "absorb", "loss": format!("{n}/{d}")});
+                }
+                doc["terminal"] = json!(terminal);
+                ToyMdp::from_json(&doc).expect("generated terminating MDPs are valid")
+            })
+    })
+}
+
+/// A terminating MDP (see [`terminating_toy_mdp`]) with two parameter points.
+pub fn terminating_mdp_and_two_thetas()
+-> impl Strategy<Value = (ToyMdp, Vec<BigRational>, Vec<BigRational>)> {
+    terminating_toy_mdp().prop_flat_map(|m| {
+        let (a, b) = (theta_for(&m), theta_for(&m));
+        (Just(m), a, b)
     })
 }
 
