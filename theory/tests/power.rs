@@ -210,7 +210,7 @@ fn row2c_is_informative_only_where_the_bound_is_below_the_statistics_maximum() {
 /// scaled control 2c.ctl is detected; the unweighted-STORM and printed-Algorithm-4 controls are
 /// in the table, and the table's status names every control its check did not detect.
 #[test]
-#[ignore = "≈ 1 minute in release: 4 × 100 runs of 20 000 STORM iterations with exact ∇F"]
+#[ignore = "≈ 2 minutes in release: the global constants, then 4 × 100 runs of 20 000 STORM iterations with exact ∇F"]
 fn storm_rows_and_controls_at_the_tables_size() {
     let s = Profile::Quick.sizes();
     let g = global_constants();

@@ -361,6 +361,7 @@ pub struct DaggerSizes {
 /// Row 5e's sizes in the quick profile: K = 10 iterations of N = 10 trajectories (the exact
 /// recursion is then within 3·10⁻³ of p_PS on every instance, row 5c), R = 1000 runs so that the
 /// interval (range [0, 1]) is narrower than the gap between p_PS and the midpoint (≥ 0.0125).
+/// Its level α = 10⁻³ per instance is outside the Bonferroni family of the bound checks.
 pub const DAGGER_QUICK: DaggerSizes = DaggerSizes {
     runs: 1000,
     iterations: 10,
