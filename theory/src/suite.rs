@@ -123,6 +123,8 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     rows.push(unbiased::old_point(&pairs, Some(Weighting::Trajectory)));
     rows.push(unbiased::old_point(&pairs, Some(Weighting::PerDecision)));
     rows.push(unbiased::old_point(&pairs, None));
+    // Algorithm 5's hyper-parameters G = 2 ≥ √(sup E g²) ≈ 1.87 and Δ₀ = B_F = 1/2; the
+    // printed Algorithm 4 in exact rationals for 3 steps (the rationals grow ≈ 8× per step).
     rows.push(unbiased::printed_algorithm_5_visited(
         &m1,
         0.0,
