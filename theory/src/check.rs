@@ -14,6 +14,10 @@ pub enum Verdict {
     Fails,
     /// Neither could be shown.
     Inconclusive,
+    /// The check could not have refuted the claim as run: its lower confidence bound is ≤ 0, or the
+    /// bound is at least the largest value the statistic can take ([`crate::stats::assess`]).
+    /// Not evidence for the claim.
+    Uninformative,
 }
 
 impl Verdict {
@@ -65,6 +69,8 @@ pub enum Method {
     Rigorous,
     /// Monte Carlo with a stated false-alarm probability.
     Statistical,
+    /// Evaluated at sampled points only (no proof, no stated confidence).
+    Sampled,
     /// Estimated constants on a real environment (never a certificate).
     Estimate,
 }
@@ -113,6 +119,15 @@ pub enum Role {
     Thesis,
     /// The corrected statement (math.md).
     Corrected,
-    /// A deliberately wrong claim that the check must refute.
+    /// A deliberately wrong claim, or a wrong algorithm under a true claim's check, that the check
+    /// must refute: its verdict `Fails` means the control was detected.
     NegativeControl,
+}
+
+impl Check {
+    /// Whether this row is a negative control that its check did not detect (any verdict but
+    /// `Fails`).
+    pub fn undetected_control(&self) -> bool {
+        self.role == Role::NegativeControl && self.verdict != Verdict::Fails
+    }
 }

@@ -24,11 +24,61 @@ fn escape(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
 }
 
-/// The Markdown table (one row per check) followed by the constants with their provenance.
+fn verdict_name(v: Verdict) -> &'static str {
+    match v {
+        Verdict::Holds => "holds",
+        Verdict::Fails => "fails",
+        Verdict::Inconclusive => "inconclusive",
+        Verdict::Uninformative => "uninformative",
+    }
+}
+
+fn role_name(r: Role) -> &'static str {
+    match r {
+        Role::Thesis => "thesis",
+        Role::Corrected => "corrected",
+        Role::NegativeControl => "negative control",
+    }
+}
+
+/// A statistical bound check's power: it flags every claimed bound below its LCB, and its
+/// minimum detectable violation is X̄ − LCB (see [`crate::stats`]). `None` for rows without a
+/// bound or an LCB.
+pub fn power(c: &Check) -> Option<(f64, f64)> {
+    c.bound?;
+    let m = c.measured.as_ref()?;
+    let lcb = m.lcb?;
+    Some((lcb, m.value - lcb))
+}
+
+/// The table's overall status: `Err` naming every negative control that its check did not
+/// detect (a check that cannot flag its control shows no power), `Ok` otherwise.
+///
+/// # Errors
+/// The undetected controls' ids, as a message.
+pub fn status(checks: &[Check]) -> Result<(), String> {
+    let missed: Vec<&str> = checks
+        .iter()
+        .filter(|c| c.undetected_control())
+        .map(|c| c.id.as_str())
+        .collect();
+    if missed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "negative control(s) not detected: {}",
+            missed.join(", ")
+        ))
+    }
+}
+
+/// The Markdown table (one row per check), the closing note (every statistical row with its
+/// power and verdict, the uninformative rows, the controls and the overall status), then the
+/// details with the constants and their provenance.
 pub fn markdown(checks: &[Check]) -> String {
     let mut out = String::from(
-        "| # | result | claim | role | method | bound B | measured (LCB) | X̄/B | verdict | erratum |\n\
-         |---|---|---|---|---|---|---|---|---|---|\n",
+        "| # | result | claim | role | method | bound B | measured (LCB) | min. detectable violation | X̄/B | verdict | erratum |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     for c in checks {
         let measured = c.measured.as_ref().map_or_else(
@@ -39,32 +89,79 @@ pub fn markdown(checks: &[Check]) -> String {
             },
         );
         out += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} | **{}** | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | **{}** | {} |\n",
             c.id,
             escape(&c.result),
             escape(&c.claim),
-            match c.role {
-                Role::Thesis => "thesis",
-                Role::Corrected => "corrected",
-                Role::NegativeControl => "negative control",
-            },
+            role_name(c.role),
             match c.method {
                 Method::Exact => "exact",
                 Method::Rigorous => "rigorous",
                 Method::Statistical => "statistical",
+                Method::Sampled => "sampled",
                 Method::Estimate => "estimate",
             },
             fmt(c.bound),
             measured,
+            fmt(power(c).map(|p| p.1)),
             fmt(c.tightness),
-            match c.verdict {
-                Verdict::Holds => "holds",
-                Verdict::Fails => "fails",
-                Verdict::Inconclusive => "inconclusive",
-            },
+            verdict_name(c.verdict),
             c.erratum.as_deref().unwrap_or("—"),
         );
     }
+    out += "\n**Power.** A statistical row flags every claimed bound B below its LCB; its minimum \
+            detectable violation is X̄ − LCB. It is *uninformative* when its LCB is ≤ 0 or its B is \
+            at least the largest value its statistic can take.\n\n";
+    for c in checks.iter().filter(|c| c.method == Method::Statistical) {
+        if let Some((lcb, mdv)) = power(c) {
+            out += &format!(
+                "- **{}** ({}): B = {}, flags B < {}, minimum detectable violation {} → **{}**\n",
+                c.id,
+                role_name(c.role),
+                fmt(c.bound),
+                fmt(Some(lcb)),
+                fmt(Some(mdv)),
+                verdict_name(c.verdict)
+            );
+        }
+    }
+    let uninformative: Vec<&str> = checks
+        .iter()
+        .filter(|c| c.verdict == Verdict::Uninformative)
+        .map(|c| c.id.as_str())
+        .collect();
+    let controls: Vec<String> = checks
+        .iter()
+        .filter(|c| c.role == Role::NegativeControl)
+        .map(|c| {
+            format!(
+                "{} {}",
+                c.id,
+                if c.verdict == Verdict::Fails {
+                    "detected"
+                } else {
+                    "NOT detected"
+                }
+            )
+        })
+        .collect();
+    out += &format!(
+        "\nUninformative rows: {}. Negative controls: {}.\n\n**Status: {}**\n",
+        if uninformative.is_empty() {
+            "none".to_string()
+        } else {
+            uninformative.join(", ")
+        },
+        if controls.is_empty() {
+            "none".to_string()
+        } else {
+            controls.join("; ")
+        },
+        match status(checks) {
+            Ok(()) => "every negative control detected".to_string(),
+            Err(e) => format!("FAILS — {e}"),
+        }
+    );
     out += "\n**Details.**\n\n";
     for c in checks {
         out += &format!("- **{}** {}\n", c.id, escape(&c.details));
@@ -85,10 +182,33 @@ pub fn markdown(checks: &[Check]) -> String {
     out
 }
 
-/// The JSON report (every field, certificates included).
+/// The JSON report (every field, certificates included); each statistical row also carries
+/// `"power": {"flags_bounds_below": LCB, "min_detectable_violation": X̄ − LCB}`, and each negative
+/// control `"detected": bool`.
 ///
 /// # Panics
 /// Never: every field serialises.
 pub fn json(checks: &[Check]) -> serde_json::Value {
-    serde_json::to_value(checks).expect("serialisable")
+    let rows = checks
+        .iter()
+        .map(|c| {
+            let mut v = serde_json::to_value(c).expect("serialisable");
+            if let Some(obj) = v.as_object_mut() {
+                if let Some((lcb, mdv)) = power(c) {
+                    obj.insert(
+                        "power".into(),
+                        serde_json::json!({
+                            "flags_bounds_below": lcb,
+                            "min_detectable_violation": mdv,
+                        }),
+                    );
+                }
+                if c.role == Role::NegativeControl {
+                    obj.insert("detected".into(), (c.verdict == Verdict::Fails).into());
+                }
+            }
+            v
+        })
+        .collect();
+    serde_json::Value::Array(rows)
 }

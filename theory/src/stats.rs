@@ -3,15 +3,25 @@
 //! R i.i.d. runs give X_r ∈ [0, b]; H₀ is the theorem, E X ≤ B. A violation is flagged only when a
 //! *lower confidence bound* on E X exceeds B, so P_{H₀}(flag) ≤ α:
 //! * Hoeffding: `LCB = X̄ − b √(ln(1/α)/(2R))`;
-//! * empirical Bernstein (Maurer & Pontil 2009, Thm 4): `LCB = X̄ − √(2V ln(2/α)/R) − 7b ln(2/α)/(3(R−1))`.
+//! * empirical Bernstein (Maurer & Pontil 2009, Thm 4): `LCB = X̄ − √(2V ln(2/α)/R) − 7b ln(2/α)/(3(R−1))`;
+//! * betting (Waudby-Smith & Ramdas 2024, *Estimating means of bounded random variables by
+//!   betting*, JRSS-B): for a candidate mean m the capital `K_t(m) = Π_{i≤t} (1 + λ_i(m)(X_i − m))`,
+//!   with a predictable bet `λ_i(m) = min(λ̂_i, c/m) ≥ 0`, is a non-negative supermartingale when
+//!   E X ≤ m, so by Ville's inequality `P(max_t K_t(m) ≥ 1/α) ≤ α`. Every factor is non-increasing
+//!   in m (for X ≥ 0), so the rejected m form an interval [0, LCB) and LCB is found by bisection.
+//!   Its width is ≈ √(2V ln(1/α)/R): unlike Bernstein it pays no range term of order b/R, which
+//!   matters when X̄ ≪ b (the bounds here are loose, so X̄ is 1–5 % of b).
 //!
-//! The kit uses the larger (sharper) of the two at level α/2 each (a union bound keeps the level α).
-//! Student-t is reported for orientation only. Suites split α by Bonferroni.
+//! The kit uses the largest of the three at level α/3 each (a union bound keeps the level α).
+//! A row flags every claimed bound B < LCB, so `X̄ − LCB` is its *minimum detectable violation*.
+//! A row whose LCB is ≤ 0, or whose B is at least the largest value the statistic can take, could
+//! flag no bound it states: it is *uninformative* ([`assess`]). Suites split α by Bonferroni.
 
+use crate::check::Verdict;
 use serde::Serialize;
 
 /// Summary of R runs of a per-run statistic.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Sample {
     /// R.
     pub runs: usize,
@@ -21,6 +31,9 @@ pub struct Sample {
     pub variance: f64,
     /// The a-priori range bound b (X ∈ [0, b]).
     pub range: f64,
+    /// The runs in the order they were drawn (the betting bound is sequential).
+    #[serde(skip)]
+    pub values: Vec<f64>,
 }
 
 impl Sample {
@@ -38,6 +51,7 @@ impl Sample {
             mean,
             variance,
             range,
+            values: xs.to_vec(),
         }
     }
 
@@ -53,21 +67,82 @@ impl Sample {
         self.mean - (2.0 * self.variance * l / r).sqrt() - 7.0 * self.range * l / (3.0 * (r - 1.0))
     }
 
-    /// The decision rule's LCB: the larger of Hoeffding and empirical Bernstein at α/2 each.
-    pub fn lcb(&self, alpha: f64) -> f64 {
-        self.hoeffding_lcb(alpha / 2.0)
-            .max(self.bernstein_lcb(alpha / 2.0))
+    /// Whether the betting test rejects "E X ≤ m" at level α: `max_t K_t(m) ≥ 1/α` (see the
+    /// module docs). The bet is `λ_t = min(λ̂_t, c/m)` with c = 1/2 and the predictable plug-in
+    /// `λ̂_t = √(2 ln(1/α) / (R σ̂²_{t−1}))`, σ̂²_{t−1} the running variance of the first t − 1 runs
+    /// (with a small prior, 10⁻⁶b², so the first bets are finite). The threshold carries a relative
+    /// margin of 10⁻⁹ for the rounding of the product (≤ R ulps).
+    pub fn betting_rejects(&self, m: f64, alpha: f64) -> bool {
+        if m <= 0.0 {
+            // Every X ≥ 0, so "E X ≤ 0" is refuted by any positive run only in the limit; a
+            // non-positive bound is handled by the caller (the statistic's lower end is ≥ 0).
+            return false;
+        }
+        let threshold = (1.0 / alpha) * (1.0 + 1e-9);
+        let r = self.values.len() as f64;
+        let log_term = 2.0 * (1.0 / alpha).ln();
+        let prior = 1e-6 * self.range * self.range;
+        let (mut capital, mut sum, mut sq, mut t) = (1.0f64, 0.0f64, prior, 0.0f64);
+        for &x in &self.values {
+            // X ≥ 0 is what makes every factor positive; a value rounded below 0 counts as 0
+            // (which only lowers the capital).
+            let x = x.max(0.0);
+            let var = sq / (t + 1.0);
+            let lambda = (log_term / (r * var)).sqrt().min(0.5 / m);
+            capital *= 1.0 + lambda * (x - m);
+            if capital >= threshold {
+                return true;
+            }
+            // Running mean before this run, then the squared deviation from it (predictable).
+            let mean_before = if t > 0.0 { sum / t } else { x };
+            sq += (x - mean_before).powi(2);
+            sum += x;
+            t += 1.0;
+        }
+        false
     }
 
-    /// The matching upper confidence bound (same construction mirrored), for reporting.
+    /// Betting lower confidence bound at level α: the supremum of the rejected m (bisection,
+    /// 100 steps, returning a rejected m, so every B ≤ it is rejected too). 0 if none is rejected.
+    pub fn betting_lcb(&self, alpha: f64) -> f64 {
+        let (mut lo, mut hi) = (0.0f64, self.range.max(self.mean));
+        if self.betting_rejects(hi, alpha) {
+            return hi;
+        }
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if self.betting_rejects(mid, alpha) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
+    /// The decision rule's LCB: the largest of Hoeffding, empirical Bernstein and betting at
+    /// α/3 each.
+    pub fn lcb(&self, alpha: f64) -> f64 {
+        let a = alpha / 3.0;
+        self.hoeffding_lcb(a)
+            .max(self.bernstein_lcb(a))
+            .max(self.betting_lcb(a))
+    }
+
+    /// The minimum detectable violation `X̄ − LCB`: the row flags a claimed bound B exactly when
+    /// the measured mean exceeds B by more than this.
+    pub fn min_detectable_violation(&self, alpha: f64) -> f64 {
+        self.mean - self.lcb(alpha)
+    }
+
+    /// The matching upper confidence bound at level α: the three bounds applied to b − X (each
+    /// at α/3), the smallest taken.
     pub fn ucb(&self, alpha: f64) -> f64 {
-        let r = self.runs as f64;
-        let h = self.mean + self.range * ((2.0 / alpha).ln() / (2.0 * r)).sqrt();
-        let l = (4.0 / alpha).ln();
-        let b = self.mean
-            + (2.0 * self.variance * l / r).sqrt()
-            + 7.0 * self.range * l / (3.0 * (r - 1.0));
-        h.min(b)
+        let mirrored: Vec<f64> = self.values.iter().map(|x| self.range - x).collect();
+        self.range - Sample::new(&mirrored, self.range).lcb(alpha)
     }
 }
 
@@ -87,6 +162,23 @@ pub fn decide(sample: &Sample, bound: f64, alpha: f64) -> Decision {
         Decision::Violated
     } else {
         Decision::Consistent
+    }
+}
+
+/// The verdict of a statistical row on H₀: E X ≤ `bound`, where X can take no value above
+/// `statistic_max` (a certified supremum, e.g. G_F² for a mean of ‖∇F‖²):
+/// * [`Verdict::Fails`] if LCB > `bound` (violated with confidence 1 − α);
+/// * [`Verdict::Uninformative`] otherwise, if LCB ≤ 0 (the row could flag no non-negative bound)
+///   or `bound ≥ statistic_max` (no distribution of X could violate it);
+/// * [`Verdict::Holds`] otherwise: the row could have flagged any B < LCB and did not flag B.
+pub fn assess(sample: &Sample, bound: f64, statistic_max: f64, alpha: f64) -> Verdict {
+    let lcb = sample.lcb(alpha);
+    if lcb > bound {
+        Verdict::Fails
+    } else if lcb <= 0.0 || bound >= statistic_max {
+        Verdict::Uninformative
+    } else {
+        Verdict::Holds
     }
 }
 
@@ -127,5 +219,52 @@ mod tests {
             }
         }
         assert!(f64::from(alarms) / f64::from(trials) <= alpha, "{alarms}");
+    }
+
+    /// The betting test's false-alarm rate at the boundary E X = B stays below α, for a
+    /// low-variance statistic far below its range (the regime of the bound checks) and for a
+    /// Bernoulli one.
+    #[test]
+    fn betting_false_alarm_rate_is_below_alpha() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(5);
+        let (alpha, trials) = (0.05, 2000);
+        let mut alarms = [0u32; 2];
+        for _ in 0..trials {
+            // Uniform on [0.008, 0.012]: mean 0.01, range b = 1.
+            let xs: Vec<f64> = (0..100)
+                .map(|_| 0.008 + 0.004 * rng.random::<f64>())
+                .collect();
+            alarms[0] += u32::from(Sample::new(&xs, 1.0).betting_rejects(0.01, alpha));
+            let ys: Vec<f64> = (0..100)
+                .map(|_| f64::from(u8::from(rng.random::<f64>() < 0.3)))
+                .collect();
+            alarms[1] += u32::from(Sample::new(&ys, 1.0).betting_rejects(0.3, alpha));
+        }
+        for a in alarms {
+            assert!(f64::from(a) / f64::from(trials) <= alpha, "{alarms:?}");
+        }
+    }
+
+    /// Where X̄ ≪ b the betting bound is far sharper than Bernstein's (whose range term
+    /// 7b ln(2/α)/(3(R − 1)) exceeds X̄ here), and the rejected bounds are exactly those below it.
+    #[test]
+    fn betting_bound_is_sharp_for_small_means_and_consistent() {
+        let xs: Vec<f64> = (0..100)
+            .map(|i| 0.01 + 0.002 * ((i % 5) as f64 - 2.0))
+            .collect();
+        let s = Sample::new(&xs, 1.0);
+        assert!(s.bernstein_lcb(1e-3) < 0.0);
+        let b = s.betting_lcb(1e-3);
+        assert!(b > 0.008 && b < 0.01, "{b}");
+        assert!(s.betting_rejects(b, 1e-3) && !s.betting_rejects(b * 1.001, 1e-3));
+        assert_eq!(assess(&s, 0.5 * b, 1.0, 1e-3), Verdict::Fails);
+        assert_eq!(assess(&s, 0.02, 1.0, 1e-3), Verdict::Holds);
+        // A bound at or above the statistic's maximum cannot be refuted: uninformative.
+        assert_eq!(assess(&s, 1.0, 1.0, 1e-3), Verdict::Uninformative);
+        // Too few runs for a positive LCB: uninformative.
+        let few = Sample::new(&[0.0, 0.01], 1.0);
+        assert!(few.lcb(1e-3) <= 0.0);
+        assert_eq!(assess(&few, 0.02, 1.0, 1e-3), Verdict::Uninformative);
     }
 }

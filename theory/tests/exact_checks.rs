@@ -125,3 +125,40 @@ fn check3_corollary_follows_from_the_theorem() {
     let half = o2nc_formula::ratios(20_000, 1, 0.5);
     assert!(half.theorem > 1.0 || half.intermediate > 1.0);
 }
+
+/// Rows 4e and 4f run the kit's printed Algorithms 5 and 4 and check, exactly, the property each
+/// algorithm's analysis needs at the points it visits: both fail; the corrected algorithms
+/// (sampling at w_n; IS-STORM) satisfy it exactly at their own points.
+#[test]
+fn check4_printed_algorithms_at_the_points_they_visit() {
+    let m1 = example("m1-tied.json");
+    let e = unbiased::printed_algorithm_5_visited(&m1, 0.0, 12, (1, 10), 2.0, 0.5, 0);
+    assert_eq!(e.verdict, Verdict::Fails, "{}", e.details);
+    assert!(e.measured.unwrap().value > 0.0);
+    assert!(e.details.ends_with("max |bias| = 0"), "{}", e.details);
+    let f = unbiased::printed_algorithm_4_visited(&m1, &q("0"), (1, 20), (1, 2), 2, 0);
+    assert_eq!(f.verdict, Verdict::Fails, "{}", f.details);
+    assert!(f.details.ends_with("max |difference| = 0"), "{}", f.details);
+}
+
+/// Rows 5c, 5d are proofs on the exact recursion; 5e runs the kit's DAgger: with enough runs its
+/// interval lies on p_PS's side on M1, and with too few it cannot decide.
+#[test]
+fn check5_dagger_rows() {
+    let m1 = &thm31::instances()[0];
+    let f = thm31::analyse(m1).unwrap();
+    assert!(f.g_affine_on_iterates);
+    assert_eq!((f.eq_3_37_violated_at, f.eq_3_38_violated_at), (None, None));
+    // κ = 1/4 > 0 and p₁ > p_PS: every error has one sign, so (3.38) holds with equality.
+    assert_eq!(f.eq_3_38_max_ratio, q("1"));
+    let sizes = thm31::DaggerSizes {
+        runs: 400,
+        iterations: 6,
+        trajectories: 10,
+        alpha: 1e-3,
+    };
+    let row = thm31::dagger_row(m1, sizes);
+    assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+    let few = thm31::dagger_row(m1, thm31::DaggerSizes { runs: 10, ..sizes });
+    assert_eq!(few.verdict, Verdict::Inconclusive, "{}", few.details);
+}

@@ -2,8 +2,10 @@
 //! * the tail chart reproduces the engine's policy table exactly;
 //! * the chart constants dominate exact values at rational points in both charts, and an
 //!   understated L̃ is refuted by an exact quotient; tampered certificates are rejected;
-//! * IS-STORM with schedule (3.43) satisfies (3.60*), and the adaptive (Cutkosky–Orabona) schedule
-//!   its Theorem 1 (secondary); each with a deliberately understated bound that must be flagged.
+//! * IS-STORM with schedule (3.43) against (3.60*), and the adaptive (Cutkosky–Orabona) schedule
+//!   against its Theorem 1 (secondary): uninformative where the bound exceeds the statistic's
+//!   maximum (K = 1000), holding at the full profile's K = 3·10⁴; each with a deliberately
+//!   understated bound that must be flagged.
 
 mod common;
 
@@ -245,16 +247,17 @@ fn tampered_chart_certificates_are_rejected() {
 }
 
 #[test]
-fn check2c_storm_bound_holds_and_an_understated_bound_is_flagged() {
+fn check2c_at_k_1000_is_uninformative_and_an_understated_bound_is_flagged() {
     let k = constants();
     let m1 = m1_tied();
     let mc = McSettings {
         runs: 200,
         alpha: 0.002,
     };
+    // At K = 1000 (3.60*) exceeds sup ‖∇F‖² = G_F², so no run could refute it: uninformative.
     for w in [Weighting::Trajectory, Weighting::PerDecision] {
         let row = storm::fixed_schedule(&m1, k, w, 0.0, 1000, mc, 1.0);
-        assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+        assert_eq!(row.verdict, Verdict::Uninformative, "{}", row.details);
         assert!(row.tightness.unwrap() < 0.1, "{}", row.details);
     }
     // The bound divided by 100 is below what IS-STORM attains: flagged.
@@ -268,15 +271,16 @@ fn check2c_storm_bound_holds_and_an_understated_bound_is_flagged() {
 }
 
 #[test]
-fn check2d_adaptive_bound_holds_and_an_understated_bound_is_flagged() {
+fn check2d_is_uninformative_and_an_understated_bound_is_flagged() {
     let k = constants();
     let m1 = m1_tied();
     let mc = McSettings {
         runs: 200,
         alpha: 0.002,
     };
+    // Its bound exceeds sup ‖∇F‖ = G_F at this K: uninformative.
     let row = storm::adaptive_schedule(&m1, k, 0.0, 1.0, 1000, mc, 1.0);
-    assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+    assert_eq!(row.verdict, Verdict::Uninformative, "{}", row.details);
     let mc = McSettings {
         runs: 800,
         alpha: 0.002,
@@ -285,9 +289,9 @@ fn check2d_adaptive_bound_holds_and_an_understated_bound_is_flagged() {
     assert_eq!(wrong.verdict, Verdict::Fails, "{}", wrong.details);
 }
 
-/// The full-profile sizes: tighter L̃, K = 10⁴, R = 1000.
+/// The full-profile sizes: tighter L̃, K = 3·10⁴ (where (3.60*) is below G_F²), R = 500.
 #[test]
-#[ignore = "about 4 minutes in release: both L̃ at tolerance 0.1 with a re-check, then 1000 runs of 10 000 iterations for 2c, 2c.pd and 2d"]
+#[ignore = "about 5 minutes in release: both L̃ at tolerance 0.1 with a re-check, then 500 runs of 30 000 iterations for 2c and 2c.pd, 500 of 10 000 for 2d"]
 fn check2_at_full_size() {
     let k = GlobalConstants::compute(
         &m1_tied(),
@@ -306,20 +310,20 @@ fn check2_at_full_size() {
     assert!(recheck_l_tilde(&m1_tied(), Weighting::PerDecision, &k.l_tilde_pd).is_ok());
     let m1 = m1_tied();
     let mc = McSettings {
-        runs: 1000,
+        runs: 500,
         alpha: 0.002,
     };
     for c in k.all() {
         eprintln!("{} ≤ {} ({})", c.name, c.value, c.how);
     }
     for w in [Weighting::Trajectory, Weighting::PerDecision] {
-        let row = storm::fixed_schedule(&m1, &k, w, 0.0, 10_000, mc, 1.0);
+        let row = storm::fixed_schedule(&m1, &k, w, 0.0, 30_000, mc, 1.0);
         eprintln!("{}: {} (X̄/B = {:?})", row.id, row.details, row.tightness);
         assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
     }
     let row = storm::adaptive_schedule(&m1, &k, 0.0, 1.0, 10_000, mc, 1.0);
     eprintln!("2d: {} (X̄/B = {:?})", row.details, row.tightness);
-    assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
+    assert_eq!(row.verdict, Verdict::Uninformative, "{}", row.details);
 }
 
 /// (h, ∂h/∂θ, ∂h/∂θ′) for h = ∂²V/∂θ′² at rational (θ, θ′), exactly: third-order nested duals

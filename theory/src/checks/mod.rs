@@ -1,4 +1,4 @@
-//! The checks of issue 4, each a function returning [`crate::check::Check`] rows.
+//! The checks of the theorem table, each a function returning [`crate::check::Check`] rows.
 
 pub mod constants;
 pub mod estimated;
@@ -6,6 +6,7 @@ pub mod montecarlo;
 pub mod o2nc_formula;
 pub mod real_env;
 pub mod schedule;
+pub mod statistical;
 pub mod storm;
 pub mod thm31;
 pub mod unbiased;

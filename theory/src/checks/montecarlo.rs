@@ -10,7 +10,7 @@
 use crate::bounds::{O2ncParams, o2nc_theorem, sgd_constant, sgd_step_admissible, upper};
 use crate::check::{Check, Measured, Method, Role, Verdict};
 use crate::checks::constants::ToyConstants;
-use crate::stats::{Decision, Sample, decide};
+use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::o2nc::O2ncConfig;
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
@@ -66,46 +66,22 @@ fn inconclusive(id: &str, result: &str, claim: String, details: String) -> Check
     }
 }
 
-/// Check 1: SGD with constant η on `mdp` from θ₁, K iterates, eq. 3.27 (averaged form):
-/// E[(1/K) Σ_{k=1}^K ‖∇F(θ_k)‖²] ≤ Lησ² + 2B_F/(ηK), with c = 1 (σ² = sup Var).
-pub fn sgd(
+/// Per-run statistics of R runs: (rigorous lower ends, midpoints), in seed order.
+pub type Runs = (Vec<f64>, Vec<f64>);
+
+/// The per-run statistic of check 1, `X = (1/K) Σ_{k=1}^K ‖∇F(θ_k)‖²`, over R seeded runs of the
+/// kit's SGD with constant η from θ₁: (lower ends, midpoints) of each run's X (exact ∇F enclosed
+/// in intervals, so the lower end is a rigorous lower bound on X).
+///
+/// # Errors
+/// A message naming the run if a run fails or ∇F cannot be enclosed.
+pub fn sgd_sample(
     mdp: &ToyMdp,
-    k_consts: &ToyConstants,
     theta1: f64,
     eta: (i64, i64),
     k: u64,
-    mc: McSettings,
-    claim_scale: f64,
-) -> Check {
-    let (l, s2, bf, gf) = (
-        k_consts.l_f.value,
-        k_consts.sigma2.value,
-        k_consts.b_f.value,
-        k_consts.g_f.value,
-    );
-    let eta_f = eta.0 as f64 / eta.1 as f64;
-    let claim = format!(
-        "(1/K) Σ E‖∇F(θ_k)‖² ≤ {}(Lησ² + 2B_F/(ηK)), η = {}/{}, K = {k}",
-        if claim_scale == 1.0 {
-            String::new()
-        } else {
-            format!("{claim_scale}·")
-        },
-        eta.0,
-        eta.1
-    );
-    let result = "SGD, eq. 3.27";
-    // Side condition η ≤ 1/(Lc), c = 1, with the rigorous L (an upper bound: if it holds for the
-    // bound it holds for the true constant).
-    if !sgd_step_admissible(l, 1.0, eta_f) {
-        return inconclusive(
-            "1",
-            result,
-            claim,
-            format!("side condition η ≤ 1/(Lc) fails: η = {eta_f}, L = {l}"),
-        );
-    }
-    let bound = sgd_constant(l, eta_f, s2, bf, k) * claim_scale;
+    runs: usize,
+) -> Result<Runs, String> {
     let pi = ToyProblem::<Interval>::new(mdp);
     let pf = ToyProblem::<f64>::new(mdp);
     let cfg = |seed: u64| RunConfig {
@@ -117,8 +93,8 @@ pub fn sgd(
         seed,
         stop: StoppingRule::iterations(k - 1),
     };
-    let (mut lows, mut mids) = (Vec::with_capacity(mc.runs), Vec::with_capacity(mc.runs));
-    for r in 0..mc.runs {
+    let (mut lows, mut mids) = (Vec::with_capacity(runs), Vec::with_capacity(runs));
+    for r in 0..runs {
         let acc = RefCell::new((0.0f64, 0.0f64, None::<String>));
         let observer = |m: &IterationMetrics<f64>| {
             let mut a = acc.borrow_mut();
@@ -140,24 +116,153 @@ pub fn sgd(
         let (lo, mid, err) = acc.into_inner();
         match rec {
             Ok(rec) if !matches!(rec.termination, Termination::Failed(_)) && err.is_none() => {
-                lows.push(lo / k as f64);
+                // The sum's own rounding (relative ≤ K·2⁻⁵³) is absorbed by the factor.
+                lows.push(lo / k as f64 * (1.0 - 1e-9));
                 mids.push(mid / k as f64);
             }
-            Ok(rec) => {
-                return inconclusive(
-                    "1",
-                    result,
-                    claim,
-                    format!("run {r}: {:?} {err:?}", rec.termination),
-                );
-            }
-            Err(e) => return inconclusive("1", result, claim, format!("run {r}: {e}")),
+            Ok(rec) => return Err(format!("run {r}: {:?} {err:?}", rec.termination)),
+            Err(e) => return Err(format!("run {r}: {e}")),
         }
     }
-    let b = gf * gf * (1.0 + 1e-12);
-    let sample = Sample::new(&lows, b);
+    Ok((lows, mids))
+}
+
+/// The claim prefix of a scaled (control) bound.
+fn scale_prefix(claim_scale: f64) -> String {
+    if claim_scale == 1.0 {
+        String::new()
+    } else {
+        format!("{claim_scale}·")
+    }
+}
+
+/// The measured value of a statistical row and its verdict ([`assess`]): the LCB of the lower
+/// ends against `upper(bound)`, the statistic's certified maximum `statistic_max`.
+fn measure(
+    lows: &[f64],
+    mids: &[f64],
+    range: f64,
+    bound: f64,
+    statistic_max: f64,
+    mc: McSettings,
+) -> (Measured, Verdict, String) {
+    let sample = Sample::new(lows, range);
     let mean_mid = mids.iter().sum::<f64>() / mids.len() as f64;
-    let decision = decide(&sample, upper(bound), mc.alpha);
+    let lcb = sample.lcb(mc.alpha);
+    let verdict = assess(&sample, upper(bound), statistic_max, mc.alpha);
+    let text = format!(
+        "R = {}; X̄ = {mean_mid:.5}, LCB = {lcb:.5} (max of Hoeffding, empirical Bernstein, betting at α/3 each; α = {:.1e}, range [0, {range:.4}]), B = {bound:.5}; flags any B < {lcb:.5}, minimum detectable violation X̄ − LCB = {:.5}; the statistic cannot exceed {statistic_max:.4}",
+        mc.runs,
+        mc.alpha,
+        mean_mid - lcb,
+    );
+    (
+        Measured {
+            value: mean_mid,
+            lcb: Some(lcb),
+            ucb: Some(sample.ucb(mc.alpha)),
+            runs: Some(mc.runs),
+            alpha: Some(mc.alpha),
+        },
+        verdict,
+        text,
+    )
+}
+
+/// Check 1: SGD with constant η on `mdp` from θ₁, K iterates, eq. 3.27 (averaged form):
+/// E[(1/K) Σ_{k=1}^K ‖∇F(θ_k)‖²] ≤ Lησ² + 2B_F/(ηK), with c = 1 (σ² = sup Var).
+/// `claim_scale` ≠ 1 states a deliberately wrong (scaled) bound — a negative control.
+pub fn sgd(
+    mdp: &ToyMdp,
+    k_consts: &ToyConstants,
+    theta1: f64,
+    eta: (i64, i64),
+    k: u64,
+    mc: McSettings,
+    claim_scale: f64,
+) -> Check {
+    let eta_f = eta.0 as f64 / eta.1 as f64;
+    if !sgd_step_admissible(k_consts.l_f.value, 1.0, eta_f) {
+        return sgd_row(
+            k_consts,
+            theta1,
+            eta,
+            k,
+            mc,
+            claim_scale,
+            &Err(String::new()),
+        );
+    }
+    let sims = sgd_sample(mdp, theta1, eta, k, mc.runs);
+    sgd_row(k_consts, theta1, eta, k, mc, claim_scale, &sims)
+}
+
+/// Check 1 and its negative control from **one** sample (same K, R, α and verdict code): the
+/// theorem's bound, and the same bound multiplied by `control_scale` (< 1), which the row must
+/// flag.
+pub fn sgd_with_control(
+    mdp: &ToyMdp,
+    k_consts: &ToyConstants,
+    theta1: f64,
+    eta: (i64, i64),
+    k: u64,
+    mc: McSettings,
+    control_scale: f64,
+) -> Vec<Check> {
+    let eta_f = eta.0 as f64 / eta.1 as f64;
+    let sims = if sgd_step_admissible(k_consts.l_f.value, 1.0, eta_f) {
+        sgd_sample(mdp, theta1, eta, k, mc.runs)
+    } else {
+        Err(String::new())
+    };
+    let mut control = sgd_row(k_consts, theta1, eta, k, mc, control_scale, &sims);
+    control.id = "1.ctl".into();
+    vec![sgd_row(k_consts, theta1, eta, k, mc, 1.0, &sims), control]
+}
+
+/// The row of check 1 for a bound scaled by `claim_scale`, from a sample of [`sgd_sample`] (the
+/// verdict by [`assess`], with the statistic's maximum G_F²).
+pub fn sgd_row(
+    k_consts: &ToyConstants,
+    theta1: f64,
+    eta: (i64, i64),
+    k: u64,
+    mc: McSettings,
+    claim_scale: f64,
+    sims: &Result<Runs, String>,
+) -> Check {
+    let (l, s2, bf, gf) = (
+        k_consts.l_f.value,
+        k_consts.sigma2.value,
+        k_consts.b_f.value,
+        k_consts.g_f.value,
+    );
+    let eta_f = eta.0 as f64 / eta.1 as f64;
+    let claim = format!(
+        "(1/K) Σ E‖∇F(θ_k)‖² ≤ {}(Lησ² + 2B_F/(ηK)), η = {}/{}, K = {k}",
+        scale_prefix(claim_scale),
+        eta.0,
+        eta.1
+    );
+    let result = "SGD, eq. 3.27";
+    // Side condition η ≤ 1/(Lc), c = 1, with the rigorous L (an upper bound: if it holds for the
+    // bound it holds for the true constant).
+    if !sgd_step_admissible(l, 1.0, eta_f) {
+        return inconclusive(
+            "1",
+            result,
+            claim,
+            format!("side condition η ≤ 1/(Lc) fails: η = {eta_f}, L = {l}"),
+        );
+    }
+    let bound = sgd_constant(l, eta_f, s2, bf, k) * claim_scale;
+    let (lows, mids) = match sims {
+        Ok(x) => x,
+        Err(e) => return inconclusive("1", result, claim, e.clone()),
+    };
+    // X ≤ sup ‖∇F‖² ≤ G_F² (the rounding factor keeps it an upper bound).
+    let b = gf * gf * (1.0 + 1e-12);
+    let (measured, verdict, text) = measure(lows, mids, b, bound, b, mc);
     Check {
         id: "1".into(),
         result: result.into(),
@@ -169,20 +274,10 @@ pub fn sgd(
         ],
         constants: k_consts.all(),
         bound: Some(bound),
-        measured: Some(Measured {
-            value: mean_mid,
-            lcb: Some(sample.lcb(mc.alpha)),
-            ucb: Some(sample.ucb(mc.alpha)),
-            runs: Some(mc.runs),
-            alpha: Some(mc.alpha),
-        }),
-        tightness: Some(mean_mid / bound),
+        tightness: Some(measured.value / bound),
+        measured: Some(measured),
         method: Method::Statistical,
-        verdict: if decision == Decision::Violated {
-            Verdict::Fails
-        } else {
-            Verdict::Holds
-        },
+        verdict,
         erratum: None,
         role: if claim_scale == 1.0 {
             Role::Thesis
@@ -190,13 +285,20 @@ pub fn sgd(
             Role::NegativeControl
         },
         details: format!(
-            "R = {} runs of the kit's SGD from θ₁ = {theta1}; X̄ = {mean_mid:.5}, LCB = {:.5} (Hoeffding ∨ empirical Bernstein, α = {:.1e}), B = {bound:.5}; η ≤ 1/(Lc) holds (Lη = {:.3})",
+            "{} runs of the kit's SGD from θ₁ = {theta1}; {text}; η ≤ 1/(Lc) holds (Lη = {:.3})",
             mc.runs,
-            sample.lcb(mc.alpha),
-            mc.alpha,
             l * eta_f
         ),
     }
+}
+
+/// Which Algorithm 5 a run of check 3 uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum O2ncVariant {
+    /// IL-correct: τ_n ∼ p(·; w_n) (math.md §5).
+    IlCorrect,
+    /// As printed (E11): τ_n ∼ p(·; θ_n), the kit's `printed_algorithm_5` — a negative control.
+    Printed,
 }
 
 /// Check 3: online-to-non-convex (IL-correct sampling at w_n), budget N, radius δ:
@@ -211,58 +313,89 @@ pub fn o2nc(
     mc: McSettings,
     claim_scale: f64,
 ) -> Vec<Check> {
-    let result = "Online-to-non-convex (Alg. 5, IL-correct), Thm 3.8";
-    let g = k_consts.g2.value.sqrt().next_up();
-    let sigma = k_consts.sigma2.value.sqrt().next_up();
-    let delta0 = k_consts.b_f.value;
+    o2nc_variant(
+        mdp,
+        k_consts,
+        theta0,
+        n,
+        delta,
+        mc,
+        &[claim_scale],
+        O2ncVariant::IlCorrect,
+    )
+}
+
+/// Check 3 for one Algorithm 5 variant: row 3a (IL-correct only) and one row 3b per entry of
+/// `claim_scales`, all from **one** sample (same N, δ, R, α and verdict code). A scale ≠ 1, or
+/// the printed variant, is a negative control that the row must flag.
+#[allow(clippy::too_many_arguments)]
+pub fn o2nc_variant(
+    mdp: &ToyMdp,
+    k_consts: &ToyConstants,
+    theta0: f64,
+    n: u64,
+    delta: (i64, i64),
+    mc: McSettings,
+    claim_scales: &[f64],
+    variant: O2ncVariant,
+) -> Vec<Check> {
+    let sample = o2nc_sample(mdp, k_consts, theta0, n, delta, mc.runs, variant);
+    o2nc_rows(k_consts, n, delta, mc, &sample, claim_scales, variant)
+}
+
+/// What R runs of check 3 recorded.
+#[derive(Debug, Clone)]
+pub struct O2ncSample {
+    /// Per run, X = (1/K) Σ_k ‖(1/T) Σ_t ∇F(wᵏ_t)‖ (lower ends, midpoints).
+    pub runs: Runs,
+    /// max over runs, blocks and t of |w̄ᵏ − wᵏ_t|.
+    pub worst_spread: f64,
+}
+
+/// The O2NC configuration of check 3 and its parameters T, K, M.
+fn o2nc_config(
+    k_consts: &ToyConstants,
+    n: u64,
+    delta: (i64, i64),
+) -> Result<(O2ncConfig, ilopt::algo::o2nc::O2ncParameters), String> {
     let config = O2ncConfig {
         budget: n,
         delta: Num::ratio(delta.0, delta.1),
-        g: Num::Float(g),
-        delta0: Num::Exact(BigRational::from_float(delta0).expect("finite")),
+        g: Num::Float(k_consts.g2.value.sqrt().next_up()),
+        delta0: Num::Exact(BigRational::from_float(k_consts.b_f.value).expect("finite")),
         form: EstimatorForm::Causal,
     };
-    let params = match config.parameters() {
-        Ok(p) => p,
-        Err(e) => {
-            return vec![inconclusive(
-                "3",
-                result,
-                "parameters".into(),
-                e.to_string(),
-            )];
-        }
+    let params = config.parameters().map_err(|e| e.to_string())?;
+    Ok((config, params))
+}
+
+/// R seeded runs of Algorithm 5 (`variant`) with budget N and radius δ from θ₀, recording the
+/// statistic of check 3b (exact ∇F at every w_n, enclosed in intervals) and the spread of 3a.
+///
+/// # Errors
+/// A message naming the run if a run fails or ∇F cannot be enclosed.
+pub fn o2nc_sample(
+    mdp: &ToyMdp,
+    k_consts: &ToyConstants,
+    theta0: f64,
+    n: u64,
+    delta: (i64, i64),
+    runs: usize,
+    variant: O2ncVariant,
+) -> Result<O2ncSample, String> {
+    let (config, params) = o2nc_config(k_consts, n, delta)?;
+    let algorithm = match variant {
+        O2ncVariant::IlCorrect => AlgorithmConfig::O2nc(config),
+        O2ncVariant::Printed => AlgorithmConfig::PrintedAlgorithm5(config),
     };
     let (t, kb) = (params.t as usize, params.k as usize);
-    let delta_f = delta.0 as f64 / delta.1 as f64;
-    let bound = o2nc_theorem(
-        delta0,
-        delta_f,
-        g,
-        sigma,
-        O2ncParams {
-            t: params.t,
-            k: params.k,
-            m: params.m,
-        },
-    ) * claim_scale;
-    let claim = format!(
-        "E[(1/K) Σ_k ‖(1/T) Σ_t ∇F(wᵏ_t)‖] ≤ {}(Δ₀/(DM) + (G + σ)/√T), N = {n}, δ = {}/{}",
-        if claim_scale == 1.0 {
-            String::new()
-        } else {
-            format!("{claim_scale}·")
-        },
-        delta.0,
-        delta.1
-    );
     let pi = ToyProblem::<Interval>::new(mdp);
     let pf = ToyProblem::<f64>::new(mdp);
     let (mut lows, mut mids) = (vec![], vec![]);
     let mut worst_spread = 0.0f64;
-    for r in 0..mc.runs {
+    for r in 0..runs {
         let cfg = RunConfig {
-            algorithm: AlgorithmConfig::O2nc(config.clone()),
+            algorithm: algorithm.clone(),
             theta0: vec![Num::Float(theta0)],
             seed: r as u64,
             stop: StoppingRule::iterations(params.m + 1),
@@ -280,29 +413,19 @@ pub fn o2nc(
                 .run_config(&cfg, &pf)
         });
         match rec {
-            Err(e) => return vec![inconclusive("3", result, claim, format!("run {r}: {e}"))],
+            Err(e) => return Err(format!("run {r}: {e}")),
             Ok(rec) if matches!(rec.termination, Termination::Failed(_)) => {
-                return vec![inconclusive(
-                    "3",
-                    result,
-                    claim,
-                    format!("run {r}: {}", rec.termination),
-                )];
+                return Err(format!("run {r}: {}", rec.termination));
             }
             Ok(_) => {}
         }
         let ws = ws.into_inner();
         if ws.len() < t * kb {
-            return vec![inconclusive(
-                "3",
-                result,
-                claim,
-                format!(
-                    "run {r}: {} evaluation points, expected {}",
-                    ws.len(),
-                    t * kb
-                ),
-            )];
+            return Err(format!(
+                "run {r}: {} evaluation points, expected {}",
+                ws.len(),
+                t * kb
+            ));
         }
         let (mut lo_sum, mut mid_sum) = (0.0, 0.0);
         for block in ws.chunks(t).take(kb) {
@@ -314,26 +437,83 @@ pub fn o2nc(
             for w in block {
                 match grad_enclosure(&pi, &[*w]) {
                     Ok(gv) => acc += gv[0],
-                    Err(e) => return vec![inconclusive("3", result, claim, e)],
+                    Err(e) => return Err(e),
                 }
             }
             let avg = acc / Interval::from_i64(t as i64);
             lo_sum += avg.mig();
             mid_sum += avg.mid().abs();
         }
-        lows.push(lo_sum / kb as f64);
+        // The outer average's rounding is absorbed by the factor.
+        lows.push(lo_sum / kb as f64 * (1.0 - 1e-9));
         mids.push(mid_sum / kb as f64);
     }
-    let sample = Sample::new(&lows, k_consts.g_f.value);
-    let mean_mid = mids.iter().sum::<f64>() / mids.len() as f64;
-    let decision = decide(&sample, upper(bound), mc.alpha);
-    let role = if claim_scale == 1.0 {
-        Role::Thesis
-    } else {
-        Role::NegativeControl
+    Ok(O2ncSample {
+        runs: (lows, mids),
+        worst_spread,
+    })
+}
+
+/// Rows 3a (IL-correct only) and one row 3b per entry of `claim_scales` from a sample of
+/// [`o2nc_sample`] (the verdict by [`assess`], with the statistic's maximum G_F).
+pub fn o2nc_rows(
+    k_consts: &ToyConstants,
+    n: u64,
+    delta: (i64, i64),
+    mc: McSettings,
+    sample: &Result<O2ncSample, String>,
+    claim_scales: &[f64],
+    variant: O2ncVariant,
+) -> Vec<Check> {
+    let result = match variant {
+        O2ncVariant::IlCorrect => "Online-to-non-convex (Alg. 5, IL-correct), Thm 3.8",
+        O2ncVariant::Printed => {
+            "Online-to-non-convex, Algorithm 5 as printed (τ_n ∼ θ_n), against Thm 3.8's bound"
+        }
     };
-    vec![
-        Check {
+    let claim = |claim_scale: f64| {
+        format!(
+            "E[(1/K) Σ_k ‖(1/T) Σ_t ∇F(wᵏ_t)‖] ≤ {}(Δ₀/(DM) + (G + σ)/√T), N = {n}, δ = {}/{}{}",
+            scale_prefix(claim_scale),
+            delta.0,
+            delta.1,
+            if variant == O2ncVariant::Printed {
+                ", run by the printed Algorithm 5"
+            } else {
+                ""
+            }
+        )
+    };
+    let (params, sample) = match (o2nc_config(k_consts, n, delta), sample) {
+        (Ok((_, p)), Ok(s)) => (p, s),
+        (Err(e), _) => return vec![inconclusive("3", result, claim(1.0), e)],
+        (_, Err(e)) => return vec![inconclusive("3", result, claim(1.0), e.clone())],
+    };
+    let (t, kb) = (params.t as usize, params.k as usize);
+    let (lows, mids) = &sample.runs;
+    let worst_spread = sample.worst_spread;
+    let delta_f = delta.0 as f64 / delta.1 as f64;
+    let (g, sigma, delta0) = (
+        k_consts.g2.value.sqrt().next_up(),
+        k_consts.sigma2.value.sqrt().next_up(),
+        k_consts.b_f.value,
+    );
+    let bound1 = o2nc_theorem(
+        delta0,
+        delta_f,
+        g,
+        sigma,
+        O2ncParams {
+            t: params.t,
+            k: params.k,
+            m: params.m,
+        },
+    );
+    // X ≤ sup ‖∇F‖ ≤ G_F.
+    let b = k_consts.g_f.value;
+    let mut rows = vec![];
+    if variant == O2ncVariant::IlCorrect {
+        rows.push(Check {
             id: "3a".into(),
             result: result.into(),
             claim: format!("‖w̄ᵏ − wᵏ_t‖ ≤ δ = {delta_f} for every block and run"),
@@ -350,40 +530,44 @@ pub fn o2nc(
                 "max over {} runs × {kb} blocks of max_t |w̄ᵏ − wᵏ_t| = {worst_spread:.6}",
                 mc.runs
             ),
-        },
-        Check {
-            id: "3b".into(),
+        });
+    }
+    for &claim_scale in claim_scales {
+        let bound = bound1 * claim_scale;
+        let (measured, verdict, text) = measure(lows, mids, b, bound, b, mc);
+        let control = claim_scale != 1.0 || variant == O2ncVariant::Printed;
+        rows.push(Check {
+            id: match (variant, claim_scale == 1.0) {
+                (O2ncVariant::IlCorrect, true) => "3b".into(),
+                (O2ncVariant::IlCorrect, false) => "3b.ctl".into(),
+                (O2ncVariant::Printed, _) => "3b.printed5".into(),
+            },
             result: result.into(),
-            claim,
+            claim: claim(claim_scale),
             assumptions: vec![
-                "τ_n ∼ p(·; w_n) (E11)".into(),
+                match variant {
+                    O2ncVariant::IlCorrect => "τ_n ∼ p(·; w_n) (E11)".into(),
+                    O2ncVariant::Printed => {
+                        "violated on purpose: τ_n ∼ p(·; θ_n) (E11), the kit's printed_algorithm_5"
+                            .into()
+                    }
+                },
                 "G² ≥ sup E‖g‖², σ² ≥ sup Var, Δ₀ ≥ F(θ₀) − F*".into(),
             ],
             constants: k_consts.all(),
             bound: Some(bound),
-            measured: Some(Measured {
-                value: mean_mid,
-                lcb: Some(sample.lcb(mc.alpha)),
-                ucb: Some(sample.ucb(mc.alpha)),
-                runs: Some(mc.runs),
-                alpha: Some(mc.alpha),
-            }),
-            tightness: Some(mean_mid / bound),
+            tightness: Some(measured.value / bound),
+            measured: Some(measured),
             method: Method::Statistical,
-            verdict: if decision == Decision::Violated {
-                Verdict::Fails
-            } else {
-                Verdict::Holds
-            },
+            verdict,
             erratum: Some("E11, E12, E13".into()),
-            role,
-            details: format!(
-                "T = {t}, K = {kb}, M = {}, D = δ/T; X̄ = {mean_mid:.5}, LCB = {:.5}, B = {bound:.5} (α = {:.1e}, R = {})",
-                params.m,
-                sample.lcb(mc.alpha),
-                mc.alpha,
-                mc.runs
-            ),
-        },
-    ]
+            role: if control {
+                Role::NegativeControl
+            } else {
+                Role::Thesis
+            },
+            details: format!("T = {t}, K = {kb}, M = {}, D = δ/T; {text}", params.m),
+        });
+    }
+    rows
 }

@@ -14,10 +14,11 @@ use crate::bounds::{
     cutkosky_orabona, cutkosky_orabona_params, storm_fixed, storm_schedule, upper,
 };
 use crate::check::{Check, Measured, Method, Role, Verdict};
-use crate::checks::montecarlo::McSettings;
+use crate::checks::montecarlo::{McSettings, Runs};
 use crate::global::GlobalConstants;
-use crate::stats::{Decision, Sample, decide};
+use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
+use ilopt::algo::printed::PrintedAlgorithm4Config;
 use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
 use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
 use ilopt::exact::forward::forward;
@@ -44,7 +45,7 @@ fn simulate(
     k: u64,
     runs: usize,
     stat: Statistic,
-) -> Result<(Vec<f64>, Vec<f64>), String> {
+) -> Result<Runs, String> {
     let pi = ToyProblem::<Interval>::new(mdp);
     let pf = ToyProblem::<f64>::new(mdp);
     let (mut lows, mut mids) = (Vec::with_capacity(runs), Vec::with_capacity(runs));
@@ -122,7 +123,7 @@ fn row(
     k: &GlobalConstants,
     bound: f64,
     sample_range: f64,
-    sims: Result<(Vec<f64>, Vec<f64>), String>,
+    sims: &Result<Runs, String>,
     mc: McSettings,
     role: Role,
     erratum: &str,
@@ -146,35 +147,210 @@ fn row(
     let (lows, mids) = match sims {
         Ok(x) => x,
         Err(e) => {
-            return Check { details: e, ..base };
+            return Check {
+                details: e.clone(),
+                ..base
+            };
         }
     };
-    let sample = Sample::new(&lows, sample_range);
+    let sample = Sample::new(lows, sample_range);
     let mean_mid = mids.iter().sum::<f64>() / mids.len() as f64;
-    let decision = decide(&sample, upper(bound), mc.alpha);
+    let lcb = sample.lcb(mc.alpha);
+    // The statistic is an average of ‖∇F‖² (resp. ‖∇F‖), so it cannot exceed its range bound.
+    let verdict = assess(&sample, upper(bound), sample_range, mc.alpha);
     Check {
         measured: Some(Measured {
             value: mean_mid,
-            lcb: Some(sample.lcb(mc.alpha)),
+            lcb: Some(lcb),
             ucb: Some(sample.ucb(mc.alpha)),
             runs: Some(mc.runs),
             alpha: Some(mc.alpha),
         }),
         tightness: Some(mean_mid / bound),
-        verdict: if decision == Decision::Violated {
-            Verdict::Fails
-        } else {
-            Verdict::Holds
-        },
+        verdict,
         details: format!(
-            "R = {} seeded runs; X̄ = {mean_mid:.5}, LCB = {:.5}, UCB = {:.5} (Hoeffding ∨ empirical Bernstein, α = {:.1e}, range [0, {sample_range:.4}]), B = {bound:.5}; {extra}",
+            "R = {} seeded runs; X̄ = {mean_mid:.5}, LCB = {lcb:.5}, UCB = {:.5} (max of Hoeffding, empirical Bernstein, betting at α/3 each; α = {:.1e}, range [0, {sample_range:.4}]), B = {bound:.5}; flags any B < {lcb:.5}, minimum detectable violation X̄ − LCB = {:.5}; the statistic cannot exceed {sample_range:.4}{}; {extra}",
             mc.runs,
-            sample.lcb(mc.alpha),
             sample.ucb(mc.alpha),
             mc.alpha,
+            mean_mid - lcb,
+            if bound >= sample_range {
+                " ≤ B, so no run could violate the bound (uninformative)"
+            } else {
+                ""
+            },
         ),
         ..base
     }
+}
+
+/// The algorithm a run of check 2c uses: IS-STORM (the theorem's algorithm) or a negative control
+/// run through the same check.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StormVariant {
+    /// IS-STORM with the given importance weights (math.md §4).
+    Weighted(Weighting),
+    /// Eq. 3.40 verbatim: the old-point term without importance weight (E10) — a control.
+    Unweighted,
+    /// The kit's `printed_algorithm_4`: the printed update (E9), no weights — a control.
+    PrintedAlgorithm4,
+}
+
+/// Check 2c for one algorithm with schedule (3.43) for L = max(L_F, L̃) (trajectory L̃ for the
+/// controls, as in 2c), K iterates from θ₁, against the middle expression of (3.60\*); one row
+/// per entry of `claim_scales`, all from **one** sample (same K, R, α and verdict code). A
+/// scale ≠ 1, or a control algorithm, is a negative control the row must flag.
+#[allow(clippy::too_many_arguments)]
+pub fn fixed_schedule_rows(
+    mdp: &ToyMdp,
+    k: &GlobalConstants,
+    variant: StormVariant,
+    theta1: f64,
+    iterations: u64,
+    mc: McSettings,
+    claim_scales: &[f64],
+) -> Vec<Check> {
+    let sims = fixed_schedule_sample(mdp, k, variant, theta1, iterations, mc.runs);
+    fixed_schedule_rows_from(k, variant, theta1, iterations, mc, &sims, claim_scales)
+}
+
+/// L = max(L_F, L̃) for the variant's weights (trajectory weights for the controls).
+fn variant_l(k: &GlobalConstants, variant: StormVariant) -> (Weighting, f64) {
+    let weighting = match variant {
+        StormVariant::Weighted(w) => w,
+        _ => Weighting::Trajectory,
+    };
+    (weighting, k.l(weighting))
+}
+
+/// R seeded runs of check 2c's algorithm (`variant`, schedule (3.43)), each reporting
+/// X = Σ_k η_k ‖∇F(θ_k)‖² / Σ_k η_k over θ_1..θ_K (lower ends, midpoints).
+///
+/// # Errors
+/// A message naming the run if a run fails or ∇F cannot be enclosed.
+pub fn fixed_schedule_sample(
+    mdp: &ToyMdp,
+    k: &GlobalConstants,
+    variant: StormVariant,
+    theta1: f64,
+    iterations: u64,
+    runs: usize,
+) -> Result<Runs, String> {
+    let (_, l) = variant_l(k, variant);
+    let schedule = StormSchedule::Thesis { l: Num::Float(l) };
+    let algorithm = match variant {
+        StormVariant::Weighted(w) => AlgorithmConfig::Storm(StormConfig {
+            schedule,
+            correction: match w {
+                Weighting::Trajectory => Correction::Trajectory,
+                Weighting::PerDecision => Correction::PerDecision,
+            },
+            form: EstimatorForm::Causal,
+        }),
+        StormVariant::Unweighted => AlgorithmConfig::Storm(StormConfig {
+            schedule,
+            correction: Correction::Unweighted,
+            form: EstimatorForm::Causal,
+        }),
+        StormVariant::PrintedAlgorithm4 => {
+            AlgorithmConfig::PrintedAlgorithm4(PrintedAlgorithm4Config {
+                schedule,
+                form: EstimatorForm::Causal,
+            })
+        }
+    };
+    simulate(
+        mdp,
+        &algorithm,
+        theta1,
+        iterations,
+        runs,
+        Statistic::EtaWeightedSquare { l },
+    )
+}
+
+/// The rows of check 2c from a sample of [`fixed_schedule_sample`], one per entry of
+/// `claim_scales` (the verdict by [`assess`], with the statistic's maximum G_F²).
+pub fn fixed_schedule_rows_from(
+    k: &GlobalConstants,
+    variant: StormVariant,
+    theta1: f64,
+    iterations: u64,
+    mc: McSettings,
+    sims: &Result<Runs, String>,
+    claim_scales: &[f64],
+) -> Vec<Check> {
+    let (weighting, l) = variant_l(k, variant);
+    let (id, wname, lname) = match variant {
+        StormVariant::Weighted(Weighting::Trajectory) => {
+            ("2c", "IS-STORM (trajectory weights)", "L̃")
+        }
+        StormVariant::Weighted(Weighting::PerDecision) => {
+            ("2c.pd", "IS-STORM (per-decision weights)", "L̃_PD")
+        }
+        StormVariant::Unweighted => (
+            "2c.unweighted",
+            "STORM with the unweighted old-point term (eq. 3.40 verbatim, E10)",
+            "L̃",
+        ),
+        StormVariant::PrintedAlgorithm4 => (
+            "2c.printed4",
+            "the printed Algorithm 4 update (E9), no weights",
+            "L̃",
+        ),
+    };
+    let algorithm_is_control = !matches!(variant, StormVariant::Weighted(_));
+    claim_scales
+        .iter()
+        .map(|&claim_scale| {
+            let bound = storm_fixed(l, k.sigma2.value, k.b_f.value, iterations) * claim_scale;
+            let control = algorithm_is_control || claim_scale != 1.0;
+            let mut c = row(
+                id,
+                "STORM, eq. 3.60 → Theorem S, eq. (3.60*)",
+                format!(
+                    "E[Σ_k η_k‖∇F(θ_k)‖²/Σ_k η_k] ≤ {}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))]/Σ_k (7/(k+7))^{{1/3}}, {wname}, schedule (3.43), L = max(L_F, {lname}) = {l:.4}, K = {iterations}",
+                    scale_prefix(claim_scale)
+                ),
+                vec![
+                    "(A1) F L_F-smooth on ℝ, inf F = 7/8 exact".into(),
+                    if algorithm_is_control {
+                        "(A2) violated on purpose: the old-point term's mean is not ∇F(θ_k) (rows 4d, 4f)".into()
+                    } else {
+                        "(A2) E g = ∇F; E[w g(θ_k, τ)] = ∇F(θ_k) for τ ∼ θ_{k+1} (identity I3, checked exactly in row 4)".into()
+                    },
+                    "(A3) Var_θ g ≤ σ² for all θ ∈ ℝ".into(),
+                    format!("(A4) E_{{τ∼θ′}}(g(θ′,τ) − g̃(θ→θ′,τ))² ≤ {lname}²(θ′−θ)² for all θ, θ′ ∈ ℝ (only consecutive iterates are needed, but it holds globally)"),
+                    "(C1), (C2) for schedule (3.43): row 2a".into(),
+                ],
+                k,
+                bound,
+                k.g_f.value * k.g_f.value * (1.0 + 1e-12),
+                sims,
+                mc,
+                if control {
+                    Role::NegativeControl
+                } else {
+                    Role::Corrected
+                },
+                "E7, E8, E10",
+                format!(
+                    "θ₁ = {theta1}, L_F ≤ {:.4}, {lname} ≤ {:.4}, σ² ≤ {:.4}, B_F = {}",
+                    k.l_f.value,
+                    match weighting {
+                        Weighting::Trajectory => k.l_tilde.value,
+                        Weighting::PerDecision => k.l_tilde_pd.value,
+                    },
+                    k.sigma2.value,
+                    k.b_f.value
+                ),
+            );
+            if claim_scale != 1.0 {
+                c.id = format!("{id}.ctl");
+            }
+            c
+        })
+        .collect()
 }
 
 /// Check 2c: IS-STORM (trajectory weights) with schedule (3.43) for L = max(L_F, L̃), K iterates
@@ -190,61 +366,16 @@ pub fn fixed_schedule(
     mc: McSettings,
     claim_scale: f64,
 ) -> Check {
-    let l = k.l(weighting);
-    let (id, correction, wname, lname) = match weighting {
-        Weighting::Trajectory => ("2c", Correction::Trajectory, "trajectory", "L̃"),
-        Weighting::PerDecision => ("2c.pd", Correction::PerDecision, "per-decision", "L̃_PD"),
-    };
-    let bound = storm_fixed(l, k.sigma2.value, k.b_f.value, iterations) * claim_scale;
-    let algorithm = AlgorithmConfig::Storm(StormConfig {
-        schedule: StormSchedule::Thesis { l: Num::Float(l) },
-        correction,
-        form: EstimatorForm::Causal,
-    });
-    let sims = simulate(
+    fixed_schedule_rows(
         mdp,
-        &algorithm,
+        k,
+        StormVariant::Weighted(weighting),
         theta1,
         iterations,
-        mc.runs,
-        Statistic::EtaWeightedSquare { l },
-    );
-    row(
-        id,
-        "STORM, eq. 3.60 → Theorem S, eq. (3.60*)",
-        format!(
-            "E[Σ_k η_k‖∇F(θ_k)‖²/Σ_k η_k] ≤ {}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))]/Σ_k (7/(k+7))^{{1/3}}, IS-STORM ({wname} weights), schedule (3.43), L = max(L_F, {lname}) = {l:.4}, K = {iterations}",
-            scale_prefix(claim_scale)
-        ),
-        vec![
-            "(A1) F L_F-smooth on ℝ, inf F = 7/8 exact".into(),
-            "(A2) E g = ∇F; E[w g(θ_k, τ)] = ∇F(θ_k) for τ ∼ θ_{k+1} (identity I3, checked exactly in row 4)".into(),
-            "(A3) Var_θ g ≤ σ² for all θ ∈ ℝ".into(),
-            format!("(A4) E_{{τ∼θ′}}(g(θ′,τ) − g̃(θ→θ′,τ))² ≤ {lname}²(θ′−θ)² for all θ, θ′ ∈ ℝ ({wname} weights; only consecutive iterates are needed, but it holds globally)"),
-            "(C1), (C2) for schedule (3.43): row 2a".into(),
-        ],
-        k,
-        bound,
-        k.g_f.value * k.g_f.value * (1.0 + 1e-12),
-        sims,
         mc,
-        if claim_scale == 1.0 {
-            Role::Corrected
-        } else {
-            Role::NegativeControl
-        },
-        "E7, E8, E10",
-        format!(
-            "θ₁ = {theta1}, L_F ≤ {:.4}, {lname} ≤ {:.4}, σ² ≤ {:.4}, B_F = {}",
-            k.l_f.value,
-            match weighting {
-                Weighting::Trajectory => k.l_tilde.value,
-                Weighting::PerDecision => k.l_tilde_pd.value,
-            },
-            k.sigma2.value,
-            k.b_f.value
-        ),
+        &[claim_scale],
     )
+    .remove(0)
 }
 
 /// Check 2d (secondary, argued transfer): IS-STORM with Algorithm 4's adaptive schedule, i.e.
@@ -294,7 +425,7 @@ pub fn adaptive_schedule(
         k,
         bound,
         k.g_f.value * (1.0 + 1e-12),
-        sims,
+        &sims,
         mc,
         if claim_scale == 1.0 {
             Role::Corrected
@@ -309,7 +440,7 @@ pub fn adaptive_schedule(
             params.w,
             if bound >= k.g_f.value {
                 format!(
-                    "; the bound is vacuous at this K (B ≥ sup ‖∇F‖ = G_F ≤ {:.4}): it holds trivially",
+                    "; the bound is vacuous at this K (B ≥ sup ‖∇F‖ = G_F ≤ {:.4})",
                     k.g_f.value
                 )
             } else {
