@@ -2,7 +2,7 @@
 
 use crate::check::Check;
 use crate::checks::montecarlo::{self, McSettings};
-use crate::checks::{constants, o2nc_formula, schedule, storm, thm31, unbiased};
+use crate::checks::{constants, o2nc_formula, schedule, second_toy, storm, thm31, unbiased};
 use crate::global::{GlobalConstants, GlobalSizes};
 use crate::stats::bonferroni;
 use ilopt::problem::Weighting;
@@ -125,7 +125,8 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     }
     let k = constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
         .map_err(|e| e.to_string())?;
-    rows.push(k.row("M1 (P2', c = 1/2, θ₁ = 0)", domain));
+    let coverage = crate::recheck::coverage_for(profile == Profile::Full);
+    rows.push(k.row_with("M1 (P2', c = 1/2, θ₁ = 0)", domain, coverage, "8"));
     let mc = McSettings {
         runs: s.runs,
         alpha: bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS),
@@ -133,7 +134,10 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     rows.push(montecarlo::sgd(&m1, &k, 0.0, (1, 20), s.sgd_k, mc, 1.0));
     rows.extend(montecarlo::o2nc(&m1, &k, 0.0, s.o2nc_n, (1, 10), mc, 1.0));
     let g = global_constants(&m1, s)?;
-    rows.push(g.row("M1 (P2', c = 1/2, θ₁ = 0)"));
+    rows.push(g.row_with("M1 (P2', c = 1/2, θ₁ = 0)", coverage));
+    rows.extend(second_toy::rows(second_toy::sizes(
+        profile == Profile::Full,
+    ))?);
     for w in [Weighting::Trajectory, Weighting::PerDecision] {
         rows.push(storm::fixed_schedule(&m1, &g, w, 0.0, s.storm_k, mc, 1.0));
     }
