@@ -14,6 +14,10 @@
 //! product of charts in 2-D) gives a rigorous bound of the supremum over ℝ (ℝ²), with one
 //! certificate per region ([`ChartBound`]); together the regions cover ℝ (ℝ²).
 //!
+//! Every certificate is re-evaluated in the table, box by box, by a second route that shares no code
+//! with this module ([`crate::recheck`]), and the regions' boxes must tile them exactly
+//! ([`crate::bnb::verify_tiling`]); row 8b fails if any box fails.
+//!
 //! The point of this module is that no box has to contain the iterates: the constants hold
 //! everywhere, so they apply to STORM, whose iterates have no useful a.s. box (the direction d_k
 //! has no a.s. bound that stays small as a_k → 0).
@@ -567,7 +571,9 @@ pub fn l_tilde(
     ))
 }
 
-/// Re-check the certificate of an L̃ from [`l_tilde`] independently of the branch-and-bound run:
+/// Re-run the first route on the certificate of an L̃ from [`l_tilde`] (a consistency check of the
+/// recorded enclosures with the same code; the independent re-check the table runs is
+/// [`crate::recheck`], through [`GlobalConstants::recheck`]):
 /// the regions cover ℝ² ([`verify_charts`]), the enclosure of |∂²V_IS/∂θ′²| is **re-evaluated** on
 /// every certificate box and must not exceed the recorded one, and the constant must be
 /// ≥ √(½ · the re-evaluated supremum). Returns the re-evaluated supremum.
