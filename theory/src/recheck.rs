@@ -32,8 +32,9 @@
 //!    [`MAX_DEPTH`] times) and every piece must prove it.
 //!
 //! A box passes if its corner values can lie in its recorded enclosure, its recorded bound is
-//! proved to within the certificate's own precision (upper bound minus attained value, at least a
-//! relative 10⁻⁹) and the bound proved is ≤ the constant's certified bound (no slack); the
+//! proved to within the certificate's own precision (upper bound minus attained value, capped at
+//! 1 % of the certified bound, at least a relative 10⁻⁹) and the bound proved is ≤ the constant's
+//! certified bound (no slack); the
 //! certificate passes if every box passes and the boxes tile the domain exactly
 //! ([`crate::bnb::verify_tiling`]). A core-chart side with |θ| ≥ R is evaluated in the tail
 //! coordinate u = 1/θ (same function, smooth there), which keeps wide far-out boxes cheap.
@@ -51,6 +52,9 @@ pub const MAX_DEPTH: u32 = 12;
 
 /// Relative slack on a box's own recorded bound (never on the constant's certified bound).
 const BOX_SLACK: f64 = 1e-9;
+
+/// The largest slack on a box's own recorded bound, as a share of the certified bound.
+const BOX_SHARE: f64 = 0.01;
 
 /// A second-order jet in `d` variables: value, gradient and Hessian (row-major).
 #[derive(Debug, Clone)]
@@ -822,13 +826,17 @@ pub fn recheck(
         };
         let inside = |v: &Interval| !(v.inf() > rh.sup() || v.sup() < rl.inf());
         // The box's own bound, re-proved to within the certificate's stated precision (its
-        // upper bound minus the value it attained), never beyond the certified bound.
+        // upper bound minus the value it attained) but at most 1 % of the certified bound, never
+        // beyond the certified bound.
         let gap = if (cert.upper - cert.lower).is_nan() {
             0.0
         } else {
             (cert.upper - cert.lower).max(0.0)
         };
-        let target = (hi + gap.max(BOX_SLACK * hi.abs())).min(certified);
+        let slack = gap
+            .min(BOX_SHARE * certified.abs())
+            .max(BOX_SLACK * hi.abs());
+        let target = (hi + slack).min(certified);
         match ctx.box_bound(&b.bounds) {
             Err(e) => out.fail(format!("box {:?}: {e}", b.bounds)),
             Ok((_, exact)) => {

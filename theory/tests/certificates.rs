@@ -196,6 +196,21 @@ fn a_lowered_bound_fails_rows_8_and_8b() {
     cert.upper = low;
     k.g_f.value = low.sqrt().next_up();
     assert_eq!(row8(&k), Verdict::Fails);
+    // Row 8b, L̃ (2-D): one box of the core × core region claims a bound 2 % of the certified
+    // bound below its own recorded lower end (so below every value on the box).
+    let mut g = global_constants().clone();
+    let region = g
+        .l_tilde
+        .charts
+        .iter_mut()
+        .find(|r| r.charts == [Chart::Core, Chart::Core])
+        .unwrap();
+    let i = top(&region.bound);
+    let drop = 0.02 * region.bound.upper;
+    let e = &mut region.bound.certificate[i].enclosure;
+    e[1] = e[0] - drop;
+    e[0] = e[1];
+    assert_eq!(row8b(&g), Verdict::Fails);
     // Row 8b, L̃ (2-D, core × core region, where its supremum is): every box's bound, the
     // region's bound and the constant lowered consistently to 0.1 % below a value the function
     // attains (the branch-and-bound's `lower`), so only the re-evaluation can tell.
@@ -281,4 +296,39 @@ fn overlapping_boxes_fail_rows_8_and_8b() {
     let row = g.row("M1");
     assert_eq!(row.verdict, Verdict::Fails);
     assert!(row.details.contains("tiling broken"), "{}", row.details);
+}
+
+/// The second toy at a small size: its constants' certificates pass the second route (every box)
+/// and the SGD row runs with every iterate inside the box; the same certificates with one box
+/// removed fail.
+#[test]
+fn second_toy_rows_at_a_small_size() {
+    use ilopt_theory::checks::second_toy::{SecondToySizes, SgdSizes, domain, rows};
+    let s = SecondToySizes {
+        tol: 0.5,
+        max_boxes: 400,
+        coverage: Coverage::All,
+        sgd: SgdSizes {
+            runs: 20,
+            k: 200,
+            eta: (1, 1000),
+            alpha: 0.01,
+        },
+    };
+    let r = rows(s).unwrap();
+    assert_eq!((r[0].id.as_str(), r[1].id.as_str()), ("8c", "1b"));
+    assert_eq!(r[0].verdict, Verdict::Holds, "{}", r[0].details);
+    assert!(r[0].details.contains("every box"), "{}", r[0].details);
+    assert_ne!(r[1].verdict, Verdict::Fails, "{}", r[1].details);
+    assert!(
+        r[1].details.contains("runs leaving the box 0"),
+        "{}",
+        r[1].details
+    );
+    let m2 = m2_two_groups();
+    let zero = q("0");
+    let mut k = compute(&m2, &[zero.clone(), zero], None, &domain(), 0.5, 400).unwrap();
+    assert_eq!(k.row("M2", &domain()).verdict, Verdict::Holds);
+    k.l_f.certificate.as_mut().unwrap().certificate.remove(7);
+    assert_eq!(k.row("M2", &domain()).verdict, Verdict::Fails);
 }
