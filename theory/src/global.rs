@@ -14,6 +14,10 @@
 //! product of charts in 2-D) gives a rigorous bound of the supremum over ℝ (ℝ²), with one
 //! certificate per region ([`ChartBound`]); together the regions cover ℝ (ℝ²).
 //!
+//! Every certificate is re-evaluated in the table, box by box, by a second route that shares no code
+//! with this module ([`crate::recheck`]), and the regions' boxes must tile them exactly
+//! ([`crate::bnb::verify_tiling`]); row 8b fails if any box fails.
+//!
 //! The point of this module is that no box has to contain the iterates: the constants hold
 //! everywhere, so they apply to STORM, whose iterates have no useful a.s. box (the direction d_k
 //! has no a.s. bound that stays small as a_k → 0).
@@ -29,6 +33,7 @@
 use crate::bnb::{BnbError, SupBound, sup_bound, verify_certificate};
 use crate::check::{Check, Measured, Method, Role, Verdict};
 use crate::constants::{Constant, Provenance, attained_sqrt};
+use crate::recheck::{Coverage, Quantity, Recheck, recheck};
 use ilopt::exact::enumerate::for_each_prefix;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
@@ -566,7 +571,9 @@ pub fn l_tilde(
     ))
 }
 
-/// Re-check the certificate of an L̃ from [`l_tilde`] independently of the branch-and-bound run:
+/// Re-run the first route on the certificate of an L̃ from [`l_tilde`] (a consistency check of the
+/// recorded enclosures with the same code; the independent re-check the table runs is
+/// [`crate::recheck`], through [`GlobalConstants::recheck`]):
 /// the regions cover ℝ² ([`verify_charts`]), the enclosure of |∂²V_IS/∂θ′²| is **re-evaluated** on
 /// every certificate box and must not exceed the recorded one, and the constant must be
 /// ≥ √(½ · the re-evaluated supremum). Returns the re-evaluated supremum.
@@ -618,6 +625,10 @@ pub fn gradient_in_chart(mdp: &ToyMdp, chart: Chart, x: Interval) -> Result<Inte
     Ok(theta_first(chart, x, fx))
 }
 
+/// A rigorous constant, the quantity its certificate bounds, its dimension (1: ℝ, 2: ℝ²) and the
+/// map from the certified supremum to the constant.
+type Certified<'a> = (&'a Constant, Quantity, usize, fn(f64) -> f64);
+
 /// The global constants of the STORM checks: B_F exact, the rest rigorous over ℝ (ℝ² for L̃).
 #[derive(Debug, Clone)]
 pub struct GlobalConstants {
@@ -635,6 +646,8 @@ pub struct GlobalConstants {
     pub g_f: Constant,
     /// G_∞ ≥ sup |g|.
     pub g_inf: Constant,
+    /// The MDP the constants are for (the second route re-evaluates its certificates on it).
+    pub mdp: ToyMdp,
 }
 
 /// Branch-and-bound sizes: (tolerance, box budget per region) for the 1-D constants and for L̃.
@@ -679,6 +692,7 @@ impl GlobalConstants {
             sigma2,
             g_f,
             g_inf,
+            mdp: mdp.clone(),
         })
     }
 
@@ -717,9 +731,77 @@ impl GlobalConstants {
             .collect()
     }
 
-    /// The report row (8b): every constant exact or rigorous over ℝ, each certificate re-checked.
+    /// Every rigorous constant with the quantity its certificate bounds, the constant's
+    /// dimension (1: ℝ, 2: ℝ²) and the map from the certified supremum to the constant.
+    fn certified(&self) -> [Certified<'_>; 6] {
+        fn id(s: f64) -> f64 {
+            s
+        }
+        fn root(s: f64) -> f64 {
+            s.max(0.0).sqrt()
+        }
+        fn half_root(s: f64) -> f64 {
+            (s / 2.0).max(0.0).sqrt()
+        }
+        [
+            (&self.l_f, Quantity::Hessian, 1, id),
+            (&self.sigma2, Quantity::Variance, 1, id),
+            (&self.g_f, Quantity::GradientSq, 1, root),
+            (&self.g_inf, Quantity::MaxEstimateSq, 1, root),
+            (&self.l_tilde, Quantity::VisTrajectory, 2, half_root),
+            (&self.l_tilde_pd, Quantity::VisPerDecision, 2, half_root),
+        ]
+    }
+
+    /// Re-evaluate every certificate by the second route ([`crate::recheck`]): each region's
+    /// boxes (all, or a sample) and its exact tiling; a constant passes if every region passes
+    /// and the constant is ≥ the transformed largest bound the second route proved.
+    pub fn recheck(&self, coverage: Coverage) -> Vec<(String, Recheck)> {
+        self.certified()
+            .iter()
+            .map(|(c, q, _, t)| {
+                let mut all = Recheck::empty();
+                for r in &c.charts {
+                    all.merge(recheck(
+                        &self.mdp,
+                        *q,
+                        &r.charts,
+                        &r.domain,
+                        &r.bound,
+                        r.bound.upper,
+                        coverage,
+                    ));
+                }
+                if c.charts.is_empty() {
+                    all.failures.push("no certificate".into());
+                } else if c
+                    .value
+                    .partial_cmp(&t(all.max_upper))
+                    .is_none_or(|o| o.is_lt())
+                {
+                    all.failures.push(format!(
+                        "{} = {} < the re-checked bound {}",
+                        c.name,
+                        c.value,
+                        t(all.max_upper)
+                    ));
+                }
+                (c.name.clone(), all)
+            })
+            .collect()
+    }
+
+    /// The report row (8b): every constant exact or rigorous over ℝ, every certificate re-checked
+    /// box by box by the second route.
     pub fn row(&self, name: &str) -> Check {
+        self.row_with(name, Coverage::All)
+    }
+
+    /// [`GlobalConstants::row`] re-checking the boxes given by `coverage`.
+    pub fn row_with(&self, name: &str, coverage: Coverage) -> Check {
         let all = self.all();
+        let rechecks = self.recheck(coverage);
+        let ok = self.verified() && rechecks.iter().all(|(_, r)| r.passed());
         Check {
             id: "8b".into(),
             result: "Rigorous constants over ℝ (math.md §7.1, tails by θ = 1/u)".into(),
@@ -730,44 +812,67 @@ impl GlobalConstants {
                 "none on the iterates: the bounds hold for every θ (θ, θ′)".into(),
                 "L̃² ≤ ½ sup |∂²V_IS/∂θ′²| since V_IS(θ, θ) = 0 is a minimum (Taylor)".into(),
             ],
-            details: all
-                .iter()
-                .map(|c| {
-                    let boxes: usize = c.charts.iter().map(|r| r.bound.certificate.len()).sum();
-                    format!("{} ≤ {:.6} ({boxes} boxes)", c.name, c.value)
-                })
-                .collect::<Vec<_>>()
-                .join("; "),
+            details: format!(
+                "{}. {}",
+                all.iter()
+                    .map(|c| {
+                        let boxes: usize = c.charts.iter().map(|r| r.bound.certificate.len()).sum();
+                        format!("{} ≤ {:.6} ({boxes} boxes)", c.name, c.value)
+                    })
+                    .collect::<Vec<_>>()
+                    .join("; "),
+                recheck_summary(&rechecks, coverage)
+            ),
             constants: all,
             bound: None,
             measured: Some(Measured::exact(self.l_tilde.value)),
             tightness: None,
             method: Method::Rigorous,
-            verdict: Verdict::from_bool(self.verified()),
+            verdict: Verdict::from_bool(ok),
             erratum: Some("E2".into()),
             role: Role::Corrected,
         }
     }
 
-    /// Re-check every certificate (B_F is exact): each covers ℝ (ℝ² for L̃) and the constant is
+    /// Re-check every certificate (B_F is exact): each tiles ℝ (ℝ² for L̃) and the constant is
     /// at least the transformed supremum it certifies.
     pub fn verified(&self) -> bool {
-        let id = |s: f64| s;
-        let root = |s: f64| s.max(0.0).sqrt();
-        let half_root = |s: f64| (s / 2.0).max(0.0).sqrt();
-        type Transform<'a> = &'a dyn Fn(f64) -> f64;
-        let checks: [(&Constant, usize, Transform<'_>); 6] = [
-            (&self.l_f, 1, &id),
-            (&self.sigma2, 1, &id),
-            (&self.g_f, 1, &root),
-            (&self.g_inf, 1, &root),
-            (&self.l_tilde, 2, &half_root),
-            (&self.l_tilde_pd, 2, &half_root),
-        ];
         self.b_f.provenance == Provenance::Exact
-            && checks.iter().all(|(c, d, t)| {
+            && self.certified().iter().all(|(c, _, d, t)| {
                 c.provenance == Provenance::Rigorous
                     && verify_charts(&c.charts, *d).is_some_and(|sup| c.value >= t(sup))
             })
     }
+}
+
+/// One sentence per constant: boxes re-checked, pieces, corners, tiling, result.
+pub fn recheck_summary(rechecks: &[(String, Recheck)], coverage: Coverage) -> String {
+    let scope = match coverage {
+        Coverage::All => "every box".to_string(),
+        Coverage::Sample(n) => format!(
+            "a seeded sample of {n} boxes per region plus every box within 1 % of the certified bound"
+        ),
+    };
+    let each: Vec<String> = rechecks
+        .iter()
+        .map(|(name, r)| {
+            let verdict = if r.passed() {
+                "passed".to_string()
+            } else {
+                format!("FAILED: {}", r.failures.join("; "))
+            };
+            format!(
+                "{name}: {} boxes, {} pieces, {} corners, tiling {}, max re-checked {:.6}, {verdict}",
+                r.boxes,
+                r.pieces,
+                r.corners,
+                if r.tiling { "exact" } else { "broken" },
+                r.max_upper
+            )
+        })
+        .collect();
+    format!(
+        "Second route (hand-written P2′ closed forms, enumeration and estimator; corner values enclosed at points and a Dual<Interval> gradient bound on each box; {scope}): {}",
+        each.join("; ")
+    )
 }

@@ -13,6 +13,7 @@ pub mod check;
 pub mod checks;
 pub mod constants;
 pub mod global;
+pub mod recheck;
 pub mod report;
 pub mod schedule;
 pub mod stats;

@@ -2,7 +2,7 @@
 
 use crate::check::Check;
 use crate::checks::montecarlo::McSettings;
-use crate::checks::{constants, o2nc_formula, schedule, statistical, thm31, unbiased};
+use crate::checks::{constants, o2nc_formula, schedule, second_toy, statistical, thm31, unbiased};
 use crate::global::{GlobalConstants, GlobalSizes};
 use crate::stats::bonferroni;
 use ilopt::problem::Weighting;
@@ -158,14 +158,18 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     }
     let k = constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
         .map_err(|e| e.to_string())?;
-    rows.push(k.row("M1 (P2', c = 1/2, θ₁ = 0)", domain));
+    let coverage = crate::recheck::coverage_for(profile == Profile::Full);
+    rows.push(k.row_with("M1 (P2', c = 1/2, θ₁ = 0)", domain, coverage, "8"));
     let mc = McSettings {
         runs: s.runs,
         alpha: bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS),
     };
     rows.extend(statistical::toy_rows(&m1, &k, s, mc));
     let g = global_constants(&m1, s)?;
-    rows.push(g.row("M1 (P2', c = 1/2, θ₁ = 0)"));
+    rows.push(g.row_with("M1 (P2', c = 1/2, θ₁ = 0)", coverage));
+    rows.extend(second_toy::rows(second_toy::sizes(
+        profile == Profile::Full,
+    ))?);
     rows.extend(statistical::storm_rows(&m1, &g, s, mc.alpha));
     Ok(rows)
 }

@@ -6,6 +6,7 @@ pub mod montecarlo;
 pub mod o2nc_formula;
 pub mod real_env;
 pub mod schedule;
+pub mod second_toy;
 pub mod statistical;
 pub mod storm;
 pub mod thm31;
