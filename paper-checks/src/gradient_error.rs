@@ -1127,6 +1127,43 @@ mod tests {
         assert!((&a.2 - &m2).norm() < 1e-9 * (1.0 + m2.norm()));
     }
 
+    /// The exact spread of one squared error equals its f64 value by enumerating the prefixes
+    /// directly.
+    #[test]
+    fn exact_spread_of_one_squared_error() {
+        let g = toy_section(vec![1, 2, 4], 2);
+        let (mdp, grad, _, sigma2) = toy_exact(&g.toy).unwrap();
+        let sd = squared_error_sd(&mdp, &g.toy, &grad, &sigma2).unwrap();
+        let (p, theta, reference, s2) = toy_sampler(&g);
+        let (mut m2, mut m4) = (0.0, 0.0);
+        for q in ilopt::exact::enumerate::prefixes(&p, theta.as_slice()).unwrap() {
+            let e: f64 = q
+                .estimate
+                .iter()
+                .zip(&reference)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum();
+            m2 += q.prob * e;
+            m4 += q.prob * e * e;
+        }
+        assert!((m2 - s2).abs() < 1e-9 * s2);
+        assert!((sd - (m4 - m2 * m2).sqrt()).abs() < 1e-9 * sd);
+    }
+
+    #[test]
+    fn the_slope_rule_on_synthetic_intervals() {
+        let s = |lo, hi| SlopeCi {
+            estimate: (lo + hi) / 2.0,
+            lo,
+            hi,
+            n: 100,
+        };
+        assert!(s(-0.55, -0.45).consistent_with_inverse_sqrt());
+        assert!(!s(-0.45, -0.35).consistent_with_inverse_sqrt());
+        assert!(!s(-0.6, 0.1).consistent_with_inverse_sqrt());
+        assert!(!s(-0.7, -0.55).consistent_with_inverse_sqrt());
+    }
+
     #[test]
     fn slope_of_a_power_law() {
         let x = [1.0, 10.0, 100.0];
