@@ -183,7 +183,7 @@ impl GradientError {
         format!(
             "{:016x}",
             fnv1a(&format!(
-                "v2|{}|{:016x}",
+                "v3|{}|{:016x}",
                 serde_json::to_string(self).unwrap_or_default(),
                 fnv1a(&file)
             ))
@@ -238,6 +238,9 @@ pub struct RouteResult {
     pub rmse: Vec<RmsePoint>,
     /// The fitted slope.
     pub slope: SlopeCi,
+    /// Per gradient block (obstacle: the x and y rows, the thesis's panels (a) and (b)): its name
+    /// and the slope of its own RMSE (σ² and the reference variance of that block).
+    pub block_slopes: Vec<(String, SlopeCi)>,
     /// Wall time of the route in seconds (0 when reused; kept out of the deterministic data,
     /// written to `timings/gradient-error.json`).
     #[serde(skip)]
@@ -529,6 +532,7 @@ pub fn toy_route(g: &GradientError) -> Result<RouteResult, Error> {
         reference_trajectories: None,
         rmse,
         slope,
+        block_slopes: vec![],
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -702,6 +706,26 @@ pub fn obstacle_route(g: &GradientError) -> Result<RouteResult, Error> {
         |rng| draw(&p, &theta, rng),
     )?;
     let (rmse, slope) = summarise(&o.ns, &sq, sigma2, reference_variance, g.bootstrap, &key);
+    let block_slopes = [("x-row", 0..h), ("y-row", h..d)]
+        .into_iter()
+        .enumerate()
+        .map(|(b, (name, range))| {
+            let only: Vec<Vec<Vec<f64>>> = sq
+                .iter()
+                .map(|rep| rep.iter().map(|v| vec![v[b]]).collect())
+                .collect();
+            let s2 = mom.variance(range);
+            let (_, slope) = summarise(
+                &o.ns,
+                &only,
+                s2,
+                s2 / o.reference_trajectories as f64,
+                g.bootstrap,
+                &format!("{key}|{name}"),
+            );
+            (name.to_string(), slope)
+        })
+        .collect();
     Ok(RouteResult {
         ns: o.ns.clone(),
         blocks: vec!["x-row".into(), "y-row".into()],
@@ -714,6 +738,7 @@ pub fn obstacle_route(g: &GradientError) -> Result<RouteResult, Error> {
         reference_trajectories: Some(o.reference_trajectories),
         rmse,
         slope,
+        block_slopes,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -945,7 +970,7 @@ pub fn description(g: &GradientError, r: &GradientErrorResult) -> String {
          σ̂² = {os2:.6e} is their sample variance (trace), and the reference's own standard error \
          σ̂/√M = {se:.4e} is drawn as a floor. Because the reference is independent of the streams, \
          E‖ḡ_N − R‖² = σ²/N + σ²/M; the band \"− ref. variance\" and the slope use \
-         √(MSE − σ̂²/M) (the two bands coincide to the eye when M ≫ N). Slope {os}. {times}\
+         √(MSE − σ̂²/M) (the two bands coincide to the eye when M ≫ N). Slope {os}; by row of the gradient (the thesis's panels (a) and (b)): {blocks}. {times}\
          {n1}(Data: `gradient_error.csv`, one row per stream, N and gradient block.)",
         reps = g.repetitions,
         boot = g.bootstrap,
@@ -960,6 +985,12 @@ pub fn description(g: &GradientError, r: &GradientErrorResult) -> String {
         os2 = o.sigma2,
         se = o.reference_variance.sqrt(),
         os = slope_text(o),
+        blocks = o
+            .block_slopes
+            .iter()
+            .map(|(b, s)| format!("{b} {} [{}, {}]", fmt3(s.estimate), fmt3(s.lo), fmt3(s.hi)))
+            .collect::<Vec<_>>()
+            .join(", "),
         n1 = coverage_note(t, g.repetitions) + &coverage_note(o, g.repetitions),
         times = if t.seconds > 0.0 {
             format!(
