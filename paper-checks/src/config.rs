@@ -27,20 +27,7 @@ pub struct Profile {
     pub cartpole: TaskSection,
 }
 
-/// Fig. 4.2: error of the oracle's mean over N trajectories against a high-N reference.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct GradientError {
-    /// The sample sizes N (each ≥ 1, increasing).
-    pub ns: Vec<u64>,
-    /// Trajectories of the reference mean (≥ the largest N).
-    pub reference_trajectories: u64,
-    /// σ_π of the linear-Gaussian learner.
-    pub sigma: f64,
-    /// The policy parameter θ at which the gradient is estimated (2 × 9 = 18 entries, row-major:
-    /// x-row then y-row).
-    pub theta: Vec<f64>,
-}
+pub use crate::gradient_error::GradientError;
 
 /// One task's experiment: the learner, the evaluation, the convergence criterion, the algorithms.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -189,40 +176,9 @@ impl Profile {
                 "must be \"quick\", \"full\" or \"none\"",
             ));
         }
-        let g = &self.gradient_error;
-        if g.ns.is_empty() || g.ns.contains(&0) || g.ns.windows(2).any(|w| w[0] >= w[1]) {
-            return Err(field(
-                file,
-                "gradient_error.ns",
-                "must be a non-empty increasing list of positive integers",
-            ));
-        }
-        if g.reference_trajectories < *g.ns.last().unwrap_or(&1) {
-            return Err(field(
-                file,
-                "gradient_error.reference_trajectories",
-                "must be at least the largest N",
-            ));
-        }
-        if !(g.sigma.is_finite() && g.sigma > 0.0) {
-            return Err(field(
-                file,
-                "gradient_error.sigma",
-                "must be finite and > 0",
-            ));
-        }
-        if g.theta.len() != 2 * ilopt::task::obstacle::FEATURES
-            || g.theta.iter().any(|x| !x.is_finite())
-        {
-            return Err(field(
-                file,
-                "gradient_error.theta",
-                format!(
-                    "must hold {} finite numbers",
-                    2 * ilopt::task::obstacle::FEATURES
-                ),
-            ));
-        }
+        self.gradient_error
+            .validate()
+            .map_err(|(name, reason)| field(file, &name, reason))?;
         for (name, t) in [("obstacle", &self.obstacle), ("cartpole", &self.cartpole)] {
             if name == "obstacle" && !t.sigma.is_some_and(|s| s.is_finite() && s > 0.0) {
                 return Err(field(file, "obstacle.sigma", "must be set, finite and > 0"));

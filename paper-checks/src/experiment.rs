@@ -1,5 +1,5 @@
-//! The experiments: one seeded run of one algorithm on one task, evaluated at checkpoints, and the
-//! gradient-error study of Fig. 4.2.
+//! The experiments: one seeded run of one algorithm on one task, evaluated at checkpoints (the
+//! gradient-error study of Fig. 4.2 is in [`crate::gradient_error`]).
 //!
 //! **Evaluation.** At every checkpoint the learned policy acts *deterministically* (the
 //! linear-Gaussian mean `Wφ(s)`; the softmax's most probable action) on `eval_episodes` seeded
@@ -16,7 +16,7 @@
 //! calls to converge" are the cumulative per-state gradient evaluations ([`Cost`]) at that
 //! checkpoint, its runtime the training wall time up to it (evaluation excluded).
 
-use crate::config::{AlgorithmEntry, CartPoleExpertChoice, GradientError, TaskSection};
+use crate::config::{AlgorithmEntry, CartPoleExpertChoice, TaskSection};
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::algo::{Num, RunConfig, Runner, StoppingRule};
@@ -627,74 +627,4 @@ pub fn baseline_seed(
         &Cost::default(),
         None,
     ))
-}
-
-/// Fig. 4.2 for one seed: for each N, the norms of the x and y rows of
-/// (mean of the first N estimates) − reference.
-///
-/// # Errors
-/// [`Error::Experiment`] if a roll-out fails.
-pub fn gradient_error_seed(
-    g: &GradientError,
-    reference: &DVector<f64>,
-    seed_index: u32,
-) -> Result<Vec<(u64, f64, f64)>, Error> {
-    let Bench::Obstacle { problem, .. } = Bench::obstacle(g.sigma, ObstacleFeatures::Basic)? else {
-        return Err(Error::experiment("gradient error", "not the obstacle task"));
-    };
-    let theta = DVector::from_vec(g.theta.clone());
-    let key = format!(
-        "gradient-error|{}",
-        serde_json::to_string(g).unwrap_or_default()
-    );
-    let mut rng = KitRng::seed_from_u64(derive_seed(&key, u64::from(seed_index)));
-    let mut cost = Cost::default();
-    let mut sum = DVector::zeros(theta.len());
-    let mut out = Vec::new();
-    let mut k = 0u64;
-    for &n in &g.ns {
-        while k < n {
-            let t = problem
-                .rollout(&Behaviour::Learner(&theta), &mut rng, &mut cost)
-                .map_err(|e| Error::experiment("gradient error", e))?;
-            sum += problem
-                .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
-                .map_err(|e| Error::experiment("gradient error", e))?;
-            k += 1;
-        }
-        let (x, y) = row_norms(&(&sum / n as f64 - reference));
-        out.push((n, x, y));
-    }
-    Ok(out)
-}
-
-/// The high-N reference of Fig. 4.2 (its own seed stream, independent of the seeds' streams).
-///
-/// # Errors
-/// As [`gradient_error_seed`].
-pub fn gradient_reference(g: &GradientError) -> Result<DVector<f64>, Error> {
-    let Bench::Obstacle { problem, .. } = Bench::obstacle(g.sigma, ObstacleFeatures::Basic)? else {
-        return Err(Error::experiment("gradient error", "not the obstacle task"));
-    };
-    use rayon::prelude::*;
-    let key = format!(
-        "gradient-reference|{}",
-        serde_json::to_string(g).unwrap_or_default()
-    );
-    let theta = DVector::from_vec(g.theta.clone());
-    // Chunks of 64 trajectories, each with its own derived seed, summed in chunk order: the same
-    // number whatever the thread count.
-    let chunks: Vec<u64> = (0..g.reference_trajectories.div_ceil(64)).collect();
-    let parts = chunks
-        .par_iter()
-        .map(|&c| {
-            let n = 64.min(g.reference_trajectories - 64 * c);
-            mean_estimate(&problem, &theta, n, derive_seed(&key, c)).map(|m| m * n as f64)
-        })
-        .collect::<Result<Vec<_>, Error>>()?;
-    let mut sum = DVector::zeros(theta.len());
-    for p in parts {
-        sum += p;
-    }
-    Ok(sum / g.reference_trajectories as f64)
 }

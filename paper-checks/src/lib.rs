@@ -11,6 +11,7 @@
 pub mod config;
 pub mod error;
 pub mod experiment;
+pub mod gradient_error;
 pub mod pipeline;
 pub mod plots;
 pub mod provenance;

@@ -10,8 +10,7 @@
 use crate::config::{AlgorithmEntry, Profile, TaskSection};
 use crate::error::Error;
 use crate::experiment::{
-    Baseline, Bench, Checkpoint, SeedRun, SeedTiming, TaskKind, baseline_seed, gradient_error_seed,
-    gradient_reference, run_key, run_seed,
+    Baseline, Bench, Checkpoint, SeedRun, SeedTiming, TaskKind, baseline_seed, run_key, run_seed,
 };
 use crate::stats::fnv1a;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -64,16 +63,7 @@ pub struct ConfigTiming {
 /// A configuration's results with its timings (absent when reused without a timing file).
 pub type ConfigWithTiming = (ConfigResult, Option<ConfigTiming>);
 
-/// Fig. 4.2 data.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct GradientErrorResult {
-    /// Reuse key.
-    pub key_hash: String,
-    /// The reference mean estimate.
-    pub reference: Vec<f64>,
-    /// Per seed: (N, error x, error y).
-    pub seeds: Vec<Vec<(u64, f64, f64)>>,
-}
+pub use crate::gradient_error::GradientErrorResult;
 
 /// A baseline policy's evaluation on every seed's evaluation episodes (the episodes the learners'
 /// checkpoints of that seed meet).
@@ -263,14 +253,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         results.push(row);
     }
     let gfile = runs_dir.join("gradient-error.json");
-    let gkey = format!(
-        "{:016x}",
-        fnv1a(&format!(
-            "{}|{}",
-            serde_json::to_string(&profile.gradient_error).unwrap_or_default(),
-            profile.seeds
-        ))
-    );
+    let gkey = profile.gradient_error.key_hash();
     let gcached: Option<GradientErrorResult> = if opts.redo { None } else { read_json(&gfile) };
     let gcached = gcached.filter(|g| g.key_hash == gkey);
     let theory_file = opts.out.join("theory.md");
@@ -280,12 +263,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         std::fs::read_to_string(&theory_file).ok()
     };
 
-    let total = todo.len() * profile.seeds as usize
-        + if gcached.is_none() {
-            profile.seeds as usize
-        } else {
-            0
-        };
+    let total = todo.len() * profile.seeds as usize;
     let progress = Progress::new(total, opts.progress);
     let benches = [
         Bench::new(TaskKind::Obstacle, &profile.obstacle)?,
@@ -322,20 +300,18 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         if let Some(g) = gcached.clone() {
             return Ok(g);
         }
-        let reference = gradient_reference(&profile.gradient_error)?;
-        let per_seed = seeds
-            .par_iter()
-            .map(|&s| {
-                let r = gradient_error_seed(&profile.gradient_error, &reference, s);
-                progress.seed_done("Fig. 4.2");
-                r
-            })
-            .collect::<Result<Vec<_>, Error>>()?;
-        let g = GradientErrorResult {
-            key_hash: gkey.clone(),
-            reference: reference.iter().copied().collect(),
-            seeds: per_seed,
-        };
+        let g = crate::gradient_error::run(&profile.gradient_error)?;
+        progress.line(&format!(
+            "done: Fig. 4.2 (toy {:.1} s, obstacle {:.1} s)",
+            g.toy.seconds, g.obstacle.seconds
+        ));
+        write_atomic(
+            &timings_dir.join("gradient-error.json"),
+            &to_json(
+                "timings",
+                &serde_json::json!({"toy_seconds": g.toy.seconds, "obstacle_seconds": g.obstacle.seconds}),
+            )?,
+        )?;
         write_atomic(&gfile, &to_json("gradient error", &g)?)?;
         Ok(g)
     };

@@ -353,56 +353,6 @@ fn band(
     s
 }
 
-/// Least-squares slope of log10(y) on log10(x).
-fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
-    let pts: Vec<(f64, f64)> = x
-        .iter()
-        .zip(y)
-        .filter(|(a, b)| **a > 0.0 && **b > 0.0)
-        .map(|(a, b)| (a.log10(), b.log10()))
-        .collect();
-    let n = pts.len() as f64;
-    if pts.len() < 2 {
-        return f64::NAN;
-    }
-    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    sxy / sxx
-}
-
-/// The Fig. 4.2 bands (x, y) over seeds.
-fn gradient_error_series(r: &Results) -> (Series, Series) {
-    let seeds = &r.gradient_error.seeds;
-    let ns: Vec<u64> = seeds
-        .first()
-        .map(|s| s.iter().map(|t| t.0).collect())
-        .unwrap_or_default();
-    let mk = |label: &str, pick: &dyn Fn(&(u64, f64, f64)) -> f64| {
-        let mut s = Series::new(label);
-        for (i, n) in ns.iter().enumerate() {
-            let ys: Vec<f64> = seeds.iter().filter_map(|v| v.get(i)).map(pick).collect();
-            let sm = Summary::of(&ys);
-            s.x.push(*n as f64);
-            s.mean.push(sm.mean);
-            s.lo.push(sm.lo());
-            s.hi.push(sm.hi());
-        }
-        s
-    };
-    (mk("x-row error", &|t| t.1), mk("y-row error", &|t| t.2))
-}
-
-fn reference_line(s: &Series) -> Series {
-    let c = s.mean.first().copied().unwrap_or(1.0) * s.x.first().copied().unwrap_or(1.0).sqrt();
-    reference_series(
-        "c/√N".into(),
-        s.x.clone(),
-        s.x.iter().map(|n| c / n.sqrt()).collect(),
-    )
-}
-
 /// A dashed reference line (no band: its band is the line itself).
 fn reference_series(label: String, x: Vec<f64>, mean: Vec<f64>) -> Series {
     Series {
@@ -494,17 +444,26 @@ pub fn claims(r: &Results, obs: &[ConvergenceRow], cp: &[ConvergenceRow]) -> Vec
                 verdict: v,
             })
         };
-    // Fig. 4.2.
-    let (gx, gy) = gradient_error_series(r);
-    let (sx, sy) = (loglog_slope(&gx.x, &gx.mean), loglog_slope(&gy.x, &gy.mean));
+    // Fig. 4.2: the fitted slopes of both routes (crate::gradient_error).
+    let (toy, obst) = (&r.gradient_error.toy, &r.gradient_error.obstacle);
     push(
         "O1",
         "§4.1.3, Fig. 4.2",
         "the gradient-estimate error decays at ≈ 1/√N",
-        "least-squares log-log slope of the mean error vs N in [−0.7, −0.3], for x and for y"
+        "for each route, the 95% bootstrap CI of the least-squares slope of log RMSE vs log N \
+         contains −1/2 and excludes 0"
             .into(),
-        format!("slope x = {}, slope y = {}", num(sx), num(sy)),
-        Verdict::of(&[within(sx, -0.7, -0.3), within(sy, -0.7, -0.3)]),
+        format!(
+            "toy MDP vs exact ∇F: slope {}; obstacle task vs an M = {} reference (SE {}): slope {}",
+            crate::gradient_error::slope_text(toy),
+            obst.reference_trajectories.unwrap_or(0),
+            num(obst.reference_variance.sqrt()),
+            crate::gradient_error::slope_text(obst)
+        ),
+        Verdict::of(&[
+            toy.slope.consistent_with_inverse_sqrt(),
+            obst.slope.consistent_with_inverse_sqrt(),
+        ]),
     );
     let score = |l: &str| row_of(obs, l).map_or(f64::NAN, |x| x.final_score.mean);
     // BC ≈ 70%, constant.
@@ -897,12 +856,7 @@ pub fn write(
         }
     }
     write_atomic(&out.join("checkpoints.csv"), csv.as_bytes())?;
-    let mut g = String::from("seed_index,n,error_x,error_y\n");
-    for (s, rows) in r.gradient_error.seeds.iter().enumerate() {
-        for (n, x, y) in rows {
-            let _ = writeln!(g, "{s},{n},{x},{y}");
-        }
-    }
+    let g = crate::gradient_error::csv(&r.gradient_error);
     write_atomic(&out.join("gradient_error.csv"), g.as_bytes())?;
     let mut t = String::from("task,algorithm,seed_index,train_seconds,converge_seconds\n");
     for (c, tm) in r.obstacle.iter().chain(&r.cartpole) {
@@ -939,24 +893,8 @@ pub fn write(
 
     // Figures.
     let mut figs: Vec<(&str, &str, Figure)> = Vec::new();
-    let (gx, gy) = gradient_error_series(r);
-    for (name, s, lab) in [
-        ("fig4-2a-gradient-error-x", &gx, "x"),
-        ("fig4-2b-gradient-error-y", &gy, "y"),
-    ] {
-        figs.push((
-            name,
-            "Fig. 4.2",
-            Figure {
-                title: format!("Fig. 4.2 ({lab}): ‖mean of N estimates − reference‖"),
-                x_label: "N (sampled trajectories)".into(),
-                y_label: format!("error, {lab}-row of ∇"),
-                log_x: true,
-                log_y: true,
-                y_range: Some((0.0, f64::INFINITY)),
-                series: vec![s.clone(), reference_line(s)],
-            },
-        ));
+    for (name, f) in crate::gradient_error::figures(&r.gradient_error) {
+        figs.push((name, "Fig. 4.2", f));
     }
     let it = |c: &Checkpoint| c.iteration as f64;
     let traj = |c: &Checkpoint| c.trajectories as f64;
@@ -1454,30 +1392,41 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     d.push(h(
         "Fig. 4.2: gradient-estimate error vs number of trajectories",
     ));
-    d.push(Block::Para(format!(
-        "Obstacle task, linear-Gaussian learner (σ = {}) over the 9 basic features, with the loss of the \
-         executed velocity, at a fixed θ; error = ‖(mean of N eq. 3.15 \
-         estimates) − (mean of {} independent estimates)‖ for the x and y rows of the gradient. The \
-         reference has its own noise, so the error floors near its standard error.",
-        profile.gradient_error.sigma, profile.gradient_error.reference_trajectories
+    d.push(Block::Para(crate::gradient_error::description(
+        &profile.gradient_error,
+        &r.gradient_error,
     )));
     figures(&mut d, &["Fig. 4.2"]);
-    let (gx, gy) = gradient_error_series(r);
-    d.push(Block::Table(Table {
-        caption: None,
-        label: "tab:pc-fig-4-2".into(),
-        header: strings(&["N", "error x", "error y"]),
-        rows: (0..gx.x.len())
-            .map(|i| {
-                vec![
-                    format!("{:.0}", gx.x[i]),
-                    format!("{} ± {}", num(gx.mean[i]), num(gx.hi[i] - gx.mean[i])),
-                    format!("{} ± {}", num(gy.mean[i]), num(gy.hi[i] - gy.mean[i])),
-                ]
-            })
-            .collect(),
-        spec: "rrr".into(),
-    }));
+    for (route, label, head) in [
+        (
+            &r.gradient_error.toy,
+            "tab:pc-fig-4-2a",
+            &["N", "RMSE [95% CI]", "σ/√N", "RMSE / (σ/√N)"][..],
+        ),
+        (
+            &r.gradient_error.obstacle,
+            "tab:pc-fig-4-2b",
+            &[
+                "N",
+                "RMSE vs reference [95% CI]",
+                "ref. variance removed [95% CI]",
+                "σ̂/√N",
+                "ratio",
+            ][..],
+        ),
+    ] {
+        d.push(Block::Table(Table {
+            caption: Some(if route.reference_trajectories.is_some() {
+                "Fig. 4.2 (b), obstacle task".into()
+            } else {
+                "Fig. 4.2 (a), toy MDP against the exact ∇F".into()
+            }),
+            label: label.into(),
+            header: strings(head),
+            rows: crate::gradient_error::table_rows(route),
+            spec: "r".repeat(head.len()),
+        }));
+    }
 
     for (heading, para, figs, task, head1, obstacle, rows, configs, nos, tc, tr) in [
         (

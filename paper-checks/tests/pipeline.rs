@@ -14,10 +14,20 @@ seeds = 2
 theory_profile = "none"
 
 [gradient_error]
+repetitions = 4
+bootstrap = 100
+
+[gradient_error.toy]
+mdp = "examples/toy/three-state.json"
+theta = ["1/2", "-1", "1", "1/3", "-1/2", "2"]
 ns = [1, 2, 4]
-reference_trajectories = 8
-sigma = 0.05
+
+[gradient_error.obstacle]
+horizon = 200
+sigma = 0.1
 theta = [0.05, 0, 0, 0, 0, 0, 0, 0, 0,   0, 0.05, 0, 0, 0, 0, 0, 0, 0]
+ns = [1, 2, 4]
+reference_trajectories = 400
 
 [obstacle]
 sigma = 0.05
@@ -272,18 +282,18 @@ fn bad_profiles_are_rejected_naming_file_and_field() {
         ),
         (
             "decreasing N",
-            TINY.replace("ns = [1, 2, 4]", "ns = [4, 2]"),
-            "gradient_error.ns",
+            TINY.replace("ns = [1, 2, 4]", "ns = [4, 2, 1]"),
+            "gradient_error.toy.ns",
         ),
         (
             "small reference",
-            TINY.replace("reference_trajectories = 8", "reference_trajectories = 2"),
+            TINY.replace("reference_trajectories = 400", "reference_trajectories = 399"),
             "reference_trajectories",
         ),
         (
             "theta length",
             TINY.replace("theta = [0.05, 0,", "theta = [0,"),
-            "gradient_error.theta",
+            "gradient_error.obstacle.theta",
         ),
         (
             "threshold",
