@@ -119,9 +119,15 @@ pub enum Role {
     Thesis,
     /// The corrected statement (math.md).
     Corrected,
-    /// A deliberately wrong claim, or a wrong algorithm under a true claim's check, that the check
-    /// must refute: its verdict `Fails` means the control was detected.
+    /// A deliberately wrong claim (the true bound scaled down, a mutated estimator) that the check
+    /// must refute: its verdict `Fails` means the control was detected, and an undetected control
+    /// fails the table.
     NegativeControl,
+    /// A wrong algorithm (one the thesis printed) run through a bound check of the right one, at
+    /// the same sizes: its verdict says whether that bound is sensitive to the algorithm's error.
+    /// Reported, never required: an error that does not raise the bounded quantity is invisible
+    /// to the bound, and the exact rows (4d–4f) are what detect it.
+    Probe,
 }
 
 impl Check {

@@ -38,6 +38,7 @@ fn role_name(r: Role) -> &'static str {
         Role::Thesis => "thesis",
         Role::Corrected => "corrected",
         Role::NegativeControl => "negative control",
+        Role::Probe => "probe (printed algorithm)",
     }
 }
 
@@ -145,6 +146,30 @@ pub fn markdown(checks: &[Check]) -> String {
             )
         })
         .collect();
+    let probes: Vec<String> = checks
+        .iter()
+        .filter(|c| c.role == Role::Probe)
+        .map(|c| {
+            format!(
+                "{} {}",
+                c.id,
+                if c.verdict == Verdict::Fails {
+                    "detected"
+                } else {
+                    "not detected"
+                }
+            )
+        })
+        .collect();
+    if !probes.is_empty() {
+        out += &format!(
+            "\nProbes (algorithms as the thesis printed them, through the bound checks of the \
+             corrected ones at the same sizes): {}. A probe the bound does not detect is a finding \
+             about the bound's sensitivity, not a failure of the table: the exact rows 4d–4f detect \
+             these errors.\n",
+            probes.join("; ")
+        );
+    }
     out += &format!(
         "\nUninformative rows: {}. Negative controls: {}.\n\n**Status: {}**\n",
         if uninformative.is_empty() {

@@ -229,7 +229,7 @@ fn storm_rows_and_controls_at_the_tables_size() {
     assert_eq!(by_id("2c.ctl").verdict, Verdict::Fails);
     for id in ["2c.unweighted", "2c.printed4"] {
         let r = by_id(id);
-        assert_eq!(r.role, Role::NegativeControl);
+        assert_eq!(r.role, Role::Probe);
         assert_eq!(r.bound, by_id("2c").bound, "same K, same bound");
         assert_eq!(r.measured.as_ref().unwrap().runs, Some(s.storm_runs));
     }
@@ -268,7 +268,7 @@ fn toy_rows_and_controls_at_the_tables_size() {
         assert_eq!(by_id(id).verdict, Verdict::Fails, "{id}");
     }
     let printed = by_id("3b.printed5");
-    assert_eq!(printed.role, Role::NegativeControl);
+    assert_eq!(printed.role, Role::Probe);
     assert_eq!(printed.bound, by_id("3b").bound);
     let undetected: Vec<&str> = rows
         .iter()

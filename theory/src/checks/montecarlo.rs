@@ -561,7 +561,9 @@ pub fn o2nc_rows(
             method: Method::Statistical,
             verdict,
             erratum: Some("E11, E12, E13".into()),
-            role: if control {
+            role: if variant == O2ncVariant::Printed {
+                Role::Probe
+            } else if control {
                 Role::NegativeControl
             } else {
                 Role::Thesis

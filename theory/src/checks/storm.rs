@@ -328,7 +328,9 @@ pub fn fixed_schedule_rows_from(
                 k.g_f.value * k.g_f.value * (1.0 + 1e-12),
                 sims,
                 mc,
-                if control {
+                if algorithm_is_control {
+                    Role::Probe
+                } else if control {
                     Role::NegativeControl
                 } else {
                     Role::Corrected
