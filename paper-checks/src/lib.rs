@@ -16,6 +16,7 @@ pub mod plots;
 pub mod provenance;
 pub mod report;
 pub mod stats;
+pub mod tuning;
 
 pub use error::Error;
 
