@@ -862,7 +862,7 @@ pub fn write(
     std::fs::create_dir_all(&fig_dir).map_err(|e| Error::io(&fig_dir, e))?;
     // Raw data.
     let mut csv = String::from(
-        "task,algorithm,seed_index,seed,iteration,trajectories,gradient_evaluations,expert_queries,score,successes,crashes,timeouts,reward,loss,loss_x,loss_y,grad_x,grad_y,converged_here\n",
+        "task,algorithm,seed_index,seed,iteration,trajectories,gradient_evaluations,expert_queries,score,successes,crashes,timeouts,reward,loss,loss_x,loss_y,grad_x,grad_y,converged_here,at_calls,resets_to_full_episode,run_status\n",
     );
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
     for (c, _) in r.obstacle.iter().chain(&r.cartpole) {
@@ -870,7 +870,7 @@ pub fn write(
             for (i, k) in run.checkpoints.iter().enumerate() {
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     c.task.name(),
                     c.label,
                     run.seed_index,
@@ -889,7 +889,15 @@ pub fn write(
                     opt(k.loss_y),
                     opt(k.grad_x),
                     opt(k.grad_y),
-                    run.converged == Some(i)
+                    run.converged == Some(i),
+                    k.at_calls,
+                    k.resets_to_full_episode
+                        .map_or(String::new(), |x| x.to_string()),
+                    match &run.status {
+                        crate::experiment::RunStatus::Converged { .. } => "converged",
+                        crate::experiment::RunStatus::NotConverged => "not-converged",
+                        crate::experiment::RunStatus::Diverged { .. } => "diverged",
+                    }
                 );
             }
         }

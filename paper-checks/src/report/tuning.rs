@@ -28,12 +28,13 @@ fn section(profile: &Profile, kind: TaskKind) -> &TaskSection {
     }
 }
 
-/// A selection statistic as text: calls, or "2 × budget" for a point that never converged.
+/// A selection statistic as text: calls, or "2 × budget" when the median tuning run did not
+/// converge (or diverged).
 pub fn score_text(score: f64, budget: u64) -> String {
     if !score.is_finite() {
         "—".into()
     } else if score >= 2.0 * budget as f64 {
-        "2 × budget (none converged)".into()
+        "2 × budget (median run not converged)".into()
     } else {
         num(score)
     }
@@ -101,7 +102,8 @@ fn protocol_list(profile: &Profile) -> Vec<String> {
          disjoint from the {} report seeds before any report run). Rule: the median over tuning seeds \
          of the gradient calls at sustained convergence, a run that did not converge or diverged \
          counting 2 × budget; the smallest median wins, ties to the first point in grid order. The \
-         thesis's numbers never enter. Tuning runs stop at sustained convergence or divergence. \
+         thesis's numbers never enter (when every point scores 2 × budget the rule selects the first \
+         point in grid order). Tuning runs stop at sustained convergence or divergence. \
          Rows borrowing another row's selection say so.",
         profile.tuning_seeds, profile.seeds
     ));
