@@ -10,16 +10,27 @@
 //! `l(s, θ)` on the states the deterministic policy visits (obstacle: split into the x and y
 //! coordinates of the velocity).
 //!
-//! **Score and convergence** (one definition for every algorithm): the score of a checkpoint is
-//! the obstacle task's success rate, or CartPole's mean episode reward divided by 500. A run
-//! *converges* at the first checkpoint whose score is ≥ the task's `converge_score`; its "gradient
-//! calls to converge" are the cumulative per-state gradient evaluations ([`Cost`]) at that
-//! checkpoint, its runtime the training wall time up to it (evaluation excluded).
+//! **Budget and checkpoints** (issue 17 item 2): every run of a task gets the same budget of
+//! gradient calls (per-state gradient evaluations, [`Cost`]; DAgger's full-batch retraining
+//! counts epochs × |D|), and is evaluated at the fixed call counts 0, `checkpoint_every`, …,
+//! `budget` (at the first iterate whose cumulative calls reach each). θ₁ is the task's
+//! [`Theta1`] (zero unless a profile says otherwise).
+//!
+//! **Score and sustained convergence** (one definition for every algorithm): the score of a
+//! checkpoint is the obstacle task's success rate, or CartPole's mean episode reward divided by
+//! 500. A run *converges* at checkpoint i when the score is ≥ `converge_score` at checkpoints
+//! i, i+1, …, i+`sustain`−1 (3 by default; [`sustained`]); its "gradient calls to converge" are the
+//! calls at checkpoint i, its time the training wall time up to it (evaluation excluded).
+//!
+//! **Failure is data** ([`RunStatus`]): a run whose ‖θ‖₂ exceeds the task's `norm_bound`, whose θ
+//! is not finite, or whose step fails is *diverged* — it stops there, is never converged (even if
+//! it had met the criterion before), and is counted among the failed runs.
 
-use crate::config::{AlgorithmEntry, CartPoleExpertChoice, TaskSection};
+use crate::config::{AlgorithmEntry, CartPoleExpertChoice, TaskSection, Theta1};
 use crate::error::Error;
 use crate::stats::derive_seed;
-use ilopt::algo::{Num, RunConfig, Runner, StoppingRule};
+use ilopt::algo::{AlgorithmConfig, Ctx};
+use ilopt::batched::Batched;
 use ilopt::env::obstacle::{
     ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome, VoExpertParams, VoExpertPolicy,
 };
@@ -27,7 +38,7 @@ use ilopt::policy::{LinearGaussian, Policy, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use ilopt::task::cartpole::{self, CartPoleEpisode, CartPoleTask};
 use ilopt::task::obstacle::{ObstacleFeatures, ObstacleTask};
-use ilopt::task::{Task, TaskProblem};
+use ilopt::task::{Horizon, Task, TaskProblem};
 use nalgebra::DVector;
 use rand::SeedableRng;
 use serde::{Deserialize, Serialize};
@@ -52,10 +63,90 @@ impl TaskKind {
     }
 }
 
+/// How a run ended (serialised with a `status` tag: `converged`, `not-converged`, `diverged`).
+///
+/// Wall times are kept out of it (they live in [`SeedTiming`], so that the results files are
+/// byte-identical across reruns): the time to convergence is [`SeedTiming::converge_seconds`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "status", rename_all = "kebab-case")]
+pub enum RunStatus {
+    /// Sustained convergence: the score held the threshold at `sustain` consecutive checkpoints
+    /// from `checkpoint` on, and the run never diverged.
+    Converged {
+        /// Index of the first checkpoint of the window.
+        checkpoint: usize,
+        /// Gradient calls at that checkpoint.
+        gradient_evaluations: u64,
+    },
+    /// Ran to its budget (or, when tuning, ended) without sustained convergence.
+    NotConverged,
+    /// ‖θ‖ left the norm bound, θ became non-finite, or a step failed: never converged.
+    Diverged {
+        /// What happened (e.g. `‖θ‖ = 3.2e5 > 1e4`, `non-finite θ`, the step's error).
+        reason: String,
+        /// Gradient calls when it happened.
+        gradient_evaluations: u64,
+    },
+}
+
+impl RunStatus {
+    /// Whether the run converged.
+    pub fn is_converged(&self) -> bool {
+        matches!(self, RunStatus::Converged { .. })
+    }
+    /// Whether the run diverged.
+    pub fn is_diverged(&self) -> bool {
+        matches!(self, RunStatus::Diverged { .. })
+    }
+    /// The convergence checkpoint, if converged.
+    pub fn checkpoint(&self) -> Option<usize> {
+        match self {
+            RunStatus::Converged { checkpoint, .. } => Some(*checkpoint),
+            _ => None,
+        }
+    }
+}
+
+/// The first index i with `scores[i..i + sustain]` all ≥ `threshold` (the window must be complete).
+pub fn sustained(scores: &[f64], threshold: f64, sustain: usize) -> Option<usize> {
+    let k = sustain.max(1);
+    if scores.len() < k {
+        return None;
+    }
+    (0..=scores.len() - k).find(|&i| scores[i..i + k].iter().all(|&s| s >= threshold))
+}
+
+/// The status of a run from its checkpoints and its divergence, if any: a diverged run is never
+/// converged.
+pub fn status_of(
+    checkpoints: &[Checkpoint],
+    threshold: f64,
+    sustain: usize,
+    diverged: Option<(String, u64)>,
+) -> RunStatus {
+    if let Some((reason, gradient_evaluations)) = diverged {
+        return RunStatus::Diverged {
+            reason,
+            gradient_evaluations,
+        };
+    }
+    let scores: Vec<f64> = checkpoints.iter().map(|c| c.score).collect();
+    match sustained(&scores, threshold, sustain) {
+        Some(i) => RunStatus::Converged {
+            checkpoint: i,
+            gradient_evaluations: checkpoints[i].gradient_evaluations,
+        },
+        None => RunStatus::NotConverged,
+    }
+}
+
 /// The evaluation of one checkpoint.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Checkpoint {
-    /// Iteration of the run (0 = θ₀).
+    /// The checkpoint's nominal call count (0, `checkpoint_every`, …, budget): checkpoints of
+    /// different runs are aligned by it.
+    pub at_calls: u64,
+    /// Iteration of the run (0 = θ₁).
     pub iteration: u64,
     /// Cumulative trajectories rolled out by the algorithm.
     pub trajectories: u64,
@@ -83,6 +174,10 @@ pub struct Checkpoint {
     pub grad_x: Option<f64>,
     /// ‖y-row of it‖.
     pub grad_y: Option<f64>,
+    /// Fig. 4.9 (CartPole): crashes (resets) before the deterministic policy completes one full
+    /// 500-step episode, counting at most the task's `full_episode_cap` (= the cap: not completed).
+    #[serde(default)]
+    pub resets_to_full_episode: Option<u32>,
 }
 
 impl Checkpoint {
@@ -100,6 +195,8 @@ impl Checkpoint {
             TaskKind::Cartpole => ev.reward / cartpole_max_steps() as f64,
         };
         Checkpoint {
+            at_calls: 0,
+            resets_to_full_episode: None,
             iteration,
             trajectories: cost.trajectories,
             gradient_evaluations: cost.gradient_evaluations,
@@ -131,8 +228,12 @@ pub struct SeedRun {
     pub theta: Vec<f64>,
     /// The checkpoints.
     pub checkpoints: Vec<Checkpoint>,
-    /// Index of the first checkpoint that met the convergence criterion.
+    /// Index of the sustained-convergence checkpoint (= `status`'s, for the tables).
     pub converged: Option<usize>,
+    /// How the run ended ([`RunStatus`]); the verdicts read it.
+    pub status: RunStatus,
+    /// The hyper-parameters the run used (the selected grid point), e.g. `alpha=0.005, m=16`.
+    pub hyper_parameters: String,
 }
 
 /// One seeded run's wall times (kept out of the deterministic results).
@@ -232,13 +333,19 @@ impl Bench {
     ///
     /// # Errors
     /// [`Error::Experiment`] if the environment, expert or policy cannot be built.
-    pub fn new(kind: TaskKind, task: &TaskSection) -> Result<Self, Error> {
+    pub fn new(kind: TaskKind, task: &TaskSection, horizon: Horizon) -> Result<Self, Error> {
         let e = |x: &dyn std::fmt::Display| Error::experiment(kind.name(), x);
         Ok(match kind {
-            TaskKind::Obstacle => Self::obstacle(
-                task.sigma.unwrap_or(0.02),
-                task.features.unwrap_or_default(),
-            )?,
+            TaskKind::Obstacle => {
+                let mut b = Self::obstacle(
+                    task.sigma.unwrap_or(0.02),
+                    task.features.unwrap_or_default(),
+                )?;
+                if let Bench::Obstacle { problem, .. } = &mut b {
+                    problem.horizon = horizon;
+                }
+                b
+            }
             TaskKind::Cartpole => {
                 let choice = task.expert.unwrap_or_default();
                 let t = match choice {
@@ -252,7 +359,7 @@ impl Bench {
                     problem: TaskProblem {
                         task: t,
                         policy: Softmax::new(2, cartpole::FEATURES).map_err(|x| e(&x))?,
-                        horizon: ilopt::task::Horizon::Episodic,
+                        horizon,
                     },
                     expert: choice,
                 }
@@ -285,6 +392,46 @@ impl Bench {
             expert: VoExpertPolicy::new(&env, params).map_err(|x| e(&x))?,
             env,
         })
+    }
+
+    /// The objective of the bench's problem.
+    pub fn horizon(&self) -> Horizon {
+        match self {
+            Bench::Obstacle { problem, .. } => problem.horizon,
+            Bench::Cartpole { problem, .. } => problem.horizon,
+        }
+    }
+
+    /// Fig. 4.9 as the thesis measures it (CartPole): the deterministic policy at θ plays
+    /// seeded episodes, reset after every crash, until one completes the full 500 steps; the
+    /// number of crashes before it, at most `cap` (= `cap`: none completed within the cap).
+    fn resets_to_full_episode(
+        &self,
+        theta: &[f64],
+        cap: u32,
+        key: &str,
+    ) -> Result<Option<u32>, Error> {
+        let Bench::Cartpole { problem, .. } = self else {
+            return Ok(None);
+        };
+        let err = |x: &dyn std::fmt::Display| Error::experiment(format!("Fig. 4.9 ({key})"), x);
+        let task = &problem.task;
+        for j in 0..cap {
+            let mut rng = KitRng::seed_from_u64(derive_seed(&format!("{key}|full"), u64::from(j)));
+            let mut ep = task.start(&mut rng).map_err(|x| err(&x))?;
+            loop {
+                let phi = task.features(&ep);
+                let z = problem.policy.logits(theta, &phi).map_err(|x| err(&x))?;
+                let a = usize::from(z[1] > z[0]);
+                if task.advance(&mut ep, &a).map_err(|x| err(&x))? {
+                    break;
+                }
+            }
+            if ep.steps >= cartpole_max_steps() {
+                return Ok(Some(j));
+            }
+        }
+        Ok(Some(cap))
     }
 
     /// Number of policy parameters.
@@ -511,19 +658,77 @@ fn mean_estimate<P: IlProblem<f64>>(
     Ok(sum / n as f64)
 }
 
-/// The identity of an algorithm's runs: task, label and the algorithm's config (JSON). The run's
-/// RNG seed is derived from it and the seed index only.
-pub fn run_key(kind: TaskKind, entry: &AlgorithmEntry) -> String {
-    let json = serde_json::to_string(&entry.config).unwrap_or_default();
-    format!("{}|{}|{}", kind.name(), entry.label, json)
+/// The identity of a row's runs at given hyper-parameters: task, label, the algorithm's config
+/// (JSON), m and the objective. Run seeds are derived from it and the seed index only.
+pub fn run_key_of(
+    kind: TaskKind,
+    label: &str,
+    config: &AlgorithmConfig,
+    m: usize,
+    horizon: Horizon,
+) -> String {
+    let json = serde_json::to_string(config).unwrap_or_default();
+    format!("{}|{label}|{json}|m={m}|{}", kind.name(), horizon.label())
 }
 
-/// Run one seed of one algorithm and evaluate its checkpoints.
+/// [`run_key_of`] for a row at its configured hyper-parameters.
+pub fn run_key(kind: TaskKind, task: &TaskSection, entry: &AlgorithmEntry) -> String {
+    run_key_of(
+        kind,
+        &entry.label,
+        &entry.config,
+        entry.m.unwrap_or(1),
+        entry.horizon(task, kind.name()),
+    )
+}
+
+/// One run to carry out.
+#[derive(Debug, Clone)]
+pub struct RunSpec<'a> {
+    /// The task.
+    pub kind: TaskKind,
+    /// Its section (budget, checkpoints, bound, θ₁, evaluation).
+    pub task: &'a TaskSection,
+    /// The algorithm.
+    pub config: &'a AlgorithmConfig,
+    /// Trajectories per gradient (oracle methods; 1 = the plain problem).
+    pub m: usize,
+    /// The run key (seed derivation of θ₁ and of Fig. 4.5's estimates).
+    pub key: String,
+    /// The run's RNG seed.
+    pub seed: u64,
+    /// The seed's index.
+    pub seed_index: u32,
+    /// The evaluation episodes' key.
+    pub eval_key: String,
+    /// Stop at sustained convergence (tuning runs; report runs use the whole budget).
+    pub stop_at_convergence: bool,
+    /// Hyper-parameters, for the record.
+    pub hyper_parameters: String,
+}
+
+/// θ₁ of a run.
+fn theta1(law: Theta1, dim: usize, key: &str) -> DVector<f64> {
+    match law {
+        Theta1::Zero => DVector::zeros(dim),
+        Theta1::Normal { std } => {
+            use rand::Rng;
+            let mut rng = KitRng::seed_from_u64(derive_seed(&format!("{key}|theta1"), 0));
+            DVector::from_fn(dim, |_, _| {
+                // Box–Muller.
+                let u: f64 = 1.0 - rng.random::<f64>();
+                let v: f64 = rng.random::<f64>();
+                std * (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+            })
+        }
+    }
+}
+
+/// Run one seed of one row (the report's runs: the row's configured hyper-parameters, the report
+/// seed and evaluation episodes).
 ///
 /// # Errors
-/// [`Error::Experiment`] if the run cannot start or an evaluation fails. A run that fails
-/// mid-way (e.g. a non-finite iterate) is *not* an error: its termination says so and it keeps
-/// the checkpoints reached.
+/// As [`run_spec`].
 pub fn run_seed(
     bench: &Bench,
     kind: TaskKind,
@@ -531,70 +736,191 @@ pub fn run_seed(
     entry: &AlgorithmEntry,
     seed_index: u32,
 ) -> Result<(SeedRun, SeedTiming), Error> {
-    let key = run_key(kind, entry);
-    let seed = derive_seed(&key, u64::from(seed_index));
-    let iterations = entry.iterations(task);
-    let every = entry.eval_every(task);
-    let rc = RunConfig {
-        algorithm: entry.config.clone(),
-        theta0: vec![Num::Float(0.0); bench.dim()],
-        seed,
-        stop: StoppingRule::iterations(iterations),
-    };
-    let what = format!("{} / {} / seed {seed_index}", kind.name(), entry.label);
-    let rec = match bench {
-        Bench::Obstacle { problem, .. } => Runner::new(rc.stop.clone())
-            .and_then(|mut r| r.run_config(&rc, problem))
-            .map_err(|e| Error::experiment(&what, e))?,
-        Bench::Cartpole { problem, .. } => Runner::new(rc.stop.clone())
-            .and_then(|mut r| r.run_config(&rc, problem))
-            .map_err(|e| Error::experiment(&what, e))?,
-    };
-    let eval_key = eval_key(kind, seed_index);
-    let last = rec.history.last().map_or(0, |m| m.iteration);
-    let mut checkpoints = Vec::new();
-    let mut seconds = Vec::new();
-    for m in &rec.history {
-        if !(m.iteration.is_multiple_of(every) || m.iteration == last) {
-            continue;
+    let key = run_key(kind, task, entry);
+    let m = entry.m.unwrap_or(1);
+    run_spec(
+        bench,
+        &RunSpec {
+            kind,
+            task,
+            config: &entry.config,
+            m,
+            seed: derive_seed(&key, u64::from(seed_index)),
+            key,
+            seed_index,
+            eval_key: eval_key(kind, seed_index),
+            stop_at_convergence: false,
+            hyper_parameters: crate::tuning::grid_points(entry)
+                .ok()
+                .and_then(|p| p.into_iter().next())
+                .map_or_else(String::new, |p| p.describe()),
+        },
+    )
+}
+
+/// Carry out one run and evaluate its checkpoints.
+///
+/// # Errors
+/// [`Error::Experiment`] if the run cannot start or an evaluation fails. A run that fails
+/// mid-way (a non-finite iterate, a failing step, ‖θ‖ beyond the bound) is *not* an error: its
+/// status is [`RunStatus::Diverged`] and it keeps the checkpoints reached.
+pub fn run_spec(bench: &Bench, spec: &RunSpec<'_>) -> Result<(SeedRun, SeedTiming), Error> {
+    match bench {
+        Bench::Obstacle { problem, .. } => {
+            if spec.m > 1 {
+                let b = Batched::new(problem.clone(), spec.m)
+                    .map_err(|e| Error::experiment("minibatch", e))?;
+                drive(bench, &b, spec)
+            } else {
+                drive(bench, problem, spec)
+            }
         }
-        if !m.theta.iter().all(|x| x.is_finite()) {
+        Bench::Cartpole { problem, .. } => {
+            if spec.m > 1 {
+                let b = Batched::new(problem.clone(), spec.m)
+                    .map_err(|e| Error::experiment("minibatch", e))?;
+                drive(bench, &b, spec)
+            } else {
+                drive(bench, problem, spec)
+            }
+        }
+    }
+}
+
+/// The run loop: steps until the budget, divergence or (tuning) sustained convergence; the
+/// checkpoints at the fixed call counts; training time without the evaluations.
+fn drive<P: IlProblem<f64>>(
+    bench: &Bench,
+    problem: &P,
+    spec: &RunSpec<'_>,
+) -> Result<(SeedRun, SeedTiming), Error> {
+    let task = spec.task;
+    let what = format!(
+        "{} / {} / seed {}",
+        spec.kind.name(),
+        spec.key,
+        spec.seed_index
+    );
+    let mut algorithm = spec
+        .config
+        .build::<f64, P>()
+        .map_err(|e| Error::experiment(&what, e))?;
+    let mut rng = KitRng::seed_from_u64(spec.seed);
+    let mut cost = Cost::default();
+    let mut train = std::time::Duration::ZERO;
+    let mut clock = std::time::Instant::now();
+    algorithm
+        .init(
+            problem,
+            theta1(task.theta1, bench.dim(), &spec.key),
+            &mut Ctx {
+                rng: &mut rng,
+                cost: &mut cost,
+            },
+        )
+        .map_err(|e| Error::experiment(&what, e))?;
+    let mut checkpoints: Vec<Checkpoint> = Vec::new();
+    let mut seconds = Vec::new();
+    let mut next = 0u64;
+    let mut iteration = 0u64;
+    let mut diverged: Option<(String, u64)> = None;
+    loop {
+        let theta = algorithm.theta();
+        let norm = theta.norm();
+        if !norm.is_finite() {
+            diverged = Some(("non-finite θ".into(), cost.gradient_evaluations));
+        } else if norm > task.norm_bound {
+            diverged = Some((
+                format!("‖θ‖ = {norm:.3e} > {:e}", task.norm_bound),
+                cost.gradient_evaluations,
+            ));
+        }
+        if diverged.is_some() {
             break;
         }
-        let ev = bench.evaluate(m.theta.as_slice(), task.eval_episodes, &eval_key)?;
-        let grad = bench.gradient_xy(
-            &m.theta,
-            task.grad_trajectories,
-            derive_seed(
-                &format!("{key}|grad"),
-                m.iteration * 1000 + u64::from(seed_index),
-            ),
-        )?;
-        checkpoints.push(Checkpoint::from_eval(
-            &ev,
-            kind,
-            task.eval_episodes,
-            m.iteration,
-            &m.cost,
-            grad,
-        ));
-        seconds.push(m.wall_time);
+        // Checkpoints due (a step that crosses several call counts serves each).
+        if next <= task.budget && cost.gradient_evaluations >= next {
+            train += clock.elapsed();
+            let ev = bench.evaluate(theta.as_slice(), task.eval_episodes, &spec.eval_key)?;
+            let grad = bench.gradient_xy(
+                theta,
+                task.grad_trajectories,
+                derive_seed(
+                    &format!("{}|grad", spec.key),
+                    iteration * 1000 + u64::from(spec.seed_index),
+                ),
+            )?;
+            let full = bench.resets_to_full_episode(
+                theta.as_slice(),
+                task.full_episode_cap,
+                &spec.eval_key,
+            )?;
+            let mut c =
+                Checkpoint::from_eval(&ev, spec.kind, task.eval_episodes, iteration, &cost, grad);
+            c.resets_to_full_episode = full;
+            while next <= task.budget && cost.gradient_evaluations >= next {
+                let mut c = c.clone();
+                c.at_calls = next;
+                checkpoints.push(c);
+                seconds.push(train.as_secs_f64());
+                next = if next == task.budget {
+                    u64::MAX
+                } else {
+                    (next + task.checkpoint_every).min(task.budget)
+                };
+            }
+            clock = std::time::Instant::now();
+            if spec.stop_at_convergence {
+                let scores: Vec<f64> = checkpoints.iter().map(|c| c.score).collect();
+                if sustained(&scores, task.converge_score, task.sustain).is_some() {
+                    break;
+                }
+            }
+        }
+        if cost.gradient_evaluations >= task.budget {
+            break;
+        }
+        match algorithm.step(
+            problem,
+            &mut Ctx {
+                rng: &mut rng,
+                cost: &mut cost,
+            },
+        ) {
+            Ok(_) => iteration += 1,
+            Err(e) => {
+                diverged = Some((format!("step failed: {e}"), cost.gradient_evaluations));
+                break;
+            }
+        }
     }
-    let converged = checkpoints
-        .iter()
-        .position(|c| c.score >= task.converge_score);
+    train += clock.elapsed();
+    let status = status_of(
+        &checkpoints,
+        task.converge_score,
+        task.sustain,
+        diverged.clone(),
+    );
+    let converged = status.checkpoint();
+    let termination = match &diverged {
+        Some((reason, _)) => format!("diverged: {reason}"),
+        None if cost.gradient_evaluations >= task.budget => "gradient-budget".into(),
+        None => "sustained-convergence".into(),
+    };
     Ok((
         SeedRun {
-            seed_index,
-            seed,
-            termination: rec.termination.to_string(),
-            theta: rec.theta.iter().copied().collect(),
+            seed_index: spec.seed_index,
+            seed: spec.seed,
+            termination,
+            theta: algorithm.theta().iter().copied().collect(),
             checkpoints,
             converged,
+            status,
+            hyper_parameters: spec.hyper_parameters.clone(),
         },
         SeedTiming {
-            seed_index,
-            train_seconds: rec.wall_time,
+            seed_index: spec.seed_index,
+            train_seconds: train.as_secs_f64(),
             converge_seconds: converged.map(|i| seconds[i]),
             checkpoint_seconds: seconds,
         },
@@ -603,7 +929,7 @@ pub fn run_seed(
 
 /// The key of a seed's evaluation episodes: the same episodes for every algorithm, checkpoint
 /// and baseline of that seed (common random numbers).
-fn eval_key(kind: TaskKind, seed_index: u32) -> String {
+pub fn eval_key(kind: TaskKind, seed_index: u32) -> String {
     format!("{}-eval|{seed_index}", kind.name())
 }
 
@@ -627,4 +953,73 @@ pub fn baseline_seed(
         &Cost::default(),
         None,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cp(score: f64, calls: u64) -> Checkpoint {
+        Checkpoint {
+            at_calls: calls,
+            iteration: 0,
+            trajectories: 0,
+            gradient_evaluations: calls,
+            expert_queries: 0,
+            score,
+            successes: 0,
+            crashes: 0,
+            timeouts: 0,
+            reward: 0.0,
+            loss: 0.0,
+            loss_x: None,
+            loss_y: None,
+            grad_x: None,
+            grad_y: None,
+            resets_to_full_episode: None,
+        }
+    }
+
+    #[test]
+    fn sustained_convergence_needs_three_consecutive_checkpoints() {
+        let t = 0.8;
+        // Two above, a dip, then three above: converged at index 3, not 0.
+        let s = [0.9, 0.9, 0.5, 0.85, 0.8, 1.0];
+        assert_eq!(sustained(&s, t, 3), Some(3));
+        // Above at the last two checkpoints only: an incomplete window is not convergence.
+        assert_eq!(sustained(&[0.1, 0.9, 0.9], t, 3), None);
+        assert_eq!(sustained(&[0.9, 0.9], t, 3), None);
+        // Alternating never holds.
+        assert_eq!(sustained(&[0.9, 0.1, 0.9, 0.1, 0.9], t, 3), None);
+        let cps: Vec<Checkpoint> = s
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| cp(x, 100 * i as u64))
+            .collect();
+        assert_eq!(
+            status_of(&cps, t, 3, None),
+            RunStatus::Converged {
+                checkpoint: 3,
+                gradient_evaluations: 300
+            }
+        );
+        assert_eq!(status_of(&cps[..3], t, 3, None), RunStatus::NotConverged);
+    }
+
+    #[test]
+    fn diverged_runs_are_never_counted_converged() {
+        // Converged by its scores, then ‖θ‖ left the bound: diverged, not converged.
+        let cps: Vec<Checkpoint> = (0..5).map(|i| cp(1.0, 100 * i)).collect();
+        let s = status_of(&cps, 0.8, 3, Some(("‖θ‖ = 2e34 > 1e4".into(), 450)));
+        assert!(s.is_diverged());
+        assert!(!s.is_converged());
+        assert_eq!(s.checkpoint(), None);
+        assert_eq!(
+            crate::tuning::selection_score(std::slice::from_ref(&s), 1000),
+            2000.0
+        );
+        // The serialised status names itself (the verdict code reads it).
+        let json = serde_json::to_string(&s).unwrap();
+        assert!(json.contains(r#""status":"diverged""#), "{json}");
+    }
 }

@@ -4,9 +4,11 @@
 //! SVG/PNG figures, per-seed CSV/JSON, provenance).
 //!
 //! The binary (`cargo run --release -p paper-checks`) reads a committed TOML profile
-//! ([`config::Profile`]), runs the [`experiment`]s through the [`pipeline`] (seeds in parallel,
-//! results independent of the thread count, finished configurations reused) and writes the
-//! [`report`].
+//! ([`config::Profile`]), selects every row's hyper-parameters by the pre-registered [`tuning`]
+//! protocol (grids on tuning seeds disjoint from the report seeds), runs the [`experiment`]s
+//! through the [`pipeline`] (budgets in gradient calls, sustained convergence, diverged runs as
+//! data; seeds in parallel, results independent of the thread count, finished configurations
+//! reused) and writes the [`report`].
 
 pub mod config;
 pub mod error;
@@ -17,6 +19,7 @@ pub mod plots;
 pub mod provenance;
 pub mod report;
 pub mod stats;
+pub mod tuning;
 pub mod verdict;
 
 pub use error::Error;

@@ -10,9 +10,15 @@
 use crate::config::{AlgorithmEntry, Profile, TaskSection};
 use crate::error::Error;
 use crate::experiment::{
-    Baseline, Bench, Checkpoint, SeedRun, SeedTiming, TaskKind, baseline_seed, run_key, run_seed,
+    Baseline, Bench, Checkpoint, RunSpec, SeedRun, SeedTiming, TaskKind, baseline_seed, eval_key,
+    run_key, run_key_of, run_spec,
 };
 use crate::stats::fnv1a;
+use crate::tuning::{
+    GridPoint, PointResult, TuningResult, TuningRun, grid_points, select, selection_score,
+    tuning_eval_key, tuning_seed,
+};
+use ilopt::task::Horizon;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -90,6 +96,9 @@ pub struct Results {
     pub cartpole: Vec<(ConfigResult, Option<ConfigTiming>)>,
     /// The baselines of both tasks (obstacle first, table order).
     pub baselines: Vec<BaselineResult>,
+    /// The tuning of every row (both tasks, table order; rows without a grid have one point and
+    /// no tuning runs).
+    pub tuning: Vec<TuningResult>,
     /// The theorem-check table (Markdown).
     pub theory_markdown: String,
     /// Configurations computed in this run (the others were reused).
@@ -194,29 +203,264 @@ impl Progress {
     }
 }
 
-fn task_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEntry) -> String {
+/// What determines a task's runs apart from the algorithm rows: the section without its rows,
+/// and the expert's identity.
+fn section_key(kind: TaskKind, t: &TaskSection) -> String {
     let expert = (kind == TaskKind::Cartpole).then(|| t.expert.unwrap_or_default().identity());
-    let section = serde_json::json!({
-        "sigma": t.sigma, "features": t.features, "expert": expert,
-        "eval_episodes": t.eval_episodes,
-        "grad_trajectories": t.grad_trajectories, "converge_score": t.converge_score,
-        "iterations": e.iterations(t), "eval_every": e.eval_every(t),
-    });
+    let mut bare = t.clone();
+    bare.algorithms.clear();
+    format!(
+        "{}|{}",
+        serde_json::to_string(&bare).unwrap_or_default(),
+        expert.unwrap_or_default()
+    )
+}
+
+fn task_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEntry) -> String {
     format!(
         "{:016x}",
         fnv1a(&format!(
-            "{}|{}|{}",
-            run_key(kind, e),
-            section,
+            "{}|{}|{}|{}",
+            run_key(kind, t, e),
+            section_key(kind, t),
+            serde_json::to_string(e).unwrap_or_default(),
             profile.seeds
         ))
     )
 }
 
+fn tuning_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEntry) -> String {
+    format!(
+        "{:016x}",
+        fnv1a(&format!(
+            "tuning|{}|{}|{}|{}",
+            kind.name(),
+            section_key(kind, t),
+            serde_json::to_string(e).unwrap_or_default(),
+            profile.tuning_seeds
+        ))
+    )
+}
+
+/// The benches of a profile: one per (task, objective) used by its rows.
+struct Benches(Vec<(TaskKind, Horizon, Bench)>);
+
+impl Benches {
+    fn new(profile: &Profile) -> Result<Self, Error> {
+        let mut v: Vec<(TaskKind, Horizon, Bench)> = Vec::new();
+        for (kind, t) in [
+            (TaskKind::Obstacle, &profile.obstacle),
+            (TaskKind::Cartpole, &profile.cartpole),
+        ] {
+            for e in &t.algorithms {
+                let h = e.horizon(t, kind.name());
+                if !v.iter().any(|(k, hh, _)| *k == kind && *hh == h) {
+                    v.push((kind, h, Bench::new(kind, t, h)?));
+                }
+            }
+        }
+        Ok(Benches(v))
+    }
+    fn get(&self, kind: TaskKind, h: Horizon) -> &Bench {
+        self.0
+            .iter()
+            .find(|(k, hh, _)| *k == kind && *hh == h)
+            .map(|x| &x.2)
+            .expect("a bench for every row's objective")
+    }
+    /// The task's bench under its default objective (baselines: no training).
+    fn of_task(&self, kind: TaskKind) -> &Bench {
+        self.0
+            .iter()
+            .find(|(k, _, _)| *k == kind)
+            .map(|x| &x.2)
+            .expect("every task has a row")
+    }
+}
+
+/// A row with the hyper-parameters of `p` (no grid left).
+fn at_point(e: &AlgorithmEntry, p: &GridPoint) -> AlgorithmEntry {
+    let mut x = e.clone();
+    x.config = p.config.clone();
+    x.m = Some(p.m);
+    x.grid.clear();
+    x
+}
+
+/// Run (or reuse) the tuning of every row with a grid; rows without one get their single point.
+fn tune(
+    profile: &Profile,
+    opts: &Options,
+    benches: &Benches,
+    progress: &Progress,
+) -> Result<Vec<TuningResult>, Error> {
+    let runs_dir = opts.out.join("runs");
+    let mut out: Vec<Option<TuningResult>> = Vec::new();
+    // (slot, task, section, entry, key, file, points)
+    let mut todo = Vec::new();
+    for (kind, t) in [
+        (TaskKind::Obstacle, &profile.obstacle),
+        (TaskKind::Cartpole, &profile.cartpole),
+    ] {
+        for e in &t.algorithms {
+            let points = grid_points(e).map_err(|m| Error::experiment(&e.label, m))?;
+            let key = tuning_key(profile, kind, t, e);
+            let file = runs_dir.join(format!("tuning-{}-{}.json", kind.name(), slug(&e.label)));
+            if e.grid.is_empty() || e.hyper_parameters_of.is_some() {
+                out.push(Some(TuningResult {
+                    task: kind,
+                    label: e.label.clone(),
+                    key_hash: key,
+                    dims: Vec::new(),
+                    points: points
+                        .into_iter()
+                        .map(|point| PointResult {
+                            point,
+                            runs: Vec::new(),
+                            score: f64::NAN,
+                        })
+                        .collect(),
+                    selected: 0,
+                    budget: t.budget,
+                }));
+                continue;
+            }
+            let cached: Option<TuningResult> = if opts.redo { None } else { read_json(&file) };
+            match cached {
+                Some(c) if c.key_hash == key => out.push(Some(c)),
+                _ => {
+                    todo.push((out.len(), kind, t, e, key, file, points));
+                    out.push(None);
+                }
+            }
+        }
+    }
+    let computed = todo
+        .par_iter()
+        .map(|(slot, kind, t, e, key, file, points)| {
+            let h = e.horizon(t, kind.name());
+            let bench = benches.get(*kind, h);
+            let jobs: Vec<(usize, u32)> = (0..points.len())
+                .flat_map(|i| (0..profile.tuning_seeds).map(move |s| (i, s)))
+                .collect();
+            let runs = jobs
+                .par_iter()
+                .map(|&(i, s)| {
+                    let p = &points[i];
+                    let rk = run_key_of(*kind, &e.label, &p.config, p.m, h);
+                    let seed = tuning_seed(&rk, s);
+                    let (run, _) = run_spec(
+                        bench,
+                        &RunSpec {
+                            kind: *kind,
+                            task: t,
+                            config: &p.config,
+                            m: p.m,
+                            key: format!("tuning|{rk}"),
+                            seed,
+                            seed_index: s,
+                            eval_key: tuning_eval_key(*kind, s),
+                            stop_at_convergence: true,
+                            hyper_parameters: p.describe(),
+                        },
+                    )?;
+                    progress.seed_done(&format!("tuning {} / {}", kind.name(), e.label));
+                    Ok(TuningRun {
+                        seed_index: s,
+                        seed,
+                        gradient_evaluations: run
+                            .checkpoints
+                            .last()
+                            .map_or(0, |c| c.gradient_evaluations),
+                        last_score: run.checkpoints.last().map(|c| c.score),
+                        status: run.status,
+                    })
+                })
+                .collect::<Result<Vec<_>, Error>>()?;
+            let mut it = runs.into_iter();
+            let points: Vec<PointResult> = points
+                .iter()
+                .map(|p| {
+                    let runs: Vec<TuningRun> =
+                        it.by_ref().take(profile.tuning_seeds as usize).collect();
+                    let statuses: Vec<_> = runs.iter().map(|r| r.status.clone()).collect();
+                    PointResult {
+                        point: p.clone(),
+                        score: selection_score(&statuses, t.budget),
+                        runs,
+                    }
+                })
+                .collect();
+            let scores: Vec<f64> = points.iter().map(|p| p.score).collect();
+            let r = TuningResult {
+                task: *kind,
+                label: e.label.clone(),
+                key_hash: key.clone(),
+                dims: e.grid.iter().map(|d| d.path.clone()).collect(),
+                selected: select(&scores),
+                points,
+                budget: t.budget,
+            };
+            write_atomic(file, &to_json("tuning", &r)?)?;
+            progress.line(&format!(
+                "tuned: {} / {} → {}",
+                kind.name(),
+                e.label,
+                r.chosen().describe()
+            ));
+            Ok((*slot, r))
+        })
+        .collect::<Result<Vec<_>, Error>>()?;
+    for (slot, r) in computed {
+        out[slot] = Some(r);
+    }
+    // Borrowed hyper-parameters (control rows).
+    let mut all: Vec<TuningResult> = out.into_iter().flatten().collect();
+    for (kind, t) in [
+        (TaskKind::Obstacle, &profile.obstacle),
+        (TaskKind::Cartpole, &profile.cartpole),
+    ] {
+        for e in &t.algorithms {
+            let Some(of) = &e.hyper_parameters_of else {
+                continue;
+            };
+            let chosen = all
+                .iter()
+                .find(|r| r.task == kind && &r.label == of)
+                .map(|r| r.chosen().clone())
+                .ok_or_else(|| Error::experiment(&e.label, format!("no row `{of}`")))?;
+            if let Some(r) = all
+                .iter_mut()
+                .find(|r| r.task == kind && r.label == e.label)
+            {
+                let mut p = chosen;
+                p.index = 0;
+                r.points = vec![PointResult {
+                    point: p,
+                    runs: Vec::new(),
+                    score: f64::NAN,
+                }];
+                r.selected = 0;
+            }
+        }
+    }
+    Ok(all)
+}
+
+/// Every tuning seed of the results (the seeds actually used, or those a grid would use).
+fn tuning_seeds_of(tuning: &[TuningResult]) -> std::collections::BTreeSet<u64> {
+    tuning
+        .iter()
+        .flat_map(|t| &t.points)
+        .flat_map(|p| &p.runs)
+        .map(|r| r.seed)
+        .collect()
+}
+
 /// Run everything the profile asks for (reusing finished configurations) and collect the results.
 ///
 /// # Errors
-/// Any experiment, I/O or theory failure.
+/// Any experiment, I/O or theory failure; a report seed equal to a tuning seed.
 pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     let runs_dir = opts.out.join("runs");
     let timings_dir = opts.out.join("timings");
@@ -226,32 +470,6 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         (TaskKind::Obstacle, &profile.obstacle),
         (TaskKind::Cartpole, &profile.cartpole),
     ];
-    // Which configurations are already done?
-    let mut todo = Vec::new();
-    let mut results: Vec<Vec<Option<ConfigWithTiming>>> = Vec::new();
-    for (kind, t) in tasks {
-        let mut row = Vec::new();
-        for e in &t.algorithms {
-            let file = runs_dir.join(format!("{}-{}.json", kind.name(), slug(&e.label)));
-            let key = task_key(profile, kind, t, e);
-            let cached: Option<ConfigResult> = if opts.redo { None } else { read_json(&file) };
-            match cached {
-                Some(c) if c.key_hash == key => {
-                    let timing = read_json(&timings_dir.join(format!(
-                        "{}-{}.json",
-                        kind.name(),
-                        slug(&e.label)
-                    )));
-                    row.push(Some((c, timing)));
-                }
-                _ => {
-                    todo.push((kind, t, e.clone(), key, file));
-                    row.push(None);
-                }
-            }
-        }
-        results.push(row);
-    }
     let gfile = runs_dir.join("gradient-error.json");
     let gkey = profile.gradient_error.key_hash();
     let gcached: Option<GradientErrorResult> = if opts.redo { None } else { read_json(&gfile) };
@@ -263,12 +481,17 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         std::fs::read_to_string(&theory_file).ok()
     };
 
-    let total = todo.len() * profile.seeds as usize;
+    let tuning_total: usize = tasks
+        .iter()
+        .flat_map(|(_, t)| &t.algorithms)
+        .filter(|e| !e.grid.is_empty() && e.hyper_parameters_of.is_none())
+        .map(|e| grid_points(e).map_or(0, |p| p.len()) * profile.tuning_seeds as usize)
+        .sum();
+    let report_total: usize =
+        tasks.iter().map(|(_, t)| t.algorithms.len()).sum::<usize>() * profile.seeds as usize;
+    let total = tuning_total + report_total;
     let progress = Progress::new(total, opts.progress);
-    let benches = [
-        Bench::new(TaskKind::Obstacle, &profile.obstacle)?,
-        Bench::new(TaskKind::Cartpole, &profile.cartpole)?,
-    ];
+    let benches = Benches::new(profile)?;
     let seeds: Vec<u32> = (0..profile.seeds).collect();
 
     let theory_job = || -> Result<String, Error> {
@@ -316,15 +539,76 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         Ok(g)
     };
 
-    let configs_job = || -> Result<Vec<(TaskKind, String, ConfigResult, ConfigTiming)>, Error> {
-        todo.par_iter()
-            .map(|(kind, t, e, key, file)| {
+    type Rows = Vec<Vec<ConfigWithTiming>>;
+    let experiments_job = || -> Result<(Vec<TuningResult>, Rows, Vec<String>), Error> {
+        let tuning = tune(profile, opts, &benches, &progress)?;
+        let used = tuning_seeds_of(&tuning);
+        // The report rows at their selected hyper-parameters; which are already done?
+        let mut todo = Vec::new();
+        let mut results: Vec<Vec<Option<ConfigWithTiming>>> = Vec::new();
+        for (kind, t) in tasks {
+            let mut row = Vec::new();
+            for e in &t.algorithms {
+                let tr = tuning
+                    .iter()
+                    .find(|r| r.task == kind && r.label == e.label)
+                    .ok_or_else(|| Error::experiment(&e.label, "no tuning result"))?;
+                let chosen = tr.chosen();
+                let eff = at_point(e, chosen);
+                let rk = run_key(kind, t, &eff);
+                for s in 0..profile.seeds {
+                    let seed = crate::stats::derive_seed(&rk, u64::from(s));
+                    if used.contains(&seed) {
+                        return Err(Error::experiment(
+                            &e.label,
+                            format!("report seed {seed} equals a tuning seed"),
+                        ));
+                    }
+                }
+                let file = runs_dir.join(format!("{}-{}.json", kind.name(), slug(&e.label)));
+                let key = task_key(profile, kind, t, &eff);
+                let cached: Option<ConfigResult> = if opts.redo { None } else { read_json(&file) };
+                match cached {
+                    Some(c) if c.key_hash == key => {
+                        let timing = read_json(&timings_dir.join(format!(
+                            "{}-{}.json",
+                            kind.name(),
+                            slug(&e.label)
+                        )));
+                        row.push(Some((c, timing)));
+                    }
+                    _ => {
+                        todo.push((kind, t, eff, chosen.describe(), key, file));
+                        row.push(None);
+                    }
+                }
+            }
+            results.push(row);
+        }
+        let computed = todo
+            .par_iter()
+            .map(|(kind, t, e, hyper, key, file)| {
                 let start = Instant::now();
-                let bench = &benches[usize::from(*kind == TaskKind::Cartpole)];
+                let bench = benches.get(*kind, e.horizon(t, kind.name()));
+                let rk = run_key(*kind, t, e);
                 let pairs = seeds
                     .par_iter()
                     .map(|&s| {
-                        let r = run_seed(bench, *kind, t, e, s);
+                        let r = run_spec(
+                            bench,
+                            &RunSpec {
+                                kind: *kind,
+                                task: t,
+                                config: &e.config,
+                                m: e.m.unwrap_or(1),
+                                key: rk.clone(),
+                                seed: crate::stats::derive_seed(&rk, u64::from(s)),
+                                seed_index: s,
+                                eval_key: eval_key(*kind, s),
+                                stop_at_convergence: false,
+                                hyper_parameters: hyper.clone(),
+                            },
+                        );
                         progress.seed_done(&format!("{} / {}", kind.name(), e.label));
                         r
                     })
@@ -357,39 +641,43 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
                 ));
                 Ok((*kind, e.label.clone(), c, tm))
             })
-            .collect()
+            .collect::<Result<Vec<_>, Error>>()?;
+        let mut names = Vec::new();
+        for (kind, label, c, tm) in computed {
+            names.push(format!("{} / {label}", kind.name()));
+            let ti = usize::from(kind == TaskKind::Cartpole);
+            let t = tasks[ti].1;
+            if let Some(i) = t.algorithms.iter().position(|e| e.label == label) {
+                results[ti][i] = Some((c, Some(tm)));
+            }
+        }
+        let rows = results
+            .into_iter()
+            .map(|row| row.into_iter().flatten().collect::<Vec<_>>())
+            .collect();
+        Ok((tuning, rows, names))
     };
 
-    let (theory, (gradient, computed)) =
-        rayon::join(theory_job, || rayon::join(gradient_job, configs_job));
+    let (theory, (gradient, experiments)) =
+        rayon::join(theory_job, || rayon::join(gradient_job, experiments_job));
     progress.finish();
     let theory_markdown = theory?;
     let gradient_error = gradient?;
-    let computed = computed?;
-    let mut names = Vec::new();
-    for (kind, label, c, tm) in computed {
-        names.push(format!("{} / {label}", kind.name()));
-        let ti = usize::from(kind == TaskKind::Cartpole);
-        let t = tasks[ti].1;
-        if let Some(i) = t.algorithms.iter().position(|e| e.label == label) {
-            results[ti][i] = Some((c, Some(tm)));
-        }
-    }
+    let (tuning, rows, computed) = experiments?;
     let baselines = baselines_job(profile, &benches, &seeds)?;
     write_atomic(
         &opts.out.join("baselines.json"),
         &to_json("baselines", &baselines)?,
     )?;
-    let mut it = results
-        .into_iter()
-        .map(|row| row.into_iter().flatten().collect::<Vec<_>>());
+    let mut it = rows.into_iter();
     Ok(Results {
         gradient_error,
         obstacle: it.next().unwrap_or_default(),
         cartpole: it.next().unwrap_or_default(),
         baselines,
+        tuning,
         theory_markdown,
-        computed: names,
+        computed,
     })
 }
 
@@ -397,14 +685,15 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
 /// never cached).
 fn baselines_job(
     profile: &Profile,
-    benches: &[Bench; 2],
+    benches: &Benches,
     seeds: &[u32],
 ) -> Result<Vec<BaselineResult>, Error> {
     let mut out = Vec::new();
-    for (kind, t, bench) in [
-        (TaskKind::Obstacle, &profile.obstacle, &benches[0]),
-        (TaskKind::Cartpole, &profile.cartpole, &benches[1]),
+    for (kind, t) in [
+        (TaskKind::Obstacle, &profile.obstacle),
+        (TaskKind::Cartpole, &profile.cartpole),
     ] {
+        let bench = benches.of_task(kind);
         for &b in Baseline::of(kind) {
             let runs = seeds
                 .par_iter()

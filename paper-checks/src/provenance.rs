@@ -143,7 +143,26 @@ pub fn write(
             })
         })
         .collect();
+    let selected: Vec<serde_json::Value> = r
+        .tuning
+        .iter()
+        .map(|t| {
+            let p = t.chosen();
+            serde_json::json!({
+                "task": t.task.name(),
+                "algorithm": t.label,
+                "selected": p.describe(),
+                "config": p.config,
+                "m": p.m,
+                "grid_points": t.points.len(),
+                "selection_score": if t.dims.is_empty() { None } else { Some(t.points[t.selected].score) },
+                "tuning_seeds": t.points.iter().flat_map(|q| q.runs.iter().map(|x| x.seed)).collect::<Vec<_>>(),
+            })
+        })
+        .collect();
     let prov = serde_json::json!({
+        "selected_hyper_parameters": selected,
+        "selection_rule": "median over tuning seeds of the gradient calls at sustained convergence (not converged or diverged = 2 × budget); smallest wins, ties to the first point in grid order",
         "command": if profile.name == "full" {
             "cargo run --release -p paper-checks -- --full"
         } else {
@@ -153,7 +172,7 @@ pub fn write(
         "profile_file": profile_file.file_name().map(|f| f.to_string_lossy().to_string()),
         "profile_toml": profile_text,
         "profile_parsed": profile,
-        "seed_derivation": "seed = SplitMix64(FNV-1a(\"task|label|algorithm-config-json\") XOR SplitMix64(seed index)); evaluation episodes and Fig. 4.2 streams likewise from their own keys",
+        "seed_derivation": "report seed = SplitMix64(FNV-1a(\"task|label|algorithm-config-json|m=…|objective\") XOR SplitMix64(seed index)); tuning seed likewise from \"tuning|\" + that key; evaluation episodes (\"<task>-eval\" / \"<task>-tuning-eval\") and Fig. 4.2 streams likewise from their own keys",
         "run_seeds": seeds,
         "git_commit": command_output("git", &["rev-parse", "HEAD"]),
         "git_dirty": command_output("git", &["status", "--porcelain"]).map(|s| !s.is_empty()),

@@ -16,6 +16,7 @@ use std::path::Path;
 
 pub mod doc;
 pub mod speedup;
+pub mod tuning;
 
 use doc::{Block, Table};
 
@@ -222,7 +223,8 @@ pub struct ConvergenceRow {
     pub final_reward: Summary,
     /// Final evaluation loss (all seeds).
     pub final_loss: Summary,
-    /// Runs that ended with a failure (non-finite iterate).
+    /// Diverged runs ([`crate::experiment::RunStatus::Diverged`]: ‖θ‖ beyond the bound, a
+    /// non-finite iterate, a failed step).
     pub failed_runs: usize,
 }
 
@@ -254,11 +256,7 @@ fn convergence_row(c: &ConfigResult) -> ConvergenceRow {
         final_crashes: summarise(c, |k| f64::from(k.crashes)),
         final_reward: summarise(c, |k| k.reward),
         final_loss: summarise(c, |k| k.loss),
-        failed_runs: c
-            .runs
-            .iter()
-            .filter(|r| r.termination.starts_with("failed"))
-            .count(),
+        failed_runs: c.runs.iter().filter(|r| r.status.is_diverged()).count(),
     }
 }
 
@@ -308,26 +306,26 @@ fn band(
     xf: impl Fn(&Checkpoint) -> f64,
     yf: impl Fn(&Checkpoint) -> Option<f64>,
 ) -> Series {
-    // Checkpoints are aligned by iteration, on the schedule of the longest run: a run that
-    // failed stops at an off-schedule iteration, and its last checkpoint is left out (counted).
+    // Checkpoints are aligned by their nominal call count, on the schedule of the longest run (a
+    // diverged run stops early: its checkpoints are those it reached).
     let schedule: Vec<u64> = c
         .runs
         .iter()
         .max_by_key(|r| r.checkpoints.len())
-        .map(|r| r.checkpoints.iter().map(|k| k.iteration).collect())
+        .map(|r| r.checkpoints.iter().map(|k| k.at_calls).collect())
         .unwrap_or_default();
     let mut s = Series::new(c.label.clone());
     s.off_schedule = c
         .runs
         .iter()
         .flat_map(|r| &r.checkpoints)
-        .filter(|k| !schedule.contains(&k.iteration))
+        .filter(|k| !schedule.contains(&k.at_calls))
         .count();
     for it in schedule {
         let cps: Vec<&Checkpoint> = c
             .runs
             .iter()
-            .filter_map(|r| r.checkpoints.iter().find(|k| k.iteration == it))
+            .filter_map(|r| r.checkpoints.iter().find(|k| k.at_calls == it))
             .collect();
         let all: Vec<f64> = cps.iter().filter_map(|c| yf(c)).collect();
         let ys: Vec<f64> = all.iter().copied().filter(|y| y.is_finite()).collect();
@@ -823,7 +821,7 @@ pub fn write(
     std::fs::create_dir_all(&fig_dir).map_err(|e| Error::io(&fig_dir, e))?;
     // Raw data.
     let mut csv = String::from(
-        "task,algorithm,seed_index,seed,iteration,trajectories,gradient_evaluations,expert_queries,score,successes,crashes,timeouts,reward,loss,loss_x,loss_y,grad_x,grad_y,converged_here\n",
+        "task,algorithm,seed_index,seed,iteration,trajectories,gradient_evaluations,expert_queries,score,successes,crashes,timeouts,reward,loss,loss_x,loss_y,grad_x,grad_y,converged_here,at_calls,resets_to_full_episode,run_status\n",
     );
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| x.to_string());
     for (c, _) in r.obstacle.iter().chain(&r.cartpole) {
@@ -831,7 +829,7 @@ pub fn write(
             for (i, k) in run.checkpoints.iter().enumerate() {
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                    "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     c.task.name(),
                     c.label,
                     run.seed_index,
@@ -850,7 +848,15 @@ pub fn write(
                     opt(k.loss_y),
                     opt(k.grad_x),
                     opt(k.grad_y),
-                    run.converged == Some(i)
+                    run.converged == Some(i),
+                    k.at_calls,
+                    k.resets_to_full_episode
+                        .map_or(String::new(), |x| x.to_string()),
+                    match &run.status {
+                        crate::experiment::RunStatus::Converged { .. } => "converged",
+                        crate::experiment::RunStatus::NotConverged => "not-converged",
+                        crate::experiment::RunStatus::Diverged { .. } => "diverged",
+                    }
                 );
             }
         }
@@ -1019,7 +1025,6 @@ pub fn write(
             series: series.into_iter().chain(lines).collect(),
         }
     };
-    let n_cp = f64::from(profile.cartpole.eval_episodes);
     figs.push((
         "fig4-8-loss",
         "Fig. 4.8",
@@ -1035,12 +1040,15 @@ pub fn write(
         "fig4-9-crashes",
         "Fig. 4.9",
         cart_fig(
-            &format!("Fig. 4.9: CartPole crashes out of {n_cp} episodes"),
-            "crashes",
+            &format!(
+                "Fig. 4.9: CartPole resets until one full 500-step episode (cap {})",
+                profile.cartpole.full_episode_cap
+            ),
+            "resets",
             false,
-            &|c| Some(f64::from(c.crashes)),
+            &|c| c.resets_to_full_episode.map(f64::from),
         )
-        .clamped((0.0, n_cp)),
+        .clamped((0.0, f64::from(profile.cartpole.full_episode_cap))),
     ));
     figs.push((
         "fig4-10-reward",
@@ -1353,7 +1361,7 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     d.push(h("Definitions (applied to every algorithm alike)"));
     d.push(Block::List(vec![
         format!(
-            "**Evaluation.** At each checkpoint (every `eval_every` iterations and at the last one) the learned \
+            "**Evaluation.** At each checkpoint (fixed gradient-call counts, below) the learned \
              policy acts deterministically — the linear-Gaussian mean `Wφ(s)` as the environment executes it \
              (clipped to the maximum speed) (obstacle), the most probable action of the softmax (CartPole) — \
              on {} (obstacle) / {} (CartPole) seeded episodes, the same episodes for every algorithm, \
@@ -1372,7 +1380,7 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
          imitation achieves."
             .into(),
         format!(
-            "**Converge.** A run converges at the first checkpoint whose score is ≥ the task's threshold: \
+            "**Converge.** A run converges at the first checkpoint of the first window of `sustain` consecutive checkpoints whose score is ≥ the task's threshold (sustained convergence; a diverged run never converges): \
              score = success rate (obstacle, threshold {}) or mean episode reward / 500 (CartPole, threshold \
              {}). *Gradient calls to converge* = cumulative per-state gradient evaluations (`Cost::gradient_evaluations`, \
              the same unit for the oracle methods and the dataset learners' inner updates) at that checkpoint; \
@@ -1384,10 +1392,11 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
          `t(0.975, n−1)·s/√n`, in every table; figures shade the same interval at each checkpoint. \
          The thesis's ± values are its own (their meaning is not stated)."
             .into(),
-        "**Hyper-parameters** are the profile's defaults, chosen once and not tuned (see `provenance.json`)."
+        "**Hyper-parameters** are selected by the pre-registered tuning protocol below (see `provenance.json`)."
             .into(),
         episode_length_note(r),
     ]));
+    d.extend(tuning::blocks(profile, r));
 
     d.push(h(
         "Fig. 4.2: gradient-estimate error vs number of trajectories",

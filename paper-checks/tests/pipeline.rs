@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 const TINY: &str = r#"
 name = "tiny"
 seeds = 2
+tuning_seeds = 1
 theory_profile = "none"
 
 [gradient_error]
@@ -31,8 +32,10 @@ reference_trajectories = 400
 
 [obstacle]
 sigma = 0.05
-iterations = 4
-eval_every = 2
+horizon = { kind = "fixed", steps = 30, after_end = "absorb" }
+budget = 200
+checkpoint_every = 100
+norm_bound = 1e4
 eval_episodes = 2
 grad_trajectories = 1
 converge_score = 0.5
@@ -40,19 +43,30 @@ converge_score = 0.5
 [[obstacle.algorithms]]
 label = "SGD"
 config = { algorithm = "sgd", form = "causal", step = { kind = "constant", eta = 1e-5 } }
+grid = [{ path = "step.eta", values = [1e-5, 1e-4] }, { path = "m", values = [1, 2] }]
 
 [[obstacle.algorithms]]
 label = "DAgger"
 config = { algorithm = "dagger", trajectories_per_iteration = 1, aggregate = true, retrain = "warm-start", beta = { kind = "exponential", p = 0.5 }, inner = { iterations = 2, rule = { rule = "adam", alpha = 0.01, beta1 = 0.9, beta2 = 0.999, epsilon = 1e-8 } } }
 
 [cartpole]
-iterations = 4
-eval_every = 2
+horizon = { kind = "fixed", steps = 40, after_end = "reset" }
+budget = 300
+checkpoint_every = 100
+norm_bound = 1e4
+full_episode_cap = 3
 eval_episodes = 2
 converge_score = 0.5
 
 [[cartpole.algorithms]]
 label = "STORM"
+config = { algorithm = "storm", form = "causal", correction = "per-decision", schedule = { kind = "constant", eta = 0.01, a = 0.5 } }
+
+[[cartpole.algorithms]]
+label = "STORM (episodic objective)"
+role = "control"
+horizon = { kind = "episodic" }
+hyper_parameters_of = "STORM"
 config = { algorithm = "storm", form = "causal", correction = "per-decision", schedule = { kind = "constant", eta = 0.01, a = 0.5 } }
 "#;
 
@@ -118,14 +132,45 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
     let b = temp_dir("b");
     let computed_a = regenerate_in(&a, 1, false);
     let computed_b = regenerate_in(&b, 2, false);
-    assert_eq!(computed_a.len(), 3, "{computed_a:?}");
-    assert_eq!(computed_b.len(), 3, "{computed_b:?}");
+    assert_eq!(computed_a.len(), 4, "{computed_a:?}");
+    assert_eq!(computed_b.len(), 4, "{computed_b:?}");
     let fa = deterministic_files(&a);
     let fb = deterministic_files(&b);
     assert!(fa.contains_key("checkpoints.csv"), "{:?}", fa.keys());
     assert!(fa.contains_key("tables.json"), "{:?}", fa.keys());
     assert!(fa.contains_key("gradient_error.csv"), "{:?}", fa.keys());
     assert!(fa.contains_key("baselines.json"), "{:?}", fa.keys());
+    // The selected hyper-parameters are recorded in the provenance and printed in the appendix
+    // (with the whole grid's sensitivity table); every report run has a status.
+    let prov: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("provenance.json")).expect("provenance.json"))
+            .expect("provenance.json parses");
+    let selected = prov["selected_hyper_parameters"]
+        .as_array()
+        .expect("selected hyper-parameters recorded");
+    assert_eq!(selected.len(), 4, "{selected:?}");
+    let sgd = selected
+        .iter()
+        .find(|s| s["algorithm"] == "SGD")
+        .expect("the tuned SGD row");
+    let chosen = sgd["selected"].as_str().expect("a description").to_string();
+    assert!(chosen.starts_with("step.eta="), "{chosen}");
+    assert_eq!(sgd["grid_points"], 4);
+    assert_eq!(sgd["tuning_seeds"].as_array().map(Vec::len), Some(4));
+    let md = std::fs::read_to_string(a.join("appendix.md")).expect("appendix.md");
+    assert!(md.contains(&format!("`{chosen}`")), "selection not printed");
+    assert!(
+        md.contains("step.eta=0.0001, m=2"),
+        "the grid is not printed whole"
+    );
+    assert!(
+        md.contains("as selected for STORM"),
+        "the control row's borrowing"
+    );
+    let sgd_runs: paper_checks::pipeline::ConfigResult =
+        serde_json::from_slice(&std::fs::read(a.join("runs/obstacle-sgd.json")).expect("SGD runs"))
+            .expect("SGD runs parse");
+    assert!(sgd_runs.runs.iter().all(|r| r.hyper_parameters == chosen));
     // The baselines are evaluated on the learners' episodes: the experts succeed on every one
     // (the VO expert reaches the goal, PPO balances 500 steps) with zero loss against
     // themselves, and ignoring the obstacle does not beat the expert.
@@ -206,7 +251,7 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
 fn rerun_skips_finished_configurations_and_redo_recomputes() {
     let d = temp_dir("resume");
     let first = regenerate_in(&d, 2, false);
-    assert_eq!(first.len(), 3, "{first:?}");
+    assert_eq!(first.len(), 4, "{first:?}");
     let before = deterministic_files(&d);
     // Nothing to do on a rerun.
     let second = regenerate_in(&d, 2, false);
@@ -229,7 +274,7 @@ fn rerun_skips_finished_configurations_and_redo_recomputes() {
     assert_eq!(fourth, vec!["cartpole / STORM".to_string()]);
     // --redo recomputes everything.
     let redo = regenerate_in(&d, 2, true);
-    assert_eq!(redo.len(), 3, "{redo:?}");
+    assert_eq!(redo.len(), 4, "{redo:?}");
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -237,7 +282,7 @@ fn rerun_skips_finished_configurations_and_redo_recomputes() {
 fn a_changed_configuration_is_recomputed() {
     let d = temp_dir("changed");
     regenerate_in(&d, 2, false);
-    let text = TINY.replace("eta = 1e-5", "eta = 2e-5");
+    let text = TINY.replace("inner = { iterations = 2,", "inner = { iterations = 3,");
     let profile = Profile::from_toml(&text, Path::new("tiny.toml")).expect("valid");
     let opts = Options {
         out: d.clone(),
@@ -246,7 +291,7 @@ fn a_changed_configuration_is_recomputed() {
     };
     let r = paper_checks::regenerate(&profile, Path::new("tiny.toml"), &text, &opts, false)
         .expect("runs");
-    assert_eq!(r.computed, vec!["obstacle / SGD".to_string()]);
+    assert_eq!(r.computed, vec!["obstacle / DAgger".to_string()]);
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -301,9 +346,29 @@ fn bad_profiles_are_rejected_naming_file_and_field() {
             "converge_score",
         ),
         (
-            "negative step",
-            TINY.replace("eta = 1e-5", "eta = -1e-5"),
+            "negative step at a grid point",
+            TINY.replace("values = [1e-5, 1e-4]", "values = [1e-5, -1e-4]"),
             "obstacle.algorithms[0] (SGD).config",
+        ),
+        (
+            "a grid path the config does not have",
+            TINY.replace("path = \"step.eta\"", "path = \"step.etta\""),
+            "etta",
+        ),
+        (
+            "zero trajectories per gradient",
+            TINY.replace("values = [1, 2]", "values = [0, 2]"),
+            "obstacle.algorithms[0] (SGD).grid",
+        ),
+        (
+            "a checkpoint period beyond the budget",
+            TINY.replace("checkpoint_every = 100\nnorm_bound = 1e4\neval_episodes = 2\ngrad", "checkpoint_every = 1000\nnorm_bound = 1e4\neval_episodes = 2\ngrad"),
+            "obstacle.checkpoint_every",
+        ),
+        (
+            "borrowing from a missing row",
+            TINY.replace("hyper_parameters_of = \"STORM\"", "hyper_parameters_of = \"Adam\""),
+            "hyper_parameters_of",
         ),
         (
             "duplicate label",

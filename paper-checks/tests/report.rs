@@ -28,7 +28,7 @@ fn timing(train: &[f64], converge: &[Option<f64>]) -> ConfigTiming {
 }
 
 #[test]
-fn kit_time_is_to_converge_over_converged_seeds_else_the_whole_run() {
+fn kit_time_is_to_converge_over_converged_seeds_else_none() {
     let t = timing(&[4.0, 6.0, 8.0], &[Some(1.0), None, Some(3.0)]);
     let (s, basis) = kit_time(&t);
     assert_eq!(s.mean, 2.0);
@@ -42,16 +42,16 @@ fn kit_time_is_to_converge_over_converged_seeds_else_the_whole_run() {
     );
     let never = timing(&[4.0, 6.0, 8.0], &[None, None, None]);
     let (s, basis) = kit_time(&never);
-    assert_eq!(s.mean, 6.0);
+    assert_eq!(s.n, 0);
     assert_eq!(basis, TimeBasis::WholeRun { seeds: 3 });
-    assert_eq!(basis.text(), "whole run (0/3 converged)");
+    assert_eq!(basis.text(), "— (0/3 converged)");
 }
 
 #[test]
 fn speed_up_is_thesis_over_kit_with_a_total_row() {
     let thesis = [("STORM", 561.37), ("SGD", 786.64)];
     let storm = timing(&[4.0, 6.0], &[Some(2.0), Some(4.0)]); // mean 3 s to converge
-    let sgd = timing(&[1.0, 3.0], &[None, None]); // mean 2 s, whole run
+    let sgd = timing(&[1.0, 3.0], &[None, None]); // never converged: no ratio (issue 17)
     let rows: Vec<SpeedupRow> = vec![
         speedup_row("STORM", Some(&storm), &thesis),
         speedup_row("SGD", Some(&sgd), &thesis),
@@ -59,23 +59,23 @@ fn speed_up_is_thesis_over_kit_with_a_total_row() {
         speedup_row("Adam", None, &thesis),           // no timing file
     ];
     assert_eq!(rows[0].ratio(), Some(561.37 / 3.0));
-    assert_eq!(rows[1].ratio(), Some(786.64 / 2.0));
+    assert_eq!(rows[1].ratio(), None);
     assert_eq!(rows[2].ratio(), None);
     assert_eq!(rows[3].ratio(), None);
     let (kit, th, ratio, n) = speedup_total(&rows);
-    assert_eq!((kit, th, n), (5.0, 561.37 + 786.64, 2));
-    assert_eq!(ratio, Some((561.37 + 786.64) / 5.0));
+    assert_eq!((kit, th, n), (3.0, 561.37, 1));
+    assert_eq!(ratio, Some(561.37 / 3.0));
     let cells = speedup_cells("4.2", &rows);
     assert_eq!(cells.len(), 5);
     assert_eq!(cells[0][1], "STORM");
     assert_eq!(cells[0][3], "to converge (2/2 seeds)");
     assert_eq!(cells[0][5], "187.1×");
-    assert_eq!(cells[1][3], "whole run (0/2 converged)");
-    assert_eq!(cells[1][5], "393.3×");
+    assert_eq!(cells[1][3], "— (0/2 converged)");
+    assert_eq!(cells[1][5], "—");
     assert_eq!(cells[2][5], "—");
     assert_eq!(cells[3][3], "no timing file");
-    assert_eq!(cells[4][1], "total (2 algorithms with both times)");
-    assert_eq!(cells[4][5], "269.6×");
+    assert_eq!(cells[4][1], "total (1 algorithms with both times)");
+    assert_eq!(cells[4][5], "187.1×");
 }
 
 fn figure(range: Option<(f64, f64)>, log_y: bool) -> Figure {

@@ -33,7 +33,7 @@ impl TimeBasis {
             TimeBasis::ToConverge { converged, seeds } => {
                 format!("to converge ({converged}/{seeds} seeds)")
             }
-            TimeBasis::WholeRun { seeds } => format!("whole run (0/{seeds} converged)"),
+            TimeBasis::WholeRun { seeds } => format!("— (0/{seeds} converged)"),
         }
     }
 }
@@ -62,7 +62,11 @@ pub fn ratio(thesis_seconds: f64, kit_seconds: f64) -> Option<f64> {
 impl SpeedupRow {
     /// The speed-up `thesis seconds / kit mean seconds`, if both exist.
     pub fn ratio(&self) -> Option<f64> {
-        ratio(self.thesis_seconds?, self.kit.as_ref()?.0.mean)
+        let kit = self.kit.as_ref()?;
+        if !matches!(kit.1, TimeBasis::ToConverge { .. }) {
+            return None;
+        }
+        ratio(self.thesis_seconds?, kit.0.mean)
     }
 }
 
@@ -73,8 +77,8 @@ pub fn kit_time(t: &ConfigTiming) -> (Summary, TimeBasis) {
     let conv: Vec<f64> = t.runs.iter().filter_map(|r| r.converge_seconds).collect();
     let seeds = t.runs.len();
     if conv.is_empty() {
-        let total: Vec<f64> = t.runs.iter().map(|r| r.train_seconds).collect();
-        (Summary::of(&total), TimeBasis::WholeRun { seeds })
+        // Issue 17 item 10: no ratio for a method that did not converge (the row shows "—").
+        (Summary::of(&[]), TimeBasis::WholeRun { seeds })
     } else {
         (
             Summary::of(&conv),
@@ -180,9 +184,9 @@ pub fn machine_sentence(m: &Machine) -> String {
 pub fn speedup_intro(m: &Machine) -> String {
     format!(
         "Speed-up = thesis seconds / kit mean seconds. The kit's time is the mean training wall \
-         time per run (evaluation excluded) to the convergence checkpoint over the seeds that \
-         converged, or of the whole run when no seed converged (column \"kit time is\"); the \
-         thesis does not say which of the two its runtimes are. BC, absent from the thesis's \
+         time per run (evaluation excluded) to the sustained-convergence checkpoint over the \
+         seeds that converged (diverged runs never count); a method none of whose runs converged \
+         shows \"—\", not a ratio. BC, absent from the thesis's \
          tables, is left out; totals sum the algorithms that have both times. {} The thesis does not describe \
          the machine its runtimes were measured on, so each ratio compares machines as well as \
          implementations (and runs of different lengths).",
