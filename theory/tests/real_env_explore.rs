@@ -33,6 +33,7 @@ fn explore() {
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(1e-2),
             controls: vec![Mutation::DropCrossReset, Mutation::Reversed],
+            note: String::new(),
         };
         task_rows("a", &s, sizes()).unwrap()
     } else {
@@ -55,6 +56,7 @@ fn explore() {
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(1e-2),
             controls: vec![Mutation::DropEndScore, Mutation::Reversed],
+            note: String::new(),
         };
         task_rows("b", &s, sizes()).unwrap()
     };
@@ -118,4 +120,30 @@ fn explore_old_obstacle() {
             .map(|(a, b)| format!("{:.2}", (a / b).powi(2)))
             .collect::<Vec<_>>()
     );
+}
+
+/// The table's real-environment rows with their details (PROFILE=full for the full sizes).
+#[test]
+#[ignore = "exploration"]
+fn explore_table() {
+    use ilopt_theory::suite::{Profile, real_environments};
+    let profile = if std::env::var("PROFILE").as_deref() == Ok("full") {
+        Profile::Full
+    } else {
+        Profile::Quick
+    };
+    let t0 = std::time::Instant::now();
+    for r in real_environments(profile).unwrap() {
+        eprintln!(
+            "{} | {:?} | {:?} | B = {:?} | X = {:?} | {}\n   {}\n",
+            r.id,
+            r.role,
+            r.verdict,
+            r.bound,
+            r.measured.as_ref().map(|m| m.value),
+            r.claim,
+            r.details
+        );
+    }
+    eprintln!("time {:?}", t0.elapsed());
 }

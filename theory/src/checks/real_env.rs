@@ -694,6 +694,8 @@ pub struct TaskSetup<'a, T, P> {
     pub eta: f64,
     /// Which controls apply (the absorbing-tail mutation only where streams absorb).
     pub controls: Vec<Mutation>,
+    /// A note for the oracle row (appended to its details).
+    pub note: String,
 }
 
 /// Every row of check 6 on one task: the oracle, the IS-weighted old-point terms, and the
@@ -759,7 +761,7 @@ where
         &r,
         z.alpha,
         &refs,
-        "",
+        &s.note,
     )];
     for (w, c, ess) in &weighted {
         let wl = match w {
@@ -810,19 +812,6 @@ where
     Ok(rows)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::normal_upper_quantile;
-
-    #[test]
-    fn normal_quantiles() {
-        assert!((normal_upper_quantile(0.025) - 1.959_964).abs() < 1e-5);
-        assert!((normal_upper_quantile(0.005) - 2.575_829).abs() < 1e-5);
-        assert!((normal_upper_quantile(1e-6) - 4.753_424).abs() < 1e-4);
-        assert!((normal_upper_quantile(0.2) - super::POWER_Z).abs() < 1e-5);
-    }
-}
-
 /// The CartPole problem of the checks: softmax learner over the task's features, LQR expert, the
 /// thesis's objective (T = 500 decisions, a reset after every crash).
 ///
@@ -843,16 +832,16 @@ pub fn cartpole_theta() -> DVector<f64> {
     DVector::from_vec(vec![0.0, 0.0, -2.0, -0.5, 0.0, 0.0, 0.0, 2.0, 0.5, 0.0])
 }
 
+/// The obstacle task's problem (the experiments' types).
+pub type ObstacleProblem = TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGaussian<f64, [f64; 2]>>;
+
 /// The obstacle problem of the checks: the experiments' learner (linear-Gaussian over the basic
 /// features, σ = `sigma`, loss of the executed speed-clipped velocity), the velocity-obstacle
 /// expert, and `horizon`.
 ///
 /// # Errors
 /// A message if the task cannot be built.
-pub fn obstacle_problem(
-    sigma: f64,
-    horizon: Horizon,
-) -> Result<TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGaussian<f64, [f64; 2]>>, String> {
+pub fn obstacle_problem(sigma: f64, horizon: Horizon) -> Result<ObstacleProblem, String> {
     let e = |x: &dyn std::fmt::Display| x.to_string();
     let v_max = ObstacleConfig::default().agent_max_speed;
     let inner = LinearGaussian::new(2, obstacle::FEATURES, sigma)
@@ -874,4 +863,17 @@ pub fn obstacle_theta() -> DVector<f64> {
     theta[0] = 0.05;
     theta[obstacle::FEATURES + 1] = 0.05;
     theta
+}
+
+#[cfg(test)]
+mod tests {
+    use super::normal_upper_quantile;
+
+    #[test]
+    fn normal_quantiles() {
+        assert!((normal_upper_quantile(0.025) - 1.959_964).abs() < 1e-5);
+        assert!((normal_upper_quantile(0.005) - 2.575_829).abs() < 1e-5);
+        assert!((normal_upper_quantile(1e-6) - 4.753_424).abs() < 1e-4);
+        assert!((normal_upper_quantile(0.2) - super::POWER_Z).abs() < 1e-5);
+    }
 }
