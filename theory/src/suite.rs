@@ -183,7 +183,7 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
     let (cs, os) = real_sizes(profile);
     let mut rows = vec![];
     let es = |rho: f64, spread: f64, eta0: f64| EstimateSizes {
-        m: if full { 400 } else { 40 },
+        m: if full { 400 } else { 100 },
         probes: 4,
         rho,
         spread,

@@ -151,3 +151,36 @@ fn quick_profile_controls_flagged_and_oracle_passes() {
         assert_eq!(r.verdict, Verdict::Holds, "{}", r.details);
     }
 }
+
+/// Check 7 on CartPole under the fixed-horizon objective at a small size: the constants are
+/// labelled estimates, the row reports a finite bound and tightness.
+#[test]
+fn check7_estimated_constants_are_labelled() {
+    use ilopt_theory::check::Method;
+    use ilopt_theory::checks::estimated::{EstimateSizes, sgd_row};
+    use ilopt_theory::constants::Provenance;
+    let p = cartpole_fixed().unwrap();
+    let s = EstimateSizes {
+        m: 10,
+        probes: 2,
+        rho: 0.1,
+        spread: 0.5,
+        runs: 2,
+        k: 20,
+        stride: 10,
+        eta0: 0.01,
+    };
+    let r = sgd_row("CartPole, fixed-500-reset", &p, &cartpole_theta(), s);
+    assert_eq!(r.method, Method::Estimate);
+    assert!(
+        r.constants
+            .iter()
+            .all(|c| c.provenance == Provenance::Estimate)
+    );
+    assert!(
+        r.bound.unwrap().is_finite() && r.tightness.unwrap().is_finite(),
+        "{}",
+        r.details
+    );
+    assert!(r.details.starts_with("ESTIMATES"));
+}
