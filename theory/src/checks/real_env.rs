@@ -784,6 +784,10 @@ where
                 if *ess < MIN_ESS { " — TOO FEW for the normal approximation: uninformative" } else { "" }
             ),
         ));
+        // The weighted old-point term is math.md §4's correction of the printed algorithms.
+        if let Some(last) = rows.last_mut() {
+            last.role = Role::Corrected;
+        }
     }
     rows.push(row_from(
         &format!("6{tag}.incl"),
