@@ -10,7 +10,11 @@
 //! Then R seeded SGD runs with η = min(η₀, 1/L̂) give X = (1/K) Σ_k ‖∇F(θ_k)‖², with ‖∇F(θ_k)‖²
 //! estimated without bias as ‖ḡ_M‖² − tr Var̂/M at every `stride`-th iterate. The row reports
 //! X̄, B̂ = L̂ησ̂² + 2B̂_F/(ηK) and the tightness X̄/B̂, so a reader sees whether the theory's rate
-//! describes the task; the verdict compares point estimates and is labelled an estimate.
+//! describes the task; the verdict compares point estimates and is labelled an estimate. The row
+//! is "inconclusive (uninformative)" when X̄ is within two standard errors (over the R runs) of 0:
+//! the per-iterate ‖∇F‖² estimates are then dominated by their variance correction and the
+//! comparison with B̂ carries no information. On the real tasks it runs under the objective the
+//! chapter-4 experiments use (the fixed horizon, see `suite::real_environments`).
 
 use crate::bounds::sgd_constant;
 use crate::check::{Check, Measured, Method, Role, Verdict};
@@ -190,6 +194,15 @@ pub fn sgd_row<P: IlProblem<f64>>(
         xs.push(acc / its.len() as f64);
     }
     let mean = xs.iter().sum::<f64>() / xs.len() as f64;
+    // The spread of X over the runs: X̄ within 2 standard errors of 0 says nothing about the
+    // bound (the per-iterate ‖∇F‖² estimates are then dominated by their variance correction).
+    let se = if xs.len() > 1 {
+        (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / ((xs.len() - 1) * xs.len()) as f64)
+            .sqrt()
+    } else {
+        f64::INFINITY
+    };
+    let informative = mean - 2.0 * se > 0.0;
     Check {
         id: "7".into(),
         result: result.into(),
@@ -201,20 +214,21 @@ pub fn sgd_row<P: IlProblem<f64>>(
             estimate("L_F", l, format!("max ‖ḡ(θ+ρu) − ḡ(θ)‖/ρ over {} probes, ρ = {}, common random numbers", s.probes, s.rho)),
         ],
         bound: Some(bound),
-        measured: Some(Measured { value: mean, lcb: None, ucb: None, runs: Some(s.runs), alpha: None }),
+        measured: Some(Measured { value: mean, lcb: Some(mean - 2.0 * se), ucb: Some(mean + 2.0 * se), runs: Some(s.runs), alpha: None }),
         tightness: Some(mean / bound),
         method: Method::Estimate,
-        verdict: Verdict::from_bool(mean <= bound),
+        verdict: if informative { Verdict::from_bool(mean <= bound) } else { Verdict::Inconclusive },
         erratum: Some("E2".into()),
         role: Role::Thesis,
         details: format!(
-            "ESTIMATES: B̂_F = {b_f:.4e}, σ̂² = {sigma2:.4e}, L̂ = {l:.4e}; η = min({}, 1/L̂) = {eta:.4e}; X̄ = {mean:.4e} over {} runs (‖∇F‖² at every {}-th iterate, M = {}), B̂ = {bound:.4e}, X̄/B̂ = {:.3e}{}",
+            "ESTIMATES: B̂_F = {b_f:.4e}, σ̂² = {sigma2:.4e}, L̂ = {l:.4e}; η = min({}, 1/L̂) = {eta:.4e}; X̄ = {mean:.4e} ± {se:.2e} (s.e. over {} runs; ‖∇F‖² at every {}-th iterate, unbiased from M = {} trajectories), B̂ = {bound:.4e}, X̄/B̂ = {:.3e}{}{}",
             s.eta0,
             s.runs,
             s.stride,
             s.m,
             mean / bound,
-            if mean > 1e6 * bound { " — SGD diverged: the local estimates do not describe the task" } else { "" }
+            if mean > 1e6 * bound { " — SGD diverged: the local estimates do not describe the task" } else { "" },
+            if informative { "; point estimates against estimated constants: not a certificate" } else { "; UNINFORMATIVE: X̄ is within 2 s.e. of 0: the per-iterate ‖∇F‖² estimates are dominated by their variance correction, the measurement is noise" }
         ),
     }
 }
