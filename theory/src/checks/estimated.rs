@@ -217,7 +217,7 @@ pub fn sgd_row<P: IlProblem<f64>>(
         measured: Some(Measured { value: mean, lcb: Some(mean - 2.0 * se), ucb: Some(mean + 2.0 * se), runs: Some(s.runs), alpha: None }),
         tightness: Some(mean / bound),
         method: Method::Estimate,
-        verdict: if informative { Verdict::from_bool(mean <= bound) } else { Verdict::Inconclusive },
+        verdict: if informative { Verdict::from_bool(mean <= bound) } else { Verdict::Uninformative },
         erratum: Some("E2".into()),
         role: Role::Thesis,
         details: format!(

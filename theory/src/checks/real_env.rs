@@ -607,10 +607,10 @@ pub fn row_from(
     let finite = c.z.iter().chain(&c.mdb).all(|x| x.is_finite());
     let degenerate = !finite || note.contains("uninformative");
     let verdict = match kind {
-        _ if degenerate => Verdict::Inconclusive,
+        _ if degenerate => Verdict::Uninformative,
         RowKind::Control => Verdict::from_bool(!c.flagged()),
         RowKind::Claim if c.flagged() => Verdict::Fails,
-        RowKind::Claim if !undetected.is_empty() => Verdict::Inconclusive,
+        RowKind::Claim if !undetected.is_empty() => Verdict::Uninformative,
         RowKind::Claim => Verdict::Holds,
     };
     let power = match kind {
