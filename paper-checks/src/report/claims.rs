@@ -1,0 +1,537 @@
+//! The qualitative claims of chapter 4, each judged by a stated rule on intervals
+//! ([`crate::verdict`]): numbers with their CIs and n, failed runs counted, and one of
+//! reproduced / inconclusive / not reproduced.
+//!
+//! Only rows whose role is `thesis` enter a claim (the thesis's algorithms on each task); extra
+//! and control rows are reported in the tables, never in a thesis claim.
+
+use super::{Claim, num};
+use crate::experiment::{Checkpoint, RunStatus, SeedRun};
+use crate::gradient_error::SlopeCi;
+use crate::pipeline::{ConfigResult, ConfigTiming, Results};
+use crate::stats::Summary;
+use crate::verdict::{
+    MedianCi, Outcome, Tally, Verdict, cap_for_failures, extreme, least, less, most, within,
+};
+use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+
+/// Confidence level of every interval of a claim.
+const LEVEL: f64 = 0.95;
+
+type Row = (ConfigResult, Option<ConfigTiming>);
+
+fn outcome(r: &SeedRun) -> Outcome {
+    match &r.status {
+        RunStatus::Converged {
+            gradient_evaluations,
+            ..
+        } => Outcome::Converged(*gradient_evaluations as f64),
+        RunStatus::NotConverged => Outcome::NotConverged,
+        RunStatus::Diverged { .. } => Outcome::Diverged,
+    }
+}
+
+/// A thesis row of a task by label.
+fn thesis<'a>(rows: &'a [Row], label: &str) -> Option<&'a ConfigResult> {
+    rows.iter()
+        .map(|r| &r.0)
+        .find(|c| c.label == label && c.entry.role == crate::config::Role::Thesis)
+}
+
+/// The thesis rows of `labels`, in that order (missing ones skipped).
+fn in_order<'a>(rows: &'a [Row], labels: &[&str]) -> Vec<&'a ConfigResult> {
+    labels.iter().filter_map(|l| thesis(rows, l)).collect()
+}
+
+fn tally(c: &ConfigResult) -> Tally {
+    Tally::of(&c.runs.iter().map(outcome).collect::<Vec<_>>())
+}
+
+/// Calls to sustained convergence, +∞ for runs that did not converge.
+fn calls(c: &ConfigResult) -> MedianCi {
+    let xs: Vec<f64> = c.runs.iter().map(|r| outcome(r).cost()).collect();
+    MedianCi::of(&xs, LEVEL)
+}
+
+/// A quantity of each run's last checkpoint; `diverged` gives a diverged run's value (`None`:
+/// left out).
+fn last_value(
+    c: &ConfigResult,
+    f: impl Fn(&Checkpoint) -> Option<f64>,
+    diverged: Option<f64>,
+) -> Summary {
+    let xs: Vec<f64> = c
+        .runs
+        .iter()
+        .filter_map(|r| {
+            if r.status.is_diverged() {
+                diverged
+            } else {
+                r.checkpoints.last().and_then(&f)
+            }
+        })
+        .collect();
+    Summary::of(&xs)
+}
+
+fn ci_text(s: &Summary) -> String {
+    if s.half_width.is_finite() {
+        format!(
+            "{} [{}, {}] (n = {})",
+            num(s.mean),
+            num(s.lo()),
+            num(s.hi()),
+            s.n
+        )
+    } else {
+        format!("{} (n = {})", num(s.mean), s.n)
+    }
+}
+
+/// `label: value; tally` for each row.
+fn evidence<'a>(rows: impl IntoIterator<Item = (&'a ConfigResult, String)>) -> String {
+    rows.into_iter()
+        .map(|(c, v)| format!("{} {v} — {}", c.label, tally(c).text()))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// O1's rule for one route: reproduced if the slope's CI contains −1/2 and lies below 0, not
+/// reproduced if it excludes −1/2, inconclusive otherwise (it contains −1/2 and 0).
+fn slope_verdict(s: &SlopeCi) -> Verdict {
+    if !(s.lo.is_finite() && s.hi.is_finite()) {
+        Verdict::Inconclusive
+    } else if s.consistent_with_inverse_sqrt() {
+        Verdict::Reproduced
+    } else if s.lo > -0.5 || s.hi < -0.5 {
+        Verdict::NotReproduced
+    } else {
+        Verdict::Inconclusive
+    }
+}
+
+/// "`a`'s variance is lower than `b`'s": the one-sided F test at level 0.975 each way.
+fn lower_variance(a: &Summary, b: &Summary, xa: &[f64], xb: &[f64]) -> Verdict {
+    let var =
+        |x: &[f64], m: f64| x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (x.len() as f64 - 1.0);
+    if xa.len() < 2 || xb.len() < 2 {
+        return Verdict::Inconclusive;
+    }
+    let (va, vb) = (var(xa, a.mean), var(xb, b.mean));
+    let quantile = |d1: usize, d2: usize| {
+        FisherSnedecor::new((d1 - 1) as f64, (d2 - 1) as f64)
+            .map(|f| f.inverse_cdf(LEVEL + (1.0 - LEVEL) / 2.0))
+            .unwrap_or(f64::INFINITY)
+    };
+    if va == 0.0 && vb == 0.0 {
+        Verdict::Inconclusive
+    } else if vb > va * quantile(xb.len(), xa.len()) {
+        Verdict::Reproduced
+    } else if va > vb * quantile(xa.len(), xb.len()) {
+        Verdict::NotReproduced
+    } else {
+        Verdict::Inconclusive
+    }
+}
+
+/// The deterministic claims (runtime claims: [`timing_claims`]).
+pub fn claims(r: &Results) -> Vec<Claim> {
+    let mut out = Vec::new();
+    let mut push = |id: &str, source: &str, claim: &str, rule: &str, ev: String, v: Verdict| {
+        out.push(Claim {
+            id: id.into(),
+            source: source.into(),
+            claim: claim.into(),
+            rule: rule.into(),
+            evidence: ev,
+            verdict: v,
+        });
+    };
+    let (toy, obst) = (&r.gradient_error.toy, &r.gradient_error.obstacle);
+    push(
+        "O1",
+        "§4.1.3, Fig. 4.2",
+        "the gradient-estimate error decays at ≈ 1/√N",
+        "for each route, the 95% bootstrap CI of the least-squares slope of log RMSE vs log N: \
+         reproduced if it contains −1/2 and lies below 0, not reproduced if it excludes −1/2",
+        format!(
+            "toy MDP vs exact ∇F: slope {}; obstacle task vs an M = {} reference (SE {}): slope {}",
+            crate::gradient_error::slope_text(toy),
+            obst.reference_trajectories.unwrap_or(0),
+            num(obst.reference_variance.sqrt()),
+            crate::gradient_error::slope_text(obst)
+        ),
+        Verdict::all(&[slope_verdict(&toy.slope), slope_verdict(&obst.slope)]),
+    );
+
+    let o = &r.obstacle;
+    let success = |c: &ConfigResult| last_value(c, |k| Some(k.score), Some(0.0));
+    let level = |id: &str, label: &str, claim: &str, lo: f64, hi: f64| {
+        let rule = format!(
+            "the 95% t-interval of the final success rate (diverged runs count as 0) lies in \
+             [{}%, {}%]: reproduced; disjoint from it: not reproduced; else inconclusive",
+            num(100.0 * lo),
+            num(100.0 * hi)
+        );
+        match thesis(o, label) {
+            Some(c) => {
+                let s = success(c);
+                (
+                    id.to_string(),
+                    claim.to_string(),
+                    rule,
+                    evidence([(c, ci_text(&s))]),
+                    within(&s, lo, hi),
+                )
+            }
+            None => (
+                id.to_string(),
+                claim.to_string(),
+                rule,
+                format!("no thesis row {label}"),
+                Verdict::Inconclusive,
+            ),
+        }
+    };
+    // BC ≈ 70 %, and constant: the per-seed change from the first checkpoint to the last.
+    if let Some(bc) = thesis(o, "BC") {
+        let s = success(bc);
+        let change: Vec<f64> = bc
+            .runs
+            .iter()
+            .filter_map(|r| Some(r.checkpoints.last()?.score - r.checkpoints.get(1)?.score))
+            .collect();
+        let d = Summary::of(&change);
+        push(
+            "O2",
+            "§4.1.3, Fig. 4.3",
+            "BC's success rate is ≈ 70% and stays constant as expert trajectories increase",
+            "the final success's 95% t-interval lies in [60%, 80%], and the interval of the \
+             per-seed change from the second checkpoint to the last lies in [−10, +10] pp \
+             (both inside: reproduced; either disjoint: not reproduced)",
+            format!(
+                "{}; change {} pp",
+                evidence([(bc, ci_text(&s))]),
+                ci_text(&Summary {
+                    n: d.n,
+                    mean: 100.0 * d.mean,
+                    half_width: 100.0 * d.half_width
+                })
+            ),
+            Verdict::all(&[within(&s, 0.6, 0.8), within(&d, -0.1, 0.1)]),
+        );
+    }
+    for (id, label, claim, lo, hi) in [
+        ("O3", "SGD", "SGD's success rate is ≈ 82.5%", 0.725, 0.925),
+        (
+            "O4",
+            "RMSProp",
+            "RMSProp's success rate lies between 72% and 85%",
+            0.67,
+            0.90,
+        ),
+    ] {
+        let (id, claim, rule, ev, v) = level(id, label, claim, lo, hi);
+        push(&id, "§4.1.3, Fig. 4.3", &claim, &rule, ev, v);
+    }
+    let trio: Vec<&ConfigResult> = ["STORM", "DAgger", "Adam"]
+        .iter()
+        .filter_map(|l| thesis(o, l))
+        .collect();
+    push(
+        "O5",
+        "§4.1.3, Fig. 4.3",
+        "STORM, DAgger and Adam reach ≈ 90% success for many expert trajectories",
+        "each final success's 95% t-interval (diverged runs count as 0) lies in [80%, 100%]; \
+         any disjoint from it: not reproduced",
+        evidence(trio.iter().map(|c| (*c, ci_text(&success(c))))),
+        Verdict::all(
+            &trio
+                .iter()
+                .map(|c| within(&success(c), 0.8, 1.0))
+                .collect::<Vec<_>>(),
+        ),
+    );
+    let optimisers = |labels: &[&str]| -> Vec<&ConfigResult> {
+        labels.iter().filter_map(|l| thesis(o, l)).collect()
+    };
+    let all_obstacle: Vec<&ConfigResult> = o
+        .iter()
+        .map(|r| &r.0)
+        .filter(|c| c.entry.role == crate::config::Role::Thesis)
+        .collect();
+    let extreme_claim = |target: &str,
+                         set: &[&ConfigResult],
+                         f: &dyn Fn(&ConfigResult) -> Summary,
+                         largest: bool|
+     -> (String, Verdict) {
+        let Some(t) = set.iter().find(|c| c.label == target) else {
+            return (format!("no thesis row {target}"), Verdict::Inconclusive);
+        };
+        let ts = f(t);
+        let others: Vec<Summary> = set
+            .iter()
+            .filter(|c| c.label != target)
+            .map(|c| f(c))
+            .collect();
+        let refs: Vec<&Summary> = others.iter().collect();
+        let mut v = extreme(&ts, &refs, largest);
+        if !largest {
+            v = cap_for_failures(v, &[tally(t)]);
+        }
+        if tally(t).diverged * 2 > tally(t).runs() {
+            v = Verdict::NotReproduced;
+        }
+        (evidence(set.iter().map(|c| (*c, ci_text(&f(c))))), v)
+    };
+    let crashes = |c: &ConfigResult| last_value(c, |k| Some(f64::from(k.crashes)), None);
+    let (ev, v) = extreme_claim("BC", &all_obstacle, &crashes, true);
+    push(
+        "O6",
+        "§4.1.3, Fig. 4.4",
+        "BC has the most crashes",
+        "BC's final crashes (of the evaluation episodes; diverged runs left out) have a 95% \
+         t-interval wholly above every other thesis row's: reproduced; some other's wholly above \
+         BC's: not reproduced; else inconclusive",
+        ev,
+        v,
+    );
+    let opt = optimisers(&["SGD", "Adam", "RMSProp", "STORM"]);
+    let grad_x = |c: &ConfigResult| last_value(c, |k| k.grad_x, None);
+    let (ev, v) = extreme_claim("STORM", &opt, &grad_x, false);
+    push(
+        "O7",
+        "§4.1.3, Fig. 4.5",
+        "in the x direction STORM converges faster than the other optimisers (lowest gradient norm)",
+        "STORM's final ‖x-row of the gradient estimate‖ (runs that did not diverge) has a 95% \
+         t-interval wholly below SGD's, Adam's and RMSProp's; a STORM run that diverged caps the \
+         verdict at inconclusive, a majority of diverged runs makes it not reproduced",
+        ev,
+        v,
+    );
+    let loss = |c: &ConfigResult| last_value(c, |k| Some(k.loss), None);
+    let (ev, v) = extreme_claim("DAgger", &all_obstacle, &loss, false);
+    push(
+        "O8",
+        "§4.1.3, Fig. 4.6",
+        "DAgger's loss is very low at every iteration",
+        "DAgger's final evaluation loss has a 95% t-interval wholly below every other thesis \
+         row's (diverged runs left out, and a DAgger divergence caps the verdict)",
+        ev,
+        v,
+    );
+    let calls_ev = |set: &[&ConfigResult]| {
+        evidence(
+            set.iter()
+                .map(|c| (*c, format!("median calls {}", calls(c).text(num)))),
+        )
+    };
+    let t41 = in_order(o, &["STORM", "SGD", "RMSProp", "DAgger", "Adam"]);
+    let median_rule = "medians of the gradient calls to sustained convergence with \
+                       distribution-free 95% intervals (order statistics); runs that never \
+                       converged or diverged count as +∞";
+    if let Some(storm) = t41.iter().find(|c| c.label == "STORM") {
+        let others: Vec<MedianCi> = t41
+            .iter()
+            .filter(|c| c.label != "STORM")
+            .map(|c| calls(c))
+            .collect();
+        let v = least(&calls(storm), &others.iter().collect::<Vec<_>>());
+        push(
+            "O9",
+            "Table 4.1",
+            "STORM needs the fewest gradient calls to converge",
+            &format!(
+                "{median_rule}; STORM's interval wholly below every other's: reproduced; some \
+                 wholly below STORM's, or STORM's median +∞: not reproduced; a STORM divergence \
+                 caps the verdict"
+            ),
+            calls_ev(&t41),
+            cap_for_failures(v, &[tally(storm)]),
+        );
+    }
+    let most_claim = |set: &[&ConfigResult]| -> Verdict {
+        let Some(d) = set.iter().find(|c| c.label == "DAgger") else {
+            return Verdict::Inconclusive;
+        };
+        let others: Vec<MedianCi> = set
+            .iter()
+            .filter(|c| c.label != "DAgger")
+            .map(|c| calls(c))
+            .collect();
+        most(&calls(d), &others.iter().collect::<Vec<_>>())
+    };
+    let most_rule = format!(
+        "{median_rule}; DAgger's interval wholly above every other's: reproduced; DAgger's median \
+         +∞, or another's interval wholly above it or +∞: not reproduced"
+    );
+    push(
+        "O10",
+        "Table 4.1",
+        "DAgger needs the most gradient calls to converge",
+        &most_rule,
+        calls_ev(&t41),
+        most_claim(&t41),
+    );
+    let c = &r.cartpole;
+    let t43 = in_order(c, &["STORM", "RMSProp", "DAgger", "Adam"]);
+    push(
+        "C1",
+        "Table 4.3",
+        "DAgger needs the most gradient calls to converge",
+        &most_rule,
+        calls_ev(&t43),
+        most_claim(&t43),
+    );
+    if let (Some(st), Some(ad), Some(rm)) =
+        (thesis(c, "STORM"), thesis(c, "Adam"), thesis(c, "RMSProp"))
+    {
+        push(
+            "C2",
+            "§4.2.2, Fig. 4.8, Table 4.3",
+            "STORM takes more gradient calls to converge than Adam and RMSProp",
+            &format!(
+                "{median_rule}; Adam's and RMSProp's intervals each wholly below STORM's: \
+                 reproduced; either's median +∞ or STORM's wholly below: not reproduced; \
+                 divergences of Adam or RMSProp cap the verdict"
+            ),
+            calls_ev(&[st, ad, rm]),
+            cap_for_failures(
+                Verdict::all(&[less(&calls(ad), &calls(st)), less(&calls(rm), &calls(st))]),
+                &[tally(ad), tally(rm)],
+            ),
+        );
+    }
+    let rewards: Vec<&ConfigResult> = c
+        .iter()
+        .map(|r| &r.0)
+        .filter(|x| x.entry.role == crate::config::Role::Thesis)
+        .collect();
+    let reward = |x: &ConfigResult| last_value(x, |k| Some(k.reward), Some(0.0));
+    push(
+        "C3",
+        "§4.2.2, Fig. 4.10",
+        "rewards increase to the maximum episode reward of 500",
+        "for every thesis row, the final mean reward's 95% t-interval (diverged runs count as 0) \
+         lies in [475, 500] (CartPole-v1's solved threshold): reproduced; any disjoint: not \
+         reproduced",
+        evidence(rewards.iter().map(|x| (*x, ci_text(&reward(x))))),
+        Verdict::all(
+            &rewards
+                .iter()
+                .map(|x| within(&reward(x), 475.0, 500.0))
+                .collect::<Vec<_>>(),
+        ),
+    );
+    let resets = |x: &ConfigResult| -> Vec<f64> {
+        x.runs
+            .iter()
+            .filter(|r| !r.status.is_diverged())
+            .filter_map(|r| r.checkpoints.last()?.resets_to_full_episode.map(f64::from))
+            .collect()
+    };
+    if let (Some(st), Some(ad), Some(rm)) =
+        (thesis(c, "STORM"), thesis(c, "Adam"), thesis(c, "RMSProp"))
+    {
+        let (xs, xa, xr) = (resets(st), resets(ad), resets(rm));
+        let (ss, sa, sr) = (Summary::of(&xs), Summary::of(&xa), Summary::of(&xr));
+        let sd = |x: &[f64], s: &Summary| {
+            if x.len() < 2 {
+                "—".to_string()
+            } else {
+                num(
+                    (x.iter().map(|v| (v - s.mean).powi(2)).sum::<f64>() / (x.len() as f64 - 1.0))
+                        .sqrt(),
+                )
+            }
+        };
+        push(
+            "C4",
+            "§4.2.2, Fig. 4.9",
+            "among STORM, Adam and RMSProp the variance of STORM's crashes is the lowest",
+            "crashes = resets of the final policy before one full 500-step episode (capped); \
+             STORM's sample variance below Adam's and RMSProp's by a two-sided F test at 95% \
+             (each way): reproduced; above: not reproduced; else inconclusive; a STORM \
+             divergence caps the verdict",
+            [(st, &xs, &ss), (ad, &xa, &sa), (rm, &xr, &sr)]
+                .iter()
+                .map(|(x, v, s)| {
+                    format!(
+                        "{} sd {} (mean {}, n = {}) — {}",
+                        x.label,
+                        sd(v, s),
+                        num(s.mean),
+                        v.len(),
+                        tally(x).text()
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join("; "),
+            cap_for_failures(
+                Verdict::all(&[
+                    lower_variance(&ss, &sa, &xs, &xa),
+                    lower_variance(&ss, &sr, &xs, &xr),
+                ]),
+                &[tally(st)],
+            ),
+        );
+    }
+    out
+}
+
+/// Runtime claims (wall time; appendix.md only): DAgger's training time per run is the largest.
+pub fn timing_claims(r: &Results) -> Vec<Claim> {
+    let mut out = Vec::new();
+    for (id, table, set, labels) in [
+        (
+            "T1",
+            "Table 4.2",
+            &r.obstacle,
+            &["STORM", "SGD", "RMSProp", "DAgger", "Adam"][..],
+        ),
+        (
+            "T2",
+            "Table 4.4",
+            &r.cartpole,
+            &["STORM", "RMSProp", "DAgger", "Adam"][..],
+        ),
+    ] {
+        let times: Vec<(String, Summary)> = labels
+            .iter()
+            .filter_map(|l| {
+                let (_, t) = set
+                    .iter()
+                    .find(|x| x.0.label == *l && x.0.entry.role == crate::config::Role::Thesis)?;
+                let xs: Vec<f64> = t.as_ref()?.runs.iter().map(|r| r.train_seconds).collect();
+                Some(((*l).to_string(), Summary::of(&xs)))
+            })
+            .collect();
+        let verdict = match times.iter().find(|t| t.0 == "DAgger") {
+            Some((_, d)) => extreme(
+                d,
+                &times
+                    .iter()
+                    .filter(|t| t.0 != "DAgger")
+                    .map(|t| &t.1)
+                    .collect::<Vec<_>>(),
+                true,
+            ),
+            None => Verdict::Inconclusive,
+        };
+        out.push(Claim {
+            id: id.into(),
+            source: table.into(),
+            claim: "DAgger's runtime is much higher than the other algorithms'".into(),
+            rule: "DAgger's training wall time per run (equal gradient-call budgets) has a 95% \
+                   t-interval wholly above every other thesis row's"
+                .into(),
+            evidence: times
+                .iter()
+                .map(|(l, s)| format!("{l} {} s", ci_text(s)))
+                .collect::<Vec<_>>()
+                .join("; "),
+            verdict,
+        });
+    }
+    out
+}
