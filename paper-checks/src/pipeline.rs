@@ -506,9 +506,8 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         } else {
             ilopt_theory::suite::Profile::Quick
         };
-        // The box holding every SGD iterate of the SGD check (as `ilopt-theory`'s binary).
-        let r = 1000.0 * 0.05 * ilopt_theory::constants::tied_softmax_g_inf_closed_form(3, 0.5);
-        let rows = ilopt_theory::suite::exact_suite(p, &[[-r, r]]).map_err(Error::Theory)?;
+        // The whole table, real-environment rows included (as `ilopt-theory`'s binary prints it).
+        let rows = ilopt_theory::suite::whole_table(p).map_err(Error::Theory)?;
         let md = ilopt_theory::report::markdown(&rows);
         write_atomic(
             &opts.out.join("theory.json"),

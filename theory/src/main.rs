@@ -1,7 +1,7 @@
 //! `ilopt-theory`: print the theorem-check table (Markdown to stdout, JSON to a file).
 use clap::Parser;
 use ilopt_theory::report::{json, markdown};
-use ilopt_theory::suite::{Profile, exact_suite, real_environments};
+use ilopt_theory::suite::{Profile, whole_table};
 use std::process::ExitCode;
 
 /// The thesis's results, checked: exact identities, rigorous constants, stated-confidence bounds.
@@ -23,14 +23,7 @@ fn main() -> ExitCode {
     } else {
         Profile::Quick
     };
-    // The box holding every SGD iterate of the SGD check (η = 0.05, K = 1000, G_∞ closed form).
-    let r = 1000.0 * 0.05 * ilopt_theory::constants::tied_softmax_g_inf_closed_form(3, 0.5);
-    let rows = match exact_suite(profile, &[[-r, r]]).and_then(|mut rows| {
-        real_environments(profile).map(|more| {
-            rows.extend(more);
-            rows
-        })
-    }) {
+    let rows = match whole_table(profile) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: {e}");

@@ -193,6 +193,18 @@ pub fn global_constants(m1: &ToyMdp, s: Sizes) -> Result<GlobalConstants, String
     .map_err(|e| e.to_string())
 }
 
+/// The whole table: [`exact_suite`] on the box holding every SGD iterate of check 1 (η = 0.05,
+/// K = 1000, G_∞ in closed form), then [`real_environments`].
+///
+/// # Errors
+/// As the two parts.
+pub fn whole_table(profile: Profile) -> Result<Vec<Check>, String> {
+    let r = 1000.0 * 0.05 * crate::constants::tied_softmax_g_inf_closed_form(3, 0.5);
+    let mut rows = exact_suite(profile, &[[-r, r]])?;
+    rows.extend(real_environments(profile)?);
+    Ok(rows)
+}
+
 /// Checks 6 and 7 on CartPole (softmax learner, LQR expert; T = 500 with resets) and the
 /// obstacle task (speed-limited linear-Gaussian learner, velocity-obstacle expert; T = 200,
 /// absorbing), the thesis's fixed-horizon objectives the chapter-4 experiments use, plus the
