@@ -469,7 +469,7 @@ pub fn write(
 
     let obs: Vec<ConvergenceRow> = r.obstacle.iter().map(|c| convergence_row(&c.0)).collect();
     let cp: Vec<ConvergenceRow> = r.cartpole.iter().map(|c| convergence_row(&c.0)).collect();
-    let cl = claims::claims(r);
+    let cl = claims::claims(r, profile.cartpole.full_episode_cap);
     let tcl = claims::timing_claims(r);
     write_atomic(
         &out.join("tables.json"),

@@ -134,8 +134,24 @@ fn lower_variance(a: &Summary, b: &Summary, xa: &[f64], xb: &[f64]) -> Verdict {
     }
 }
 
+/// A lower variance of `xs` cannot be shown when its values are censored at `cap`: any at the
+/// cap caps `v` at inconclusive; all at the cap (no run ever completed an episode) make it not
+/// reproduced.
+fn censored(v: Verdict, xs: &[f64], cap: f64) -> Verdict {
+    if !xs.is_empty() && xs.iter().all(|x| *x >= cap) {
+        Verdict::NotReproduced
+    } else if v == Verdict::Reproduced && xs.iter().any(|x| *x >= cap) {
+        Verdict::Inconclusive
+    } else {
+        v
+    }
+}
+
 /// The deterministic claims (runtime claims: [`timing_claims`]).
-pub fn claims(r: &Results) -> Vec<Claim> {
+///
+/// `reset_cap` is the cap of Fig. 4.9's count (resets before one full episode): a run at the cap
+/// never completed an episode, so its count is censored and says nothing about a variance.
+pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
     let mut out = Vec::new();
     let mut push = |id: &str, source: &str, claim: &str, rule: &str, ev: String, v: Verdict| {
         out.push(Claim {
@@ -452,7 +468,8 @@ pub fn claims(r: &Results) -> Vec<Claim> {
             "crashes = resets of the final policy before one full 500-step episode (capped); \
              STORM's sample variance below Adam's and RMSProp's by a two-sided F test at 95% \
              (each way): reproduced; above: not reproduced; else inconclusive; a STORM \
-             divergence caps the verdict",
+             divergence, or a STORM run at the cap (censored: no episode completed), caps the \
+             verdict at inconclusive, and all STORM runs at the cap make it not reproduced",
             [(st, &xs, &ss), (ad, &xa, &sa), (rm, &xr, &sr)]
                 .iter()
                 .map(|(x, v, s)| {
@@ -467,12 +484,16 @@ pub fn claims(r: &Results) -> Vec<Claim> {
                 })
                 .collect::<Vec<_>>()
                 .join("; "),
-            cap_for_failures(
-                Verdict::all(&[
-                    lower_variance(&ss, &sa, &xs, &xa),
-                    lower_variance(&ss, &sr, &xs, &xr),
-                ]),
-                &[tally(st)],
+            censored(
+                cap_for_failures(
+                    Verdict::all(&[
+                        lower_variance(&ss, &sa, &xs, &xa),
+                        lower_variance(&ss, &sr, &xs, &xr),
+                    ]),
+                    &[tally(st)],
+                ),
+                &xs,
+                f64::from(reset_cap),
             ),
         );
     }
@@ -534,4 +555,43 @@ pub fn timing_claims(r: &Results) -> Vec<Claim> {
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_variance_of_censored_counts_is_never_a_lower_variance() {
+        let (a, b) = ([100.0; 5], [10.0, 90.0, 40.0, 60.0, 100.0]);
+        let (sa, sb) = (Summary::of(&a), Summary::of(&b));
+        // Zero spread beats any spread by the F test, but every value is at the cap.
+        assert_eq!(lower_variance(&sa, &sb, &a, &b), Verdict::Reproduced);
+        assert_eq!(
+            censored(lower_variance(&sa, &sb, &a, &b), &a, 100.0),
+            Verdict::NotReproduced
+        );
+        let c = [3.0, 3.0, 3.0, 100.0, 3.0];
+        assert_eq!(
+            censored(Verdict::Reproduced, &c, 100.0),
+            Verdict::Inconclusive
+        );
+        assert_eq!(
+            censored(Verdict::Reproduced, &[3.0, 4.0], 100.0),
+            Verdict::Reproduced
+        );
+    }
+
+    #[test]
+    fn the_slope_rule_needs_minus_a_half_inside_and_zero_outside() {
+        let s = |lo, hi| SlopeCi {
+            estimate: 0.5 * (lo + hi),
+            lo,
+            hi,
+            n: 100,
+        };
+        assert_eq!(slope_verdict(&s(-0.55, -0.45)), Verdict::Reproduced);
+        assert_eq!(slope_verdict(&s(-0.3, -0.1)), Verdict::NotReproduced);
+        assert_eq!(slope_verdict(&s(-0.7, 0.1)), Verdict::Inconclusive);
+    }
 }
