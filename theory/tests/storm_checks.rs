@@ -291,7 +291,7 @@ fn check2d_is_uninformative_and_an_understated_bound_is_flagged() {
 
 /// The full-profile sizes: tighter L̃, K = 3·10⁴ (where (3.60*) is below G_F²), R = 500.
 #[test]
-#[ignore = "about 5 minutes in release: both L̃ at tolerance 0.1 with a re-check, then 500 runs of 30 000 iterations for 2c and 2c.pd, 500 of 10 000 for 2d"]
+#[ignore = "the full profile's size, about 5 minutes in release (both L̃ at tolerance 0.1 with a re-check, then 500 runs of 30 000 iterations for 2c and 2c.pd, 500 of 10 000 for 2d); CI skips it, run it by hand: cargo test --release -p ilopt-theory --test storm_checks -- --ignored"]
 fn check2_at_full_size() {
     let k = GlobalConstants::compute(
         &m1_tied(),
