@@ -131,36 +131,23 @@ pub fn markdown(checks: &[Check]) -> String {
         .filter(|c| c.verdict == Verdict::Uninformative)
         .map(|c| c.id.as_str())
         .collect();
-    let controls: Vec<String> = checks
-        .iter()
-        .filter(|c| c.role == Role::NegativeControl)
-        .map(|c| {
-            format!(
-                "{} {}",
-                c.id,
-                if c.verdict == Verdict::Fails {
+    // `id detected` / `id <missed>` for every row of `role` (detected = the check refuted it).
+    let detections = |role: Role, missed: &str| -> Vec<String> {
+        checks
+            .iter()
+            .filter(|c| c.role == role)
+            .map(|c| {
+                let seen = if c.verdict == Verdict::Fails {
                     "detected"
                 } else {
-                    "NOT detected"
-                }
-            )
-        })
-        .collect();
-    let probes: Vec<String> = checks
-        .iter()
-        .filter(|c| c.role == Role::Probe)
-        .map(|c| {
-            format!(
-                "{} {}",
-                c.id,
-                if c.verdict == Verdict::Fails {
-                    "detected"
-                } else {
-                    "not detected"
-                }
-            )
-        })
-        .collect();
+                    missed
+                };
+                format!("{} {seen}", c.id)
+            })
+            .collect()
+    };
+    let controls = detections(Role::NegativeControl, "NOT detected");
+    let probes = detections(Role::Probe, "not detected");
     if !probes.is_empty() {
         out += &format!(
             "\nProbes (algorithms as the thesis printed them, through the bound checks of the \
