@@ -16,7 +16,7 @@ use std::path::Path;
 pub struct Profile {
     /// A short name (`"quick"`, `"full"`); recorded in the provenance.
     pub name: String,
-    /// Report seeds per configuration (≥ 2 for a confidence interval; issue 6 asks for ≥ 10).
+    /// Report seeds per configuration (≥ 2 for a confidence interval; the committed profiles use ≥ 10).
     pub seeds: u32,
     /// Tuning seeds per grid point of the pre-registered tuning protocol ([`crate::tuning`]);
     /// their RNG seeds come from a key namespace of their own, disjoint from the report seeds'.
@@ -47,7 +47,7 @@ pub struct TaskSection {
     /// velocity-obstacle expert of eq. 4.1): `"ppo"` (the thesis's, default) or `"lqr"`.
     #[serde(default)]
     pub expert: Option<CartPoleExpertChoice>,
-    /// The objective the oracle methods descend (issue 17 item 1): `{ kind = "fixed", steps,
+    /// The objective the oracle methods descend: `{ kind = "fixed", steps,
     /// after_end = "reset" | "absorb" }` (the thesis's fixed horizon; the default: CartPole 500
     /// decisions with resets, the obstacle task 200 with an absorbing end) or
     /// `{ kind = "episodic" }` (one Gymnasium episode per trajectory). An algorithm may override

@@ -10,7 +10,7 @@
 //! `l(s, θ)` on the states the deterministic policy visits (obstacle: split into the x and y
 //! coordinates of the velocity).
 //!
-//! **Budget and checkpoints** (issue 17 item 2): every run of a task gets the same budget of
+//! **Budget and checkpoints**: every run of a task gets the same budget of
 //! gradient calls (per-state gradient evaluations, [`Cost`]; DAgger's full-batch retraining
 //! counts epochs × |D|), and is evaluated at the fixed call counts 0, `checkpoint_every`, …,
 //! `budget` (at the first iterate whose cumulative calls reach each). θ₁ is the task's

@@ -1,4 +1,4 @@
-//! The pre-registered hyper-parameter protocol (issue 17 item 3).
+//! The pre-registered hyper-parameter protocol.
 //!
 //! **Grid.** Each algorithm row of a profile may carry a `grid`: dimensions, each a dotted path
 //! into the row's [`AlgorithmConfig`] (its JSON form) or `"m"` (trajectories per gradient through

@@ -51,7 +51,7 @@ fn kit_time_is_to_converge_over_converged_seeds_else_none() {
 fn speed_up_is_thesis_over_kit_with_a_total_row() {
     let thesis = [("STORM", 561.37), ("SGD", 786.64)];
     let storm = timing(&[4.0, 6.0], &[Some(2.0), Some(4.0)]); // mean 3 s to converge
-    let sgd = timing(&[1.0, 3.0], &[None, None]); // never converged: no ratio (issue 17)
+    let sgd = timing(&[1.0, 3.0], &[None, None]); // never converged: no ratio
     let rows: Vec<SpeedupRow> = vec![
         speedup_row("STORM", Some(&storm), &thesis),
         speedup_row("SGD", Some(&sgd), &thesis),

@@ -296,11 +296,11 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
     Ok(rows)
 }
 
-/// What the obstacle task's z-trend of the former row 6 was (issue 18; reproduced by
+/// What the obstacle task's z-trend of the former row 6 was (reproduced by
 /// `tests/real_env_explore.rs::explore_old_obstacle`).
 pub const OBSTACLE_Z_TREND: &str = "; the former row's z-trend (worst z 1.21 → 2.44 → 3.08 at N = 18, 75, 300; episodic, σ = 0.05, h = 0.005, N′ = 200) was not a bias: re-run with this statistic it recurs at that size (1.79 → 2.15 → 3.20, nested subsamples against one fixed, noisy reference), and vanishes at 16× the size (N = 4800, N′ = 3200: 2.85 → 2.50 → 2.26) and at h/5 (2.61 → 2.49 → 2.18); the reference's own bias shows only at h = 0.02 (2.64 → 2.59 → 4.84), an O(h²)-and-beyond finite-difference bias, not of the oracle. The same signature, larger, on the episodic control row (6e, --full) at h = 0.05 (worst z 5.1 → 12.0 → 22.9 at N = 2000, 8000, 32000, Richardson's O(h²) term 346 of its s.e.): the reference is biased where the episodic F is not smooth at the scale h; at h = 0.01 and 0.002 (N = N′ = 8000) worst z 2.05 and 2.71, no trend. On the fixed-horizon row, h = 0.01 (N = N′ = 8000) gives worst z 1.81 (1.45 → 1.34 → 1.81), agreeing with h = 0.05";
 
-/// The obstacle learner's σ in the real-environment checks (issue 17's fixed-horizon setting).
+/// The obstacle learner's σ in the real-environment checks (the experiments' fixed-horizon setting).
 pub const REAL_SIGMA: f64 = 0.1;
 /// The old point of the STORM rows on CartPole: θ′ = θ − η∇F(θ) with this η (‖θ′ − θ‖ ≈ 0.018, inside the
 /// range of the chapter-4 STORM steps, η ∈ [10⁻⁶, 10⁻²] times gradients of norm ~10³).

@@ -1,4 +1,4 @@
-//! The appendix's protocol section (issue 17): the objective, budgets and checkpoints, the
+//! The appendix's protocol section: the objective, budgets and checkpoints, the
 //! convergence and divergence rules, θ₁, the selected hyper-parameters of every row, the run
 //! statuses, and the whole tuning grid's results (the sensitivity table).
 
