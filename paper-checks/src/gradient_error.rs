@@ -877,7 +877,7 @@ pub fn slope_text(route: &RouteResult) -> String {
     )
 }
 
-/// The rows of a route's table: N, RMSE [CI], corrected RMSE [CI] (obstacle), σ/√N, ratio.
+/// The rows of a route's table: N, RMSE \[CI\], corrected RMSE \[CI\] (obstacle), σ/√N, ratio.
 pub fn table_rows(route: &RouteResult) -> Vec<Vec<String>> {
     let g = |v: f64| {
         if v.is_finite() {
