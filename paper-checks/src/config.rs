@@ -388,10 +388,24 @@ impl Profile {
                 ));
             }
             let mut labels = std::collections::BTreeSet::new();
+            // Each row's results live in a file named after its label's slug: two labels with
+            // one slug would share (and overwrite) one file.
+            let mut slugs = std::collections::BTreeMap::new();
             for (i, a) in t.algorithms.iter().enumerate() {
                 let here = format!("{name}.algorithms[{i}] ({})", a.label);
                 if !labels.insert(a.label.clone()) {
                     return Err(field(file, &format!("{here}.label"), "duplicate label"));
+                }
+                let slug = crate::pipeline::slug(&a.label);
+                if let Some(other) = slugs.insert(slug.clone(), a.label.clone()) {
+                    return Err(field(
+                        file,
+                        &format!("{here}.label"),
+                        format!(
+                            "its file name `{name}-{slug}.json` is also that of label \"{other}\" \
+                             (labels must differ in more than case and punctuation)"
+                        ),
+                    ));
                 }
                 if a.m == Some(0) {
                     return Err(field(file, &format!("{here}.m"), "must be ≥ 1"));

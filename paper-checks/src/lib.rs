@@ -10,6 +10,7 @@
 //! data; seeds in parallel, results independent of the thread count, finished configurations
 //! reused) and writes the [`report`].
 
+pub mod build_info;
 pub mod config;
 pub mod error;
 pub mod experiment;
@@ -46,7 +47,7 @@ pub fn regenerate(
         profile_file,
         profile_text,
         &r,
-        &opts.out,
+        opts,
         start.elapsed().as_secs_f64(),
     )?;
     Ok(r)

@@ -43,9 +43,9 @@ fn main() -> ExitCode {
         .and_then(|text| {
             let p = Profile::from_toml(&text, &path)?;
             let opts = Options {
-                out: args.out.clone(),
                 redo: args.redo,
                 progress: !args.quiet,
+                ..Options::new(args.out.clone())
             };
             paper_checks::regenerate(&p, &path, &text, &opts, !args.no_png).map(|r| (p, r))
         });

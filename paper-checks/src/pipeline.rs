@@ -1,8 +1,11 @@
 //! The pipeline: run (or reuse) every configuration, then write the data, figures and reports.
 //!
 //! Every configuration's per-seed results are written atomically (temporary file + rename) to
-//! `runs/<task>-<algorithm>.json` together with a hash of everything that determines them; a
-//! rerun reuses a file whose hash matches unless `redo` is set. Wall times go to `timings/` and
+//! `runs/<task>-<algorithm>.json` together with a hash of everything that determines them (the
+//! row, its task's section and expert, the seed count, and the code version
+//! [`Options::source_version`]); a rerun reuses a file whose hash matches unless `redo` is set.
+//! The tuning, the Fig. 4.2 study and the theorem table are cached the same way, and files no row
+//! of the profile produces are removed ([`remove_stale`]). Wall times go to `timings/` and
 //! `timings.json` only, so every other CSV/JSON file is byte-identical across runs and thread
 //! counts (each seed's RNG is derived from the configuration and the seed index alone, and
 //! parallel results are collected in seed order).
@@ -36,6 +39,26 @@ pub struct Options {
     pub redo: bool,
     /// Show progress (bars on a terminal, plain lines otherwise); `false` = silent.
     pub progress: bool,
+    /// The version of the code that computes the results; part of every cache key, so results
+    /// computed by other code are never reused. [`Options::new`] takes the build's
+    /// [`crate::build_info::SOURCE_HASH`].
+    pub source_version: String,
+    /// The command line recorded in the provenance ([`Options::new`]: this process's argv).
+    pub command: Vec<String>,
+}
+
+impl Options {
+    /// Write into `out`, reuse cached results computed by this build's sources, show progress,
+    /// and record this process's argv.
+    pub fn new(out: impl Into<PathBuf>) -> Self {
+        Options {
+            out: out.into(),
+            redo: false,
+            progress: true,
+            source_version: crate::build_info::SOURCE_HASH.to_string(),
+            command: std::env::args().collect(),
+        }
+    }
 }
 
 /// All results of one algorithm on one task.
@@ -103,6 +126,8 @@ pub struct Results {
     pub theory_markdown: String,
     /// Configurations computed in this run (the others were reused).
     pub computed: Vec<String>,
+    /// Files removed from `runs/` and `timings/` because no row of this profile produces them.
+    pub removed_stale: Vec<String>,
 }
 
 /// Write `bytes` to `path` atomically (a temporary file in the same directory, then rename).
@@ -114,8 +139,13 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
         "{}.tmp",
         path.extension().and_then(|e| e.to_str()).unwrap_or("")
     ));
-    std::fs::write(&tmp, bytes).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+    // A failed write or rename (full disk, permissions) must not leave the temporary behind.
+    let cleanup = |e: std::io::Error, at: &Path| {
+        let _ = std::fs::remove_file(&tmp);
+        Error::io(at, e)
+    };
+    std::fs::write(&tmp, bytes).map_err(|e| cleanup(e, &tmp))?;
+    std::fs::rename(&tmp, path).map_err(|e| cleanup(e, path))
 }
 
 /// Serialise as pretty JSON with a trailing newline.
@@ -216,11 +246,19 @@ fn section_key(kind: TaskKind, t: &TaskSection) -> String {
     )
 }
 
-fn task_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEntry) -> String {
+/// The cache key of a row's report runs: the row at its selected hyper-parameters, its task's
+/// section and expert, the number of seeds, and the code version.
+fn task_key(
+    profile: &Profile,
+    kind: TaskKind,
+    t: &TaskSection,
+    e: &AlgorithmEntry,
+    version: &str,
+) -> String {
     format!(
         "{:016x}",
         fnv1a(&format!(
-            "{}|{}|{}|{}",
+            "{}|{}|{}|{}|code={version}",
             run_key(kind, t, e),
             section_key(kind, t),
             serde_json::to_string(e).unwrap_or_default(),
@@ -229,17 +267,53 @@ fn task_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEnt
     )
 }
 
-fn tuning_key(profile: &Profile, kind: TaskKind, t: &TaskSection, e: &AlgorithmEntry) -> String {
+/// The cache key of a row's tuning: the row with its grid, its task's section and expert, the
+/// number of tuning seeds, and the code version.
+fn tuning_key(
+    profile: &Profile,
+    kind: TaskKind,
+    t: &TaskSection,
+    e: &AlgorithmEntry,
+    version: &str,
+) -> String {
     format!(
         "{:016x}",
         fnv1a(&format!(
-            "tuning|{}|{}|{}|{}",
+            "tuning|{}|{}|{}|{}|code={version}",
             kind.name(),
             section_key(kind, t),
             serde_json::to_string(e).unwrap_or_default(),
             profile.tuning_seeds
         ))
     )
+}
+
+/// The cache key of the Fig. 4.2 study: its settings and the code version.
+fn gradient_key(profile: &Profile, version: &str) -> String {
+    format!(
+        "{:016x}",
+        fnv1a(&format!(
+            "gradient-error|{}|code={version}",
+            profile.gradient_error.key_hash()
+        ))
+    )
+}
+
+/// The cache key of the theorem table: its size profile and the code version.
+fn theory_key(profile: &Profile, version: &str) -> String {
+    format!(
+        "{:016x}",
+        fnv1a(&format!("theory|{}|code={version}", profile.theory_profile))
+    )
+}
+
+/// The cached theorem table (`runs/theory.json`): the Markdown and the key it was computed
+/// under.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct TheoryCache {
+    key_hash: String,
+    markdown: String,
+    rows: serde_json::Value,
 }
 
 /// The benches of a profile: one per (task, objective) used by its rows.
@@ -304,7 +378,7 @@ fn tune(
     ] {
         for e in &t.algorithms {
             let points = grid_points(e).map_err(|m| Error::experiment(&e.label, m))?;
-            let key = tuning_key(profile, kind, t, e);
+            let key = tuning_key(profile, kind, t, e, &opts.source_version);
             let file = runs_dir.join(format!("tuning-{}-{}.json", kind.name(), slug(&e.label)));
             if e.grid.is_empty() || e.hyper_parameters_of.is_some() {
                 out.push(Some(TuningResult {
@@ -471,14 +545,16 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         (TaskKind::Cartpole, &profile.cartpole),
     ];
     let gfile = runs_dir.join("gradient-error.json");
-    let gkey = profile.gradient_error.key_hash();
+    let gkey = gradient_key(profile, &opts.source_version);
     let gcached: Option<GradientErrorResult> = if opts.redo { None } else { read_json(&gfile) };
     let gcached = gcached.filter(|g| g.key_hash == gkey);
     let theory_file = opts.out.join("theory.md");
-    let theory_cached = if opts.redo {
+    let theory_cache_file = runs_dir.join("theory.json");
+    let tkey = theory_key(profile, &opts.source_version);
+    let theory_cached: Option<TheoryCache> = if opts.redo {
         None
     } else {
-        std::fs::read_to_string(&theory_file).ok()
+        read_json::<TheoryCache>(&theory_cache_file).filter(|c| c.key_hash == tkey)
     };
 
     let tuning_total: usize = tasks
@@ -495,10 +571,20 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     let seeds: Vec<u32> = (0..profile.seeds).collect();
 
     let theory_job = || -> Result<String, Error> {
-        if let Some(t) = theory_cached.clone() {
-            return Ok(t);
+        let theory_json = opts.out.join("theory.json");
+        if let Some(c) = theory_cached.clone() {
+            // The copies beside the appendix follow the cached table the key names.
+            write_atomic(&theory_file, c.markdown.as_bytes())?;
+            write_atomic(&theory_json, &to_json("theory", &c.rows)?)?;
+            return Ok(c.markdown);
         }
         if profile.theory_profile == "none" {
+            // No table this time: a table left by an earlier profile must not sit beside it.
+            for f in [&theory_file, &theory_json, &theory_cache_file] {
+                if f.exists() {
+                    std::fs::remove_file(f).map_err(|e| Error::io(f, e))?;
+                }
+            }
             return Ok("*Not run: the profile sets `theory_profile = \"none\"`. Run `cargo run --release -p ilopt-theory` or a profile with `theory_profile = \"quick\"`.*\n".into());
         }
         let p = if profile.theory_profile == "full" {
@@ -508,21 +594,24 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         };
         // The whole table, real-environment rows included (as `ilopt-theory`'s binary prints it).
         let rows = ilopt_theory::suite::whole_table(p).map_err(Error::Theory)?;
-        let md = ilopt_theory::report::markdown(&rows);
-        write_atomic(
-            &opts.out.join("theory.json"),
-            &to_json("theory", &ilopt_theory::report::json(&rows))?,
-        )?;
-        write_atomic(&theory_file, md.as_bytes())?;
+        let cache = TheoryCache {
+            key_hash: tkey.clone(),
+            markdown: ilopt_theory::report::markdown(&rows),
+            rows: ilopt_theory::report::json(&rows),
+        };
+        write_atomic(&theory_json, &to_json("theory", &cache.rows)?)?;
+        write_atomic(&theory_file, cache.markdown.as_bytes())?;
+        write_atomic(&theory_cache_file, &to_json("theory cache", &cache)?)?;
         progress.line("theorem-check table done");
-        Ok(md)
+        Ok(cache.markdown)
     };
 
     let gradient_job = || -> Result<GradientErrorResult, Error> {
         if let Some(g) = gcached.clone() {
             return Ok(g);
         }
-        let g = crate::gradient_error::run(&profile.gradient_error)?;
+        let mut g = crate::gradient_error::run(&profile.gradient_error)?;
+        g.key_hash = gkey.clone();
         progress.line(&format!(
             "done: Fig. 4.2 (toy {:.1} s, obstacle {:.1} s)",
             g.toy.seconds, g.obstacle.seconds
@@ -565,7 +654,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
                     }
                 }
                 let file = runs_dir.join(format!("{}-{}.json", kind.name(), slug(&e.label)));
-                let key = task_key(profile, kind, t, &eff);
+                let key = task_key(profile, kind, t, &eff, &opts.source_version);
                 let cached: Option<ConfigResult> = if opts.redo { None } else { read_json(&file) };
                 match cached {
                     Some(c) if c.key_hash == key => {
@@ -668,6 +757,14 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         &opts.out.join("baselines.json"),
         &to_json("baselines", &baselines)?,
     )?;
+    let removed_stale = remove_stale(profile, &runs_dir, &timings_dir)?;
+    if !removed_stale.is_empty() {
+        progress.line(&format!(
+            "removed {} cached files no row of this profile uses: {}",
+            removed_stale.len(),
+            removed_stale.join(", ")
+        ));
+    }
     let mut it = rows.into_iter();
     Ok(Results {
         gradient_error,
@@ -677,7 +774,56 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         tuning,
         theory_markdown,
         computed,
+        removed_stale,
     })
+}
+
+/// Remove from `runs/` and `timings/` every file this profile does not produce (results of
+/// rows an earlier profile had, left-over temporaries), so that the directory holds exactly the
+/// data the appendix was built from. Returns the removed files (relative to the output
+/// directory), sorted.
+///
+/// # Errors
+/// [`Error::Io`] if a directory cannot be read or a file cannot be removed.
+pub fn remove_stale(
+    profile: &Profile,
+    runs_dir: &Path,
+    timings_dir: &Path,
+) -> Result<Vec<String>, Error> {
+    let mut keep_runs = vec!["gradient-error.json".to_string()];
+    if profile.theory_profile != "none" {
+        keep_runs.push("theory.json".into());
+    }
+    let mut keep_timings = vec!["gradient-error.json".to_string()];
+    for (kind, t) in [
+        (TaskKind::Obstacle, &profile.obstacle),
+        (TaskKind::Cartpole, &profile.cartpole),
+    ] {
+        for e in &t.algorithms {
+            let stem = format!("{}-{}.json", kind.name(), slug(&e.label));
+            if !e.grid.is_empty() && e.hyper_parameters_of.is_none() {
+                keep_runs.push(format!("tuning-{stem}"));
+            }
+            keep_runs.push(stem.clone());
+            keep_timings.push(stem);
+        }
+    }
+    let mut removed = Vec::new();
+    for (dir, keep) in [(runs_dir, &keep_runs), (timings_dir, &keep_timings)] {
+        let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+        for entry in entries {
+            let entry = entry.map_err(|e| Error::io(dir, e))?;
+            let path = entry.path();
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if path.is_file() && !keep.contains(&name) {
+                std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+                let sub = dir.file_name().map(|d| d.to_string_lossy().into_owned());
+                removed.push(format!("{}/{name}", sub.unwrap_or_default()));
+            }
+        }
+    }
+    removed.sort();
+    Ok(removed)
 }
 
 /// Evaluate every task's baselines on every seed's evaluation episodes (cheap: no training, so
@@ -707,4 +853,26 @@ fn baselines_job(
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_theory_cache_key_names_the_size_profile_and_the_code() {
+        let mut p = Profile::from_toml(
+            &std::fs::read_to_string(
+                Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/quick.toml"),
+            )
+            .expect("the quick profile"),
+            Path::new("quick.toml"),
+        )
+        .expect("valid");
+        let quick = theory_key(&p, "a");
+        assert_eq!(quick, theory_key(&p, "a"));
+        assert_ne!(quick, theory_key(&p, "b"));
+        p.theory_profile = "full".into();
+        assert_ne!(quick, theory_key(&p, "a"));
+    }
 }

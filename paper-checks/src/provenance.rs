@@ -1,4 +1,5 @@
-//! The provenance record (`provenance.json`: configuration, seeds, commit, toolchain, machine) and
+//! The provenance record (`provenance.json`: configuration, seeds, the command line, the commit
+//! and source hash the binary was built from, toolchain, machine) and
 //! the run's timings (`timings.json`: date, threads, wall times), kept apart so that
 //! `provenance.json` is identical across reruns on one machine and commit.
 //!
@@ -7,7 +8,7 @@
 
 use crate::config::Profile;
 use crate::error::Error;
-use crate::pipeline::{Results, to_json, write_atomic};
+use crate::pipeline::{Options, Results, to_json, write_atomic};
 use std::path::Path;
 use std::process::Command;
 
@@ -127,9 +128,10 @@ pub fn write(
     profile_file: &Path,
     profile_text: &str,
     r: &Results,
-    out: &Path,
+    opts: &Options,
     wall_seconds: f64,
 ) -> Result<(), Error> {
+    let out = opts.out.as_path();
     let machine = Machine::current();
     let seeds: Vec<serde_json::Value> = r
         .obstacle
@@ -163,19 +165,17 @@ pub fn write(
     let prov = serde_json::json!({
         "selected_hyper_parameters": selected,
         "selection_rule": "median over tuning seeds of the gradient calls at sustained convergence (not converged or diverged = 2 × budget); smallest wins, ties to the first point in grid order",
-        "command": if profile.name == "full" {
-            "cargo run --release -p paper-checks -- --full"
-        } else {
-            "cargo run --release -p paper-checks"
-        },
+        "command": opts.command,
         "profile": profile.name,
         "profile_file": profile_file.file_name().map(|f| f.to_string_lossy().to_string()),
         "profile_toml": profile_text,
         "profile_parsed": profile,
         "seed_derivation": "report seed = SplitMix64(FNV-1a(\"task|label|algorithm-config-json|m=…|objective\") XOR SplitMix64(seed index)); tuning seed likewise from \"tuning|\" + that key; evaluation episodes (\"<task>-eval\" / \"<task>-tuning-eval\") and Fig. 4.2 streams likewise from their own keys",
         "run_seeds": seeds,
-        "git_commit": command_output("git", &["rev-parse", "HEAD"]),
-        "git_dirty": command_output("git", &["status", "--porcelain"]).map(|s| !s.is_empty()),
+        "git_commit": crate::build_info::GIT_COMMIT,
+        "git_dirty_at_build": crate::build_info::GIT_DIRTY,
+        "source_hash": crate::build_info::SOURCE_HASH,
+        "cache_code_version": opts.source_version,
         "rustc": machine.rustc,
         "cpu": machine.cpu,
         "logical_cpus": machine.logical_cpus,

@@ -81,11 +81,16 @@ fn temp_dir(name: &str) -> PathBuf {
 }
 
 fn regenerate_in(out: &Path, threads: usize, redo: bool) -> Vec<String> {
+    regenerate_with(out, threads, redo, paper_checks::build_info::SOURCE_HASH)
+}
+
+fn regenerate_with(out: &Path, threads: usize, redo: bool, version: &str) -> Vec<String> {
     let profile = tiny();
     let opts = Options {
-        out: out.to_path_buf(),
         redo,
         progress: false,
+        source_version: version.into(),
+        ..Options::new(out)
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -285,13 +290,113 @@ fn a_changed_configuration_is_recomputed() {
     let text = TINY.replace("inner = { iterations = 2,", "inner = { iterations = 3,");
     let profile = Profile::from_toml(&text, Path::new("tiny.toml")).expect("valid");
     let opts = Options {
-        out: d.clone(),
-        redo: false,
         progress: false,
+        ..Options::new(&d)
     };
     let r = paper_checks::regenerate(&profile, Path::new("tiny.toml"), &text, &opts, false)
         .expect("runs");
     assert_eq!(r.computed, vec!["obstacle / DAgger".to_string()]);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn a_changed_code_version_recomputes_everything_and_an_unchanged_one_nothing() {
+    let d = temp_dir("version");
+    assert_eq!(regenerate_with(&d, 2, false, "code-a").len(), 4);
+    assert!(regenerate_with(&d, 2, false, "code-a").is_empty());
+    let again = regenerate_with(&d, 2, false, "code-b");
+    assert_eq!(again.len(), 4, "{again:?}");
+    // The Fig. 4.2 study is keyed by the version too.
+    let g: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(d.join("runs/gradient-error.json")).expect("cached study"),
+    )
+    .expect("parses");
+    let key_b = g["key_hash"].as_str().expect("a key").to_string();
+    regenerate_with(&d, 2, false, "code-a");
+    let g: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(d.join("runs/gradient-error.json")).expect("cached study"),
+    )
+    .expect("parses");
+    assert_ne!(g["key_hash"].as_str(), Some(key_b.as_str()));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn files_no_row_produces_are_removed_and_provenance_records_the_command() {
+    let d = temp_dir("stale");
+    regenerate_in(&d, 2, false);
+    std::fs::write(d.join("runs/obstacle-old-row.json"), "{}").expect("writable");
+    std::fs::write(d.join("runs/cartpole-storm.json.tmp"), "").expect("writable");
+    // Without the DAgger row its files are stale.
+    let start = TINY
+        .find("[[obstacle.algorithms]]\nlabel = \"DAgger\"")
+        .expect("the DAgger row");
+    let end = TINY.find("[cartpole]").expect("the cartpole section");
+    let text = format!("{}{}", &TINY[..start], &TINY[end..]);
+    let profile = Profile::from_toml(&text, Path::new("tiny.toml")).expect("valid");
+    let opts = Options {
+        progress: false,
+        command: vec!["paper-checks".into(), "--out".into(), "somewhere".into()],
+        ..Options::new(&d)
+    };
+    let r = paper_checks::regenerate(&profile, Path::new("tiny.toml"), &text, &opts, false)
+        .expect("runs");
+    assert!(r.computed.is_empty(), "{:?}", r.computed);
+    assert_eq!(
+        r.removed_stale,
+        vec![
+            "runs/cartpole-storm.json.tmp".to_string(),
+            "runs/obstacle-dagger.json".into(),
+            "runs/obstacle-old-row.json".into(),
+            "timings/obstacle-dagger.json".into(),
+        ]
+    );
+    assert!(!d.join("runs/obstacle-dagger.json").exists());
+    assert!(d.join("runs/obstacle-sgd.json").exists());
+    let prov: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("provenance.json")).expect("written"))
+            .expect("parses");
+    assert_eq!(
+        prov["command"],
+        serde_json::json!(["paper-checks", "--out", "somewhere"])
+    );
+    assert_eq!(
+        prov["source_hash"].as_str(),
+        Some(paper_checks::build_info::SOURCE_HASH)
+    );
+    assert!(prov["git_commit"].as_str().is_some_and(|c| !c.is_empty()));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn labels_sharing_a_file_name_are_refused() {
+    let text = TINY
+        .replace(r#"label = "STORM""#, r#"label = "IS STORM""#)
+        .replace(
+            r#"label = "STORM (episodic objective)""#,
+            r#"label = "IS-STORM""#,
+        );
+    let text = text.replace(
+        r#"hyper_parameters_of = "STORM""#,
+        r#"hyper_parameters_of = "IS STORM""#,
+    );
+    let e = config_error(&text);
+    assert!(
+        e.contains("cartpole.algorithms[1] (IS-STORM).label")
+            && e.contains("cartpole-is-storm.json")
+            && e.contains("IS STORM"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_failed_atomic_write_leaves_no_temporary() {
+    let d = temp_dir("atomic");
+    std::fs::create_dir_all(d.join("target.json")).expect("a directory where the file goes");
+    let err = paper_checks::pipeline::write_atomic(&d.join("target.json"), b"data")
+        .expect_err("cannot replace a directory by a file");
+    assert!(err.to_string().contains("target.json"), "{err}");
+    assert!(!d.join("target.json.tmp").exists());
     let _ = std::fs::remove_dir_all(&d);
 }
 
