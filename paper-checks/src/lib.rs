@@ -17,6 +17,7 @@ pub mod experiment;
 pub mod gradient_error;
 pub mod pipeline;
 pub mod plots;
+pub mod progress;
 pub mod provenance;
 pub mod report;
 pub mod stats;
@@ -41,7 +42,11 @@ pub fn regenerate(
 ) -> Result<pipeline::Results, Error> {
     let start = std::time::Instant::now();
     let r = pipeline::run(profile, opts)?;
-    report::write(profile, profile_text, &r, &opts.out, png)?;
+    let stages = progress::Progress::new(0, opts.progress);
+    stages.stage("figures and documents", || {
+        report::write(profile, profile_text, &r, &opts.out, png)
+    })?;
+    stages.finish();
     provenance::write(
         profile,
         profile_file,

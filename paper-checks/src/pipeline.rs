@@ -16,18 +16,16 @@ use crate::experiment::{
     Baseline, Bench, Checkpoint, RunSpec, SeedRun, SeedTiming, TaskKind, baseline_seed, eval_key,
     run_key, run_key_of, run_spec,
 };
+use crate::progress::Progress;
 use crate::stats::fnv1a;
 use crate::tuning::{
     GridPoint, PointResult, TuningResult, TuningRun, grid_points, select, selection_score,
     tuning_eval_key, tuning_seed,
 };
 use ilopt::task::Horizon;
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// How to run.
@@ -182,55 +180,6 @@ pub fn slug(label: &str) -> String {
 
 fn mkdir(p: &Path) -> Result<(), Error> {
     std::fs::create_dir_all(p).map_err(|e| Error::io(p, e))
-}
-
-struct Progress {
-    bar: Option<ProgressBar>,
-    plain: bool,
-    done: AtomicUsize,
-    total: usize,
-}
-
-impl Progress {
-    fn new(total: usize, enabled: bool) -> Self {
-        let tty = std::io::stderr().is_terminal();
-        let bar = (enabled && tty).then(|| {
-            let b = ProgressBar::new(total as u64);
-            if let Ok(style) = ProgressStyle::with_template(
-                "{elapsed_precise} [{bar:40}] {pos}/{len} seed runs  {msg}",
-            ) {
-                b.set_style(style.progress_chars("=> "));
-            }
-            b
-        });
-        Progress {
-            bar,
-            plain: enabled && !tty,
-            done: AtomicUsize::new(0),
-            total,
-        }
-    }
-    fn seed_done(&self, what: &str) {
-        let k = self.done.fetch_add(1, Ordering::Relaxed) + 1;
-        if let Some(b) = &self.bar {
-            b.set_message(what.to_string());
-            b.inc(1);
-        } else if self.plain && (k == self.total || k.is_multiple_of(10)) {
-            eprintln!("[{k}/{}] seed runs done (last: {what})", self.total);
-        }
-    }
-    fn line(&self, msg: &str) {
-        if let Some(b) = &self.bar {
-            b.println(msg);
-        } else if self.plain {
-            eprintln!("{msg}");
-        }
-    }
-    fn finish(&self) {
-        if let Some(b) = &self.bar {
-            b.finish_and_clear();
-        }
-    }
 }
 
 /// What determines a task's runs apart from the algorithm rows: the section without its rows,
@@ -602,7 +551,6 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         write_atomic(&theory_json, &to_json("theory", &cache.rows)?)?;
         write_atomic(&theory_file, cache.markdown.as_bytes())?;
         write_atomic(&theory_cache_file, &to_json("theory cache", &cache)?)?;
-        progress.line("theorem-check table done");
         Ok(cache.markdown)
     };
 
@@ -746,13 +694,21 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         Ok((tuning, rows, names))
     };
 
-    let (theory, (gradient, experiments)) =
-        rayon::join(theory_job, || rayon::join(gradient_job, experiments_job));
-    progress.finish();
+    let (theory, (gradient, experiments)) = rayon::join(
+        || progress.stage("theorem-check table", theory_job),
+        || {
+            rayon::join(
+                || progress.stage("Fig. 4.2 study", gradient_job),
+                || progress.stage("tuning and report runs", experiments_job),
+            )
+        },
+    );
     let theory_markdown = theory?;
     let gradient_error = gradient?;
     let (tuning, rows, computed) = experiments?;
-    let baselines = baselines_job(profile, &benches, &seeds)?;
+    let baselines = progress.stage("baselines (expert, zero policy)", || {
+        baselines_job(profile, &benches, &seeds)
+    })?;
     write_atomic(
         &opts.out.join("baselines.json"),
         &to_json("baselines", &baselines)?,
@@ -765,6 +721,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
             removed_stale.join(", ")
         ));
     }
+    progress.finish();
     let mut it = rows.into_iter();
     Ok(Results {
         gradient_error,

@@ -534,3 +534,35 @@ fn the_committed_profiles_are_valid() {
         assert!(profile.seeds >= 10, "{name}: issue 6 asks for ≥ 10 seeds");
     }
 }
+
+#[test]
+fn without_a_terminal_every_stage_prints_one_line_with_its_time() {
+    let d = temp_dir("stages");
+    std::fs::create_dir_all(&d).expect("writable");
+    let cfg = d.join("tiny.toml");
+    std::fs::write(&cfg, TINY).expect("writable");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_paper-checks"))
+        .arg("--config")
+        .arg(&cfg)
+        .arg("--out")
+        .arg(d.join("out"))
+        .arg("--no-png")
+        .output()
+        .expect("the binary runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    for stage in [
+        "theorem-check table",
+        "Fig. 4.2 study",
+        "tuning and report runs",
+        "baselines (expert, zero policy)",
+        "figures and documents",
+    ] {
+        assert!(
+            err.contains(&format!("{stage}: started"))
+                && err.contains(&format!("{stage}: finished in ")),
+            "stage {stage} missing in:\n{err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
