@@ -31,6 +31,18 @@ pub enum Error {
     /// The theorem-check suite failed.
     #[error("theorem checks: {0}")]
     Theory(String),
+    /// `paper-checks merge` found work no shard has done.
+    #[error(
+        "merge: {missing} of the profile's units are not in {store} ({what}); run the shards that have not finished (each twice: tuning, then report runs) and merge again"
+    )]
+    Incomplete {
+        /// How many units are missing.
+        missing: usize,
+        /// Which parts are missing.
+        what: String,
+        /// The unit store.
+        store: String,
+    },
     /// Serialising a result failed.
     #[error("serialising {what}: {message}")]
     Serialise {

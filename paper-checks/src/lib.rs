@@ -20,6 +20,7 @@ pub mod plots;
 pub mod progress;
 pub mod provenance;
 pub mod report;
+pub mod shard;
 pub mod stats;
 pub mod tuning;
 pub mod verdict;

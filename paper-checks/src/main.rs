@@ -1,7 +1,8 @@
 //! `paper-checks`: regenerate the thesis's chapter 4 as a reproducible appendix.
-use clap::Parser;
+use clap::{Parser, Subcommand};
 use paper_checks::config::Profile;
 use paper_checks::pipeline::Options;
+use paper_checks::shard::{Mode, Shard};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -11,23 +12,42 @@ use std::process::ExitCode;
 #[command(name = "paper-checks", version)]
 struct Args {
     /// Use the thesis-scale profile (`configs/full.toml`) instead of the quick one.
-    #[arg(long)]
+    #[arg(long, global = true)]
     full: bool,
     /// Use this profile file instead of the committed ones.
-    #[arg(long, value_name = "FILE", conflicts_with = "full")]
+    #[arg(long, value_name = "FILE", conflicts_with = "full", global = true)]
     config: Option<PathBuf>,
     /// Output directory.
-    #[arg(long, value_name = "DIR", default_value = "out/appendix")]
+    #[arg(
+        long,
+        value_name = "DIR",
+        default_value = "out/appendix",
+        global = true
+    )]
     out: PathBuf,
     /// Recompute configurations whose results already exist.
-    #[arg(long)]
+    #[arg(long, global = true)]
     redo: bool,
     /// Skip the PNG renderings of the figures (SVG only).
-    #[arg(long)]
+    #[arg(long, global = true)]
     no_png: bool,
     /// No progress output.
-    #[arg(long)]
+    #[arg(long, global = true)]
     quiet: bool,
+    /// Compute only shard K of N (e.g. `3/16`) of the tuning and report runs into the output
+    /// directory's unit store; run every shard twice (tuning first, then the report runs, which
+    /// need every row's tuning) and then `paper-checks merge`.
+    #[arg(long, value_name = "K/N", value_parser = Shard::parse)]
+    shard: Option<Shard>,
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Assemble the appendix from the shards' results in the output directory, computing
+    /// nothing (an error lists what is missing).
+    Merge,
 }
 
 fn main() -> ExitCode {
@@ -42,21 +62,49 @@ fn main() -> ExitCode {
         .map_err(|e| paper_checks::Error::io(&path, e))
         .and_then(|text| {
             let p = Profile::from_toml(&text, &path)?;
+            let mode = match (&args.command, args.shard) {
+                (Some(Command::Merge), _) => Mode::Merge,
+                (None, Some(s)) => Mode::Shard(s),
+                (None, None) => Mode::All,
+            };
             let opts = Options {
                 redo: args.redo,
                 progress: !args.quiet,
+                mode,
                 ..Options::new(args.out.clone())
             };
-            paper_checks::regenerate(&p, &path, &text, &opts, !args.no_png).map(|r| (p, r))
-        });
-    match result {
-        Ok((_p, r)) => {
-            eprintln!(
+            if mode == Mode::Merge && args.redo {
+                return Err(paper_checks::Error::experiment(
+                    "merge",
+                    "--redo would recompute, and a merge computes nothing",
+                ));
+            }
+            if let Mode::Shard(s) = mode {
+                let r = paper_checks::pipeline::run_shard(&p, &opts)?;
+                return Ok(format!(
+                    "shard {s}: computed {} units in {:.1} s; {}",
+                    r.computed,
+                    start.elapsed().as_secs_f64(),
+                    if r.complete {
+                        "every unit of the profile is stored: run `paper-checks merge`"
+                    } else if r.tuning_complete {
+                        "this shard's report runs are stored; merge when every shard has finished"
+                    } else {
+                        "the tuning of other shards is not stored yet: run this shard again when they have finished, for its report runs"
+                    }
+                ));
+            }
+            let r = paper_checks::regenerate(&p, &path, &text, &opts, !args.no_png)?;
+            Ok(format!(
                 "computed {} configurations in {:.1} s; output in {}",
                 r.computed.len(),
                 start.elapsed().as_secs_f64(),
                 args.out.display()
-            );
+            ))
+        });
+    match result {
+        Ok(msg) => {
+            eprintln!("{msg}");
             ExitCode::SUCCESS
         }
         Err(e) => {

@@ -17,6 +17,7 @@ use crate::experiment::{
     run_key, run_key_of, run_spec,
 };
 use crate::progress::Progress;
+use crate::shard::{Mode, Units, unit_key};
 use crate::stats::fnv1a;
 use crate::tuning::{
     GridPoint, PointResult, TuningResult, TuningRun, grid_points, select, selection_score,
@@ -43,6 +44,9 @@ pub struct Options {
     pub source_version: String,
     /// The command line recorded in the provenance ([`Options::new`]: this process's argv).
     pub command: Vec<String>,
+    /// Compute everything missing ([`Mode::All`], [`Options::new`]'s default), one shard's
+    /// share, or nothing (merge).
+    pub mode: Mode,
 }
 
 impl Options {
@@ -55,6 +59,7 @@ impl Options {
             progress: true,
             source_version: crate::build_info::SOURCE_HASH.to_string(),
             command: std::env::args().collect(),
+            mode: Mode::All,
         }
     }
 }
@@ -311,12 +316,15 @@ fn at_point(e: &AlgorithmEntry, p: &GridPoint) -> AlgorithmEntry {
 }
 
 /// Run (or reuse) the tuning of every row with a grid; rows without one get their single point.
+/// `None` when some tuning unit is neither stored nor computed by this run (a shard, or a merge
+/// before every shard has tuned).
 fn tune(
     profile: &Profile,
     opts: &Options,
     benches: &Benches,
     progress: &Progress,
-) -> Result<Vec<TuningResult>, Error> {
+    units: &Units,
+) -> Result<Option<Vec<TuningResult>>, Error> {
     let runs_dir = opts.out.join("runs");
     let mut out: Vec<Option<TuningResult>> = Vec::new();
     // (slot, task, section, entry, key, file, points)
@@ -366,40 +374,50 @@ fn tune(
             let jobs: Vec<(usize, u32)> = (0..points.len())
                 .flat_map(|i| (0..profile.tuning_seeds).map(move |s| (i, s)))
                 .collect();
+            let unit_keys: Vec<String> = jobs
+                .iter()
+                .map(|(i, s)| unit_key(key, &format!("point={i}|seed={s}")))
+                .collect();
             let runs = jobs
                 .par_iter()
-                .map(|&(i, s)| {
-                    let p = &points[i];
-                    let rk = run_key_of(*kind, &e.label, &p.config, p.m, h);
-                    let seed = tuning_seed(&rk, s);
-                    let (run, _) = run_spec(
-                        bench,
-                        &RunSpec {
-                            kind: *kind,
-                            task: t,
-                            config: &p.config,
-                            m: p.m,
-                            key: format!("tuning|{rk}"),
-                            seed,
+                .zip(&unit_keys)
+                .map(|(&(i, s), ukey)| {
+                    units.get(ukey, || {
+                        let p = &points[i];
+                        let rk = run_key_of(*kind, &e.label, &p.config, p.m, h);
+                        let seed = tuning_seed(&rk, s);
+                        let (run, _) = run_spec(
+                            bench,
+                            &RunSpec {
+                                kind: *kind,
+                                task: t,
+                                config: &p.config,
+                                m: p.m,
+                                key: format!("tuning|{rk}"),
+                                seed,
+                                seed_index: s,
+                                eval_key: tuning_eval_key(*kind, s),
+                                stop_at_convergence: true,
+                                hyper_parameters: p.describe(),
+                            },
+                        )?;
+                        progress.seed_done(&format!("tuning {} / {}", kind.name(), e.label));
+                        Ok(TuningRun {
                             seed_index: s,
-                            eval_key: tuning_eval_key(*kind, s),
-                            stop_at_convergence: true,
-                            hyper_parameters: p.describe(),
-                        },
-                    )?;
-                    progress.seed_done(&format!("tuning {} / {}", kind.name(), e.label));
-                    Ok(TuningRun {
-                        seed_index: s,
-                        seed,
-                        gradient_evaluations: run
-                            .checkpoints
-                            .last()
-                            .map_or(0, |c| c.gradient_evaluations),
-                        last_score: run.checkpoints.last().map(|c| c.score),
-                        status: run.status,
+                            seed,
+                            gradient_evaluations: run
+                                .checkpoints
+                                .last()
+                                .map_or(0, |c| c.gradient_evaluations),
+                            last_score: run.checkpoints.last().map(|c| c.score),
+                            status: run.status,
+                        })
                     })
                 })
                 .collect::<Result<Vec<_>, Error>>()?;
+            let Some(runs) = runs.into_iter().collect::<Option<Vec<_>>>() else {
+                return Ok((*slot, None));
+            };
             let mut it = runs.into_iter();
             let points: Vec<PointResult> = points
                 .iter()
@@ -424,18 +442,25 @@ fn tune(
                 points,
                 budget: t.budget,
             };
-            write_atomic(file, &to_json("tuning", &r)?)?;
+            // Shards never write assembled files: two of them could assemble the same row.
+            if !matches!(units.mode(), Mode::Shard(_)) {
+                write_atomic(file, &to_json("tuning", &r)?)?;
+                units.remove(&unit_keys);
+            }
             progress.line(&format!(
                 "tuned: {} / {} → {}",
                 kind.name(),
                 e.label,
                 r.chosen().describe()
             ));
-            Ok((*slot, r))
+            Ok((*slot, Some(r)))
         })
         .collect::<Result<Vec<_>, Error>>()?;
     for (slot, r) in computed {
-        out[slot] = Some(r);
+        match r {
+            Some(r) => out[slot] = Some(r),
+            None => return Ok(None),
+        }
     }
     // Borrowed hyper-parameters (control rows).
     let mut all: Vec<TuningResult> = out.into_iter().flatten().collect();
@@ -467,7 +492,7 @@ fn tune(
             }
         }
     }
-    Ok(all)
+    Ok(Some(all))
 }
 
 /// Every tuning seed of the results (the seeds actually used, or those a grid would use).
@@ -480,15 +505,168 @@ fn tuning_seeds_of(tuning: &[TuningResult]) -> std::collections::BTreeSet<u64> {
         .collect()
 }
 
-/// Run everything the profile asks for (reusing finished configurations) and collect the results.
+type Rows = Vec<Vec<ConfigWithTiming>>;
+
+/// How far the tuning and report runs got.
+enum Experiments {
+    /// Some tuning unit is neither stored nor this run's.
+    TuningIncomplete,
+    /// Every row is tuned; some report unit is neither stored nor this run's.
+    ReportIncomplete,
+    /// Everything: the tuning, every row's results, the configurations computed.
+    Done(Vec<TuningResult>, Rows, Vec<String>),
+}
+
+/// The three concurrent stages' results (`None`: not this run's share, or missing in a merge).
+struct Stages {
+    theory: Option<String>,
+    gradient: Option<GradientErrorResult>,
+    experiments: Experiments,
+}
+
+/// The progress bar over every seed run of the profile.
+fn progress_for(profile: &Profile, opts: &Options) -> Progress {
+    let tasks = [&profile.obstacle, &profile.cartpole];
+    let tuning_total: usize = tasks
+        .iter()
+        .flat_map(|t| &t.algorithms)
+        .filter(|e| !e.grid.is_empty() && e.hyper_parameters_of.is_none())
+        .map(|e| grid_points(e).map_or(0, |p| p.len()) * profile.tuning_seeds as usize)
+        .sum();
+    let report_total: usize =
+        tasks.iter().map(|t| t.algorithms.len()).sum::<usize>() * profile.seeds as usize;
+    Progress::new(tuning_total + report_total, opts.progress)
+}
+
+/// Run everything the profile asks for (reusing finished configurations and stored units; in a
+/// merge, computing nothing) and collect the results.
 ///
 /// # Errors
-/// Any experiment, I/O or theory failure; a report seed equal to a tuning seed.
+/// Any experiment, I/O or theory failure; a report seed equal to a tuning seed;
+/// [`Error::Incomplete`] when a merge finds units no shard has computed.
 pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     let runs_dir = opts.out.join("runs");
     let timings_dir = opts.out.join("timings");
     mkdir(&runs_dir)?;
     mkdir(&timings_dir)?;
+    let progress = progress_for(profile, opts);
+    let benches = Benches::new(profile)?;
+    let seeds: Vec<u32> = (0..profile.seeds).collect();
+    let mode = match opts.mode {
+        Mode::Shard(_) => Mode::All,
+        m => m,
+    };
+    let units = Units::new(&runs_dir, mode, opts.redo);
+    let st = stages(profile, opts, &progress, &benches, &units)?;
+    let (theory_markdown, gradient_error, (tuning, rows, computed)) =
+        match (st.theory, st.gradient, st.experiments) {
+            (Some(t), Some(g), Experiments::Done(a, b, c)) => (t, g, (a, b, c)),
+            (t, g, e) => {
+                let mut what = Vec::new();
+                if t.is_none() {
+                    what.push("the theorem table".to_string());
+                }
+                if g.is_none() {
+                    what.push("the Fig. 4.2 study".into());
+                }
+                match e {
+                    Experiments::TuningIncomplete => what.push("tuning runs".into()),
+                    Experiments::ReportIncomplete => what.push("report runs".into()),
+                    Experiments::Done(..) => {}
+                }
+                return Err(Error::Incomplete {
+                    missing: units.missing() + usize::from(t.is_none()) + usize::from(g.is_none()),
+                    what: what.join(", "),
+                    store: runs_dir.join("units").display().to_string(),
+                });
+            }
+        };
+    let baselines = progress.stage("baselines (expert, zero policy)", || {
+        baselines_job(profile, &benches, &seeds)
+    })?;
+    write_atomic(
+        &opts.out.join("baselines.json"),
+        &to_json("baselines", &baselines)?,
+    )?;
+    let removed_stale = remove_stale(profile, &runs_dir, &timings_dir)?;
+    if !removed_stale.is_empty() {
+        progress.line(&format!(
+            "removed {} cached files no row of this profile uses: {}",
+            removed_stale.len(),
+            removed_stale.join(", ")
+        ));
+    }
+    progress.finish();
+    let mut it = rows.into_iter();
+    Ok(Results {
+        gradient_error,
+        obstacle: it.next().unwrap_or_default(),
+        cartpole: it.next().unwrap_or_default(),
+        baselines,
+        tuning,
+        theory_markdown,
+        computed,
+        removed_stale,
+    })
+}
+
+/// What one shard did.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ShardSummary {
+    /// Units this shard computed now.
+    pub computed: usize,
+    /// Whether every row's tuning is in the store (so the report runs could start).
+    pub tuning_complete: bool,
+    /// Whether everything of the profile is in the store (`paper-checks merge` can run).
+    pub complete: bool,
+}
+
+/// Compute this shard's share (`opts.mode` must be [`Mode::Shard`]) into the unit store.
+///
+/// # Errors
+/// As [`run`]; a mode other than a shard.
+pub fn run_shard(profile: &Profile, opts: &Options) -> Result<ShardSummary, Error> {
+    if !matches!(opts.mode, Mode::Shard(_)) {
+        return Err(Error::experiment("shard", "the options name no shard"));
+    }
+    let runs_dir = opts.out.join("runs");
+    mkdir(&runs_dir)?;
+    mkdir(&opts.out.join("timings"))?;
+    let progress = progress_for(profile, opts);
+    let benches = Benches::new(profile)?;
+    let units = Units::new(&runs_dir, opts.mode, opts.redo);
+    let st = stages(profile, opts, &progress, &benches, &units)?;
+    progress.finish();
+    Ok(ShardSummary {
+        computed: units.computed(),
+        tuning_complete: !matches!(st.experiments, Experiments::TuningIncomplete),
+        complete: units.missing() == 0
+            && st.theory.is_some()
+            && st.gradient.is_some()
+            && matches!(st.experiments, Experiments::Done(..)),
+    })
+}
+
+/// The theorem table, the Fig. 4.2 study, and the tuning and report runs, concurrently.
+fn stages(
+    profile: &Profile,
+    opts: &Options,
+    progress: &Progress,
+    benches: &Benches,
+    units: &Units,
+) -> Result<Stages, Error> {
+    let runs_dir = opts.out.join("runs");
+    let timings_dir = opts.out.join("timings");
+    let sharded = match opts.mode {
+        Mode::Shard(s) => Some(s),
+        _ => None,
+    };
+    // Whether this run computes a single job with this key.
+    let computes = |key: &str| match opts.mode {
+        Mode::All => true,
+        Mode::Shard(s) => s.owns(key),
+        Mode::Merge => false,
+    };
     let tasks = [
         (TaskKind::Obstacle, &profile.obstacle),
         (TaskKind::Cartpole, &profile.cartpole),
@@ -506,35 +684,30 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         read_json::<TheoryCache>(&theory_cache_file).filter(|c| c.key_hash == tkey)
     };
 
-    let tuning_total: usize = tasks
-        .iter()
-        .flat_map(|(_, t)| &t.algorithms)
-        .filter(|e| !e.grid.is_empty() && e.hyper_parameters_of.is_none())
-        .map(|e| grid_points(e).map_or(0, |p| p.len()) * profile.tuning_seeds as usize)
-        .sum();
-    let report_total: usize =
-        tasks.iter().map(|(_, t)| t.algorithms.len()).sum::<usize>() * profile.seeds as usize;
-    let total = tuning_total + report_total;
-    let progress = Progress::new(total, opts.progress);
-    let benches = Benches::new(profile)?;
     let seeds: Vec<u32> = (0..profile.seeds).collect();
 
-    let theory_job = || -> Result<String, Error> {
+    let theory_job = || -> Result<Option<String>, Error> {
         let theory_json = opts.out.join("theory.json");
         if let Some(c) = theory_cached.clone() {
+            if sharded.is_some() {
+                return Ok(Some(c.markdown));
+            }
             // The copies beside the appendix follow the cached table the key names.
             write_atomic(&theory_file, c.markdown.as_bytes())?;
             write_atomic(&theory_json, &to_json("theory", &c.rows)?)?;
-            return Ok(c.markdown);
+            return Ok(Some(c.markdown));
         }
         if profile.theory_profile == "none" {
             // No table this time: a table left by an earlier profile must not sit beside it.
             for f in [&theory_file, &theory_json, &theory_cache_file] {
-                if f.exists() {
+                if sharded.is_none() && f.exists() {
                     std::fs::remove_file(f).map_err(|e| Error::io(f, e))?;
                 }
             }
-            return Ok("*Not run: the profile sets `theory_profile = \"none\"`. Run `cargo run --release -p ilopt-theory` or a profile with `theory_profile = \"quick\"`.*\n".into());
+            return Ok(Some("*Not run: the profile sets `theory_profile = \"none\"`. Run `cargo run --release -p ilopt-theory` or a profile with `theory_profile = \"quick\"`.*\n".into()));
+        }
+        if !computes(&tkey) {
+            return Ok(None);
         }
         let p = if profile.theory_profile == "full" {
             ilopt_theory::suite::Profile::Full
@@ -551,12 +724,15 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         write_atomic(&theory_json, &to_json("theory", &cache.rows)?)?;
         write_atomic(&theory_file, cache.markdown.as_bytes())?;
         write_atomic(&theory_cache_file, &to_json("theory cache", &cache)?)?;
-        Ok(cache.markdown)
+        Ok(Some(cache.markdown))
     };
 
-    let gradient_job = || -> Result<GradientErrorResult, Error> {
+    let gradient_job = || -> Result<Option<GradientErrorResult>, Error> {
         if let Some(g) = gcached.clone() {
-            return Ok(g);
+            return Ok(Some(g));
+        }
+        if !computes(&gkey) {
+            return Ok(None);
         }
         let mut g = crate::gradient_error::run(&profile.gradient_error)?;
         g.key_hash = gkey.clone();
@@ -572,12 +748,13 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
             )?,
         )?;
         write_atomic(&gfile, &to_json("gradient error", &g)?)?;
-        Ok(g)
+        Ok(Some(g))
     };
 
-    type Rows = Vec<Vec<ConfigWithTiming>>;
-    let experiments_job = || -> Result<(Vec<TuningResult>, Rows, Vec<String>), Error> {
-        let tuning = tune(profile, opts, &benches, &progress)?;
+    let experiments_job = || -> Result<Experiments, Error> {
+        let Some(tuning) = tune(profile, opts, benches, progress, units)? else {
+            return Ok(Experiments::TuningIncomplete);
+        };
         let used = tuning_seeds_of(&tuning);
         // The report rows at their selected hyper-parameters; which are already done?
         let mut todo = Vec::new();
@@ -627,28 +804,38 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
                 let start = Instant::now();
                 let bench = benches.get(*kind, e.horizon(t, kind.name()));
                 let rk = run_key(*kind, t, e);
+                let unit_keys: Vec<String> = seeds
+                    .iter()
+                    .map(|s| unit_key(key, &format!("seed={s}")))
+                    .collect();
                 let pairs = seeds
                     .par_iter()
-                    .map(|&s| {
-                        let r = run_spec(
-                            bench,
-                            &RunSpec {
-                                kind: *kind,
-                                task: t,
-                                config: &e.config,
-                                m: e.m.unwrap_or(1),
-                                key: rk.clone(),
-                                seed: crate::stats::derive_seed(&rk, u64::from(s)),
-                                seed_index: s,
-                                eval_key: eval_key(*kind, s),
-                                stop_at_convergence: false,
-                                hyper_parameters: hyper.clone(),
-                            },
-                        );
-                        progress.seed_done(&format!("{} / {}", kind.name(), e.label));
-                        r
+                    .zip(&unit_keys)
+                    .map(|(&s, ukey)| {
+                        units.get(ukey, || {
+                            let r = run_spec(
+                                bench,
+                                &RunSpec {
+                                    kind: *kind,
+                                    task: t,
+                                    config: &e.config,
+                                    m: e.m.unwrap_or(1),
+                                    key: rk.clone(),
+                                    seed: crate::stats::derive_seed(&rk, u64::from(s)),
+                                    seed_index: s,
+                                    eval_key: eval_key(*kind, s),
+                                    stop_at_convergence: false,
+                                    hyper_parameters: hyper.clone(),
+                                },
+                            );
+                            progress.seed_done(&format!("{} / {}", kind.name(), e.label));
+                            r
+                        })
                     })
                     .collect::<Result<Vec<_>, Error>>()?;
+                let Some(pairs) = pairs.into_iter().collect::<Option<Vec<_>>>() else {
+                    return Ok(None);
+                };
                 let (runs, timings): (Vec<_>, Vec<_>) = pairs.into_iter().unzip();
                 let c = ConfigResult {
                     task: *kind,
@@ -663,11 +850,15 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
                     runs: timings,
                     wall_seconds: start.elapsed().as_secs_f64(),
                 };
-                write_atomic(
-                    &timings_dir.join(format!("{}-{}.json", kind.name(), slug(&e.label))),
-                    &to_json("timings", &tm)?,
-                )?;
-                write_atomic(file, &to_json("results", &c)?)?;
+                // Shards never write assembled files: two of them could assemble the same row.
+                if sharded.is_none() {
+                    write_atomic(
+                        &timings_dir.join(format!("{}-{}.json", kind.name(), slug(&e.label))),
+                        &to_json("timings", &tm)?,
+                    )?;
+                    write_atomic(file, &to_json("results", &c)?)?;
+                    units.remove(&unit_keys);
+                }
                 progress.line(&format!(
                     "done: {} / {} ({} seeds, {:.1} s)",
                     kind.name(),
@@ -675,9 +866,12 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
                     profile.seeds,
                     tm.wall_seconds
                 ));
-                Ok((*kind, e.label.clone(), c, tm))
+                Ok(Some((*kind, e.label.clone(), c, tm)))
             })
             .collect::<Result<Vec<_>, Error>>()?;
+        let Some(computed) = computed.into_iter().collect::<Option<Vec<_>>>() else {
+            return Ok(Experiments::ReportIncomplete);
+        };
         let mut names = Vec::new();
         for (kind, label, c, tm) in computed {
             names.push(format!("{} / {label}", kind.name()));
@@ -691,7 +885,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
             .into_iter()
             .map(|row| row.into_iter().flatten().collect::<Vec<_>>())
             .collect();
-        Ok((tuning, rows, names))
+        Ok(Experiments::Done(tuning, rows, names))
     };
 
     let (theory, (gradient, experiments)) = rayon::join(
@@ -703,35 +897,10 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
             )
         },
     );
-    let theory_markdown = theory?;
-    let gradient_error = gradient?;
-    let (tuning, rows, computed) = experiments?;
-    let baselines = progress.stage("baselines (expert, zero policy)", || {
-        baselines_job(profile, &benches, &seeds)
-    })?;
-    write_atomic(
-        &opts.out.join("baselines.json"),
-        &to_json("baselines", &baselines)?,
-    )?;
-    let removed_stale = remove_stale(profile, &runs_dir, &timings_dir)?;
-    if !removed_stale.is_empty() {
-        progress.line(&format!(
-            "removed {} cached files no row of this profile uses: {}",
-            removed_stale.len(),
-            removed_stale.join(", ")
-        ));
-    }
-    progress.finish();
-    let mut it = rows.into_iter();
-    Ok(Results {
-        gradient_error,
-        obstacle: it.next().unwrap_or_default(),
-        cartpole: it.next().unwrap_or_default(),
-        baselines,
-        tuning,
-        theory_markdown,
-        computed,
-        removed_stale,
+    Ok(Stages {
+        theory: theory?,
+        gradient: gradient?,
+        experiments: experiments?,
     })
 }
 
@@ -776,6 +945,20 @@ pub fn remove_stale(
                 std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
                 let sub = dir.file_name().map(|d| d.to_string_lossy().into_owned());
                 removed.push(format!("{}/{name}", sub.unwrap_or_default()));
+            }
+        }
+    }
+    // Every configuration is assembled by now and its units removed: what is left in the unit
+    // store belongs to other code versions or profiles.
+    let units_dir = runs_dir.join("units");
+    if units_dir.is_dir() {
+        let entries = std::fs::read_dir(&units_dir).map_err(|e| Error::io(&units_dir, e))?;
+        for entry in entries {
+            let path = entry.map_err(|e| Error::io(&units_dir, e))?.path();
+            if path.is_file() {
+                std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+                let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+                removed.push(format!("runs/units/{}", name.unwrap_or_default()));
             }
         }
     }

@@ -566,3 +566,80 @@ fn without_a_terminal_every_stage_prints_one_line_with_its_time() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Run the binary on the tiny profile into `out` with `args`; (success, stderr).
+fn binary(cfg: &Path, out: &Path, args: &[&str]) -> (bool, String) {
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_paper-checks"))
+        .arg("--config")
+        .arg(cfg)
+        .arg("--out")
+        .arg(out)
+        .arg("--no-png")
+        .arg("--quiet")
+        .args(args)
+        .output()
+        .expect("the binary runs");
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn three_shards_merged_give_the_single_run_s_data_byte_for_byte() {
+    let d = temp_dir("shards");
+    std::fs::create_dir_all(&d).expect("writable");
+    let cfg = d.join("tiny.toml");
+    std::fs::write(&cfg, TINY).expect("writable");
+    let (single, shared) = (d.join("single"), d.join("shared"));
+    let (ok, err) = binary(&cfg, &single, &[]);
+    assert!(ok, "{err}");
+
+    // Before any shard: merge refuses, naming what is missing.
+    let (ok, err) = binary(&cfg, &shared, &["merge"]);
+    assert!(
+        !ok && err.contains("units are not in") && err.contains("tuning"),
+        "{err}"
+    );
+    // Three shards, as separate processes, each twice (tuning, then report runs).
+    for round in 0..2 {
+        let children: Vec<_> = (1..=3)
+            .map(|k| {
+                std::process::Command::new(env!("CARGO_BIN_EXE_paper-checks"))
+                    .arg("--config")
+                    .arg(&cfg)
+                    .arg("--out")
+                    .arg(&shared)
+                    .args(["--quiet", "--shard", &format!("{k}/3")])
+                    .stderr(std::process::Stdio::piped())
+                    .spawn()
+                    .expect("a shard starts")
+            })
+            .collect();
+        for c in children {
+            let o = c.wait_with_output().expect("a shard ends");
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(o.status.success(), "round {round}: {err}");
+        }
+    }
+    assert!(
+        std::fs::read_dir(shared.join("runs/units"))
+            .expect("the shards stored units")
+            .count()
+            > 0
+    );
+    let (ok, err) = binary(&cfg, &shared, &["merge"]);
+    assert!(ok, "{err}");
+    assert_eq!(deterministic_files(&single), deterministic_files(&shared));
+    assert!(
+        !shared.join("runs/units").exists()
+            || std::fs::read_dir(shared.join("runs/units"))
+                .expect("readable")
+                .next()
+                .is_none(),
+        "merged units are removed"
+    );
+    let (ok, err) = binary(&cfg, &shared, &["--shard", "4/3"]);
+    assert!(!ok && err.contains("4/3"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}
