@@ -168,9 +168,18 @@ pub enum CartPoleExpertChoice {
 }
 
 impl CartPoleExpertChoice {
-    /// The committed PPO expert's file (in the repository, next to this package).
-    pub fn ppo_file() -> std::path::PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../experts/cartpole-ppo.json")
+    /// The committed PPO expert (`experts/cartpole-ppo.json`), embedded when the binary is built,
+    /// so that an installed `paper-checks` runs from any directory.
+    pub const PPO_EXPERT: &'static str = include_str!("../../experts/cartpole-ppo.json");
+
+    /// The embedded PPO expert, validated.
+    ///
+    /// # Errors
+    /// A message if the embedded file does not validate (it is checked by the kit's tests).
+    pub fn ppo_expert() -> Result<ilopt::expert::ppo::PpoExpert, String> {
+        ilopt::expert::ppo::PpoExpertFile::parse(Self::PPO_EXPERT, "experts/cartpole-ppo.json")
+            .and_then(|f| f.expert())
+            .map_err(|e| e.to_string())
     }
 
     /// `"PPO"` / `"LQR"`.
@@ -186,12 +195,9 @@ impl CartPoleExpertChoice {
     pub fn identity(self) -> String {
         match self {
             CartPoleExpertChoice::Lqr => "lqr".into(),
-            CartPoleExpertChoice::Ppo => format!(
-                "ppo:{:016x}",
-                std::fs::read_to_string(Self::ppo_file())
-                    .map(|t| crate::stats::fnv1a(&t))
-                    .unwrap_or(0)
-            ),
+            CartPoleExpertChoice::Ppo => {
+                format!("ppo:{:016x}", crate::stats::fnv1a(Self::PPO_EXPERT))
+            }
         }
     }
 }

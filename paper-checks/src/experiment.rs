@@ -31,12 +31,13 @@ use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::algo::{AlgorithmConfig, Ctx};
 use ilopt::batched::Batched;
+use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::{
     ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome, VoExpertParams, VoExpertPolicy,
 };
 use ilopt::policy::{LinearGaussian, Policy, Softmax, SpeedLimitedGaussian};
-use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
-use ilopt::task::cartpole::{self, CartPoleEpisode, CartPoleTask};
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
+use ilopt::task::cartpole::{self, CartPoleEpisode, CartPoleExpert, CartPoleTask};
 use ilopt::task::obstacle::{ObstacleFeatures, ObstacleTask};
 use ilopt::task::{Horizon, Task, TaskProblem};
 use nalgebra::DVector;
@@ -350,9 +351,9 @@ impl Bench {
                 let choice = task.expert.unwrap_or_default();
                 let t = match choice {
                     CartPoleExpertChoice::Lqr => CartPoleTask::with_lqr(),
-                    CartPoleExpertChoice::Ppo => {
-                        CartPoleTask::with_ppo(&CartPoleExpertChoice::ppo_file())
-                    }
+                    CartPoleExpertChoice::Ppo => CartPoleExpertChoice::ppo_expert()
+                        .map_err(OracleError::Environment)
+                        .and_then(|x| CartPoleTask::new(CartPoleExpert::Ppo(x), MAX_EPISODE_STEPS)),
                 }
                 .map_err(|x| e(&x))?;
                 Bench::Cartpole {

@@ -90,13 +90,15 @@ pub struct ObstacleRoute {
 }
 
 impl ToyRoute {
-    /// The toy-MDP file's path (relative paths are taken from the repository root).
+    /// The toy-MDP file's path: a relative path names the repository's file while the source
+    /// tree the binary was built from exists, else a file relative to the current directory.
     pub fn mdp_path(&self) -> PathBuf {
         let p = Path::new(&self.mdp);
-        if p.is_absolute() {
+        let in_repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(p);
+        if p.is_absolute() || !in_repo.exists() {
             p.to_path_buf()
         } else {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(p)
+            in_repo
         }
     }
 }

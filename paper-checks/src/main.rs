@@ -52,15 +52,23 @@ enum Command {
 
 fn main() -> ExitCode {
     let args = Args::parse();
-    let path = args.config.clone().unwrap_or_else(|| {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-            .join("configs")
-            .join(if args.full { "full.toml" } else { "quick.toml" })
-    });
+    // The committed profiles are embedded, so an installed binary runs from any directory.
+    let (path, text) = match &args.config {
+        Some(p) => (
+            p.clone(),
+            std::fs::read_to_string(p).map_err(|e| paper_checks::Error::io(p, e)),
+        ),
+        None if args.full => (
+            PathBuf::from("configs/full.toml"),
+            Ok(include_str!("../configs/full.toml").to_string()),
+        ),
+        None => (
+            PathBuf::from("configs/quick.toml"),
+            Ok(include_str!("../configs/quick.toml").to_string()),
+        ),
+    };
     let start = std::time::Instant::now();
-    let result = std::fs::read_to_string(&path)
-        .map_err(|e| paper_checks::Error::io(&path, e))
-        .and_then(|text| {
+    let result = text.and_then(|text| {
             let p = Profile::from_toml(&text, &path)?;
             let mode = match (&args.command, args.shard) {
                 (Some(Command::Merge), _) => Mode::Merge,
