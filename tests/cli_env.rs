@@ -158,7 +158,9 @@ fn expert_vo_lines_in_order_with_errors_inline() {
     .unwrap();
     drop(f);
     let (code, out, err) = ilopt(&["expert", "vo", "--cases", path.to_str().unwrap()]);
-    assert_eq!(code, 0, "{err}");
+    // Two of four cases fail: every line is written, and the status says so.
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("2 of 4 cases failed"), "{err}");
     let lines: Vec<Value> = out
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
@@ -176,6 +178,29 @@ fn expert_vo_lines_in_order_with_errors_inline() {
     // 4: obstacle beside the path, unconstrained optimum u₀ = (v_des − v_r)/(1+λ) = (0.05, 0).
     assert_eq!(lines[3]["u"][0].as_f64().unwrap(), 0.05);
     assert_eq!(lines[3]["u"][1].as_f64().unwrap(), 0.0);
+    // The same cases from standard input; a batch without failures exits 0.
+    let from_stdin = |input: &str| {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_ilopt"))
+            .args(["expert", "vo", "--cases", "-"])
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        child
+            .stdin
+            .take()
+            .unwrap()
+            .write_all(input.as_bytes())
+            .unwrap();
+        let o = child.wait_with_output().unwrap();
+        (o.status.code(), String::from_utf8(o.stdout).unwrap())
+    };
+    let (code, piped) = from_stdin(&std::fs::read_to_string(&path).unwrap());
+    assert_eq!((code, piped.as_str()), (Some(1), out.as_str()));
+    let good = r#"{"r":[0,1],"v_o":[0,0],"v_r":[0,0],"v_des":[0.1,0],"lam":1,"R":0.45}"#;
+    let (code, piped) = from_stdin(good);
+    assert_eq!(code, Some(0), "{piped}");
     let (code, _, err) = ilopt(&["expert", "vo", "--cases", "/nonexistent/cases.jsonl"]);
     assert_eq!(code, 1);
     assert!(err.contains("/nonexistent/cases.jsonl"), "{err}");

@@ -386,7 +386,7 @@ fn expert_vo_bad_arguments_and_cases() {
         "/nonexistent/c.jsonl",
     );
     expect_failure(&["expert", "vo", "--cases", dir], dir);
-    // Bad cases do not fail the command: each is an {"error": …} line naming the line and field.
+    // Bad cases do not stop the batch: each is an {"error": …} line naming the line and field.
     let cases = TempFile::new(
         "cases.jsonl",
         concat!(
@@ -408,7 +408,9 @@ fn expert_vo_bad_arguments_and_cases() {
     );
     let args = ["expert", "vo", "--cases", cases.path()];
     let (code, out, err) = ilopt(&args);
-    assert_eq!(code, 0, "{err}");
+    // Every line is answered; failures make the exit status 1.
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("cases failed"), "{err}");
     no_nan(&out, &args);
     let lines: Vec<serde_json::Value> = out
         .lines()

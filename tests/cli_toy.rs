@@ -231,3 +231,39 @@ fn terminal_flags_without_a_rule_are_a_clear_error() {
         "{err}"
     );
 }
+
+/// An infeasible enumeration is refused from the support count, before any exact arithmetic:
+/// the answer comes at once (the bound below is two orders of magnitude above what the count
+/// takes and far below what the enumeration would), naming the size and the limit.
+#[test]
+fn an_infeasible_horizon_is_refused_at_once_naming_size_and_limit() {
+    let text =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(M1)).unwrap();
+    let mut v: Value = serde_json::from_str(&text).unwrap();
+    v["horizon"] = json!(20);
+    let path = std::env::temp_dir().join(format!("ilopt-horizon-20-{}.json", std::process::id()));
+    std::fs::write(&path, v.to_string()).unwrap();
+    let start = std::time::Instant::now();
+    let (code, out, err) = ilopt(&[
+        "toy",
+        "eval",
+        "--mdp",
+        path.to_str().unwrap(),
+        "--theta",
+        "0",
+    ]);
+    let seconds = start.elapsed().as_secs_f64();
+    std::fs::remove_file(&path).ok();
+    assert_eq!(code, 1, "{out}");
+    // M1: two initial states, and from each state action 0 branches to 2 states and action 1 to
+    // one, so T = 20 has 2 · 3¹⁸ = 774,840,978 prefixes.
+    assert!(
+        err.contains("7.748e8 trajectory prefixes") && err.contains("limit of 20000000"),
+        "{err}"
+    );
+    assert!(seconds < 5.0, "took {seconds} s");
+    // Exact inputs are bounded too.
+    let (code, _, err) = ilopt(&["toy", "eval", "--mdp", M1, "--theta", "1e4000"]);
+    assert_eq!(code, 1);
+    assert!(err.contains("exponent beyond ±1000"), "{err}");
+}

@@ -58,7 +58,15 @@ pub fn main() -> ExitCode {
             // Streams its JSON lines itself; only errors come back.
             let stdout = std::io::stdout();
             return match expert::run(&args, &mut stdout.lock()) {
-                Ok(()) => ExitCode::SUCCESS,
+                Ok(s) if s.failed == 0 => ExitCode::SUCCESS,
+                Ok(s) => {
+                    eprintln!(
+                        "error: {} of {} cases failed (their output lines say why)",
+                        s.failed,
+                        s.failed + s.solved
+                    );
+                    ExitCode::FAILURE
+                }
                 Err(e) => {
                     eprintln!("error: {e}");
                     ExitCode::FAILURE

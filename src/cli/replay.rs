@@ -8,7 +8,11 @@
 //! the float64 state after each step ([`cartpole_step`], bit-for-bit Gymnasium's) and whether it is
 //! terminal. Numbers are printed in the shortest form that reads back to the same float64. Stepping
 //! goes on after a terminal state, as `env.unwrapped.step` does in Gymnasium, and there is no time
-//! limit. The initial state is read as Python's `float()` reads it (correctly rounded).
+//! limit; like Gymnasium, the command then warns (on stderr: the step that terminated and how many
+//! steps followed it, whose states are outside the environment's defined behaviour) and the output
+//! says so in two more fields: `"first_terminal_step"` (1-based, or `null`) and
+//! `"steps_after_termination"`. The initial state is read as Python's `float()` reads it
+//! (correctly rounded).
 
 use crate::env::EnvError;
 #[cfg(doc)]
@@ -187,8 +191,25 @@ pub fn run(args: &ReplayCartpoleArgs) -> Result<Value, ReplayError> {
         terminated.push(term);
         state = next;
     }
+    let first = terminated.iter().position(|&t| t);
+    let after = first.map_or(0, |i| terminated.len() - i - 1);
+    if let Some(i) = first
+        && after > 0
+    {
+        eprintln!(
+            "warning: the episode terminated at step {} and {after} more steps were taken; \
+             Gymnasium warns likewise: the states after a termination are outside the \
+             environment's defined behaviour",
+            i + 1
+        );
+    }
     // Every state is finite (checked by the step), so serde_json writes plain numbers.
-    Ok(json!({ "states": states, "terminated": terminated }))
+    Ok(json!({
+        "states": states,
+        "terminated": terminated,
+        "first_terminal_step": first.map(|i| i + 1),
+        "steps_after_termination": after,
+    }))
 }
 
 #[cfg(test)]
@@ -260,6 +281,12 @@ mod tests {
         // θ' = θ + τ θ̇ = 0.2 + 0.02 > θ_max ≈ 0.2094 after the first step.
         assert_eq!(terminated[0], Value::Bool(true));
         assert_eq!(states[0][2].as_f64().unwrap(), 0.2 + 0.02 * 1.0);
+        // Termination at step 1, two steps past it.
+        assert_eq!(v["first_terminal_step"], 1);
+        assert_eq!(v["steps_after_termination"], 2);
+        let calm = run(&parse(&["--init=0,0,0,0", "--actions", "1,0"]).unwrap()).unwrap();
+        assert_eq!(calm["first_terminal_step"], Value::Null);
+        assert_eq!(calm["steps_after_termination"], 0);
     }
 
     #[test]

@@ -52,16 +52,87 @@ pub struct Enumeration<S> {
     pub prefixes: u64,
 }
 
+/// The number of positive-probability prefixes at θ, counted on the support graph without any
+/// arithmetic in `S` (a dynamic programme over states; each step costs the number of support
+/// edges). Returns `(count, complete)`: once the count has passed `limit` (it never decreases
+/// with the length, since every prefix has a continuation) the programme stops after a bounded
+/// amount of work, and `count` is then a lower bound (`complete = false`).
+pub fn count_prefixes<S: Scalar>(
+    problem: &ToyProblem<S>,
+    table: &PolicyTable<S>,
+    limit: u64,
+) -> (f64, bool) {
+    const WORK: usize = 50_000_000;
+    let (n, h) = (problem.mdp().states, problem.mdp().horizon);
+    // succ[s] = (s′, number of actions a with π(a|s) > 0 and P′(s′|s, a) > 0).
+    let succ: Vec<Vec<(usize, f64)>> = (0..n)
+        .map(|s| {
+            if problem.is_absorbing(s) {
+                return vec![(s, 1.0)];
+            }
+            let mut m = vec![0.0f64; n];
+            for a in 0..problem.mdp().actions {
+                if table.prob(s, a).is_certainly_zero() {
+                    continue;
+                }
+                for (s2, pt) in problem.transition(s, a).iter().enumerate() {
+                    if !pt.is_certainly_zero() {
+                        m[s2] += 1.0;
+                    }
+                }
+            }
+            m.into_iter()
+                .enumerate()
+                .filter(|(_, k)| *k > 0.0)
+                .collect()
+        })
+        .collect();
+    let edges: usize = succ.iter().map(Vec::len).sum::<usize>() + n;
+    let mut count: Vec<f64> = problem
+        .initial()
+        .iter()
+        .map(|mu| if mu.is_certainly_zero() { 0.0 } else { 1.0 })
+        .collect();
+    let mut total: f64 = count.iter().sum();
+    let mut work = 0usize;
+    for _ in 1..h.saturating_sub(1) {
+        if total > limit as f64 && work > WORK {
+            return (total, false);
+        }
+        let mut next = vec![0.0f64; n];
+        for (s, c) in count.iter().enumerate() {
+            if *c > 0.0 {
+                for &(s2, k) in &succ[s] {
+                    next[s2] += c * k;
+                }
+            }
+        }
+        count = next;
+        total = count.iter().sum();
+        work += edges;
+    }
+    (total, true)
+}
+
 /// Visit every positive-probability prefix at θ, in lexicographic order of (s_1, a_1, s_2, …),
 /// calling `visit(states, actions, probability)`.
 ///
 /// # Errors
-/// [`ExactError::TooLarge`] beyond [`MAX_PREFIXES`].
+/// [`ExactError::TooLarge`] beyond [`MAX_PREFIXES`], decided by [`count_prefixes`] before any
+/// prefix is visited.
 pub fn for_each_prefix<S: Scalar>(
     problem: &ToyProblem<S>,
     table: &PolicyTable<S>,
     mut visit: impl FnMut(&[usize], &[usize], &S),
 ) -> Result<u64, ExactError> {
+    let (expected, complete) = count_prefixes(problem, table, MAX_PREFIXES);
+    if expected > MAX_PREFIXES as f64 {
+        return Err(ExactError::TooLarge {
+            prefixes: expected,
+            at_least: !complete,
+            limit: MAX_PREFIXES,
+        });
+    }
     let h = problem.mdp().horizon;
     let mut states = Vec::with_capacity(h - 1);
     let mut actions = Vec::with_capacity(h - 2);
@@ -81,6 +152,8 @@ pub fn for_each_prefix<S: Scalar>(
             *count += 1;
             if *count > MAX_PREFIXES {
                 return Err(ExactError::TooLarge {
+                    prefixes: *count as f64,
+                    at_least: true,
                     limit: MAX_PREFIXES,
                 });
             }
@@ -222,4 +295,40 @@ pub fn gradient_by_duals<S: Scalar>(
         total += p.clone() * prefix_loss(&table, states);
     })?;
     Ok(total.into_parts(theta.len()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::BigRational;
+    use crate::toy::ToyMdp;
+
+    /// The support count agrees with the prefixes the enumeration visits, on every example MDP
+    /// (with and without termination) at several θ, and refuses before visiting anything.
+    #[test]
+    fn the_prefix_count_is_the_number_visited() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/toy");
+        let mut checked = 0;
+        for entry in std::fs::read_dir(&dir).expect("the examples") {
+            let mdp = ToyMdp::load(&entry.expect("an entry").path()).expect("a valid example");
+            let p = ToyProblem::<BigRational>::new(&mdp);
+            for x in [0i64, 1, -2] {
+                let theta = vec![BigRational::from_integer(x.into()); mdp.policy.dim()];
+                let Ok(table) = p.table(&theta) else {
+                    continue;
+                };
+                let visited = for_each_prefix(&p, &table, |_, _, _| {}).expect("small");
+                assert_eq!(
+                    count_prefixes(&p, &table, MAX_PREFIXES),
+                    (visited as f64, true)
+                );
+                checked += 1;
+                let limit = visited.saturating_sub(1);
+                if limit > 0 {
+                    assert!(count_prefixes(&p, &table, limit).0 > limit as f64);
+                }
+            }
+        }
+        assert!(checked >= 10, "{checked}");
+    }
 }

@@ -35,8 +35,15 @@ pub enum ExactError {
     #[error(transparent)]
     Oracle(#[from] OracleError),
     /// Enumeration would visit too many prefixes.
-    #[error("the MDP has more than {limit} trajectory prefixes; enumeration is infeasible")]
+    #[error(
+        "the MDP has {}{prefixes:.3e} trajectory prefixes of positive probability at this θ, more than the limit of {limit}; enumeration is infeasible (use a shorter horizon or fewer states)",
+        if *at_least { "at least " } else { "" }
+    )]
     TooLarge {
+        /// The number of prefixes.
+        prefixes: f64,
+        /// Whether `prefixes` is only a lower bound (counting stopped past the limit).
+        at_least: bool,
         /// The limit.
         limit: u64,
     },

@@ -35,8 +35,11 @@ impl Scalar for BigRational {
     }
 }
 
-/// Largest decimal exponent accepted, so that `1e999999999` cannot exhaust memory.
-const MAX_EXPONENT: i64 = 4096;
+/// Largest decimal exponent accepted, so that `1e999999999` cannot exhaust memory and an exact
+/// computation on the number stays within seconds.
+pub const MAX_EXPONENT: i64 = 1000;
+/// Most digits accepted in a mantissa, a numerator or a denominator (same reason).
+pub const MAX_DIGITS: usize = 1000;
 
 /// Why a string is not an exact number.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -53,9 +56,17 @@ pub enum ParseExactError {
     /// `p/0`.
     #[error("`{0}` has a zero denominator")]
     ZeroDenominator(String),
-    /// The decimal exponent is beyond ±4096.
-    #[error("`{0}` has an exponent beyond ±4096")]
+    /// The decimal exponent is beyond ±[`MAX_EXPONENT`].
+    #[error("`{0}` has an exponent beyond ±{MAX_EXPONENT}")]
     ExponentTooLarge(String),
+    /// More than [`MAX_DIGITS`] digits in a mantissa, numerator or denominator.
+    #[error("`{number}` has {digits} digits, more than the {MAX_DIGITS} accepted")]
+    TooManyDigits {
+        /// The number as written (its first 40 characters and `…` when longer).
+        number: String,
+        /// Its significant digits.
+        digits: usize,
+    },
 }
 
 fn parse_uint(digits: &str) -> Option<BigInt> {
@@ -63,6 +74,23 @@ fn parse_uint(digits: &str) -> Option<BigInt> {
         return None;
     }
     BigInt::parse_bytes(digits.as_bytes(), 10)
+}
+
+/// [`parse_uint`] with the [`MAX_DIGITS`] bound (leading zeros do not count); `whole` is the
+/// number as written, for the error.
+fn parse_bounded(digits: &str, whole: &str) -> Result<Option<BigInt>, ParseExactError> {
+    let significant = digits.trim_start_matches('0').len();
+    if significant > MAX_DIGITS {
+        let mut number: String = whole.chars().take(40).collect();
+        if whole.chars().count() > 40 {
+            number.push('…');
+        }
+        return Err(ParseExactError::TooManyDigits {
+            number,
+            digits: significant,
+        });
+    }
+    Ok(parse_uint(digits))
 }
 
 /// Parse one exact number (see the module docs for the syntax).
@@ -81,8 +109,8 @@ pub fn parse_exact(text: &str) -> Result<BigRational, ParseExactError> {
         _ => (false, s),
     };
     let value = if let Some((p, q)) = body.split_once('/') {
-        let p = parse_uint(p).ok_or_else(syntax)?;
-        let q = parse_uint(q).ok_or_else(syntax)?;
+        let p = parse_bounded(p, s)?.ok_or_else(syntax)?;
+        let q = parse_bounded(q, s)?.ok_or_else(syntax)?;
         if q.is_zero() {
             return Err(ParseExactError::ZeroDenominator(s.to_string()));
         }
@@ -110,7 +138,7 @@ pub fn parse_exact(text: &str) -> Result<BigRational, ParseExactError> {
             return Err(syntax());
         }
         let digits = format!("{int}{frac}");
-        let m = parse_uint(&digits).ok_or_else(syntax)?;
+        let m = parse_bounded(&digits, s)?.ok_or_else(syntax)?;
         let scale = exponent - frac.len() as i64;
         let ten = BigInt::from(10u8);
         let pow = num_traits::pow(ten, scale.unsigned_abs() as usize);
@@ -172,6 +200,30 @@ mod tests {
             parse_exact("1e5000"),
             Err(ParseExactError::ExponentTooLarge(_))
         ));
+        assert!(parse_exact("1e1000").is_ok() && parse_exact("1e-1000").is_ok());
+        assert!(matches!(
+            parse_exact("1e1001"),
+            Err(ParseExactError::ExponentTooLarge(_))
+        ));
+        // Digits are bounded in every form; leading zeros are free.
+        let many = "7".repeat(MAX_DIGITS + 1);
+        for text in [
+            many.clone(),
+            format!("1/{many}"),
+            format!("{many}/3"),
+            format!("0.{many}"),
+        ] {
+            let e = parse_exact(&text).unwrap_err();
+            assert_eq!(
+                e,
+                ParseExactError::TooManyDigits {
+                    number: text.chars().take(40).collect::<String>() + "…",
+                    digits: MAX_DIGITS + 1
+                }
+            );
+            assert!(e.to_string().contains("1001 digits"), "{e}");
+        }
+        assert!(parse_exact(&format!("{}{}", "0".repeat(50), "7".repeat(MAX_DIGITS))).is_ok());
     }
 
     #[test]
