@@ -14,6 +14,7 @@
 //! Every call adds what it cost to a [`Cost`], so "gradient calls" (Tables 4.1, 4.3) mean one thing
 //! across algorithms.
 
+use crate::baseline::DecisionTerms;
 use crate::scalar::{Scalar, Undecidable};
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -143,6 +144,10 @@ pub enum OracleError {
     /// The environment or the expert failed.
     #[error("environment: {0}")]
     Environment(String),
+    /// A baseline that cannot be used here (see [`crate::baseline`]): an invalid configuration,
+    /// or a problem that does not expose its [`DecisionTerms`].
+    #[error("baseline: {0}")]
+    Baseline(String),
 }
 
 /// An imitation-learning problem: environment + expert + learner policy class + loss.
@@ -196,6 +201,34 @@ pub trait IlProblem<S: Scalar> {
         weighting: Weighting,
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError>;
+
+    /// The causal estimator of eq. 3.15 at θ on one trajectory, decision by decision, into `out`
+    /// ([`DecisionTerms`]: the direct part `Σ_t w_{1:t−1} ∇l_t`, every scored decision's score ψ_i
+    /// and loss-to-go, the weights), from which [`crate::baseline::Baselined`] assembles the
+    /// baselined estimate `g_b = g − Σ_i b_i ψ_i`. With `weights = Some((θ_new, weighting))` the
+    /// terms are those of the importance-weighted old-point estimate of
+    /// [`IlProblem::weighted_estimate`] (θ = θ_old, τ sampled at θ_new); the baseline term of
+    /// decision i then carries the prefix weight `w_{1:i}` (per-decision) or the trajectory's
+    /// weight (whole trajectory), which keeps it mean-zero (module docs of [`crate::baseline`]).
+    /// The caller calls [`DecisionTerms::finish`] (idempotent) before reading `out`. Counts the same gradient evaluations as
+    /// [`IlProblem::estimate`].
+    ///
+    /// # Errors
+    /// As [`IlProblem::weighted_estimate`]; the default returns [`OracleError::Baseline`] (a
+    /// problem that does not support baselines).
+    fn decision_terms(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
+        out: &mut DecisionTerms<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        let _ = (theta, trajectory, weights, out, cost);
+        Err(OracleError::Baseline(
+            "this problem does not expose the per-decision terms of eq. 3.15".into(),
+        ))
+    }
 
     /// `Σ_{t=1}^{T−1} l(s_t, θ)` on a trajectory: an unbiased estimate of F(θ) when τ ∼ p(·; θ).
     ///
