@@ -14,7 +14,7 @@
 //! Every call adds what it cost to a [`Cost`], so "gradient calls" (Tables 4.1, 4.3) mean one thing
 //! across algorithms.
 
-use crate::baseline::DecisionTerms;
+use crate::baseline::{DecisionTerms, Given};
 use crate::scalar::{Scalar, Undecidable};
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -230,6 +230,35 @@ pub trait IlProblem<S: Scalar> {
         ))
     }
 
+    /// The baselined causal estimator `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) at θ on one
+    /// trajectory, for baselines fixed before the pass (unbiased for ∇F(θ) when τ ∼ p(·; θ),
+    /// since b_i does not depend on τ).
+    ///
+    /// The default assembles it from [`IlProblem::decision_terms`] (one pass, storing each
+    /// decision's score); a problem may override it with a faster pass (the real tasks fold the
+    /// baseline into the plain estimator's loop, see [`crate::policy::Policy::causal_sum_shifted_trusted`]).
+    ///
+    /// # Errors
+    /// As [`IlProblem::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list is
+    /// shorter than the trajectory's scored decisions.
+    fn baselined_estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        baseline: Given<'_, S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let mut terms = DecisionTerms::new();
+        self.decision_terms(theta, trajectory, None, &mut terms, cost)?;
+        terms.finish();
+        if !baseline.covers(terms.decisions()) {
+            return Err(too_few_baselines(terms.decisions()));
+        }
+        let mut g = vec![S::zero(); theta.len()];
+        terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
+        Ok(DVector::from_vec(g))
+    }
+
     /// `Σ_{t=1}^{T−1} l(s_t, θ)` on a trajectory: an unbiased estimate of F(θ) when τ ∼ p(·; θ).
     ///
     /// # Errors
@@ -254,4 +283,11 @@ pub trait IlProblem<S: Scalar> {
         example: &Self::Labelled,
         cost: &mut Cost,
     ) -> Result<(S, DVector<S>), OracleError>;
+}
+
+/// The error of a time-indexed baseline list shorter than a trajectory's scored decisions.
+pub(crate) fn too_few_baselines(decisions: usize) -> OracleError {
+    OracleError::Baseline(format!(
+        "too few time-indexed baselines: a trajectory has {decisions} scored decisions"
+    ))
 }

@@ -580,3 +580,77 @@ fn the_configuration_round_trips_through_json() {
     let b: Baseline = serde_json::from_str(r#"{"kind": "leave-one-out"}"#).unwrap();
     assert_eq!(b, Baseline::LeaveOneOut);
 }
+
+/// The real tasks fold a given baseline into the plain estimator's loop (loss shifts
+/// `δ_t = b_t − b_{t−1}`, summation by parts); that fused pass agrees with the baselined estimate
+/// assembled term by term from the stored scores, for the logistic policy (its own fixed-
+/// dimension loop) and the softmax policy (the default loop), and with b = 0 it is the plain
+/// estimate bit for bit.
+#[test]
+fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
+    use ilopt::baseline::Given;
+    use ilopt::policy::{Logistic, Softmax};
+    use ilopt::task::cartpole::{self, CartPoleTask};
+    use ilopt::task::{AfterEnd, TaskProblem};
+    use ilopt::tolerance::derivative_f64_agrees;
+
+    fn check<P>(p: &TaskProblem<CartPoleTask<f64>, P>, theta: &DVector<f64>)
+    where
+        P: ilopt::policy::LikelihoodRatio<f64, Action = usize, Label = usize>,
+    {
+        let mut rng = KitRng::seed_from_u64(21);
+        let mut cost = Cost::default();
+        for _ in 0..6 {
+            let t = p
+                .rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                .unwrap();
+            let n = t.len();
+            let zero = 0.0;
+            let fused = p
+                .baselined_estimate(theta, &t, Given::Constant(&zero), &mut cost)
+                .unwrap();
+            let plain = p
+                .estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+                .unwrap();
+            assert_eq!(
+                fused.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                plain.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                "b = 0 is the plain estimate"
+            );
+            let ramp: Vec<f64> = (0..n).map(|i| 3.0 - i as f64 / 50.0).collect();
+            let constant = 2.5;
+            for given in [Given::Constant(&constant), Given::TimeIndexed(&ramp)] {
+                let fused = p.baselined_estimate(theta, &t, given, &mut cost).unwrap();
+                let mut terms = DecisionTerms::new();
+                p.decision_terms(theta, &t, None, &mut terms, &mut cost)
+                    .unwrap();
+                terms.finish();
+                let mut direct = vec![0.0; theta.len()];
+                terms.estimate_into(|i| given.at(i).copied(), &mut direct);
+                assert!(
+                    derivative_f64_agrees(fused.as_slice(), &direct),
+                    "{given:?}: {fused:?} vs {direct:?}"
+                );
+            }
+        }
+    }
+    let logistic = TaskProblem::fixed(
+        CartPoleTask::<f64>::with_lqr().unwrap(),
+        Logistic::new(cartpole::FEATURES).unwrap(),
+        120,
+        AfterEnd::Reset,
+    )
+    .unwrap();
+    check(&logistic, &DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1]));
+    let softmax = TaskProblem::fixed(
+        CartPoleTask::<f64>::with_lqr().unwrap(),
+        Softmax::new(2, cartpole::FEATURES).unwrap(),
+        120,
+        AfterEnd::Reset,
+    )
+    .unwrap();
+    check(
+        &softmax,
+        &DVector::from_vec(vec![0.1, -0.2, 0.3, 0.5, 0.0, 0.2, 0.1, -0.4, 0.3, 0.1]),
+    );
+}

@@ -34,10 +34,12 @@
 //! its [`DecisionTerms`] ([`crate::problem::IlProblem::decision_terms`]); every oracle method
 //! (SGD, STORM, IS-STORM, Adam, RMSProp, O2NC) run on it uses the baseline.
 
+mod given;
 mod oracle;
 mod running;
 mod terms;
 
+pub use given::Given;
 pub use oracle::Baselined;
 pub use running::RunningOptimum;
 pub use terms::DecisionTerms;

@@ -1,6 +1,6 @@
 //! [`Baselined`]: m trajectories per oracle call, each estimate with a baseline.
 
-use super::{Baseline, DecisionTerms, RunningOptimum};
+use super::{Baseline, DecisionTerms, Given, RunningOptimum};
 use crate::batched::Batched;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::Scalar;
@@ -195,11 +195,7 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
                 Kind::Constant(b) => t.estimate_into(|_| Some(b.clone()), g),
                 Kind::TimeIndexed(bs) => {
                     if t.decisions() > bs.len() {
-                        return Err(invalid(format!(
-                            "{} time-indexed baselines, a trajectory has {} scored decisions",
-                            bs.len(),
-                            t.decisions()
-                        )));
+                        return Err(crate::problem::too_few_baselines(t.decisions()));
                     }
                     t.estimate_into(|i| Some(bs[i].clone()), g);
                 }
@@ -272,6 +268,28 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
             return Err(invalid("baselines apply to the causal form of eq. 3.15"));
         }
         let inner = self.inner();
+        let given = match &self.kind {
+            Kind::Constant(b) => Some(Given::Constant(b)),
+            Kind::TimeIndexed(bs) => Some(Given::TimeIndexed(bs)),
+            _ => None,
+        };
+        if let Some(given) = given {
+            // Baselines known before the pass: the problem's own (possibly fused) pass.
+            let mut parts = trajectory.iter();
+            let first = parts
+                .next()
+                .ok_or_else(|| OracleError::Trajectory("an empty minibatch".into()))?;
+            let mut sum = inner.baselined_estimate(theta, first, given, cost)?;
+            for t in parts {
+                sum += inner.baselined_estimate(theta, t, given, cost)?;
+            }
+            let m = S::from_i64(trajectory.len() as i64);
+            let g = sum.map(|x| x / &m);
+            if !g.iter().all(Scalar::is_finite) {
+                return Err(OracleError::NonFinite("the baselined gradient estimate"));
+            }
+            return Ok(g);
+        }
         self.baselined(trajectory, true, |t, out| {
             inner.decision_terms(theta, t, None, out, cost)
         })

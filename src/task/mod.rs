@@ -33,7 +33,7 @@ pub mod obstacle;
 
 pub use horizon::{AfterEnd, Horizon};
 
-use crate::baseline::DecisionTerms;
+use crate::baseline::{DecisionTerms, Given};
 use crate::policy::{LikelihoodRatio, Policy, PolicyError};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::{Real, Scalar};
@@ -856,6 +856,63 @@ where
         cost.gradient_evaluations += trajectory.len() as u64;
         if !g.iter().all(Scalar::is_finite) {
             return Err(OracleError::NonFinite("the weighted gradient estimate"));
+        }
+        Ok(DVector::from_vec(g))
+    }
+
+    /// Without an absorbing tail, on a trajectory whose features are known valid, the baseline
+    /// is folded into the plain estimator's loop as per-decision loss shifts
+    /// `δ_t = b_t − b_{t−1}` ([`Policy::causal_sum_shifted_trusted`]); otherwise assembled from
+    /// the [`DecisionTerms`].
+    fn baselined_estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        baseline: Given<'_, S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let t = trajectory;
+        let n = t.len();
+        let scored = if t.absorbed.is_some() { n } else { n - 1 };
+        if !baseline.covers(scored) {
+            return Err(crate::problem::too_few_baselines(scored));
+        }
+        let mut g = vec![S::zero(); self.dim()];
+        if t.absorbed.is_none() && features_valid(&self.policy, t) {
+            let b = |k: usize| match baseline.at(k) {
+                Some(b) if k < scored => b.clone(),
+                _ => S::zero(),
+            };
+            let mut shifts = Vec::with_capacity(n);
+            let mut previous = S::zero();
+            for k in 0..n {
+                let current = b(k);
+                shifts.push(current.clone() - &previous);
+                previous = current;
+            }
+            let mut scratch = Vec::new();
+            self.policy
+                .causal_sum_shifted_trusted(
+                    theta.as_slice(),
+                    &t.feature_data,
+                    &t.labels,
+                    &t.actions,
+                    &shifts,
+                    &mut g,
+                    &mut scratch,
+                )
+                .map_err(policy_error)?;
+        } else {
+            let mut terms = DecisionTerms::new();
+            terms_pass(&self.policy, theta.as_slice(), None, t, &mut terms)?;
+            terms.finish();
+            terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
+        }
+        cost.gradient_evaluations += n as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
         }
         Ok(DVector::from_vec(g))
     }
