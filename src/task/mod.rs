@@ -881,16 +881,24 @@ where
         }
         let mut g = vec![S::zero(); self.dim()];
         if t.absorbed.is_none() && features_valid(&self.policy, t) {
-            let b = |k: usize| match baseline.at(k) {
-                Some(b) if k < scored => b.clone(),
-                _ => S::zero(),
-            };
-            let mut shifts = Vec::with_capacity(n);
-            let mut previous = S::zero();
-            for k in 0..n {
-                let current = b(k);
-                shifts.push(current.clone() - &previous);
-                previous = current;
+            // δ_t = b_t − b_{t−1} with b_0 = 0 and b_t = 0 after the last scored decision: for
+            // one constant only the first and the first unscored decision shift.
+            let mut shifts = vec![S::zero(); n];
+            match baseline {
+                Given::Constant(b) => {
+                    if scored > 0 {
+                        shifts[0] = b.clone();
+                        shifts[scored] = -b.clone();
+                    }
+                }
+                Given::TimeIndexed(bs) => {
+                    let mut previous = S::zero();
+                    for (shift, b) in shifts.iter_mut().zip(&bs[..scored]) {
+                        *shift = b.clone() - &previous;
+                        previous = b.clone();
+                    }
+                    shifts[scored] = -previous;
+                }
             }
             let mut scratch = Vec::new();
             self.policy
