@@ -654,3 +654,94 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
         &DVector::from_vec(vec![0.1, -0.2, 0.3, 0.5, 0.0, 0.2, 0.1, -0.4, 0.3, 0.1]),
     );
 }
+
+/// The real tasks' per-decision terms with no baseline reproduce the task's own estimators (an
+/// independent pass): the plain causal estimate and both importance-weighted old-point estimates,
+/// on CartPole (fixed horizon with resets) and on the obstacle task (fixed horizon with an
+/// absorbing tail), to the kit's f64 derivative tolerance.
+#[test]
+fn task_decision_terms_reproduce_the_task_estimators() {
+    use ilopt::policy::{LinearGaussian, Logistic};
+    use ilopt::task::cartpole::{self, CartPoleTask};
+    use ilopt::task::obstacle::{self, ObstacleTask};
+    use ilopt::task::{AfterEnd, TaskProblem};
+    use ilopt::tolerance::derivative_f64_agrees;
+
+    fn check<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>, theta_new: &DVector<f64>, what: &str) {
+        let mut rng = KitRng::seed_from_u64(4);
+        let mut cost = Cost::default();
+        let mut terms = DecisionTerms::new();
+        for _ in 0..5 {
+            let t = p
+                .rollout(&Behaviour::Learner(theta_new), &mut rng, &mut cost)
+                .unwrap();
+            let mut g = vec![0.0; theta.len()];
+            p.decision_terms(theta, &t, None, &mut terms, &mut cost)
+                .unwrap();
+            terms.finish();
+            terms.estimate_into(|_| None, &mut g);
+            let plain = p
+                .estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+                .unwrap();
+            assert!(
+                derivative_f64_agrees(&g, plain.as_slice()),
+                "{what}: {g:?} vs {plain:?}"
+            );
+            for w in [Weighting::Trajectory, Weighting::PerDecision] {
+                p.decision_terms(theta, &t, Some((theta_new, w)), &mut terms, &mut cost)
+                    .unwrap();
+                terms.finish();
+                terms.estimate_into(|_| None, &mut g);
+                let direct = p
+                    .weighted_estimate(theta, theta_new, &t, w, &mut cost)
+                    .unwrap();
+                assert!(
+                    derivative_f64_agrees(&g, direct.as_slice()),
+                    "{what}, {w:?}: {g:?} vs {direct:?}"
+                );
+            }
+        }
+    }
+    let cartpole = TaskProblem::fixed(
+        CartPoleTask::<f64>::with_lqr().unwrap(),
+        Logistic::new(cartpole::FEATURES).unwrap(),
+        150,
+        AfterEnd::Reset,
+    )
+    .unwrap();
+    check(
+        &cartpole,
+        &DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1]),
+        &DVector::from_vec(vec![0.25, 1.1, 7.5, 2.0, 0.15]),
+        "cartpole",
+    );
+    let obstacle = TaskProblem::fixed(
+        ObstacleTask::thesis().unwrap(),
+        LinearGaussian::new(2, obstacle::FEATURES, 0.3).unwrap(),
+        200,
+        AfterEnd::Absorb,
+    )
+    .unwrap();
+    let mut w = vec![0.0; 2 * obstacle::FEATURES];
+    w[0] = 1.0;
+    w[obstacle::FEATURES + 1] = 1.0;
+    let mut w_new = w.clone();
+    w_new[1] = 0.05;
+    let (w, w_new) = (DVector::from_vec(w), DVector::from_vec(w_new));
+    check(&obstacle, &w, &w_new, "obstacle");
+    // The same roll-outs (same seed) include absorbing tails.
+    let mut rng = KitRng::seed_from_u64(4);
+    let absorbed = (0..5)
+        .filter(|_| {
+            obstacle
+                .rollout(&Behaviour::Learner(&w_new), &mut rng, &mut Cost::default())
+                .unwrap()
+                .absorbed
+                .is_some()
+        })
+        .count();
+    assert!(
+        absorbed > 0,
+        "no absorbing tail among the checked trajectories"
+    );
+}
