@@ -5,7 +5,10 @@
 //!    `f64` version of `support/specialised.rs` (same trajectories, bit-identical gradients);
 //! 2. the obstacle task: roll-out (linear-Gaussian policy, VO expert labels) + causal estimate,
 //!    with the default `Vec<f64>` actions and with inline `[f64; 2]` actions (no allocation);
-//! 3. the VO expert alone (solves per second).
+//! 3. the VO expert alone (solves per second);
+//! 4. the baselined causal estimate (`ilopt::baseline`) on the CartPole trajectories of (1): one
+//!    constant baseline (m = 1) and leave-one-out over pairs (m = 2), beside the plain estimate of
+//!    the same trajectories; and roll-out + estimate with the constant baseline.
 //!
 //! Each iteration rolls out the same fixed set of seeds (re-seeded), so the throughput in steps
 //! is exact. Run with `cargo bench --bench oracle`.
@@ -14,6 +17,8 @@
 mod specialised;
 
 use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
+use ilopt::algo::Num;
+use ilopt::baseline::{Baseline, Baselined};
 use ilopt::env::obstacle::{ObstacleEnv, VoExpertPolicy};
 use ilopt::expert::lqr::LqrExpert;
 use ilopt::policy::{LinearGaussian, Logistic};
@@ -121,6 +126,44 @@ fn cartpole(c: &mut Criterion) {
             }
         })
     });
+
+    let singles: Vec<Vec<_>> = trajectories.iter().map(|t| vec![t.clone()]).collect();
+    let pairs: Vec<Vec<_>> = trajectories.chunks(2).map(<[_]>::to_vec).collect();
+    let constant = Baselined::new(
+        generic.clone(),
+        1,
+        &Baseline::Constant {
+            value: Num::ratio(50, 1),
+        },
+    )
+    .unwrap();
+    let loo = Baselined::new(generic.clone(), 2, &Baseline::LeaveOneOut).unwrap();
+    let plain_pairs = Baselined::new(generic.clone(), 2, &Baseline::None).unwrap();
+    let estimate_all = |p: &Baselined<_, f64>, batches: &[Vec<_>]| {
+        let mut cost = Cost::default();
+        for t in batches {
+            black_box(
+                p.estimate(black_box(&theta), t, EstimatorForm::Causal, &mut cost)
+                    .unwrap(),
+            );
+        }
+    };
+    g.bench_function(
+        "causal estimate only, constant baseline, generic (f64)",
+        |b| b.iter(|| estimate_all(&constant, &singles)),
+    );
+    g.bench_function(
+        "causal estimate only, pairs, no baseline, generic (f64)",
+        |b| b.iter(|| estimate_all(&plain_pairs, &pairs)),
+    );
+    g.bench_function(
+        "causal estimate only, pairs, leave-one-out baseline, generic (f64)",
+        |b| b.iter(|| estimate_all(&loo, &pairs)),
+    );
+    g.bench_function(
+        "roll-out + causal estimate, constant baseline, generic (f64)",
+        |b| b.iter(|| oracle_pass(&constant, black_box(&theta))),
+    );
 
     let gain = *LqrExpert::cartpole().unwrap().gain();
     let fast = Specialised {

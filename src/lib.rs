@@ -11,6 +11,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod algo;
+pub mod baseline;
 pub mod batched;
 /// Command-line front ends (the `ilopt` binary's subcommands).
 pub mod cli;

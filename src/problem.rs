@@ -14,6 +14,7 @@
 //! Every call adds what it cost to a [`Cost`], so "gradient calls" (Tables 4.1, 4.3) mean one thing
 //! across algorithms.
 
+use crate::baseline::{DecisionTerms, Given};
 use crate::scalar::{Scalar, Undecidable};
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -143,6 +144,10 @@ pub enum OracleError {
     /// The environment or the expert failed.
     #[error("environment: {0}")]
     Environment(String),
+    /// A baseline that cannot be used here (see [`crate::baseline`]): an invalid configuration,
+    /// or a problem that does not expose its [`DecisionTerms`].
+    #[error("baseline: {0}")]
+    Baseline(String),
 }
 
 /// An imitation-learning problem: environment + expert + learner policy class + loss.
@@ -197,6 +202,63 @@ pub trait IlProblem<S: Scalar> {
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError>;
 
+    /// The causal estimator of eq. 3.15 at θ on one trajectory, decision by decision, into `out`
+    /// ([`DecisionTerms`]: the direct part `Σ_t w_{1:t−1} ∇l_t`, every scored decision's score ψ_i
+    /// and loss-to-go, the weights), from which [`crate::baseline::Baselined`] assembles the
+    /// baselined estimate `g_b = g − Σ_i b_i ψ_i`. With `weights = Some((θ_new, weighting))` the
+    /// terms are those of the importance-weighted old-point estimate of
+    /// [`IlProblem::weighted_estimate`] (θ = θ_old, τ sampled at θ_new); the baseline term of
+    /// decision i then carries the prefix weight `w_{1:i}` (per-decision) or the trajectory's
+    /// weight (whole trajectory), which keeps it mean-zero (module docs of [`crate::baseline`]).
+    /// The caller calls [`DecisionTerms::finish`] (idempotent) before reading `out`. Counts the same gradient evaluations as
+    /// [`IlProblem::estimate`].
+    ///
+    /// # Errors
+    /// As [`IlProblem::weighted_estimate`]; the default returns [`OracleError::Baseline`] (a
+    /// problem that does not support baselines).
+    fn decision_terms(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
+        out: &mut DecisionTerms<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        let _ = (theta, trajectory, weights, out, cost);
+        Err(OracleError::Baseline(
+            "this problem does not expose the per-decision terms of eq. 3.15".into(),
+        ))
+    }
+
+    /// The baselined causal estimator `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) at θ on one
+    /// trajectory, for baselines fixed before the pass (unbiased for ∇F(θ) when τ ∼ p(·; θ),
+    /// since b_i does not depend on τ).
+    ///
+    /// The default assembles it from [`IlProblem::decision_terms`] (one pass, storing each
+    /// decision's score); a problem may override it with a faster pass (the real tasks fold the
+    /// baseline into the plain estimator's loop, see [`crate::policy::Policy::causal_sum_shifted_trusted`]).
+    ///
+    /// # Errors
+    /// As [`IlProblem::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list is
+    /// shorter than the trajectory's scored decisions.
+    fn baselined_estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        baseline: Given<'_, S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let mut terms = DecisionTerms::new();
+        self.decision_terms(theta, trajectory, None, &mut terms, cost)?;
+        terms.finish();
+        if !baseline.covers(terms.decisions()) {
+            return Err(too_few_baselines(terms.decisions()));
+        }
+        let mut g = vec![S::zero(); theta.len()];
+        terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
+        Ok(DVector::from_vec(g))
+    }
+
     /// `Σ_{t=1}^{T−1} l(s_t, θ)` on a trajectory: an unbiased estimate of F(θ) when τ ∼ p(·; θ).
     ///
     /// # Errors
@@ -221,4 +283,11 @@ pub trait IlProblem<S: Scalar> {
         example: &Self::Labelled,
         cost: &mut Cost,
     ) -> Result<(S, DVector<S>), OracleError>;
+}
+
+/// The error of a time-indexed baseline list shorter than a trajectory's scored decisions.
+pub(crate) fn too_few_baselines(decisions: usize) -> OracleError {
+    OracleError::Baseline(format!(
+        "too few time-indexed baselines: a trajectory has {decisions} scored decisions"
+    ))
 }

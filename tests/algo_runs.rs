@@ -623,3 +623,64 @@ fn the_runner_records_where_o2nc_evaluated_its_gradients() {
         replay(&run_config(field_configs()[0].clone(), 1, 3), &problem).unwrap();
     assert!(sgd.history.iter().all(|m| m.evaluated_at.is_none()));
 }
+
+/// A baseline is an option of the oracle: every algorithm runs on `Baselined` (m = 2) with each
+/// kind, and with no baseline the run is the plain minibatch run bit for bit.
+#[test]
+fn every_algorithm_runs_with_every_baseline() {
+    use ilopt::baseline::{Baseline, Baselined};
+    let problem = ToyProblem::<f64>::new(&mdp("m1-softmax.json"));
+    let dim = ilopt::problem::IlProblem::<f64>::dim(&problem);
+    let kinds = [
+        Baseline::None,
+        Baseline::Constant {
+            value: Num::ratio(1, 2),
+        },
+        Baseline::TimeIndexed {
+            values: vec![Num::ratio(1, 3)],
+        },
+        Baseline::Estimated {
+            time_indexed: true,
+            decay: Some(Num::ratio(9, 10)),
+        },
+        Baseline::LeaveOneOut,
+    ];
+    let mut baselined = 0;
+    for algorithm in field_configs().into_iter().chain(root_configs()) {
+        let cfg = RunConfig {
+            theta0: vec![Num::ratio(0, 1); dim],
+            ..run_config(algorithm, 5, 20)
+        };
+        let batched = ilopt::batched::Batched::new(problem.clone(), 2).unwrap();
+        let plain: RunRecord<f64> = replay(&cfg, &batched).unwrap();
+        for kind in &kinds {
+            let oracle = Baselined::<_, f64>::new(problem.clone(), 2, kind).unwrap();
+            let rec: RunRecord<f64> = replay(&cfg, &oracle).unwrap();
+            if *kind != Baseline::None
+                && rec
+                    .termination
+                    .to_string()
+                    .contains("apply to the causal form")
+            {
+                // A configuration with the full form: baselines are refused, by design.
+                continue;
+            }
+            baselined += 1;
+            assert!(
+                ok_end(&rec.termination),
+                "{} with {kind:?}: {}",
+                rec.algorithm,
+                rec.termination
+            );
+            assert!(rec.theta.iter().all(|x| x.is_finite()));
+            if *kind == Baseline::None {
+                assert!(
+                    rec.same_run(&plain),
+                    "{}: no baseline is the plain run",
+                    rec.algorithm
+                );
+            }
+        }
+    }
+    assert!(baselined > 40, "runs with a baseline: {baselined}");
+}

@@ -267,3 +267,69 @@ fn an_infeasible_horizon_is_refused_at_once_naming_size_and_limit() {
     assert_eq!(code, 1);
     assert!(err.contains("exponent beyond ±1000"), "{err}");
 }
+
+#[test]
+fn baseline_flag_prints_the_baselined_moments() {
+    // M1 at θ = 0 (math.md §1.4 prefix table): ψ(1) = 1, ψ(0) = −1/3, E[gψ] = 5/24, E ψ² = 1/3, so
+    // with b = 1: E g_b² = 185/192 − 2·5/24 + 1/3 = 169/192, and E g_b = F′(0) = −1/2.
+    let (code, out, err) = ilopt(&[
+        "toy",
+        "eval",
+        "--mdp",
+        M1,
+        "--theta",
+        "0",
+        "--baseline",
+        "1",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["expected_estimate"], json!(["-1/2"]));
+    assert_eq!(v["gradient"], json!(["-1/2"]));
+    assert_eq!(v["second_moment"], json!("169/192"));
+    // b* = (5/24)/(1/3) = 5/8; E g_b*² = 185/192 − (5/24)²·3 = 5/6; reduction 185/160 = 37/32.
+    let (code, out, err) = ilopt(&[
+        "toy",
+        "eval",
+        "--mdp",
+        M1,
+        "--theta",
+        "0",
+        "--optimal-baseline",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: Value = serde_json::from_str(&out).unwrap();
+    let o = &v["optimal_baseline"];
+    assert_eq!(o["constant"], json!("5/8"));
+    assert_eq!(o["time_indexed"], json!(["5/8"]));
+    assert_eq!(o["second_moment_constant"], json!("5/6"));
+    assert_eq!(o["reduction_constant"], json!("37/32"));
+    assert_eq!(
+        v["second_moment"],
+        json!("185/192"),
+        "no --baseline: the plain moment"
+    );
+}
+
+#[test]
+fn bad_baselines_are_clear_errors() {
+    for (list, needle) in [
+        ("1,2", "--baseline has 2 numbers"),
+        ("1/0", "--baseline entry 0"),
+        ("x", "--baseline entry 0"),
+        ("1,,2", "--baseline entry 1"),
+    ] {
+        let (code, out, err) = ilopt(&[
+            "toy",
+            "eval",
+            "--mdp",
+            M1,
+            "--theta",
+            "0",
+            &format!("--baseline={list}"),
+        ]);
+        assert_ne!(code, 0, "{list}: {out}");
+        assert!(err.contains(needle), "{list}: {err}");
+        assert!(!err.contains("panicked"), "{list}: {err}");
+    }
+}

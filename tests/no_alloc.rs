@@ -387,3 +387,96 @@ fn vec_actions_allocate_per_step() {
         t.len()
     );
 }
+
+/// The baselined oracle (`ilopt::baseline`): once its reused buffers have seen the longest
+/// trajectory, every estimate allocates one constant number of times whatever the episodes'
+/// lengths (its per-decision terms are written into those buffers, never per step).
+#[test]
+fn baselined_estimates_allocate_per_call_not_per_step() {
+    use ilopt::algo::Num;
+    use ilopt::baseline::{Baseline, Baselined};
+    let thetas = [
+        balancing(),
+        DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
+        DVector::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.0]),
+    ];
+    for (m, kind) in [
+        (
+            1,
+            Baseline::Constant {
+                value: Num::ratio(1, 2),
+            },
+        ),
+        (
+            2,
+            Baseline::Estimated {
+                time_indexed: true,
+                decay: None,
+            },
+        ),
+        (2, Baseline::LeaveOneOut),
+    ] {
+        let p = Baselined::<_, f64>::new(cartpole(), m, &kind).unwrap();
+        let mut rng = KitRng::seed_from_u64(5);
+        let mut cost = Cost::default();
+        let mut batches = vec![];
+        let mut rollout_counts = vec![];
+        for _ in 0..20 {
+            for theta in &thetas {
+                let (n, b) = count(|| {
+                    p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                        .unwrap()
+                });
+                rollout_counts.push(n);
+                batches.push((theta.clone(), b));
+            }
+        }
+        let lengths: std::collections::BTreeSet<usize> = batches
+            .iter()
+            .flat_map(|(_, b)| b.iter().map(|t| t.len()))
+            .collect();
+        assert!(
+            lengths.len() >= 10 && lengths.last() == Some(&500),
+            "{kind:?}: episode lengths should vary widely: {lengths:?}"
+        );
+        // Warm-up: the longest trajectory in every place of a batch sizes the reused buffers.
+        let (theta, longest) = batches
+            .iter()
+            .flat_map(|(theta, b)| b.iter().map(move |t| (theta, t)))
+            .max_by_key(|(_, t)| t.len())
+            .unwrap();
+        let warm = vec![longest.clone(); m];
+        p.estimate(theta, &warm, EstimatorForm::Causal, &mut cost)
+            .unwrap();
+        p.weighted_estimate(&thetas[1], theta, &warm, Weighting::PerDecision, &mut cost)
+            .unwrap();
+        let (mut estimate_counts, mut weighted_counts) = (vec![], vec![]);
+        for (theta, b) in &batches {
+            let (n, _) = count(|| {
+                p.estimate(theta, b, EstimatorForm::Causal, &mut cost)
+                    .unwrap()
+            });
+            estimate_counts.push(n);
+            let (n, _) = count(|| {
+                p.weighted_estimate(&thetas[1], theta, b, Weighting::PerDecision, &mut cost)
+                    .unwrap()
+            });
+            weighted_counts.push(n);
+        }
+        for (what, counts) in [
+            ("baselined estimate", &estimate_counts),
+            ("baselined weighted estimate", &weighted_counts),
+        ] {
+            assert!(
+                counts.iter().all(|&n| n == counts[0] && n <= 4),
+                "{kind:?}, {what}: allocations per call {counts:?} (must be one constant ≤ 4)"
+            );
+        }
+        if m == 1 {
+            assert!(
+                rollout_counts.iter().all(|&n| n == rollout_counts[0]),
+                "{kind:?}: roll-out allocations {rollout_counts:?}"
+            );
+        }
+    }
+}

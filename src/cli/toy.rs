@@ -1,11 +1,18 @@
-//! `ilopt toy eval --mdp FILE --theta LIST [--scalar exact|f64|interval]`: the exact engine at θ.
+//! `ilopt toy eval --mdp FILE --theta LIST [--scalar exact|f64|interval] [--baseline LIST]
+//! [--optimal-baseline]`: the exact engine at θ.
 //!
 //! Prints one JSON object with `objective` (F(θ), forward DP X2), `gradient` (∇F(θ), X2),
 //! `expected_estimate` (E[∇f(θ, τ)] by enumeration X1, eq. 3.15) and `second_moment` (E‖∇f‖², X1).
+//! With `--baseline` (one number b for every decision, or T − 2 numbers b_1..b_{T−2}) the last two
+//! are those of the baselined estimator `g_b = g − Σ_i b_i ψ_i` (math.md §9; [`crate::baseline`]),
+//! and `baseline` echoes the values. `--optimal-baseline` adds `optimal_baseline`: E[g·ψ_i],
+//! E‖ψ_i‖², the variance-minimising b*_i and b*_const, the second moments they reach, and the
+//! reduction factors E‖g‖²/E‖g_{b*}‖² ([`crate::exact::baseline`]).
 //! `exact` prints fraction strings (`"-13/24"`), `f64` prints numbers, `interval` prints `[lo, hi]`
 //! pairs that enclose the exact values.
 
 use crate::exact::ExactError;
+use crate::exact::baseline::{baselined_moments, optimal_baselines};
 use crate::exact::enumerate::moments;
 use crate::exact::forward::forward;
 use crate::scalar::{BigRational, Interval, JsonScalar, Scalar, parse_exact_list};
@@ -44,6 +51,14 @@ pub struct EvalArgs {
     /// Arithmetic.
     #[arg(long, value_enum, default_value_t = ScalarChoice::Exact)]
     pub scalar: ScalarChoice,
+    /// Baselines of the estimator as comma-separated exact numbers: one b for every decision, or
+    /// T − 2 numbers b_1..b_{T−2}; `expected_estimate` and `second_moment` are then those of
+    /// g_b = g − Σ_i b_i ψ_i.
+    #[arg(long, value_name = "LIST", allow_hyphen_values = true)]
+    pub baseline: Option<String>,
+    /// Also print the exact variance-minimising baselines and reduction factors.
+    #[arg(long)]
+    pub optimal_baseline: bool,
 }
 
 /// Why `toy eval` failed.
@@ -65,6 +80,24 @@ pub enum ToyCliError {
         index: usize,
         /// What is wrong.
         message: String,
+    },
+    /// A `--baseline` entry that is not an exact number.
+    #[error("--baseline entry {index} (0-based): {message}")]
+    Baseline {
+        /// Entry index.
+        index: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// A `--baseline` list of the wrong length.
+    #[error(
+        "--baseline has {got} numbers; give one (the same b for every decision) or T − 2 = {expected}"
+    )]
+    BaselineLength {
+        /// Numbers given.
+        got: usize,
+        /// T − 2.
+        expected: usize,
     },
     /// The exact engine.
     #[error("at θ: {0}")]
@@ -93,11 +126,41 @@ fn eval(args: &EvalArgs) -> Result<Value, ToyCliError> {
         index,
         message: e.to_string(),
     })?;
+    let baseline = match &args.baseline {
+        None => None,
+        Some(text) => {
+            let b = parse_exact_list(text).map_err(|(index, e)| ToyCliError::Baseline {
+                index,
+                message: e.to_string(),
+            })?;
+            let expected = mdp.horizon - 2;
+            if b.len() != 1 && b.len() != expected {
+                return Err(ToyCliError::BaselineLength {
+                    got: b.len(),
+                    expected,
+                });
+            }
+            Some(b)
+        }
+    };
+    let options = Options {
+        baseline: baseline.as_deref(),
+        optimal_baseline: args.optimal_baseline,
+    };
     match args.scalar {
-        ScalarChoice::Exact => evaluate::<BigRational>(&mdp, &theta),
-        ScalarChoice::F64 => evaluate::<f64>(&mdp, &theta),
-        ScalarChoice::Interval => evaluate::<Interval>(&mdp, &theta),
+        ScalarChoice::Exact => evaluate_with::<BigRational>(&mdp, &theta, &options),
+        ScalarChoice::F64 => evaluate_with::<f64>(&mdp, &theta, &options),
+        ScalarChoice::Interval => evaluate_with::<Interval>(&mdp, &theta, &options),
     }
+}
+
+/// What `toy eval` adds to the four quantities.
+#[derive(Debug, Clone, Default)]
+pub struct Options<'a> {
+    /// Baselines (one number, or T − 2): the estimator's moments become those of g_b.
+    pub baseline: Option<&'a [BigRational]>,
+    /// Print the exact optimal baselines.
+    pub optimal_baseline: bool,
 }
 
 /// The four quantities of `toy eval` in scalar `S`.
@@ -105,10 +168,30 @@ fn eval(args: &EvalArgs) -> Result<Value, ToyCliError> {
 /// # Errors
 /// As [`run`].
 pub fn evaluate<S: JsonScalar>(mdp: &ToyMdp, theta: &[BigRational]) -> Result<Value, ToyCliError> {
+    evaluate_with::<S>(mdp, theta, &Options::default())
+}
+
+/// The quantities of `toy eval` in scalar `S`, with `options`.
+///
+/// # Errors
+/// As [`run`].
+pub fn evaluate_with<S: JsonScalar>(
+    mdp: &ToyMdp,
+    theta: &[BigRational],
+    options: &Options<'_>,
+) -> Result<Value, ToyCliError> {
     let p = ToyProblem::<S>::new(mdp);
     let th: Vec<S> = theta.iter().map(S::from_rational).collect();
     let x2 = forward(&p, &th)?;
     let x1 = moments(&p, &th)?;
+    let (expected_estimate, second_moment) = match options.baseline {
+        None => (x1.expected_estimate, x1.second_moment),
+        Some(b) => {
+            let b: Vec<S> = b.iter().map(S::from_rational).collect();
+            let m = baselined_moments(&p, &th, &b)?;
+            (m.expected_estimate, m.second_moment)
+        }
+    };
     let finite = |name: &'static str, xs: &[S]| {
         if xs.iter().all(Scalar::is_finite) {
             Ok(())
@@ -118,15 +201,40 @@ pub fn evaluate<S: JsonScalar>(mdp: &ToyMdp, theta: &[BigRational]) -> Result<Va
     };
     finite("objective", std::slice::from_ref(&x2.objective))?;
     finite("gradient", &x2.gradient)?;
-    finite("expected_estimate", &x1.expected_estimate)?;
-    finite("second_moment", std::slice::from_ref(&x1.second_moment))?;
+    finite("expected_estimate", &expected_estimate)?;
+    finite("second_moment", std::slice::from_ref(&second_moment))?;
     let list = |xs: &[S]| Value::Array(xs.iter().map(JsonScalar::to_json).collect());
-    Ok(json!({
+    let mut out = json!({
         "objective": x2.objective.to_json(),
         "gradient": list(&x2.gradient),
-        "expected_estimate": list(&x1.expected_estimate),
-        "second_moment": x1.second_moment.to_json(),
-    }))
+        "expected_estimate": list(&expected_estimate),
+        "second_moment": second_moment.to_json(),
+    });
+    if let Some(b) = options.baseline {
+        let b: Vec<S> = b.iter().map(S::from_rational).collect();
+        out["baseline"] = list(&b);
+    }
+    if options.optimal_baseline {
+        let o = optimal_baselines(&p, &th)?;
+        // A value that is not finite in this arithmetic (a ratio whose enclosure reaches 0)
+        // prints as null.
+        let one = |x: Option<S>| match x {
+            Some(x) if x.is_finite() => x.to_json(),
+            _ => Value::Null,
+        };
+        out["optimal_baseline"] = json!({
+            "cross": list(&o.cross),
+            "score_moment": list(&o.score_moment),
+            "time_indexed": Value::Array(o.time_indexed.iter().cloned().map(Some).map(one).collect()),
+            "constant": one(Some(o.constant.clone())),
+            "second_moment_plain": o.second_moment.to_json(),
+            "second_moment_time_indexed": one(Some(o.second_moment_time_indexed.clone())),
+            "second_moment_constant": one(Some(o.second_moment_constant.clone())),
+            "reduction_time_indexed": one(o.reduction_time_indexed()),
+            "reduction_constant": one(o.reduction_constant()),
+        });
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@
 //! | X1 enumeration of prefixes | [`enumerate`] | F, E\[g\], E\[g_full\], E‖g‖², and ∇F = Σ ∇\[p·L\] by dual numbers (no score formula) |
 //! | X2 forward DP | [`forward`] | F, ∇F from differentiated state distributions, and d_t |
 //! | X3 backward DP | [`backward`] | F, ∇F in the adjoint (performative policy-gradient) form |
+//! | baselines | [`baseline`] | E\[g_b\], E‖g_b‖² of the baselined estimator, the optimal b*_i, b*_const (math.md §9) |
 //! | importance sampling | [`importance`] | Σ p(τ̄;θ′) w g(θ, τ̄) (identity I3) and the bias b(θ, θ′) (I4) |
 //!
 //! The identities (I1) F_X1 = F_X2 = F_X3 and (I2) ∇F_X2 = ∇F_X3 = ∇F_enum = E\[g\] = E\[g_full\] are
@@ -17,6 +18,7 @@
 //! same identities state the unbiasedness of the fixed-horizon estimators.
 
 pub mod backward;
+pub mod baseline;
 pub mod enumerate;
 pub mod forward;
 pub mod importance;

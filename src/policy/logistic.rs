@@ -221,6 +221,52 @@ fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     Ok(true)
 }
 
+/// [`causal_sum_fixed`] with the per-decision loss shifts of [`Policy::causal_sum_shifted_trusted`]
+/// (a baseline): the score sum is multiplied by `l_t + δ_t`, one addition per decision more.
+#[inline(never)]
+fn causal_sum_shifted_fixed<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    shifts: &[S],
+    g: &mut [S],
+) -> Result<bool, PolicyError> {
+    let theta: &[S; N] = theta.try_into().map_err(|_| PolicyError::Shape {
+        param: "theta",
+        expected: N,
+        got: theta.len(),
+    })?;
+    check_out("g", g, N)?;
+    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
+    let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
+    let (rows, _) = features.as_chunks::<N>();
+    let mut failed = false;
+    for (((phi, label), action), delta) in rows.iter().zip(labels).zip(actions).zip(shifts) {
+        let label = *label.borrow();
+        let z = crate::scalar::dot(theta, phi);
+        failed |= (label > 1) | (*action > 1) | !finite_logit(&z);
+        let p = sigmoid_of_finite(&z);
+        let r = if label == 1 {
+            p.clone() - S::one()
+        } else {
+            p.clone()
+        };
+        let dz = S::from_i64(4) * &r * &p * (S::one() - &p);
+        let l = S::from_i64(2) * r.square() + delta;
+        let c = if *action == 1 { S::one() - p } else { -p };
+        for ((gj, sj), x) in acc.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+            *gj += dz.clone() * x + l.clone() * &*sj;
+            *sj += c.clone() * x;
+        }
+    }
+    if failed {
+        return Ok(false);
+    }
+    g.clone_from_slice(&acc);
+    Ok(true)
+}
+
 /// The logistic policy over `n ≥ 1` features (actions 0 and 1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Logistic {
@@ -440,6 +486,55 @@ impl<S: Real> Policy<S> for Logistic {
                         }
                     })*
                     _ => causal_sum_by_steps(self, theta, features, labels, actions, g, scratch),
+                }
+            };
+        }
+        fixed!(1 2 3 4 5 6 7 8)
+    }
+
+    /// With a compile-time dimension for 1 to 8 features (`causal_sum_shifted_fixed`), else the
+    /// default.
+    #[inline]
+    fn causal_sum_shifted_trusted<L: Borrow<usize>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[usize],
+        shifts: &[S],
+        g: &mut [S],
+        scratch: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        let by_steps = |g: &mut [S], scratch: &mut Vec<S>| {
+            let d = self.features;
+            scratch.clear();
+            scratch.resize(3 * d, S::zero());
+            let (grad, rest) = scratch.split_at_mut(d);
+            let (score, score_sum) = rest.split_at_mut(d);
+            for (((phi, y), a), delta) in features
+                .chunks_exact(d)
+                .zip(labels)
+                .zip(actions)
+                .zip(shifts)
+            {
+                for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
+                    *gj += delta.clone() * sj;
+                }
+                self.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+            }
+            Ok(())
+        };
+        macro_rules! fixed {
+            ($($n:literal)*) => {
+                match self.features {
+                    $($n => {
+                        if causal_sum_shifted_fixed::<S, L, $n>(theta, features, labels, actions, shifts, g)? {
+                            Ok(())
+                        } else {
+                            by_steps(g, scratch)
+                        }
+                    })*
+                    _ => by_steps(g, scratch),
                 }
             };
         }

@@ -285,6 +285,46 @@ pub trait Policy<S: Scalar> {
     ) -> Result<(), PolicyError> {
         causal_sum_by_steps(self, theta, features, labels, actions, g, scratch)
     }
+
+    /// [`Policy::causal_sum_trusted`] with a per-decision shift of the losses that multiply the
+    /// score sums: adds `Σ_t [∇_θ l_t + (l_t + δ_t) Σ_{i<t} ψ_i]` to `g` (`shifts[t] = δ_t`, one
+    /// per row). With `δ_t = b_t − b_{t−1}` (b_0 = 0, b_t = 0 after the last scored decision)
+    /// this is the baselined estimator `g − Σ_i b_i ψ_i` of [`crate::baseline`], by summation by
+    /// parts: `Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`. One addition per decision more
+    /// than the plain pass.
+    ///
+    /// The default adds `δ_t Σ_{i<t} ψ_i` before each [`Policy::causal_step_trusted`]; a policy
+    /// may override it with a faster loop (the logistic policy does). Inputs as for
+    /// [`Policy::causal_sum_trusted`].
+    ///
+    /// # Errors
+    /// As [`Policy::causal_step_trusted`] at the first failing decision.
+    #[allow(clippy::too_many_arguments)] // the plain pass's arguments and the shifts
+    #[inline]
+    fn causal_sum_shifted_trusted<L: std::borrow::Borrow<Self::Label>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[Self::Action],
+        shifts: &[S],
+        g: &mut [S],
+        scratch: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        let d = self.param_dim();
+        scratch.clear();
+        scratch.resize(3 * d, S::zero());
+        let (grad, rest) = scratch.split_at_mut(d);
+        let (score, score_sum) = rest.split_at_mut(d);
+        let rows = features.chunks_exact(self.feature_dim().max(1));
+        for (((phi, y), a), delta) in rows.zip(labels).zip(actions).zip(shifts) {
+            for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
+                *gj += delta.clone() * sj;
+            }
+            self.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+        }
+        Ok(())
+    }
 }
 
 /// The default [`Policy::causal_sum_trusted`]: [`Policy::causal_step_trusted`] decision after

@@ -33,6 +33,7 @@ pub mod obstacle;
 
 pub use horizon::{AfterEnd, Horizon};
 
+use crate::baseline::{DecisionTerms, Given};
 use crate::policy::{LikelihoodRatio, Policy, PolicyError};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::{Real, Scalar};
@@ -423,6 +424,73 @@ where
     Ok((g, log_w))
 }
 
+/// The causal estimator's [`DecisionTerms`] on a task trajectory with decisions t = 1..n, for
+/// the baselined estimator of [`crate::baseline`]: direct part `Σ_t w_{1:t−1} ∇l_t`, per step
+/// the loss `w_{1:t−1} l_t` (then the absorbing tail's `w_{1:n} L_abs`, with no decision), per
+/// scored decision (1..n−1; 1..n when the trajectory absorbed, as in [`causal_pass`]) its score
+/// ψ_i with the prefix weight `w_{1:i}` (per-decision weighting) — or the whole weight as the
+/// estimate's scale (trajectory weighting). Same per-decision calls as [`causal_pass`], into the
+/// reused buffers of `out`: no allocation per step.
+fn terms_pass<S, P, L, A>(
+    policy: &P,
+    theta: &[S],
+    ratio: Option<(&[S], Weighting)>,
+    t: &TaskTrajectory<S, L, A>,
+    out: &mut DecisionTerms<S>,
+) -> Result<(), OracleError>
+where
+    S: Real,
+    P: LikelihoodRatio<S, Action = A>,
+    L: Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    let n = t.len();
+    let tail = t.absorbed.as_ref();
+    let scored = if tail.is_some() { n } else { n - 1 };
+    let per_decision = matches!(ratio, Some((_, Weighting::PerDecision)));
+    out.begin(d, n);
+    let mut scratch = Scratch::new(d);
+    let (grad, score, _) = scratch.parts();
+    let mut log_w = S::zero();
+    for (step, ((phi, a), y)) in t.feature_rows().zip(&t.actions).zip(&t.labels).enumerate() {
+        let l = policy
+            .loss_score_into(theta, phi, y.borrow(), a, grad, score)
+            .map_err(policy_error)?;
+        if per_decision {
+            let w = log_w.exp();
+            for (o, g) in out.direct_mut().iter_mut().zip(grad.iter()) {
+                *o += w.clone() * g;
+            }
+            out.push_loss(w * l);
+        } else {
+            for (o, g) in out.direct_mut().iter_mut().zip(grad.iter()) {
+                *o += g;
+            }
+            out.push_loss(l);
+        }
+        if step < scored {
+            if let Some((theta_new, _)) = ratio {
+                log_w += policy
+                    .log_likelihood_ratio(theta, theta_new, phi, a)
+                    .map_err(policy_error)?;
+            }
+            let row = out.push_score(per_decision.then(|| log_w.exp()));
+            row.clone_from_slice(score);
+        }
+    }
+    if let Some(tail) = tail {
+        out.push_loss(if per_decision {
+            log_w.exp() * tail
+        } else {
+            tail.clone()
+        });
+    }
+    if matches!(ratio, Some((_, Weighting::Trajectory))) {
+        out.set_scale(log_w.exp());
+    }
+    Ok(())
+}
+
 /// Whether every feature vector of `t` has the policy's length and only finite entries (the
 /// per-call φ check of the policies, done once for the whole trajectory).
 fn features_valid<S, P, L, A>(policy: &P, t: &TaskTrajectory<S, L, A>) -> bool
@@ -790,6 +858,90 @@ where
             return Err(OracleError::NonFinite("the weighted gradient estimate"));
         }
         Ok(DVector::from_vec(g))
+    }
+
+    /// Without an absorbing tail, on a trajectory whose features are known valid, the baseline
+    /// is folded into the plain estimator's loop as per-decision loss shifts
+    /// `δ_t = b_t − b_{t−1}` ([`Policy::causal_sum_shifted_trusted`]); otherwise assembled from
+    /// the [`DecisionTerms`].
+    fn baselined_estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        baseline: Given<'_, S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let t = trajectory;
+        let n = t.len();
+        let scored = if t.absorbed.is_some() { n } else { n - 1 };
+        if !baseline.covers(scored) {
+            return Err(crate::problem::too_few_baselines(scored));
+        }
+        let mut g = vec![S::zero(); self.dim()];
+        if t.absorbed.is_none() && features_valid(&self.policy, t) {
+            // δ_t = b_t − b_{t−1} with b_0 = 0 and b_t = 0 after the last scored decision: for
+            // one constant only the first and the first unscored decision shift.
+            let mut shifts = vec![S::zero(); n];
+            match baseline {
+                Given::Constant(b) => {
+                    if scored > 0 {
+                        shifts[0] = b.clone();
+                        shifts[scored] = -b.clone();
+                    }
+                }
+                Given::TimeIndexed(bs) => {
+                    let mut previous = S::zero();
+                    for (shift, b) in shifts.iter_mut().zip(&bs[..scored]) {
+                        *shift = b.clone() - &previous;
+                        previous = b.clone();
+                    }
+                    shifts[scored] = -previous;
+                }
+            }
+            let mut scratch = Vec::new();
+            self.policy
+                .causal_sum_shifted_trusted(
+                    theta.as_slice(),
+                    &t.feature_data,
+                    &t.labels,
+                    &t.actions,
+                    &shifts,
+                    &mut g,
+                    &mut scratch,
+                )
+                .map_err(policy_error)?;
+        } else {
+            let mut terms = DecisionTerms::new();
+            terms_pass(&self.policy, theta.as_slice(), None, t, &mut terms)?;
+            terms.finish();
+            terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
+        }
+        cost.gradient_evaluations += n as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(DVector::from_vec(g))
+    }
+
+    fn decision_terms(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
+        out: &mut DecisionTerms<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        check_theta(theta, self.dim())?;
+        if let Some((theta_new, _)) = weights {
+            check_theta(theta_new, self.dim())?;
+        }
+        check_trajectory(trajectory)?;
+        let ratio = weights.map(|(new, w)| (new.as_slice(), w));
+        terms_pass(&self.policy, theta.as_slice(), ratio, trajectory, out)?;
+        cost.gradient_evaluations += trajectory.len() as u64;
+        Ok(())
     }
 
     fn trajectory_loss(

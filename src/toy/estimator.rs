@@ -14,6 +14,7 @@
 //! function of s_i alone, so E[ψ_i Σ_{t>i} l_t] = E[E[ψ_i | s_i] Σ_{t>i} l_t] = 0.
 
 use super::table::PolicyTable;
+use crate::baseline::DecisionTerms;
 use crate::scalar::Scalar;
 
 /// Causal form (eq. 3.15): `g = Σ_t ∇l_t + Σ_{i=1}^{n} ψ_i Σ_{t=i+1}^{T−1} l_t` with n = `actions.len()`
@@ -83,4 +84,44 @@ pub fn per_decision<S: Scalar>(
         }
     }
     g
+}
+
+/// The causal form's per-decision terms ([`DecisionTerms`]) on a prefix, for the baselined
+/// estimator `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]): the direct part `Σ_t w_{1:t−1} ∇l_t`,
+/// per step the loss `w_{1:t−1} l_t`, per scored decision i ≤ n = `actions.len()` its score ψ_i
+/// (absorbing steps take none). `ratios` as in [`per_decision`]: `None` gives eq. 3.15's terms;
+/// with `per_decision` the prefix weights `w_{1:t−1}` and `w_{1:i}` enter as there, otherwise the
+/// whole product `Π_i ratios[i]` is the estimate's scale (math.md §4). Calls
+/// [`DecisionTerms::finish`].
+pub fn decision_terms<S: Scalar>(
+    table: &PolicyTable<S>,
+    states: &[usize],
+    actions: &[usize],
+    ratios: Option<&[S]>,
+    per_decision: bool,
+    out: &mut DecisionTerms<S>,
+) {
+    out.begin(table.dim, states.len());
+    let mut w = S::one();
+    for (t, &s) in states.iter().enumerate() {
+        let weighted = ratios.is_some() && per_decision;
+        if weighted {
+            table.add_block(out.direct_mut(), s, &table.loss_grad[s], &w);
+            out.push_loss(w.clone() * &table.loss[s]);
+        } else {
+            table.add_block_unscaled(out.direct_mut(), s, &table.loss_grad[s]);
+            out.push_loss(table.loss[s].clone());
+        }
+        if t < actions.len() {
+            if let Some(r) = ratios {
+                w *= &r[t];
+            }
+            let row = out.push_score(weighted.then(|| w.clone()));
+            table.add_block_unscaled(row, s, table.score(s, actions[t]));
+        }
+    }
+    if ratios.is_some() && !per_decision {
+        out.set_scale(w);
+    }
+    out.finish();
 }

@@ -18,6 +18,7 @@
 use super::estimator;
 use super::table::PolicyTable;
 use super::{Termination, ToyMdp, estimator::prefix_loss};
+use crate::baseline::DecisionTerms;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::{Scalar, Undecidable, certainly_less};
 use nalgebra::DVector;
@@ -440,6 +441,41 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         };
         cost.gradient_evaluations += self.decision_count(states) as u64;
         Ok(DVector::from_vec(g))
+    }
+
+    fn decision_terms(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &ToyTrajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
+        out: &mut DecisionTerms<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        self.check(trajectory)?;
+        let table = self.table(theta.as_slice())?;
+        let (states, actions) = self.prefix(trajectory);
+        match weights {
+            None => estimator::decision_terms(&table, states, actions, None, false, out),
+            Some((theta_new, weighting)) => {
+                let new = self.table(theta_new.as_slice())?;
+                let ratios: Vec<S> = states
+                    .iter()
+                    .zip(actions)
+                    .map(|(&s, &a)| table.prob(s, a).clone() / new.prob(s, a))
+                    .collect();
+                let per_decision = weighting == Weighting::PerDecision;
+                estimator::decision_terms(
+                    &table,
+                    states,
+                    actions,
+                    Some(&ratios),
+                    per_decision,
+                    out,
+                );
+            }
+        }
+        cost.gradient_evaluations += self.decision_count(states) as u64;
+        Ok(())
     }
 
     fn trajectory_loss(

@@ -1,0 +1,82 @@
+//! Baselines (control variates) for the causal estimator of eq. 3.15 that keep it exactly
+//! unbiased.
+//!
+//! With per-decision baselines b_i (i = 1..T−2, the scored decisions),
+//!
+//! `g_b(θ, τ) = Σ_{t=1}^{T−1} ∇l_t + Σ_{i=1}^{T−2} ψ_i (Σ_{t=i+1}^{T−1} l_t − b_i) = g − Σ_i b_i ψ_i`,
+//!
+//! ψ_i = ∇log π_θ(a_i|s_i). **Why it stays unbiased.** If b_i is a function of the history
+//! h_i = (s_1, a_1, …, s_i) and of data independent of the current trajectory (earlier
+//! iterations, the other trajectories of a minibatch), but not of a_i or anything later, then
+//! `E[b_i ψ_i] = E[b_i E[ψ_i | h_i]] = 0`, because `E[ψ_i | h_i] = Σ_a π_θ(a|s_i) ∇log π_θ(a|s_i)
+//! = ∇ Σ_a π_θ(a|s_i) = 0`. So `E[g_b] = E[g] = ∇F(θ)` (eqs. 3.16/3.18). A baseline that looks
+//! at a_i breaks this (e.g. `b_i = 1[a_i = 0]` gives `E[b_i ψ_i] = E[∇π_θ(0|s_i)] ≠ 0`).
+//!
+//! **Variance.** `E[ψ_i·ψ_j] = 0` for i ≠ j (condition on the later one's history), so
+//! `E‖g_b‖² = E‖g‖² − 2 Σ_i b_i E[g·ψ_i] + Σ_i b_i² E‖ψ_i‖²` for constants b_i, minimised by
+//! `b*_i = E[g·ψ_i] / E‖ψ_i‖²` (time-indexed) and `b*_const = Σ_i E[g·ψ_i] / Σ_i E‖ψ_i‖²` (one
+//! constant). [`crate::exact::baseline`] computes all of these exactly on toy MDPs.
+//!
+//! **Importance-weighted old-point estimate** (IS-STORM, math.md §4), τ ∼ p(·; θ′):
+//!
+//! * whole-trajectory weight `w = p(τ; θ)/p(τ; θ′)` multiplies the baselined estimate:
+//!   `E_θ′[w g_b(θ, τ)] = E_θ[g_b(θ, τ)] = ∇F(θ)`, since `w b_i ψ_i` has θ′-mean `E_θ[b_i ψ_i] = 0`;
+//! * per-decision weights: term t of eq. 3.15 carries `w_{1:t−1}` and the baseline term of
+//!   decision i carries the prefix weight `w_{1:i} = Π_{k≤i} π_θ(a_k|s_k)/π_θ′(a_k|s_k)`.
+//!   `w_{1:i} b_i ψ_i` is a function of the prefix up to a_i, so its θ′-mean is the θ-mean of
+//!   `b_i ψ_i`, which is 0.
+//!
+//! **Kinds** ([`Baseline`]): none (the plain estimator, bit for bit), one constant, constants per
+//! decision index, the variance-minimising constant(s) estimated from earlier iterations only
+//! ([`RunningOptimum`]), and leave-one-out across the m trajectories of one gradient (trajectory
+//! j's b_i is the mean loss-to-go at decision i of the other m − 1, independent of trajectory j;
+//! exact for m ≥ 2). [`Baselined`] is the oracle that applies them, to any problem that exposes
+//! its [`DecisionTerms`] ([`crate::problem::IlProblem::decision_terms`]); every oracle method
+//! (SGD, STORM, IS-STORM, Adam, RMSProp, O2NC) run on it uses the baseline.
+
+mod given;
+mod oracle;
+mod running;
+mod terms;
+
+pub use given::Given;
+pub use oracle::Baselined;
+pub use running::RunningOptimum;
+pub use terms::DecisionTerms;
+
+use crate::algo::Num;
+use serde::{Deserialize, Serialize};
+
+/// Which baseline the oracle subtracts (JSON: `{"kind": "constant", "value": "1/2"}`).
+///
+/// Indices: b_1 is the baseline of the first decision (index 0 in code).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "kebab-case")]
+#[non_exhaustive]
+pub enum Baseline {
+    /// No baseline: eq. 3.15 as it is (results bit-identical to the plain oracle).
+    #[default]
+    None,
+    /// One number b for every decision: `g_b = g − b Σ_i ψ_i`.
+    Constant {
+        /// b.
+        value: Num,
+    },
+    /// b_1, b_2, … per decision index: `g_b = g − Σ_i b_i ψ_i`. A decision beyond the list is an
+    /// error.
+    TimeIndexed {
+        /// b_1, b_2, ….
+        values: Vec<Num>,
+    },
+    /// The variance-minimising constant(s) `E[g·ψ_i]/E‖ψ_i‖²` estimated from earlier iterations'
+    /// trajectories ([`RunningOptimum`]).
+    Estimated {
+        /// Per decision index (`true`) or one constant (`false`).
+        time_indexed: bool,
+        /// Factor in [0, 1] applied to the past statistics at every iteration (absent: 1).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        decay: Option<Num>,
+    },
+    /// Leave-one-out across the m ≥ 2 trajectories of one gradient.
+    LeaveOneOut,
+}

@@ -1,0 +1,337 @@
+//! [`Baselined`]: m trajectories per oracle call, each estimate with a baseline.
+
+use super::{Baseline, DecisionTerms, Given, RunningOptimum};
+use crate::batched::Batched;
+use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
+use crate::scalar::Scalar;
+use nalgebra::DVector;
+use std::cell::RefCell;
+
+/// A baseline resolved in the scalar `S`.
+#[derive(Debug, Clone)]
+enum Kind<S> {
+    None,
+    Constant(S),
+    TimeIndexed(Vec<S>),
+    Estimated {
+        time_indexed: bool,
+        running: RefCell<RunningOptimum<S>>,
+    },
+    LeaveOneOut,
+}
+
+/// Reused storage of one oracle call: per trajectory its [`DecisionTerms`], the leave-one-out
+/// sums `Σ_k L_i^{(k)}`, one estimate.
+#[derive(Debug, Clone)]
+struct Buffers<S> {
+    terms: Vec<DecisionTerms<S>>,
+    totals: Vec<S>,
+    g: Vec<S>,
+}
+
+/// The problem `inner` with m trajectories per oracle call (as [`Batched`]) and the causal
+/// estimator of eq. 3.15 replaced by its baselined form
+/// `g_b = g − Σ_i b_i ψ_i` (module docs of [`crate::baseline`]):
+/// `g_m(θ) = (1/m) Σ_j g_b(θ, τ_j)` with trajectory j's own baselines `b^{(j)}`, unbiased for ∇F(θ)
+/// by the argument there. The importance-weighted old-point estimate is the baselined one with the
+/// weight on it (trajectory weight) or the prefix weight `w_{1:i}` on `b_i ψ_i` (per-decision).
+///
+/// With [`Baseline::None`] every call is [`Batched`]'s, bit for bit. With a baseline, the
+/// [`EstimatorForm::Full`] form is refused (baselines apply to the causal form), and `inner`
+/// must implement [`IlProblem::decision_terms`].
+///
+/// Leave-one-out: trajectory j's `b_i^{(j)} = (1/(m−1)) Σ_{k≠j} L_i^{(k)}` with `L_i^{(k)}` the
+/// loss-to-go of trajectory k at its decision i (0 where k took fewer decisions; in a weighted
+/// estimate the weighted loss-to-go). It is a function of the other trajectories only, which are
+/// independent of τ_j.
+///
+/// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
+/// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines
+/// from earlier roll-outs only. This assumes, as every algorithm of the kit does, that a
+/// trajectory is estimated before the next one is rolled out.
+#[derive(Debug, Clone)]
+pub struct Baselined<P, S> {
+    batch: Batched<P>,
+    kind: Kind<S>,
+    buffers: RefCell<Buffers<S>>,
+}
+
+/// The error of a baseline that cannot be used.
+fn invalid(msg: impl Into<String>) -> OracleError {
+    OracleError::Baseline(msg.into())
+}
+
+impl<P, S: Scalar> Baselined<P, S> {
+    /// `m` trajectories per oracle call with `baseline`.
+    ///
+    /// # Errors
+    /// [`OracleError::Behaviour`] if `m` is 0; [`OracleError::Baseline`] for a non-finite value,
+    /// a `decay` outside [0, 1], or leave-one-out with m < 2 (one trajectory has no other to
+    /// take its baseline from).
+    pub fn new(inner: P, m: usize, baseline: &Baseline) -> Result<Self, OracleError> {
+        let batch = Batched::new(inner, m)?;
+        let num = |x: &crate::algo::Num, what: &'static str| {
+            x.to::<S>(what).map_err(|e| invalid(e.to_string()))
+        };
+        let kind = match baseline {
+            Baseline::None => Kind::None,
+            Baseline::Constant { value } => Kind::Constant(num(value, "baseline value")?),
+            Baseline::TimeIndexed { values } => Kind::TimeIndexed(
+                values
+                    .iter()
+                    .map(|v| num(v, "baseline values"))
+                    .collect::<Result<_, _>>()?,
+            ),
+            Baseline::Estimated {
+                time_indexed,
+                decay,
+            } => {
+                let decay = match decay {
+                    None => None,
+                    Some(x) => {
+                        let q = x
+                            .exact("baseline decay")
+                            .map_err(|e| invalid(e.to_string()))?;
+                        let zero = crate::scalar::BigRational::from_integer(0.into());
+                        let one = crate::scalar::BigRational::from_integer(1.into());
+                        if q < zero || q > one {
+                            return Err(invalid(format!("decay {q} is not in [0, 1]")));
+                        }
+                        Some(S::from_rational(&q))
+                    }
+                };
+                Kind::Estimated {
+                    time_indexed: *time_indexed,
+                    running: RefCell::new(RunningOptimum::new(decay)),
+                }
+            }
+            Baseline::LeaveOneOut => {
+                if m < 2 {
+                    return Err(invalid(format!(
+                        "leave-one-out needs at least 2 trajectories per gradient, got {m}"
+                    )));
+                }
+                Kind::LeaveOneOut
+            }
+        };
+        Ok(Self {
+            batch,
+            kind,
+            buffers: RefCell::new(Buffers {
+                terms: Vec::new(),
+                totals: Vec::new(),
+                g: Vec::new(),
+            }),
+        })
+    }
+
+    /// The problem each trajectory comes from.
+    pub fn inner(&self) -> &P {
+        self.batch.inner()
+    }
+
+    /// Trajectories per oracle call.
+    pub fn size(&self) -> usize {
+        self.batch.size()
+    }
+
+    /// The committed running estimates of an [`Baseline::Estimated`] baseline (a copy).
+    pub fn running(&self) -> Option<RunningOptimum<S>> {
+        match &self.kind {
+            Kind::Estimated { running, .. } => Some(running.borrow().clone()),
+            _ => None,
+        }
+    }
+}
+
+impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
+    /// The mean baselined estimate over `batch`, each trajectory's terms from `fill`.
+    fn baselined(
+        &self,
+        batch: &[P::Trajectory],
+        observe: bool,
+        mut fill: impl FnMut(&P::Trajectory, &mut DecisionTerms<S>) -> Result<(), OracleError>,
+    ) -> Result<DVector<S>, OracleError> {
+        let m = batch.len();
+        if m == 0 {
+            return Err(OracleError::Trajectory("an empty minibatch".into()));
+        }
+        let mut buffers = self.buffers.borrow_mut();
+        let Buffers { terms, totals, g } = &mut *buffers;
+        if terms.len() < m {
+            terms.resize_with(m, DecisionTerms::new);
+        }
+        for (t, out) in batch.iter().zip(terms.iter_mut()) {
+            fill(t, out)?;
+            out.finish();
+        }
+        let d = self.inner().dim();
+        g.clear();
+        g.resize(d, S::zero());
+        let mut sum = DVector::from_element(d, S::zero());
+        let mut running = match &self.kind {
+            Kind::Estimated { running, .. } => Some(running.borrow_mut()),
+            _ => None,
+        };
+        if let Some(r) = running.as_mut()
+            && observe
+        {
+            r.clear_pending();
+        }
+        if matches!(self.kind, Kind::LeaveOneOut) {
+            let n = terms[..m].iter().map(DecisionTerms::decisions).max();
+            totals.clear();
+            totals.resize(n.unwrap_or(0), S::zero());
+            for t in &terms[..m] {
+                for (i, x) in totals.iter_mut().enumerate().take(t.decisions()) {
+                    *x += t.loss_to_go(i);
+                }
+            }
+        }
+        let others = S::from_i64(m as i64 - 1);
+        for t in &terms[..m] {
+            match &self.kind {
+                Kind::None => t.estimate_into(|_| None, g),
+                Kind::Constant(b) => t.estimate_into(|_| Some(b.clone()), g),
+                Kind::TimeIndexed(bs) => {
+                    if t.decisions() > bs.len() {
+                        return Err(crate::problem::too_few_baselines(t.decisions()));
+                    }
+                    t.estimate_into(|i| Some(bs[i].clone()), g);
+                }
+                Kind::Estimated { time_indexed, .. } => {
+                    let r = running.as_ref().expect("estimated kind");
+                    if *time_indexed {
+                        t.estimate_into(|i| r.time_indexed(i), g);
+                    } else {
+                        let b = r.constant();
+                        t.estimate_into(|_| b.clone(), g);
+                    }
+                }
+                Kind::LeaveOneOut => {
+                    t.estimate_into(|i| Some((totals[i].clone() - t.loss_to_go(i)) / &others), g)
+                }
+            }
+            for (s, x) in sum.iter_mut().zip(g.iter()) {
+                *s += x;
+            }
+        }
+        if let Some(r) = running.as_mut()
+            && observe
+        {
+            for t in &terms[..m] {
+                r.observe(t);
+            }
+        }
+        let m = S::from_i64(m as i64);
+        let g = sum.map(|x| x / &m);
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(g)
+    }
+}
+
+impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
+    type Trajectory = Vec<P::Trajectory>;
+    type Labelled = P::Labelled;
+
+    fn dim(&self) -> usize {
+        self.batch.dim()
+    }
+
+    /// `m` roll-outs in turn from the one RNG; an estimated baseline first takes in the
+    /// statistics of the previous call's trajectories.
+    fn rollout(
+        &self,
+        behaviour: &Behaviour<'_, S>,
+        rng: &mut KitRng,
+        cost: &mut Cost,
+    ) -> Result<Self::Trajectory, OracleError> {
+        if let Kind::Estimated { running, .. } = &self.kind {
+            running.borrow_mut().commit();
+        }
+        self.batch.rollout(behaviour, rng, cost)
+    }
+
+    fn estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        form: EstimatorForm,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        if matches!(self.kind, Kind::None) {
+            return self.batch.estimate(theta, trajectory, form, cost);
+        }
+        if form == EstimatorForm::Full {
+            return Err(invalid("baselines apply to the causal form of eq. 3.15"));
+        }
+        let inner = self.inner();
+        let given = match &self.kind {
+            Kind::Constant(b) => Some(Given::Constant(b)),
+            Kind::TimeIndexed(bs) => Some(Given::TimeIndexed(bs)),
+            _ => None,
+        };
+        if let Some(given) = given {
+            // Baselines known before the pass: the problem's own (possibly fused) pass.
+            let mut parts = trajectory.iter();
+            let first = parts
+                .next()
+                .ok_or_else(|| OracleError::Trajectory("an empty minibatch".into()))?;
+            let mut sum = inner.baselined_estimate(theta, first, given, cost)?;
+            for t in parts {
+                sum += inner.baselined_estimate(theta, t, given, cost)?;
+            }
+            let m = S::from_i64(trajectory.len() as i64);
+            let g = sum.map(|x| x / &m);
+            if !g.iter().all(Scalar::is_finite) {
+                return Err(OracleError::NonFinite("the baselined gradient estimate"));
+            }
+            return Ok(g);
+        }
+        self.baselined(trajectory, true, |t, out| {
+            inner.decision_terms(theta, t, None, out, cost)
+        })
+    }
+
+    fn weighted_estimate(
+        &self,
+        theta_old: &DVector<S>,
+        theta_new: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weighting: Weighting,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        if matches!(self.kind, Kind::None) {
+            return self
+                .batch
+                .weighted_estimate(theta_old, theta_new, trajectory, weighting, cost);
+        }
+        let inner = self.inner();
+        self.baselined(trajectory, false, |t, out| {
+            inner.decision_terms(theta_old, t, Some((theta_new, weighting)), out, cost)
+        })
+    }
+
+    fn trajectory_loss(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+    ) -> Result<S, OracleError> {
+        self.batch.trajectory_loss(theta, trajectory)
+    }
+
+    fn labelled_states(&self, trajectory: &Self::Trajectory) -> Vec<Self::Labelled> {
+        self.batch.labelled_states(trajectory)
+    }
+
+    fn supervised(
+        &self,
+        theta: &DVector<S>,
+        example: &Self::Labelled,
+        cost: &mut Cost,
+    ) -> Result<(S, DVector<S>), OracleError> {
+        self.batch.supervised(theta, example, cost)
+    }
+}

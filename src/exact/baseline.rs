@@ -1,0 +1,180 @@
+//! Baselines exactly (math.md §9): the mean and second moment of the baselined estimator
+//! `g_b = g − Σ_i b_i ψ_i` by enumeration (X1), and the variance-minimising constants in closed
+//! form.
+//!
+//! For constants b_i, `E[g_b] = ∇F` exactly (`E[ψ_i | s_1, a_1, …, s_i] = 0`; module docs of
+//! [`crate::baseline`]) and, because `E[ψ_i·ψ_j] = 0` for i ≠ j,
+//! `E‖g_b‖² = E‖g‖² − 2 Σ_i b_i E[g·ψ_i] + Σ_i b_i² E‖ψ_i‖²`, minimised by
+//! `b*_i = E[g·ψ_i]/E‖ψ_i‖²` per decision index and by `b*_const = Σ_i E[g·ψ_i] / Σ_i E‖ψ_i‖²`
+//! for one constant. Every expectation is a sum over prefixes; each prefix's estimate comes
+//! from the oracle's own code ([`crate::toy::estimator::decision_terms`]).
+
+use super::ExactError;
+use super::enumerate::for_each_prefix;
+use crate::baseline::DecisionTerms;
+use crate::scalar::{Scalar, dot, norm_sq};
+use crate::toy::estimator::decision_terms;
+use crate::toy::{ToyProblem, ToyTrajectory};
+
+/// `E[g_b]` and `E‖g_b‖²` at θ for given baselines.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BaselineMoments<S> {
+    /// E\[g_b\] = Σ p g_b.
+    pub expected_estimate: Vec<S>,
+    /// E‖g_b‖² = Σ p ‖g_b‖².
+    pub second_moment: S,
+}
+
+/// The exact ingredients of the optimal baselines at θ (decision indices i = 1..T−2, 0-based in
+/// the vectors).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptimalBaselines<S> {
+    /// E\[g·ψ_i\] (g the plain estimate of eq. 3.15; 0 where decision i is never scored).
+    pub cross: Vec<S>,
+    /// E‖ψ_i‖².
+    pub score_moment: Vec<S>,
+    /// E‖g‖².
+    pub second_moment: S,
+    /// b*_i = E\[g·ψ_i\]/E‖ψ_i‖², 0 where E‖ψ_i‖² = 0 (then b_i does not matter).
+    pub time_indexed: Vec<S>,
+    /// b*_const = Σ_i E\[g·ψ_i\] / Σ_i E‖ψ_i‖², 0 when every score vanishes.
+    pub constant: S,
+    /// E‖g_{b*}‖² with the time-indexed b*, by enumeration.
+    pub second_moment_time_indexed: S,
+    /// E‖g_{b*}‖² with the constant b*_const, by enumeration.
+    pub second_moment_constant: S,
+}
+
+impl<S: Scalar> OptimalBaselines<S> {
+    /// The reduction factor `E‖g‖² / E‖g_{b*}‖²` of the time-indexed optimum (`None` when the
+    /// baselined second moment is 0).
+    pub fn reduction_time_indexed(&self) -> Option<S> {
+        ratio(&self.second_moment, &self.second_moment_time_indexed)
+    }
+    /// The reduction factor `E‖g‖² / E‖g_{b*const}‖²` of the constant optimum.
+    pub fn reduction_constant(&self) -> Option<S> {
+        ratio(&self.second_moment, &self.second_moment_constant)
+    }
+}
+
+fn ratio<S: Scalar>(num: &S, den: &S) -> Option<S> {
+    (!den.is_certainly_zero()).then(|| num.clone() / den)
+}
+
+/// The baseline of decision i (0-based) from a list: one entry is one constant for every
+/// decision, otherwise entry i.
+fn pick<S: Scalar>(baseline: &[S], i: usize) -> Option<S> {
+    match baseline {
+        [b] => Some(b.clone()),
+        bs => bs.get(i).cloned(),
+    }
+}
+
+/// The prefix (s_1..s_{T−1}, a_1..a_{T−2}) completed into a trajectory of the problem (the last
+/// action and state do not matter: they are set to 0 and s_{T−1}; labels are the expert's).
+pub fn prefix_trajectory<S: Scalar>(
+    problem: &ToyProblem<S>,
+    states: &[usize],
+    actions: &[usize],
+) -> ToyTrajectory {
+    let mut st = states.to_vec();
+    st.push(states[states.len() - 1]);
+    let mut ac = actions.to_vec();
+    ac.push(0);
+    ToyTrajectory {
+        labels: states.iter().map(|s| problem.mdp().expert[*s]).collect(),
+        states: st,
+        actions: ac,
+    }
+}
+
+/// (X1) `E[g_b]` and `E‖g_b‖²` at θ with `baseline` = one number b (every decision) or
+/// T − 2 numbers b_1..b_{T−2}.
+///
+/// # Errors
+/// [`ExactError::NotApplicable`] for a list of another length; as
+/// [`crate::exact::enumerate::moments`].
+pub fn baselined_moments<S: Scalar>(
+    problem: &ToyProblem<S>,
+    theta: &[S],
+    baseline: &[S],
+) -> Result<BaselineMoments<S>, ExactError> {
+    let decisions = problem.mdp().horizon - 2;
+    if baseline.len() != 1 && baseline.len() != decisions {
+        return Err(ExactError::NotApplicable(format!(
+            "a baseline is one number or T − 2 = {decisions} numbers, got {}",
+            baseline.len()
+        )));
+    }
+    let table = problem.table(theta)?;
+    let d = table.dim;
+    let mut terms = DecisionTerms::new();
+    let mut g = vec![S::zero(); d];
+    let mut eg = vec![S::zero(); d];
+    let mut m2 = S::zero();
+    for_each_prefix(problem, &table, |states, actions, p| {
+        let actions = problem.scored_actions(states, actions);
+        decision_terms(&table, states, actions, None, false, &mut terms);
+        terms.estimate_into(|i| pick(baseline, i), &mut g);
+        m2 += p.clone() * norm_sq(&g);
+        for (e, x) in eg.iter_mut().zip(&g) {
+            *e += p.clone() * x;
+        }
+    })?;
+    Ok(BaselineMoments {
+        expected_estimate: eg,
+        second_moment: m2,
+    })
+}
+
+/// (X1) `E[g·ψ_i]`, `E‖ψ_i‖²`, `E‖g‖²` at θ, the optimal baselines b*_i and b*_const, and the
+/// second moments they achieve (math.md §9).
+///
+/// # Errors
+/// As [`crate::exact::enumerate::moments`].
+pub fn optimal_baselines<S: Scalar>(
+    problem: &ToyProblem<S>,
+    theta: &[S],
+) -> Result<OptimalBaselines<S>, ExactError> {
+    let decisions = problem.mdp().horizon - 2;
+    let table = problem.table(theta)?;
+    let mut terms = DecisionTerms::new();
+    let mut g = vec![S::zero(); table.dim];
+    let mut cross = vec![S::zero(); decisions];
+    let mut score_moment = vec![S::zero(); decisions];
+    let mut m2 = S::zero();
+    for_each_prefix(problem, &table, |states, actions, p| {
+        let actions = problem.scored_actions(states, actions);
+        decision_terms(&table, states, actions, None, false, &mut terms);
+        terms.estimate_into(|_| None, &mut g);
+        m2 += p.clone() * norm_sq(&g);
+        for i in 0..terms.decisions() {
+            cross[i] += p.clone() * dot(&g, terms.score(i));
+            score_moment[i] += p.clone() * norm_sq(terms.score(i));
+        }
+    })?;
+    let time_indexed: Vec<S> = cross
+        .iter()
+        .zip(&score_moment)
+        .map(|(c, m)| ratio(c, m).unwrap_or_else(S::zero))
+        .collect();
+    let total = |xs: &[S]| xs.iter().fold(S::zero(), |acc, x| acc + x);
+    let constant = ratio(&total(&cross), &total(&score_moment)).unwrap_or_else(S::zero);
+    let (second_moment_time_indexed, second_moment_constant) = if decisions == 0 {
+        (m2.clone(), m2.clone())
+    } else {
+        (
+            baselined_moments(problem, theta, &time_indexed)?.second_moment,
+            baselined_moments(problem, theta, &vec![constant.clone(); decisions])?.second_moment,
+        )
+    };
+    Ok(OptimalBaselines {
+        cross,
+        score_moment,
+        second_moment: m2,
+        time_indexed,
+        constant,
+        second_moment_time_indexed,
+        second_moment_constant,
+    })
+}
