@@ -161,6 +161,7 @@ fn row3b_power_at_the_tables_size() {
         &Ok(O2ncSample {
             runs: zeros(s.runs),
             worst_spread: 0.0,
+            tracking: Default::default(),
         }),
     );
     assert_eq!(blind[1].verdict, Verdict::Uninformative);
@@ -259,7 +260,7 @@ fn toy_rows_and_controls_at_the_tables_size() {
         runs: s.runs,
         alpha: alpha(),
     };
-    let rows = statistical::toy_rows(&m1_tied(), toy_constants(), s, mc);
+    let rows = statistical::toy_rows(&m1_tied(), toy_constants(), global_constants(), s, mc);
     let by_id = |id: &str| rows.iter().find(|r| r.id == id).unwrap();
     for id in ["1", "3a", "3b"] {
         assert_eq!(by_id(id).verdict, Verdict::Holds, "{id}");
