@@ -169,7 +169,7 @@ fn row3b_power_at_the_tables_size() {
     assert_eq!(vacuous[1].verdict, Verdict::Uninformative);
 }
 
-/// Rows 2c / 2c.pd with few runs at the table's K: informative, hold, and a bound at half the
+/// Rows 2c / 2c.pd with few runs at the table's K: informative, hold, and a bound at 40 % of the
 /// measured mean is flagged; at K = 1000, (3.60*) is above sup ‖∇F‖² = G_F², so the row is
 /// uninformative whatever the runs; a sample with LCB = 0 is uninformative.
 #[test]
@@ -187,8 +187,8 @@ fn row2c_is_informative_only_where_the_bound_is_below_the_statistics_maximum() {
         let r = storm::fixed_schedule_rows_from(g, v, 0.0, s.storm_k, mc, &sims, &[1.0]);
         assert_eq!(r[0].verdict, Verdict::Holds, "{}", r[0].details);
         assert!(r[0].bound.unwrap() < g.g_f.value.powi(2));
-        let half = scale_to_mean(&r[0], 0.5);
-        let r = storm::fixed_schedule_rows_from(g, v, 0.0, s.storm_k, mc, &sims, &[half]);
+        let below = scale_to_mean(&r[0], 0.4);
+        let r = storm::fixed_schedule_rows_from(g, v, 0.0, s.storm_k, mc, &sims, &[below]);
         assert_eq!(r[0].verdict, Verdict::Fails, "{}", r[0].details);
         let blind =
             storm::fixed_schedule_rows_from(g, v, 0.0, s.storm_k, mc, &Ok(zeros(20)), &[1.0]);
@@ -277,4 +277,46 @@ fn toy_rows_and_controls_at_the_tables_size() {
         .map(|r| r.id.as_str())
         .collect();
     assert_eq!(status(&rows).is_err(), !undetected.is_empty());
+}
+
+/// Row 1b (the second toy, M(1/2, 1/4, 1/2, 4) with two parameters) at the quick profile's sizes:
+/// informative (LCB > 0, B < G_F²) and holds; a bound just below the measured mean (0.9·X̄) is
+/// flagged; a sample of zeros (LCB = 0) is uninformative.
+#[test]
+fn row1b_power_at_the_tables_size() {
+    use ilopt_theory::checks::second_toy::{
+        SgdSample, domain, m2_two_groups, sgd_row, sgd_sample, sizes,
+    };
+    let s = sizes(false);
+    let m2 = m2_two_groups();
+    let zero = parse_exact("0").unwrap();
+    let k = compute(
+        &m2,
+        &[zero.clone(), zero],
+        None,
+        &domain(),
+        s.tol,
+        s.max_boxes,
+    )
+    .unwrap();
+    let theta1 = [0.0, 0.0];
+    let sample = sgd_sample(&m2, &domain(), &theta1, s.sgd);
+    let row = |scale: f64, sample: &Result<SgdSample, String>| {
+        sgd_row("M2", &k, &domain(), &theta1, s.sgd, scale, sample)
+    };
+    let r = row(1.0, &sample);
+    assert_eq!(r.verdict, Verdict::Holds, "{}", r.details);
+    assert!(lcb(&r) > 0.0 && r.bound.unwrap() < k.g_f.value.powi(2));
+    let below = row(scale_to_mean(&r, 0.9), &sample);
+    assert_eq!(below.verdict, Verdict::Fails, "{}", below.details);
+    let blind = row(
+        1.0,
+        &Ok(SgdSample {
+            lows: vec![0.0; s.sgd.runs],
+            mids: vec![0.0; s.sgd.runs],
+            left: 0,
+            farthest: 0.0,
+        }),
+    );
+    assert_eq!(blind.verdict, Verdict::Uninformative);
 }

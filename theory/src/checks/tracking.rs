@@ -24,7 +24,10 @@
 //! what gives the rows power: a run's average has the range of a single step but a spread √K
 //! smaller, and a range-limited test of R = 100 averages cannot resolve a mean below ≈ 0.17 of the
 //! range. Exact ∇F at the iterates is enclosed in intervals (forward DP); the lower ends of the
-//! enclosures give the LCB and the upper ends the UCB.
+//! enclosures give the LCB and the upper ends the UCB. The decision "0 is outside the interval" is
+//! what carries the level α; when the conditional means vary along the runs (as under the
+//! alternative), the betting bound reflects the stretches where the capital grew and the interval
+//! need not contain z̄.
 
 use crate::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::ZeroMeanTest;
