@@ -225,9 +225,10 @@ pub fn markdown(checks: &[Check]) -> String {
     out
 }
 
-/// The JSON report (every field, certificates included); each statistical row also carries
-/// `"power": {"flags_bounds_below": LCB, "min_detectable_violation": X̄ − LCB}`, and each negative
-/// control `"detected": bool`.
+/// The JSON report (every field, certificates included); each statistical bound row also carries
+/// `"power": {"flags_bounds_below": LCB, "min_detectable_violation": X̄ − LCB}`, each two-sided
+/// row `"power": {"interval": [LCB, UCB], "min_detectable_bias": …}`, and each negative control
+/// `"detected": bool`.
 ///
 /// # Panics
 /// Never: every field serialises.
@@ -243,6 +244,15 @@ pub fn json(checks: &[Check]) -> serde_json::Value {
                         serde_json::json!({
                             "flags_bounds_below": lcb,
                             "min_detectable_violation": mdv,
+                        }),
+                    );
+                }
+                if let Some((lcb, ucb, mdb)) = two_sided_power(c) {
+                    obj.insert(
+                        "power".into(),
+                        serde_json::json!({
+                            "interval": [lcb, ucb],
+                            "min_detectable_bias": mdb,
                         }),
                     );
                 }
