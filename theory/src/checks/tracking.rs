@@ -309,11 +309,13 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
             test.ucb,
             alpha,
             mdb,
-            match verdict {
-                Verdict::Fails => "mean ≠ 0: the property fails along these iterates",
-                Verdict::Holds => "no evidence against mean 0",
-                Verdict::Uninformative => "the interval spans the range (no power)",
-                Verdict::Inconclusive => "inconclusive",
+            match (verdict, test.lcb > test.mean || test.ucb < test.mean) {
+                (Verdict::Fails, true) =>
+                    "mean ≠ 0: the property fails along these iterates (the conditional means vary along the runs, so the betting interval need not contain z̄; the decision, 0 outside it, is what carries α)",
+                (Verdict::Fails, false) => "mean ≠ 0: the property fails along these iterates",
+                (Verdict::Holds, _) => "no evidence against mean 0",
+                (Verdict::Uninformative, _) => "the interval spans the range (no power)",
+                (Verdict::Inconclusive, _) => "inconclusive",
             }
         ),
         ..base
