@@ -208,8 +208,9 @@ fn row2c_is_informative_only_where_the_bound_is_below_the_statistics_maximum() {
 
 /// The table's STORM rows and controls at the quick profile's K and R (as the suite makes them):
 /// 2c and 2c.pd hold and are informative, a bound 20 % below the measured mean is flagged, the
-/// scaled control 2c.ctl is detected; the unweighted-STORM and printed-Algorithm-4 controls are
-/// in the table, and the table's status names every control its check did not detect.
+/// scaled control 2c.ctl is detected; the unweighted-STORM and printed-Algorithm-4 probes are
+/// in the table; rows 2e and 2e.pd hold, the control 2e.printed4 is detected; and the table's
+/// status names every control its check did not detect.
 #[test]
 #[ignore = "≈ 2 minutes in release: the global constants, then 4 × 100 runs of 20 000 STORM iterations with exact ∇F"]
 fn storm_rows_and_controls_at_the_tables_size() {
@@ -228,6 +229,20 @@ fn storm_rows_and_controls_at_the_tables_size() {
         );
     }
     assert_eq!(by_id("2c.ctl").verdict, Verdict::Fails);
+    // The tracking rows from the same runs: IS-STORM holds with both weightings, the printed
+    // Algorithm 4 is a negative control and is flagged; dropping the weight biases the increment
+    // by O(η_k‖d_k‖), below this size's resolution, so that row is a probe reporting its power.
+    for id in ["2e", "2e.pd"] {
+        let r = by_id(id);
+        assert_eq!(r.verdict, Verdict::Holds, "{id}: {}", r.details);
+        assert_eq!(r.role, Role::Corrected);
+    }
+    let p4 = by_id("2e.printed4");
+    assert_eq!(p4.role, Role::NegativeControl);
+    assert_eq!(p4.verdict, Verdict::Fails, "{}", p4.details);
+    let unweighted = by_id("2e.unweighted");
+    assert_eq!(unweighted.role, Role::Probe);
+    assert!(unweighted.details.contains("minimum detectable bias"));
     for id in ["2c.unweighted", "2c.printed4"] {
         let r = by_id(id);
         assert_eq!(r.role, Role::Probe);
@@ -251,8 +266,8 @@ fn storm_rows_and_controls_at_the_tables_size() {
 
 /// The table's SGD and O2NC rows and controls at the quick profile's sizes (as the suite makes
 /// them): rows 1 and 3b hold and are informative, 1.ctl and 3b.ctl are detected, the printed
-/// Algorithm 5 runs through check 3b at the same N, δ, R, and the status names every control its
-/// check did not detect.
+/// Algorithm 5 runs through check 3b at the same N, δ, R, row 3d holds, and the status names every
+/// control its check did not detect.
 #[test]
 fn toy_rows_and_controls_at_the_tables_size() {
     let s = Profile::Quick.sizes();
@@ -271,6 +286,12 @@ fn toy_rows_and_controls_at_the_tables_size() {
     let printed = by_id("3b.printed5");
     assert_eq!(printed.role, Role::Probe);
     assert_eq!(printed.bound, by_id("3b").bound);
+    // The tracking rows from the same runs: the IL-correct Algorithm 5 holds; the printed one's
+    // bias O(‖θ_n − w_n‖) ≤ O(δ/T) is below this size's resolution, so its row is a probe.
+    let r = by_id("3d");
+    assert_eq!(r.verdict, Verdict::Holds, "{}", r.details);
+    assert_eq!(r.role, Role::Corrected);
+    assert_eq!(by_id("3d.printed5").role, Role::Probe);
     let undetected: Vec<&str> = rows
         .iter()
         .filter(|r| r.undetected_control())

@@ -1,11 +1,8 @@
-//! The tracking rows 2e and 3d at the table's own sizes: the corrected algorithms hold (and are
-//! informative), the controls run by the kit's printed Algorithms 4 and 5 and the unweighted
-//! STORM are flagged, and the decision rejects a stream with a planted bias.
+//! The tracking rows' decision and ranges, and their power against a dropped importance weight.
+//! (The rows at the table's own sizes are tested with the other statistical rows in `power.rs`.)
 
 use ilopt::scalar::parse_exact;
-use ilopt_theory::check::{Check, Role, Verdict};
-use ilopt_theory::checks::montecarlo::McSettings;
-use ilopt_theory::checks::statistical;
+use ilopt_theory::check::Verdict;
 use ilopt_theory::checks::tracking::{self, StormRange};
 use ilopt_theory::global::{GlobalConstants, GlobalSizes};
 use ilopt_theory::stats::{ZeroMeanTest, bonferroni};
@@ -33,12 +30,6 @@ fn global_constants() -> &'static GlobalConstants {
 
 fn alpha() -> f64 {
     bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS)
-}
-
-fn find<'a>(rows: &'a [Check], id: &str) -> &'a Check {
-    rows.iter()
-        .find(|r| r.id == id)
-        .unwrap_or_else(|| panic!("no row {id}"))
 }
 
 /// The two-sided rule on a planted stream: mean 0 holds, a bias of a few times the minimum
@@ -81,59 +72,6 @@ fn storm_range_bounds_the_worst_case_increment() {
         let printed = g_inf + g_f + oma * (3.0 * g_inf + g_f);
         assert!(StormRange::Printed.bound(k, g_inf, g_f) >= printed);
     }
-}
-
-/// Rows 2e at the quick profile's K and R (the runs of 2c): IS-STORM holds with both weightings,
-/// the printed Algorithm 4 and the unweighted STORM are flagged; the controls are negative
-/// controls, so the table's status requires them.
-#[test]
-#[ignore = "≈ 2 minutes in release: the global constants, then 4 × 100 runs of 20 000 STORM iterations with exact ∇F (the table runs the same rows)"]
-fn storm_tracking_rows_at_the_tables_size() {
-    let s = Profile::Quick.sizes();
-    let rows = statistical::storm_rows(&m1_tied(), global_constants(), s, alpha());
-    for r in rows.iter().filter(|r| r.id.starts_with("2e")) {
-        eprintln!("{} {:?}: {}", r.id, r.verdict, r.details);
-    }
-    for id in ["2e", "2e.pd"] {
-        let r = find(&rows, id);
-        assert_eq!(r.verdict, Verdict::Holds, "{id}: {}", r.details);
-        assert_eq!(r.role, Role::Corrected);
-    }
-    let p4 = find(&rows, "2e.printed4");
-    assert_eq!(p4.role, Role::NegativeControl);
-    assert_eq!(p4.verdict, Verdict::Fails, "{}", p4.details);
-    // Dropping the weight biases the increment by O(η_k‖d_k‖), below this size's resolution: the
-    // row reports it as a probe, with its minimum detectable bias.
-    let unweighted = find(&rows, "2e.unweighted");
-    assert_eq!(unweighted.role, Role::Probe);
-    assert!(unweighted.details.contains("minimum detectable bias"));
-}
-
-/// Rows 3d at the quick profile's N and R (the runs of 3b).
-#[test]
-fn o2nc_tracking_rows_at_the_tables_size() {
-    let s = Profile::Quick.sizes();
-    let mc = McSettings {
-        runs: s.runs,
-        alpha: alpha(),
-    };
-    let k = ilopt_theory::checks::constants::compute(
-        &m1_tied(),
-        &[parse_exact("0").unwrap()],
-        Some(&parse_exact("7/8").unwrap()),
-        &[[-905.0, 905.0]],
-        s.bnb_tol,
-        200_000,
-    )
-    .unwrap();
-    let rows = statistical::toy_rows(&m1_tied(), &k, global_constants(), s, mc);
-    for r in rows.iter().filter(|r| r.id.starts_with("3d")) {
-        eprintln!("{} {:?}: {}", r.id, r.verdict, r.details);
-    }
-    let r = find(&rows, "3d");
-    assert_eq!(r.verdict, Verdict::Holds, "{}", r.details);
-    assert_eq!(r.role, Role::Corrected);
-    assert_eq!(find(&rows, "3d.printed5").role, Role::Probe);
 }
 
 /// The row's power against a dropped importance weight where the weight matters: with a constant

@@ -38,7 +38,7 @@ use ilopt::scalar::Interval;
 /// (3 + √3)/(3 − √3) = 2 + √3.
 pub const M1_WEIGHT_MAX: f64 = 3.732_050_807_568_878;
 
-/// The per-step values of a tracking row: enclosures [lows[i], highs[i]] of z = h u / c, in the
+/// The per-step values of a tracking row: enclosures (`lows[i]`, `highs[i]`) of z = h u / c, in the
 /// order they were drawn (runs concatenated).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Tracking {
