@@ -131,6 +131,10 @@ pub struct IterationMetrics<S> {
     pub cost: Cost,
     /// Seconds since the run started.
     pub wall_time: f64,
+    /// The step's direction ([`StepReport::estimate`]: the oracle estimate for SGD, `d_{k+1}` for
+    /// STORM, `g_n = g(w_n, τ_n)` for O2NC), if it has one; what the theory checks compare with
+    /// the exact gradient.
+    pub estimate: Option<DVector<S>>,
     /// `‖estimate‖²` of the step's direction, if it has one.
     pub estimate_norm_sq: Option<S>,
     /// `‖estimate‖` for reporting (`f64`).
@@ -224,6 +228,7 @@ impl<S: Scalar> RunRecord<S> {
                 a.iteration == b.iteration
                     && a.theta == b.theta
                     && a.cost == b.cost
+                    && a.estimate == b.estimate
                     && a.estimate_norm_sq == b.estimate_norm_sq
                     && a.loss == b.loss
                     && a.objective == b.objective
@@ -502,6 +507,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
             wall_time: start.elapsed().as_secs_f64(),
             estimate_norm: estimate_norm_sq.as_ref().map(|x| x.to_f64().sqrt()),
             estimate_norm_sq,
+            estimate: report.estimate.clone(),
             loss: report.loss.clone(),
             evaluated_at: report.evaluated_at.clone(),
             objective: self.objective.as_ref().and_then(|f| {

@@ -123,10 +123,11 @@ pub enum Role {
     /// must refute: its verdict `Fails` means the control was detected, and an undetected control
     /// fails the table.
     NegativeControl,
-    /// A wrong algorithm (one the thesis printed) run through a bound check of the right one, at
-    /// the same sizes: its verdict says whether that bound is sensitive to the algorithm's error.
-    /// Reported, never required: an error that does not raise the bounded quantity is invisible
-    /// to the bound, and the exact rows (4d–4f) are what detect it.
+    /// A wrong algorithm (one the thesis printed, or STORM without the importance weight) run
+    /// through a check of the right one, at the same sizes: its verdict says whether that check
+    /// resolves the algorithm's error. Reported, never required: an error that does not raise the
+    /// bounded quantity is invisible to a bound, one below a row's minimum detectable bias is
+    /// invisible to that row, and the exact rows (4d–4f) are what detect it.
     Probe,
 }
 

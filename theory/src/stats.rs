@@ -132,6 +132,21 @@ impl Sample {
             .max(self.betting_lcb(a))
     }
 
+    /// A lower confidence bound at level α that stays valid when the values are bounded
+    /// martingale differences around their conditional means (each E[X_t | X_1..X_{t−1}] ≥ the
+    /// bound): the larger of Azuma–Hoeffding (the Hoeffding formula) and betting (Ville's
+    /// inequality), at α/2 each.
+    pub fn martingale_lcb(&self, alpha: f64) -> f64 {
+        let a = alpha / 2.0;
+        self.hoeffding_lcb(a).max(self.betting_lcb(a))
+    }
+
+    /// The matching upper bound: [`Sample::martingale_lcb`] applied to b − X.
+    pub fn martingale_ucb(&self, alpha: f64) -> f64 {
+        let mirrored: Vec<f64> = self.values.iter().map(|x| self.range - x).collect();
+        self.range - Sample::new(&mirrored, self.range).martingale_lcb(alpha)
+    }
+
     /// The minimum detectable violation `X̄ − LCB`: the row flags a claimed bound B exactly when
     /// the measured mean exceeds B by more than this.
     pub fn min_detectable_violation(&self, alpha: f64) -> f64 {
@@ -179,6 +194,80 @@ pub fn assess(sample: &Sample, bound: f64, statistic_max: f64, alpha: f64) -> Ve
         Verdict::Uninformative
     } else {
         Verdict::Holds
+    }
+}
+
+/// A two-sided confidence interval for E X, where every run's X lies in [−c, c] (a certified
+/// range), for testing H₀: E X = 0 (the tracking rows, [`crate::checks::tracking`]).
+///
+/// The bounds valid for bounded martingale differences ([`Sample::martingale_lcb`]: Azuma–Hoeffding
+/// and betting; not empirical Bernstein, which needs independence) are applied to
+/// Y = X + c ∈ [0, 2c] at α/2 per side, so P_{H₀}(0 ∉ [LCB, UCB]) ≤ α whether the values are
+/// i.i.d. runs or the steps of runs whose conditional means are 0. Each value is known as an enclosure
+/// [lower, upper] (exact gradients in interval arithmetic); the LCB uses the lower ends and the
+/// UCB the upper ends, so rounding can never exclude 0 spuriously.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ZeroMeanTest {
+    /// R.
+    pub runs: usize,
+    /// X̄ (midpoints of the enclosures).
+    pub mean: f64,
+    /// Lower confidence bound on E X at level α/2.
+    pub lcb: f64,
+    /// Upper confidence bound on E X at level α/2.
+    pub ucb: f64,
+    /// The certified range c (|X| ≤ c).
+    pub range: f64,
+    /// α (both sides together).
+    pub alpha: f64,
+}
+
+impl ZeroMeanTest {
+    /// The interval from the runs' enclosures `lows[r] ≤ X_r ≤ highs[r]`, each in [−c, c].
+    ///
+    /// # Panics
+    /// If fewer than two runs are given or the two lists differ in length.
+    pub fn new(lows: &[f64], highs: &[f64], c: f64, alpha: f64) -> Self {
+        assert_eq!(lows.len(), highs.len(), "one enclosure per run");
+        let shift =
+            |xs: &[f64]| -> Vec<f64> { xs.iter().map(|x| (x + c).clamp(0.0, 2.0 * c)).collect() };
+        let lo = Sample::new(&shift(lows), 2.0 * c);
+        let hi = Sample::new(&shift(highs), 2.0 * c);
+        let mean = lows
+            .iter()
+            .zip(highs)
+            .map(|(a, b)| 0.5 * (a + b))
+            .sum::<f64>()
+            / lows.len() as f64;
+        Self {
+            runs: lows.len(),
+            mean,
+            lcb: lo.martingale_lcb(alpha / 2.0) - c,
+            ucb: hi.martingale_ucb(alpha / 2.0) - c,
+            range: c,
+            alpha,
+        }
+    }
+
+    /// The minimum detectable bias: the larger distance from X̄ to an end of the interval. A mean
+    /// shifted by more than this (either way) moves the interval off 0.
+    pub fn min_detectable_bias(&self) -> f64 {
+        (self.mean - self.lcb).max(self.ucb - self.mean)
+    }
+
+    /// The verdict on H₀: E X = 0:
+    /// * [`Verdict::Fails`] if 0 ∉ [LCB, UCB] (the mean is non-zero with confidence 1 − α);
+    /// * [`Verdict::Uninformative`] otherwise, if the minimum detectable bias is ≥ c (no mean the
+    ///   statistic can have could be flagged);
+    /// * [`Verdict::Holds`] otherwise.
+    pub fn verdict(&self) -> Verdict {
+        if self.lcb > 0.0 || self.ucb < 0.0 {
+            Verdict::Fails
+        } else if self.min_detectable_bias() >= self.range {
+            Verdict::Uninformative
+        } else {
+            Verdict::Holds
+        }
     }
 }
 

@@ -161,6 +161,7 @@ fn row3b_power_at_the_tables_size() {
         &Ok(O2ncSample {
             runs: zeros(s.runs),
             worst_spread: 0.0,
+            tracking: Default::default(),
         }),
     );
     assert_eq!(blind[1].verdict, Verdict::Uninformative);
@@ -168,7 +169,7 @@ fn row3b_power_at_the_tables_size() {
     assert_eq!(vacuous[1].verdict, Verdict::Uninformative);
 }
 
-/// Rows 2c / 2c.pd with few runs at the table's K: informative, hold, and a bound at half the
+/// Rows 2c / 2c.pd with few runs at the table's K: informative, hold, and a bound at 40 % of the
 /// measured mean is flagged; at K = 1000, (3.60*) is above sup ‖∇F‖² = G_F², so the row is
 /// uninformative whatever the runs; a sample with LCB = 0 is uninformative.
 #[test]
@@ -186,8 +187,8 @@ fn row2c_is_informative_only_where_the_bound_is_below_the_statistics_maximum() {
         let r = storm::fixed_schedule_rows_from(g, v, 0.0, s.storm_k, mc, &sims, &[1.0]);
         assert_eq!(r[0].verdict, Verdict::Holds, "{}", r[0].details);
         assert!(r[0].bound.unwrap() < g.g_f.value.powi(2));
-        let half = scale_to_mean(&r[0], 0.5);
-        let r = storm::fixed_schedule_rows_from(g, v, 0.0, s.storm_k, mc, &sims, &[half]);
+        let below = scale_to_mean(&r[0], 0.4);
+        let r = storm::fixed_schedule_rows_from(g, v, 0.0, s.storm_k, mc, &sims, &[below]);
         assert_eq!(r[0].verdict, Verdict::Fails, "{}", r[0].details);
         let blind =
             storm::fixed_schedule_rows_from(g, v, 0.0, s.storm_k, mc, &Ok(zeros(20)), &[1.0]);
@@ -207,8 +208,9 @@ fn row2c_is_informative_only_where_the_bound_is_below_the_statistics_maximum() {
 
 /// The table's STORM rows and controls at the quick profile's K and R (as the suite makes them):
 /// 2c and 2c.pd hold and are informative, a bound 20 % below the measured mean is flagged, the
-/// scaled control 2c.ctl is detected; the unweighted-STORM and printed-Algorithm-4 controls are
-/// in the table, and the table's status names every control its check did not detect.
+/// scaled control 2c.ctl is detected; the unweighted-STORM and printed-Algorithm-4 probes are
+/// in the table; rows 2e and 2e.pd hold, the control 2e.printed4 is detected; and the table's
+/// status names every control its check did not detect.
 #[test]
 #[ignore = "≈ 2 minutes in release: the global constants, then 4 × 100 runs of 20 000 STORM iterations with exact ∇F"]
 fn storm_rows_and_controls_at_the_tables_size() {
@@ -227,6 +229,20 @@ fn storm_rows_and_controls_at_the_tables_size() {
         );
     }
     assert_eq!(by_id("2c.ctl").verdict, Verdict::Fails);
+    // The tracking rows from the same runs: IS-STORM holds with both weightings, the printed
+    // Algorithm 4 is a negative control and is flagged; dropping the weight biases the increment
+    // by O(η_k‖d_k‖), below this size's resolution, so that row is a probe reporting its power.
+    for id in ["2e", "2e.pd"] {
+        let r = by_id(id);
+        assert_eq!(r.verdict, Verdict::Holds, "{id}: {}", r.details);
+        assert_eq!(r.role, Role::Corrected);
+    }
+    let p4 = by_id("2e.printed4");
+    assert_eq!(p4.role, Role::NegativeControl);
+    assert_eq!(p4.verdict, Verdict::Fails, "{}", p4.details);
+    let unweighted = by_id("2e.unweighted");
+    assert_eq!(unweighted.role, Role::Probe);
+    assert!(unweighted.details.contains("minimum detectable bias"));
     for id in ["2c.unweighted", "2c.printed4"] {
         let r = by_id(id);
         assert_eq!(r.role, Role::Probe);
@@ -250,8 +266,8 @@ fn storm_rows_and_controls_at_the_tables_size() {
 
 /// The table's SGD and O2NC rows and controls at the quick profile's sizes (as the suite makes
 /// them): rows 1 and 3b hold and are informative, 1.ctl and 3b.ctl are detected, the printed
-/// Algorithm 5 runs through check 3b at the same N, δ, R, and the status names every control its
-/// check did not detect.
+/// Algorithm 5 runs through check 3b at the same N, δ, R, row 3d holds, and the status names every
+/// control its check did not detect.
 #[test]
 fn toy_rows_and_controls_at_the_tables_size() {
     let s = Profile::Quick.sizes();
@@ -259,7 +275,7 @@ fn toy_rows_and_controls_at_the_tables_size() {
         runs: s.runs,
         alpha: alpha(),
     };
-    let rows = statistical::toy_rows(&m1_tied(), toy_constants(), s, mc);
+    let rows = statistical::toy_rows(&m1_tied(), toy_constants(), global_constants(), s, mc);
     let by_id = |id: &str| rows.iter().find(|r| r.id == id).unwrap();
     for id in ["1", "3a", "3b"] {
         assert_eq!(by_id(id).verdict, Verdict::Holds, "{id}");
@@ -270,10 +286,58 @@ fn toy_rows_and_controls_at_the_tables_size() {
     let printed = by_id("3b.printed5");
     assert_eq!(printed.role, Role::Probe);
     assert_eq!(printed.bound, by_id("3b").bound);
+    // The tracking rows from the same runs: the IL-correct Algorithm 5 holds; the printed one's
+    // bias O(‖θ_n − w_n‖) ≤ O(δ/T) is below this size's resolution, so its row is a probe.
+    let r = by_id("3d");
+    assert_eq!(r.verdict, Verdict::Holds, "{}", r.details);
+    assert_eq!(r.role, Role::Corrected);
+    assert_eq!(by_id("3d.printed5").role, Role::Probe);
     let undetected: Vec<&str> = rows
         .iter()
         .filter(|r| r.undetected_control())
         .map(|r| r.id.as_str())
         .collect();
     assert_eq!(status(&rows).is_err(), !undetected.is_empty());
+}
+
+/// Row 1b (the second toy, M(1/2, 1/4, 1/2, 4) with two parameters) at the quick profile's sizes:
+/// informative (LCB > 0, B < G_F²) and holds; a bound just below the measured mean (0.9·X̄) is
+/// flagged; a sample of zeros (LCB = 0) is uninformative.
+#[test]
+fn row1b_power_at_the_tables_size() {
+    use ilopt_theory::checks::second_toy::{
+        SgdSample, domain, m2_two_groups, sgd_row, sgd_sample, sizes,
+    };
+    let s = sizes(false);
+    let m2 = m2_two_groups();
+    let zero = parse_exact("0").unwrap();
+    let k = compute(
+        &m2,
+        &[zero.clone(), zero],
+        None,
+        &domain(),
+        s.tol,
+        s.max_boxes,
+    )
+    .unwrap();
+    let theta1 = [0.0, 0.0];
+    let sample = sgd_sample(&m2, &domain(), &theta1, s.sgd);
+    let row = |scale: f64, sample: &Result<SgdSample, String>| {
+        sgd_row("M2", &k, &domain(), &theta1, s.sgd, scale, sample)
+    };
+    let r = row(1.0, &sample);
+    assert_eq!(r.verdict, Verdict::Holds, "{}", r.details);
+    assert!(lcb(&r) > 0.0 && r.bound.unwrap() < k.g_f.value.powi(2));
+    let below = row(scale_to_mean(&r, 0.9), &sample);
+    assert_eq!(below.verdict, Verdict::Fails, "{}", below.details);
+    let blind = row(
+        1.0,
+        &Ok(SgdSample {
+            lows: vec![0.0; s.sgd.runs],
+            mids: vec![0.0; s.sgd.runs],
+            left: 0,
+            farthest: 0.0,
+        }),
+    );
+    assert_eq!(blind.verdict, Verdict::Uninformative);
 }

@@ -10,4 +10,5 @@ pub mod second_toy;
 pub mod statistical;
 pub mod storm;
 pub mod thm31;
+pub mod tracking;
 pub mod unbiased;

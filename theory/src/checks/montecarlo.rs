@@ -10,6 +10,7 @@
 use crate::bounds::{O2ncParams, o2nc_theorem, sgd_constant, sgd_step_admissible, upper};
 use crate::check::{Check, Measured, Method, Role, Verdict};
 use crate::checks::constants::ToyConstants;
+use crate::checks::tracking::{O2ncTracker, Tracking};
 use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::o2nc::O2ncConfig;
@@ -350,6 +351,9 @@ pub struct O2ncSample {
     pub runs: Runs,
     /// max over runs, blocks and t of |w̄ᵏ − wᵏ_t|.
     pub worst_spread: f64,
+    /// The per-step values of the tracking row 3d ([`crate::checks::tracking`]):
+    /// sign(Δ_n)(g_n − ∇F(w_n))/(G_∞ + G_F).
+    pub tracking: Tracking,
 }
 
 /// The O2NC configuration of check 3 and its parameters T, K, M.
@@ -383,6 +387,35 @@ pub fn o2nc_sample(
     runs: usize,
     variant: O2ncVariant,
 ) -> Result<O2ncSample, String> {
+    o2nc_sample_tracked(
+        mdp,
+        k_consts,
+        theta0,
+        n,
+        delta,
+        runs,
+        variant,
+        (k_consts.g_inf.value, k_consts.g_f.value),
+    )
+}
+
+/// As [`o2nc_sample`], with the tracking values normalised by G_∞ + G_F for the given
+/// `(G_∞, G_F)` (bounds of sup |g| and sup |∇F| valid wherever the iterates go).
+///
+/// # Errors
+/// As [`o2nc_sample`].
+#[allow(clippy::too_many_arguments)]
+pub fn o2nc_sample_tracked(
+    mdp: &ToyMdp,
+    k_consts: &ToyConstants,
+    theta0: f64,
+    n: u64,
+    delta: (i64, i64),
+    runs: usize,
+    variant: O2ncVariant,
+    (g_inf, g_f): (f64, f64),
+) -> Result<O2ncSample, String> {
+    let mut tracker = O2ncTracker::new(g_inf, g_f);
     let (config, params) = o2nc_config(k_consts, n, delta)?;
     let algorithm = match variant {
         O2ncVariant::IlCorrect => AlgorithmConfig::O2nc(config),
@@ -400,10 +433,11 @@ pub fn o2nc_sample(
             seed: r as u64,
             stop: StoppingRule::iterations(params.m + 1),
         };
-        let ws = RefCell::new(Vec::<f64>::with_capacity(params.m as usize));
+        // (θ_n, w_n, g_n) per step.
+        let ws = RefCell::new(Vec::<(f64, f64, f64)>::with_capacity(params.m as usize));
         let observer = |m: &IterationMetrics<f64>| {
-            if let Some(w) = &m.evaluated_at {
-                ws.borrow_mut().push(w[0]);
+            if let (Some(w), Some(g)) = (&m.evaluated_at, &m.estimate) {
+                ws.borrow_mut().push((m.theta[0], w[0], g[0]));
             }
         };
         let rec = Runner::new(cfg.stop.clone()).and_then(|runner| {
@@ -419,26 +453,32 @@ pub fn o2nc_sample(
             }
             Ok(_) => {}
         }
-        let ws = ws.into_inner();
-        if ws.len() < t * kb {
+        let steps = ws.into_inner();
+        if steps.len() < t * kb {
             return Err(format!(
                 "run {r}: {} evaluation points, expected {}",
-                ws.len(),
+                steps.len(),
                 t * kb
             ));
         }
+        let ws: Vec<f64> = steps.iter().map(|s| s.1).collect();
+        let grads = ws
+            .iter()
+            .map(|w| grad_enclosure(&pi, &[*w]).map(|g| g[0]))
+            .collect::<Result<Vec<Interval>, String>>()?;
+        tracker.start_run(theta0);
+        for ((theta, _, g), grad) in steps.iter().zip(&grads) {
+            tracker.observe(*theta, *g, *grad);
+        }
         let (mut lo_sum, mut mid_sum) = (0.0, 0.0);
-        for block in ws.chunks(t).take(kb) {
+        for (block, block_grads) in ws.chunks(t).zip(grads.chunks(t)).take(kb) {
             let mean = block.iter().sum::<f64>() / t as f64;
             worst_spread = block
                 .iter()
                 .fold(worst_spread, |m, w| m.max((w - mean).abs()));
             let mut acc = Interval::zero();
-            for w in block {
-                match grad_enclosure(&pi, &[*w]) {
-                    Ok(gv) => acc += gv[0],
-                    Err(e) => return Err(e),
-                }
+            for g in block_grads {
+                acc += *g;
             }
             let avg = acc / Interval::from_i64(t as i64);
             lo_sum += avg.mig();
@@ -451,6 +491,7 @@ pub fn o2nc_sample(
     Ok(O2ncSample {
         runs: (lows, mids),
         worst_spread,
+        tracking: tracker.tracking,
     })
 }
 

@@ -15,6 +15,7 @@ use crate::bounds::{
 };
 use crate::check::{Check, Measured, Method, Role, Verdict};
 use crate::checks::montecarlo::{McSettings, Runs};
+use crate::checks::tracking::{Momentum, StormRange, StormTracker, Tracking};
 use crate::global::GlobalConstants;
 use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
@@ -45,6 +46,7 @@ fn simulate(
     k: u64,
     runs: usize,
     stat: Statistic,
+    tracker: Option<&RefCell<StormTracker>>,
 ) -> Result<Runs, String> {
     let pi = ToyProblem::<Interval>::new(mdp);
     let pf = ToyProblem::<f64>::new(mdp);
@@ -58,6 +60,9 @@ fn simulate(
         };
         // (Σ w·lower, Σ w·mid, Σ w, count, error)
         let acc = RefCell::new((0.0f64, 0.0f64, 0.0f64, 0u64, None::<String>));
+        if let Some(t) = tracker {
+            t.borrow_mut().start_run();
+        }
         let observer = |m: &IterationMetrics<f64>| {
             let mut a = acc.borrow_mut();
             let th = Interval::try_from((m.theta[0], m.theta[0]));
@@ -67,6 +72,10 @@ fn simulate(
             match g {
                 Ok(f) => {
                     let gi = f.gradient[0];
+                    // After step k the runner reports θ_{k+1} and d_{k+1} (iteration 0: θ₁, no d).
+                    if let (Some(t), Some(d)) = (tracker, &m.estimate) {
+                        t.borrow_mut().observe(m.iteration + 1, d[0], gi);
+                    }
                     let (w, lo, mid) = match stat {
                         Statistic::EtaWeightedSquare { l } => {
                             let (eta, _) = storm_schedule(l, m.iteration + 1);
@@ -236,6 +245,25 @@ pub fn fixed_schedule_sample(
     iterations: u64,
     runs: usize,
 ) -> Result<Runs, String> {
+    let range = StormRange::Recursion { w: 0.0 };
+    fixed_schedule_samples(mdp, k, variant, theta1, iterations, runs, range).map(|x| x.0)
+}
+
+/// As [`fixed_schedule_sample`], and from the same runs the tracking values of row 2e
+/// ([`crate::checks::tracking`]) with |u_{k+1}| bounded by `range` and the constants G_∞, G_F of `k`.
+///
+/// # Errors
+/// As [`fixed_schedule_sample`].
+pub fn fixed_schedule_samples(
+    mdp: &ToyMdp,
+    k: &GlobalConstants,
+    variant: StormVariant,
+    theta1: f64,
+    iterations: u64,
+    runs: usize,
+    range: StormRange,
+) -> Result<(Runs, Tracking), String> {
+    let tracker = RefCell::new(StormTracker::new(range, k.g_inf.value, k.g_f.value));
     let (_, l) = variant_l(k, variant);
     let schedule = StormSchedule::Thesis { l: Num::Float(l) };
     let algorithm = match variant {
@@ -259,14 +287,51 @@ pub fn fixed_schedule_sample(
             })
         }
     };
-    simulate(
+    let runs = simulate(
         mdp,
         &algorithm,
         theta1,
         iterations,
         runs,
         Statistic::EtaWeightedSquare { l },
-    )
+        Some(&tracker),
+    )?;
+    Ok((runs, tracker.into_inner().tracking))
+}
+
+/// The tracking values of row 2e ([`crate::checks::tracking`]) for any STORM-type `algorithm`
+/// whose momenta are `momentum`, over `runs` seeded runs of K = `iterations` iterates from θ₁,
+/// with |u_{k+1}| bounded by `range` and the constants G_∞, G_F of `k`.
+///
+/// # Errors
+/// As [`fixed_schedule_sample`].
+#[allow(clippy::too_many_arguments)]
+pub fn tracking_sample(
+    mdp: &ToyMdp,
+    k: &GlobalConstants,
+    algorithm: &AlgorithmConfig,
+    momentum: Momentum,
+    theta1: f64,
+    iterations: u64,
+    runs: usize,
+    range: StormRange,
+) -> Result<Tracking, String> {
+    let tracker = RefCell::new(StormTracker::with_momentum(
+        range,
+        momentum,
+        k.g_inf.value,
+        k.g_f.value,
+    ));
+    simulate(
+        mdp,
+        algorithm,
+        theta1,
+        iterations,
+        runs,
+        Statistic::MeanNorm,
+        Some(&tracker),
+    )?;
+    Ok(tracker.into_inner().tracking)
 }
 
 /// The rows of check 2c from a sample of [`fixed_schedule_sample`], one per entry of
@@ -411,6 +476,7 @@ pub fn adaptive_schedule(
                 iterations,
                 mc.runs,
                 Statistic::MeanNorm,
+                None,
             )
         });
     row(
