@@ -185,7 +185,7 @@ pub fn style_for(label: &str) -> Style {
 /// a 10 pt article), 0.48 pt per pixel: the smallest text below (15 px) prints at 7.2 pt.
 const WIDTH: u32 = 720;
 /// Height of the plot (axes and labels), in pixels.
-const PLOT_HEIGHT: u32 = 420;
+const PLOT_HEIGHT: u32 = 440;
 /// Font sizes in pixels: tick labels, axis descriptions, legend, notes.
 const TICK_FONT: u32 = 16;
 const AXIS_FONT: u32 = 17;
@@ -297,7 +297,7 @@ fn two_digits(v: f64) -> String {
     format!("{:.digits$}", (v / scale).round() * scale)
 }
 
-/// A tick label. On a log axis `v` is log10 of the value: whole decades print as 1, 10, 100,
+/// A tick label. On a log axis `v` is log10 of the value: whole decades print as 0.001, …, 1, 10, 100,
 /// 1000, 10000 or 1eK, other ticks with two significant digits. On a linear axis a tick within
 /// `1e-9 × span` of zero prints as `0` (not `-5.6e-17`).
 pub fn fmt_tick(v: f64, log: bool, span: f64) -> String {
@@ -305,8 +305,9 @@ pub fn fmt_tick(v: f64, log: bool, span: f64) -> String {
         let x = 10f64.powf(v);
         if (v - v.round()).abs() < 1e-9 {
             let k = v.round() as i32;
-            if (0..=4).contains(&k) {
-                format!("{}", 10f64.powi(k))
+            if (-3..=4).contains(&k) {
+                let digits = (-k).max(0) as usize;
+                format!("{:.digits$}", 10f64.powi(k))
             } else {
                 format!("1e{k}")
             }

@@ -353,9 +353,11 @@ fn baseline_lines(
     r.baselines
         .iter()
         .filter(|b| b.task == task)
-        .map(|b| {
+        .filter_map(|b| {
             let m = b.runs.iter().map(&f).sum::<f64>() / b.runs.len().max(1) as f64;
-            reference_series(format!("{} (ref.)", b.label), vec![x0, x1], vec![m, m])
+            // A reference without the quantity (no gradient estimate) is not drawn at all.
+            m.is_finite()
+                .then(|| reference_series(format!("{} (ref.)", b.label), vec![x0, x1], vec![m, m]))
         })
         .collect()
 }
@@ -492,7 +494,7 @@ pub fn write(
     let it = |c: &Checkpoint| c.iteration as f64;
     let traj = |c: &Checkpoint| c.trajectories as f64;
     let gc = |c: &Checkpoint| c.gradient_evaluations as f64;
-    let by_iteration: (&str, &dyn Fn(&Checkpoint) -> f64) = ("iteration", &it);
+    let by_iteration: (&str, &dyn Fn(&Checkpoint) -> f64) = ("iteration (parameter updates)", &it);
     let by_trajectories: (&str, &dyn Fn(&Checkpoint) -> f64) = (
         "expert-labelled trajectories rolled out (cumulative count)",
         &traj,
@@ -555,7 +557,7 @@ pub fn write(
             "fig4-5a-gradient-x",
             "Fig. 4.5",
             " (a): obstacle task, norm of the x-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band)".into(),
-            "‖x-row of gradient estimate‖ (log scale)",
+            "‖gradient estimate, x-row‖ (log scale)",
             &|c| c.grad_x,
             true,
         ),
@@ -563,7 +565,7 @@ pub fn write(
             "fig4-5b-gradient-y",
             "Fig. 4.5",
             " (b): obstacle task, norm of the y-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band)".into(),
-            "‖y-row of gradient estimate‖ (log scale)",
+            "‖gradient estimate, y-row‖ (log scale)",
             &|c| c.grad_y,
             true,
         ),
@@ -571,7 +573,7 @@ pub fn write(
             "fig4-6a-loss-x",
             "Fig. 4.6",
             " (a): obstacle task, loss of the x velocity per decision (mean over seeds, 95% CI band)".into(),
-            "squared error of x velocity (log scale)",
+            "x-velocity squared error (log scale)",
             &|c| c.loss_x,
             false,
         ),
@@ -579,7 +581,7 @@ pub fn write(
             "fig4-6b-loss-y",
             "Fig. 4.6",
             " (b): obstacle task, loss of the y velocity per decision (mean over seeds, 95% CI band)".into(),
-            "squared error of y velocity (log scale)",
+            "y-velocity squared error (log scale)",
             &|c| c.loss_y,
             false,
         ),
@@ -648,7 +650,7 @@ pub fn write(
         "Fig. 4.10",
         cart_fig(
             "Fig. 4.10: CartPole, mean episode reward of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policy)",
-            "episode reward (steps balanced, max. 500)",
+            "episode reward (steps, max. 500)",
             false,
             &|c| Some(c.reward),
         )
