@@ -35,6 +35,8 @@ pub struct Details {
 
 /// Parse one constant line's text (`name = value (certificate; how)`).
 fn parse_constant(s: &str) -> Option<Constant> {
+    // The fields become table cells, which the renderers escape themselves.
+    let s = s.replace("\\|", "|");
     let (name, rest) = s.split_once(" = ")?;
     let (value, rest) = rest.split_once(" (")?;
     let inner = rest.strip_suffix(')')?;
@@ -224,7 +226,7 @@ mod tests {
 \n**Details.**\n\n\
 - **1a** first\n\
   - L_F = 2.029554 (rigorous upper bound; interval branch-and-bound (727 boxes))\n\
-  - B_F = 0.500000 (exact; F(θ₁) − inf F)\n\
+  - B_F = 0.500000 (exact; F(θ₁) − inf F over \\|θ\\| ≤ 1)\n\
 - **8** second\n\
   - L_F = 2.029554 (rigorous upper bound; interval branch-and-bound (727 boxes))\n\
 - **9** none\n";
@@ -245,7 +247,7 @@ mod tests {
                 how: "interval branch-and-bound (727 boxes)".into(),
             }
         );
-        assert_eq!(d[0].constants[1].how, "F(θ₁) − inf F");
+        assert_eq!(d[0].constants[1].how, "F(θ₁) − inf F over |θ| ≤ 1");
         assert!(d[2].constants.is_empty());
     }
 
