@@ -1030,9 +1030,10 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     ] {
         d.push(Block::Table(Table {
             caption: Some(if route.reference_trajectories.is_some() {
-                "Fig. 4.2 (b), obstacle task".into()
+                "RMSE by N on the obstacle task (the data of thesis Fig. 4.2 (b))".into()
             } else {
-                "Fig. 4.2 (a), toy MDP against the exact ∇F".into()
+                "RMSE by N on the toy MDP against the exact ∇F (the data of thesis Fig. 4.2 (a))"
+                    .into()
             }),
             label: label.into(),
             header: strings(head),
