@@ -799,13 +799,13 @@ pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figu
         "fig4-2a-gradient-error-toy",
         Figure {
             title: format!(
-                "Fig. 4.2 (a): toy MDP, exact ∇F; slope {} [{}, {}]",
+                "Fig. 4.2 (a): toy MDP, RMSE of the mean of N gradient estimates against the exact ∇F over {reps} repetitions (95% CI band; dashed: σ/√N); fitted slope {} [{}, {}]",
                 fmt3(t.slope.estimate),
                 fmt3(t.slope.lo),
                 fmt3(t.slope.hi)
             ),
-            x_label: "N (trajectories averaged)".into(),
-            y_label: format!("RMSE of the mean (over {reps} repetitions)"),
+            x_label: "N, trajectories averaged (log scale)".into(),
+            y_label: "RMSE of mean gradient (log scale)".into(),
             log_x: true,
             log_y: true,
             y_range: Some((0.0, f64::INFINITY)),
@@ -822,16 +822,14 @@ pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figu
         "fig4-2b-gradient-error-obstacle",
         Figure {
             title: format!(
-                "Fig. 4.2 (b): obstacle task, M = {m} reference; slope {} [{}, {}]",
+                "Fig. 4.2 (b): obstacle task, RMSE of the mean of N gradient estimates against an M = {m} trajectory reference over {} repetitions (95% CI bands; dashed: σ̂/√N and the reference's standard error); fitted slope {} [{}, {}]",
+                o.squared_errors.len(),
                 fmt3(o.slope.estimate),
                 fmt3(o.slope.lo),
                 fmt3(o.slope.hi)
             ),
-            x_label: "N (trajectories averaged)".into(),
-            y_label: format!(
-                "RMSE of the mean (over {} repetitions)",
-                o.squared_errors.len()
-            ),
+            x_label: "N, trajectories averaged (log scale)".into(),
+            y_label: "RMSE of mean gradient (log scale)".into(),
             log_x: true,
             log_y: true,
             y_range: Some((0.0, f64::INFINITY)),

@@ -65,22 +65,207 @@ pub struct Figure {
     pub series: Vec<Series>,
 }
 
-const COLORS: [RGBColor; 8] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-];
+/// The Okabe–Ito palette (distinguishable under the common colour-vision deficiencies).
+pub mod okabe_ito {
+    use plotters::style::RGBColor;
+    /// Orange.
+    pub const ORANGE: RGBColor = RGBColor(230, 159, 0);
+    /// Sky blue.
+    pub const SKY_BLUE: RGBColor = RGBColor(86, 180, 233);
+    /// Bluish green.
+    pub const BLUISH_GREEN: RGBColor = RGBColor(0, 158, 115);
+    /// Yellow, darkened so that a line on white stays visible.
+    pub const DARK_YELLOW: RGBColor = RGBColor(181, 165, 0);
+    /// Blue.
+    pub const BLUE: RGBColor = RGBColor(0, 114, 178);
+    /// Vermillion.
+    pub const VERMILLION: RGBColor = RGBColor(213, 94, 0);
+    /// Reddish purple.
+    pub const REDDISH_PURPLE: RGBColor = RGBColor(204, 121, 167);
+    /// Black.
+    pub const BLACK: RGBColor = RGBColor(0, 0, 0);
+}
 
-/// Width of the legend panel right of the plot, in pixels.
-const LEGEND_WIDTH: u32 = 200;
+/// A point marker.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Marker {
+    /// Circle.
+    Circle,
+    /// Square.
+    Square,
+    /// Upward triangle.
+    Triangle,
+    /// Downward triangle.
+    TriangleDown,
+    /// Diamond.
+    Diamond,
+    /// Plus sign.
+    Plus,
+    /// Diagonal cross.
+    Cross,
+    /// No marker (reference lines).
+    None,
+}
 
-/// Colours of the dashed reference lines, in order (black, mid grey, dark teal).
-const REFERENCE_COLORS: [RGBColor; 3] = [BLACK, RGBColor(140, 140, 140), RGBColor(0, 110, 110)];
+/// How a series is drawn, the same in every figure: a colour, a marker (filled or hollow) and a
+/// line pattern.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Style {
+    /// Line, marker and band colour.
+    pub color: RGBColor,
+    /// Marker at each point.
+    pub marker: Marker,
+    /// Filled marker (`false`: outline only).
+    pub filled: bool,
+    /// Dashed line (variants of an algorithm, reference lines).
+    pub dashed: bool,
+}
+
+/// The style of a series, a function of its label alone, so an algorithm looks the same in every
+/// figure whatever else the figure shows. Variants of an algorithm (DAgger (minibatch), the
+/// episodic-objective control, the IS-STORM pair) share their family's colour and differ by
+/// marker and a dashed line; reference policies and reference lines are grey and dashed, without
+/// markers; a label not listed gets a colour and marker derived from a hash of its text.
+pub fn style_for(label: &str) -> Style {
+    use okabe_ito::*;
+    let s = |color, marker, filled, dashed| Style {
+        color,
+        marker,
+        filled,
+        dashed,
+    };
+    let grey = |v: u8| s(RGBColor(v, v, v), Marker::None, false, true);
+    match label {
+        "BC" => s(BLACK, Marker::Circle, false, false),
+        "DAgger" => s(ORANGE, Marker::Square, true, false),
+        "DAgger (minibatch)" => s(ORANGE, Marker::Square, false, true),
+        "SGD" => s(SKY_BLUE, Marker::TriangleDown, true, false),
+        "Adam" => s(BLUE, Marker::Diamond, true, false),
+        "Adam (episodic objective)" => s(BLUE, Marker::Diamond, false, true),
+        "RMSProp" => s(BLUISH_GREEN, Marker::Triangle, true, false),
+        "STORM" => s(VERMILLION, Marker::Circle, true, false),
+        "IS-STORM (trajectory)" => s(REDDISH_PURPLE, Marker::Cross, true, false),
+        "IS-STORM (per-decision)" => s(REDDISH_PURPLE, Marker::Plus, true, true),
+        // Fig. 4.2's estimates.
+        "RMSE (95% CI)" | "vs reference (95% CI)" => s(BLUE, Marker::Circle, true, false),
+        "− ref. variance (95% CI)" => s(VERMILLION, Marker::Square, true, false),
+        l if l.starts_with("Expert") || l.starts_with("σ") => grey(0),
+        l if l.starts_with("Straight to goal") || l.starts_with("reference SE") => grey(130),
+        other => {
+            const COLORS: [RGBColor; 7] = [
+                ORANGE,
+                SKY_BLUE,
+                BLUISH_GREEN,
+                DARK_YELLOW,
+                BLUE,
+                VERMILLION,
+                REDDISH_PURPLE,
+            ];
+            const MARKERS: [Marker; 7] = [
+                Marker::Circle,
+                Marker::Square,
+                Marker::Triangle,
+                Marker::TriangleDown,
+                Marker::Diamond,
+                Marker::Plus,
+                Marker::Cross,
+            ];
+            let h = crate::stats::fnv1a(other);
+            s(
+                COLORS[(h % 7) as usize],
+                MARKERS[((h / 7) % 7) as usize],
+                true,
+                false,
+            )
+        }
+    }
+}
+
+/// Canvas width in SVG pixels. The LaTeX appendix includes figures at the line width (345 pt in
+/// a 10 pt article), 0.48 pt per pixel: the smallest text below (15 px) prints at 7.2 pt.
+const WIDTH: u32 = 720;
+/// Height of the plot (axes and labels), in pixels.
+const PLOT_HEIGHT: u32 = 440;
+/// Font sizes in pixels: tick labels, axis descriptions, legend, notes.
+const TICK_FONT: u32 = 16;
+const AXIS_FONT: u32 = 17;
+const LEGEND_FONT: u32 = 16;
+const NOTE_FONT: u32 = 15;
+/// Legend row height in pixels.
+const LEGEND_ROW: u32 = 24;
+
+/// Draw `marker` centred at pixel `c` on `area` (pixel coordinates).
+fn draw_marker<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    c: (i32, i32),
+    st: &Style,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let r = 5;
+    let stroke = ShapeStyle::from(&st.color).stroke_width(2);
+    let fill = if st.filled {
+        st.color.filled()
+    } else {
+        WHITE.filled()
+    };
+    let (x, y) = c;
+    let polygon = |pts: Vec<(i32, i32)>| -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+        area.draw(&Polygon::new(pts.clone(), fill))?;
+        let mut outline = pts;
+        outline.push(outline[0]);
+        area.draw(&PathElement::new(outline, stroke))
+    };
+    match st.marker {
+        Marker::None => Ok(()),
+        Marker::Circle => {
+            area.draw(&Circle::new(c, r, fill))?;
+            area.draw(&Circle::new(c, r, stroke))
+        }
+        Marker::Square => polygon(vec![
+            (x - r + 1, y - r + 1),
+            (x + r - 1, y - r + 1),
+            (x + r - 1, y + r - 1),
+            (x - r + 1, y + r - 1),
+        ]),
+        Marker::Triangle => polygon(vec![(x, y - r - 1), (x + r, y + r - 1), (x - r, y + r - 1)]),
+        Marker::TriangleDown => {
+            polygon(vec![(x, y + r + 1), (x + r, y - r + 1), (x - r, y - r + 1)])
+        }
+        Marker::Diamond => polygon(vec![(x, y - r - 1), (x + r, y), (x, y + r + 1), (x - r, y)]),
+        Marker::Plus => {
+            area.draw(&PathElement::new(vec![(x - r, y), (x + r, y)], stroke))?;
+            area.draw(&PathElement::new(vec![(x, y - r), (x, y + r)], stroke))
+        }
+        Marker::Cross => {
+            area.draw(&PathElement::new(
+                vec![(x - r, y - r), (x + r, y + r)],
+                stroke,
+            ))?;
+            area.draw(&PathElement::new(
+                vec![(x - r, y + r), (x + r, y - r)],
+                stroke,
+            ))
+        }
+    }
+}
+
+/// Split `text` into lines of at most `width` characters at spaces.
+fn wrap(text: &str, width: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut cur = String::new();
+    for w in text.split(' ') {
+        if !cur.is_empty() && cur.chars().count() + 1 + w.chars().count() > width {
+            lines.push(std::mem::take(&mut cur));
+        }
+        if !cur.is_empty() {
+            cur.push(' ');
+        }
+        cur += w;
+    }
+    if !cur.is_empty() {
+        lines.push(cur);
+    }
+    lines
+}
 
 /// A transformed point: (x, mean, band low, band high); a band low of `None` runs to the
 /// bottom of the axis (a lower end ≤ 0 on a log axis).
@@ -112,7 +297,7 @@ fn two_digits(v: f64) -> String {
     format!("{:.digits$}", (v / scale).round() * scale)
 }
 
-/// A tick label. On a log axis `v` is log10 of the value: whole decades print as 1, 10, 100,
+/// A tick label. On a log axis `v` is log10 of the value: whole decades print as 0.001, …, 1, 10, 100,
 /// 1000, 10000 or 1eK, other ticks with two significant digits. On a linear axis a tick within
 /// `1e-9 × span` of zero prints as `0` (not `-5.6e-17`).
 pub fn fmt_tick(v: f64, log: bool, span: f64) -> String {
@@ -120,8 +305,9 @@ pub fn fmt_tick(v: f64, log: bool, span: f64) -> String {
         let x = 10f64.powf(v);
         if (v - v.round()).abs() < 1e-9 {
             let k = v.round() as i32;
-            if (0..=4).contains(&k) {
-                format!("{}", 10f64.powi(k))
+            if (-3..=4).contains(&k) {
+                let digits = (-k).max(0) as usize;
+                format!("{:.digits$}", 10f64.powi(k))
             } else {
                 format!("1e{k}")
             }
@@ -276,19 +462,38 @@ impl Figure {
         }
         let pad = 0.05 * (y1 - y0);
         let (y0, y1) = (y0 - pad, y1 + pad);
-        let note_height = 22 * notes.len() as u32 + if notes.is_empty() { 0 } else { 6 };
+        // The legend lists the series that are drawn, in columns under the plot.
+        let styles: Vec<Style> = self.series.iter().map(|s| style_for(&s.label)).collect();
+        let shown: Vec<usize> = (0..self.series.len())
+            .filter(|&i| !pts[i].is_empty())
+            .collect();
+        let longest = shown
+            .iter()
+            .map(|&i| self.series[i].label.chars().count())
+            .max()
+            .unwrap_or(0) as u32;
+        let column_width = 48 + longest * LEGEND_FONT * 55 / 100;
+        let columns = ((WIDTH - 20) / column_width.max(1)).clamp(1, 4);
+        let legend_rows = (shown.len() as u32).div_ceil(columns);
+        let legend_height = legend_rows * LEGEND_ROW + 8;
+        let note_chars = ((WIDTH - 24) * 100 / (NOTE_FONT * 52)) as usize;
+        let note_lines: Vec<String> = notes
+            .iter()
+            .flat_map(|n| wrap(&format!("Note: {n}."), note_chars))
+            .collect();
+        let note_height = (NOTE_FONT + 5) * note_lines.len() as u32 + 6;
         {
-            let root = SVGBackend::with_string(out, (800 + LEGEND_WIDTH, 520 + note_height))
-                .into_drawing_area();
+            let root =
+                SVGBackend::with_string(out, (WIDTH, PLOT_HEIGHT + legend_height + note_height))
+                    .into_drawing_area();
             root.fill(&WHITE)?;
-            let root = root.titled(&self.title, ("sans-serif", 24))?;
-            let (main, note_area) = root.split_vertically(root.dim_in_pixel().1 - note_height);
-            let (plot_area, legend_area) = main.split_horizontally(800);
+            let (plot_area, rest) = root.split_vertically(PLOT_HEIGHT);
+            let (legend_area, note_area) = rest.split_vertically(legend_height);
             let mut chart = ChartBuilder::on(&plot_area)
-                .margin(12)
-                .margin_right(28)
-                .x_label_area_size(45)
-                .y_label_area_size(75)
+                .margin(10)
+                .margin_right(24)
+                .x_label_area_size(50)
+                .y_label_area_size(78)
                 .build_cartesian_2d(x0..x1, y0..y1)?;
             let (lx, ly) = (self.log_x, self.log_y);
             let (sx, sy) = (x1 - x0, y1 - y0);
@@ -296,62 +501,69 @@ impl Figure {
                 .configure_mesh()
                 .x_desc(&self.x_label)
                 .y_desc(&self.y_label)
-                .x_labels(label_count(x0, x1, lx))
+                .x_labels(label_count(x0, x1, lx).min(8))
                 .y_labels(label_count(y0, y1, ly))
                 .x_label_formatter(&|v| fmt_tick(*v, lx, sx))
                 .y_label_formatter(&|v| fmt_tick(*v, ly, sy))
                 .light_line_style(WHITE.mix(0.0))
-                .label_style(("sans-serif", 15))
-                .axis_desc_style(("sans-serif", 16))
+                .bold_line_style(RGBColor(235, 235, 235))
+                .label_style(("sans-serif", TICK_FONT))
+                .axis_desc_style(("sans-serif", AXIS_FONT))
                 .draw()?;
-            let mut legend = Vec::new();
-            let mut references = 0;
+            // Bands first (light fill and thin edges), so no band covers another series' line.
             for (i, v) in pts.iter().enumerate() {
-                let s = &self.series[i];
-                let color = if s.reference {
-                    references += 1;
-                    REFERENCE_COLORS[(references - 1) % REFERENCE_COLORS.len()]
-                } else {
-                    COLORS[i % COLORS.len()]
-                };
-                legend.push((s.label.clone(), color, s.reference));
-                if !s.reference && v.len() > 1 {
-                    let mut poly: Vec<(f64, f64)> =
-                        v.iter().map(|p| (p.0, p.2.unwrap_or(y0))).collect();
-                    poly.extend(v.iter().rev().map(|p| (p.0, p.3)));
-                    chart.draw_series(std::iter::once(Polygon::new(poly, color.mix(0.2))))?;
+                let (s, st) = (&self.series[i], &styles[i]);
+                if s.reference || v.len() < 2 {
+                    continue;
                 }
-                let style = ShapeStyle::from(&color).stroke_width(2);
+                let lo: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.2.unwrap_or(y0))).collect();
+                let hi: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.3)).collect();
+                let mut poly = lo.clone();
+                poly.extend(hi.iter().rev());
+                chart.draw_series(std::iter::once(Polygon::new(poly, st.color.mix(0.10))))?;
+                let edge = ShapeStyle::from(&st.color.mix(0.45)).stroke_width(1);
+                chart.draw_series(LineSeries::new(lo, edge))?;
+                chart.draw_series(LineSeries::new(hi, edge))?;
+            }
+            for (i, v) in pts.iter().enumerate() {
+                let st = &styles[i];
+                let style = ShapeStyle::from(&st.color).stroke_width(2);
                 let line: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.1)).collect();
-                if s.reference {
-                    chart.draw_series(DashedLineSeries::new(line, 8, 5, style))?;
+                if st.dashed {
+                    chart.draw_series(DashedLineSeries::new(line.clone(), 9, 5, style))?;
                 } else {
                     chart.draw_series(LineSeries::new(line.clone(), style))?;
-                    chart.draw_series(line.iter().map(|p| Circle::new(*p, 3, color.filled())))?;
+                }
+                for p in &line {
+                    draw_marker(&root, chart.backend_coord(p), st)?;
                 }
             }
-            // The legend in its own panel, so it never covers the curves.
-            let font = ("sans-serif", 14).into_font();
-            for (k, (label, color, dashed)) in legend.iter().enumerate() {
-                let y = 30 + 24 * k as i32;
-                let style = ShapeStyle::from(color).stroke_width(2);
-                if *dashed {
-                    legend_area.draw(&PathElement::new(vec![(4, y), (12, y)], style))?;
-                    legend_area.draw(&PathElement::new(vec![(18, y), (26, y)], style))?;
+            let font = ("sans-serif", LEGEND_FONT).into_font();
+            let origin = legend_area.get_base_pixel();
+            for (k, &i) in shown.iter().enumerate() {
+                let (col, row) = (k as u32 % columns, k as u32 / columns);
+                let x = origin.0 + 16 + (col * column_width) as i32;
+                let y = origin.1 + 4 + (row * LEGEND_ROW + LEGEND_ROW / 2) as i32;
+                let st = &styles[i];
+                let style = ShapeStyle::from(&st.color).stroke_width(2);
+                if st.dashed {
+                    root.draw(&PathElement::new(vec![(x, y), (x + 10, y)], style))?;
+                    root.draw(&PathElement::new(vec![(x + 16, y), (x + 30, y)], style))?;
                 } else {
-                    legend_area.draw(&Rectangle::new(
-                        [(4, y - 6), (28, y + 6)],
-                        color.mix(0.2).filled(),
-                    ))?;
-                    legend_area.draw(&PathElement::new(vec![(4, y), (28, y)], style))?;
+                    root.draw(&PathElement::new(vec![(x, y), (x + 30, y)], style))?;
                 }
-                legend_area.draw(&Text::new(label.clone(), (34, y - 8), font.clone()))?;
+                draw_marker(&root, (x + 15, y), st)?;
+                root.draw(&Text::new(
+                    self.series[i].label.clone(),
+                    (x + 38, y - (LEGEND_FONT as i32) / 2 - 1),
+                    font.clone(),
+                ))?;
             }
-            for (k, n) in notes.iter().enumerate() {
+            for (k, n) in note_lines.iter().enumerate() {
                 note_area.draw(&Text::new(
-                    format!("Note: {n}."),
-                    (12, 2 + 20 * k as i32),
-                    ("sans-serif", 13).into_font(),
+                    n.clone(),
+                    (12, 2 + (NOTE_FONT as i32 + 5) * k as i32),
+                    ("sans-serif", NOTE_FONT).into_font(),
                 ))?;
             }
             root.present()?;

@@ -17,6 +17,8 @@ use std::path::Path;
 pub mod claims;
 pub mod doc;
 pub mod speedup;
+pub mod tex;
+pub mod theory;
 pub mod tuning;
 
 use doc::{Block, Table};
@@ -351,9 +353,11 @@ fn baseline_lines(
     r.baselines
         .iter()
         .filter(|b| b.task == task)
-        .map(|b| {
+        .filter_map(|b| {
             let m = b.runs.iter().map(&f).sum::<f64>() / b.runs.len().max(1) as f64;
-            reference_series(format!("{} (ref.)", b.label), vec![x0, x1], vec![m, m])
+            // A reference without the quantity (no gradient estimate) is not drawn at all.
+            m.is_finite()
+                .then(|| reference_series(format!("{} (ref.)", b.label), vec![x0, x1], vec![m, m]))
         })
         .collect()
 }
@@ -490,9 +494,9 @@ pub fn write(
     let it = |c: &Checkpoint| c.iteration as f64;
     let traj = |c: &Checkpoint| c.trajectories as f64;
     let gc = |c: &Checkpoint| c.gradient_evaluations as f64;
-    let by_iteration: (&str, &dyn Fn(&Checkpoint) -> f64) = ("iteration", &it);
+    let by_iteration: (&str, &dyn Fn(&Checkpoint) -> f64) = ("iteration (parameter updates)", &it);
     let by_trajectories: (&str, &dyn Fn(&Checkpoint) -> f64) = (
-        "trajectories rolled out, each labelled by the expert (cumulative)",
+        "expert-labelled trajectories rolled out (cumulative count)",
         &traj,
     );
     let obstacle_fig = |title: &str,
@@ -523,8 +527,8 @@ pub fn write(
         "fig4-3-success",
         "Fig. 4.3",
         obstacle_fig(
-            "Fig. 4.3: success rate (obstacle)",
-            "success rate",
+            "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policies)",
+            "success rate (fraction of episodes)",
             false,
             &|c| Some(c.score),
             false,
@@ -536,8 +540,8 @@ pub fn write(
         "fig4-4-crashes",
         "Fig. 4.4",
         obstacle_fig(
-            &format!("Fig. 4.4: crashes out of {n_obs} episodes (obstacle)"),
-            "crashes",
+            &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% CI band; dashed: reference policies)"),
+            &format!("crashes (episodes out of {n_obs})"),
             false,
             &|c| Some(f64::from(c.crashes)),
             false,
@@ -552,32 +556,32 @@ pub fn write(
         (
             "fig4-5a-gradient-x",
             "Fig. 4.5",
-            "(a): ‖x-row of the gradient estimate‖".into(),
-            "norm (log)",
+            " (a): obstacle task, norm of the x-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band)".into(),
+            "‖gradient estimate, x-row‖ (log scale)",
             &|c| c.grad_x,
             true,
         ),
         (
             "fig4-5b-gradient-y",
             "Fig. 4.5",
-            "(b): ‖y-row of the gradient estimate‖".into(),
-            "norm (log)",
+            " (b): obstacle task, norm of the y-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band)".into(),
+            "‖gradient estimate, y-row‖ (log scale)",
             &|c| c.grad_y,
             true,
         ),
         (
             "fig4-6a-loss-x",
             "Fig. 4.6",
-            "(a): loss, x coordinate (per decision)".into(),
-            "loss (log)",
+            " (a): obstacle task, loss of the x velocity per decision (mean over seeds, 95% CI band)".into(),
+            "x-velocity squared error (log scale)",
             &|c| c.loss_x,
             false,
         ),
         (
             "fig4-6b-loss-y",
             "Fig. 4.6",
-            "(b): loss, y coordinate (per decision)".into(),
-            "loss (log)",
+            " (b): obstacle task, loss of the y velocity per decision (mean over seeds, 95% CI band)".into(),
+            "y-velocity squared error (log scale)",
             &|c| c.loss_y,
             false,
         ),
@@ -598,13 +602,19 @@ pub fn write(
         ));
     }
     let cart_fig = |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| {
-        let series: Vec<Series> = r.cartpole.iter().map(|c| band(&c.0, gc, f)).collect();
+        // Checkpoints are evenly spaced in gradient calls: a linear axis in millions shows the
+        // start (0 calls) of every algorithm alike.
+        let series: Vec<Series> = r
+            .cartpole
+            .iter()
+            .map(|c| band(&c.0, |k| gc(k) / 1e6, f))
+            .collect();
         let lines = baseline_lines(r, TaskKind::Cartpole, |c| f(c).unwrap_or(f64::NAN), &series);
         Figure {
             title: title.into(),
-            x_label: "gradient calls (log; mean over seeds at each checkpoint)".into(),
+            x_label: "gradient calls (millions, cumulative)".into(),
             y_label: y.into(),
-            log_x: true,
+            log_x: false,
             log_y,
             y_range: None,
             series: series.into_iter().chain(lines).collect(),
@@ -614,8 +624,8 @@ pub fn write(
         "fig4-8-loss",
         "Fig. 4.8",
         cart_fig(
-            "Fig. 4.8: CartPole loss (per decision)",
-            "Brier loss",
+            "Fig. 4.8: CartPole, Brier loss per decision against the expert's action (mean over seeds, 95% CI band; dashed: reference policy)",
+            "Brier loss per decision",
             false,
             &|c| Some(c.loss),
         )
@@ -626,10 +636,10 @@ pub fn write(
         "Fig. 4.9",
         cart_fig(
             &format!(
-                "Fig. 4.9: CartPole resets until one full 500-step episode (cap {})",
+                "Fig. 4.9: CartPole, resets until one full 500-step episode, capped at {} (mean over seeds, 95% CI band; dashed: reference policy)",
                 profile.cartpole.full_episode_cap
             ),
-            "resets",
+            "resets before a full episode (count)",
             false,
             &|c| c.resets_to_full_episode.map(f64::from),
         )
@@ -639,8 +649,8 @@ pub fn write(
         "fig4-10-reward",
         "Fig. 4.10",
         cart_fig(
-            "Fig. 4.10: CartPole mean episode reward",
-            "reward",
+            "Fig. 4.10: CartPole, mean episode reward of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policy)",
+            "episode reward (steps, max. 500)",
             false,
             &|c| Some(c.reward),
         )
@@ -676,6 +686,10 @@ pub fn write(
     write_atomic(
         &out.join("appendix.tex"),
         doc::latex(&blocks, LATEX_PREAMBLE).as_bytes(),
+    )?;
+    write_atomic(
+        &out.join("appendix-standalone.tex"),
+        latex_standalone().as_bytes(),
     )?;
     Ok(())
 }
@@ -1016,9 +1030,10 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     ] {
         d.push(Block::Table(Table {
             caption: Some(if route.reference_trajectories.is_some() {
-                "Fig. 4.2 (b), obstacle task".into()
+                "RMSE by N on the obstacle task (the data of thesis Fig. 4.2 (b))".into()
             } else {
-                "Fig. 4.2 (a), toy MDP against the exact ∇F".into()
+                "RMSE by N on the toy MDP against the exact ∇F (the data of thesis Fig. 4.2 (a))"
+                    .into()
             }),
             label: label.into(),
             header: strings(head),
@@ -1125,10 +1140,7 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     }));
 
     d.push(h("Theorem checks (`ilopt-theory`)"));
-    d.push(Block::Raw {
-        markdown: format!("{}\n", r.theory_markdown),
-        latex: doc::latex(&doc::from_markdown(&r.theory_markdown, "tab:pc-theory"), ""),
-    });
+    d.extend(theory::blocks(&r.theory_markdown, "tab:pc-theory"));
     d.push(h("Errata (math.md §0)"));
     let by = checks_by_erratum(&r.theory_markdown);
     d.push(Block::Table(Table {
@@ -1153,6 +1165,25 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     d
 }
 
-/// The LaTeX file's opening comment.
-const LATEX_PREAMBLE: &str = "% Generated by paper-checks. \\input{} into a document that loads booktabs, graphicx and\n\
-     % (for long tables) longtable. Figures are referenced relative to this file's directory.\n";
+/// The LaTeX fragment's opening comment.
+const LATEX_PREAMBLE: &str = "% Generated by paper-checks. \\input{} into a document whose preamble loads\n\
+     % amsmath, amssymb, booktabs, longtable, array, graphicx, float and pdflscape\n\
+     % (appendix-standalone.tex does).\n\
+     % Figures are referenced relative to this file's directory.\n";
+
+/// The complete LaTeX document around `appendix.tex` (`pdflatex appendix-standalone.tex` in the
+/// output directory builds the PDF).
+pub fn latex_standalone() -> String {
+    format!(
+        "% Generated by paper-checks: the appendix as a complete document.\n\
+         % Build: pdflatex -interaction=nonstopmode -halt-on-error appendix-standalone.tex (twice, for the\n\
+         % longtables' column widths).\n\
+         \\documentclass[10pt,a4paper]{{article}}\n\
+         {}\
+         \\setlength{{\\emergencystretch}}{{3em}}\n\
+         \\begin{{document}}\n\
+         \\input{{appendix}}\n\
+         \\end{{document}}\n",
+        doc::LATEX_PACKAGES
+    )
+}

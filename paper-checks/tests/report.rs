@@ -3,7 +3,7 @@
 
 use paper_checks::experiment::{SeedTiming, TaskKind};
 use paper_checks::pipeline::ConfigTiming;
-use paper_checks::plots::{Figure, Series, fmt_tick};
+use paper_checks::plots::{Figure, Marker, Series, Style, fmt_tick, style_for};
 use paper_checks::report::speedup::{
     SpeedupRow, TimeBasis, kit_time, speedup_cells, speedup_row, speedup_total,
 };
@@ -126,4 +126,108 @@ fn ticks_near_zero_print_as_zero() {
     assert_eq!(fmt_tick(2.0, true, 3.0), "100");
     assert_eq!(fmt_tick(50.0, true, 300.0), "1e50");
     assert_eq!(fmt_tick(0.5, true, 2.0), "3.2");
+}
+
+/// The algorithms of the committed profiles.
+const ALGORITHMS: [&str; 10] = [
+    "BC",
+    "DAgger",
+    "DAgger (minibatch)",
+    "SGD",
+    "Adam",
+    "Adam (episodic objective)",
+    "RMSProp",
+    "STORM",
+    "IS-STORM (trajectory)",
+    "IS-STORM (per-decision)",
+];
+
+fn hex(s: &Style) -> String {
+    let c = s.color;
+    format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
+}
+
+fn figure_of(labels: &[&str]) -> Figure {
+    Figure {
+        title: "t".into(),
+        x_label: "x".into(),
+        y_label: "y".into(),
+        log_x: false,
+        log_y: false,
+        y_range: None,
+        series: labels
+            .iter()
+            .map(|l| {
+                let mut s = Series::new(*l);
+                s.x = vec![0.0, 1.0];
+                s.mean = vec![0.2, 0.4];
+                s.lo = vec![0.1, 0.3];
+                s.hi = vec![0.3, 0.5];
+                s
+            })
+            .collect(),
+    }
+}
+
+#[test]
+fn each_algorithm_keeps_its_colour_and_marker_in_every_figure() {
+    // Every algorithm is told apart from every other by colour, marker, fill or line.
+    let styles: Vec<Style> = ALGORITHMS.iter().map(|a| style_for(a)).collect();
+    for i in 0..styles.len() {
+        for j in i + 1..styles.len() {
+            assert_ne!(
+                styles[i], styles[j],
+                "{} and {}",
+                ALGORITHMS[i], ALGORITHMS[j]
+            );
+        }
+    }
+    // The style is a function of the name, not of the series' position: STORM is drawn in its
+    // colour first, last or alone, and a figure without STORM does not use that colour.
+    let storm = hex(&style_for("STORM"));
+    for labels in [
+        &["STORM", "SGD"][..],
+        &["SGD", "Adam", "RMSProp", "STORM"][..],
+        &["STORM"][..],
+    ] {
+        let svg = figure_of(labels).to_svg().expect("draws");
+        assert!(
+            svg.to_uppercase().contains(&format!("STROKE=\"{storm}\"")),
+            "STORM not in {storm} in {labels:?}"
+        );
+    }
+    let without = figure_of(&["SGD", "Adam", "RMSProp", "DAgger"])
+        .to_svg()
+        .expect("draws")
+        .to_uppercase();
+    assert!(
+        !without.contains(&storm),
+        "STORM's colour used without STORM"
+    );
+    // Reference lines are grey and carry no marker.
+    for r in [
+        "Expert (VO) (ref.)",
+        "Straight to goal (ref.)",
+        "Expert (PPO) (ref.)",
+    ] {
+        let s = style_for(r);
+        assert_eq!(s.marker, Marker::None, "{r}");
+        assert!(
+            s.color.0 == s.color.1 && s.color.1 == s.color.2,
+            "{r} not grey"
+        );
+    }
+}
+
+#[test]
+fn the_legend_lists_only_drawn_series() {
+    let mut f = figure_of(&["SGD", "STORM"]);
+    // STORM has no finite point: it is not drawn, so it is not in the legend.
+    f.series[1].mean = vec![f64::NAN, f64::NAN];
+    let svg = f.to_svg().expect("draws");
+    assert!(svg.contains("\nSGD\n"), "SGD missing from the legend");
+    assert!(
+        !svg.contains("\nSTORM\n"),
+        "an undrawn series in the legend"
+    );
 }

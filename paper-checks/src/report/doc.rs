@@ -5,6 +5,7 @@
 //! Text in paragraphs, list items, captions and table cells is Markdown inline text: `**bold**`,
 //! `*emphasis*` and `` `code` `` (the LaTeX renderer converts them and escapes the rest).
 
+use super::tex;
 use std::fmt::Write as _;
 
 /// A table: an optional caption (a paragraph above it in Markdown, the float's caption in
@@ -86,7 +87,8 @@ pub fn markdown(blocks: &[Block]) -> String {
                 o.push('\n');
             }
             Block::Figure { path, caption } => {
-                let _ = writeln!(o, "![{caption}]({path})\n");
+                // The image, then its caption as text (Markdown viewers do not show alt text).
+                let _ = writeln!(o, "![{caption}]({path})\n\n*{caption}.*\n");
             }
             Block::Raw { markdown, .. } => o += markdown,
         }
@@ -94,8 +96,15 @@ pub fn markdown(blocks: &[Block]) -> String {
     o
 }
 
-/// Render as LaTeX (`\section*`/`\subsection*`, booktabs tables, `graphicx` figures) after
-/// `preamble` (comment lines). A table without a caption is captioned with its section's heading.
+/// The packages [`latex`]'s output needs, as `\usepackage` lines (the standalone document loads
+/// them; a thesis that `\input`s the fragment loads them in its preamble).
+pub const LATEX_PACKAGES: &str = "\\usepackage{amsmath,amssymb}\n\\usepackage{booktabs,longtable,array}\n\\usepackage{graphicx,float,pdflscape}\n";
+
+/// Render as LaTeX after `preamble` (comment lines): `\section*`/`\subsection*` headings,
+/// booktabs `longtable`s whose columns are sized to fit the line ([`column_layout`]), and figures
+/// placed where they stand (`[H]`). Captions are numbered by LaTeX alone: a leading thesis number
+/// ("Table 4.1: …", "Fig. 4.3: …") moves to the caption's end. A table without a caption is
+/// captioned with its section's heading.
 pub fn latex(blocks: &[Block], preamble: &str) -> String {
     let mut o = String::from(preamble);
     let mut section = String::new();
@@ -117,19 +126,8 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
                 o += "\\end{itemize}\n\n";
             }
             Block::Table(t) => {
-                o += "\\begin{table}[htbp]\n\\centering\\small\n";
-                // A table without a caption takes its section's heading.
                 let c = t.caption.as_deref().unwrap_or(&section);
-                let c = c.trim_end().trim_end_matches(':');
-                let _ = writeln!(o, "\\caption{{{}}}\\label{{{}}}", inline(c), t.label);
-                let _ = writeln!(o, "\\begin{{tabular}}{{{}}}\n\\toprule", t.spec);
-                let head: Vec<String> = t.header.iter().map(|h| inline(h)).collect();
-                let _ = writeln!(o, "{} \\\\\n\\midrule", head.join(" & "));
-                for r in &t.rows {
-                    let cells: Vec<String> = r.iter().map(|c| inline(c)).collect();
-                    let _ = writeln!(o, "{} \\\\", cells.join(" & "));
-                }
-                o += "\\bottomrule\n\\end{tabular}\n\\end{table}\n\n";
+                o += &latex_table(t, &caption_text(c));
             }
             Block::Figure { path, caption } => {
                 let svg_note = if path.ends_with(".svg") {
@@ -139,8 +137,8 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
                 };
                 let _ = writeln!(
                     o,
-                    "\\begin{{figure}}[htbp]\n\\centering\n{svg_note}\\includegraphics[width=0.8\\linewidth]{{{path}}}\n\\caption{{{}}}\n\\end{{figure}}\n",
-                    escape(caption)
+                    "\\begin{{figure}}[H]\n\\centering\n{svg_note}\\includegraphics[width=\\linewidth]{{{path}}}\n\\caption{{{}}}\n\\end{{figure}}\n",
+                    caption_text(caption)
                 );
             }
             Block::Raw { latex, .. } => o += latex,
@@ -149,9 +147,260 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
     o
 }
 
+/// A caption's LaTeX: the text without Markdown's trailing colon, a leading thesis number
+/// ("Table 4.1: x", "Fig. 4.2 (a): x", bold or not) moved to the end ("x (thesis Table 4.1)") so
+/// that LaTeX's own number is the only one in front, and the first letter capitalised.
+pub fn caption_text(c: &str) -> String {
+    let c = c.trim().trim_end_matches(':').trim_end();
+    let (bold, body) = match c.strip_prefix("**") {
+        Some(rest) => (true, rest),
+        None => (false, c),
+    };
+    let mut number = None;
+    let mut rest = body.to_string();
+    for kind in ["Table ", "Fig. ", "Figs. "] {
+        if let Some(after) = body.strip_prefix(kind) {
+            // The number: digits and dots, then an optional panel "(a)"; then ": " or " (".
+            let n_end = after
+                .find(|ch: char| !(ch.is_ascii_digit() || ch == '.'))
+                .unwrap_or(after.len());
+            let mut tail = &after[n_end..];
+            let mut num = format!("{kind}{}", &after[..n_end]);
+            if let Some(p) = tail
+                .strip_prefix(" (")
+                .filter(|p| p.get(1..3) == Some("):"))
+            {
+                num += &format!(" ({})", &p[..1]);
+                tail = &p[2..];
+            }
+            if n_end > 0 {
+                if let Some(t) = tail.strip_prefix(':') {
+                    number = Some(num);
+                    rest = t.trim_start().to_string();
+                } else if tail.is_empty() || tail.starts_with(',') {
+                    // The caption is only the number (and a qualifier): keep it as text.
+                    number = None;
+                }
+            }
+            break;
+        }
+    }
+    let mut text = if bold { format!("**{rest}") } else { rest };
+    // Capitalise the first letter of the caption's text (after any markup).
+    if let Some(k) = text.find(|ch: char| ch.is_alphanumeric()) {
+        let ch = text[k..].chars().next().unwrap_or(' ');
+        if ch.is_lowercase() {
+            let up: String = ch.to_uppercase().collect();
+            text.replace_range(k..k + ch.len_utf8(), &up);
+        }
+    }
+    let mut out = inline(&text);
+    if let Some(n) = number {
+        out += &format!(" (thesis {})", inline(&n));
+    }
+    out
+}
+
+/// The visible length of Markdown inline text, in characters (markup removed).
+fn visible_len(s: &str) -> usize {
+    s.replace("**", "")
+        .replace("\\|", "|")
+        .chars()
+        .filter(|c| !matches!(c, '`' | '*') && !('\u{0300}'..='\u{036F}').contains(c))
+        .count()
+}
+
+/// The longest unbreakable piece of a cell (a word), in characters.
+fn longest_word(s: &str) -> usize {
+    s.split([' ', '/', '-']).map(visible_len).max().unwrap_or(0)
+}
+
+/// How a table is typeset: the font size and each column's LaTeX specification.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ColumnLayout {
+    /// `\small`, `\footnotesize` or `\scriptsize`, with a narrower `\tabcolsep` at the
+    /// smallest size.
+    pub size: &'static str,
+    /// Whether the table needs a landscape page (its longest words do not fit across the line
+    /// even at the smallest size).
+    pub landscape: bool,
+    /// Column specifications (`l`, `r`, or a ragged `p{…}` of a fraction of the line).
+    pub columns: Vec<String>,
+}
+
+/// Fit a table to the line width. The estimate counts characters: about 64 characters of
+/// `\small` text fit in the line of a 345 pt text block (10 pt article), less each column's
+/// padding (2\tabcolsep ≈ 2.7 characters), more at smaller sizes. A table whose natural widths
+/// fit keeps `l`/`r` columns; otherwise the largest font at which the longest words fit is
+/// chosen (the smallest with 3 pt column padding, else a landscape page) and the width is shared
+/// out: columns narrower than an equal share keep their natural width, the others share the rest
+/// in proportion to their natural widths (never below their longest word). Columns are
+/// right-aligned where `spec` says `r`.
+pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> ColumnLayout {
+    let n = header.len().max(1);
+    let right: Vec<bool> = {
+        // The alignment letters of `spec` (ignoring p{…} arguments).
+        let mut v = Vec::new();
+        let mut depth = 0;
+        for ch in spec.chars() {
+            match ch {
+                '{' => depth += 1,
+                '}' => depth -= 1,
+                c if depth == 0 && c.is_ascii_alphabetic() => v.push(c == 'r'),
+                _ => {}
+            }
+        }
+        (0..n).map(|j| v.get(j).copied().unwrap_or(false)).collect()
+    };
+    let cells = |j: usize| {
+        std::iter::once(header.get(j).map_or("", String::as_str)).chain(
+            rows.iter()
+                .map(move |r| r.get(j).map_or("", String::as_str)),
+        )
+    };
+    let natural: Vec<f64> = (0..n)
+        .map(|j| cells(j).map(visible_len).max().unwrap_or(0) as f64 + 0.5)
+        .collect();
+    let minimum: Vec<f64> = (0..n)
+        .map(|j| {
+            // A header wraps between words; its longest word still has to fit.
+            cells(j).map(longest_word).max().unwrap_or(0) as f64 + 1.0
+        })
+        .collect();
+    // (font size command, characters per 345 pt line, padding of a column in characters).
+    let sizes = [
+        ("\\small", 64.0, 2.7),
+        ("\\footnotesize", 72.0, 3.0),
+        ("\\scriptsize\\setlength{\\tabcolsep}{3pt}", 82.0, 1.8),
+        // A landscape page: 1.6 times the line.
+        ("\\scriptsize\\setlength{\\tabcolsep}{3pt}", 131.0, 1.8),
+    ];
+    let budget = |(_, line, pad): (&str, f64, f64)| line - pad * n as f64;
+    if natural.iter().sum::<f64>() <= budget(sizes[0]) {
+        return ColumnLayout {
+            landscape: false,
+            size: sizes[0].0,
+            columns: right
+                .iter()
+                .map(|r| if *r { "r" } else { "l" }.to_string())
+                .collect(),
+        };
+    }
+    let pick = sizes
+        .iter()
+        .position(|&sz| minimum.iter().sum::<f64>() <= budget(sz))
+        .unwrap_or(sizes.len() - 1);
+    let (size, _, pad) = sizes[pick];
+    let landscape = pick == sizes.len() - 1;
+    let total = budget(sizes[pick]);
+    // Water-filling: fix the columns that need less than an equal share of what is left.
+    let mut width = vec![0.0; n];
+    let mut open: Vec<usize> = (0..n).collect();
+    let mut left = total;
+    loop {
+        let share = left / open.len().max(1) as f64;
+        let (small, big): (Vec<usize>, Vec<usize>) =
+            open.iter().partition(|&&j| natural[j] <= share);
+        if small.is_empty() {
+            let sum: f64 = big.iter().map(|&j| natural[j]).sum();
+            for &j in &big {
+                width[j] = left * natural[j] / sum;
+            }
+            break;
+        }
+        for &j in &small {
+            width[j] = natural[j];
+            left -= natural[j];
+        }
+        open = big;
+        if open.is_empty() {
+            break;
+        }
+    }
+    // Never below the longest word: take the difference from the widest columns.
+    for j in 0..n {
+        if width[j] < minimum[j] {
+            let need = minimum[j] - width[j];
+            width[j] = minimum[j];
+            let widest = (0..n)
+                .filter(|&k| k != j)
+                .max_by(|&a, &b| (width[a] - minimum[a]).total_cmp(&(width[b] - minimum[b])));
+            if let Some(k) = widest {
+                width[k] = (width[k] - need).max(minimum[k]);
+            }
+        }
+    }
+    // Each column's share of the line includes its padding (2\tabcolsep, subtracted again
+    // in the specification).
+    let sum: f64 = width.iter().map(|w| w + pad).sum();
+    let columns = (0..n)
+        .map(|j| {
+            let frac = (width[j] + pad) / sum;
+            let align = if right[j] {
+                "\\raggedleft"
+            } else {
+                "\\raggedright"
+            };
+            format!(
+                ">{{{align}\\arraybackslash\\hspace{{0pt}}}}p{{\\dimexpr{frac:.3}\\linewidth-2\\tabcolsep\\relax}}"
+            )
+        })
+        .collect();
+    ColumnLayout {
+        size,
+        landscape,
+        columns,
+    }
+}
+
+/// A table as a booktabs `longtable` (it breaks across pages and stays where it stands), its
+/// columns laid out by [`column_layout`], the header repeated on every page.
+fn latex_table(t: &Table, caption: &str) -> String {
+    let layout = column_layout(&t.header, &t.rows, &t.spec);
+    let mut o = String::new();
+    if layout.landscape {
+        o += "\\begin{landscape}\n";
+    }
+    let _ = writeln!(
+        o,
+        "\\begingroup{}\\setlength{{\\LTpre}}{{6pt}}\\setlength{{\\LTpost}}{{6pt}}",
+        layout.size
+    );
+    let _ = writeln!(
+        o,
+        "\\begin{{longtable}}{{@{{}}{}@{{}}}}",
+        layout.columns.join("")
+    );
+    let head: Vec<String> = t.header.iter().map(|h| inline(h)).collect();
+    let head = head.join(" & ");
+    if caption.trim().is_empty() {
+        let _ = writeln!(o, "\\label{{{}}}\\\\", t.label);
+    } else {
+        let _ = writeln!(o, "\\caption{{{caption}}}\\label{{{}}}\\\\", t.label);
+    }
+    let _ = writeln!(o, "\\toprule\n{head} \\\\\n\\midrule\n\\endfirsthead");
+    let _ = writeln!(
+        o,
+        "\\multicolumn{{{}}}{{@{{}}l}}{{\\emph{{(continued)}}}}\\\\\n\\toprule\n{head} \\\\\n\\midrule\n\\endhead",
+        t.header.len()
+    );
+    let _ = writeln!(o, "\\bottomrule\n\\endlastfoot");
+    for r in &t.rows {
+        let cells: Vec<String> = r.iter().map(|c| inline(c)).collect();
+        let _ = writeln!(o, "{} \\\\", cells.join(" & "));
+    }
+    o += "\\end{longtable}\n\\endgroup\n";
+    if layout.landscape {
+        o += "\\end{landscape}\n";
+    }
+    o.push('\n');
+    o
+}
+
 /// Markdown inline text to LaTeX: `**x**` → `\textbf{x}`, `*x*` → `\emph{x}` (a `*` that opens
-/// a word and has a closing `*`), `` `x` `` → `\texttt{x}`, Markdown's `\|` → `|`; everything
-/// else escaped ([`escape`]).
+/// a word and has a closing `*`), `` `x` `` → `\texttt{x}` (escaped verbatim, with break points
+/// after `/`, `_`, `.` and `,`), Markdown's `\|` → `|`; the rest through [`tex::text`] (Unicode
+/// mathematics to LaTeX math).
 pub fn inline(s: &str) -> String {
     let s = s.replace("\\|", "|");
     let chars: Vec<char> = s.chars().collect();
@@ -159,21 +408,25 @@ pub fn inline(s: &str) -> String {
     let mut plain = String::new();
     let (mut bold, mut emph, mut code) = (false, false, false);
     let mut i = 0;
-    let flush = |o: &mut String, plain: &mut String| {
-        *o += &escape(plain);
+    let flush = |o: &mut String, plain: &mut String, code: bool| {
+        if code {
+            *o += &code_text(plain);
+        } else {
+            *o += &tex::text(plain);
+        }
         plain.clear();
     };
     while i < chars.len() {
         let c = chars[i];
         let next = chars.get(i + 1).copied();
         if c == '`' {
-            flush(&mut o, &mut plain);
+            flush(&mut o, &mut plain, code);
             o += if code { "}" } else { "\\texttt{" };
             code = !code;
         } else if code {
             plain.push(c);
         } else if c == '*' && next == Some('*') {
-            flush(&mut o, &mut plain);
+            flush(&mut o, &mut plain, code);
             o += if bold { "}" } else { "\\textbf{" };
             bold = !bold;
             i += 1;
@@ -183,7 +436,7 @@ pub fn inline(s: &str) -> String {
                     && (i == 0 || !chars[i - 1].is_alphanumeric())
                     && chars[i + 1..].contains(&'*')))
         {
-            flush(&mut o, &mut plain);
+            flush(&mut o, &mut plain, code);
             o += if emph { "}" } else { "\\emph{" };
             emph = !emph;
         } else {
@@ -191,7 +444,7 @@ pub fn inline(s: &str) -> String {
         }
         i += 1;
     }
-    flush(&mut o, &mut plain);
+    flush(&mut o, &mut plain, code);
     for open in [code, bold, emph] {
         if open {
             o.push('}');
@@ -200,55 +453,23 @@ pub fn inline(s: &str) -> String {
     o
 }
 
-/// Escape text for LaTeX (special characters, and the symbols the appendix uses as math).
-pub fn escape(s: &str) -> String {
+/// Code escaped verbatim, with a break point after each `/`, `_`, `.`, `,` and `=` (typewriter
+/// text does not hyphenate, and paths would run into the margin).
+fn code_text(s: &str) -> String {
     let mut o = String::new();
-    for ch in s.chars() {
-        match ch {
-            '\\' => o += "\\textbackslash{}",
-            '&' | '%' | '$' | '#' | '_' | '{' | '}' => {
-                o.push('\\');
-                o.push(ch);
-            }
-            '~' => o += "\\textasciitilde{}",
-            '^' => o += "\\textasciicircum{}",
-            '±' => o += "$\\pm$",
-            '≥' => o += "$\\geq$",
-            '≤' => o += "$\\leq$",
-            '≈' => o += "$\\approx$",
-            '√' => o += "$\\surd$",
-            '−' => o.push('-'),
-            '‖' => o += "$\\|$",
-            '∇' => o += "$\\nabla$",
-            'θ' => o += "$\\theta$",
-            'σ' => o += "$\\sigma$",
-            'τ' => o += "$\\tau$",
-            'η' => o += "$\\eta$",
-            'Δ' => o += "$\\Delta$",
-            'φ' => o += "$\\phi$",
-            'π' => o += "$\\pi$",
-            'β' => o += "$\\beta$",
-            'ε' => o += "$\\varepsilon$",
-            'γ' => o += "$\\gamma$",
-            'α' => o += "$\\alpha$",
-            '∼' => o += "$\\sim$",
-            '·' => o += "$\\cdot$",
-            '…' => o += "\\ldots{}",
-            '⌈' => o += "$\\lceil$",
-            '⌉' => o += "$\\rceil$",
-            '⁻' => o += "$^{-}$",
-            '¹' => o += "$^{1}$",
-            '²' => o += "$^{2}$",
-            '³' => o += "$^{3}$",
-            '→' => o += "$\\to$",
-            '∈' => o += "$\\in$",
-            '≠' => o += "$\\neq$",
-            '×' => o += "$\\times$",
-            '§' => o += "\\S{}",
-            c => o.push(c),
+    for c in s.chars() {
+        o += &tex::literal(&c.to_string());
+        if matches!(c, '/' | '_' | '.' | ',' | '=') {
+            o += "\\allowbreak{}";
         }
     }
     o
+}
+
+/// Escape plain text for LaTeX: special characters escaped, Unicode mathematics as math
+/// ([`tex::text`]).
+pub fn escape(s: &str) -> String {
+    tex::text(s)
 }
 
 /// Blocks from simple Markdown (`## ` headings, paragraphs, `- ` lists with indented
@@ -273,7 +494,10 @@ pub fn from_markdown(md: &str, label: &str) -> Vec<Block> {
             prev = c;
         }
         v.push(cur.trim().to_string());
-        v
+        // Cells hold the text itself; the Markdown renderer escapes `|` again.
+        v.into_iter()
+            .map(|c| c.replace("\\|", "|"))
+            .collect::<Vec<_>>()
     };
     let mut k = 0;
     while let Some(line) = lines.next() {
@@ -366,15 +590,15 @@ mod tests {
     fn inline_markup() {
         assert_eq!(
             inline("**a** *b* `c_d` x*y (3.60*) 5%"),
-            "\\textbf{a} \\emph{b} \\texttt{c\\_d} x*y (3.60*) 5\\%"
+            "\\textbf{a} \\emph{b} \\texttt{c\\_\\allowbreak{}d} x*y (3.60*) 5\\%"
         );
-        assert_eq!(inline("\\|E g − ∇F\\|"), "|E g - $\\nabla$F|");
+        assert_eq!(inline("\\|E g − ∇F\\|"), "$|$E g $-$ $\\nabla$F$|$");
     }
 
     #[test]
     fn one_table_two_renderings() {
         let b = [Block::Table(Table {
-            caption: Some("**Table X: t** (kit):".into()),
+            caption: Some("**Table 4.1: t** (kit):".into()),
             label: "tab:x".into(),
             header: vec!["a".into(), "b".into()],
             rows: vec![vec!["1".into(), "p|q".into()]],
@@ -382,14 +606,14 @@ mod tests {
         })];
         assert_eq!(
             markdown(&b),
-            "**Table X: t** (kit):\n\n| a | b |\n|---|---|\n| 1 | p\\|q |\n\n"
+            "**Table 4.1: t** (kit):\n\n| a | b |\n|---|---|\n| 1 | p\\|q |\n\n"
         );
         let t = latex(&b, "");
         assert!(
-            t.contains("\\caption{\\textbf{Table X: t} (kit)}\\label{tab:x}"),
+            t.contains("\\caption{\\textbf{T} (kit) (thesis Table 4.1)}\\label{tab:x}"),
             "{t}"
         );
-        assert!(t.contains("1 & p|q \\\\"), "{t}");
+        assert!(t.contains("1 & p$|$q \\\\"), "{t}");
         assert!(t.contains("\\toprule") && t.contains("\\bottomrule"), "{t}");
     }
 
@@ -401,7 +625,7 @@ mod tests {
         match &b[0] {
             Block::Table(t) => {
                 assert_eq!(t.header, vec!["#", "x"]);
-                assert_eq!(t.rows, vec![vec!["1".to_string(), "a \\| b".to_string()]]);
+                assert_eq!(t.rows, vec![vec!["1".to_string(), "a | b".to_string()]]);
             }
             other => panic!("{other:?}"),
         }

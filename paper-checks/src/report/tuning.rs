@@ -142,7 +142,11 @@ fn selected_table(profile: &Profile, r: &Results) -> Table {
         ]);
     }
     Table {
-        caption: None,
+        caption: Some(
+            "Selected hyper-parameters of every row (recorded in `provenance.json`), and how the \
+             report runs ended:"
+                .into(),
+        ),
         label: "tab:pc-selected".into(),
         header: strings(&[
             "task",
@@ -178,7 +182,12 @@ fn sensitivity_table(tuning: &[TuningResult]) -> Table {
         }
     }
     Table {
-        caption: None,
+        caption: Some(
+            "Sensitivity: every grid point's tuning result (the whole pre-registered grid, in grid \
+             order). STORM rows tune the schedule as a grid dimension: `kind=constant` (η, a) and \
+             `kind=adaptive` (Algorithm 4's schedule with E9 corrected, k' = w = 0.1, c as listed):"
+                .into(),
+        ),
         label: "tab:pc-sensitivity".into(),
         header: strings(&[
             "task",
@@ -201,18 +210,7 @@ pub fn blocks(profile: &Profile, r: &Results) -> Vec<Block> {
             text: "Protocol: objective, budgets, convergence, tuning".into(),
         },
         Block::List(protocol_list(profile)),
-        Block::Para(
-            "Selected hyper-parameters of every row (recorded in `provenance.json`), and how the \
-             report runs ended."
-                .into(),
-        ),
         Block::Table(selected_table(profile, r)),
-        Block::Para(
-            "Sensitivity: every grid point's tuning result (the whole pre-registered grid, in grid \
-             order). STORM rows tune the schedule as a grid dimension: `kind=constant` (η, a) and \
-             `kind=adaptive` (Algorithm 4's schedule with E9 corrected, k' = w = 0.1, c as listed)."
-                .into(),
-        ),
         Block::Table(sensitivity_table(&r.tuning)),
     ]
 }
