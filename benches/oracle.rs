@@ -9,6 +9,9 @@
 //! 4. the baselined causal estimate (`ilopt::baseline`) on the CartPole trajectories of (1): one
 //!    constant baseline (m = 1) and leave-one-out over pairs (m = 2), beside the plain estimate of
 //!    the same trajectories; and roll-out + estimate with the constant baseline.
+//! 5. the fixed-horizon objective (streams of T decisions, reset or absorbing) through the same
+//!    roll-out and estimator: CartPole (LQR labels) with resets and absorbing ends, CartPole with
+//!    the experiments' PPO labels and softmax learner, the obstacle task with absorbing ends.
 //!
 //! Each iteration rolls out the same fixed set of seeds (re-seeded), so the throughput in steps
 //! is exact. Run with `cargo bench --bench oracle`.
@@ -21,11 +24,11 @@ use ilopt::algo::Num;
 use ilopt::baseline::{Baseline, Baselined};
 use ilopt::env::obstacle::{ObstacleEnv, VoExpertPolicy};
 use ilopt::expert::lqr::LqrExpert;
-use ilopt::policy::{LinearGaussian, Logistic};
+use ilopt::policy::{LinearGaussian, Logistic, Softmax};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
-use ilopt::task::TaskProblem;
 use ilopt::task::cartpole::{self, CartPoleTask};
 use ilopt::task::obstacle::{self, ObstacleTask};
+use ilopt::task::{AfterEnd, Horizon, TaskProblem};
 use nalgebra::DVector;
 use rand::SeedableRng;
 use specialised::{D, Specialised, Trajectory};
@@ -187,6 +190,37 @@ fn cartpole(c: &mut Criterion) {
             acc
         })
     });
+
+    // The thesis's fixed-horizon objective through the same roll-out and estimator: streams of
+    // exactly 500 decisions, reset after a crash or absorbing (the same policy, so the episodic
+    // rows above are the yardstick per step).
+    for (name, after_end) in [("reset", AfterEnd::Reset), ("absorb", AfterEnd::Absorb)] {
+        let fixed = TaskProblem {
+            horizon: Horizon::fixed(ilopt::env::cartpole::MAX_EPISODE_STEPS, after_end),
+            ..generic.clone()
+        };
+        g.throughput(Throughput::Elements(steps_of(&fixed, &theta)));
+        g.bench_function(
+            format!("roll-out + causal estimate, generic, fixed 500 {name} (f64)"),
+            |b| b.iter(|| oracle_pass(&fixed, black_box(&theta))),
+        );
+    }
+    // What the chapter-4 experiments run: the PPO expert's labels, the softmax learner, 500
+    // decisions with resets (θ = 0: the learner crashes often, so resets are frequent).
+    let ppo = TaskProblem {
+        task: CartPoleTask::<f64>::with_ppo(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json"),
+        )
+        .unwrap(),
+        policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+        horizon: Horizon::fixed(ilopt::env::cartpole::MAX_EPISODE_STEPS, AfterEnd::Reset),
+    };
+    let zero = DVector::zeros(2 * cartpole::FEATURES);
+    g.throughput(Throughput::Elements(steps_of(&ppo, &zero)));
+    g.bench_function(
+        "roll-out + causal estimate, PPO labels + softmax, fixed 500 reset (f64)",
+        |b| b.iter(|| oracle_pass(&ppo, black_box(&zero))),
+    );
     g.finish();
 }
 
@@ -219,6 +253,16 @@ fn obstacle_task(c: &mut Criterion) {
     g.bench_function(
         "roll-out + VO labels + linear-Gaussian + causal estimate (f64, inline actions)",
         |b| b.iter(|| oracle_pass(&inline, black_box(&theta))),
+    );
+    // The fixed-horizon objective of the experiments: 200 decisions, absorbing ends.
+    let absorb = TaskProblem {
+        horizon: Horizon::fixed(200, AfterEnd::Absorb),
+        ..inline.clone()
+    };
+    g.throughput(Throughput::Elements(steps_of(&absorb, &theta)));
+    g.bench_function(
+        "roll-out + VO labels + linear-Gaussian + causal estimate (f64, inline actions, fixed 200 absorb)",
+        |b| b.iter(|| oracle_pass(&absorb, black_box(&theta))),
     );
     g.finish();
 }

@@ -480,3 +480,108 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
         }
     }
 }
+
+/// The fixed-horizon objective (streams of T decisions): roll-outs with resets after a crash, and
+/// with an absorbing end, allocate a constant per call whatever the number of resets or the
+/// decision at which the stream absorbed; so do the causal, full and weighted estimates on them.
+fn fixed_per_call<T, P>(p: &TaskProblem<T, P>, thetas: &[DVector<f64>], seed: u64) -> (usize, usize)
+where
+    T: ilopt::task::Task<f64>,
+    P: LikelihoodRatio<f64, Action = T::Action>,
+    T::Label: std::borrow::Borrow<P::Label>,
+{
+    let mut rng = KitRng::seed_from_u64(seed);
+    let mut cost = Cost::default();
+    let (mut shapes, mut rollouts, mut estimates) =
+        (std::collections::BTreeSet::new(), Vec::new(), Vec::new());
+    for _ in 0..20 {
+        for theta in thetas {
+            let (n, t) = count(|| {
+                p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                    .unwrap()
+            });
+            rollouts.push(n);
+            shapes.insert((t.len(), t.resets, t.absorbed.is_some()));
+            // Grouped by estimator and by whether the stream absorbed (an absorbed trajectory
+            // takes the estimator's general pass, with its scratch buffer).
+            let absorbed = t.absorbed.is_some();
+            for (k, form) in [EstimatorForm::Causal, EstimatorForm::Full]
+                .into_iter()
+                .enumerate()
+            {
+                let (n, _) = count(|| p.estimate(theta, &t, form, &mut cost).unwrap());
+                estimates.push(((k, absorbed), n));
+            }
+            let (n, _) = count(|| {
+                p.weighted_estimate(&thetas[0], theta, &t, Weighting::PerDecision, &mut cost)
+                    .unwrap()
+            });
+            estimates.push(((2, absorbed), n));
+        }
+    }
+    assert!(
+        rollouts.iter().all(|&n| n == rollouts[0] && n <= 3),
+        "roll-outs: {rollouts:?}"
+    );
+    for &(group, n) in &estimates {
+        assert!(
+            n <= 2 && estimates.iter().all(|&(g, m)| g != group || m == n),
+            "estimates (estimator, absorbed) → allocations: {estimates:?}"
+        );
+    }
+    let lengths = shapes
+        .iter()
+        .map(|s| s.0)
+        .collect::<std::collections::BTreeSet<_>>();
+    let resets = shapes
+        .iter()
+        .map(|s| s.1)
+        .collect::<std::collections::BTreeSet<_>>();
+    (lengths.len(), resets.len())
+}
+
+#[test]
+fn fixed_horizon_reset_allocates_per_call_not_per_step() {
+    use ilopt::task::AfterEnd;
+    let thetas = [
+        DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
+        balancing(),
+        DVector::zeros(5),
+    ];
+    let p = TaskProblem::fixed(cartpole().task, cartpole().policy, 500, AfterEnd::Reset).unwrap();
+    let (lengths, resets) = fixed_per_call(&p, &thetas, 11);
+    assert_eq!(lengths, 1, "every stream has 500 decisions");
+    assert!(resets >= 5, "{resets} different reset counts");
+    let s = cartpole_softmax();
+    let p = TaskProblem::fixed(s.task, s.policy, 500, AfterEnd::Reset).unwrap();
+    let (_, resets) = fixed_per_call(&p, &thetas.clone().map(|t| as_softmax(&t)), 12);
+    assert!(resets >= 5, "{resets} different reset counts");
+    // The experiments' CartPole: the PPO expert labels every state (its network evaluated
+    // without storing the hidden layer).
+    let ppo = CartPoleTask::<f64>::with_ppo(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json"),
+    )
+    .unwrap();
+    let p = TaskProblem::fixed(ppo, Softmax::new(2, 5).unwrap(), 500, AfterEnd::Reset).unwrap();
+    let (_, resets) = fixed_per_call(&p, &thetas.map(|t| as_softmax(&t)), 15);
+    assert!(resets >= 5, "{resets} different reset counts");
+}
+
+#[test]
+fn fixed_horizon_absorb_allocates_per_call_not_per_step() {
+    use ilopt::task::AfterEnd;
+    let c = cartpole();
+    let p = TaskProblem::fixed(c.task, c.policy, 500, AfterEnd::Absorb).unwrap();
+    let thetas = [
+        DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
+        balancing(),
+        DVector::zeros(5),
+    ];
+    let (lengths, _) = fixed_per_call(&p, &thetas, 13);
+    assert!(lengths >= 10, "{lengths} different decision counts");
+    let o = obstacle_rbf();
+    let n = o.task.feature_dim();
+    let p = TaskProblem::fixed(o.task, o.policy, 200, AfterEnd::Absorb).unwrap();
+    let (lengths, _) = fixed_per_call(&p, &[DVector::zeros(2 * n), pull_n(n)], 14);
+    assert!(lengths >= 5, "{lengths} different decision counts");
+}

@@ -143,6 +143,26 @@ pub trait Policy<S: Scalar> {
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng)
     -> Result<Self::Action, PolicyError>;
 
+    /// The loss alone, `l` of [`Policy::loss_into`] bit for bit, for a θ and φ the caller has
+    /// already checked (finite, of the policy's lengths): what a trajectory's loss needs, without
+    /// the gradient. `scratch` has [`Policy::param_dim`] entries; its contents afterwards are
+    /// unspecified.
+    ///
+    /// The default calls [`Policy::loss_into`] (the gradient is computed and discarded); the
+    /// linear-Gaussian policies override it to skip the gradient and the per-call θ and φ checks.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_into`].
+    fn loss_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &Self::Label,
+        scratch: &mut [S],
+    ) -> Result<S, PolicyError> {
+        self.loss_into(theta, phi, label, scratch)
+    }
+
     /// [`Policy::loss`] without allocating: writes `∇_θ l` into `grad` (length
     /// [`Policy::param_dim`]) and returns `l`. Bit-for-bit the values of [`Policy::loss`].
     ///

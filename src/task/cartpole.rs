@@ -5,7 +5,7 @@
 use super::Task;
 use crate::env::cartpole::{CartPoleDynamics, MAX_EPISODE_STEPS, sample_reset_state};
 use crate::expert::lqr::{LqrExpert, LqrGain};
-use crate::expert::ppo::PpoExpert;
+use crate::expert::ppo::{PpoExpert, PpoGreedy};
 use crate::policy::from_f64_exact;
 use crate::problem::{KitRng, OracleError};
 use crate::scalar::Real;
@@ -35,7 +35,7 @@ pub struct CartPoleTask<S> {
 #[derive(Debug, Clone)]
 enum Labeller<S> {
     Lqr(LqrGain<S>),
-    Ppo(PpoExpert),
+    Ppo(PpoGreedy<S>),
 }
 
 /// One episode: the state and the number of steps taken.
@@ -82,7 +82,10 @@ impl<S: Real> CartPoleTask<S> {
             dynamics: CartPoleDynamics::new(),
             labeller: match expert {
                 CartPoleExpert::Lqr(e) => Labeller::Lqr(e.gain_in()),
-                CartPoleExpert::Ppo(e) => Labeller::Ppo(e),
+                CartPoleExpert::Ppo(e) => Labeller::Ppo(
+                    e.greedy_in()
+                        .map_err(|e| OracleError::Environment(e.to_string()))?,
+                ),
             },
             max_steps,
         })
@@ -91,12 +94,12 @@ impl<S: Real> CartPoleTask<S> {
 
 /// The PPO expert's action, out of line: the network is not inlined anyway, and keeping its call
 /// out of [`Task::expert`] leaves the roll-out's hot loop with the LQR expert alone. The state
-/// comes by value, copied at the call (only on this cold path), so that the episode's own state
+/// comes by value, copied at the call (only on this path), so that the episode's own state
 /// is never handed to an opaque function by reference.
 #[cold]
 #[inline(never)]
-fn ppo_action<S: Real>(e: &PpoExpert, state: [S; 4]) -> Result<usize, OracleError> {
-    e.action_in(&state)
+fn ppo_action<S: Real>(e: &PpoGreedy<S>, state: [S; 4]) -> Result<usize, OracleError> {
+    e.action(&state)
         .map_err(|e| OracleError::Environment(e.to_string()))
 }
 

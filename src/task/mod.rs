@@ -953,11 +953,17 @@ where
         check_trajectory(trajectory)?;
         let mut total = trajectory.absorbed.clone().unwrap_or_else(S::zero);
         let mut grad = vec![S::zero(); self.dim()];
+        // θ is checked above; with every φ checked once, the loss alone is computed per decision
+        // (the same values as `loss_into`'s, without its gradient).
+        let trusted = features_valid(&self.policy, trajectory);
         for (phi, y) in trajectory.feature_rows().zip(&trajectory.labels) {
-            total += self
-                .policy
-                .loss_into(theta.as_slice(), phi, y.borrow(), &mut grad)
-                .map_err(policy_error)?;
+            let th = theta.as_slice();
+            total += if trusted {
+                self.policy.loss_trusted(th, phi, y.borrow(), &mut grad)
+            } else {
+                self.policy.loss_into(th, phi, y.borrow(), &mut grad)
+            }
+            .map_err(policy_error)?;
         }
         Ok(total)
     }
