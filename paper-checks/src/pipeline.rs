@@ -961,6 +961,8 @@ pub fn remove_stale(
                 removed.push(format!("runs/units/{}", name.unwrap_or_default()));
             }
         }
+        // Empty now: a single run's directory has none.
+        let _ = std::fs::remove_dir(&units_dir);
     }
     removed.sort();
     Ok(removed)

@@ -632,11 +632,7 @@ fn three_shards_merged_give_the_single_run_s_data_byte_for_byte() {
     assert!(ok, "{err}");
     assert_eq!(deterministic_files(&single), deterministic_files(&shared));
     assert!(
-        !shared.join("runs/units").exists()
-            || std::fs::read_dir(shared.join("runs/units"))
-                .expect("readable")
-                .next()
-                .is_none(),
+        !shared.join("runs/units").exists(),
         "merged units are removed"
     );
     let (ok, err) = binary(&cfg, &shared, &["--shard", "4/3"]);
