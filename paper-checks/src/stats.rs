@@ -2,24 +2,14 @@
 
 use serde::Serialize;
 
-/// Two-sided 97.5% quantiles of Student's t for 1..=30 degrees of freedom.
-const T975: [f64; 30] = [
-    12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
-    2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
-    2.052, 2.048, 2.045, 2.042,
-];
-
-/// The 0.975 quantile of Student's t with `df` degrees of freedom (table up to 30, then
-/// 40/60/120/∞ steps, conservative in between).
+/// The 0.975 quantile of Student's t with `df` degrees of freedom (NaN for `df = 0`), from
+/// statrs' inverse CDF.
 pub fn t975(df: usize) -> f64 {
-    match df {
-        0 => f64::NAN,
-        1..=30 => T975[df - 1],
-        31..=40 => 2.042,
-        41..=60 => 2.021,
-        61..=120 => 2.000,
-        _ => 1.980,
+    use statrs::distribution::{ContinuousCDF, StudentsT};
+    if df == 0 {
+        return f64::NAN;
     }
+    StudentsT::new(0.0, 1.0, df as f64).map_or(f64::NAN, |t| t.inverse_cdf(0.975))
 }
 
 /// A sample summary: n, mean and the 95% Student-t interval `mean ± t_{0.975,n−1}·s/√n`.
@@ -95,8 +85,27 @@ mod tests {
     use super::*;
     #[test]
     fn t_interval_of_a_known_sample() {
+        // df = 2 has the closed form t_p = (2p − 1)·√(2 / (4p(1 − p))); s = 1, n = 3.
+        let p = 0.975f64;
+        let t2 = (2.0 * p - 1.0) * (2.0 / (4.0 * p * (1.0 - p))).sqrt();
         let s = Summary::of(&[1.0, 2.0, 3.0]);
         assert_eq!(s.mean, 2.0);
-        assert!((s.half_width - 4.303 / 3f64.sqrt()).abs() < 1e-12);
+        assert!(
+            (s.half_width - t2 / 3f64.sqrt()).abs() < 1e-9,
+            "{}",
+            s.half_width
+        );
+    }
+
+    #[test]
+    fn t_quantiles_against_closed_forms_and_the_printed_table() {
+        // df = 1 is Cauchy: t_p = tan(π(p − 1/2)).
+        let t1 = (std::f64::consts::PI * 0.475).tan();
+        assert!((t975(1) - t1).abs() < 1e-9 * t1, "{}", t975(1));
+        // Printed tables (3 decimals): df 10, 30, 120.
+        for (df, printed) in [(10, 2.228), (30, 2.042), (120, 1.980)] {
+            assert!((t975(df) - printed).abs() < 5e-4, "df {df}: {}", t975(df));
+        }
+        assert!(t975(0).is_nan());
     }
 }
