@@ -25,7 +25,7 @@ pub use dual::Dual;
 pub use inari::Interval;
 pub use interval::{enclose_rational, interval_contains_rational};
 pub use num_rational::BigRational;
-pub use rational::{ParseExactError, parse_exact, parse_exact_list};
+pub use rational::{MAX_DIGITS, MAX_EXPONENT, ParseExactError, parse_exact, parse_exact_list};
 pub use report::JsonScalar;
 
 use std::cmp::Ordering;
