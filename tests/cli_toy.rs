@@ -232,9 +232,8 @@ fn terminal_flags_without_a_rule_are_a_clear_error() {
     );
 }
 
-/// An infeasible enumeration is refused from the support count, before any exact arithmetic:
-/// the answer comes at once (the bound below is two orders of magnitude above what the count
-/// takes and far below what the enumeration would), naming the size and the limit.
+/// An infeasible enumeration is refused naming the size and the limit (that it is refused before
+/// any prefix is visited is shown in the exact engine's unit tests, not by a timing).
 #[test]
 fn an_infeasible_horizon_is_refused_at_once_naming_size_and_limit() {
     let text =
@@ -243,7 +242,6 @@ fn an_infeasible_horizon_is_refused_at_once_naming_size_and_limit() {
     v["horizon"] = json!(20);
     let path = std::env::temp_dir().join(format!("ilopt-horizon-20-{}.json", std::process::id()));
     std::fs::write(&path, v.to_string()).unwrap();
-    let start = std::time::Instant::now();
     let (code, out, err) = ilopt(&[
         "toy",
         "eval",
@@ -252,7 +250,6 @@ fn an_infeasible_horizon_is_refused_at_once_naming_size_and_limit() {
         "--theta",
         "0",
     ]);
-    let seconds = start.elapsed().as_secs_f64();
     std::fs::remove_file(&path).ok();
     assert_eq!(code, 1, "{out}");
     // M1: two initial states, and from each state action 0 branches to 2 states and action 1 to
@@ -261,7 +258,6 @@ fn an_infeasible_horizon_is_refused_at_once_naming_size_and_limit() {
         err.contains("7.748e8 trajectory prefixes") && err.contains("limit of 20000000"),
         "{err}"
     );
-    assert!(seconds < 5.0, "took {seconds} s");
     // Exact inputs are bounded too.
     let (code, _, err) = ilopt(&["toy", "eval", "--mdp", M1, "--theta", "1e4000"]);
     assert_eq!(code, 1);

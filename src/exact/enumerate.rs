@@ -331,4 +331,32 @@ mod tests {
         }
         assert!(checked >= 10, "{checked}");
     }
+
+    /// Beyond the limit the enumeration is refused before a single prefix is visited: M1 at
+    /// T = 20 has 2 · 3¹⁸ prefixes (two initial states; action 0 branches to 2 states, action 1
+    /// to one).
+    #[test]
+    fn an_infeasible_enumeration_visits_nothing() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/toy/m1-tied.json");
+        let mut v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(path).expect("M1")).expect("JSON");
+        v["horizon"] = serde_json::json!(20);
+        let mdp = ToyMdp::from_json_str(&v.to_string()).expect("valid");
+        let p = ToyProblem::<BigRational>::new(&mdp);
+        let table = p
+            .table(&[BigRational::from_integer(0.into())])
+            .expect("θ = 0");
+        let mut visited = 0u64;
+        let err = for_each_prefix(&p, &table, |_, _, _| visited += 1).expect_err("too large");
+        assert_eq!(visited, 0);
+        assert_eq!(
+            err,
+            ExactError::TooLarge {
+                prefixes: 2.0 * 3f64.powi(18),
+                at_least: false,
+                limit: MAX_PREFIXES
+            }
+        );
+    }
 }
