@@ -8,12 +8,12 @@
 
 use inari::Interval;
 use num_rational::BigRational;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 /// One box of the final partition and the enclosure of f on it.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CertifiedBox {
     /// [lo, hi] per dimension.
     pub bounds: Vec<[f64; 2]>,
@@ -22,7 +22,7 @@ pub struct CertifiedBox {
 }
 
 /// A rigorous upper bound with its certificate.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SupBound {
     /// Upper bound on the supremum (max of the boxes' enclosure sups).
     pub upper: f64,

@@ -6,7 +6,7 @@
 //! 2⁻⁵³ each, plus libm's < 1 ulp for `ln`/`cbrt`/`sqrt`) can only make the bound *larger*: a check
 //! that compares a measurement against `upper(B)` can never flag a violation caused by rounding.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// `b · (1 + 10⁻¹²)` (for b ≥ 0): a safe upper bound on a bound evaluated in floating point.
 pub fn upper(b: f64) -> f64 {
@@ -64,7 +64,7 @@ pub fn storm_fixed_closed(l: f64, sigma2: f64, b_f: f64, k: u64) -> f64 {
 }
 
 /// Parameters of the adaptive (Cutkosky–Orabona) schedule of Algorithm 4 (math.md §3.3).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CutkoskyOrabona {
     /// k′ = bG^{2/3}/L.
     pub k_prime: f64,
@@ -100,7 +100,7 @@ pub fn cutkosky_orabona(l: f64, sigma2: f64, b_f: f64, p: CutkoskyOrabona, k: u6
 }
 
 /// The online-to-non-convex parameters of math.md §5 for budget N, radius δ, G, Δ₀.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct O2ncParams {
     /// Block length T = min(⌈(GNδ/Δ₀)^{2/3}⌉, ⌊N/2⌋).
     pub t: u64,

@@ -2,10 +2,10 @@
 //! the bound, what was measured (with its confidence bounds), the tightness, and the verdict.
 
 use crate::constants::Constant;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// The outcome of a check, relative to the claim it states.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Verdict {
     /// The claim holds (exactly, rigorously, or with no evidence against it at the stated level).
@@ -28,7 +28,7 @@ impl Verdict {
 }
 
 /// What was measured, with confidence bounds for statistical checks.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Measured {
     /// The measured value (X̄, or an exact quantity).
     pub value: f64,
@@ -60,7 +60,7 @@ impl Measured {
 }
 
 /// How the verdict was reached.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Method {
     /// Equalities/inequalities in exact rational arithmetic.
@@ -76,7 +76,7 @@ pub enum Method {
 }
 
 /// One row of the theorem-check table.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Check {
     /// Identifier (math.md numbering: "1a", "2b", …).
     pub id: String,
@@ -112,7 +112,7 @@ pub struct Check {
 }
 
 /// The role of a claim in the table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Role {
     /// The thesis's statement as printed.

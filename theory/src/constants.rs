@@ -15,10 +15,10 @@ use ilopt::exact::enumerate::{moments, prefixes};
 use ilopt::exact::forward::forward;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// How a constant was obtained.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Provenance {
     /// Computed exactly in rationals.
@@ -30,7 +30,7 @@ pub enum Provenance {
 }
 
 /// A named constant with its value and provenance.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Constant {
     /// Name as in math.md (L_F, σ², …).
     pub name: String,
@@ -47,7 +47,7 @@ pub struct Constant {
     pub certificate: Option<SupBound>,
     /// For a constant bounded over all of ℝ^d: one certificate per chart region
     /// ([`crate::global`]); empty otherwise.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub charts: Vec<crate::global::ChartBound>,
     /// For a rigorous constant: the largest value of the quantity actually attained at a point the
     /// branch-and-bound evaluated, in the constant's own units (e.g. `√ sup ‖g‖²` for G_∞, not the

@@ -40,10 +40,10 @@ use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::estimator::{causal, per_decision};
 use ilopt::toy::policy::brier;
 use ilopt::toy::{PolicyKind, PolicyTable, ToyMdp, ToyProblem};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// A chart of ℝ ∪ {∞} (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Chart {
     /// θ ∈ [−R, R].
@@ -67,7 +67,7 @@ impl Chart {
 
 /// A supremum bound on one region (a product of charts), with its branch-and-bound certificate in
 /// the charts' coordinates.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ChartBound {
     /// The chart of each coordinate.
     pub charts: Vec<Chart>,

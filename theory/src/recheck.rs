@@ -44,7 +44,7 @@ use crate::global::{CORE_RADIUS, Chart};
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::{PolicyKind, ToyMdp};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
 /// How often a box may be bisected when its corner bound does not prove the recorded bound.
@@ -377,7 +377,7 @@ fn estimate<S: Scalar>(
 }
 
 /// The quantity a certificate bounds, as a function of the point (in chart coordinates).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Quantity {
     /// |F″| for one parameter; ‖∇²F‖_F (recorded as √ of the sum of squares) for several.
@@ -525,7 +525,7 @@ pub fn pieces<S: Scalar>(
 }
 
 /// The outcome of re-checking one certificate.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct Recheck {
     /// Certificate boxes re-checked.
     pub boxes: usize,
@@ -760,7 +760,7 @@ pub fn coverage_for(full: bool) -> Coverage {
 }
 
 /// Which boxes to re-check: all, or a seeded random sample of a given size.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Coverage {
     /// Every box.

@@ -12,7 +12,7 @@
 use num_bigint::BigInt;
 use num_rational::BigRational;
 use num_traits::{One, Zero};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Rational bounds `lo ≤ q^{1/3} ≤ hi` for q ≥ 0, of width ≤ 2^{−bits}·max(1, q).
 pub fn cbrt_enclosure(q: &BigRational, bits: u32) -> (BigRational, BigRational) {
@@ -30,7 +30,7 @@ pub fn cbrt_enclosure(q: &BigRational, bits: u32) -> (BigRational, BigRational) 
 }
 
 /// A decided inequality `lhs ≤ rhs`, or undecided at the precision tried.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Verdict {
     /// Proved to hold.
@@ -106,7 +106,7 @@ pub fn c1(k: u64) -> Verdict {
 }
 
 /// What the schedule checks found for k = 1..=k_max.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ScheduleReport {
     /// Largest k checked.
     pub k_max: u64,

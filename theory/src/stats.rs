@@ -18,10 +18,10 @@
 //! flag no bound it states: it is *uninformative* ([`assess`]). Suites split α by Bonferroni.
 
 use crate::check::Verdict;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Summary of R runs of a per-run statistic.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Sample {
     /// R.
     pub runs: usize,
@@ -162,7 +162,7 @@ impl Sample {
 }
 
 /// Outcome of testing H₀: E X ≤ B.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Decision {
     /// LCB ≤ B: no evidence against the bound.
@@ -206,7 +206,7 @@ pub fn assess(sample: &Sample, bound: f64, statistic_max: f64, alpha: f64) -> Ve
 /// i.i.d. runs or the steps of runs whose conditional means are 0. Each value is known as an enclosure
 /// [lower, upper] (exact gradients in interval arithmetic); the LCB uses the lower ends and the
 /// UCB the upper ends, so rounding can never exclude 0 spuriously.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ZeroMeanTest {
     /// R.
     pub runs: usize,
