@@ -3,7 +3,7 @@
 //! Logistic>` (issue 8: "generic code must cost nothing in f64").
 //!
 //! It follows the generic code operation by operation (same RNG draws, same order of floating-point
-//! operations), so the gradients are bit-for-bit the same; `tests/specialised.rs` checks that on
+//! operations), so the gradients are bit-for-bit the same; `tests/estimators/specialised.rs` checks that on
 //! seeded trajectories, and `benches/oracle.rs` times both.
 
 #![allow(clippy::needless_range_loop)] // index loops mirror the generic code

@@ -3,9 +3,7 @@
 //! under the kit's tolerance policy (`ilopt::tolerance`): rationals equal, intervals contain the
 //! exact value, f64 lies inside the interval run of the same code.
 
-mod common;
-
-use common::{example, q};
+use crate::common::{example, q};
 use ilopt::exact::backward::backward;
 use ilopt::exact::enumerate::moments;
 use ilopt::exact::forward::forward;

@@ -3,8 +3,8 @@
 //! `TaskProblem<CartPoleTask<f64>, Logistic>` computes: the same trajectories from the same seeds
 //! and bit-identical causal gradients.
 
-#[path = "../benches/support/specialised.rs"]
-mod specialised;
+#[path = "../../benches/support/specialised.rs"]
+mod yardstick;
 
 use ilopt::expert::lqr::LqrExpert;
 use ilopt::policy::Logistic;
@@ -13,7 +13,7 @@ use ilopt::task::TaskProblem;
 use ilopt::task::cartpole::{self, CartPoleTask};
 use nalgebra::DVector;
 use rand::SeedableRng;
-use specialised::{D, Specialised, Trajectory};
+use yardstick::{D, Specialised, Trajectory};
 
 #[test]
 fn specialised_and_generic_agree_bit_for_bit() {

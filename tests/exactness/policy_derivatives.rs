@@ -2,9 +2,9 @@
 //! derivatives computed by forward-mode `Dual<BigRational>` arithmetic through the generic
 //! probability code — two independent routes, compared with `==`.
 
-mod common;
+use crate::common;
 
-use common::{theta_for, toy_mdp};
+use crate::common::{theta_for, toy_mdp};
 use ilopt::scalar::{BigRational, Dual, Scalar};
 use ilopt::toy::policy::brier_value;
 use ilopt::toy::{ToyMdp, ToyProblem};

@@ -17,7 +17,7 @@ use rand::SeedableRng;
 use serde_json::Value;
 
 fn reference() -> Value {
-    let text = include_str!("data/cartpole_reference.json");
+    let text = include_str!("../data/cartpole_reference.json");
     serde_json::from_str(text).expect("reference JSON")
 }
 

@@ -11,7 +11,7 @@
 //! plus sampling (one seed, one path in every scalar; empirical frequencies), numerical safety at
 //! extreme logits, and constructor/argument validation.
 
-mod common;
+use crate::common;
 
 use ilopt::policy::{
     LikelihoodRatio, LinearGaussian, Logistic, Mlp, MlpGaussian, MlpSoftmax, Policy, PolicyError,

@@ -2,10 +2,9 @@
 //! inlined and run through the target's own property (`fuzz/src/props.rs`), with a note on the
 //! cause and the fix. A target's seed corpus is replayed here too, so `cargo test` covers it.
 
-#[path = "../fuzz/src/props.rs"]
-mod props;
+use crate::props;
 
-use props::{CartpoleInput, VoInput};
+use crate::props::{CartpoleInput, VoInput};
 
 fn corpus(target: &str) -> Vec<Vec<u8>> {
     let dir = format!("{}/fuzz/corpus/{target}", env!("CARGO_MANIFEST_DIR"));

@@ -4,9 +4,7 @@
 //! and the optimality of b*, the importance-weighted baselined old-point estimate (I3 with a
 //! baseline), and the `f64` oracle against the exact one on the same trajectories.
 
-mod common;
-
-use common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
+use crate::common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
 use ilopt::algo::Num;
 use ilopt::baseline::{Baseline, Baselined, DecisionTerms};
 use ilopt::exact::baseline::{baselined_moments, optimal_baselines, prefix_trajectory};

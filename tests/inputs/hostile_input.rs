@@ -1,11 +1,10 @@
 //! Hostile input at small scale (issue 7): the fuzz targets' properties (`fuzz/src/props.rs`, the
 //! same code) as proptest suites that run in `cargo test`. Seeded (`RngSeed::Fixed`), so every
-//! run checks the same cases; failures found by the fuzzers are pinned in `tests/fuzz_regressions.rs`.
+//! run checks the same cases; failures found by the fuzzers are pinned in `tests/inputs/fuzz_regressions.rs`.
 
-#[path = "../fuzz/src/props.rs"]
-mod props;
+use crate::props;
 
-use props::{CartpoleInput, Frac, MdpSpec, OracleInput, TrajSpec, VoInput};
+use crate::props::{CartpoleInput, Frac, MdpSpec, OracleInput, TrajSpec, VoInput};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
 

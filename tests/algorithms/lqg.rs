@@ -10,9 +10,9 @@
 //!   "no score term" gradient;
 //! * constructor validation.
 
-mod common;
+use crate::common;
 
-use common::q;
+use crate::common::q;
 use ilopt::lqg::{LqgError, LqgSystem, matrix_of, theta_of};
 use ilopt::policy::LinearGaussian;
 use ilopt::problem::KitRng;

@@ -757,7 +757,7 @@ fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
 fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
     // M1 in the fixture's parameter p = π(1): F'(p) = 4p − 3 (math.md §6), F'(3/10) = −9/5. The
     // plain estimate at p and the IS-weighted old-point estimates (τ drawn at p' = 3/5) must all
-    // have mean F'(p); tolerance 6 standard errors (see tests/algo_m1.rs for the policy).
+    // have mean F'(p); tolerance 6 standard errors (see tests/algorithms/algo_m1.rs for the policy).
     // (At p = 1/2 the old-point estimate happens to be unbiased even without weights, since
     // l(A) = l(B) there, so p = 3/10 is used.)
     use ilopt::algo::fixture::AliasedTwoState;

@@ -12,9 +12,7 @@
 //!   f64, rationals and intervals;
 //! * terminal flags that are all false change nothing.
 
-mod common;
-
-use common::{example, q, terminating_mdp_and_two_thetas};
+use crate::common::{example, q, terminating_mdp_and_two_thetas};
 use ilopt::exact::backward::backward;
 use ilopt::exact::enumerate::{for_each_prefix, gradient_by_duals, moments};
 use ilopt::exact::forward::forward;

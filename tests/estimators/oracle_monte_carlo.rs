@@ -12,9 +12,7 @@
 //!    below 10⁻⁴ per N. An estimator with a wrong mean fails (1) at large N; one with the right
 //!    mean but the wrong variance scaling fails (2).
 
-mod common;
-
-use common::{example, q};
+use crate::common::{example, q};
 use ilopt::exact::enumerate::prefixes;
 use ilopt::exact::forward::forward;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};

@@ -1,9 +1,7 @@
 //! The oracle's roll-outs: seeded and reproducible, identical across scalar types, honest cost
 //! accounting, and clear errors for invalid behaviours, trajectories and parameters.
 
-mod common;
-
-use common::{example, q};
+use crate::common::{example, q};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::scalar::{BigRational, Interval, Scalar, Undecidable, interval_contains_rational};
 use ilopt::toy::{ToyMdp, ToyProblem, ToyTrajectory, sample_categorical};

@@ -2,9 +2,7 @@
 //! (I1) F_X1 = F_X2 = F_X3, (I2) ∇F_X2 = ∇F_X3 = ∇F_enum = E[g] = E[g_full] (the thesis's
 //! unbiasedness claim, eqs. 3.16/3.18), (I3) the importance-sampling identity, (I4) the bias.
 
-mod common;
-
-use common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
+use crate::common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
 use ilopt::exact::backward::backward;
 use ilopt::exact::enumerate::{gradient_by_duals, moments, prefixes};
 use ilopt::exact::forward::forward;

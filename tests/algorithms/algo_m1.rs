@@ -316,7 +316,7 @@ fn printed_algorithm_4_does_not_track_the_gradient() {
 
 /// A measurement, not a check: prints the mean final p = 1 − θ (tail average for the
 /// optimisers) of every algorithm on M1 over 32 seeds. Run with
-/// `cargo test --release --test algo_m1 -- --ignored --nocapture`.
+/// `cargo test --release --test algorithms algo_m1 -- --ignored --nocapture`.
 #[test]
 #[ignore = "measurement table for reports (≈ 10 s in release)"]
 fn measure_every_algorithm_on_m1() {

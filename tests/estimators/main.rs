@@ -1,0 +1,17 @@
+//! The gradient oracle of eq. 3.15 and its variants: Monte-Carlo unbiasedness, the stored reference, sampling laws, task problems, the hand-specialised yardstick, baselines, minibatches, the fixed-horizon objective and the trajectory loss.
+//!
+//! One test binary of several modules, so that a fresh `cargo test` links the crate a few times
+//! rather than once per file.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod baselines;
+mod batched;
+mod fixed_horizon;
+mod oracle_monte_carlo;
+mod oracle_reference;
+mod oracle_sampling;
+mod specialised;
+mod task_problems;
+mod trajectory_loss;
