@@ -8,9 +8,9 @@
 //! wrong (understated) bound, which the check must flag.
 
 use crate::bounds::{O2ncParams, o2nc_theorem, sgd_constant, sgd_step_admissible, upper};
-use crate::check::{Check, Measured, Method, Role, Verdict};
-use crate::checks::constants::ToyConstants;
+use crate::certify::box_constants::ToyConstants;
 use crate::checks::tracking::{O2ncTracker, Tracking};
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::o2nc::O2ncConfig;
@@ -50,21 +50,9 @@ fn norm_sq_bounds(v: &[Interval]) -> (f64, f64) {
 }
 
 fn inconclusive(id: &str, result: &str, claim: String, details: String) -> Check {
-    Check {
-        id: id.into(),
-        result: result.into(),
-        claim,
-        assumptions: vec![],
-        constants: vec![],
-        bound: None,
-        measured: None,
-        tightness: None,
-        method: Method::Statistical,
-        verdict: Verdict::Inconclusive,
-        erratum: None,
-        role: Role::Thesis,
-        details,
-    }
+    Check::builder(id, result, claim, Role::Thesis)
+        .details(details)
+        .decided(Method::Statistical, Verdict::Inconclusive)
 }
 
 /// Per-run statistics of R runs: (rigorous lower ends, midpoints), in seed order.
@@ -158,13 +146,7 @@ fn measure(
         mean_mid - lcb,
     );
     (
-        Measured {
-            value: mean_mid,
-            lcb: Some(lcb),
-            ucb: Some(sample.ucb(mc.alpha)),
-            runs: Some(mc.runs),
-            alpha: Some(mc.alpha),
-        },
+        Measured::from_sample(&sample, mc.alpha).with_value(mean_mid),
         verdict,
         text,
     )
@@ -264,33 +246,27 @@ pub fn sgd_row(
     // X ≤ sup ‖∇F‖² ≤ G_F² (the rounding factor keeps it an upper bound).
     let b = gf * gf * (1.0 + 1e-12);
     let (measured, verdict, text) = measure(lows, mids, b, bound, b, mc);
-    Check {
-        id: "1".into(),
-        result: result.into(),
-        claim,
-        assumptions: vec![
-            "(S1) F L-smooth on a box holding every iterate a.s.".into(),
-            "(S2) E g = ∇F, E‖g‖² ≤ σ² + ‖∇F‖² (c = 1)".into(),
-            "(S3) fresh τ_k ∼ p(·; θ_k), η ≤ 1/(Lc)".into(),
-        ],
-        constants: k_consts.all(),
-        bound: Some(bound),
-        tightness: Some(measured.value / bound),
-        measured: Some(measured),
-        method: Method::Statistical,
-        verdict,
-        erratum: None,
-        role: if claim_scale == 1.0 {
-            Role::Thesis
-        } else {
-            Role::NegativeControl
-        },
-        details: format!(
+    let role = if claim_scale == 1.0 {
+        Role::Thesis
+    } else {
+        Role::NegativeControl
+    };
+    Check::builder("1", result, claim, role)
+        .assumptions([
+            "(S1) F L-smooth on a box holding every iterate a.s.",
+            "(S2) E g = ∇F, E‖g‖² ≤ σ² + ‖∇F‖² (c = 1)",
+            "(S3) fresh τ_k ∼ p(·; θ_k), η ≤ 1/(Lc)",
+        ])
+        .constants(k_consts.all())
+        .bound(bound)
+        .tightness(measured.value / bound)
+        .measured(measured)
+        .details(format!(
             "{} runs of the kit's SGD from θ₁ = {theta1}; {text}; η ≤ 1/(Lc) holds (Lη = {:.3})",
             mc.runs,
             l * eta_f
-        ),
-    }
+        ))
+        .decided(Method::Statistical, verdict)
 }
 
 /// Which Algorithm 5 a run of check 3 uses.
@@ -554,63 +530,64 @@ pub fn o2nc_rows(
     let b = k_consts.g_f.value;
     let mut rows = vec![];
     if variant == O2ncVariant::IlCorrect {
-        rows.push(Check {
-            id: "3a".into(),
-            result: result.into(),
-            claim: format!("‖w̄ᵏ − wᵏ_t‖ ≤ δ = {delta_f} for every block and run"),
-            assumptions: vec!["‖Δ_n‖ ≤ D = δ/T, restart Δ = 0 per block (E14)".into()],
-            constants: vec![],
-            bound: Some(delta_f),
-            measured: Some(Measured::exact(worst_spread)),
-            tightness: Some(worst_spread / delta_f),
-            method: Method::Exact,
-            verdict: Verdict::from_bool(worst_spread <= delta_f * (1.0 + 1e-12)),
-            erratum: Some("E14".into()),
-            role: Role::Thesis,
-            details: format!(
+        rows.push(
+            Check::builder(
+                "3a",
+                result,
+                format!("‖w̄ᵏ − wᵏ_t‖ ≤ δ = {delta_f} for every block and run"),
+                Role::Thesis,
+            )
+            .assumptions(["‖Δ_n‖ ≤ D = δ/T, restart Δ = 0 per block (E14)"])
+            .bound(delta_f)
+            .measured(Measured::exact(worst_spread))
+            .tightness(worst_spread / delta_f)
+            .erratum("E14")
+            .details(format!(
                 "max over {} runs × {kb} blocks of max_t |w̄ᵏ − wᵏ_t| = {worst_spread:.6}",
                 mc.runs
+            ))
+            .decided(
+                Method::Exact,
+                Verdict::from_bool(worst_spread <= delta_f * (1.0 + 1e-12)),
             ),
-        });
+        );
     }
     for &claim_scale in claim_scales {
         let bound = bound1 * claim_scale;
         let (measured, verdict, text) = measure(lows, mids, b, bound, b, mc);
         let control = claim_scale != 1.0 || variant == O2ncVariant::Printed;
-        rows.push(Check {
-            id: match (variant, claim_scale == 1.0) {
-                (O2ncVariant::IlCorrect, true) => "3b".into(),
-                (O2ncVariant::IlCorrect, false) => "3b.ctl".into(),
-                (O2ncVariant::Printed, _) => "3b.printed5".into(),
-            },
-            result: result.into(),
-            claim: claim(claim_scale),
-            assumptions: vec![
-                match variant {
-                    O2ncVariant::IlCorrect => "τ_n ∼ p(·; w_n) (E11)".into(),
-                    O2ncVariant::Printed => {
-                        "violated on purpose: τ_n ∼ p(·; θ_n) (E11), the kit's printed_algorithm_5"
-                            .into()
-                    }
-                },
-                "G² ≥ sup E‖g‖², σ² ≥ sup Var, Δ₀ ≥ F(θ₀) − F*".into(),
-            ],
-            constants: k_consts.all(),
-            bound: Some(bound),
-            tightness: Some(measured.value / bound),
-            measured: Some(measured),
-            method: Method::Statistical,
-            verdict,
-            erratum: Some("E11, E12, E13".into()),
-            role: if variant == O2ncVariant::Printed {
-                Role::Probe
-            } else if control {
-                Role::NegativeControl
-            } else {
-                Role::Thesis
-            },
-            details: format!("T = {t}, K = {kb}, M = {}, D = δ/T; {text}", params.m),
-        });
+        let id = match (variant, claim_scale == 1.0) {
+            (O2ncVariant::IlCorrect, true) => "3b",
+            (O2ncVariant::IlCorrect, false) => "3b.ctl",
+            (O2ncVariant::Printed, _) => "3b.printed5",
+        };
+        let role = if variant == O2ncVariant::Printed {
+            Role::Probe
+        } else if control {
+            Role::NegativeControl
+        } else {
+            Role::Thesis
+        };
+        let sampling = match variant {
+            O2ncVariant::IlCorrect => "τ_n ∼ p(·; w_n) (E11)",
+            O2ncVariant::Printed => {
+                "violated on purpose: τ_n ∼ p(·; θ_n) (E11), the kit's printed_algorithm_5"
+            }
+        };
+        rows.push(
+            Check::builder(id, result, claim(claim_scale), role)
+                .assumptions([sampling, "G² ≥ sup E‖g‖², σ² ≥ sup Var, Δ₀ ≥ F(θ₀) − F*"])
+                .constants(k_consts.all())
+                .bound(bound)
+                .tightness(measured.value / bound)
+                .measured(measured)
+                .erratum("E11, E12, E13")
+                .details(format!(
+                    "T = {t}, K = {kb}, M = {}, D = δ/T; {text}",
+                    params.m
+                ))
+                .decided(Method::Statistical, verdict),
+        );
     }
     rows
 }

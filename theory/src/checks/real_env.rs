@@ -28,7 +28,7 @@
 //! the control's measured bias is at least the row's own MDB. Otherwise the row is
 //! "inconclusive (uninformative)", whatever its z.
 
-use crate::check::{Check, Measured, Method, Role, Verdict};
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::env::obstacle::ObstacleConfig;
 use ilopt::policy::{LikelihoodRatio, LinearGaussian, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
@@ -617,31 +617,23 @@ pub fn row_from(
         })
         .collect::<Vec<_>>()
         .join("; ");
-    Check {
-        id: id.into(),
-        result: "Unbiasedness on the real environments (Fig. 4.2)".into(),
+    let role = match kind {
+        RowKind::Claim => Role::Thesis,
+        RowKind::Control => Role::NegativeControl,
+    };
+    Check::builder(
+        id,
+        "Unbiasedness on the real environments (Fig. 4.2)",
         claim,
-        assumptions: vec![
-            "CLT for the means (normal approximation); finite-difference reference with common random numbers, Richardson-extrapolated (its noise in the SE, O(h⁴) bias left)".into(),
-        ],
-        constants: vec![],
-        bound: Some(c.z_crit),
-        measured: Some(Measured {
-            value: worst,
-            lcb: None,
-            ucb: None,
-            runs: Some(c.n),
-            alpha: Some(alpha),
-        }),
-        tightness: None,
-        method: Method::Statistical,
-        verdict,
-        erratum: erratum.map(Into::into),
-        role: match kind {
-            RowKind::Claim => Role::Thesis,
-            RowKind::Control => Role::NegativeControl,
-        },
-        details: format!(
+        role,
+    )
+    .assumptions([
+        "CLT for the means (normal approximation); finite-difference reference with common random numbers, Richardson-extrapolated (its noise in the SE, O(h⁴) bias left)",
+    ])
+    .bound(c.z_crit)
+    .measured(Measured::statistic(worst).with_runs(c.n).with_alpha(alpha))
+    .maybe_erratum(erratum.map(Into::into))
+    .details(format!(
             "N = {}, N′ = {} CRN pairs at h = {} and h/2; worst |z| = {worst:.2} (coordinate {wj}) vs z_crit = {:.2} (α = {alpha:.0e}, Bonferroni over d = {d}); SE ≤ {max_se:.2e} (reference noise ≤ {:.0}% of the variance); MDB (power 0.8) {min_mdb:.2e}…{max_mdb:.2e}; O(h²) term removed by Richardson ≤ {h2_res:.1} of its s.e.; worst |z| with N = {}{power}{note}; per coordinate bias±SE: {per_coord}",
             c.n,
             r.n_fd,
@@ -653,8 +645,8 @@ pub fn row_from(
                 .map(|(n, z)| format!("{n}: {z:.2}"))
                 .collect::<Vec<_>>()
                 .join(", "),
-        ),
-    }
+    ))
+    .decided(Method::Statistical, verdict)
 }
 
 /// Below this effective sample size of the importance weights, a weighted row is uninformative

@@ -2,7 +2,7 @@
 //! skips it): print the real-environment rows at sizes from the environment (N, NFD, H, ETA,
 //! TASK = cp | ob | obe, SIGMA, PROFILE = full). `explore_old_obstacle` reproduces the former row
 //! 6's obstacle z-trend, e.g.
-//! `ILOPT_EXPLORE=1 N=300 NFD=200 H=0.005 cargo test --release -p ilopt-theory --test real_env_explore -- --ignored --nocapture explore_old`.
+//! `ILOPT_EXPLORE=1 N=300 NFD=200 H=0.005 cargo test --release -p ilopt-theory --test checks -- --ignored --nocapture real_env_explore::explore_old`.
 use ilopt::task::{AfterEnd, Horizon};
 use ilopt_theory::checks::real_env::*;
 
