@@ -1,8 +1,6 @@
 //! The protocol of the theorem table: the two profiles and their sizes, the family-wise
 //! false-alarm probability and its Bonferroni split, and the real-environment settings.
 
-use crate::checks::real_env::RealSizes;
-
 /// How large the suite runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Profile {
@@ -104,4 +102,17 @@ pub fn real_sizes(profile: Profile) -> (RealSizes, RealSizes) {
             alpha,
         },
     )
+}
+
+/// Sizes of the real-environment unbiasedness rows (check 6).
+#[derive(Debug, Clone, Copy)]
+pub struct RealSizes {
+    /// Trajectories N per estimator.
+    pub n_oracle: usize,
+    /// Paired roll-outs per finite difference N′.
+    pub n_fd: usize,
+    /// Step h (the reference uses h and h/2).
+    pub h: f64,
+    /// False-alarm probability of each row.
+    pub alpha: f64,
 }

@@ -7,8 +7,8 @@ use crate::checks::constants::{global_row, toy_row};
 use crate::checks::montecarlo::McSettings;
 use crate::checks::{o2nc_formula, schedule, second_toy, statistical, thm31, unbiased};
 use crate::protocol::{
-    CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, STATISTICAL_CLAIMS, Sizes,
-    real_sizes,
+    CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes,
+    STATISTICAL_CLAIMS, Sizes, real_sizes,
 };
 use crate::record::check::Check;
 use crate::stats::bonferroni;
@@ -156,8 +156,8 @@ pub fn whole_table(profile: Profile) -> Result<Vec<Check>, String> {
 pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
     use crate::checks::estimated::{EstimateSizes, sgd_row};
     use crate::checks::real_env::{
-        Mutation, RealSizes, TaskSetup, cartpole_fixed, cartpole_theta, obstacle_problem,
-        obstacle_theta, task_rows,
+        Mutation, TaskSetup, cartpole_fixed, cartpole_theta, obstacle_problem, obstacle_theta,
+        task_rows,
     };
     use ilopt::task::{AfterEnd, Horizon};
     let full = profile == Profile::Full;

@@ -28,6 +28,7 @@
 //! the control's measured bias is at least the row's own MDB. Otherwise the row is
 //! "inconclusive (uninformative)", whatever its z.
 
+use crate::protocol::RealSizes;
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::env::obstacle::ObstacleConfig;
 use ilopt::policy::{LikelihoodRatio, LinearGaussian, Softmax, SpeedLimitedGaussian};
@@ -56,19 +57,6 @@ fn mean_var(xs: &[f64]) -> (f64, f64) {
         m,
         xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0),
     )
-}
-
-/// Sizes of the check.
-#[derive(Debug, Clone, Copy)]
-pub struct RealSizes {
-    /// Trajectories N per estimator.
-    pub n_oracle: usize,
-    /// Paired roll-outs per finite difference N′.
-    pub n_fd: usize,
-    /// Step h (the reference uses h and h/2).
-    pub h: f64,
-    /// False-alarm probability of each row.
-    pub alpha: f64,
 }
 
 /// `f(i)` for `i` in `0..n`, on up to two threads (the machine's budget), in order.

@@ -5,6 +5,7 @@
 //! `ILOPT_EXPLORE=1 N=300 NFD=200 H=0.005 cargo test --release -p ilopt-theory --test checks -- --ignored --nocapture real_env_explore::explore_old`.
 use ilopt::task::{AfterEnd, Horizon};
 use ilopt_theory::checks::real_env::*;
+use ilopt_theory::protocol::RealSizes;
 
 fn sizes() -> RealSizes {
     let g = |k: &str, d: f64| {
