@@ -4,7 +4,7 @@
 /// How large the suite runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Profile {
-    /// Minutes on 2 cores at most.
+    /// The small sizes: the default table, and the sizes the tests check the rows at.
     Quick,
     /// The thesis's scale.
     Full,

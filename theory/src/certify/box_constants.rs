@@ -212,8 +212,8 @@ pub fn tied_softmax_g_inf_closed_form(horizon: usize, c: f64) -> f64 {
 /// `V_IS(θ, θ′) = Σ_τ̄ [p(τ̄;θ′)‖g(θ′)‖² − 2p(τ̄;θ)⟨g(θ′), g(θ)⟩ + p(τ̄;θ)²/p(τ̄;θ′)‖g(θ)‖²]`
 /// vanishes with zero gradient at θ′ = θ, so by Taylor `L̃² ≤ ½ sup_{θ,ϑ ∈ box} ‖∇²_{θ′}V_IS(θ, ϑ)‖`.
 /// The supremum is enclosed by 2-D branch-and-bound (1-D θ), with θ′ in `Dual<Dual<Interval>>`.
-/// (This is the whole-trajectory form of (A4), the one of math.md §3.2.) This box version is
-/// superseded for the checks by [`crate::certify::global::l_tilde`], which bounds L̃ over all of ℝ².
+/// (This is the whole-trajectory form of (A4), the one of math.md §3.2.) It holds on the box
+/// only; the STORM checks use [`crate::certify::global::l_tilde`], which bounds L̃ over all of ℝ².
 ///
 /// # Errors
 /// [`BnbError`] if the engine fails on a box, or for a policy with more than one parameter.

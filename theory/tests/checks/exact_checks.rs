@@ -1,4 +1,4 @@
-//! The exact and rigorous checks of issue 4 (checks 2 part, 3 part, 4, 5), each with a deliberately
+//! The exact and rigorous checks (checks 2 part, 3 part, 4, 5), each with a deliberately
 //! wrong claim that the same machinery flags.
 
 use crate::common::q;

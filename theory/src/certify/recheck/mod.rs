@@ -286,8 +286,8 @@ impl BoxProver<'_> {
 /// Boxes per region the quick profile re-checks (besides those within 1 % of the bound).
 pub const QUICK_SAMPLE: usize = 200;
 
-/// The coverage of a profile: every box at full size, a seeded sample in the quick profile (every
-/// box of every L̃ certificate takes minutes on two cores).
+/// The coverage of a profile: every box at full size, a seeded sample in the quick profile (the
+/// L̃ certificates hold the most boxes, and re-checking all of them is the full profile's cost).
 pub fn coverage_for(full: bool) -> Coverage {
     if full {
         Coverage::All
