@@ -21,8 +21,8 @@
 //!
 //! 1. **Values at the corners.** The quantity is enclosed at every corner of X (the same code in
 //!    [`Interval`] at a point: a rigorous enclosure a few ulps wide; the code also runs in
-//!    [`BigRational`], where the tests compare it exactly with math.md's reference values and the
-//!    engine). A corner enclosure entirely outside the recorded enclosure is a certain error (so a
+//!    [`ilopt::scalar::BigRational`], where the tests compare it exactly with math.md's reference
+//!    values and the engine). A corner enclosure entirely outside the recorded enclosure is a certain error (so a
 //!    recorded bound lowered below a value f takes at a corner is caught).
 //! 2. **An upper bound of the box from the corners.** The same code run in `Dual<Interval>` over X
 //!    encloses the gradient ∂h/∂x on X by `[d⁻, d⁺]`; for every x ∈ X and every corner c,

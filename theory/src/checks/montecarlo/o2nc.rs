@@ -218,7 +218,7 @@ pub fn o2nc_sample_tracked(
 }
 
 /// Rows 3a (IL-correct only) and one row 3b per entry of `claim_scales` from a sample of
-/// [`o2nc_sample`] (the verdict by [`assess`], with the statistic's maximum G_F).
+/// [`o2nc_sample`] (the verdict by [`crate::stats::assess`], with the statistic's maximum G_F).
 pub fn o2nc_rows(
     k_consts: &ToyConstants,
     n: u64,

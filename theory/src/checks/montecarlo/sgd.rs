@@ -125,7 +125,7 @@ pub fn sgd_with_control(
 }
 
 /// The row of check 1 for a bound scaled by `claim_scale`, from a sample of [`sgd_sample`] (the
-/// verdict by [`assess`], with the statistic's maximum G_F²).
+/// verdict by [`crate::stats::assess`], with the statistic's maximum G_F²).
 pub fn sgd_row(
     k_consts: &ToyConstants,
     theta1: f64,
