@@ -17,9 +17,9 @@
 use crate::certify::bnb::{BnbError, sup_bound};
 use crate::certify::tiling::verify_certificate;
 use crate::record::certificate::{CORE_RADIUS, Chart, ChartBound};
-use crate::record::constant::{Constant, Provenance};
+use crate::record::constant::Constant;
 use ilopt::exact::enumerate::for_each_prefix;
-use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
+use ilopt::scalar::{Dual, Interval, Scalar};
 use ilopt::toy::estimator::causal;
 use ilopt::toy::policy::brier;
 use ilopt::toy::{PolicyKind, PolicyTable, ToyMdp, ToyProblem};
@@ -261,16 +261,7 @@ pub(crate) fn global_constant(
         1.0 / CORE_RADIUS,
         attained(lower)
     );
-    Constant {
-        name: name.into(),
-        value,
-        rational: BigRational::from_float(value).map_or_else(|| "inf".into(), |q| q.to_string()),
-        provenance: Provenance::Rigorous,
-        how,
-        certificate: None,
-        charts: regions,
-        attained: Some(attained(lower)),
-    }
+    Constant::over_charts(name, value, how, regions, attained(lower))
 }
 
 pub(crate) fn sqrt_up(x: f64) -> f64 {

@@ -18,7 +18,7 @@
 
 use crate::bounds::sgd_constant;
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
-use crate::record::constant::{Constant, Provenance};
+use crate::record::constant::Constant;
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
 use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
@@ -75,19 +75,6 @@ fn mean_and_trace<P: IlProblem<f64>>(
         sq += (g - &mean).norm_squared();
     }
     Ok((mean, sq / (m as f64 - 1.0)))
-}
-
-fn estimate(name: &str, value: f64, how: String) -> Constant {
-    Constant {
-        name: name.into(),
-        value,
-        rational: "—".into(),
-        provenance: Provenance::Estimate,
-        how,
-        certificate: None,
-        charts: vec![],
-        attained: None,
-    }
 }
 
 /// The row for one task. `theta1` is the SGD start; probe points are θ₁ plus seeded perturbations.
@@ -211,9 +198,9 @@ pub fn sgd_row<P: IlProblem<f64>>(
     )
     .assumptions(["constants are Monte-Carlo ESTIMATES (not certificates); L̂ is a local, sampled smoothness"])
     .constants(vec![
-        estimate("B_F", b_f, format!("F̂(θ₁) from {} roll-outs", s.m)),
-        estimate("σ²", sigma2, format!("max tr Var̂(g) over {} probe points (θ₁ ± {}), M = {}", s.probes, s.spread, s.m)),
-        estimate("L_F", l, format!("max ‖ḡ(θ+ρu) − ḡ(θ)‖/ρ over {} probes, ρ = {}, common random numbers", s.probes, s.rho)),
+        Constant::estimate("B_F", b_f, format!("F̂(θ₁) from {} roll-outs", s.m)),
+        Constant::estimate("σ²", sigma2, format!("max tr Var̂(g) over {} probe points (θ₁ ± {}), M = {}", s.probes, s.spread, s.m)),
+        Constant::estimate("L_F", l, format!("max ‖ḡ(θ+ρu) − ḡ(θ)‖/ρ over {} probes, ρ = {}, common random numbers", s.probes, s.rho)),
     ])
     .bound(bound)
     .measured(Measured::statistic(mean).with_interval(mean - 2.0 * se, mean + 2.0 * se).with_runs(s.runs))

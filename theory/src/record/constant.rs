@@ -45,6 +45,11 @@ pub struct Constant {
     pub attained: Option<f64>,
 }
 
+/// The exact rational an `f64` is, as text (`inf` for a non-finite value).
+fn rational_form(value: f64) -> String {
+    BigRational::from_float(value).map_or_else(|| "inf".into(), |q| q.to_string())
+}
+
 impl Constant {
     /// An exact rational constant.
     pub fn exact(name: &str, q: &BigRational, how: &str) -> Self {
@@ -73,13 +78,46 @@ impl Constant {
         Self {
             name: name.into(),
             value,
-            rational: BigRational::from_float(value)
-                .map_or_else(|| "inf".into(), |q| q.to_string()),
+            rational: rational_form(value),
             provenance: Provenance::Rigorous,
             how,
             certificate: Some(bound),
             charts: vec![],
             attained,
+        }
+    }
+    /// A rigorous upper bound `value` over all of ℝ (ℝ²) with one certificate per chart region
+    /// ([`ChartBound`]); `attained` is the largest value of the quantity at a point the
+    /// branch-and-bound evaluated, in the constant's units.
+    pub fn over_charts(
+        name: &str,
+        value: f64,
+        how: String,
+        regions: Vec<ChartBound>,
+        attained: f64,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            value,
+            rational: rational_form(value),
+            provenance: Provenance::Rigorous,
+            how,
+            certificate: None,
+            charts: regions,
+            attained: Some(attained),
+        }
+    }
+    /// A statistical or sampled estimate: no exact rational form, never a certificate.
+    pub fn estimate(name: &str, value: f64, how: String) -> Self {
+        Self {
+            name: name.into(),
+            value,
+            rational: "—".into(),
+            provenance: Provenance::Estimate,
+            how,
+            certificate: None,
+            charts: vec![],
+            attained: None,
         }
     }
 }
