@@ -1,7 +1,7 @@
 //! The theorem-check table as Markdown and JSON (for the appendix).
 
-use crate::check::{Check, Method, Role, Verdict};
-use crate::constants::Provenance;
+use crate::record::check::{Check, Method, Role, Verdict};
+use crate::record::constant::Provenance;
 
 /// Four significant digits, scientific notation outside [10⁻³, 10⁴).
 fn fmt(x: Option<f64>) -> String {

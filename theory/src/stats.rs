@@ -17,7 +17,7 @@
 //! A row whose LCB is ≤ 0, or whose B is at least the largest value the statistic can take, could
 //! flag no bound it states: it is *uninformative* ([`assess`]). Suites split α by Bonferroni.
 
-use crate::check::Verdict;
+use crate::record::check::{Measured, Verdict};
 use serde::{Deserialize, Serialize};
 
 /// Summary of R runs of a per-run statistic.
@@ -158,6 +158,17 @@ impl Sample {
     pub fn ucb(&self, alpha: f64) -> f64 {
         let mirrored: Vec<f64> = self.values.iter().map(|x| self.range - x).collect();
         self.range - Sample::new(&mirrored, self.range).lcb(alpha)
+    }
+}
+
+impl Measured {
+    /// The mean of `sample` with the decision rule's confidence bounds at level `alpha`
+    /// ([`Sample::lcb`], [`Sample::ucb`]), the number of runs and α.
+    pub fn from_sample(sample: &Sample, alpha: f64) -> Self {
+        Measured::statistic(sample.mean)
+            .with_interval(sample.lcb(alpha), sample.ucb(alpha))
+            .with_runs(sample.runs)
+            .with_alpha(alpha)
     }
 }
 

@@ -17,8 +17,8 @@
 //! chapter-4 experiments use (the fixed horizon, see `suite::real_environments`).
 
 use crate::bounds::sgd_constant;
-use crate::check::{Check, Measured, Method, Role, Verdict};
-use crate::constants::{Constant, Provenance};
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
+use crate::record::constant::Constant;
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
 use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
@@ -77,19 +77,6 @@ fn mean_and_trace<P: IlProblem<f64>>(
     Ok((mean, sq / (m as f64 - 1.0)))
 }
 
-fn estimate(name: &str, value: f64, how: String) -> Constant {
-    Constant {
-        name: name.into(),
-        value,
-        rational: "—".into(),
-        provenance: Provenance::Estimate,
-        how,
-        certificate: None,
-        charts: vec![],
-        attained: None,
-    }
-}
-
 /// The row for one task. `theta1` is the SGD start; probe points are θ₁ plus seeded perturbations.
 pub fn sgd_row<P: IlProblem<f64>>(
     name: &str,
@@ -98,20 +85,15 @@ pub fn sgd_row<P: IlProblem<f64>>(
     s: EstimateSizes,
 ) -> Check {
     let result = "SGD, eq. 3.27 (real task, estimated constants)";
-    let fail = |d: String| Check {
-        id: "7".into(),
-        result: result.into(),
-        claim: format!("{name}: (1/K) Σ E‖∇F(θ_k)‖² ≤ Lησ² + 2B_F/(ηK)"),
-        assumptions: vec![],
-        constants: vec![],
-        bound: None,
-        measured: None,
-        tightness: None,
-        method: Method::Estimate,
-        verdict: Verdict::Inconclusive,
-        erratum: None,
-        role: Role::Thesis,
-        details: d,
+    let fail = |d: String| {
+        Check::builder(
+            "7",
+            result,
+            format!("{name}: (1/K) Σ E‖∇F(θ_k)‖² ≤ Lησ² + 2B_F/(ηK)"),
+            Role::Thesis,
+        )
+        .details(d)
+        .decided(Method::Estimate, Verdict::Inconclusive)
     };
     // B̂_F.
     let mut c = Cost::default();
@@ -203,24 +185,28 @@ pub fn sgd_row<P: IlProblem<f64>>(
         f64::INFINITY
     };
     let informative = mean - 2.0 * se > 0.0;
-    Check {
-        id: "7".into(),
-        result: result.into(),
-        claim: format!("{name}: (1/K) Σ E‖∇F(θ_k)‖² ≤ L̂ησ̂² + 2B̂_F/(ηK), K = {}, η = {eta:.4}", s.k),
-        assumptions: vec!["constants are Monte-Carlo ESTIMATES (not certificates); L̂ is a local, sampled smoothness".into()],
-        constants: vec![
-            estimate("B_F", b_f, format!("F̂(θ₁) from {} roll-outs", s.m)),
-            estimate("σ²", sigma2, format!("max tr Var̂(g) over {} probe points (θ₁ ± {}), M = {}", s.probes, s.spread, s.m)),
-            estimate("L_F", l, format!("max ‖ḡ(θ+ρu) − ḡ(θ)‖/ρ over {} probes, ρ = {}, common random numbers", s.probes, s.rho)),
-        ],
-        bound: Some(bound),
-        measured: Some(Measured { value: mean, lcb: Some(mean - 2.0 * se), ucb: Some(mean + 2.0 * se), runs: Some(s.runs), alpha: None }),
-        tightness: Some(mean / bound),
-        method: Method::Estimate,
-        verdict: if informative { Verdict::from_bool(mean <= bound) } else { Verdict::Uninformative },
-        erratum: Some("E2".into()),
-        role: Role::Thesis,
-        details: format!(
+    let verdict = if informative {
+        Verdict::from_bool(mean <= bound)
+    } else {
+        Verdict::Uninformative
+    };
+    Check::builder(
+        "7",
+        result,
+        format!("{name}: (1/K) Σ E‖∇F(θ_k)‖² ≤ L̂ησ̂² + 2B̂_F/(ηK), K = {}, η = {eta:.4}", s.k),
+        Role::Thesis,
+    )
+    .assumptions(["constants are Monte-Carlo ESTIMATES (not certificates); L̂ is a local, sampled smoothness"])
+    .constants(vec![
+        Constant::estimate("B_F", b_f, format!("F̂(θ₁) from {} roll-outs", s.m)),
+        Constant::estimate("σ²", sigma2, format!("max tr Var̂(g) over {} probe points (θ₁ ± {}), M = {}", s.probes, s.spread, s.m)),
+        Constant::estimate("L_F", l, format!("max ‖ḡ(θ+ρu) − ḡ(θ)‖/ρ over {} probes, ρ = {}, common random numbers", s.probes, s.rho)),
+    ])
+    .bound(bound)
+    .measured(Measured::statistic(mean).with_interval(mean - 2.0 * se, mean + 2.0 * se).with_runs(s.runs))
+    .tightness(mean / bound)
+    .erratum("E2")
+    .details(format!(
             "ESTIMATES: B̂_F = {b_f:.4e}, σ̂² = {sigma2:.4e}, L̂ = {l:.4e}; η = min({}, 1/L̂) = {eta:.4e}; X̄ = {mean:.4e} ± {se:.2e} (s.e. over {} runs; ‖∇F‖² at every {}-th iterate, unbiased from M = {} trajectories), B̂ = {bound:.4e}, X̄/B̂ = {:.3e}{}{}",
             s.eta0,
             s.runs,
@@ -229,6 +215,6 @@ pub fn sgd_row<P: IlProblem<f64>>(
             mean / bound,
             if mean > 1e6 * bound { " — SGD diverged: the local estimates do not describe the task" } else { "" },
             if informative { "; point estimates against estimated constants: not a certificate" } else { "; UNINFORMATIVE: X̄ is within 2 s.e. of 0: the per-iterate ‖∇F‖² estimates are dominated by their variance correction, the measurement is noise" }
-        ),
-    }
+    ))
+    .decided(Method::Estimate, verdict)
 }

@@ -1,4 +1,4 @@
-//! The checks of the theorem table, each a function returning [`crate::check::Check`] rows.
+//! The checks of the theorem table, each a function returning [`crate::record::check::Check`] rows.
 
 pub mod constants;
 pub mod estimated;

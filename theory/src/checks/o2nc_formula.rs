@@ -5,7 +5,7 @@
 //! 2TΔ₀/(δN) + 3G/√T must both be ≤ the corollary 2Δ₀/(δN) + max(5G^{2/3}Δ₀^{1/3}/(Nδ)^{1/3}, 6G/√N).
 
 use crate::bounds::{o2nc_corollary, o2nc_intermediate, o2nc_params, o2nc_theorem, upper};
-use crate::check::{Check, Measured, Method, Role, Verdict};
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use rand::{Rng, SeedableRng};
 
 /// The worst ratios found over `cases` random parameter sets.
@@ -44,24 +44,22 @@ pub fn ratios(cases: usize, seed: u64, scale: f64) -> Ratios {
 pub fn row(cases: usize, seed: u64) -> Check {
     let r = ratios(cases, seed, 1.0);
     let ok = r.theorem <= upper(1.0) && r.intermediate <= upper(1.0);
-    Check {
-        id: "3c".into(),
-        result: "Online-to-non-convex, corollary (3.71)".into(),
-        claim: format!(
+    let worst = r.theorem.max(r.intermediate);
+    Check::builder(
+        "3c",
+        "Online-to-non-convex, corollary (3.71)",
+        format!(
             "theorem-level bound and the thesis's intermediate line are ≤ (3.71) at {cases} sampled (N, δ, G, Δ₀) (no proof for all)"
         ),
-        assumptions: vec!["σ = G; T = min(⌈(GNδ/Δ₀)^{2/3}⌉, ⌊N/2⌋), K = ⌊N/T⌋".into()],
-        constants: vec![],
-        bound: Some(1.0),
-        measured: Some(Measured::exact(r.theorem.max(r.intermediate))),
-        tightness: Some(r.theorem.max(r.intermediate)),
-        method: Method::Sampled,
-        verdict: Verdict::from_bool(ok),
-        erratum: None,
-        role: Role::Thesis,
-        details: format!(
-            "{cases} seeded random parameter sets (log-uniform δ, G, Δ₀; uniform N), evaluated in f64 with a relative slack of 10⁻¹²: max theorem/corollary = {:.4}, max intermediate/corollary = {:.4}",
-            r.theorem, r.intermediate
-        ),
-    }
+        Role::Thesis,
+    )
+    .assumptions(["σ = G; T = min(⌈(GNδ/Δ₀)^{2/3}⌉, ⌊N/2⌋), K = ⌊N/T⌋"])
+    .bound(1.0)
+    .measured(Measured::exact(worst))
+    .tightness(worst)
+    .details(format!(
+        "{cases} seeded random parameter sets (log-uniform δ, G, Δ₀; uniform N), evaluated in f64 with a relative slack of 10⁻¹²: max theorem/corollary = {:.4}, max intermediate/corollary = {:.4}",
+        r.theorem, r.intermediate
+    ))
+    .decided(Method::Sampled, Verdict::from_bool(ok))
 }

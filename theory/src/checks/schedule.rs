@@ -2,27 +2,19 @@
 //! Theorem S, and the thesis's own route fails for k = 1..23 (erratum E7). Proved with rational
 //! cube-root enclosures ([`crate::schedule`]).
 
-use crate::check::{Check, Method, Role, Verdict};
+use crate::record::check::{Check, Method, Role, Verdict};
 use crate::schedule::check_schedule;
 
 /// The two rows: corrected conditions (holds) and the thesis route (fails for k ≤ 23).
 pub fn rows(k_max: u64) -> Vec<Check> {
     let r = check_schedule(k_max);
     let corrected_ok = r.c1_not_proved.is_empty() && r.c2_not_proved.is_empty();
-    let base = |id: &str, claim: String, verdict, role, details: String| Check {
-        id: id.into(),
-        result: "STORM, eq. 3.60 (schedule 3.43)".into(),
-        claim,
-        assumptions: vec!["η_k = (1/4L)(7/(k+7))^{1/3}, a_{k+1} = 16L²η_k²".into()],
-        constants: vec![],
-        bound: None,
-        measured: None,
-        tightness: None,
-        method: Method::Rigorous,
-        verdict,
-        erratum: Some("E7".into()),
-        role,
-        details,
+    let base = |id: &str, claim: String, verdict, role, details: String| {
+        Check::builder(id, "STORM, eq. 3.60 (schedule 3.43)", claim, role)
+            .assumptions(["η_k = (1/4L)(7/(k+7))^{1/3}, a_{k+1} = 16L²η_k²"])
+            .erratum("E7")
+            .details(details)
+            .decided(Method::Rigorous, verdict)
     };
     vec![
         base(

@@ -4,16 +4,17 @@
 //!
 //! * Row 8c: its constants B_F (exact) and L_F ≥ sup ‖∇²F‖₂ (via ‖mag H‖_F), σ², G², G_F, G_∞ over
 //!   the stated box `[−R, R]²`, by 2-D interval branch-and-bound, each certificate re-checked box by
-//!   box by the second route ([`crate::recheck`]) and tiled exactly.
+//!   box by the second route ([`crate::certify::recheck`]) and tiled exactly.
 //! * Row 1b: the SGD bound (3.27) on it, by Monte Carlo over seeded runs of the kit's SGD with the
 //!   exact ∇F at every iterate (forward DP in intervals, the lower end of each run's statistic) and
 //!   the decision rule of [`crate::stats`]. The constants hold on the box only, so every iterate of
 //!   every run is checked to lie in it; if one leaves, the row says so and is inconclusive.
 
 use crate::bounds::{sgd_constant, sgd_step_admissible, upper};
-use crate::check::{Check, Measured, Method, Role, Verdict};
-use crate::checks::constants::{ToyConstants, compute};
-use crate::recheck::Coverage;
+use crate::certify::box_constants::{ToyConstants, compute};
+use crate::certify::recheck::Coverage;
+use crate::checks::constants::toy_row;
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
@@ -197,25 +198,15 @@ pub fn sgd_row(
     } else {
         Role::NegativeControl
     };
-    let mut row = Check {
-        id: if claim_scale == 1.0 { "1b" } else { "1b.ctl" }.into(),
-        result: result.into(),
-        claim,
-        assumptions: vec![
+    let id = if claim_scale == 1.0 { "1b" } else { "1b.ctl" };
+    let mut row = Check::builder(id, result, claim, role)
+        .assumptions([
             format!("(S1) F L-smooth on the box {domain:?}; every iterate is checked to lie in it"),
             "(S2) E g = ∇F, E‖g‖² ≤ σ² + ‖∇F‖² (c = 1)".into(),
             "(S3) fresh τ_k ∼ p(·; θ_k), η ≤ 1/(Lc)".into(),
-        ],
-        constants: k.all(),
-        bound: None,
-        measured: None,
-        tightness: None,
-        method: Method::Statistical,
-        verdict: Verdict::Inconclusive,
-        erratum: None,
-        role,
-        details: String::new(),
-    };
+        ])
+        .constants(k.all())
+        .decided(Method::Statistical, Verdict::Inconclusive);
     if !sgd_step_admissible(l, 1.0, eta) {
         row.details = format!("side condition η ≤ 1/(Lc) fails: η = {eta}, L = {l}");
         return row;
@@ -233,13 +224,12 @@ pub fn sgd_row(
     let stats = Sample::new(&sample.lows, b);
     let mean_mid = sample.mids.iter().sum::<f64>() / sample.mids.len() as f64;
     let (lcb, ucb) = (stats.lcb(s.alpha), stats.ucb(s.alpha));
-    row.measured = Some(Measured {
-        value: mean_mid,
-        lcb: Some(lcb),
-        ucb: Some(ucb),
-        runs: Some(s.runs),
-        alpha: Some(s.alpha),
-    });
+    row.measured = Some(
+        Measured::statistic(mean_mid)
+            .with_interval(lcb, ucb)
+            .with_runs(s.runs)
+            .with_alpha(s.alpha),
+    );
     row.tightness = Some(mean_mid / bound);
     row.verdict = if sample.left > 0 {
         Verdict::Inconclusive
@@ -294,14 +284,14 @@ pub fn sizes(full: bool) -> SecondToySizes {
     SecondToySizes {
         tol: if full { 0.02 } else { 0.1 },
         max_boxes: if full { 50_000 } else { 5_000 },
-        coverage: crate::recheck::coverage_for(full),
+        coverage: crate::certify::recheck::coverage_for(full),
         sgd: SgdSizes {
             runs: if full { 10_000 } else { 200 },
             k: 2_000,
             eta: (1, 100),
             alpha: crate::stats::bonferroni(
-                crate::suite::FAMILY_ALPHA,
-                crate::suite::STATISTICAL_CLAIMS + 1,
+                crate::protocol::FAMILY_ALPHA,
+                crate::protocol::STATISTICAL_CLAIMS + 1,
             ),
         },
     }
@@ -320,7 +310,7 @@ pub fn rows(s: SecondToySizes) -> Result<Vec<Check>, String> {
         .map_err(|e| e.to_string())?;
     let name = "M(1/2, 1/4, 1/2, 4), P2' per state (c = 1/2)";
     Ok(vec![
-        k.row_with(name, &dom, s.coverage, "8c"),
+        toy_row(&k, name, &dom, s.coverage, "8c"),
         sgd(&m2, name, &k, &dom, &[0.0, 0.0], s.sgd, 1.0),
     ])
 }

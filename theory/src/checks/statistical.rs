@@ -23,14 +23,14 @@
 //! The scales are fixed in advance: ÷ 100 puts the stated bound below the measured mean of rows
 //! 1 and 3b (tightness ≈ 0.04 and 0.5); row 2c's tightness is ≈ 0.01, so ÷ 200.
 
-use crate::check::Check;
-use crate::check::Role;
-use crate::checks::constants::ToyConstants;
+use crate::certify::box_constants::ToyConstants;
+use crate::certify::global::GlobalConstants;
 use crate::checks::montecarlo::{self, McSettings, O2ncVariant};
 use crate::checks::storm::{self, StormVariant};
 use crate::checks::tracking::{self, M1_WEIGHT_MAX, StormRange, Tracking, TrackingSpec};
-use crate::global::GlobalConstants;
-use crate::suite::Sizes;
+use crate::protocol::Sizes;
+use crate::record::check::Check;
+use crate::record::check::Role;
 use ilopt::problem::Weighting;
 use ilopt::toy::ToyMdp;
 
@@ -125,7 +125,7 @@ pub fn o2nc_tracking_spec(variant: O2ncVariant, n: u64, c: f64) -> TrackingSpec 
 }
 
 /// The bound on |u_{k+1}| of a STORM variant on M1 (T = 3, P2' with c = 1/2), from the global
-/// G_∞ and the closed-form a.s. bound ([`crate::constants::tied_softmax_g_inf_closed_form`]):
+/// G_∞ and the closed-form a.s. bound ([`crate::certify::box_constants::tied_softmax_g_inf_closed_form`]):
 /// trajectory weight |w g| ≤ w_max G_∞; per decision every term carries a weight ≤ w_max, so
 /// |g̃| ≤ w_max · (the triangle-inequality bound of the closed form); unweighted |g| ≤ G_∞.
 pub fn m1_storm_range(variant: StormVariant, g: &GlobalConstants) -> StormRange {
@@ -134,7 +134,8 @@ pub fn m1_storm_range(variant: StormVariant, g: &GlobalConstants) -> StormRange 
             w: M1_WEIGHT_MAX * g.g_inf.value,
         },
         StormVariant::Weighted(Weighting::PerDecision) => StormRange::Recursion {
-            w: M1_WEIGHT_MAX * crate::constants::tied_softmax_g_inf_closed_form(3, 0.5),
+            w: M1_WEIGHT_MAX
+                * crate::certify::box_constants::tied_softmax_g_inf_closed_form(3, 0.5),
         },
         StormVariant::Unweighted => StormRange::Recursion { w: g.g_inf.value },
         StormVariant::PrintedAlgorithm4 => StormRange::Printed,

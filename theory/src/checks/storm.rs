@@ -2,7 +2,7 @@
 //! (3.43), and — as a secondary check — the adaptive Cutkosky–Orabona schedule of Algorithm 4
 //! against their Theorem 1 (math.md §§3.2, 3.3, 7.2).
 //!
-//! Constants come from [`crate::global`]: they hold on all of ℝ (ℝ² for L̃), so no box has to
+//! Constants come from [`crate::certify::global`]: they hold on all of ℝ (ℝ² for L̃), so no box has to
 //! contain the STORM iterates. L = max(L_F, L̃) with L̃ the rigorous (A4) constant for the
 //! trajectory (prefix) importance weight, which is the weight the runs use.
 //!
@@ -13,10 +13,10 @@
 use crate::bounds::{
     cutkosky_orabona, cutkosky_orabona_params, storm_fixed, storm_schedule, upper,
 };
-use crate::check::{Check, Measured, Method, Role, Verdict};
+use crate::certify::global::GlobalConstants;
 use crate::checks::montecarlo::{McSettings, Runs};
 use crate::checks::tracking::{Momentum, StormRange, StormTracker, Tracking};
-use crate::global::GlobalConstants;
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::printed::PrintedAlgorithm4Config;
@@ -138,28 +138,17 @@ fn row(
     erratum: &str,
     extra: String,
 ) -> Check {
-    let base = Check {
-        id: id.into(),
-        result: result.into(),
-        claim,
-        assumptions,
-        constants: k.summary(),
-        bound: Some(bound),
-        measured: None,
-        tightness: None,
-        method: Method::Statistical,
-        verdict: Verdict::Inconclusive,
-        erratum: Some(erratum.into()),
-        role,
-        details: String::new(),
-    };
+    let header = Check::builder(id, result, claim, role)
+        .assumptions(assumptions)
+        .constants(k.summary())
+        .bound(bound)
+        .erratum(erratum);
     let (lows, mids) = match sims {
         Ok(x) => x,
         Err(e) => {
-            return Check {
-                details: e.clone(),
-                ..base
-            };
+            return header
+                .details(e.clone())
+                .decided(Method::Statistical, Verdict::Inconclusive);
         }
     };
     let sample = Sample::new(lows, sample_range);
@@ -167,17 +156,10 @@ fn row(
     let lcb = sample.lcb(mc.alpha);
     // The statistic is an average of ‖∇F‖² (resp. ‖∇F‖), so it cannot exceed its range bound.
     let verdict = assess(&sample, upper(bound), sample_range, mc.alpha);
-    Check {
-        measured: Some(Measured {
-            value: mean_mid,
-            lcb: Some(lcb),
-            ucb: Some(sample.ucb(mc.alpha)),
-            runs: Some(mc.runs),
-            alpha: Some(mc.alpha),
-        }),
-        tightness: Some(mean_mid / bound),
-        verdict,
-        details: format!(
+    header
+        .measured(Measured::from_sample(&sample, mc.alpha).with_value(mean_mid))
+        .tightness(mean_mid / bound)
+        .details(format!(
             "R = {} seeded runs; X̄ = {mean_mid:.5}, LCB = {lcb:.5}, UCB = {:.5} (max of Hoeffding, empirical Bernstein, betting at α/3 each; α = {:.1e}, range [0, {sample_range:.4}]), B = {bound:.5}; flags any B < {lcb:.5}, minimum detectable violation X̄ − LCB = {:.5}; the statistic cannot exceed {sample_range:.4}{}; {extra}",
             mc.runs,
             sample.ucb(mc.alpha),
@@ -188,9 +170,8 @@ fn row(
             } else {
                 ""
             },
-        ),
-        ..base
-    }
+        ))
+        .decided(Method::Statistical, verdict)
 }
 
 /// The algorithm a run of check 2c uses: IS-STORM (the theorem's algorithm) or a negative control

@@ -6,7 +6,7 @@
 //! Every quantity is computed by the kit's engine (F and ∇F by X2, G by the exact RRM map), and
 //! compared with math.md's closed forms (A₂, A₁, A₀, p_PS, κ), an independent route.
 
-use crate::check::{Check, Measured, Method, Role, Verdict};
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::exact::forward::forward;
 use ilopt::exact::rrm::rrm_map;
 use ilopt::scalar::{BigRational, Scalar};
@@ -232,21 +232,17 @@ pub fn rows(m: &Instance) -> Vec<Check> {
     let fd = match analyse(m) {
         Ok(f) => f,
         Err(e) => {
-            return vec![Check {
-                id: "5".into(),
-                result: "Theorem 3.1".into(),
-                claim: format!("{name}: analysis"),
-                assumptions: vec![],
-                constants: vec![],
-                bound: None,
-                measured: None,
-                tightness: None,
-                method: Method::Exact,
-                verdict: Verdict::Inconclusive,
-                erratum: Some("E15".into()),
-                role: Role::Corrected,
-                details: e,
-            }];
+            return vec![
+                Check::builder(
+                    "5",
+                    "Theorem 3.1",
+                    format!("{name}: analysis"),
+                    Role::Corrected,
+                )
+                .erratum("E15")
+                .details(e)
+                .decided(Method::Exact, Verdict::Inconclusive),
+            ];
         }
     };
     let base = |id: &str,
@@ -254,22 +250,15 @@ pub fn rows(m: &Instance) -> Vec<Check> {
                 ok: bool,
                 role: Role,
                 details: String,
-                measured: Option<Measured>| Check {
-        id: id.into(),
-        result: "Theorem 3.1 (DAgger → stable point)".into(),
-        claim,
-        assumptions: vec![format!(
-            "{name}, direct parameterisation P1, Brier loss, aliased states"
-        )],
-        constants: vec![],
-        bound: None,
-        measured,
-        tightness: None,
-        method: Method::Exact,
-        verdict: Verdict::from_bool(ok),
-        erratum: Some("E15".into()),
-        role,
-        details,
+                measured: Option<Measured>| {
+        Check::builder(id, "Theorem 3.1 (DAgger → stable point)", claim, role)
+            .assumptions([format!(
+                "{name}, direct parameterisation P1, Brier loss, aliased states"
+            )])
+            .maybe_measured(measured)
+            .erratum("E15")
+            .details(details)
+            .decided(Method::Exact, Verdict::from_bool(ok))
     };
     let rrm_exact = fd.rrm_ratios.iter().all(|r| *r == fd.kappa);
     let closed_forms = fd.closed_form_agrees && fd.ps_closed_form_agrees;
@@ -390,26 +379,20 @@ pub fn dagger_row(m: &Instance, s: DaggerSizes) -> Check {
     use ilopt::algo::dataset::{InnerConfig, Retrain};
     use ilopt::algo::{AlgorithmConfig, Num, RunConfig, Runner, StoppingRule, Termination};
     let name = format!("M({}, {}, {}, {})", m.mu_a, m.p0, m.p1, m.t);
-    let mut row = Check {
-        id: "5e".into(),
-        result: "Theorem 3.1 (DAgger → stable point)".into(),
-        claim: format!(
+    let mut row = Check::builder(
+        "5e",
+        "Theorem 3.1 (DAgger → stable point)",
+        format!(
             "{name}: the kit's DAgger (β = 0, aggregated, exact argmin), K = {} iterations × {} trajectories: E p_K is closer to p_PS than to p_PO",
             s.iterations, s.trajectories
         ),
-        assumptions: vec![format!(
-            "{name}, direct parameterisation P1, Brier loss, aliased states"
-        )],
-        constants: vec![],
-        bound: None,
-        measured: None,
-        tightness: None,
-        method: Method::Statistical,
-        verdict: Verdict::Inconclusive,
-        erratum: Some("E15".into()),
-        role: Role::Corrected,
-        details: String::new(),
-    };
+        Role::Corrected,
+    )
+    .assumptions([format!(
+        "{name}, direct parameterisation P1, Brier loss, aliased states"
+    )])
+    .erratum("E15")
+    .decided(Method::Statistical, Verdict::Inconclusive);
     let fd = match analyse(m) {
         Ok(f) => f,
         Err(e) => {
@@ -478,13 +461,12 @@ pub fn dagger_row(m: &Instance, s: DaggerSizes) -> Check {
     } else {
         Verdict::Inconclusive
     };
-    row.measured = Some(Measured {
-        value: sample.mean,
-        lcb: Some(lcb),
-        ucb: Some(ucb),
-        runs: Some(s.runs),
-        alpha: Some(s.alpha),
-    });
+    row.measured = Some(
+        Measured::statistic(sample.mean)
+            .with_interval(lcb, ucb)
+            .with_runs(s.runs)
+            .with_alpha(s.alpha),
+    );
     row.details = format!(
         "R = {} seeded runs of the kit's DAgger; mean p_K = {:.5}, interval [{lcb:.5}, {ucb:.5}] (α = {:.1e}, two-sided); p_PS = {} ≈ {ps:.5}, p_PO = {} ≈ {po:.5}, midpoint {mid:.5}",
         s.runs, sample.mean, s.alpha, fd.p_ps, fd.p_po

@@ -29,7 +29,7 @@
 //! alternative), the betting bound reflects the stretches where the capital grew and the interval
 //! need not contain z̄.
 
-use crate::check::{Check, Measured, Method, Role, Verdict};
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::ZeroMeanTest;
 use ilopt::scalar::Interval;
 
@@ -256,49 +256,33 @@ pub struct TrackingSpec {
 /// The row of a tracking test from its recorded values at level `alpha` (two-sided): fails if 0 is
 /// outside the interval, uninformative if the minimum detectable bias is the whole range.
 pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) -> Check {
-    let base = Check {
-        id: spec.id,
-        result: spec.result,
-        claim: spec.claim,
-        assumptions: spec.assumptions,
-        constants: vec![],
-        bound: None,
-        measured: None,
-        tightness: None,
-        method: Method::Statistical,
-        verdict: Verdict::Inconclusive,
-        erratum: Some(spec.erratum),
-        role: spec.role,
-        details: String::new(),
-    };
+    let header = Check::builder(spec.id, spec.result, spec.claim, spec.role)
+        .assumptions(spec.assumptions)
+        .erratum(spec.erratum);
     let t = match tracking {
         Ok(t) if t.lows.len() >= 2 => t,
         Ok(_) => {
-            return Check {
-                details: "fewer than two recorded steps".into(),
-                ..base
-            };
+            return header
+                .details("fewer than two recorded steps")
+                .decided(Method::Statistical, Verdict::Inconclusive);
         }
         Err(e) => {
-            return Check {
-                details: e.clone(),
-                ..base
-            };
+            return header
+                .details(e.clone())
+                .decided(Method::Statistical, Verdict::Inconclusive);
         }
     };
     let test = ZeroMeanTest::new(&t.lows, &t.highs, 1.0, alpha);
     let verdict = test.verdict();
     let mdb = test.min_detectable_bias();
-    Check {
-        measured: Some(Measured {
-            value: test.mean,
-            lcb: Some(test.lcb),
-            ucb: Some(test.ucb),
-            runs: Some(t.runs),
-            alpha: Some(alpha),
-        }),
-        verdict,
-        details: format!(
+    header
+        .measured(
+            Measured::statistic(test.mean)
+                .with_interval(test.lcb, test.ucb)
+                .with_runs(t.runs)
+                .with_alpha(alpha),
+        )
+        .details(format!(
             "{}; {} runs, {} steps; z̄ = {:.3e}, two-sided {:.2}% interval [{:.3e}, {:.3e}] (Azuma–Hoeffding ∨ betting at α/4 each per side, valid for martingale differences; α = {:.1e}), range [−1, 1] (z = h·x/c); minimum detectable bias {:.3e} (in units of c) → {}",
             spec.context,
             t.runs,
@@ -317,7 +301,6 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
                 (Verdict::Uninformative, _) => "the interval spans the range (no power)",
                 (Verdict::Inconclusive, _) => "inconclusive",
             }
-        ),
-        ..base
-    }
+        ))
+        .decided(Method::Statistical, verdict)
 }

@@ -3,7 +3,7 @@
 //! (E10), the printed Algorithm 5's sampling at θ_n instead of w_n (E11), and the printed
 //! Algorithm 4 update (E9), whose mean direction is (2 − a)∇F instead of ∇F.
 
-use crate::check::{Check, Measured, Method, Role, Verdict};
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::exact::enumerate::moments;
 use ilopt::exact::forward::forward;
 use ilopt::exact::importance::{unweighted_expectation, weighted_expectation};
@@ -31,21 +31,13 @@ fn row(
     worst: Q,
     details: String,
 ) -> Check {
-    Check {
-        id: id.into(),
-        result: "Unbiasedness, eqs. 3.16/3.18".into(),
-        claim,
-        assumptions: vec!["finite MDP; l_t a function of (s_t, θ) only (E1)".into()],
-        constants: vec![],
-        bound: Some(0.0),
-        measured: Some(Measured::exact(Scalar::to_f64(&worst))),
-        tightness: None,
-        method: Method::Exact,
-        verdict: Verdict::from_bool(worst == Q::zero()),
-        erratum: erratum.map(Into::into),
-        role,
-        details,
-    }
+    Check::builder(id, "Unbiasedness, eqs. 3.16/3.18", claim, role)
+        .assumptions(["finite MDP; l_t a function of (s_t, θ) only (E1)"])
+        .bound(0.0)
+        .measured(Measured::exact(Scalar::to_f64(&worst)))
+        .maybe_erratum(erratum.map(Into::into))
+        .details(details)
+        .decided(Method::Exact, Verdict::from_bool(worst == Q::zero()))
 }
 
 /// E[g(θ, τ)] − ∇F(θ) over `(mdp, θ)` pairs, exactly; the claim holds iff every difference is 0.
@@ -272,18 +264,11 @@ pub fn printed_algorithm_4_visited(
             c.result = "STORM, Algorithm 4 as printed".into();
             c
         }
-        (Err(e), _) | (_, Err(e)) => Check {
-            verdict: crate::check::Verdict::Inconclusive,
-            details: e,
-            ..row(
-                "4f",
-                claim,
-                Role::Thesis,
-                Some("E9"),
-                Q::zero(),
-                String::new(),
-            )
-        },
+        (Err(e), _) | (_, Err(e)) => {
+            let mut c = row("4f", claim, Role::Thesis, Some("E9"), Q::zero(), e);
+            c.verdict = Verdict::Inconclusive;
+            c
+        }
     }
 }
 
@@ -368,17 +353,10 @@ pub fn printed_algorithm_5_visited(
             c.result = "Online-to-non-convex, Algorithm 5 as printed".into();
             c
         }
-        Err(e) => Check {
-            verdict: crate::check::Verdict::Inconclusive,
-            details: e,
-            ..row(
-                "4e",
-                claim,
-                Role::Thesis,
-                Some("E11"),
-                Q::zero(),
-                String::new(),
-            )
-        },
+        Err(e) => {
+            let mut c = row("4e", claim, Role::Thesis, Some("E11"), Q::zero(), e);
+            c.verdict = Verdict::Inconclusive;
+            c
+        }
     }
 }

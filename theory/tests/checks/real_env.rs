@@ -10,7 +10,8 @@ use ilopt_theory::checks::real_env::{
     Mutation, Reference, cartpole_fixed, cartpole_theta, compare, mutated_estimate,
     obstacle_problem, obstacle_theta, rollout_marking_resets,
 };
-use ilopt_theory::suite::{Profile, REAL_SIGMA, real_environments};
+use ilopt_theory::protocol::{Profile, REAL_SIGMA};
+use ilopt_theory::suite::real_environments;
 use nalgebra::DVector;
 use rand::SeedableRng;
 
@@ -123,7 +124,7 @@ fn the_standard_error_contains_the_finite_difference_noise() {
 /// flagged, no claim fails, and the unbiased claims that say "holds" could have detected every
 /// control (each shows its minimum detectable bias).
 #[test]
-#[ignore = "the quick profile's real-environment rows: about a minute in release (cargo test --release -p ilopt-theory --test real_env -- --ignored)"]
+#[ignore = "the quick profile's real-environment rows: about a minute in release (cargo test --release -p ilopt-theory --test checks real_env:: -- --ignored)"]
 fn quick_profile_controls_flagged_and_oracle_passes() {
     let rows = real_environments(Profile::Quick).unwrap();
     let mut controls = 0;

@@ -7,47 +7,22 @@
 //!   maximum (K = 1000), holding at the full profile's K = 3·10⁴; each with a deliberately
 //!   understated bound that must be flagged.
 
-mod common;
-
+use crate::common::q;
+use crate::common::quick_global_constants;
 use ilopt::exact::enumerate::{for_each_prefix, moments, prefixes};
 use ilopt::exact::forward::forward;
 use ilopt::problem::Weighting;
-use ilopt::scalar::{BigRational, Dual, Scalar, parse_exact};
+use ilopt::scalar::{BigRational, Dual, Scalar};
 use ilopt::toy::ToyProblem;
 use ilopt::toy::estimator::{causal, per_decision};
+use ilopt_theory::certify::charts::{tail_jet, tied_table, verify_charts};
+use ilopt_theory::certify::global::{GlobalConstants, GlobalSizes, recheck_l_tilde};
 use ilopt_theory::check::{Role, Verdict};
 use ilopt_theory::checks::montecarlo::McSettings;
 use ilopt_theory::checks::storm;
-use ilopt_theory::global::{
-    GlobalConstants, GlobalSizes, recheck_l_tilde, tail_jet, tied_table, verify_charts,
-};
 use ilopt_theory::suite::m1_tied;
-use std::sync::OnceLock;
 
 type Q = BigRational;
-
-fn q(s: &str) -> Q {
-    parse_exact(s).unwrap()
-}
-
-/// The quick-profile constants (as in the suite).
-fn constants() -> &'static GlobalConstants {
-    static K: OnceLock<GlobalConstants> = OnceLock::new();
-    K.get_or_init(|| {
-        GlobalConstants::compute(
-            &m1_tied(),
-            &[q("0")],
-            Some(&q("7/8")),
-            GlobalSizes {
-                tol: 1e-2,
-                max_boxes: 200_000,
-                l_tilde_tol: 1.0,
-                l_tilde_boxes: 20_000,
-            },
-        )
-        .unwrap()
-    })
-}
 
 fn exact(x: f64) -> Q {
     Q::from_float(x).unwrap()
@@ -57,7 +32,7 @@ fn exact(x: f64) -> Q {
 /// (from the prefix probabilities) or the engine's per-decision estimator.
 fn v_is(w: Weighting, p: &ToyProblem<Q>, theta: &Q, prime: &Q) -> Q {
     match w {
-        Weighting::Trajectory => common::v_is_trajectory(p, theta, prime),
+        Weighting::Trajectory => crate::common::v_is_trajectory(p, theta, prime),
         Weighting::PerDecision => {
             let t_old = p.table(std::slice::from_ref(theta)).unwrap();
             let t_new = p.table(std::slice::from_ref(prime)).unwrap();
@@ -119,7 +94,7 @@ fn tail_chart_table_is_the_engines_table() {
 /// the exact quotient V_IS/(θ′ − θ)² for pairs near, far, and across the tails.
 #[test]
 fn global_constants_dominate_exact_values() {
-    let k = constants();
+    let k = quick_global_constants();
     assert!(k.verified());
     // The quick budget converges: L̃ within 0.1 of the value the branch-and-bound attains.
     let attained = k
@@ -193,7 +168,7 @@ fn global_constants_dominate_exact_values() {
 /// above every such quotient.
 #[test]
 fn an_understated_l_tilde_is_refuted() {
-    let k = constants();
+    let k = quick_global_constants();
     let p = ToyProblem::<Q>::new(&m1_tied());
     let mut best = (Q::zero(), String::new());
     for i in -16i64..=16 {
@@ -222,7 +197,7 @@ fn an_understated_l_tilde_is_refuted() {
 /// a box's recorded enclosure lowered (found by re-evaluating every box), L̃ understated.
 #[test]
 fn tampered_chart_certificates_are_rejected() {
-    let k = constants();
+    let k = quick_global_constants();
     let m1 = m1_tied();
     let good = &k.l_tilde.charts;
     assert!(verify_charts(good, 2).is_some());
@@ -248,7 +223,7 @@ fn tampered_chart_certificates_are_rejected() {
 
 #[test]
 fn check2c_at_k_1000_is_uninformative_and_an_understated_bound_is_flagged() {
-    let k = constants();
+    let k = quick_global_constants();
     let m1 = m1_tied();
     let mc = McSettings {
         runs: 200,
@@ -272,7 +247,7 @@ fn check2c_at_k_1000_is_uninformative_and_an_understated_bound_is_flagged() {
 
 #[test]
 fn check2d_is_uninformative_and_an_understated_bound_is_flagged() {
-    let k = constants();
+    let k = quick_global_constants();
     let m1 = m1_tied();
     let mc = McSettings {
         runs: 200,
@@ -291,7 +266,7 @@ fn check2d_is_uninformative_and_an_understated_bound_is_flagged() {
 
 /// The full-profile sizes: tighter L̃, K = 3·10⁴ (where (3.60*) is below G_F²), R = 500.
 #[test]
-#[ignore = "the full profile's size, about 5 minutes in release (both L̃ at tolerance 0.1 with a re-check, then 500 runs of 30 000 iterations for 2c and 2c.pd, 500 of 10 000 for 2d); CI skips it, run it by hand: cargo test --release -p ilopt-theory --test storm_checks -- --ignored"]
+#[ignore = "the full profile's size, about 5 minutes in release (both L̃ at tolerance 0.1 with a re-check, then 500 runs of 30 000 iterations for 2c and 2c.pd, 500 of 10 000 for 2d); CI skips it, run it by hand: cargo test --release -p ilopt-theory --test checks storm_checks:: -- --ignored"]
 fn check2_at_full_size() {
     let k = GlobalConstants::compute(
         &m1_tied(),
@@ -368,7 +343,8 @@ fn v_is_second_exact(weighting: Weighting, theta: &Q, prime: &Q) -> [Q; 3] {
 #[test]
 fn chart_enclosures_contain_exact_values() {
     use ilopt::scalar::Interval;
-    use ilopt_theory::global::{Chart, v_is_second, v_is_second_jet, v_is_second_mean_value};
+    use ilopt_theory::certify::v_is::{v_is_second, v_is_second_jet, v_is_second_mean_value};
+    use ilopt_theory::record::certificate::Chart;
     let m1 = m1_tied();
     let pd = ToyProblem::<Dual<Dual<Interval>>>::new(&m1);
     let p3 = ToyProblem::<Dual<Dual<Dual<Interval>>>>::new(&m1);

@@ -1,15 +1,12 @@
-//! The exact and rigorous checks of issue 4 (checks 2 part, 3 part, 4, 5), each with a deliberately
+//! The exact and rigorous checks (checks 2 part, 3 part, 4, 5), each with a deliberately
 //! wrong claim that the same machinery flags.
 
+use crate::common::q;
 use ilopt::problem::Weighting;
-use ilopt::scalar::{BigRational, parse_exact};
+use ilopt::scalar::BigRational;
 use ilopt::toy::ToyMdp;
 use ilopt_theory::check::{Role, Verdict};
 use ilopt_theory::checks::{o2nc_formula, schedule, thm31, unbiased};
-
-fn q(s: &str) -> BigRational {
-    parse_exact(s).unwrap()
-}
 
 fn example(name: &str) -> ToyMdp {
     ToyMdp::load(

@@ -10,92 +10,14 @@
 //! Box bounds are only valid for a box that provably contains every iterate; [`sgd_iterate_box`]
 //! gives one from an a.s. bound on the estimator.
 
-use crate::bnb::{BnbError, SupBound, sup_bound};
+use crate::certify::bnb::{BnbError, sup_bound};
+use crate::certify::recheck::{Coverage, Quantity, Recheck, recheck};
+use crate::record::certificate::Chart;
+use crate::record::constant::Constant;
 use ilopt::exact::enumerate::{moments, prefixes};
 use ilopt::exact::forward::forward;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
-use serde::{Deserialize, Serialize};
-
-/// How a constant was obtained.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Provenance {
-    /// Computed exactly in rationals.
-    Exact,
-    /// A rigorous upper bound (interval branch-and-bound; certificate attached).
-    Rigorous,
-    /// A statistical or sampled estimate — never a certificate.
-    Estimate,
-}
-
-/// A named constant with its value and provenance.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Constant {
-    /// Name as in math.md (L_F, σ², …).
-    pub name: String,
-    /// The value used by the bound (an upper bound unless exact).
-    pub value: f64,
-    /// The same value as an exact rational string (the f64 above is exactly this rational).
-    pub rational: String,
-    /// Exact, rigorous or estimate.
-    pub provenance: Provenance,
-    /// How it was obtained (domain, tolerance, boxes).
-    pub how: String,
-    /// The branch-and-bound certificate, if any.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub certificate: Option<SupBound>,
-    /// For a constant bounded over all of ℝ^d: one certificate per chart region
-    /// ([`crate::global`]); empty otherwise.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub charts: Vec<crate::global::ChartBound>,
-    /// For a rigorous constant: the largest value of the quantity actually attained at a point the
-    /// branch-and-bound evaluated, in the constant's own units (e.g. `√ sup ‖g‖²` for G_∞, not the
-    /// squared quantity the search bounds). It is a lower bound on the true supremum, so
-    /// `attained ≤ value` and the gap shows how tight the bound is.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub attained: Option<f64>,
-}
-
-impl Constant {
-    /// An exact rational constant.
-    pub fn exact(name: &str, q: &BigRational, how: &str) -> Self {
-        Self {
-            name: name.into(),
-            value: Scalar::to_f64(q),
-            rational: q.to_string(),
-            provenance: Provenance::Exact,
-            how: how.into(),
-            certificate: None,
-            charts: vec![],
-            attained: None,
-        }
-    }
-    /// A rigorous upper bound from branch-and-bound; `transform` maps the sup of the enclosed
-    /// function to the constant (e.g. a square root), and must be monotone and rounded upward.
-    /// A rigorous constant `value = transform(bound.upper)` (rounded up by the caller); the
-    /// attained value is `transform` applied to the branch-and-bound's best lower value.
-    fn rigorous(
-        name: &str,
-        bound: SupBound,
-        value: f64,
-        transform: impl Fn(f64) -> f64,
-        how: String,
-    ) -> Self {
-        let attained = Some(transform(bound.lower));
-        Self {
-            name: name.into(),
-            value,
-            rational: BigRational::from_float(value)
-                .map_or_else(|| "inf".into(), |q| q.to_string()),
-            provenance: Provenance::Rigorous,
-            how,
-            certificate: Some(bound),
-            charts: vec![],
-            attained,
-        }
-    }
-}
 
 /// `√max(x, 0)`, for attained values (lower bounds: no upward rounding).
 pub(crate) fn attained_sqrt(x: f64) -> f64 {
@@ -290,8 +212,8 @@ pub fn tied_softmax_g_inf_closed_form(horizon: usize, c: f64) -> f64 {
 /// `V_IS(θ, θ′) = Σ_τ̄ [p(τ̄;θ′)‖g(θ′)‖² − 2p(τ̄;θ)⟨g(θ′), g(θ)⟩ + p(τ̄;θ)²/p(τ̄;θ′)‖g(θ)‖²]`
 /// vanishes with zero gradient at θ′ = θ, so by Taylor `L̃² ≤ ½ sup_{θ,ϑ ∈ box} ‖∇²_{θ′}V_IS(θ, ϑ)‖`.
 /// The supremum is enclosed by 2-D branch-and-bound (1-D θ), with θ′ in `Dual<Dual<Interval>>`.
-/// (This is the whole-trajectory form of (A4), the one of math.md §3.2.) This box version is
-/// superseded for the checks by [`crate::global::l_tilde`], which bounds L̃ over all of ℝ².
+/// (This is the whole-trajectory form of (A4), the one of math.md §3.2.) It holds on the box
+/// only; the STORM checks use [`crate::certify::global::l_tilde`], which bounds L̃ over all of ℝ².
 ///
 /// # Errors
 /// [`BnbError`] if the engine fails on a box, or for a policy with more than one parameter.
@@ -349,7 +271,7 @@ pub fn l_tilde(
 /// ‖d_1‖ ≤ G_∞ and ‖d_{k+1}‖ ≤ G_∞ + (1 − a_{k+1})(‖d_k‖ + W G_∞), W ≥ the largest importance
 /// weight, so |θ_{K+1} − θ₁| ≤ Σ_k η_k ‖d_k‖ (computed with upward-rounded margins). The box grows
 /// like K^{4/3} (the a.s. bound on d_k grows like 1/a_k); the STORM checks do not need it, since
-/// their constants hold on all of ℝ ([`crate::global`]).
+/// their constants hold on all of ℝ ([`crate::certify::global`]).
 pub fn storm_iterate_box(theta1: f64, l: f64, k: u64, g_inf: f64, w_max: f64) -> [f64; 2] {
     let up = |x: f64| x * (1.0 + 1e-12);
     let mut d = g_inf;
@@ -360,4 +282,122 @@ pub fn storm_iterate_box(theta1: f64, l: f64, k: u64, g_inf: f64, w_max: f64) ->
         d = up(g_inf + (1.0 - a * 0.999_999).max(0.0) * (d + w_max * g_inf));
     }
     [theta1 - radius, theta1 + radius]
+}
+
+/// A rigorous constant, the quantity its certificate bounds, and the map from the certified
+/// supremum to the constant.
+type Certified<'a> = (&'a Constant, Quantity, fn(f64) -> f64);
+
+/// The constants on a box, and the row that reports them.
+#[derive(Debug, Clone)]
+pub struct ToyConstants {
+    /// B_F (exact).
+    pub b_f: Constant,
+    /// L_F (rigorous).
+    pub l_f: Constant,
+    /// σ² = sup Var (c = 1, rigorous).
+    pub sigma2: Constant,
+    /// G² = sup E‖g‖² (rigorous).
+    pub g2: Constant,
+    /// G_F = sup ‖∇F‖ (rigorous).
+    pub g_f: Constant,
+    /// G_∞ = sup ‖g‖ a.s. (rigorous).
+    pub g_inf: Constant,
+    /// The MDP the constants are for (the second route re-evaluates its certificates on it).
+    pub mdp: ToyMdp,
+}
+
+/// Compute every constant over `domain` for `mdp` at θ₁.
+///
+/// # Errors
+/// [`BnbError`] if an enclosure fails.
+pub fn compute(
+    mdp: &ToyMdp,
+    theta1: &[BigRational],
+    f_inf: Option<&BigRational>,
+    domain: &[[f64; 2]],
+    tol: f64,
+    max_boxes: usize,
+) -> Result<ToyConstants, BnbError> {
+    let one = BigRational::from_integer(1.into());
+    let zero = BigRational::from_integer(0.into());
+    Ok(ToyConstants {
+        b_f: b_f(mdp, theta1, f_inf).map_err(|m| BnbError::Evaluation {
+            bounds: vec![],
+            message: m,
+        })?,
+        l_f: l_f(mdp, domain, tol, max_boxes)?,
+        sigma2: sigma2(mdp, &one, domain, tol, max_boxes)?,
+        g2: sigma2(mdp, &zero, domain, tol, max_boxes)?,
+        g_f: gradient_norm(mdp, domain, tol, max_boxes)?,
+        g_inf: estimator_bound(mdp, domain, tol, max_boxes)?,
+        mdp: mdp.clone(),
+    })
+}
+
+impl ToyConstants {
+    /// Every constant, in report order.
+    pub fn all(&self) -> Vec<Constant> {
+        vec![
+            self.b_f.clone(),
+            self.l_f.clone(),
+            self.sigma2.clone(),
+            self.g2.clone(),
+            self.g_f.clone(),
+            self.g_inf.clone(),
+        ]
+    }
+
+    /// Every rigorous constant with the quantity its certificate bounds and the map from the
+    /// certified supremum to the constant.
+    fn certified(&self) -> [Certified<'_>; 5] {
+        fn id(s: f64) -> f64 {
+            s.max(0.0)
+        }
+        fn root(s: f64) -> f64 {
+            s.max(0.0).sqrt()
+        }
+        // For several parameters the L_F certificate records ‖∇²F‖_F itself (not squared).
+        [
+            (&self.l_f, Quantity::Hessian, id),
+            (&self.sigma2, Quantity::Variance, id),
+            (&self.g2, Quantity::SecondMoment, id),
+            (&self.g_f, Quantity::GradientSq, root),
+            (&self.g_inf, Quantity::MaxEstimateSq, root),
+        ]
+    }
+
+    /// Re-evaluate every certificate on `domain` by the second route ([`crate::certify::recheck`]).
+    pub fn recheck(&self, domain: &[[f64; 2]], coverage: Coverage) -> Vec<(String, Recheck)> {
+        let charts = vec![Chart::Core; domain.len()];
+        self.certified()
+            .iter()
+            .map(|(c, q, t)| {
+                let r = match &c.certificate {
+                    Some(cert) => {
+                        let mut r =
+                            recheck(&self.mdp, *q, &charts, domain, cert, cert.upper, coverage);
+                        if c.value
+                            .partial_cmp(&t(r.max_upper))
+                            .is_none_or(|o| o.is_lt())
+                        {
+                            r.failures.push(format!(
+                                "{} = {} < the re-checked bound {}",
+                                c.name,
+                                c.value,
+                                t(r.max_upper)
+                            ));
+                        }
+                        r
+                    }
+                    None => {
+                        let mut r = Recheck::empty();
+                        r.failures.push("no certificate".into());
+                        r
+                    }
+                };
+                (c.name.clone(), r)
+            })
+            .collect()
+    }
 }

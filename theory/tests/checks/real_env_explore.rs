@@ -1,10 +1,11 @@
 //! Exploration (ignored, and a no-op unless `ILOPT_EXPLORE` is set, so that CI's `--ignored` run
 //! skips it): print the real-environment rows at sizes from the environment (N, NFD, H, ETA,
-//! TASK = cp | ob | obe, SIGMA, PROFILE = full). `explore_old_obstacle` reproduces the former row
-//! 6's obstacle z-trend, e.g.
-//! `ILOPT_EXPLORE=1 N=300 NFD=200 H=0.005 cargo test --release -p ilopt-theory --test real_env_explore -- --ignored --nocapture explore_old`.
+//! TASK = cp | ob | obe, SIGMA, PROFILE = full). `explore_old_obstacle` reproduces the growth of
+//! the obstacle task's worst z with N at small sizes that `suite::OBSTACLE_Z_TREND` explains, e.g.
+//! `ILOPT_EXPLORE=1 N=300 NFD=200 H=0.005 cargo test --release -p ilopt-theory --test checks -- --ignored --nocapture real_env_explore::explore_old`.
 use ilopt::task::{AfterEnd, Horizon};
 use ilopt_theory::checks::real_env::*;
+use ilopt_theory::protocol::RealSizes;
 
 fn sizes() -> RealSizes {
     let g = |k: &str, d: f64| {

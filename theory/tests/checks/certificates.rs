@@ -5,24 +5,23 @@
 //! * one corrupted box makes the row fail: a bound lowered, a box removed, two boxes overlapping
 //!   (each its own test, on a 1-D certificate of row 8 and a 2-D certificate of row 8b).
 
+use crate::common::q;
 use ilopt::exact::enumerate::moments;
 use ilopt::exact::forward::forward;
 use ilopt::problem::Weighting;
-use ilopt::scalar::{BigRational, Dual, Scalar, parse_exact};
+use ilopt::scalar::{BigRational, Dual, Scalar};
 use ilopt::toy::ToyProblem;
+use ilopt_theory::certify::box_constants::{ToyConstants, compute};
+use ilopt_theory::certify::global::{GlobalConstants, GlobalSizes};
+use ilopt_theory::certify::recheck::{Coverage, Quantity, pieces};
 use ilopt_theory::check::Verdict;
-use ilopt_theory::checks::constants::{ToyConstants, compute};
+use ilopt_theory::checks::constants::{global_row, toy_row};
 use ilopt_theory::checks::second_toy::m2_two_groups;
-use ilopt_theory::global::{Chart, GlobalConstants, GlobalSizes};
-use ilopt_theory::recheck::{Coverage, Quantity, pieces};
+use ilopt_theory::record::certificate::Chart;
 use ilopt_theory::suite::m1_tied;
 use std::sync::OnceLock;
 
 type Q = BigRational;
-
-fn q(s: &str) -> Q {
-    parse_exact(s).unwrap()
-}
 
 const DOMAIN: [[f64; 2]; 1] = [[-64.0, 64.0]];
 
@@ -60,11 +59,11 @@ fn global_constants() -> &'static GlobalConstants {
 }
 
 fn row8(k: &ToyConstants) -> Verdict {
-    k.row("M1", &DOMAIN).verdict
+    toy_row(k, "M1", &DOMAIN, Coverage::All, "8").verdict
 }
 
 fn row8b(g: &GlobalConstants) -> Verdict {
-    g.row("M1").verdict
+    global_row(g, "M1", Coverage::All).verdict
 }
 
 /// math.md §1.4: at θ = 0, 1/2, 1 the variance, E g² and F′² of M1, exactly.
@@ -151,7 +150,7 @@ fn v_is_curvature_is_non_negative_on_the_diagonal() {
 #[test]
 fn rows_8_and_8b_hold_with_every_box_rechecked() {
     let k = box_constants();
-    let row = k.row("M1", &DOMAIN);
+    let row = toy_row(k, "M1", &DOMAIN, Coverage::All, "8");
     assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
     for (name, r) in k.recheck(&DOMAIN, Coverage::All) {
         assert!(r.passed() && r.tiling, "{name}: {r:?}");
@@ -159,13 +158,13 @@ fn rows_8_and_8b_hold_with_every_box_rechecked() {
         assert_eq!(r.boxes, c.certificate.unwrap().certificate.len());
     }
     let g = global_constants();
-    let row = g.row("M1");
+    let row = global_row(g, "M1", Coverage::All);
     assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
     assert!(row.details.contains("every box"), "{}", row.details);
 }
 
 /// The box of a certificate with the largest recorded bound.
-fn top(cert: &ilopt_theory::bnb::SupBound) -> usize {
+fn top(cert: &ilopt_theory::record::certificate::SupBound) -> usize {
     (0..cert.certificate.len())
         .max_by(|&a, &b| {
             cert.certificate[a].enclosure[1].total_cmp(&cert.certificate[b].enclosure[1])
@@ -239,7 +238,7 @@ fn a_lowered_bound_fails_rows_8_and_8b() {
         "the core × core region carries the supremum"
     );
     g.l_tilde.value = (cap / 2.0).sqrt().next_up();
-    let row = g.row("M1");
+    let row = global_row(&g, "M1", Coverage::All);
     assert_eq!(row.verdict, Verdict::Fails);
     assert!(
         row.details.contains("L̃: ") && row.details.contains("FAILED"),
@@ -264,14 +263,14 @@ fn a_removed_box_fails_rows_8_and_8b() {
         .unwrap();
     let n = region.bound.certificate.len();
     region.bound.certificate.remove(n / 2);
-    let row = g.row("M1");
+    let row = global_row(&g, "M1", Coverage::All);
     assert_eq!(row.verdict, Verdict::Fails);
     assert!(row.details.contains("tiling broken"), "{}", row.details);
 }
 
 /// Extend box i of a certificate by half its width along its first side, towards the inside of the
 /// domain: it then overlaps its neighbour (coverage is unchanged).
-fn overlap(cert: &mut ilopt_theory::bnb::SupBound, domain: &[[f64; 2]]) {
+fn overlap(cert: &mut ilopt_theory::record::certificate::SupBound, domain: &[[f64; 2]]) {
     let i = (0..cert.certificate.len())
         .find(|&i| cert.certificate[i].bounds[0][1] < domain[0][1])
         .unwrap();
@@ -293,7 +292,7 @@ fn overlapping_boxes_fail_rows_8_and_8b() {
         .unwrap();
     let domain = region.domain.clone();
     overlap(&mut region.bound, &domain);
-    let row = g.row("M1");
+    let row = global_row(&g, "M1", Coverage::All);
     assert_eq!(row.verdict, Verdict::Fails);
     assert!(row.details.contains("tiling broken"), "{}", row.details);
 }
@@ -328,7 +327,13 @@ fn second_toy_rows_at_a_small_size() {
     let m2 = m2_two_groups();
     let zero = q("0");
     let mut k = compute(&m2, &[zero.clone(), zero], None, &domain(), 0.5, 400).unwrap();
-    assert_eq!(k.row("M2", &domain()).verdict, Verdict::Holds);
+    assert_eq!(
+        toy_row(&k, "M2", &domain(), Coverage::All, "8").verdict,
+        Verdict::Holds
+    );
     k.l_f.certificate.as_mut().unwrap().certificate.remove(7);
-    assert_eq!(k.row("M2", &domain()).verdict, Verdict::Fails);
+    assert_eq!(
+        toy_row(&k, "M2", &domain(), Coverage::All, "8").verdict,
+        Verdict::Fails
+    );
 }

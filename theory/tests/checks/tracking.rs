@@ -1,36 +1,11 @@
 //! The tracking rows' decision and ranges, and their power against a dropped importance weight.
 //! (The rows at the table's own sizes are tested with the other statistical rows in `power.rs`.)
 
-use ilopt::scalar::parse_exact;
+use crate::common::{quick_global_constants, table_alpha};
 use ilopt_theory::check::Verdict;
 use ilopt_theory::checks::tracking::{self, StormRange};
-use ilopt_theory::global::{GlobalConstants, GlobalSizes};
-use ilopt_theory::stats::{ZeroMeanTest, bonferroni};
-use ilopt_theory::suite::{FAMILY_ALPHA, Profile, STATISTICAL_CLAIMS, m1_tied};
-use std::sync::OnceLock;
-
-fn global_constants() -> &'static GlobalConstants {
-    static K: OnceLock<GlobalConstants> = OnceLock::new();
-    K.get_or_init(|| {
-        let s = Profile::Quick.sizes();
-        GlobalConstants::compute(
-            &m1_tied(),
-            &[parse_exact("0").unwrap()],
-            Some(&parse_exact("7/8").unwrap()),
-            GlobalSizes {
-                tol: s.bnb_tol,
-                max_boxes: 200_000,
-                l_tilde_tol: s.l_tilde_tol,
-                l_tilde_boxes: s.l_tilde_boxes,
-            },
-        )
-        .unwrap()
-    })
-}
-
-fn alpha() -> f64 {
-    bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS)
-}
+use ilopt_theory::stats::ZeroMeanTest;
+use ilopt_theory::suite::m1_tied;
 
 /// The two-sided rule on a planted stream: mean 0 holds, a bias of a few times the minimum
 /// detectable one is flagged either way, and values of zero width everywhere give a point interval.
@@ -88,7 +63,7 @@ fn tracking_row_flags_a_dropped_weight_at_long_steps() {
     use ilopt_theory::check::Role;
     use ilopt_theory::checks::storm::tracking_sample;
     use ilopt_theory::checks::tracking::{M1_WEIGHT_MAX, Momentum, TrackingSpec, row};
-    let g = global_constants();
+    let g = quick_global_constants();
     let config = |correction| {
         AlgorithmConfig::Storm(StormConfig {
             schedule: StormSchedule::constant(Num::ratio(1, 4), Num::ratio(1, 4)),
@@ -120,7 +95,7 @@ fn tracking_row_flags_a_dropped_weight_at_long_steps() {
             10_000,
             StormRange::Recursion { w },
         );
-        let r = row(spec("long-steps"), &t, alpha());
+        let r = row(spec("long-steps"), &t, table_alpha());
         eprintln!("{correction:?}: {:?} {}", r.verdict, r.details);
         verdicts.push(r.verdict);
     }

@@ -3,24 +3,26 @@
 //! the statistic's maximum, and its negative controls (same K, R, α, same verdict code) reach the
 //! table's status.
 
+use crate::common::{quick_global_constants, table_alpha};
 use ilopt::problem::Weighting;
 use ilopt::scalar::parse_exact;
+use ilopt_theory::certify::box_constants::{ToyConstants, compute};
 use ilopt_theory::check::{Check, Role, Verdict};
-use ilopt_theory::checks::constants::{ToyConstants, compute};
 use ilopt_theory::checks::montecarlo::{
     self, McSettings, O2ncSample, O2ncVariant, sgd_row, sgd_sample,
 };
 use ilopt_theory::checks::statistical::{self, CONTROL_SCALE, O2NC_DELTA, SGD_ETA};
 use ilopt_theory::checks::storm::{self, StormVariant};
-use ilopt_theory::global::{GlobalConstants, GlobalSizes};
+use ilopt_theory::protocol::Profile;
 use ilopt_theory::report::status;
-use ilopt_theory::stats::bonferroni;
-use ilopt_theory::suite::{FAMILY_ALPHA, Profile, STATISTICAL_CLAIMS, m1_tied};
+use ilopt_theory::suite::m1_tied;
 use std::sync::OnceLock;
 
 /// The box of the table's SGD check (as the binary).
 fn domain() -> [[f64; 2]; 1] {
-    let r = 1000.0 * 0.05 * ilopt_theory::constants::tied_softmax_g_inf_closed_form(3, 0.5);
+    let r = 1000.0
+        * 0.05
+        * ilopt_theory::certify::box_constants::tied_softmax_g_inf_closed_form(3, 0.5);
     [[-r, r]]
 }
 
@@ -38,30 +40,6 @@ fn toy_constants() -> &'static ToyConstants {
         )
         .unwrap()
     })
-}
-
-fn global_constants() -> &'static GlobalConstants {
-    static K: OnceLock<GlobalConstants> = OnceLock::new();
-    K.get_or_init(|| {
-        let s = Profile::Quick.sizes();
-        GlobalConstants::compute(
-            &m1_tied(),
-            &[parse_exact("0").unwrap()],
-            Some(&parse_exact("7/8").unwrap()),
-            GlobalSizes {
-                tol: s.bnb_tol,
-                max_boxes: 200_000,
-                l_tilde_tol: s.l_tilde_tol,
-                l_tilde_boxes: s.l_tilde_boxes,
-            },
-        )
-        .unwrap()
-    })
-}
-
-/// The table's per-check level.
-fn alpha() -> f64 {
-    bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS)
 }
 
 /// The scale that puts a row's bound at `fraction` of its measured mean.
@@ -87,7 +65,7 @@ fn row1_power_at_the_tables_size() {
     let k = toy_constants();
     let mc = McSettings {
         runs: s.runs,
-        alpha: alpha(),
+        alpha: table_alpha(),
     };
     let sims = sgd_sample(&m1_tied(), 0.0, SGD_ETA, s.sgd_k, s.runs);
     let row = sgd_row(k, 0.0, SGD_ETA, s.sgd_k, mc, 1.0, &sims);
@@ -121,7 +99,7 @@ fn row3b_power_at_the_tables_size() {
     let k = toy_constants();
     let mc = McSettings {
         runs: s.runs,
-        alpha: alpha(),
+        alpha: table_alpha(),
     };
     let m1 = m1_tied();
     let sample = montecarlo::o2nc_sample(
@@ -175,11 +153,11 @@ fn row3b_power_at_the_tables_size() {
 #[test]
 fn row2c_is_informative_only_where_the_bound_is_below_the_statistics_maximum() {
     let s = Profile::Quick.sizes();
-    let g = global_constants();
+    let g = quick_global_constants();
     let m1 = m1_tied();
     let mc = McSettings {
         runs: 20,
-        alpha: alpha(),
+        alpha: table_alpha(),
     };
     for w in [Weighting::Trajectory, Weighting::PerDecision] {
         let v = StormVariant::Weighted(w);
@@ -215,9 +193,9 @@ fn row2c_is_informative_only_where_the_bound_is_below_the_statistics_maximum() {
 #[ignore = "≈ 2 minutes in release: the global constants, then 4 × 100 runs of 20 000 STORM iterations with exact ∇F"]
 fn storm_rows_and_controls_at_the_tables_size() {
     let s = Profile::Quick.sizes();
-    let g = global_constants();
+    let g = quick_global_constants();
     let m1 = m1_tied();
-    let rows = statistical::storm_rows(&m1, g, s, alpha());
+    let rows = statistical::storm_rows(&m1, g, s, table_alpha());
     let by_id = |id: &str| rows.iter().find(|r| r.id == id).unwrap();
     for id in ["2c", "2c.pd"] {
         let r = by_id(id);
@@ -273,9 +251,9 @@ fn toy_rows_and_controls_at_the_tables_size() {
     let s = Profile::Quick.sizes();
     let mc = McSettings {
         runs: s.runs,
-        alpha: alpha(),
+        alpha: table_alpha(),
     };
-    let rows = statistical::toy_rows(&m1_tied(), toy_constants(), global_constants(), s, mc);
+    let rows = statistical::toy_rows(&m1_tied(), toy_constants(), quick_global_constants(), s, mc);
     let by_id = |id: &str| rows.iter().find(|r| r.id == id).unwrap();
     for id in ["1", "3a", "3b"] {
         assert_eq!(by_id(id).verdict, Verdict::Holds, "{id}");

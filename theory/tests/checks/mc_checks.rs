@@ -3,8 +3,10 @@
 //! branch-and-bound tolerance to keep the test quick (they are still upper bounds).
 
 use ilopt::scalar::parse_exact;
+use ilopt_theory::certify::box_constants::{ToyConstants, compute};
+use ilopt_theory::certify::recheck::Coverage;
 use ilopt_theory::check::{Role, Verdict};
-use ilopt_theory::checks::constants::{ToyConstants, compute};
+use ilopt_theory::checks::constants::toy_row;
 use ilopt_theory::checks::montecarlo::{self, McSettings};
 use ilopt_theory::suite::m1_tied;
 use std::sync::OnceLock;
@@ -29,7 +31,7 @@ fn constants() -> &'static ToyConstants {
 #[test]
 fn check8_constants_are_rigorous_and_certified() {
     let k = constants();
-    let row = k.row("M1", &DOMAIN);
+    let row = toy_row(k, "M1", &DOMAIN, Coverage::All, "8");
     assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
     // Upper bounds above math.md's orientation values (§2: L ≈ 2.02, sup Var ≈ 2.82,
     // sup E g² ≈ 3.47, sup |g| ≈ 3.64, sup |F′| ≈ 0.857) and within the tolerance of the attained

@@ -1,12 +1,10 @@
 //! The rigorous L̃ of (A4) dominates the exact mean-square smoothness quotient
 //! V_IS(θ, θ′)/(θ′ − θ)², computed independently in rationals from the prefix enumeration.
 
-mod common;
-
-use common::v_is_trajectory;
+use crate::common::v_is_trajectory;
 use ilopt::scalar::{BigRational, Scalar};
 use ilopt::toy::ToyProblem;
-use ilopt_theory::constants::l_tilde;
+use ilopt_theory::certify::box_constants::l_tilde;
 use ilopt_theory::suite::m1_tied;
 
 type Q = BigRational;
