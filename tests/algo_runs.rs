@@ -18,8 +18,8 @@ use ilopt::algo::smile::SmileConfig;
 use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
 use ilopt::algo::storm_plus::StormPlusConfig;
 use ilopt::algo::{
-    Algorithm, AlgorithmConfig, Ctx, IterationMetrics, Num, RunConfig, RunRecord, Runner,
-    StoppingRule, Termination, replay, replay_field,
+    AlgoError, Algorithm, AlgorithmConfig, Ctx, IterationMetrics, Num, RunConfig, RunRecord,
+    Runner, StoppingRule, Termination, replay,
 };
 use ilopt::problem::{Cost, EstimatorForm, KitRng};
 use ilopt::scalar::{BigRational, Interval, Scalar, interval_contains_rational};
@@ -343,7 +343,7 @@ fn rational_runs_are_exact_and_enclosed_by_interval_runs() {
     let pf = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     for algorithm in field_configs() {
         let cfg = run_config(algorithm, 3, 4);
-        let q: RunRecord<BigRational> = replay_field(&cfg, &pq).unwrap();
+        let q: RunRecord<BigRational> = replay(&cfg, &pq).unwrap();
         let i: RunRecord<Interval> = replay(&cfg, &pi).unwrap();
         let f: RunRecord<f64> = replay(&cfg, &pf).unwrap();
         assert!(ok_end(&q.termination), "{}: {}", q.algorithm, q.termination);
@@ -367,7 +367,10 @@ fn field_builds_work_through_the_same_config_and_refuse_roots() {
     let pq = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
     for algorithm in root_configs() {
         let cfg = run_config(algorithm, 3, 2);
-        assert!(replay_field::<BigRational, _>(&cfg, &pq).is_err());
+        assert!(matches!(
+            replay::<BigRational, _>(&cfg, &pq),
+            Err(AlgoError::NeedsRoots { .. })
+        ));
     }
 }
 
@@ -560,7 +563,7 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
     };
     let theta0 = DVector::from_element(1, q(1, 2));
 
-    let mut bc = Bc::<BigRational, ToyProblem<BigRational>>::new_field(&BcConfig {
+    let mut bc = Bc::<BigRational, ToyProblem<BigRational>>::new(&BcConfig {
         trajectories_per_iteration: 25,
         inner: argmin_inner(),
         retrain: Retrain::FromScratch,
@@ -577,7 +580,7 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
         );
     }
 
-    let mut dagger = Dagger::<BigRational, ToyProblem<BigRational>>::new_field(&DaggerConfig {
+    let mut dagger = Dagger::<BigRational, ToyProblem<BigRational>>::new(&DaggerConfig {
         trajectories_per_iteration: 25,
         beta: BetaSchedule::Linear { iterations: 2 },
         aggregate: true,

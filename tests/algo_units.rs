@@ -9,17 +9,16 @@ use ilopt::algo::adam::{Adam, AdamConfig, AdamOptimizerConfig};
 use ilopt::algo::dagger::{BetaSchedule, Dagger, DaggerConfig};
 use ilopt::algo::dataset::{InnerConfig, Retrain, RuleConfig};
 use ilopt::algo::o2nc::O2ncConfig;
-use ilopt::algo::printed::{PrintedAlgorithm4Config, printed_algorithm_4_field};
+use ilopt::algo::printed::{PrintedAlgorithm4Config, printed_algorithm_4};
 use ilopt::algo::rmsprop::{RmsProp, RmsPropConfig, RmsPropOptimizerConfig};
 use ilopt::algo::sgd::{Sgd, SgdConfig, SgdStep};
 use ilopt::algo::storm::{Correction, Storm, StormConfig, StormSchedule};
 use ilopt::algo::storm_plus::{StormPlus, StormPlusConfig};
 use ilopt::algo::{
-    AlgoError, Algorithm, AlgorithmConfig, Ctx, Num, Roots, RunConfig, Runner, StoppingRule,
-    Termination,
+    AlgoError, Algorithm, AlgorithmConfig, Ctx, Num, RunConfig, Runner, StoppingRule, Termination,
 };
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
-use ilopt::scalar::{BigRational, Interval, Scalar};
+use ilopt::scalar::{BigRational, Interval, Roots, Scalar};
 use nalgebra::DVector;
 use rand::SeedableRng;
 use std::cell::Cell;
@@ -151,7 +150,7 @@ fn script() -> Scripted {
 #[test]
 fn one_storm_step_in_rationals() {
     let p = script();
-    let mut s = Storm::<BigRational>::new_field(&storm_cfg(Correction::Unweighted)).unwrap();
+    let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::Unweighted)).unwrap();
     let th = drive(&mut s, &p, q(1, 1), 1);
     assert_eq!(th[1], q(3, 4));
     // d₂ = 13/4 + (1/2)(1 − 4) = 7/4.
@@ -176,13 +175,13 @@ fn one_is_storm_step_in_rationals() {
     // Whole-trajectory weight (2 + 1)/(2 + 3/4) = 12/11: g̃ = 48/11,
     // d₂ = 13/4 + (1/2)(1 − 48/11) = 69/44.
     let p = script();
-    let mut s = Storm::<BigRational>::new_field(&storm_cfg(Correction::Trajectory)).unwrap();
+    let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::Trajectory)).unwrap();
     drive(&mut s, &p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(69, 44));
     // Per-decision weight (3 + 1)/(3 + 3/4) = 16/15: g̃ = 64/15,
     // d₂ = 13/4 + (1/2)(1 − 64/15) = 13/4 − 49/30 = 97/60.
     let p = script();
-    let mut s = Storm::<BigRational>::new_field(&storm_cfg(Correction::PerDecision)).unwrap();
+    let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::PerDecision)).unwrap();
     drive(&mut s, &p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(97, 60));
     assert_eq!(Algorithm::<BigRational, Scripted>::name(&s), "is-storm");
@@ -196,7 +195,7 @@ fn printed_algorithm_4_uses_the_e9_update() {
         schedule: StormSchedule::constant(Num::ratio(1, 4), Num::ratio(1, 2)),
         form: EstimatorForm::Causal,
     };
-    let mut s = printed_algorithm_4_field::<BigRational>(&cfg).unwrap();
+    let mut s = printed_algorithm_4::<BigRational>(&cfg).unwrap();
     drive(&mut s, &p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(21, 4));
     assert_eq!(
@@ -219,7 +218,7 @@ fn explicit_storm_schedule_is_followed_and_repeats_its_last_entry() {
         correction: Correction::Unweighted,
         form: EstimatorForm::Causal,
     };
-    let mut s = Storm::<BigRational>::new_field(&cfg).unwrap();
+    let mut s = Storm::<BigRational>::new(&cfg).unwrap();
     let th = drive(&mut s, &p, q(1, 1), 3);
     assert_eq!(th, vec![q(1, 1), q(1, 2), q(-1, 8), q(3, 16)]);
 }
@@ -245,7 +244,7 @@ fn thesis_schedule_matches_eq_3_43() {
     assert!((16.0 * 4.0 * eta * eta - a).abs() <= 1e-15);
     // Rationals have no cube roots.
     assert!(matches!(
-        Storm::<BigRational>::new_field(&cfg),
+        Storm::<BigRational>::new(&cfg),
         Err(AlgoError::NeedsRoots { .. })
     ));
 }
@@ -295,7 +294,7 @@ fn one_sgd_step_in_rationals_and_inverse_time_schedule() {
         },
         form: EstimatorForm::Causal,
     };
-    let mut s = Sgd::<BigRational>::new_field(&cfg).unwrap();
+    let mut s = Sgd::<BigRational>::new(&cfg).unwrap();
     let th = drive(&mut s, &p, q(1, 1), 2);
     assert_eq!(th, vec![q(1, 1), q(2, 3), q(0, 1)]);
 }
@@ -416,7 +415,7 @@ fn o2nc_parameters_are_exact() {
 fn interval_cube_root_encloses() {
     for x in [0.0, 1e-300, 0.3, 2.0, 27.0, 1e10, 7.0 / 9.0] {
         let i = Interval::try_from((x, x)).unwrap();
-        let c = Roots::cbrt(&i);
+        let c = i.try_cbrt().unwrap();
         assert!(c.contains(x.cbrt()), "cbrt({x})");
         // c³ encloses x.
         assert!((c * c * c).contains(x));
@@ -565,7 +564,7 @@ fn field_builds_refuse_what_needs_roots() {
         form: EstimatorForm::Causal,
     });
     assert!(matches!(
-        adam.build_field::<BigRational, Scripted>(),
+        adam.build::<BigRational, Scripted>(),
         Err(AlgoError::NeedsRoots { .. })
     ));
     let sgd = AlgorithmConfig::Sgd(SgdConfig {
@@ -575,7 +574,7 @@ fn field_builds_refuse_what_needs_roots() {
         form: EstimatorForm::Causal,
     });
     assert!(matches!(
-        sgd.build_field::<BigRational, Scripted>(),
+        sgd.build::<BigRational, Scripted>(),
         Err(AlgoError::NeedsRoots { .. })
     ));
     assert!(sgd.build::<f64, Scripted>().is_ok());

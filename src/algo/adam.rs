@@ -10,12 +10,15 @@
 
 use super::{
     AlgoError, Algorithm, Ctx, Num, StepReport, UpdateRule, check_dim, first_order_step, in_range,
-    positive,
+    positive, require_roots, sqrt,
 };
 use crate::problem::{EstimatorForm, IlProblem};
-use crate::scalar::Sqrt;
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
+
+/// Adam, as named in [`AlgoError::NeedsRoots`].
+const ADAM: &str = "Adam";
 
 /// Adam's hyper-parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -55,13 +58,14 @@ pub struct AdamRule<S> {
     v: Option<DVector<S>>,
 }
 
-impl<S: Sqrt> AdamRule<S> {
+impl<S: Scalar> AdamRule<S> {
     /// Validate and build.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming `alpha`, `beta1`, `beta2` or `epsilon`.
+    /// [`AlgoError::InvalidParameter`] naming `alpha`, `beta1`, `beta2` or `epsilon`;
+    /// [`AlgoError::NeedsRoots`] for a scalar without square roots.
     pub fn new(c: &AdamConfig) -> Result<Self, AlgoError> {
-        Ok(AdamRule {
+        let rule = AdamRule {
             alpha: S::from_rational(&positive(&c.alpha, "alpha", true)?),
             beta1: S::from_rational(&in_range(&c.beta1, "beta1", (0, false), (1, true))?),
             beta2: S::from_rational(&in_range(&c.beta2, "beta2", (0, false), (1, true))?),
@@ -70,11 +74,13 @@ impl<S: Sqrt> AdamRule<S> {
             beta2_t: S::one(),
             m: None,
             v: None,
-        })
+        };
+        require_roots::<S>(ADAM, "square roots")?;
+        Ok(rule)
     }
 }
 
-impl<S: Sqrt> UpdateRule<S> for AdamRule<S> {
+impl<S: Scalar> UpdateRule<S> for AdamRule<S> {
     fn reset(&mut self) {
         self.beta1_t = S::one();
         self.beta2_t = S::one();
@@ -99,7 +105,7 @@ impl<S: Sqrt> UpdateRule<S> for AdamRule<S> {
         for i in 0..theta.len() {
             let mhat = m[i].clone() / &c1;
             let vhat = v[i].clone() / &c2;
-            let den = vhat.sqrt() + &self.epsilon;
+            let den = sqrt(&vhat, ADAM)? + &self.epsilon;
             if !den.is_certainly_positive() {
                 return Err(AlgoError::NonFinite("Adam's denominator √v̂ + ε (zero)"));
             }
@@ -129,7 +135,7 @@ pub struct Adam<S> {
     theta: DVector<S>,
 }
 
-impl<S: Sqrt> Adam<S> {
+impl<S: Scalar> Adam<S> {
     /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
     pub fn theta(&self) -> &DVector<S> {
         &self.theta
@@ -148,7 +154,7 @@ impl<S: Sqrt> Adam<S> {
     }
 }
 
-impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Adam<S> {
+impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Adam<S> {
     fn name(&self) -> &'static str {
         "adam"
     }

@@ -5,9 +5,9 @@
 //! BC's learning curve in the same cost units as the other learners).
 
 use super::dataset::{Inner, InnerConfig, Retrain, collect, trajectories};
-use super::{AlgoError, Algorithm, Ctx, RootOps, StepReport, check_dim};
+use super::{AlgoError, Algorithm, Ctx, StepReport, check_dim};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{Scalar, Sqrt};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
@@ -34,22 +34,12 @@ pub struct Bc<S: Scalar, P: IlProblem<S> + ?Sized> {
 }
 
 impl<S: Scalar, P: IlProblem<S> + ?Sized> Bc<S, P> {
-    /// Build with an SGD inner optimiser for any scalar.
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &BcConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`Bc::new_field`].
-    pub fn new(c: &BcConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
+    pub fn new(c: &BcConfig) -> Result<Self, AlgoError> {
+        Self::with_inner(c, Inner::new(&c.inner)?)
     }
     /// Build with an already-built inner optimiser.
     ///

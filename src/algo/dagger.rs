@@ -7,9 +7,9 @@
 //! (eq. 3.29).
 
 use super::dataset::{Inner, InnerConfig, Retrain, collect, trajectories};
-use super::{AlgoError, Algorithm, Ctx, Num, RootOps, StepReport, check_dim, in_range, invalid};
+use super::{AlgoError, Algorithm, Ctx, Num, StepReport, check_dim, in_range, invalid};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{BigRational, Scalar, Sqrt};
+use crate::scalar::{BigRational, Scalar};
 use nalgebra::DVector;
 use num_traits::{One, ToPrimitive, Zero};
 use serde::{Deserialize, Serialize};
@@ -125,28 +125,17 @@ pub struct Dagger<S: Scalar, P: IlProblem<S> + ?Sized> {
 }
 
 impl<S: Scalar, P: IlProblem<S> + ?Sized> Dagger<S, P> {
-    /// Build with an SGD inner optimiser for any scalar.
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming the parameter (β ∉ [0, 1], …);
-    /// [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &DaggerConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`Dagger::new_field`].
-    pub fn new(c: &DaggerConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
+    /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
+    pub fn new(c: &DaggerConfig) -> Result<Self, AlgoError> {
+        Self::with_inner(c, Inner::new(&c.inner)?)
     }
     /// Build with an already-built inner optimiser.
     ///
     /// # Errors
-    /// As [`Dagger::new_field`].
+    /// As [`Dagger::new`].
     pub fn with_inner(c: &DaggerConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
         Ok(Dagger {
             n: trajectories(c.trajectories_per_iteration)?,

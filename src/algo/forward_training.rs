@@ -6,9 +6,9 @@
 //! [`Algorithm::theta`] is the newest π_t; [`Algorithm::outputs`] is the whole sequence.
 
 use super::dataset::{Inner, InnerConfig, trajectories};
-use super::{AlgoError, Algorithm, Ctx, RootOps, StepReport, check_dim};
+use super::{AlgoError, Algorithm, Ctx, StepReport, check_dim};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{Scalar, Sqrt};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
@@ -38,27 +38,17 @@ impl<S: Scalar> ForwardTraining<S> {
         &self.theta
     }
 
-    /// Build with an SGD inner optimiser for any scalar.
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &ForwardTrainingConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`ForwardTraining::new_field`].
-    pub fn new(c: &ForwardTrainingConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
+    pub fn new(c: &ForwardTrainingConfig) -> Result<Self, AlgoError> {
+        Self::with_inner(c, Inner::new(&c.inner)?)
     }
     /// Build with an already-built inner optimiser.
     ///
     /// # Errors
-    /// As [`ForwardTraining::new_field`].
+    /// As [`ForwardTraining::new`].
     pub fn with_inner(c: &ForwardTrainingConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
         Ok(ForwardTraining {
             n: trajectories(c.trajectories_per_iteration)?,

@@ -62,14 +62,14 @@ pub mod storm;
 pub mod storm_plus;
 
 use crate::problem::{Cost, IlProblem, KitRng, OracleError};
-use crate::scalar::{BigRational, Interval, Scalar, Sqrt, Undecidable, parse_exact};
+use crate::scalar::{BigRational, Scalar, Undecidable, parse_exact};
 use nalgebra::DVector;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use std::cmp::Ordering;
 
 pub use config::{AlgorithmConfig, RunConfig};
 pub use runner::{
-    IterationMetrics, Observer, RunRecord, Runner, StoppingRule, Termination, replay, replay_field,
+    IterationMetrics, Observer, RunRecord, Runner, StoppingRule, Termination, replay,
 };
 
 /// Why an algorithm could not be built or could not take a step.
@@ -85,7 +85,8 @@ pub enum AlgoError {
         reason: String,
     },
     /// The algorithm (or the chosen schedule) needs square or cube roots, which the scalar lacks
-    /// (exact rationals): build it with a [`Roots`] scalar or pick a field-only schedule.
+    /// (exact rationals; see [`crate::scalar::Roots`]): build it in a scalar with roots or pick a
+    /// schedule of field operations only.
     #[error("{algorithm} needs {operation}, which this scalar type does not provide")]
     NeedsRoots {
         /// The algorithm or schedule.
@@ -352,65 +353,6 @@ pub trait Algorithm<S: Scalar, P: IlProblem<S> + ?Sized> {
     }
 }
 
-/// Scalars with square and cube roots: what the schedule (3.43), the Cutkosky–Orabona schedule and
-/// STORM+ need. Implemented for `f64`, `f32` and (rigorously, outward-rounded) for [`Interval`].
-pub trait Roots: Sqrt {
-    /// The real cube root `∛x`.
-    fn cbrt(&self) -> Self;
-}
-
-impl Roots for f64 {
-    fn cbrt(&self) -> Self {
-        f64::cbrt(*self)
-    }
-}
-
-impl Roots for f32 {
-    fn cbrt(&self) -> Self {
-        f32::cbrt(*self)
-    }
-}
-
-fn point(x: f64) -> Interval {
-    Interval::try_from((x, x)).unwrap_or(Interval::ENTIRE)
-}
-
-/// A float `c` with `c³ ≤ x` (`lower`) or `c³ ≥ x`, certified by interval arithmetic.
-fn cbrt_bound(x: f64, lower: bool) -> f64 {
-    if !x.is_finite() {
-        return x;
-    }
-    let mut c = x.cbrt();
-    for _ in 0..8 {
-        let p = point(c);
-        let cube = p * p * p;
-        if lower && cube.sup() <= x {
-            return c;
-        }
-        if !lower && cube.inf() >= x {
-            return c;
-        }
-        c = if lower { c.next_down() } else { c.next_up() };
-    }
-    if lower {
-        f64::NEG_INFINITY
-    } else {
-        f64::INFINITY
-    }
-}
-
-impl Roots for Interval {
-    /// An enclosure of `{∛x : x ∈ self}` (the cube root is increasing, so the endpoints suffice).
-    fn cbrt(&self) -> Self {
-        if self.is_empty() {
-            return *self;
-        }
-        let lo = cbrt_bound(self.inf(), true);
-        let hi = cbrt_bound(self.sup(), false);
-        Interval::try_from((lo, hi)).unwrap_or(Interval::ENTIRE)
-    }
-}
-
 pub use crate::problem::{UNIFORM_DENOMINATOR, dyadic_uniform};
 
 /// `a·x + y`, entrywise.
@@ -458,68 +400,44 @@ pub(crate) fn min_one<S: Scalar>(x: S, what: &'static str) -> Result<S, AlgoErro
     }
 }
 
-/// Which root operations the run's scalar provides, captured as function pointers when an
-/// algorithm is built. This lets one algorithm type serve every scalar while its constructors
-/// stay bounded by what they need: `…::new` for [`Roots`]/[`Sqrt`] scalars fills these in,
-/// `…::new_field` for plain [`Scalar`]s leaves them out and rejects configurations that need them
-/// with [`AlgoError::NeedsRoots`].
-#[derive(Clone, Copy)]
-pub struct RootOps<S> {
-    /// `√x`, if the scalar has it.
-    pub sqrt: Option<fn(&S) -> S>,
-    /// `∛x`, if the scalar has it.
-    pub cbrt: Option<fn(&S) -> S>,
-}
-
-impl<S> std::fmt::Debug for RootOps<S> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("RootOps")
-            .field("sqrt", &self.sqrt.is_some())
-            .field("cbrt", &self.cbrt.is_some())
-            .finish()
+/// Reject, when an algorithm is built, a configuration that needs roots in a scalar without them.
+///
+/// # Errors
+/// [`AlgoError::NeedsRoots`] naming `algorithm` and `operation` when `S` has no roots.
+pub(crate) fn require_roots<S: Scalar>(
+    algorithm: &'static str,
+    operation: &'static str,
+) -> Result<(), AlgoError> {
+    if S::HAS_ROOTS {
+        Ok(())
+    } else {
+        Err(AlgoError::NeedsRoots {
+            algorithm,
+            operation,
+        })
     }
 }
 
-impl<S: Scalar> RootOps<S> {
-    /// No roots (exact rationals).
-    pub fn none() -> Self {
-        RootOps {
-            sqrt: None,
-            cbrt: None,
-        }
-    }
-    /// Square roots only.
-    pub fn sqrt_only() -> Self
-    where
-        S: Sqrt,
-    {
-        RootOps {
-            sqrt: Some(<S as Sqrt>::sqrt),
-            cbrt: None,
-        }
-    }
-    /// Square and cube roots.
-    pub fn all() -> Self
-    where
-        S: Roots,
-    {
-        RootOps {
-            sqrt: Some(<S as Sqrt>::sqrt),
-            cbrt: Some(<S as Roots>::cbrt),
-        }
-    }
-    pub(crate) fn need_sqrt(&self, algorithm: &'static str) -> Result<fn(&S) -> S, AlgoError> {
-        self.sqrt.ok_or(AlgoError::NeedsRoots {
-            algorithm,
-            operation: "square roots",
-        })
-    }
-    pub(crate) fn need_cbrt(&self, algorithm: &'static str) -> Result<fn(&S) -> S, AlgoError> {
-        self.cbrt.ok_or(AlgoError::NeedsRoots {
-            algorithm,
-            operation: "cube roots",
-        })
-    }
+/// `√x` for an algorithm built with [`require_roots`].
+///
+/// # Errors
+/// [`AlgoError::NeedsRoots`] when `S` has no roots (not reached after [`require_roots`]).
+pub(crate) fn sqrt<S: Scalar>(x: &S, algorithm: &'static str) -> Result<S, AlgoError> {
+    x.try_sqrt().ok_or(AlgoError::NeedsRoots {
+        algorithm,
+        operation: "square roots",
+    })
+}
+
+/// `∛x` for an algorithm built with [`require_roots`].
+///
+/// # Errors
+/// [`AlgoError::NeedsRoots`] when `S` has no roots (not reached after [`require_roots`]).
+pub(crate) fn cbrt<S: Scalar>(x: &S, algorithm: &'static str) -> Result<S, AlgoError> {
+    x.try_cbrt().ok_or(AlgoError::NeedsRoots {
+        algorithm,
+        operation: "cube roots",
+    })
 }
 
 /// One oracle draw at `theta`: roll out π_θ, evaluate eq. 3.15 and the trajectory loss.

@@ -18,15 +18,18 @@
 
 use super::{
     AlgoError, Algorithm, Ctx, Num, StepReport, axpy, check_dim, check_finite, dyadic_uniform,
-    invalid, norm_sq, positive, scale,
+    invalid, norm_sq, positive, require_roots, scale, sqrt,
 };
 use crate::problem::{Behaviour, EstimatorForm, IlProblem};
-use crate::scalar::{BigRational, Sqrt};
+use crate::scalar::{BigRational, Scalar};
 use nalgebra::DVector;
 use num_bigint::BigInt;
 use num_traits::ToPrimitive;
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
+
+/// O2NC, as named in [`AlgoError::NeedsRoots`].
+const O2NC: &str = "O2NC (projection and η = D/(G√T))";
 
 /// O2NC configuration (math.md §5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -125,7 +128,6 @@ pub struct O2nc<S> {
     eta: S,
     form: EstimatorForm,
     sampling: SamplePoint,
-    sqrt: fn(&S) -> S,
     theta: DVector<S>,
     delta: DVector<S>,
     w_sum: DVector<S>,
@@ -134,7 +136,7 @@ pub struct O2nc<S> {
     outputs: Vec<DVector<S>>,
 }
 
-impl<S: Sqrt> O2nc<S> {
+impl<S: Scalar> O2nc<S> {
     /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
     pub fn theta(&self) -> &DVector<S> {
         &self.theta
@@ -143,7 +145,8 @@ impl<S: Sqrt> O2nc<S> {
     /// Validate and build (IL-correct sampling at w_n).
     ///
     /// # Errors
-    /// As [`O2ncConfig::parameters`].
+    /// As [`O2ncConfig::parameters`]; [`AlgoError::NeedsRoots`] for a scalar without square
+    /// roots.
     pub fn new(config: &O2ncConfig) -> Result<Self, AlgoError> {
         Self::with_sampling(config, SamplePoint::W)
     }
@@ -155,14 +158,14 @@ impl<S: Sqrt> O2nc<S> {
         let params = config.parameters()?;
         let radius = S::from_rational(&params.d);
         let g = S::from_rational(&config.g.exact("g")?);
-        let eta = radius.clone() / (g * S::from_i64(params.t as i64).sqrt());
+        require_roots::<S>(O2NC, "square roots")?;
+        let eta = radius.clone() / (g * sqrt(&S::from_i64(params.t as i64), O2NC)?);
         Ok(O2nc {
             params,
             radius,
             eta,
             form: config.form,
             sampling,
-            sqrt: <S as Sqrt>::sqrt,
             theta: DVector::from_vec(Vec::new()),
             delta: DVector::from_vec(Vec::new()),
             w_sum: DVector::from_vec(Vec::new()),
@@ -192,7 +195,7 @@ impl<S: Sqrt> O2nc<S> {
         let n2 = norm_sq(&x);
         match n2.certain_cmp(&self.radius.square()) {
             Some(Ordering::Greater) => {
-                let f = self.radius.clone() / (self.sqrt)(&n2);
+                let f = self.radius.clone() / sqrt(&n2, O2NC)?;
                 Ok(scale(&f, &x))
             }
             Some(_) => Ok(x),
@@ -204,7 +207,7 @@ impl<S: Sqrt> O2nc<S> {
     }
 }
 
-impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
+impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
     fn name(&self) -> &'static str {
         match self.sampling {
             SamplePoint::W => "o2nc",

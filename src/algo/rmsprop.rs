@@ -10,12 +10,15 @@
 
 use super::{
     AlgoError, Algorithm, Ctx, Num, StepReport, UpdateRule, check_dim, first_order_step, in_range,
-    positive,
+    positive, require_roots, sqrt,
 };
 use crate::problem::{EstimatorForm, IlProblem};
-use crate::scalar::Sqrt;
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
+
+/// RMSProp, as named in [`AlgoError::NeedsRoots`].
+const RMSPROP: &str = "RMSProp";
 
 /// RMSProp's hyper-parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -48,22 +51,25 @@ pub struct RmsPropRule<S> {
     v: Option<DVector<S>>,
 }
 
-impl<S: Sqrt> RmsPropRule<S> {
+impl<S: Scalar> RmsPropRule<S> {
     /// Validate and build.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming `eta`, `beta` or `epsilon`.
+    /// [`AlgoError::InvalidParameter`] naming `eta`, `beta` or `epsilon`;
+    /// [`AlgoError::NeedsRoots`] for a scalar without square roots.
     pub fn new(c: &RmsPropConfig) -> Result<Self, AlgoError> {
-        Ok(RmsPropRule {
+        let rule = RmsPropRule {
             eta: S::from_rational(&positive(&c.eta, "eta", true)?),
             beta: S::from_rational(&in_range(&c.beta, "beta", (0, false), (1, true))?),
             epsilon: S::from_rational(&positive(&c.epsilon, "epsilon", false)?),
             v: None,
-        })
+        };
+        require_roots::<S>(RMSPROP, "square roots")?;
+        Ok(rule)
     }
 }
 
-impl<S: Sqrt> UpdateRule<S> for RmsPropRule<S> {
+impl<S: Scalar> UpdateRule<S> for RmsPropRule<S> {
     fn reset(&mut self) {
         self.v = None;
     }
@@ -76,7 +82,7 @@ impl<S: Sqrt> UpdateRule<S> for RmsPropRule<S> {
             self.beta.clone() * vi + (S::one() - &self.beta) * gi.square()
         });
         for i in 0..theta.len() {
-            let den = v[i].sqrt() + &self.epsilon;
+            let den = sqrt(&v[i], RMSPROP)? + &self.epsilon;
             if !den.is_certainly_positive() {
                 return Err(AlgoError::NonFinite("RMSProp's denominator √v + ε (zero)"));
             }
@@ -105,7 +111,7 @@ pub struct RmsProp<S> {
     theta: DVector<S>,
 }
 
-impl<S: Sqrt> RmsProp<S> {
+impl<S: Scalar> RmsProp<S> {
     /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
     pub fn theta(&self) -> &DVector<S> {
         &self.theta
@@ -124,7 +130,7 @@ impl<S: Sqrt> RmsProp<S> {
     }
 }
 
-impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for RmsProp<S> {
+impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for RmsProp<S> {
     fn name(&self) -> &'static str {
         "rmsprop"
     }

@@ -12,9 +12,9 @@
 //! exactly κ = (T−2)Δ/(T−1) (math.md §6).
 
 use super::dataset::{Inner, InnerConfig, Retrain, collect, trajectories};
-use super::{AlgoError, Algorithm, Ctx, RootOps, StepReport, check_dim, check_finite};
+use super::{AlgoError, Algorithm, Ctx, StepReport, check_dim, check_finite};
 use crate::problem::{Behaviour, IlProblem, OracleError};
-use crate::scalar::{Scalar, Sqrt};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
@@ -41,27 +41,17 @@ pub struct Rrm<S: Scalar, P: IlProblem<S> + ?Sized> {
 }
 
 impl<S: Scalar, P: IlProblem<S> + ?Sized> Rrm<S, P> {
-    /// Build with an SGD inner optimiser for any scalar.
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &RrmConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`Rrm::new_field`].
-    pub fn new(c: &RrmConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
+    pub fn new(c: &RrmConfig) -> Result<Self, AlgoError> {
+        Self::with_inner(c, Inner::new(&c.inner)?)
     }
     /// Build with an already-built inner optimiser.
     ///
     /// # Errors
-    /// As [`Rrm::new_field`].
+    /// As [`Rrm::new`].
     pub fn with_inner(c: &RrmConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
         Ok(Rrm {
             n: trajectories(c.trajectories_per_iteration)?,

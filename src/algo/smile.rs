@@ -14,9 +14,9 @@
 
 use super::dagger::beta_mixture;
 use super::dataset::{Inner, InnerConfig, Retrain, collect, trajectories};
-use super::{AlgoError, Algorithm, Ctx, Num, RootOps, StepReport, check_dim, in_range};
+use super::{AlgoError, Algorithm, Ctx, Num, StepReport, check_dim, in_range};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{BigRational, Scalar, Sqrt};
+use crate::scalar::{BigRational, Scalar};
 use nalgebra::DVector;
 use num_traits::{One, ToPrimitive};
 use serde::{Deserialize, Serialize};
@@ -48,28 +48,17 @@ pub struct Smile<S: Scalar, P: IlProblem<S> + ?Sized> {
 }
 
 impl<S: Scalar, P: IlProblem<S> + ?Sized> Smile<S, P> {
-    /// Build with an SGD inner optimiser for any scalar.
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming the parameter (α ∉ (0, 1], …);
-    /// [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &SmileConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`Smile::new_field`].
-    pub fn new(c: &SmileConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
+    /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
+    pub fn new(c: &SmileConfig) -> Result<Self, AlgoError> {
+        Self::with_inner(c, Inner::new(&c.inner)?)
     }
     /// Build with an already-built inner optimiser.
     ///
     /// # Errors
-    /// As [`Smile::new_field`].
+    /// As [`Smile::new`].
     pub fn with_inner(c: &SmileConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
         Ok(Smile {
             alpha: in_range(&c.alpha, "alpha", (0, true), (1, false))?,

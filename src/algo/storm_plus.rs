@@ -32,13 +32,17 @@
 //! "STORM+ (released code)".
 
 use super::{
-    AlgoError, Algorithm, Ctx, Num, Roots, StepReport, axpy, check_dim, check_finite, min_one,
-    norm_sq, oracle_draw, positive,
+    AlgoError, Algorithm, Ctx, Num, StepReport, axpy, cbrt, check_dim, check_finite, min_one,
+    norm_sq, oracle_draw, positive, require_roots,
 };
 use crate::algo::storm::Correction;
 use crate::problem::{Behaviour, EstimatorForm, IlProblem, Weighting};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
+
+/// STORM+, as named in [`AlgoError::NeedsRoots`].
+const STORM_PLUS: &str = "STORM+";
 
 /// STORM+ configuration (see the module docs for the exact form).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -99,7 +103,7 @@ pub struct StormPlus<S> {
     d: Option<DVector<S>>,
 }
 
-impl<S: Roots> StormPlus<S> {
+impl<S: Scalar> StormPlus<S> {
     /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
     pub fn theta(&self) -> &DVector<S> {
         &self.theta
@@ -108,17 +112,21 @@ impl<S: Roots> StormPlus<S> {
     /// Validate and build.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming `a0`, `b0`, `c` or `eta_scale`.
+    /// [`AlgoError::InvalidParameter`] naming `a0`, `b0`, `c` or `eta_scale`;
+    /// [`AlgoError::NeedsRoots`] for a scalar without cube roots.
     pub fn new(config: &StormPlusConfig) -> Result<Self, AlgoError> {
         let a0 = S::from_rational(&positive(&config.a0, "a0", true)?);
         let b0 = S::from_rational(&positive(&config.b0, "b0", false)?);
+        let c = S::from_rational(&positive(&config.c, "c", true)?);
+        let scale = S::from_rational(&positive(&config.eta_scale, "eta_scale", true)?);
+        require_roots::<S>(STORM_PLUS, "cube roots")?;
         Ok(StormPlus {
             grad_acc: a0.clone(),
             est_acc: b0.clone(),
             a0,
             b0,
-            c: S::from_rational(&positive(&config.c, "c", true)?),
-            scale: S::from_rational(&positive(&config.eta_scale, "eta_scale", true)?),
+            c,
+            scale,
             correction: config.correction,
             form: config.form,
             a_next: S::one(),
@@ -130,7 +138,7 @@ impl<S: Roots> StormPlus<S> {
     /// Fold in `‖g_t‖²` and `‖d_t‖²`: update a_{t+1} and the step-size accumulator.
     fn accumulate(&mut self, g: &DVector<S>, d: &DVector<S>) -> Result<(), AlgoError> {
         self.grad_acc += norm_sq(g);
-        let r = self.grad_acc.cbrt();
+        let r = cbrt(&self.grad_acc, STORM_PLUS)?;
         self.a_next = min_one(self.c.clone() / r.square(), "a = min(1, c·acc^(−2/3))")?;
         self.est_acc += norm_sq(d) / &self.a_next;
         if !self.a_next.is_finite() || !self.est_acc.is_finite() {
@@ -140,7 +148,7 @@ impl<S: Roots> StormPlus<S> {
     }
 }
 
-impl<S: Roots, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
+impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
     fn name(&self) -> &'static str {
         if self.correction == Correction::Unweighted {
             "storm-plus"
@@ -175,7 +183,7 @@ impl<S: Roots, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
                 "η = (b₀ + Σ‖d‖²/a)^(−1/3) with a zero sum",
             ));
         }
-        let eta = self.scale.clone() / self.est_acc.cbrt();
+        let eta = self.scale.clone() / cbrt(&self.est_acc, STORM_PLUS)?;
         let a = self.a_next.clone();
         let new = axpy(&-eta, &d, &self.theta);
         check_finite(&new, "θ")?;

@@ -193,7 +193,7 @@ pub fn printed_algorithm_4_visited(
             .and_then(|r| {
                 r.keep_history(false)
                     .with_observer(observer)
-                    .run_config_field(&cfg, &p)
+                    .run_config(&cfg, &p)
             })
             .map_err(|e| e.to_string())?;
         let th = visited.into_inner();
