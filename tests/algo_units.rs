@@ -5,17 +5,21 @@
 //! `(2 + θ_old)/(2 + θ_new)` and the per-decision one `(3 + θ_old)/(3 + θ_new)` (first entry).
 //! The expected numbers in the tests were worked out by hand from the update formulas.
 
+#[path = "common/fixture.rs"]
+mod fixture;
+
 use ilopt::algo::adam::{Adam, AdamConfig, AdamOptimizerConfig};
+use ilopt::algo::as_printed::{PrintedAlgorithm4Config, printed_algorithm_4};
 use ilopt::algo::dagger::{BetaSchedule, Dagger, DaggerConfig};
 use ilopt::algo::dataset::{InnerConfig, Retrain, RuleConfig};
 use ilopt::algo::o2nc::O2ncConfig;
-use ilopt::algo::printed::{PrintedAlgorithm4Config, printed_algorithm_4};
 use ilopt::algo::rmsprop::{RmsProp, RmsPropConfig, RmsPropOptimizerConfig};
 use ilopt::algo::sgd::{Sgd, SgdConfig, SgdStep};
 use ilopt::algo::storm::{Correction, Storm, StormConfig, StormSchedule};
 use ilopt::algo::storm_plus::{StormPlus, StormPlusConfig};
 use ilopt::algo::{
-    AlgoError, Algorithm, AlgorithmConfig, Ctx, Num, RunConfig, Runner, StoppingRule, Termination,
+    AlgoError, Algorithm, AlgorithmConfig, ConfigNumber, RunConfig, Runner, StepContext,
+    StoppingRule, Termination,
 };
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::scalar::{BigRational, Interval, Roots, Scalar};
@@ -120,7 +124,7 @@ fn drive<S: Scalar, A: Algorithm<S, Scripted>>(
 ) -> Vec<S> {
     let mut rng = KitRng::seed_from_u64(0);
     let mut cost = Cost::default();
-    let mut ctx = Ctx {
+    let mut ctx = StepContext {
         rng: &mut rng,
         cost: &mut cost,
     };
@@ -135,7 +139,7 @@ fn drive<S: Scalar, A: Algorithm<S, Scripted>>(
 
 fn storm_cfg(correction: Correction) -> StormConfig {
     StormConfig {
-        schedule: StormSchedule::constant(Num::ratio(1, 4), Num::ratio(1, 2)),
+        schedule: StormSchedule::constant(ConfigNumber::ratio(1, 4), ConfigNumber::ratio(1, 2)),
         correction,
         form: EstimatorForm::Causal,
     }
@@ -161,7 +165,7 @@ fn one_storm_step_in_rationals() {
     let mut cost = Cost::default();
     s.step(
         &p,
-        &mut Ctx {
+        &mut StepContext {
             rng: &mut rng,
             cost: &mut cost,
         },
@@ -192,7 +196,7 @@ fn printed_algorithm_4_uses_the_e9_update() {
     // d₂ = 13/4 + (1/2)·4 = 21/4: no d₁, and the correction enters with a plus sign.
     let p = script();
     let cfg = PrintedAlgorithm4Config {
-        schedule: StormSchedule::constant(Num::ratio(1, 4), Num::ratio(1, 2)),
+        schedule: StormSchedule::constant(ConfigNumber::ratio(1, 4), ConfigNumber::ratio(1, 2)),
         form: EstimatorForm::Causal,
     };
     let mut s = printed_algorithm_4::<BigRational>(&cfg).unwrap();
@@ -212,8 +216,8 @@ fn explicit_storm_schedule_is_followed_and_repeats_its_last_entry() {
     let p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Explicit {
-            eta: vec![Num::ratio(1, 2), Num::ratio(1, 4)],
-            a: vec![Num::ratio(1, 1)],
+            eta: vec![ConfigNumber::ratio(1, 2), ConfigNumber::ratio(1, 4)],
+            a: vec![ConfigNumber::ratio(1, 1)],
         },
         correction: Correction::Unweighted,
         form: EstimatorForm::Causal,
@@ -229,7 +233,7 @@ fn thesis_schedule_matches_eq_3_43() {
     let p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Thesis {
-            l: Num::ratio(2, 1),
+            l: ConfigNumber::ratio(2, 1),
         },
         correction: Correction::Unweighted,
         form: EstimatorForm::Causal,
@@ -255,9 +259,9 @@ fn adaptive_schedule_matches_algorithm_4() {
     let p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Adaptive {
-            k: Num::ratio(1, 1),
-            w: Num::ratio(7, 1),
-            c: Num::ratio(1, 2),
+            k: ConfigNumber::ratio(1, 1),
+            w: ConfigNumber::ratio(7, 1),
+            c: ConfigNumber::ratio(1, 2),
         },
         correction: Correction::Unweighted,
         form: EstimatorForm::Causal,
@@ -273,7 +277,7 @@ fn adaptive_schedule_matches_algorithm_4() {
     let mut cost = Cost::default();
     s.step(
         &p,
-        &mut Ctx {
+        &mut StepContext {
             rng: &mut rng,
             cost: &mut cost,
         },
@@ -289,8 +293,8 @@ fn one_sgd_step_in_rationals_and_inverse_time_schedule() {
     let p = script();
     let cfg = SgdConfig {
         step: SgdStep::InverseTime {
-            eta0: Num::ratio(1, 3),
-            k0: Num::ratio(2, 1),
+            eta0: ConfigNumber::ratio(1, 3),
+            k0: ConfigNumber::ratio(2, 1),
         },
         form: EstimatorForm::Causal,
     };
@@ -307,10 +311,10 @@ fn one_adam_step_in_f64_from_kingma_ba() {
     let p = Scripted::new(vec![(0, 1), (0, -2)]);
     let cfg = AdamOptimizerConfig {
         adam: AdamConfig {
-            alpha: Num::ratio(1, 10),
-            beta1: Num::ratio(9, 10),
-            beta2: Num::ratio(999, 1000),
-            epsilon: Num::Float(1e-8),
+            alpha: ConfigNumber::ratio(1, 10),
+            beta1: ConfigNumber::ratio(9, 10),
+            beta2: ConfigNumber::ratio(999, 1000),
+            epsilon: ConfigNumber::Float(1e-8),
         },
         form: EstimatorForm::Causal,
     };
@@ -333,9 +337,9 @@ fn rmsprop_follows_eqs_2_14_and_2_15() {
     let p = Scripted::new(vec![(0, 3), (0, 1)]);
     let cfg = RmsPropOptimizerConfig {
         rmsprop: RmsPropConfig {
-            eta: Num::ratio(1, 8),
-            beta: Num::ratio(3, 4),
-            epsilon: Num::ratio(0, 1),
+            eta: ConfigNumber::ratio(1, 8),
+            beta: ConfigNumber::ratio(3, 4),
+            epsilon: ConfigNumber::ratio(0, 1),
         },
         form: EstimatorForm::Causal,
     };
@@ -351,9 +355,9 @@ fn rmsprop_without_epsilon_stops_on_a_zero_denominator() {
     let p = Scripted::new(vec![(0, 0)]);
     let cfg = RmsPropOptimizerConfig {
         rmsprop: RmsPropConfig {
-            eta: Num::ratio(1, 8),
-            beta: Num::ratio(3, 4),
-            epsilon: Num::ratio(0, 1),
+            eta: ConfigNumber::ratio(1, 8),
+            beta: ConfigNumber::ratio(3, 4),
+            epsilon: ConfigNumber::ratio(0, 1),
         },
         form: EstimatorForm::Causal,
     };
@@ -385,9 +389,9 @@ fn o2nc_parameters_are_exact() {
     // K = ⌊100/8⌋ = 12, M = 96, D = δ/T = 1/80.
     let cfg = O2ncConfig {
         budget: 100,
-        delta: Num::ratio(1, 10),
-        g: Num::ratio(2, 1),
-        delta0: Num::ratio(1, 1),
+        delta: ConfigNumber::ratio(1, 10),
+        g: ConfigNumber::ratio(2, 1),
+        delta0: ConfigNumber::ratio(1, 1),
         form: EstimatorForm::Causal,
     };
     let prm = cfg.parameters().unwrap();
@@ -395,7 +399,7 @@ fn o2nc_parameters_are_exact() {
     assert_eq!(prm.d, q(1, 80));
     // Huge x: T is capped at ⌊N/2⌋.
     let cfg = O2ncConfig {
-        g: Num::ratio(1000, 1),
+        g: ConfigNumber::ratio(1000, 1),
         ..cfg
     };
     let prm = cfg.parameters().unwrap();
@@ -403,9 +407,9 @@ fn o2nc_parameters_are_exact() {
     // Exactly a cube: x² = 8³ ⇔ x = 16√8 is irrational, so use x = 8 (x² = 64 = 4³) → T = 4.
     let cfg = O2ncConfig {
         budget: 40,
-        delta: Num::ratio(1, 5),
-        g: Num::ratio(1, 1),
-        delta0: Num::ratio(1, 1),
+        delta: ConfigNumber::ratio(1, 5),
+        g: ConfigNumber::ratio(1, 1),
+        delta0: ConfigNumber::ratio(1, 1),
         form: EstimatorForm::Causal,
     };
     assert_eq!(cfg.parameters().unwrap().t, 4);
@@ -432,30 +436,39 @@ fn expect_invalid<T: std::fmt::Debug>(r: Result<T, AlgoError>, name: &str) {
 
 #[test]
 fn invalid_hyper_parameters_are_rejected_by_name() {
-    let sgd = |eta: Num| {
+    let sgd = |eta: ConfigNumber| {
         Sgd::<f64>::new(&SgdConfig {
             step: SgdStep::Constant { eta },
             form: EstimatorForm::Causal,
         })
     };
-    expect_invalid(sgd(Num::Float(-0.1)), "eta");
-    expect_invalid(sgd(Num::Float(f64::NAN)), "eta");
-    expect_invalid(sgd(Num::Float(f64::INFINITY)), "eta");
-    expect_invalid(sgd(Num::ratio(0, 1)), "eta");
-    let storm = |eta: Num, a: Num| {
+    expect_invalid(sgd(ConfigNumber::Float(-0.1)), "eta");
+    expect_invalid(sgd(ConfigNumber::Float(f64::NAN)), "eta");
+    expect_invalid(sgd(ConfigNumber::Float(f64::INFINITY)), "eta");
+    expect_invalid(sgd(ConfigNumber::ratio(0, 1)), "eta");
+    let storm = |eta: ConfigNumber, a: ConfigNumber| {
         Storm::<f64>::new(&StormConfig {
             schedule: StormSchedule::Constant { eta, a },
             correction: Correction::Trajectory,
             form: EstimatorForm::Causal,
         })
     };
-    expect_invalid(storm(Num::ratio(1, 10), Num::ratio(3, 2)), "a");
-    expect_invalid(storm(Num::ratio(1, 10), Num::Float(f64::NAN)), "a");
-    expect_invalid(storm(Num::Float(-1.0), Num::ratio(1, 2)), "eta");
+    expect_invalid(
+        storm(ConfigNumber::ratio(1, 10), ConfigNumber::ratio(3, 2)),
+        "a",
+    );
+    expect_invalid(
+        storm(ConfigNumber::ratio(1, 10), ConfigNumber::Float(f64::NAN)),
+        "a",
+    );
+    expect_invalid(
+        storm(ConfigNumber::Float(-1.0), ConfigNumber::ratio(1, 2)),
+        "eta",
+    );
     expect_invalid(
         Storm::<f64>::new(&StormConfig {
             schedule: StormSchedule::Thesis {
-                l: Num::ratio(-1, 1),
+                l: ConfigNumber::ratio(-1, 1),
             },
             correction: Correction::Unweighted,
             form: EstimatorForm::Causal,
@@ -466,7 +479,7 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         Storm::<f64>::new(&StormConfig {
             schedule: StormSchedule::Explicit {
                 eta: vec![],
-                a: vec![Num::ratio(1, 2)],
+                a: vec![ConfigNumber::ratio(1, 2)],
             },
             correction: Correction::Unweighted,
             form: EstimatorForm::Causal,
@@ -474,7 +487,7 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         "eta",
     );
     let mut adam = AdamConfig::with_alpha(0.01);
-    adam.beta1 = Num::ratio(1, 1);
+    adam.beta1 = ConfigNumber::ratio(1, 1);
     expect_invalid(
         Adam::<f64>::new(&AdamOptimizerConfig {
             adam,
@@ -490,9 +503,9 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         "eta",
     );
     let mut sp = StormPlusConfig::paper(Correction::Unweighted, EstimatorForm::Causal);
-    sp.a0 = Num::ratio(0, 1);
+    sp.a0 = ConfigNumber::ratio(0, 1);
     expect_invalid(StormPlus::<f64>::new(&sp), "a0");
-    let dagger = |beta: Num, n: u64| {
+    let dagger = |beta: ConfigNumber, n: u64| {
         Dagger::<f64, Scripted>::new(&DaggerConfig {
             trajectories_per_iteration: n,
             beta: BetaSchedule::Constant { beta },
@@ -501,14 +514,17 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
             inner: InnerConfig::gradient_descent(0.5, 1),
         })
     };
-    expect_invalid(dagger(Num::ratio(3, 2), 1), "beta");
-    expect_invalid(dagger(Num::Float(-0.25), 1), "beta");
-    expect_invalid(dagger(Num::ratio(1, 2), 0), "trajectories_per_iteration");
+    expect_invalid(dagger(ConfigNumber::ratio(3, 2), 1), "beta");
+    expect_invalid(dagger(ConfigNumber::Float(-0.25), 1), "beta");
+    expect_invalid(
+        dagger(ConfigNumber::ratio(1, 2), 0),
+        "trajectories_per_iteration",
+    );
     expect_invalid(
         Dagger::<f64, Scripted>::new(&DaggerConfig {
             trajectories_per_iteration: 1,
             beta: BetaSchedule::Exponential {
-                p: Num::ratio(2, 1),
+                p: ConfigNumber::ratio(2, 1),
             },
             aggregate: true,
             retrain: Retrain::WarmStart,
@@ -520,7 +536,7 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         Dagger::<f64, Scripted>::new(&DaggerConfig {
             trajectories_per_iteration: 1,
             beta: BetaSchedule::Constant {
-                beta: Num::ratio(0, 1),
+                beta: ConfigNumber::ratio(0, 1),
             },
             aggregate: true,
             retrain: Retrain::WarmStart,
@@ -534,18 +550,18 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         }),
         "inner.iterations",
     );
-    let o2nc = |budget: u64, delta: Num| {
+    let o2nc = |budget: u64, delta: ConfigNumber| {
         O2ncConfig {
             budget,
             delta,
-            g: Num::ratio(1, 1),
-            delta0: Num::ratio(1, 1),
+            g: ConfigNumber::ratio(1, 1),
+            delta0: ConfigNumber::ratio(1, 1),
             form: EstimatorForm::Causal,
         }
         .parameters()
     };
-    expect_invalid(o2nc(0, Num::ratio(1, 10)), "budget");
-    expect_invalid(o2nc(100, Num::ratio(-1, 10)), "delta");
+    expect_invalid(o2nc(0, ConfigNumber::ratio(1, 10)), "budget");
+    expect_invalid(o2nc(100, ConfigNumber::ratio(-1, 10)), "delta");
     expect_invalid(
         Runner::<f64>::new(StoppingRule::gradient_budget(0)),
         "stop.max_gradient_evaluations",
@@ -569,7 +585,7 @@ fn field_builds_refuse_what_needs_roots() {
     ));
     let sgd = AlgorithmConfig::Sgd(SgdConfig {
         step: SgdStep::InverseSqrt {
-            eta0: Num::ratio(1, 2),
+            eta0: ConfigNumber::ratio(1, 2),
         },
         form: EstimatorForm::Causal,
     });
@@ -603,23 +619,23 @@ fn a_non_finite_iterate_stops_the_run() {
 #[test]
 fn num_round_trips_exactly_through_json() {
     for n in [
-        Num::Float(0.1),
-        Num::ratio(1, 3),
-        Num::Float(-2.5e-300),
-        Num::ratio(-7, 1),
+        ConfigNumber::Float(0.1),
+        ConfigNumber::ratio(1, 3),
+        ConfigNumber::Float(-2.5e-300),
+        ConfigNumber::ratio(-7, 1),
     ] {
         let text = serde_json::to_string(&n).unwrap();
-        let back: Num = serde_json::from_str(&text).unwrap();
+        let back: ConfigNumber = serde_json::from_str(&text).unwrap();
         assert_eq!(back, n, "{text}");
         assert_eq!(
             back.to::<f64>("x").unwrap().to_bits(),
             n.to::<f64>("x").unwrap().to_bits()
         );
     }
-    let dec: Num = serde_json::from_str("\"0.05\"").unwrap();
-    assert_eq!(dec, Num::ratio(1, 20));
-    let nan = Num::Float(f64::NAN);
-    let back: Num = serde_json::from_str(&serde_json::to_string(&nan).unwrap()).unwrap();
+    let dec: ConfigNumber = serde_json::from_str("\"0.05\"").unwrap();
+    assert_eq!(dec, ConfigNumber::ratio(1, 20));
+    let nan = ConfigNumber::Float(f64::NAN);
+    let back: ConfigNumber = serde_json::from_str(&serde_json::to_string(&nan).unwrap()).unwrap();
     assert!(back.exact("x").is_err());
 }
 
@@ -627,11 +643,11 @@ fn num_round_trips_exactly_through_json() {
 fn run_config_round_trips_through_json() {
     let cfg = RunConfig {
         algorithm: AlgorithmConfig::Storm(storm_cfg(Correction::PerDecision)),
-        theta0: vec![Num::Float(0.3)],
+        theta0: vec![ConfigNumber::Float(0.3)],
         seed: 7,
         stop: StoppingRule {
             max_iterations: Some(5),
-            target_loss: Some(Num::ratio(1, 8)),
+            target_loss: Some(ConfigNumber::ratio(1, 8)),
             ..Default::default()
         },
     };
@@ -700,13 +716,13 @@ impl IlProblem<f64> for Recording {
 
 #[test]
 fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
+    use ilopt::algo::as_printed::printed_algorithm_5;
     use ilopt::algo::o2nc::O2nc;
-    use ilopt::algo::printed::printed_algorithm_5;
     let cfg = O2ncConfig {
         budget: 40,
-        delta: Num::ratio(1, 2),
-        g: Num::ratio(1, 1),
-        delta0: Num::ratio(1, 1),
+        delta: ConfigNumber::ratio(1, 2),
+        g: ConfigNumber::ratio(1, 1),
+        delta0: ConfigNumber::ratio(1, 1),
         form: EstimatorForm::Causal,
     };
     for printed in [false, true] {
@@ -721,7 +737,7 @@ fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
         };
         let mut rng = KitRng::seed_from_u64(1);
         let mut cost = Cost::default();
-        let mut ctx = Ctx {
+        let mut ctx = StepContext {
             rng: &mut rng,
             cost: &mut cost,
         };
@@ -759,7 +775,7 @@ fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
     // have mean F'(p); tolerance 6 standard errors (see tests/algo_m1.rs for the policy).
     // (At p = 1/2 the old-point estimate happens to be unbiased even without weights, since
     // l(A) = l(B) there, so p = 3/10 is used.)
-    use ilopt::algo::fixture::AliasedTwoState;
+    use crate::fixture::AliasedTwoState;
     let fx = AliasedTwoState::m1();
     assert_eq!(fx.derivative(&q(3, 10)), q(-9, 5));
     let target = -1.8;

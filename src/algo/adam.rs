@@ -8,11 +8,9 @@
 //! θ_t = θ_{t−1} − α m̂_t / (√v̂_t + ε)     (entrywise)
 //! ```
 
-use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, UpdateRule, check_dim, first_order_step, in_range,
-    positive, require_roots, sqrt,
-};
-use crate::problem::{EstimatorForm, IlProblem};
+use super::first_order::{FirstOrder, UpdateRule};
+use super::{AlgoError, ConfigNumber, in_range, positive, require_roots, sqrt};
+use crate::problem::EstimatorForm;
 use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -24,23 +22,23 @@ const ADAM: &str = "Adam";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AdamConfig {
     /// Step size α > 0.
-    pub alpha: Num,
+    pub alpha: ConfigNumber,
     /// First-moment decay β₁ ∈ [0, 1).
-    pub beta1: Num,
+    pub beta1: ConfigNumber,
     /// Second-moment decay β₂ ∈ [0, 1).
-    pub beta2: Num,
+    pub beta2: ConfigNumber,
     /// ε ≥ 0 added to √v̂.
-    pub epsilon: Num,
+    pub epsilon: ConfigNumber,
 }
 
 impl AdamConfig {
     /// Kingma & Ba's defaults with step size `alpha`: β₁ = 0.9, β₂ = 0.999, ε = 10⁻⁸.
-    pub fn with_alpha(alpha: impl Into<Num>) -> Self {
+    pub fn with_alpha(alpha: impl Into<ConfigNumber>) -> Self {
         AdamConfig {
             alpha: alpha.into(),
-            beta1: Num::ratio(9, 10),
-            beta2: Num::ratio(999, 1000),
-            epsilon: Num::ratio(1, 100_000_000),
+            beta1: ConfigNumber::ratio(9, 10),
+            beta2: ConfigNumber::ratio(999, 1000),
+            epsilon: ConfigNumber::ratio(1, 100_000_000),
         }
     }
 }
@@ -127,47 +125,19 @@ pub struct AdamOptimizerConfig {
     pub form: EstimatorForm,
 }
 
-/// Adam on the IL objective, driven by the eq. 3.15 oracle.
-#[derive(Debug, Clone)]
-pub struct Adam<S> {
-    rule: AdamRule<S>,
-    form: EstimatorForm,
-    theta: DVector<S>,
-}
+/// Adam on the IL objective, driven by the eq. 3.15 oracle: [`FirstOrder`] with the [`AdamRule`].
+pub type Adam<S> = FirstOrder<S, AdamRule<S>>;
 
-impl<S: Scalar> Adam<S> {
-    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
-    pub fn theta(&self) -> &DVector<S> {
-        &self.theta
-    }
-
+impl<S: Scalar> FirstOrder<S, AdamRule<S>> {
     /// Validate and build.
     ///
     /// # Errors
     /// As [`AdamRule::new`].
     pub fn new(config: &AdamOptimizerConfig) -> Result<Self, AlgoError> {
-        Ok(Adam {
-            rule: AdamRule::new(&config.adam)?,
-            form: config.form,
-            theta: DVector::from_vec(Vec::new()),
-        })
-    }
-}
-
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Adam<S> {
-    fn name(&self) -> &'static str {
-        "adam"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.rule.reset();
-        self.theta = theta0;
-        Ok(())
-    }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
-        first_order_step(problem, &mut self.theta, &mut self.rule, self.form, ctx)
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+        Ok(FirstOrder::with_rule(
+            "adam",
+            AdamRule::new(&config.adam)?,
+            config.form,
+        ))
     }
 }

@@ -3,18 +3,18 @@
 //! [`crate::algo::replay`] rebuilds the algorithm from it and reproduces the run bit for bit.
 
 use super::adam::{Adam, AdamOptimizerConfig};
+use super::as_printed::{PrintedAlgorithm4Config, printed_algorithm_4, printed_algorithm_5};
 use super::bc::{Bc, BcConfig};
 use super::dagger::{Dagger, DaggerConfig};
 use super::forward_training::{ForwardTraining, ForwardTrainingConfig};
 use super::o2nc::{O2nc, O2ncConfig};
-use super::printed::{PrintedAlgorithm4Config, printed_algorithm_4, printed_algorithm_5};
 use super::rmsprop::{RmsProp, RmsPropOptimizerConfig};
 use super::rrm::{Rrm, RrmConfig};
 use super::sgd::{Sgd, SgdConfig};
 use super::smile::{Smile, SmileConfig};
 use super::storm::{Storm, StormConfig};
 use super::storm_plus::{StormPlus, StormPlusConfig};
-use super::{AlgoError, Algorithm, Num, StoppingRule};
+use super::{AlgoError, Algorithm, ConfigNumber, StoppingRule};
 use crate::problem::IlProblem;
 use crate::scalar::Scalar;
 use nalgebra::DVector;
@@ -81,7 +81,7 @@ impl AlgorithmConfig {
             AlgorithmConfig::Dagger(c) => Box::new(Dagger::<S, P>::new(c)?),
             AlgorithmConfig::Rrm(c) => Box::new(Rrm::<S, P>::new(c)?),
             AlgorithmConfig::Smile(c) => Box::new(Smile::<S, P>::new(c)?),
-            AlgorithmConfig::ForwardTraining(c) => Box::new(ForwardTraining::new(c)?),
+            AlgorithmConfig::ForwardTraining(c) => Box::new(ForwardTraining::<S, P>::new(c)?),
         })
     }
 }
@@ -91,8 +91,8 @@ impl AlgorithmConfig {
 pub struct RunConfig {
     /// The algorithm and its hyper-parameters.
     pub algorithm: AlgorithmConfig,
-    /// The initial parameter θ₀ (exact values; see [`Num`]).
-    pub theta0: Vec<Num>,
+    /// The initial parameter θ₀ (exact values; see [`ConfigNumber`]).
+    pub theta0: Vec<ConfigNumber>,
     /// The seed of the run's ChaCha8 RNG.
     pub seed: u64,
     /// When to stop.

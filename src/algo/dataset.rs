@@ -10,7 +10,7 @@
 use super::adam::{AdamConfig, AdamRule};
 use super::rmsprop::{RmsPropConfig, RmsPropRule};
 use super::sgd::{SgdRule, SgdStep};
-use super::{AlgoError, Ctx, UpdateRule, check_finite, invalid};
+use super::{AlgoError, StepContext, UpdateRule, check_finite, invalid};
 use crate::problem::{Behaviour, IlProblem};
 use crate::scalar::Scalar;
 use nalgebra::DVector;
@@ -45,7 +45,7 @@ pub struct InnerConfig {
 
 impl InnerConfig {
     /// Full-batch gradient descent with constant step `eta`, `iterations` updates.
-    pub fn gradient_descent(eta: impl Into<super::Num>, iterations: u64) -> Self {
+    pub fn gradient_descent(eta: impl Into<super::ConfigNumber>, iterations: u64) -> Self {
         InnerConfig {
             rule: RuleConfig::Sgd {
                 step: SgdStep::constant(eta),
@@ -68,13 +68,13 @@ pub enum Retrain {
 
 /// A built inner optimiser.
 #[derive(Debug)]
-pub struct Inner<S> {
+pub struct InnerOptimiser<S> {
     rule: Box<dyn UpdateRule<S>>,
     iterations: u64,
     batch_size: Option<u64>,
 }
 
-impl<S: Scalar> Inner<S> {
+impl<S: Scalar> InnerOptimiser<S> {
     /// Validate and build; Adam and RMSProp need a scalar with roots.
     ///
     /// # Errors
@@ -92,7 +92,7 @@ impl<S: Scalar> Inner<S> {
             RuleConfig::Adam(a) => Box::new(AdamRule::new(a)?),
             RuleConfig::RmsProp(r) => Box::new(RmsPropRule::new(r)?),
         };
-        Ok(Inner {
+        Ok(InnerOptimiser {
             rule,
             iterations: c.iterations,
             batch_size: c.batch_size,
@@ -109,7 +109,7 @@ impl<S: Scalar> Inner<S> {
         problem: &P,
         start: &DVector<S>,
         data: &[P::Labelled],
-        ctx: &mut Ctx<'_>,
+        ctx: &mut StepContext<'_>,
     ) -> Result<(DVector<S>, S), AlgoError> {
         if data.is_empty() {
             return Err(AlgoError::EmptyDataset);
@@ -147,7 +147,7 @@ pub(crate) fn collect<S: Scalar, P: IlProblem<S> + ?Sized>(
     behaviour: &Behaviour<'_, S>,
     n: u64,
     data: &mut Vec<P::Labelled>,
-    ctx: &mut Ctx<'_>,
+    ctx: &mut StepContext<'_>,
 ) -> Result<(), AlgoError> {
     for _ in 0..n {
         let tau = problem.rollout(behaviour, ctx.rng, ctx.cost)?;

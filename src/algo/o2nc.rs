@@ -1,7 +1,7 @@
 //! Online-to-non-convex conversion (Algorithm 5; Cutkosky, Mehta, Orabona, ICML 2023) with online
 //! gradient descent as the online learner, the parameters of math.md §5 and the **IL-correct
 //! sampling** τ_n ∼ p(·; w_n) (erratum E11; the printed sampling at θ_n is
-//! [`crate::algo::printed`]'s negative control).
+//! [`crate::algo::as_printed`]'s negative control).
 //!
 //! Inputs: budget N ≥ 4, δ > 0, G > 0 (G² ≥ sup_θ E‖g‖²), Δ₀ > 0 (Δ₀ ≥ F(θ₀) − F*). Then
 //! `T = min(⌈(GNδ/Δ₀)^{2/3}⌉, ⌊N/2⌋)`, `K = ⌊N/T⌋`, `M = KT`, `D = δ/T`, `η = D/(G√T)`
@@ -17,8 +17,8 @@
 //! after M steps. `s_n` is a dyadic uniform ([`crate::algo::dyadic_uniform`]).
 
 use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, axpy, check_dim, check_finite, dyadic_uniform,
-    invalid, norm_sq, positive, require_roots, scale, sqrt,
+    AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, axpy, check_dim, check_finite,
+    dyadic_uniform, invalid, norm_sq, positive, require_roots, scale, sqrt,
 };
 use crate::problem::{Behaviour, EstimatorForm, IlProblem};
 use crate::scalar::{BigRational, Scalar};
@@ -37,11 +37,11 @@ pub struct O2ncConfig {
     /// Budget N ≥ 4 (gradient-oracle calls).
     pub budget: u64,
     /// δ > 0.
-    pub delta: Num,
+    pub delta: ConfigNumber,
     /// G > 0 with G² ≥ sup_θ E_{τ∼θ}‖g(θ, τ)‖².
-    pub g: Num,
+    pub g: ConfigNumber,
     /// Δ₀ > 0 with Δ₀ ≥ F(θ₀) − F*.
-    pub delta0: Num,
+    pub delta0: ConfigNumber,
     /// Which form of eq. 3.15.
     pub form: EstimatorForm,
 }
@@ -215,7 +215,12 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
         }
     }
 
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
+    fn init(
+        &mut self,
+        problem: &P,
+        theta0: DVector<S>,
+        _: &mut StepContext<'_>,
+    ) -> Result<(), AlgoError> {
         check_dim(problem.dim(), &theta0)?;
         let zero = DVector::from_element(theta0.len(), S::zero());
         self.delta = zero.clone();
@@ -227,7 +232,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
         Ok(())
     }
 
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
         if self.n >= self.params.m {
             return Err(AlgoError::State("O2NC has used its M = KT steps"));
         }

@@ -8,11 +8,9 @@
 //! The thesis's eq. 2.15 has no ε (ε = 0 here reproduces it literally); a zero denominator then
 //! stops the run with [`AlgoError::NonFinite`] rather than producing NaN. `v₀ = 0`.
 
-use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, UpdateRule, check_dim, first_order_step, in_range,
-    positive, require_roots, sqrt,
-};
-use crate::problem::{EstimatorForm, IlProblem};
+use super::first_order::{FirstOrder, UpdateRule};
+use super::{AlgoError, ConfigNumber, in_range, positive, require_roots, sqrt};
+use crate::problem::EstimatorForm;
 use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -24,20 +22,20 @@ const RMSPROP: &str = "RMSProp";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RmsPropConfig {
     /// Step size η > 0.
-    pub eta: Num,
+    pub eta: ConfigNumber,
     /// Decay β ∈ [0, 1).
-    pub beta: Num,
+    pub beta: ConfigNumber,
     /// ε ≥ 0 added to √v (0 = eq. 2.15 as printed).
-    pub epsilon: Num,
+    pub epsilon: ConfigNumber,
 }
 
 impl RmsPropConfig {
     /// Step size `eta` with β = 0.9, ε = 10⁻⁸.
-    pub fn with_eta(eta: impl Into<Num>) -> Self {
+    pub fn with_eta(eta: impl Into<ConfigNumber>) -> Self {
         RmsPropConfig {
             eta: eta.into(),
-            beta: Num::ratio(9, 10),
-            epsilon: Num::ratio(1, 100_000_000),
+            beta: ConfigNumber::ratio(9, 10),
+            epsilon: ConfigNumber::ratio(1, 100_000_000),
         }
     }
 }
@@ -103,47 +101,19 @@ pub struct RmsPropOptimizerConfig {
     pub form: EstimatorForm,
 }
 
-/// RMSProp on the IL objective, driven by the eq. 3.15 oracle.
-#[derive(Debug, Clone)]
-pub struct RmsProp<S> {
-    rule: RmsPropRule<S>,
-    form: EstimatorForm,
-    theta: DVector<S>,
-}
+/// RMSProp on the IL objective, driven by the eq. 3.15 oracle: [`FirstOrder`] with the [`RmsPropRule`].
+pub type RmsProp<S> = FirstOrder<S, RmsPropRule<S>>;
 
-impl<S: Scalar> RmsProp<S> {
-    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
-    pub fn theta(&self) -> &DVector<S> {
-        &self.theta
-    }
-
+impl<S: Scalar> FirstOrder<S, RmsPropRule<S>> {
     /// Validate and build.
     ///
     /// # Errors
     /// As [`RmsPropRule::new`].
     pub fn new(config: &RmsPropOptimizerConfig) -> Result<Self, AlgoError> {
-        Ok(RmsProp {
-            rule: RmsPropRule::new(&config.rmsprop)?,
-            form: config.form,
-            theta: DVector::from_vec(Vec::new()),
-        })
-    }
-}
-
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for RmsProp<S> {
-    fn name(&self) -> &'static str {
-        "rmsprop"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.rule.reset();
-        self.theta = theta0;
-        Ok(())
-    }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
-        first_order_step(problem, &mut self.theta, &mut self.rule, self.form, ctx)
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+        Ok(FirstOrder::with_rule(
+            "rmsprop",
+            RmsPropRule::new(&config.rmsprop)?,
+            config.form,
+        ))
     }
 }

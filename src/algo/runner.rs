@@ -17,7 +17,7 @@
 //! time limit passed. Runs with a time limit are not reproducible when the limit binds.
 
 use super::config::RunConfig;
-use super::{AlgoError, Algorithm, Ctx, Num, StepReport, invalid, norm_sq};
+use super::{AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, invalid, norm_sq};
 use crate::problem::{Cost, IlProblem, KitRng};
 use crate::scalar::{JsonScalar, Scalar};
 use nalgebra::DVector;
@@ -34,7 +34,7 @@ pub struct StoppingRule {
     /// Budget of per-state gradient evaluations ([`Cost::gradient_evaluations`], ≥ 1).
     pub max_gradient_evaluations: Option<u64>,
     /// Stop once the loss is certainly ≤ this value.
-    pub target_loss: Option<Num>,
+    pub target_loss: Option<ConfigNumber>,
     /// Wall-clock limit in milliseconds (≥ 1).
     pub time_limit_ms: Option<u64>,
 }
@@ -378,7 +378,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
         algorithm.init(
             problem,
             theta0,
-            &mut Ctx {
+            &mut StepContext {
                 rng: &mut rng,
                 cost: &mut cost,
             },
@@ -396,7 +396,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
         let termination = loop {
             let step = algorithm.step(
                 problem,
-                &mut Ctx {
+                &mut StepContext {
                     rng: &mut rng,
                     cost: &mut cost,
                 },

@@ -7,11 +7,9 @@
 //! Per erratum E17, the guarantees are for a random or best iterate, not θ_K; the runner's
 //! history has every iterate.
 
-use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, UpdateRule, axpy, check_dim, first_order_step,
-    positive, require_roots, sqrt,
-};
-use crate::problem::{EstimatorForm, IlProblem};
+use super::first_order::{FirstOrder, UpdateRule};
+use super::{AlgoError, ConfigNumber, axpy, positive, require_roots, sqrt};
+use crate::problem::EstimatorForm;
 use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -23,25 +21,25 @@ pub enum SgdStep {
     /// `η_k = eta` (eq. 3.23 ff.).
     Constant {
         /// η > 0.
-        eta: Num,
+        eta: ConfigNumber,
     },
     /// `η_k = eta0 · k0 / (k0 + k − 1)` (so η₁ = η₀); field operations only.
     InverseTime {
         /// η₀ > 0.
-        eta0: Num,
+        eta0: ConfigNumber,
         /// k₀ > 0.
-        k0: Num,
+        k0: ConfigNumber,
     },
     /// `η_k = eta0 / √k` (needs square roots).
     InverseSqrt {
         /// η₀ > 0.
-        eta0: Num,
+        eta0: ConfigNumber,
     },
 }
 
 impl SgdStep {
     /// Constant step size `eta`.
-    pub fn constant(eta: impl Into<Num>) -> Self {
+    pub fn constant(eta: impl Into<ConfigNumber>) -> Self {
         SgdStep::Constant { eta: eta.into() }
     }
 }
@@ -120,47 +118,19 @@ impl<S: Scalar> UpdateRule<S> for SgdRule<S> {
     }
 }
 
-/// SGD for IL (Algorithm 3).
-#[derive(Debug, Clone)]
-pub struct Sgd<S> {
-    rule: SgdRule<S>,
-    form: EstimatorForm,
-    theta: DVector<S>,
-}
+/// SGD for IL (Algorithm 3): [`FirstOrder`] with the [`SgdRule`].
+pub type Sgd<S> = FirstOrder<S, SgdRule<S>>;
 
-impl<S: Scalar> Sgd<S> {
-    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
-    pub fn theta(&self) -> &DVector<S> {
-        &self.theta
-    }
-
+impl<S: Scalar> FirstOrder<S, SgdRule<S>> {
     /// SGD with the configured schedule; `inverse-sqrt` needs a scalar with roots.
     ///
     /// # Errors
     /// As [`SgdRule::new`].
     pub fn new(config: &SgdConfig) -> Result<Self, AlgoError> {
-        Ok(Sgd {
-            rule: SgdRule::new(&config.step)?,
-            form: config.form,
-            theta: DVector::from_vec(Vec::new()),
-        })
-    }
-}
-
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Sgd<S> {
-    fn name(&self) -> &'static str {
-        "sgd"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.rule.reset();
-        self.theta = theta0;
-        Ok(())
-    }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
-        first_order_step(problem, &mut self.theta, &mut self.rule, self.form, ctx)
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+        Ok(FirstOrder::with_rule(
+            "sgd",
+            SgdRule::new(&config.step)?,
+            config.form,
+        ))
     }
 }

