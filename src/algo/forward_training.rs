@@ -3,7 +3,7 @@
 //! t − 1 steps and the expert afterwards, label the state s_t of each trajectory, and train π_t on
 //! those states (from θ₀). The horizon is learnt from the first roll-out
 //! ([`IlProblem::labelled_states`]); the run finishes after T − 1 iterations.
-//! [`Algorithm::theta`] is the newest π_t; [`Algorithm::outputs`] is the whole sequence.
+//! [`crate::algo::Algorithm::theta`] is the newest π_t; [`crate::algo::Algorithm::outputs`] is the whole sequence.
 
 use super::dataset::{InnerConfig, InnerOptimiser, Retrain, trajectories};
 use super::learner::{DataSchedule, DatasetLearner, LearnerState};

@@ -7,9 +7,9 @@
 //! 2. train a new component π̂^i on these data (the inner optimiser, from θ₀ or warm-started from
 //!    π̂^{i−1});
 //! 3. as the thesis's Algorithm 1 adds, aggregate D and train one policy θ on the whole D — this
-//!    is the iterate the runner reports ([`Algorithm::theta`]).
+//!    is the iterate the runner reports ([`crate::algo::Algorithm::theta`]).
 //!
-//! The components π̂^j are [`Algorithm::outputs`]; [`Smile::mixture_weights`] gives the final
+//! The components π̂^j are [`crate::algo::Algorithm::outputs`]; [`DatasetLearner::mixture_weights`] gives the final
 //! mixture with the expert removed, `α(1−α)^{j−1}/(1 − (1−α)^N)`.
 
 use super::dagger::beta_mixture;
