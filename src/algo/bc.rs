@@ -4,7 +4,7 @@
 //! the inner optimiser (so one step with enough trajectories is classic BC, and more steps show
 //! BC's learning curve in the same cost units as the other learners).
 
-use super::dataset::{InnerConfig, InnerOptimiser, Retrain, collect, trajectories};
+use super::dataset::{InnerConfig, Retrain, collect};
 use super::learner::{DataSchedule, DatasetLearner, LearnerState};
 use super::{AlgoError, StepContext, StepReport};
 use crate::problem::{Behaviour, IlProblem};
@@ -35,13 +35,8 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, ExpertData> {
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
     pub fn new(c: &BcConfig) -> Result<Self, AlgoError> {
-        let inner = InnerOptimiser::new(&c.inner)?;
         Ok(DatasetLearner {
-            state: LearnerState::new(
-                trajectories(c.trajectories_per_iteration)?,
-                c.retrain,
-                inner,
-            ),
+            state: LearnerState::build(&c.inner, c.trajectories_per_iteration, c.retrain)?,
             schedule: ExpertData,
         })
     }

@@ -6,7 +6,7 @@
 //! an exact argmin inner solver this is the map G_DA of eq. 3.30; without aggregation it is RRM
 //! (eq. 3.29).
 
-use super::dataset::{InnerConfig, InnerOptimiser, Retrain, collect, trajectories};
+use super::dataset::{InnerConfig, Retrain, collect};
 use super::learner::{DataSchedule, DatasetLearner, LearnerState};
 use super::{AlgoError, ConfigNumber, StepContext, StepReport, in_range, invalid};
 use crate::problem::{Behaviour, IlProblem};
@@ -128,10 +128,8 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, BetaMixing> {
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
     pub fn new(c: &DaggerConfig) -> Result<Self, AlgoError> {
-        let inner = InnerOptimiser::new(&c.inner)?;
-        let n = trajectories(c.trajectories_per_iteration)?;
         Ok(DatasetLearner {
-            state: LearnerState::new(n, c.retrain, inner),
+            state: LearnerState::build(&c.inner, c.trajectories_per_iteration, c.retrain)?,
             schedule: BetaMixing {
                 beta: Beta::new(&c.beta)?,
                 aggregate: c.aggregate,

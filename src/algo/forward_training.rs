@@ -5,7 +5,7 @@
 //! ([`IlProblem::labelled_states`]); the run finishes after T − 1 iterations.
 //! [`crate::algo::Algorithm::theta`] is the newest π_t; [`crate::algo::Algorithm::outputs`] is the whole sequence.
 
-use super::dataset::{InnerConfig, InnerOptimiser, Retrain, trajectories};
+use super::dataset::{InnerConfig, Retrain};
 use super::learner::{DataSchedule, DatasetLearner, LearnerState};
 use super::{AlgoError, StepContext, StepReport};
 use crate::problem::{Behaviour, IlProblem};
@@ -38,10 +38,12 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, PerStepPolicies<S
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
     pub fn new(c: &ForwardTrainingConfig) -> Result<Self, AlgoError> {
-        let inner = InnerOptimiser::new(&c.inner)?;
-        let n = trajectories(c.trajectories_per_iteration)?;
         Ok(DatasetLearner {
-            state: LearnerState::new(n, Retrain::FromScratch, inner),
+            state: LearnerState::build(
+                &c.inner,
+                c.trajectories_per_iteration,
+                Retrain::FromScratch,
+            )?,
             schedule: PerStepPolicies {
                 policies: Vec::new(),
                 horizon: None,

@@ -3,7 +3,7 @@
 //! dataset, θ₀ and the iterate ([`LearnerState`]); a [`DataSchedule`] holds what differs: which
 //! behaviour is rolled out, which data are kept, and what is trained on them.
 
-use super::dataset::{InnerOptimiser, Retrain};
+use super::dataset::{InnerConfig, InnerOptimiser, Retrain, trajectories};
 use super::{AlgoError, Algorithm, StepContext, StepReport, check_dim};
 use crate::problem::IlProblem;
 use crate::scalar::Scalar;
@@ -37,6 +37,23 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> LearnerState<S, P> {
             theta0: DVector::from_vec(Vec::new()),
             theta: DVector::from_vec(Vec::new()),
         }
+    }
+
+    /// Validate and build the inner optimiser, then the trajectory count.
+    ///
+    /// # Errors
+    /// As [`InnerOptimiser::new`]; [`AlgoError::InvalidParameter`] for zero trajectories.
+    pub(crate) fn build(
+        inner: &InnerConfig,
+        trajectories_per_iteration: u64,
+        retrain: Retrain,
+    ) -> Result<Self, AlgoError> {
+        let inner = InnerOptimiser::new(inner)?;
+        Ok(Self::new(
+            trajectories(trajectories_per_iteration)?,
+            retrain,
+            inner,
+        ))
     }
 
     /// Train on the whole dataset from θ₀ or θ (by [`Retrain`]), make the result the iterate and

@@ -11,7 +11,7 @@
 //! Convergence to θ_PS needs the contraction modulus εβ/γ < 1 (erratum E15); on the M-family it is
 //! exactly κ = (T−2)Δ/(T−1) (math.md §6).
 
-use super::dataset::{InnerConfig, InnerOptimiser, Retrain, collect, trajectories};
+use super::dataset::{InnerConfig, Retrain, collect};
 use super::learner::{DataSchedule, DatasetLearner, LearnerState};
 use super::{AlgoError, Algorithm, StepContext, StepReport, check_dim, check_finite};
 use crate::problem::{Behaviour, IlProblem, OracleError};
@@ -45,13 +45,8 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, OnPolicyData> {
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
     pub fn new(c: &RrmConfig) -> Result<Self, AlgoError> {
-        let inner = InnerOptimiser::new(&c.inner)?;
         Ok(DatasetLearner {
-            state: LearnerState::new(
-                trajectories(c.trajectories_per_iteration)?,
-                c.retrain,
-                inner,
-            ),
+            state: LearnerState::build(&c.inner, c.trajectories_per_iteration, c.retrain)?,
             schedule: OnPolicyData,
         })
     }
