@@ -20,7 +20,7 @@
 mod specialised;
 
 use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
-use ilopt::algo::Num;
+use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined};
 use ilopt::env::obstacle::{ObstacleEnv, VoExpertPolicy};
 use ilopt::expert::lqr::LqrExpert;
@@ -136,7 +136,7 @@ fn cartpole(c: &mut Criterion) {
         generic.clone(),
         1,
         &Baseline::Constant {
-            value: Num::ratio(50, 1),
+            value: ConfigNumber::ratio(50, 1),
         },
     )
     .unwrap();

@@ -393,7 +393,7 @@ fn vec_actions_allocate_per_step() {
 /// lengths (its per-decision terms are written into those buffers, never per step).
 #[test]
 fn baselined_estimates_allocate_per_call_not_per_step() {
-    use ilopt::algo::Num;
+    use ilopt::algo::ConfigNumber;
     use ilopt::baseline::{Baseline, Baselined};
     let thetas = [
         balancing(),
@@ -404,7 +404,7 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
         (
             1,
             Baseline::Constant {
-                value: Num::ratio(1, 2),
+                value: ConfigNumber::ratio(1, 2),
             },
         ),
         (

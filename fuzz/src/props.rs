@@ -870,7 +870,7 @@ pub fn check_config(bytes: &[u8]) {
     }
     if let Err(e) = cfg
         .algorithm
-        .build_field::<BigRational, ToyProblem<BigRational>>()
+        .build::<BigRational, ToyProblem<BigRational>>()
     {
         assert!(!e.to_string().is_empty());
     }

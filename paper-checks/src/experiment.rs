@@ -29,7 +29,7 @@
 use crate::config::{AlgorithmEntry, CartPoleExpertChoice, TaskSection, Theta1};
 use crate::error::Error;
 use crate::stats::derive_seed;
-use ilopt::algo::{AlgorithmConfig, Ctx};
+use ilopt::algo::{AlgorithmConfig, StepContext};
 use ilopt::batched::Batched;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::{
@@ -814,7 +814,7 @@ fn drive<P: IlProblem<f64>>(
         .init(
             problem,
             theta1(task.theta1, bench.dim(), &spec.key),
-            &mut Ctx {
+            &mut StepContext {
                 rng: &mut rng,
                 cost: &mut cost,
             },
@@ -883,7 +883,7 @@ fn drive<P: IlProblem<f64>>(
         }
         match algorithm.step(
             problem,
-            &mut Ctx {
+            &mut StepContext {
                 rng: &mut rng,
                 cost: &mut cost,
             },

@@ -8,36 +8,37 @@
 //! θ_t = θ_{t−1} − α m̂_t / (√v̂_t + ε)     (entrywise)
 //! ```
 
-use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, UpdateRule, check_dim, first_order_step, in_range,
-    positive,
-};
-use crate::problem::{EstimatorForm, IlProblem};
-use crate::scalar::Sqrt;
+use super::first_order::{FirstOrder, UpdateRule};
+use super::{AlgoError, ConfigNumber, in_range, positive, require_roots, sqrt};
+use crate::problem::EstimatorForm;
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
+
+/// Adam, as named in [`AlgoError::NeedsRoots`].
+const ADAM: &str = "Adam";
 
 /// Adam's hyper-parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AdamConfig {
     /// Step size α > 0.
-    pub alpha: Num,
+    pub alpha: ConfigNumber,
     /// First-moment decay β₁ ∈ [0, 1).
-    pub beta1: Num,
+    pub beta1: ConfigNumber,
     /// Second-moment decay β₂ ∈ [0, 1).
-    pub beta2: Num,
+    pub beta2: ConfigNumber,
     /// ε ≥ 0 added to √v̂.
-    pub epsilon: Num,
+    pub epsilon: ConfigNumber,
 }
 
 impl AdamConfig {
     /// Kingma & Ba's defaults with step size `alpha`: β₁ = 0.9, β₂ = 0.999, ε = 10⁻⁸.
-    pub fn with_alpha(alpha: impl Into<Num>) -> Self {
+    pub fn with_alpha(alpha: impl Into<ConfigNumber>) -> Self {
         AdamConfig {
             alpha: alpha.into(),
-            beta1: Num::ratio(9, 10),
-            beta2: Num::ratio(999, 1000),
-            epsilon: Num::ratio(1, 100_000_000),
+            beta1: ConfigNumber::ratio(9, 10),
+            beta2: ConfigNumber::ratio(999, 1000),
+            epsilon: ConfigNumber::ratio(1, 100_000_000),
         }
     }
 }
@@ -55,13 +56,14 @@ pub struct AdamRule<S> {
     v: Option<DVector<S>>,
 }
 
-impl<S: Sqrt> AdamRule<S> {
+impl<S: Scalar> AdamRule<S> {
     /// Validate and build.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming `alpha`, `beta1`, `beta2` or `epsilon`.
+    /// [`AlgoError::InvalidParameter`] naming `alpha`, `beta1`, `beta2` or `epsilon`;
+    /// [`AlgoError::NeedsRoots`] for a scalar without square roots.
     pub fn new(c: &AdamConfig) -> Result<Self, AlgoError> {
-        Ok(AdamRule {
+        let rule = AdamRule {
             alpha: S::from_rational(&positive(&c.alpha, "alpha", true)?),
             beta1: S::from_rational(&in_range(&c.beta1, "beta1", (0, false), (1, true))?),
             beta2: S::from_rational(&in_range(&c.beta2, "beta2", (0, false), (1, true))?),
@@ -70,11 +72,13 @@ impl<S: Sqrt> AdamRule<S> {
             beta2_t: S::one(),
             m: None,
             v: None,
-        })
+        };
+        require_roots::<S>(ADAM, "square roots")?;
+        Ok(rule)
     }
 }
 
-impl<S: Sqrt> UpdateRule<S> for AdamRule<S> {
+impl<S: Scalar> UpdateRule<S> for AdamRule<S> {
     fn reset(&mut self) {
         self.beta1_t = S::one();
         self.beta2_t = S::one();
@@ -99,7 +103,7 @@ impl<S: Sqrt> UpdateRule<S> for AdamRule<S> {
         for i in 0..theta.len() {
             let mhat = m[i].clone() / &c1;
             let vhat = v[i].clone() / &c2;
-            let den = vhat.sqrt() + &self.epsilon;
+            let den = sqrt(&vhat, ADAM)? + &self.epsilon;
             if !den.is_certainly_positive() {
                 return Err(AlgoError::NonFinite("Adam's denominator √v̂ + ε (zero)"));
             }
@@ -121,47 +125,19 @@ pub struct AdamOptimizerConfig {
     pub form: EstimatorForm,
 }
 
-/// Adam on the IL objective, driven by the eq. 3.15 oracle.
-#[derive(Debug, Clone)]
-pub struct Adam<S> {
-    rule: AdamRule<S>,
-    form: EstimatorForm,
-    theta: DVector<S>,
-}
+/// Adam on the IL objective, driven by the eq. 3.15 oracle: [`FirstOrder`] with the [`AdamRule`].
+pub type Adam<S> = FirstOrder<S, AdamRule<S>>;
 
-impl<S: Sqrt> Adam<S> {
-    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
-    pub fn theta(&self) -> &DVector<S> {
-        &self.theta
-    }
-
+impl<S: Scalar> FirstOrder<S, AdamRule<S>> {
     /// Validate and build.
     ///
     /// # Errors
     /// As [`AdamRule::new`].
     pub fn new(config: &AdamOptimizerConfig) -> Result<Self, AlgoError> {
-        Ok(Adam {
-            rule: AdamRule::new(&config.adam)?,
-            form: config.form,
-            theta: DVector::from_vec(Vec::new()),
-        })
-    }
-}
-
-impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Adam<S> {
-    fn name(&self) -> &'static str {
-        "adam"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.rule.reset();
-        self.theta = theta0;
-        Ok(())
-    }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
-        first_order_step(problem, &mut self.theta, &mut self.rule, self.form, ctx)
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+        Ok(FirstOrder::with_rule(
+            "adam",
+            AdamRule::new(&config.adam)?,
+            config.form,
+        ))
     }
 }

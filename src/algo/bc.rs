@@ -4,11 +4,11 @@
 //! the inner optimiser (so one step with enough trajectories is classic BC, and more steps show
 //! BC's learning curve in the same cost units as the other learners).
 
-use super::dataset::{Inner, InnerConfig, Retrain, collect, trajectories};
-use super::{AlgoError, Algorithm, Ctx, RootOps, StepReport, check_dim};
+use super::dataset::{InnerConfig, Retrain, collect};
+use super::learner::{DataSchedule, DatasetLearner, LearnerState};
+use super::{AlgoError, StepContext, StepReport};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{Scalar, Sqrt};
-use nalgebra::DVector;
+use crate::scalar::Scalar;
 use serde::{Deserialize, Serialize};
 
 /// Behavioural-cloning configuration.
@@ -22,77 +22,43 @@ pub struct BcConfig {
     pub retrain: Retrain,
 }
 
-/// Behavioural cloning.
-#[derive(Debug)]
-pub struct Bc<S: Scalar, P: IlProblem<S> + ?Sized> {
-    n: u64,
-    retrain: Retrain,
-    inner: Inner<S>,
-    data: Vec<P::Labelled>,
-    theta0: DVector<S>,
-    theta: DVector<S>,
-}
+/// BC's schedule: every iteration adds expert roll-outs to the dataset.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ExpertData;
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Bc<S, P> {
-    /// Build with an SGD inner optimiser for any scalar.
+/// Behavioural cloning: a [`DatasetLearner`] with the [`ExpertData`] schedule.
+pub type Bc<S, P> = DatasetLearner<S, P, ExpertData>;
+
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, ExpertData> {
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &BcConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`Bc::new_field`].
-    pub fn new(c: &BcConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
-    }
-    /// Build with an already-built inner optimiser.
-    ///
-    /// # Errors
-    /// [`AlgoError::InvalidParameter`] for zero trajectories per iteration.
-    pub fn with_inner(c: &BcConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
-        Ok(Bc {
-            n: trajectories(c.trajectories_per_iteration)?,
-            retrain: c.retrain,
-            inner,
-            data: Vec::new(),
-            theta0: DVector::from_vec(Vec::new()),
-            theta: DVector::from_vec(Vec::new()),
+    pub fn new(c: &BcConfig) -> Result<Self, AlgoError> {
+        Ok(DatasetLearner {
+            state: LearnerState::build(&c.inner, c.trajectories_per_iteration, c.retrain)?,
+            schedule: ExpertData,
         })
-    }
-    /// The aggregated dataset.
-    pub fn dataset(&self) -> &[P::Labelled] {
-        &self.data
     }
 }
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Bc<S, P> {
-    fn name(&self) -> &'static str {
-        "bc"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.data.clear();
-        self.theta0 = theta0.clone();
-        self.theta = theta0;
-        Ok(())
-    }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
-        collect(problem, &Behaviour::Expert, self.n, &mut self.data, ctx)?;
-        let start = match self.retrain {
-            Retrain::FromScratch => &self.theta0,
-            Retrain::WarmStart => &self.theta,
-        };
-        let (theta, loss) = self.inner.train(problem, start, &self.data, ctx)?;
-        self.theta = theta;
-        Ok(StepReport::new(None, Some(loss)))
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for ExpertData {
+    const NAME: &'static str = "bc";
+    fn reset(&mut self) {}
+    /// Roll out the expert, add the labelled states to the dataset (eq. 2.10's `d_{π*}`), retrain.
+    fn step(
+        &mut self,
+        state: &mut LearnerState<S, P>,
+        problem: &P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
+        collect(
+            problem,
+            &Behaviour::Expert,
+            state.trajectories,
+            &mut state.data,
+            ctx,
+        )?;
+        state.retrain_on_dataset(problem, ctx)
     }
 }

@@ -3,20 +3,18 @@
 //! [`crate::algo::replay`] rebuilds the algorithm from it and reproduces the run bit for bit.
 
 use super::adam::{Adam, AdamOptimizerConfig};
+use super::as_printed::{PrintedAlgorithm4Config, printed_algorithm_4, printed_algorithm_5};
 use super::bc::{Bc, BcConfig};
 use super::dagger::{Dagger, DaggerConfig};
 use super::forward_training::{ForwardTraining, ForwardTrainingConfig};
 use super::o2nc::{O2nc, O2ncConfig};
-use super::printed::{
-    PrintedAlgorithm4Config, printed_algorithm_4, printed_algorithm_4_field, printed_algorithm_5,
-};
 use super::rmsprop::{RmsProp, RmsPropOptimizerConfig};
 use super::rrm::{Rrm, RrmConfig};
 use super::sgd::{Sgd, SgdConfig};
 use super::smile::{Smile, SmileConfig};
 use super::storm::{Storm, StormConfig};
 use super::storm_plus::{StormPlus, StormPlusConfig};
-use super::{AlgoError, Algorithm, Num, Roots, StoppingRule};
+use super::{AlgoError, Algorithm, ConfigNumber, StoppingRule};
 use crate::problem::IlProblem;
 use crate::scalar::Scalar;
 use nalgebra::DVector;
@@ -59,11 +57,15 @@ pub enum AlgorithmConfig {
 pub type BoxedAlgorithm<'a, S, P> = Box<dyn Algorithm<S, P> + 'a>;
 
 impl AlgorithmConfig {
-    /// Build the algorithm for a scalar with square and cube roots (`f64`, `f32`, intervals).
+    /// Build the algorithm in the scalar `S`. In a scalar without roots (exact rationals) this
+    /// builds SGD with constant or inverse-time steps, STORM / IS-STORM / the printed
+    /// Algorithm 4 with `constant` or `explicit` schedules, and the dataset learners with an SGD
+    /// inner optimiser; everything else is rejected here, before the run starts.
     ///
     /// # Errors
-    /// The algorithm's constructor errors (invalid hyper-parameters).
-    pub fn build<'a, S: Roots, P: IlProblem<S> + ?Sized + 'a>(
+    /// The algorithm's constructor errors: invalid hyper-parameters, and
+    /// [`AlgoError::NeedsRoots`] for a configuration that needs roots `S` lacks.
+    pub fn build<'a, S: Scalar, P: IlProblem<S> + ?Sized + 'a>(
         &self,
     ) -> Result<BoxedAlgorithm<'a, S, P>, AlgoError> {
         Ok(match self {
@@ -79,38 +81,7 @@ impl AlgorithmConfig {
             AlgorithmConfig::Dagger(c) => Box::new(Dagger::<S, P>::new(c)?),
             AlgorithmConfig::Rrm(c) => Box::new(Rrm::<S, P>::new(c)?),
             AlgorithmConfig::Smile(c) => Box::new(Smile::<S, P>::new(c)?),
-            AlgorithmConfig::ForwardTraining(c) => Box::new(ForwardTraining::new(c)?),
-        })
-    }
-
-    /// Build the algorithm for any scalar (exact rationals): only what needs field operations —
-    /// SGD (constant / inverse-time), STORM / IS-STORM / printed Algorithm 4 with `constant` or
-    /// `explicit` schedules, and the dataset learners with an SGD inner optimiser.
-    ///
-    /// # Errors
-    /// [`AlgoError::NeedsRoots`] for everything else; constructor errors.
-    pub fn build_field<'a, S: Scalar, P: IlProblem<S> + ?Sized + 'a>(
-        &self,
-    ) -> Result<BoxedAlgorithm<'a, S, P>, AlgoError> {
-        let roots = |algorithm| AlgoError::NeedsRoots {
-            algorithm,
-            operation: "square roots",
-        };
-        Ok(match self {
-            AlgorithmConfig::Sgd(c) => Box::new(Sgd::new_field(c)?),
-            AlgorithmConfig::Storm(c) => Box::new(Storm::new_field(c)?),
-            AlgorithmConfig::PrintedAlgorithm4(c) => Box::new(printed_algorithm_4_field(c)?),
-            AlgorithmConfig::Bc(c) => Box::new(Bc::<S, P>::new_field(c)?),
-            AlgorithmConfig::Dagger(c) => Box::new(Dagger::<S, P>::new_field(c)?),
-            AlgorithmConfig::Rrm(c) => Box::new(Rrm::<S, P>::new_field(c)?),
-            AlgorithmConfig::Smile(c) => Box::new(Smile::<S, P>::new_field(c)?),
-            AlgorithmConfig::ForwardTraining(c) => Box::new(ForwardTraining::new_field(c)?),
-            AlgorithmConfig::StormPlus(_) => return Err(roots("STORM+")),
-            AlgorithmConfig::Adam(_) => return Err(roots("Adam")),
-            AlgorithmConfig::RmsProp(_) => return Err(roots("RMSProp")),
-            AlgorithmConfig::O2nc(_) | AlgorithmConfig::PrintedAlgorithm5(_) => {
-                return Err(roots("O2NC (projection and η = D/(G√T))"));
-            }
+            AlgorithmConfig::ForwardTraining(c) => Box::new(ForwardTraining::<S, P>::new(c)?),
         })
     }
 }
@@ -120,8 +91,8 @@ impl AlgorithmConfig {
 pub struct RunConfig {
     /// The algorithm and its hyper-parameters.
     pub algorithm: AlgorithmConfig,
-    /// The initial parameter θ₀ (exact values; see [`Num`]).
-    pub theta0: Vec<Num>,
+    /// The initial parameter θ₀ (exact values; see [`ConfigNumber`]).
+    pub theta0: Vec<ConfigNumber>,
     /// The seed of the run's ChaCha8 RNG.
     pub seed: u64,
     /// When to stop.

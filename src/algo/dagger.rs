@@ -6,10 +6,11 @@
 //! an exact argmin inner solver this is the map G_DA of eq. 3.30; without aggregation it is RRM
 //! (eq. 3.29).
 
-use super::dataset::{Inner, InnerConfig, Retrain, collect, trajectories};
-use super::{AlgoError, Algorithm, Ctx, Num, RootOps, StepReport, check_dim, in_range, invalid};
+use super::dataset::{InnerConfig, Retrain, collect};
+use super::learner::{DataSchedule, DatasetLearner, LearnerState};
+use super::{AlgoError, ConfigNumber, StepContext, StepReport, in_range, invalid};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{BigRational, Scalar, Sqrt};
+use crate::scalar::{BigRational, Scalar};
 use nalgebra::DVector;
 use num_traits::{One, ToPrimitive, Zero};
 use serde::{Deserialize, Serialize};
@@ -21,7 +22,7 @@ pub enum BetaSchedule {
     /// `β_i = beta` ∈ [0, 1].
     Constant {
         /// β.
-        beta: Num,
+        beta: ConfigNumber,
     },
     /// `β_i = max(0, 1 − (i−1)/iterations)`.
     Linear {
@@ -31,7 +32,7 @@ pub enum BetaSchedule {
     /// `β_i = p^{i−1}`, p ∈ [0, 1].
     Exponential {
         /// p.
-        p: Num,
+        p: ConfigNumber,
     },
 }
 
@@ -110,100 +111,63 @@ pub struct DaggerConfig {
     pub inner: InnerConfig,
 }
 
-/// DAgger.
-#[derive(Debug)]
-pub struct Dagger<S: Scalar, P: IlProblem<S> + ?Sized> {
-    n: u64,
+/// DAgger's schedule: the β_i mixture of expert and learner, the datasets aggregated or not.
+#[derive(Debug, Clone)]
+pub struct BetaMixing {
     beta: Beta,
     aggregate: bool,
-    retrain: Retrain,
-    inner: Inner<S>,
-    data: Vec<P::Labelled>,
     i: u64,
-    theta0: DVector<S>,
-    theta: DVector<S>,
 }
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Dagger<S, P> {
-    /// Build with an SGD inner optimiser for any scalar.
+/// DAgger (Algorithm 2): a [`DatasetLearner`] with the [`BetaMixing`] schedule.
+pub type Dagger<S, P> = DatasetLearner<S, P, BetaMixing>;
+
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, BetaMixing> {
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming the parameter (β ∉ [0, 1], …);
-    /// [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &DaggerConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`Dagger::new_field`].
-    pub fn new(c: &DaggerConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
-    }
-    /// Build with an already-built inner optimiser.
-    ///
-    /// # Errors
-    /// As [`Dagger::new_field`].
-    pub fn with_inner(c: &DaggerConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
-        Ok(Dagger {
-            n: trajectories(c.trajectories_per_iteration)?,
-            beta: Beta::new(&c.beta)?,
-            aggregate: c.aggregate,
-            retrain: c.retrain,
-            inner,
-            data: Vec::new(),
-            i: 0,
-            theta0: DVector::from_vec(Vec::new()),
-            theta: DVector::from_vec(Vec::new()),
+    /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
+    pub fn new(c: &DaggerConfig) -> Result<Self, AlgoError> {
+        Ok(DatasetLearner {
+            state: LearnerState::build(&c.inner, c.trajectories_per_iteration, c.retrain)?,
+            schedule: BetaMixing {
+                beta: Beta::new(&c.beta)?,
+                aggregate: c.aggregate,
+                i: 0,
+            },
         })
     }
     /// β_i of the next iteration, exactly.
     pub fn next_beta(&self) -> BigRational {
-        self.beta.at(self.i + 1)
-    }
-    /// The (aggregated) dataset.
-    pub fn dataset(&self) -> &[P::Labelled] {
-        &self.data
+        self.schedule.beta.at(self.schedule.i + 1)
     }
 }
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Dagger<S, P> {
-    fn name(&self) -> &'static str {
-        "dagger"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.data.clear();
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for BetaMixing {
+    const NAME: &'static str = "dagger";
+    fn reset(&mut self) {
         self.i = 0;
-        self.theta0 = theta0.clone();
-        self.theta = theta0;
-        Ok(())
     }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    /// Roll out `β_i π* + (1 − β_i) π_θ`, add (or, without aggregation, replace) the labelled
+    /// states, retrain.
+    fn step(
+        &mut self,
+        state: &mut LearnerState<S, P>,
+        problem: &P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
         self.i += 1;
         let beta = self.beta.at(self.i);
         if !self.aggregate {
-            self.data.clear();
+            state.data.clear();
         }
         collect(
             problem,
-            &beta_mixture(&beta, &self.theta),
-            self.n,
-            &mut self.data,
+            &beta_mixture(&beta, &state.theta),
+            state.trajectories,
+            &mut state.data,
             ctx,
         )?;
-        let start = match self.retrain {
-            Retrain::FromScratch => &self.theta0,
-            Retrain::WarmStart => &self.theta,
-        };
-        let (theta, loss) = self.inner.train(problem, start, &self.data, ctx)?;
-        self.theta = theta;
-        Ok(StepReport::new(None, Some(loss)))
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+        state.retrain_on_dataset(problem, ctx)
     }
 }

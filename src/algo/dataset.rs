@@ -10,9 +10,9 @@
 use super::adam::{AdamConfig, AdamRule};
 use super::rmsprop::{RmsPropConfig, RmsPropRule};
 use super::sgd::{SgdRule, SgdStep};
-use super::{AlgoError, Ctx, RootOps, UpdateRule, check_finite, invalid};
+use super::{AlgoError, StepContext, UpdateRule, check_finite, invalid};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{Scalar, Sqrt};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -45,7 +45,7 @@ pub struct InnerConfig {
 
 impl InnerConfig {
     /// Full-batch gradient descent with constant step `eta`, `iterations` updates.
-    pub fn gradient_descent(eta: impl Into<super::Num>, iterations: u64) -> Self {
+    pub fn gradient_descent(eta: impl Into<super::ConfigNumber>, iterations: u64) -> Self {
         InnerConfig {
             rule: RuleConfig::Sgd {
                 step: SgdStep::constant(eta),
@@ -68,19 +68,19 @@ pub enum Retrain {
 
 /// A built inner optimiser.
 #[derive(Debug)]
-pub struct Inner<S> {
+pub struct InnerOptimiser<S> {
     rule: Box<dyn UpdateRule<S>>,
     iterations: u64,
     batch_size: Option<u64>,
 }
 
-impl<S: Scalar> Inner<S> {
-    /// Validate and build for a scalar with the given roots.
+impl<S: Scalar> InnerOptimiser<S> {
+    /// Validate and build; Adam and RMSProp need a scalar with roots.
     ///
     /// # Errors
     /// [`AlgoError::InvalidParameter`] (zero iterations or batch size, bad rule parameters);
-    /// [`AlgoError::NeedsRoots`] for Adam/RMSProp without square roots.
-    pub fn new(c: &InnerConfig, roots: RootOps<S>) -> Result<Self, AlgoError> {
+    /// [`AlgoError::NeedsRoots`] for Adam/RMSProp, or SGD with η₀/√k, without square roots.
+    pub fn new(c: &InnerConfig) -> Result<Self, AlgoError> {
         if c.iterations == 0 {
             return Err(invalid("inner.iterations", "must be at least 1"));
         }
@@ -88,47 +88,11 @@ impl<S: Scalar> Inner<S> {
             return Err(invalid("inner.batch_size", "must be at least 1"));
         }
         let rule: Box<dyn UpdateRule<S>> = match &c.rule {
-            RuleConfig::Sgd { step } => Box::new(SgdRule::new(step, roots)?),
-            RuleConfig::Adam(_) => {
-                return Err(AlgoError::NeedsRoots {
-                    algorithm: "the Adam inner optimiser (build with Inner::new_sqrt)",
-                    operation: "square roots",
-                });
-            }
-            RuleConfig::RmsProp(_) => {
-                return Err(AlgoError::NeedsRoots {
-                    algorithm: "the RMSProp inner optimiser (build with Inner::new_sqrt)",
-                    operation: "square roots",
-                });
-            }
-        };
-        Ok(Inner {
-            rule,
-            iterations: c.iterations,
-            batch_size: c.batch_size,
-        })
-    }
-
-    /// Validate and build for a scalar with square roots (every rule).
-    ///
-    /// # Errors
-    /// As [`Inner::new`].
-    pub fn new_sqrt(c: &InnerConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        let rule: Box<dyn UpdateRule<S>> = match &c.rule {
+            RuleConfig::Sgd { step } => Box::new(SgdRule::new(step)?),
             RuleConfig::Adam(a) => Box::new(AdamRule::new(a)?),
             RuleConfig::RmsProp(r) => Box::new(RmsPropRule::new(r)?),
-            RuleConfig::Sgd { .. } => return Self::new(c, RootOps::sqrt_only()),
         };
-        if c.iterations == 0 {
-            return Err(invalid("inner.iterations", "must be at least 1"));
-        }
-        if c.batch_size == Some(0) {
-            return Err(invalid("inner.batch_size", "must be at least 1"));
-        }
-        Ok(Inner {
+        Ok(InnerOptimiser {
             rule,
             iterations: c.iterations,
             batch_size: c.batch_size,
@@ -145,7 +109,7 @@ impl<S: Scalar> Inner<S> {
         problem: &P,
         start: &DVector<S>,
         data: &[P::Labelled],
-        ctx: &mut Ctx<'_>,
+        ctx: &mut StepContext<'_>,
     ) -> Result<(DVector<S>, S), AlgoError> {
         if data.is_empty() {
             return Err(AlgoError::EmptyDataset);
@@ -183,7 +147,7 @@ pub(crate) fn collect<S: Scalar, P: IlProblem<S> + ?Sized>(
     behaviour: &Behaviour<'_, S>,
     n: u64,
     data: &mut Vec<P::Labelled>,
-    ctx: &mut Ctx<'_>,
+    ctx: &mut StepContext<'_>,
 ) -> Result<(), AlgoError> {
     for _ in 0..n {
         let tau = problem.rollout(behaviour, ctx.rng, ctx.cost)?;

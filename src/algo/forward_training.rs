@@ -3,12 +3,13 @@
 //! t − 1 steps and the expert afterwards, label the state s_t of each trajectory, and train π_t on
 //! those states (from θ₀). The horizon is learnt from the first roll-out
 //! ([`IlProblem::labelled_states`]); the run finishes after T − 1 iterations.
-//! [`Algorithm::theta`] is the newest π_t; [`Algorithm::outputs`] is the whole sequence.
+//! [`crate::algo::Algorithm::theta`] is the newest π_t; [`crate::algo::Algorithm::outputs`] is the whole sequence.
 
-use super::dataset::{Inner, InnerConfig, trajectories};
-use super::{AlgoError, Algorithm, Ctx, RootOps, StepReport, check_dim};
+use super::dataset::{InnerConfig, Retrain};
+use super::learner::{DataSchedule, DatasetLearner, LearnerState};
+use super::{AlgoError, StepContext, StepReport};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{Scalar, Sqrt};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
@@ -21,95 +22,71 @@ pub struct ForwardTrainingConfig {
     pub inner: InnerConfig,
 }
 
-/// Forward training.
-#[derive(Debug)]
-pub struct ForwardTraining<S: Scalar> {
-    n: u64,
-    inner: Inner<S>,
+/// Forward training's schedule: the per-step policies trained so far and the horizon.
+#[derive(Debug, Clone)]
+pub struct PerStepPolicies<S> {
     policies: Vec<DVector<S>>,
     horizon: Option<usize>,
-    theta0: DVector<S>,
-    theta: DVector<S>,
 }
 
-impl<S: Scalar> ForwardTraining<S> {
-    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
-    pub fn theta(&self) -> &DVector<S> {
-        &self.theta
-    }
+/// Forward training: a [`DatasetLearner`] with the [`PerStepPolicies`] schedule.
+pub type ForwardTraining<S, P> = DatasetLearner<S, P, PerStepPolicies<S>>;
 
-    /// Build with an SGD inner optimiser for any scalar.
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, PerStepPolicies<S>> {
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &ForwardTrainingConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`ForwardTraining::new_field`].
-    pub fn new(c: &ForwardTrainingConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
-    }
-    /// Build with an already-built inner optimiser.
-    ///
-    /// # Errors
-    /// As [`ForwardTraining::new_field`].
-    pub fn with_inner(c: &ForwardTrainingConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
-        Ok(ForwardTraining {
-            n: trajectories(c.trajectories_per_iteration)?,
-            inner,
-            policies: Vec::new(),
-            horizon: None,
-            theta0: DVector::from_vec(Vec::new()),
-            theta: DVector::from_vec(Vec::new()),
+    pub fn new(c: &ForwardTrainingConfig) -> Result<Self, AlgoError> {
+        Ok(DatasetLearner {
+            state: LearnerState::build(
+                &c.inner,
+                c.trajectories_per_iteration,
+                Retrain::FromScratch,
+            )?,
+            schedule: PerStepPolicies {
+                policies: Vec::new(),
+                horizon: None,
+            },
         })
     }
 }
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for ForwardTraining<S> {
-    fn name(&self) -> &'static str {
-        "forward-training"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for PerStepPolicies<S> {
+    const NAME: &'static str = "forward-training";
+    fn reset(&mut self) {
         self.policies.clear();
         self.horizon = None;
-        self.theta0 = theta0.clone();
-        self.theta = theta0;
-        Ok(())
     }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    /// Roll out π₁..π_{t−1} then the expert, keep the labelled state s_t of each trajectory, train
+    /// π_t on them from θ₀; finished once every step of the horizon has a policy.
+    fn step(
+        &mut self,
+        state: &mut LearnerState<S, P>,
+        problem: &P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
         let t = self.policies.len(); // 0-based index of the step being trained
         if self.horizon.is_some_and(|h| t >= h) {
             return Err(AlgoError::State("forward training has trained every step"));
         }
         let behaviour = Behaviour::NonStationary(self.policies.iter().map(Some).collect());
-        let mut data = Vec::new();
-        for _ in 0..self.n {
+        state.data.clear();
+        for _ in 0..state.trajectories {
             let tau = problem.rollout(&behaviour, ctx.rng, ctx.cost)?;
             let states = problem.labelled_states(&tau);
             self.horizon.get_or_insert(states.len());
             if let Some(s) = states.into_iter().nth(t) {
-                data.push(s);
+                state.data.push(s);
             }
         }
-        let (theta, loss) = self.inner.train(problem, &self.theta0, &data, ctx)?;
-        self.policies.push(theta.clone());
-        self.theta = theta;
-        let report = StepReport::new(None, Some(loss));
+        let report = state.retrain_on_dataset(problem, ctx)?;
+        self.policies.push(state.theta.clone());
         Ok(if self.horizon.is_some_and(|h| self.policies.len() >= h) {
             report.finished()
         } else {
             report
         })
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
     }
     fn outputs(&self) -> Vec<DVector<S>> {
         self.policies.clone()

@@ -1,7 +1,7 @@
 //! Online-to-non-convex conversion (Algorithm 5; Cutkosky, Mehta, Orabona, ICML 2023) with online
 //! gradient descent as the online learner, the parameters of math.md §5 and the **IL-correct
 //! sampling** τ_n ∼ p(·; w_n) (erratum E11; the printed sampling at θ_n is
-//! [`crate::algo::printed`]'s negative control).
+//! [`crate::algo::as_printed`]'s negative control).
 //!
 //! Inputs: budget N ≥ 4, δ > 0, G > 0 (G² ≥ sup_θ E‖g‖²), Δ₀ > 0 (Δ₀ ≥ F(θ₀) − F*). Then
 //! `T = min(⌈(GNδ/Δ₀)^{2/3}⌉, ⌊N/2⌋)`, `K = ⌊N/T⌋`, `M = KT`, `D = δ/T`, `η = D/(G√T)`
@@ -17,16 +17,19 @@
 //! after M steps. `s_n` is a dyadic uniform ([`crate::algo::dyadic_uniform`]).
 
 use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, axpy, check_dim, check_finite, dyadic_uniform,
-    invalid, norm_sq, positive, scale,
+    AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, axpy, check_dim, check_finite,
+    dyadic_uniform, invalid, norm_sq, positive, require_roots, scale, sqrt,
 };
 use crate::problem::{Behaviour, EstimatorForm, IlProblem};
-use crate::scalar::{BigRational, Sqrt};
+use crate::scalar::{BigRational, Scalar};
 use nalgebra::DVector;
 use num_bigint::BigInt;
 use num_traits::ToPrimitive;
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
+
+/// O2NC, as named in [`AlgoError::NeedsRoots`].
+const O2NC: &str = "O2NC (projection and η = D/(G√T))";
 
 /// O2NC configuration (math.md §5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -34,11 +37,11 @@ pub struct O2ncConfig {
     /// Budget N ≥ 4 (gradient-oracle calls).
     pub budget: u64,
     /// δ > 0.
-    pub delta: Num,
+    pub delta: ConfigNumber,
     /// G > 0 with G² ≥ sup_θ E_{τ∼θ}‖g(θ, τ)‖².
-    pub g: Num,
+    pub g: ConfigNumber,
     /// Δ₀ > 0 with Δ₀ ≥ F(θ₀) − F*.
-    pub delta0: Num,
+    pub delta0: ConfigNumber,
     /// Which form of eq. 3.15.
     pub form: EstimatorForm,
 }
@@ -125,7 +128,6 @@ pub struct O2nc<S> {
     eta: S,
     form: EstimatorForm,
     sampling: SamplePoint,
-    sqrt: fn(&S) -> S,
     theta: DVector<S>,
     delta: DVector<S>,
     w_sum: DVector<S>,
@@ -134,7 +136,7 @@ pub struct O2nc<S> {
     outputs: Vec<DVector<S>>,
 }
 
-impl<S: Sqrt> O2nc<S> {
+impl<S: Scalar> O2nc<S> {
     /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
     pub fn theta(&self) -> &DVector<S> {
         &self.theta
@@ -143,7 +145,8 @@ impl<S: Sqrt> O2nc<S> {
     /// Validate and build (IL-correct sampling at w_n).
     ///
     /// # Errors
-    /// As [`O2ncConfig::parameters`].
+    /// As [`O2ncConfig::parameters`]; [`AlgoError::NeedsRoots`] for a scalar without square
+    /// roots.
     pub fn new(config: &O2ncConfig) -> Result<Self, AlgoError> {
         Self::with_sampling(config, SamplePoint::W)
     }
@@ -155,14 +158,14 @@ impl<S: Sqrt> O2nc<S> {
         let params = config.parameters()?;
         let radius = S::from_rational(&params.d);
         let g = S::from_rational(&config.g.exact("g")?);
-        let eta = radius.clone() / (g * S::from_i64(params.t as i64).sqrt());
+        require_roots::<S>(O2NC, "square roots")?;
+        let eta = radius.clone() / (g * sqrt(&S::from_i64(params.t as i64), O2NC)?);
         Ok(O2nc {
             params,
             radius,
             eta,
             form: config.form,
             sampling,
-            sqrt: <S as Sqrt>::sqrt,
             theta: DVector::from_vec(Vec::new()),
             delta: DVector::from_vec(Vec::new()),
             w_sum: DVector::from_vec(Vec::new()),
@@ -192,7 +195,7 @@ impl<S: Sqrt> O2nc<S> {
         let n2 = norm_sq(&x);
         match n2.certain_cmp(&self.radius.square()) {
             Some(Ordering::Greater) => {
-                let f = self.radius.clone() / (self.sqrt)(&n2);
+                let f = self.radius.clone() / sqrt(&n2, O2NC)?;
                 Ok(scale(&f, &x))
             }
             Some(_) => Ok(x),
@@ -204,7 +207,7 @@ impl<S: Sqrt> O2nc<S> {
     }
 }
 
-impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
+impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
     fn name(&self) -> &'static str {
         match self.sampling {
             SamplePoint::W => "o2nc",
@@ -212,7 +215,12 @@ impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
         }
     }
 
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
+    fn init(
+        &mut self,
+        problem: &P,
+        theta0: DVector<S>,
+        _: &mut StepContext<'_>,
+    ) -> Result<(), AlgoError> {
         check_dim(problem.dim(), &theta0)?;
         let zero = DVector::from_element(theta0.len(), S::zero());
         self.delta = zero.clone();
@@ -224,7 +232,7 @@ impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
         Ok(())
     }
 
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
         if self.n >= self.params.m {
             return Err(AlgoError::State("O2NC has used its M = KT steps"));
         }

@@ -8,33 +8,34 @@
 //! The thesis's eq. 2.15 has no ε (ε = 0 here reproduces it literally); a zero denominator then
 //! stops the run with [`AlgoError::NonFinite`] rather than producing NaN. `v₀ = 0`.
 
-use super::{
-    AlgoError, Algorithm, Ctx, Num, StepReport, UpdateRule, check_dim, first_order_step, in_range,
-    positive,
-};
-use crate::problem::{EstimatorForm, IlProblem};
-use crate::scalar::Sqrt;
+use super::first_order::{FirstOrder, UpdateRule};
+use super::{AlgoError, ConfigNumber, in_range, positive, require_roots, sqrt};
+use crate::problem::EstimatorForm;
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
+
+/// RMSProp, as named in [`AlgoError::NeedsRoots`].
+const RMSPROP: &str = "RMSProp";
 
 /// RMSProp's hyper-parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RmsPropConfig {
     /// Step size η > 0.
-    pub eta: Num,
+    pub eta: ConfigNumber,
     /// Decay β ∈ [0, 1).
-    pub beta: Num,
+    pub beta: ConfigNumber,
     /// ε ≥ 0 added to √v (0 = eq. 2.15 as printed).
-    pub epsilon: Num,
+    pub epsilon: ConfigNumber,
 }
 
 impl RmsPropConfig {
     /// Step size `eta` with β = 0.9, ε = 10⁻⁸.
-    pub fn with_eta(eta: impl Into<Num>) -> Self {
+    pub fn with_eta(eta: impl Into<ConfigNumber>) -> Self {
         RmsPropConfig {
             eta: eta.into(),
-            beta: Num::ratio(9, 10),
-            epsilon: Num::ratio(1, 100_000_000),
+            beta: ConfigNumber::ratio(9, 10),
+            epsilon: ConfigNumber::ratio(1, 100_000_000),
         }
     }
 }
@@ -48,22 +49,25 @@ pub struct RmsPropRule<S> {
     v: Option<DVector<S>>,
 }
 
-impl<S: Sqrt> RmsPropRule<S> {
+impl<S: Scalar> RmsPropRule<S> {
     /// Validate and build.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming `eta`, `beta` or `epsilon`.
+    /// [`AlgoError::InvalidParameter`] naming `eta`, `beta` or `epsilon`;
+    /// [`AlgoError::NeedsRoots`] for a scalar without square roots.
     pub fn new(c: &RmsPropConfig) -> Result<Self, AlgoError> {
-        Ok(RmsPropRule {
+        let rule = RmsPropRule {
             eta: S::from_rational(&positive(&c.eta, "eta", true)?),
             beta: S::from_rational(&in_range(&c.beta, "beta", (0, false), (1, true))?),
             epsilon: S::from_rational(&positive(&c.epsilon, "epsilon", false)?),
             v: None,
-        })
+        };
+        require_roots::<S>(RMSPROP, "square roots")?;
+        Ok(rule)
     }
 }
 
-impl<S: Sqrt> UpdateRule<S> for RmsPropRule<S> {
+impl<S: Scalar> UpdateRule<S> for RmsPropRule<S> {
     fn reset(&mut self) {
         self.v = None;
     }
@@ -76,7 +80,7 @@ impl<S: Sqrt> UpdateRule<S> for RmsPropRule<S> {
             self.beta.clone() * vi + (S::one() - &self.beta) * gi.square()
         });
         for i in 0..theta.len() {
-            let den = v[i].sqrt() + &self.epsilon;
+            let den = sqrt(&v[i], RMSPROP)? + &self.epsilon;
             if !den.is_certainly_positive() {
                 return Err(AlgoError::NonFinite("RMSProp's denominator √v + ε (zero)"));
             }
@@ -97,47 +101,19 @@ pub struct RmsPropOptimizerConfig {
     pub form: EstimatorForm,
 }
 
-/// RMSProp on the IL objective, driven by the eq. 3.15 oracle.
-#[derive(Debug, Clone)]
-pub struct RmsProp<S> {
-    rule: RmsPropRule<S>,
-    form: EstimatorForm,
-    theta: DVector<S>,
-}
+/// RMSProp on the IL objective, driven by the eq. 3.15 oracle: [`FirstOrder`] with the [`RmsPropRule`].
+pub type RmsProp<S> = FirstOrder<S, RmsPropRule<S>>;
 
-impl<S: Sqrt> RmsProp<S> {
-    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
-    pub fn theta(&self) -> &DVector<S> {
-        &self.theta
-    }
-
+impl<S: Scalar> FirstOrder<S, RmsPropRule<S>> {
     /// Validate and build.
     ///
     /// # Errors
     /// As [`RmsPropRule::new`].
     pub fn new(config: &RmsPropOptimizerConfig) -> Result<Self, AlgoError> {
-        Ok(RmsProp {
-            rule: RmsPropRule::new(&config.rmsprop)?,
-            form: config.form,
-            theta: DVector::from_vec(Vec::new()),
-        })
-    }
-}
-
-impl<S: Sqrt, P: IlProblem<S> + ?Sized> Algorithm<S, P> for RmsProp<S> {
-    fn name(&self) -> &'static str {
-        "rmsprop"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.rule.reset();
-        self.theta = theta0;
-        Ok(())
-    }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
-        first_order_step(problem, &mut self.theta, &mut self.rule, self.form, ctx)
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+        Ok(FirstOrder::with_rule(
+            "rmsprop",
+            RmsPropRule::new(&config.rmsprop)?,
+            config.form,
+        ))
     }
 }

@@ -4,17 +4,18 @@
 //! * [`Rrm`]: the sampled map — roll out π_{θ_k} `trajectories_per_iteration` times and minimise
 //!   the empirical loss on those states only (no aggregation) with the inner optimiser.
 //! * [`ExactRrm`]: iterate a given population map G exactly (e.g. the toy engine's exact RRM map
-//!   for the direct parameterisation, or [`crate::algo::fixture::AliasedTwoState::rrm_map`]); it
+//!   for the direct parameterisation, or the aliased two-state fixture of the algorithm tests); it
 //!   uses no samples and costs nothing. Its map is a closure, so it is not part of
 //!   [`crate::algo::AlgorithmConfig`] and cannot be replayed from JSON.
 //!
 //! Convergence to θ_PS needs the contraction modulus εβ/γ < 1 (erratum E15); on the M-family it is
 //! exactly κ = (T−2)Δ/(T−1) (math.md §6).
 
-use super::dataset::{Inner, InnerConfig, Retrain, collect, trajectories};
-use super::{AlgoError, Algorithm, Ctx, RootOps, StepReport, check_dim, check_finite};
+use super::dataset::{InnerConfig, Retrain, collect};
+use super::learner::{DataSchedule, DatasetLearner, LearnerState};
+use super::{AlgoError, Algorithm, StepContext, StepReport, check_dim, check_finite};
 use crate::problem::{Behaviour, IlProblem, OracleError};
-use crate::scalar::{Scalar, Sqrt};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
@@ -29,80 +30,47 @@ pub struct RrmConfig {
     pub inner: InnerConfig,
 }
 
-/// Sampled RRM (eq. 3.29 with an empirical risk).
-#[derive(Debug)]
-pub struct Rrm<S: Scalar, P: IlProblem<S> + ?Sized> {
-    n: u64,
-    retrain: Retrain,
-    inner: Inner<S>,
-    data: Vec<P::Labelled>,
-    theta0: DVector<S>,
-    theta: DVector<S>,
-}
+/// Sampled RRM's schedule: every iteration replaces the dataset by roll-outs of the current
+/// learner.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct OnPolicyData;
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Rrm<S, P> {
-    /// Build with an SGD inner optimiser for any scalar.
+/// Sampled RRM (eq. 3.29 with an empirical risk): a [`DatasetLearner`] with the
+/// [`OnPolicyData`] schedule.
+pub type Rrm<S, P> = DatasetLearner<S, P, OnPolicyData>;
+
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, OnPolicyData> {
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &RrmConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`Rrm::new_field`].
-    pub fn new(c: &RrmConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
-    }
-    /// Build with an already-built inner optimiser.
-    ///
-    /// # Errors
-    /// As [`Rrm::new_field`].
-    pub fn with_inner(c: &RrmConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
-        Ok(Rrm {
-            n: trajectories(c.trajectories_per_iteration)?,
-            retrain: c.retrain,
-            inner,
-            data: Vec::new(),
-            theta0: DVector::from_vec(Vec::new()),
-            theta: DVector::from_vec(Vec::new()),
+    pub fn new(c: &RrmConfig) -> Result<Self, AlgoError> {
+        Ok(DatasetLearner {
+            state: LearnerState::build(&c.inner, c.trajectories_per_iteration, c.retrain)?,
+            schedule: OnPolicyData,
         })
     }
 }
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Rrm<S, P> {
-    fn name(&self) -> &'static str {
-        "rrm"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.theta0 = theta0.clone();
-        self.theta = theta0;
-        Ok(())
-    }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
-        self.data.clear();
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for OnPolicyData {
+    const NAME: &'static str = "rrm";
+    fn reset(&mut self) {}
+    /// Roll out π_{θ_k}, keep only those labelled states, minimise the empirical risk on them.
+    fn step(
+        &mut self,
+        state: &mut LearnerState<S, P>,
+        problem: &P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
+        state.data.clear();
         collect(
             problem,
-            &Behaviour::Learner(&self.theta),
-            self.n,
-            &mut self.data,
+            &Behaviour::Learner(&state.theta),
+            state.trajectories,
+            &mut state.data,
             ctx,
         )?;
-        let start = match self.retrain {
-            Retrain::FromScratch => &self.theta0,
-            Retrain::WarmStart => &self.theta,
-        };
-        let (theta, loss) = self.inner.train(problem, start, &self.data, ctx)?;
-        self.theta = theta;
-        Ok(StepReport::new(None, Some(loss)))
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+        state.retrain_on_dataset(problem, ctx)
     }
 }
 
@@ -143,12 +111,17 @@ where
     fn name(&self) -> &'static str {
         "exact-rrm"
     }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
+    fn init(
+        &mut self,
+        problem: &P,
+        theta0: DVector<S>,
+        _: &mut StepContext<'_>,
+    ) -> Result<(), AlgoError> {
         check_dim(problem.dim(), &theta0)?;
         self.theta = theta0;
         Ok(())
     }
-    fn step(&mut self, _: &P, _: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(&mut self, _: &P, _: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
         let next = (self.map)(&self.theta)?;
         check_finite(&next, "θ")?;
         self.theta = next;

@@ -17,7 +17,7 @@
 //! time limit passed. Runs with a time limit are not reproducible when the limit binds.
 
 use super::config::RunConfig;
-use super::{AlgoError, Algorithm, Ctx, Num, Roots, StepReport, invalid, norm_sq};
+use super::{AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, invalid, norm_sq};
 use crate::problem::{Cost, IlProblem, KitRng};
 use crate::scalar::{JsonScalar, Scalar};
 use nalgebra::DVector;
@@ -34,7 +34,7 @@ pub struct StoppingRule {
     /// Budget of per-state gradient evaluations ([`Cost::gradient_evaluations`], ≥ 1).
     pub max_gradient_evaluations: Option<u64>,
     /// Stop once the loss is certainly ≤ this value.
-    pub target_loss: Option<Num>,
+    pub target_loss: Option<ConfigNumber>,
     /// Wall-clock limit in milliseconds (≥ 1).
     pub time_limit_ms: Option<u64>,
 }
@@ -345,34 +345,17 @@ impl<'a, S: Scalar> Runner<'a, S> {
         self
     }
 
-    /// Run a config: build its algorithm (for a scalar with roots), seed the RNG, run.
+    /// Run a config: build its algorithm in `S` ([`crate::algo::AlgorithmConfig::build`]), seed
+    /// the RNG, run.
     ///
     /// # Errors
-    /// Invalid configuration or a failing `init`.
+    /// Invalid configuration (including [`AlgoError::NeedsRoots`]) or a failing `init`.
     pub fn run_config<P: IlProblem<S> + ?Sized>(
         &mut self,
         config: &RunConfig,
         problem: &P,
-    ) -> Result<RunRecord<S>, AlgoError>
-    where
-        S: Roots,
-    {
-        let mut algorithm = config.algorithm.build::<S, P>()?;
-        let mut rec = self.run(algorithm.as_mut(), problem, config.theta0()?, config.seed)?;
-        rec.config = Some(config.clone());
-        Ok(rec)
-    }
-
-    /// As [`Runner::run_config`] for any scalar (field-only algorithms).
-    ///
-    /// # Errors
-    /// As [`Runner::run_config`], plus [`AlgoError::NeedsRoots`].
-    pub fn run_config_field<P: IlProblem<S> + ?Sized>(
-        &mut self,
-        config: &RunConfig,
-        problem: &P,
     ) -> Result<RunRecord<S>, AlgoError> {
-        let mut algorithm = config.algorithm.build_field::<S, P>()?;
+        let mut algorithm = config.algorithm.build::<S, P>()?;
         let mut rec = self.run(algorithm.as_mut(), problem, config.theta0()?, config.seed)?;
         rec.config = Some(config.clone());
         Ok(rec)
@@ -395,7 +378,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
         algorithm.init(
             problem,
             theta0,
-            &mut Ctx {
+            &mut StepContext {
                 rng: &mut rng,
                 cost: &mut cost,
             },
@@ -413,7 +396,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
         let termination = loop {
             let step = algorithm.step(
                 problem,
-                &mut Ctx {
+                &mut StepContext {
                     rng: &mut rng,
                     cost: &mut cost,
                 },
@@ -529,25 +512,14 @@ impl<'a, S: Scalar> Runner<'a, S> {
     }
 }
 
-/// Replay a recorded run: build the algorithm from `config` for a scalar with roots and run it
-/// with the recorded seed and stopping rule (same result, bit for bit, unless a time limit binds).
+/// Replay a recorded run: build the algorithm from `config` in `S` and run it with the recorded
+/// seed and stopping rule (same result, bit for bit, unless a time limit binds).
 ///
 /// # Errors
 /// As [`Runner::run_config`].
-pub fn replay<S: Roots, P: IlProblem<S> + ?Sized>(
+pub fn replay<S: Scalar, P: IlProblem<S> + ?Sized>(
     config: &RunConfig,
     problem: &P,
 ) -> Result<RunRecord<S>, AlgoError> {
     Runner::new(config.stop.clone())?.run_config(config, problem)
-}
-
-/// [`replay`] for any scalar (exact rationals): field-only algorithms.
-///
-/// # Errors
-/// As [`Runner::run_config_field`].
-pub fn replay_field<S: Scalar, P: IlProblem<S> + ?Sized>(
-    config: &RunConfig,
-    problem: &P,
-) -> Result<RunRecord<S>, AlgoError> {
-    Runner::new(config.stop.clone())?.run_config_field(config, problem)
 }

@@ -2,16 +2,15 @@
 //! `τ_k ∼ p(·; θ_k)` and the eq. 3.15 estimator.
 //!
 //! Step sizes: constant (the setting of eqs. 3.23–3.28), inverse-time `η_k = η₀k₀/(k₀ + k − 1)`
-//! (field operations only) and inverse-square-root `η_k = η₀/√k` (needs [`Sqrt`]).
+//! (field operations only) and inverse-square-root `η_k = η₀/√k` (needs a scalar with
+//! [`crate::scalar::Roots`]).
 //! Per erratum E17, the guarantees are for a random or best iterate, not θ_K; the runner's
 //! history has every iterate.
 
-use super::{
-    AlgoError, Algorithm, Ctx, Num, RootOps, StepReport, UpdateRule, axpy, check_dim,
-    first_order_step, positive,
-};
-use crate::problem::{EstimatorForm, IlProblem};
-use crate::scalar::{Scalar, Sqrt};
+use super::first_order::{FirstOrder, UpdateRule};
+use super::{AlgoError, ConfigNumber, axpy, positive, require_roots, sqrt};
+use crate::problem::EstimatorForm;
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
@@ -22,25 +21,25 @@ pub enum SgdStep {
     /// `η_k = eta` (eq. 3.23 ff.).
     Constant {
         /// η > 0.
-        eta: Num,
+        eta: ConfigNumber,
     },
     /// `η_k = eta0 · k0 / (k0 + k − 1)` (so η₁ = η₀); field operations only.
     InverseTime {
         /// η₀ > 0.
-        eta0: Num,
+        eta0: ConfigNumber,
         /// k₀ > 0.
-        k0: Num,
+        k0: ConfigNumber,
     },
     /// `η_k = eta0 / √k` (needs square roots).
     InverseSqrt {
         /// η₀ > 0.
-        eta0: Num,
+        eta0: ConfigNumber,
     },
 }
 
 impl SgdStep {
     /// Constant step size `eta`.
-    pub fn constant(eta: impl Into<Num>) -> Self {
+    pub fn constant(eta: impl Into<ConfigNumber>) -> Self {
         SgdStep::Constant { eta: eta.into() }
     }
 }
@@ -54,11 +53,14 @@ pub struct SgdConfig {
     pub form: EstimatorForm,
 }
 
+/// The inverse-square-root schedule, as named in [`AlgoError::NeedsRoots`].
+const INVERSE_SQRT: &str = "SGD with η₀/√k";
+
 #[derive(Debug, Clone)]
 enum Schedule<S> {
     Constant(S),
     InverseTime(S, S),
-    InverseSqrt(S, fn(&S) -> S),
+    InverseSqrt(S),
 }
 
 /// The plain gradient step `θ ← θ − η_k g` as an [`UpdateRule`].
@@ -69,12 +71,12 @@ pub struct SgdRule<S> {
 }
 
 impl<S: Scalar> SgdRule<S> {
-    /// Validate the schedule (η > 0, k₀ > 0) and build it for a scalar with the given roots.
+    /// Validate the schedule (η > 0, k₀ > 0) and build it in `S`.
     ///
     /// # Errors
     /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`] for
     /// `inverse-sqrt` without square roots.
-    pub fn new(step: &SgdStep, roots: RootOps<S>) -> Result<Self, AlgoError> {
+    pub fn new(step: &SgdStep) -> Result<Self, AlgoError> {
         let schedule = match step {
             SgdStep::Constant { eta } => {
                 Schedule::Constant(S::from_rational(&positive(eta, "eta", true)?))
@@ -83,23 +85,24 @@ impl<S: Scalar> SgdRule<S> {
                 S::from_rational(&positive(eta0, "eta0", true)?),
                 S::from_rational(&positive(k0, "k0", true)?),
             ),
-            SgdStep::InverseSqrt { eta0 } => Schedule::InverseSqrt(
-                S::from_rational(&positive(eta0, "eta0", true)?),
-                roots.need_sqrt("SGD with η₀/√k")?,
-            ),
+            SgdStep::InverseSqrt { eta0 } => {
+                let eta0 = S::from_rational(&positive(eta0, "eta0", true)?);
+                require_roots::<S>(INVERSE_SQRT, "square roots")?;
+                Schedule::InverseSqrt(eta0)
+            }
         };
         Ok(SgdRule { schedule, k: 0 })
     }
 
     /// η_k for the next update (k is 1-based).
-    fn eta(&self, k: u64) -> S {
-        match &self.schedule {
+    fn eta(&self, k: u64) -> Result<S, AlgoError> {
+        Ok(match &self.schedule {
             Schedule::Constant(e) => e.clone(),
             Schedule::InverseTime(e, k0) => {
                 e.clone() * k0 / (k0.clone() + S::from_i64(k as i64 - 1))
             }
-            Schedule::InverseSqrt(e, sqrt) => e.clone() / sqrt(&S::from_i64(k as i64)),
-        }
+            Schedule::InverseSqrt(e) => e.clone() / sqrt(&S::from_i64(k as i64), INVERSE_SQRT)?,
+        })
     }
 }
 
@@ -109,68 +112,25 @@ impl<S: Scalar> UpdateRule<S> for SgdRule<S> {
     }
     fn apply(&mut self, theta: &mut DVector<S>, g: &DVector<S>) -> Result<(), AlgoError> {
         self.k += 1;
-        let eta = self.eta(self.k);
+        let eta = self.eta(self.k)?;
         *theta = axpy(&-eta, g, theta);
         Ok(())
     }
 }
 
-/// SGD for IL (Algorithm 3).
-#[derive(Debug, Clone)]
-pub struct Sgd<S> {
-    rule: SgdRule<S>,
-    form: EstimatorForm,
-    theta: DVector<S>,
-}
+/// SGD for IL (Algorithm 3): [`FirstOrder`] with the [`SgdRule`].
+pub type Sgd<S> = FirstOrder<S, SgdRule<S>>;
 
-impl<S: Scalar> Sgd<S> {
-    /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
-    pub fn theta(&self) -> &DVector<S> {
-        &self.theta
-    }
-
-    /// SGD for any scalar; `inverse-sqrt` steps are rejected ([`AlgoError::NeedsRoots`]).
+impl<S: Scalar> FirstOrder<S, SgdRule<S>> {
+    /// SGD with the configured schedule; `inverse-sqrt` needs a scalar with roots.
     ///
     /// # Errors
     /// As [`SgdRule::new`].
-    pub fn new_field(config: &SgdConfig) -> Result<Self, AlgoError> {
-        Self::with_roots(config, RootOps::none())
-    }
-
-    /// SGD for a scalar with square roots (every schedule).
-    ///
-    /// # Errors
-    /// As [`SgdRule::new`].
-    pub fn new(config: &SgdConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_roots(config, RootOps::sqrt_only())
-    }
-
-    pub(crate) fn with_roots(config: &SgdConfig, roots: RootOps<S>) -> Result<Self, AlgoError> {
-        Ok(Sgd {
-            rule: SgdRule::new(&config.step, roots)?,
-            form: config.form,
-            theta: DVector::from_vec(Vec::new()),
-        })
-    }
-}
-
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Sgd<S> {
-    fn name(&self) -> &'static str {
-        "sgd"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.rule.reset();
-        self.theta = theta0;
-        Ok(())
-    }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
-        first_order_step(problem, &mut self.theta, &mut self.rule, self.form, ctx)
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+    pub fn new(config: &SgdConfig) -> Result<Self, AlgoError> {
+        Ok(FirstOrder::with_rule(
+            "sgd",
+            SgdRule::new(&config.step)?,
+            config.form,
+        ))
     }
 }

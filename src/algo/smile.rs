@@ -7,16 +7,17 @@
 //! 2. train a new component π̂^i on these data (the inner optimiser, from θ₀ or warm-started from
 //!    π̂^{i−1});
 //! 3. as the thesis's Algorithm 1 adds, aggregate D and train one policy θ on the whole D — this
-//!    is the iterate the runner reports ([`Algorithm::theta`]).
+//!    is the iterate the runner reports ([`crate::algo::Algorithm::theta`]).
 //!
-//! The components π̂^j are [`Algorithm::outputs`]; [`Smile::mixture_weights`] gives the final
+//! The components π̂^j are [`crate::algo::Algorithm::outputs`]; [`DatasetLearner::mixture_weights`] gives the final
 //! mixture with the expert removed, `α(1−α)^{j−1}/(1 − (1−α)^N)`.
 
 use super::dagger::beta_mixture;
-use super::dataset::{Inner, InnerConfig, Retrain, collect, trajectories};
-use super::{AlgoError, Algorithm, Ctx, Num, RootOps, StepReport, check_dim, in_range};
+use super::dataset::{InnerConfig, InnerOptimiser, Retrain, collect, trajectories};
+use super::learner::{DataSchedule, DatasetLearner, LearnerState};
+use super::{AlgoError, ConfigNumber, StepContext, StepReport, in_range};
 use crate::problem::{Behaviour, IlProblem};
-use crate::scalar::{BigRational, Scalar, Sqrt};
+use crate::scalar::{BigRational, Scalar};
 use nalgebra::DVector;
 use num_traits::{One, ToPrimitive};
 use serde::{Deserialize, Serialize};
@@ -25,7 +26,7 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SmileConfig {
     /// Mixing rate α ∈ (0, 1].
-    pub alpha: Num,
+    pub alpha: ConfigNumber,
     /// Trajectories per iteration (≥ 1).
     pub trajectories_per_iteration: u64,
     /// Retrain components (and the distilled policy) from θ₀ or warm-start.
@@ -34,80 +35,59 @@ pub struct SmileConfig {
     pub inner: InnerConfig,
 }
 
-/// SMILe.
-#[derive(Debug)]
-pub struct Smile<S: Scalar, P: IlProblem<S> + ?Sized> {
+/// SMILe's schedule: the geometric mixture rate α and the components trained so far.
+#[derive(Debug, Clone)]
+pub struct SmileMixture<S> {
     alpha: BigRational,
-    n: u64,
-    retrain: Retrain,
-    inner: Inner<S>,
-    data: Vec<P::Labelled>,
     components: Vec<DVector<S>>,
-    theta0: DVector<S>,
-    theta: DVector<S>,
 }
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Smile<S, P> {
-    /// Build with an SGD inner optimiser for any scalar.
+/// SMILe (Algorithm 1): a [`DatasetLearner`] with the [`SmileMixture`] schedule.
+pub type Smile<S, P> = DatasetLearner<S, P, SmileMixture<S>>;
+
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DatasetLearner<S, P, SmileMixture<S>> {
+    /// Validate and build; an Adam or RMSProp inner optimiser needs a scalar with roots.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming the parameter (α ∉ (0, 1], …);
-    /// [`AlgoError::NeedsRoots`].
-    pub fn new_field(c: &SmileConfig) -> Result<Self, AlgoError> {
-        Self::with_inner(c, Inner::new(&c.inner, RootOps::none())?)
-    }
-    /// Build for a scalar with square roots (any inner rule).
-    ///
-    /// # Errors
-    /// As [`Smile::new_field`].
-    pub fn new(c: &SmileConfig) -> Result<Self, AlgoError>
-    where
-        S: Sqrt,
-    {
-        Self::with_inner(c, Inner::new_sqrt(&c.inner)?)
-    }
-    /// Build with an already-built inner optimiser.
-    ///
-    /// # Errors
-    /// As [`Smile::new_field`].
-    pub fn with_inner(c: &SmileConfig, inner: Inner<S>) -> Result<Self, AlgoError> {
-        Ok(Smile {
-            alpha: in_range(&c.alpha, "alpha", (0, true), (1, false))?,
-            n: trajectories(c.trajectories_per_iteration)?,
-            retrain: c.retrain,
-            inner,
-            data: Vec::new(),
-            components: Vec::new(),
-            theta0: DVector::from_vec(Vec::new()),
-            theta: DVector::from_vec(Vec::new()),
+    /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`].
+    pub fn new(c: &SmileConfig) -> Result<Self, AlgoError> {
+        let inner = InnerOptimiser::new(&c.inner)?;
+        let alpha = in_range(&c.alpha, "alpha", (0, true), (1, false))?;
+        let n = trajectories(c.trajectories_per_iteration)?;
+        Ok(DatasetLearner {
+            state: LearnerState::new(n, c.retrain, inner),
+            schedule: SmileMixture {
+                alpha,
+                components: Vec::new(),
+            },
         })
     }
 
     /// The mixture over the learned components with the expert removed (exact):
     /// `α(1−α)^{j−1} / (1 − (1−α)^N)`, j = 1..N. Empty before the first iteration.
     pub fn mixture_weights(&self) -> Vec<BigRational> {
-        let n = self.components.len();
-        let keep = <BigRational as One>::one() - &self.alpha;
+        let n = self.schedule.components.len();
+        let keep = <BigRational as One>::one() - &self.schedule.alpha;
         let norm = <BigRational as One>::one() - num_traits::pow(keep.clone(), n);
         (0..n)
-            .map(|j| &self.alpha * num_traits::pow(keep.clone(), j) / &norm)
+            .map(|j| &self.schedule.alpha * num_traits::pow(keep.clone(), j) / &norm)
             .collect()
     }
 }
 
-impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Smile<S, P> {
-    fn name(&self) -> &'static str {
-        "smile"
-    }
-    fn init(&mut self, problem: &P, theta0: DVector<S>, _: &mut Ctx<'_>) -> Result<(), AlgoError> {
-        check_dim(problem.dim(), &theta0)?;
-        self.data.clear();
+impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for SmileMixture<S> {
+    const NAME: &'static str = "smile";
+    fn reset(&mut self) {
         self.components.clear();
-        self.theta0 = theta0.clone();
-        self.theta = theta0;
-        Ok(())
     }
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    /// Roll out the current mixture, train a new component on the fresh data, aggregate, and
+    /// train the reported policy on the whole dataset.
+    fn step(
+        &mut self,
+        state: &mut LearnerState<S, P>,
+        problem: &P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
         let i = self.components.len(); // components so far = i − 1 in 1-based terms
         let keep = <BigRational as One>::one() - &self.alpha;
         let expert = num_traits::pow(keep.clone(), i);
@@ -130,24 +110,15 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Smile<S, P> {
             }
         };
         let mut fresh = Vec::new();
-        collect(problem, &behaviour, self.n, &mut fresh, ctx)?;
-        let start = match (self.retrain, self.components.last()) {
+        collect(problem, &behaviour, state.trajectories, &mut fresh, ctx)?;
+        let start = match (state.retrain, self.components.last()) {
             (Retrain::WarmStart, Some(last)) => last.clone(),
-            _ => self.theta0.clone(),
+            _ => state.theta0.clone(),
         };
-        let (component, _) = self.inner.train(problem, &start, &fresh, ctx)?;
+        let (component, _) = state.inner.train(problem, &start, &fresh, ctx)?;
         self.components.push(component);
-        self.data.extend(fresh);
-        let start = match self.retrain {
-            Retrain::FromScratch => &self.theta0,
-            Retrain::WarmStart => &self.theta,
-        };
-        let (theta, loss) = self.inner.train(problem, start, &self.data, ctx)?;
-        self.theta = theta;
-        Ok(StepReport::new(None, Some(loss)))
-    }
-    fn theta(&self) -> &DVector<S> {
-        &self.theta
+        state.data.extend(fresh);
+        state.retrain_on_dataset(problem, ctx)
     }
     fn outputs(&self) -> Vec<DVector<S>> {
         self.components.clone()

@@ -27,8 +27,8 @@
 //! the toy engine). Both are unbiased, so mixing them keeps the recursion's mean right.
 
 use super::{
-    AlgoError, Algorithm, Ctx, Num, RootOps, StepReport, axpy, check_dim, check_finite, invalid,
-    min_one, norm_sq, oracle_draw, positive,
+    AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, axpy, cbrt, check_dim,
+    check_finite, invalid, min_one, norm_sq, oracle_draw, positive, require_roots,
 };
 use crate::problem::{Behaviour, EstimatorForm, IlProblem, Weighting};
 use crate::scalar::Scalar;
@@ -42,36 +42,36 @@ pub enum StormSchedule {
     /// `η_k = eta`, `a_{k+1} = a` for all k.
     Constant {
         /// η > 0.
-        eta: Num,
+        eta: ConfigNumber,
         /// a ∈ [0, 1].
-        a: Num,
+        a: ConfigNumber,
     },
     /// `η_k = eta[k−1]`, `a_{k+1} = a[k−1]`; the last entry repeats.
     Explicit {
         /// Step sizes, each > 0 (non-empty).
-        eta: Vec<Num>,
+        eta: Vec<ConfigNumber>,
         /// Momenta, each in [0, 1] (non-empty).
-        a: Vec<Num>,
+        a: Vec<ConfigNumber>,
     },
     /// Eq. 3.43 with smoothness constant `l` (L = max(L_F, L̃) per math.md §3.2).
     Thesis {
         /// L > 0.
-        l: Num,
+        l: ConfigNumber,
     },
     /// Algorithm 4's adaptive schedule (Cutkosky–Orabona): `k'`, `w`, `c`.
     Adaptive {
         /// k' > 0.
-        k: Num,
+        k: ConfigNumber,
         /// w > 0.
-        w: Num,
+        w: ConfigNumber,
         /// c ≥ 0.
-        c: Num,
+        c: ConfigNumber,
     },
 }
 
 impl StormSchedule {
     /// `η_k = eta`, `a_{k+1} = a`.
-    pub fn constant(eta: impl Into<Num>, a: impl Into<Num>) -> Self {
+    pub fn constant(eta: impl Into<ConfigNumber>, a: impl Into<ConfigNumber>) -> Self {
         StormSchedule::Constant {
             eta: eta.into(),
             a: a.into(),
@@ -102,9 +102,9 @@ impl StormSchedule {
                 .max(2.0)
                 .max((28.0 * b + 1.0 / (7.0 * b * b)).powi(3) / 64.0);
         Ok(StormSchedule::Adaptive {
-            k: Num::Float(k),
-            w: Num::Float(w),
-            c: Num::Float(c),
+            k: ConfigNumber::Float(k),
+            w: ConfigNumber::Float(w),
+            c: ConfigNumber::Float(c),
         })
     }
 }
@@ -142,20 +142,16 @@ pub struct StormConfig {
     pub form: EstimatorForm,
 }
 
+/// The schedule (3.43), as named in [`AlgoError::NeedsRoots`].
+const THESIS_SCHEDULE: &str = "the STORM schedule (3.43)";
+/// The Cutkosky–Orabona schedule, as named in [`AlgoError::NeedsRoots`].
+const ADAPTIVE_SCHEDULE: &str = "the adaptive STORM schedule";
+
 #[derive(Debug, Clone)]
 enum Sched<S> {
     Lists(Vec<S>, Vec<S>),
-    Thesis {
-        quarter_inv_l: S,
-        cbrt: fn(&S) -> S,
-    },
-    Adaptive {
-        k: S,
-        c: S,
-        acc: S,
-        w: S,
-        cbrt: fn(&S) -> S,
-    },
+    Thesis { quarter_inv_l: S },
+    Adaptive { k: S, c: S, acc: S, w: S },
 }
 
 /// A validated STORM schedule in the run's scalar.
@@ -163,8 +159,13 @@ enum Sched<S> {
 pub(crate) struct Schedule<S>(Sched<S>);
 
 impl<S: Scalar> Schedule<S> {
-    pub(crate) fn new(s: &StormSchedule, roots: RootOps<S>) -> Result<Self, AlgoError> {
-        let momentum = |n: &Num| super::in_range(n, "a", (0, false), (1, false));
+    /// Validate the schedule and build it in `S`.
+    ///
+    /// # Errors
+    /// [`AlgoError::InvalidParameter`] naming the parameter; [`AlgoError::NeedsRoots`] for the
+    /// schedules with cube roots when `S` has none.
+    pub(crate) fn new(s: &StormSchedule) -> Result<Self, AlgoError> {
+        let momentum = |n: &ConfigNumber| super::in_range(n, "a", (0, false), (1, false));
         Ok(Schedule(match s {
             StormSchedule::Constant { eta, a } => Sched::Lists(
                 vec![S::from_rational(&positive(eta, "eta", true)?)],
@@ -188,19 +189,21 @@ impl<S: Scalar> Schedule<S> {
             }
             StormSchedule::Thesis { l } => {
                 let l = positive(l, "l", true)?;
+                require_roots::<S>(THESIS_SCHEDULE, "cube roots")?;
                 Sched::Thesis {
                     quarter_inv_l: S::one() / (S::from_i64(4) * S::from_rational(&l)),
-                    cbrt: roots.need_cbrt("the STORM schedule (3.43)")?,
                 }
             }
             StormSchedule::Adaptive { k, w, c } => {
                 let w = S::from_rational(&positive(w, "w", true)?);
+                let k = S::from_rational(&positive(k, "k", true)?);
+                let c = S::from_rational(&positive(c, "c", false)?);
+                require_roots::<S>(ADAPTIVE_SCHEDULE, "cube roots")?;
                 Sched::Adaptive {
-                    k: S::from_rational(&positive(k, "k", true)?),
-                    c: S::from_rational(&positive(c, "c", false)?),
+                    k,
+                    c,
                     acc: w.clone(),
                     w,
-                    cbrt: roots.need_cbrt("the adaptive STORM schedule")?,
                 }
             }
         }))
@@ -227,21 +230,12 @@ impl<S: Scalar> Schedule<S> {
                 eta[i.min(eta.len() - 1)].clone(),
                 a[i.min(a.len() - 1)].clone(),
             ),
-            Sched::Thesis {
-                quarter_inv_l,
-                cbrt,
-            } => {
-                let r = cbrt(&S::from_ratio(7, k as i64 + 7));
+            Sched::Thesis { quarter_inv_l } => {
+                let r = cbrt(&S::from_ratio(7, k as i64 + 7), THESIS_SCHEDULE)?;
                 (quarter_inv_l.clone() * &r, r.square())
             }
-            Sched::Adaptive {
-                k: kp,
-                c,
-                acc,
-                cbrt,
-                ..
-            } => {
-                let eta = kp.clone() / cbrt(acc);
+            Sched::Adaptive { k: kp, c, acc, .. } => {
+                let eta = kp.clone() / cbrt(acc, ADAPTIVE_SCHEDULE)?;
                 let a = min_one(c.clone() * eta.square(), "a = min(1, cη²)")?;
                 (eta, a)
             }
@@ -258,7 +252,7 @@ pub(crate) enum Update {
     PrintedE9,
 }
 
-/// STORM / IS-STORM (and, built by [`crate::algo::printed`], the printed Algorithm 4).
+/// STORM / IS-STORM (and, built by [`crate::algo::as_printed`], the printed Algorithm 4).
 #[derive(Debug, Clone)]
 pub struct Storm<S> {
     schedule: Schedule<S>,
@@ -278,38 +272,26 @@ impl<S: Scalar> Storm<S> {
         &self.theta
     }
 
-    /// STORM for a scalar with cube roots (every schedule).
+    /// STORM (eq. 3.40) or IS-STORM, by `config.correction`. Every schedule runs in a scalar
+    /// with roots; in one without (exact rationals) the `constant` and `explicit` schedules run
+    /// and the cube-root schedules are rejected.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming the parameter (η ≤ 0, a ∉ [0, 1], L ≤ 0, …).
-    pub fn new(config: &StormConfig) -> Result<Self, AlgoError>
-    where
-        S: super::Roots,
-    {
-        Self::with_roots(config, RootOps::all(), Update::Corrected)
+    /// [`AlgoError::InvalidParameter`] naming the parameter (η ≤ 0, a ∉ [0, 1], L ≤ 0, …);
+    /// [`AlgoError::NeedsRoots`] for the schedule (3.43) or the adaptive schedule without cube
+    /// roots.
+    pub fn new(config: &StormConfig) -> Result<Self, AlgoError> {
+        Self::with_update(config, Update::Corrected)
     }
 
-    /// STORM for any scalar: `constant`/`explicit` schedules only (others give
-    /// [`AlgoError::NeedsRoots`]).
-    ///
-    /// # Errors
-    /// As [`Storm::new`].
-    pub fn new_field(config: &StormConfig) -> Result<Self, AlgoError> {
-        Self::with_roots(config, RootOps::none(), Update::Corrected)
-    }
-
-    pub(crate) fn with_roots(
-        config: &StormConfig,
-        roots: RootOps<S>,
-        update: Update,
-    ) -> Result<Self, AlgoError> {
+    pub(crate) fn with_update(config: &StormConfig, update: Update) -> Result<Self, AlgoError> {
         let name = match (update, config.correction) {
             (Update::PrintedE9, _) => "printed-algorithm-4",
             (_, Correction::Unweighted) => "storm",
             (_, _) => "is-storm",
         };
         Ok(Storm {
-            schedule: Schedule::new(&config.schedule, roots)?,
+            schedule: Schedule::new(&config.schedule)?,
             correction: config.correction,
             form: config.form,
             update,
@@ -341,7 +323,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Storm<S> {
         &mut self,
         problem: &P,
         theta0: DVector<S>,
-        ctx: &mut Ctx<'_>,
+        ctx: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
         check_dim(problem.dim(), &theta0)?;
         self.schedule.reset();
@@ -354,7 +336,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Storm<S> {
         Ok(())
     }
 
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
         let d = self
             .d
             .take()

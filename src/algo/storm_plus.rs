@@ -13,44 +13,42 @@
 //! ```
 //!
 //! with `g̃_t` unweighted or importance-weighted as in [`crate::algo::storm`] (IS-STORM+).
-//! With `a₀ = 1, b₀ = 0, c = 1, s = 1` this is, to the best of my recollection, the paper's
-//! Algorithm 1: `a_{t+1} = 1/(1 + Σ‖∇f(x_i, ξ_i)‖²)^{2/3}`, `η_t = 1/(Σ‖d_i‖²/a_{i+1})^{1/3}`.
-//! **Uncertainty:** the paper was not available while this was written. Its theory allows (and
-//! the authors' released optimiser uses) initial accumulator values and a scale on the step size;
-//! these are exposed as `a0`, `b0`, `c`, `eta_scale` (the released PyTorch code initialises both
-//! accumulators at 1, i.e. `b₀ = 1`). The exponents −2/3 and −1/3 and the order of the updates
-//! (a_{t+1} from gradients up to t, η_t from d_i/a_{i+1} up to t) are the parts I am confident
-//! of; the clip `a ≤ 1` is a no-op for `a₀ ≥ c^{3/2}`.
 //!
-//! **Checked against released code** (a public PyTorch `STORMplus` optimiser, read while this
-//! was reviewed): it keeps `grad_accumulator` and `estimator_accumulator`, both initialised to
-//! `init_accumulator = 1`, sets `a = c / grad_accumulator^{2/3}` after adding ‖g_t‖², then
-//! `estimator_accumulator += ‖d_t‖²/a` and `η = lr / estimator_accumulator^{1/3}`, and forms
-//! `d_{t+1} = g_{t+1} + (1 − a)(d_t − g(θ_t; ξ_{t+1}))` — the same exponents, update order and
-//! recursion as above, with `b₀ = 1` ([`StormPlusConfig::released_code`]). The paper's own
-//! statement of the constants was not available; cite [`StormPlusConfig::released_code`] as
-//! "STORM+ (released code)".
+//! # Constants
+//! `a0`, `b0`, `c` and `eta_scale` (= s) are the initial accumulators, the momentum constant and
+//! the step-size scale. [`StormPlusConfig::paper`] takes `a₀ = 1, b₀ = 0, c = 1, s = 1`:
+//! `a_{t+1} = 1/(1 + Σ‖g_i‖²)^{2/3}`, `η_t = 1/(Σ‖d_i‖²/a_{i+1})^{1/3}`.
+//! [`StormPlusConfig::released_code`] takes `a₀ = b₀ = 1, c = 1` and a given scale, as the
+//! authors' released PyTorch `STORMplus` optimiser does: it keeps a gradient and an estimator
+//! accumulator, both starting at 1, sets `a = c / grad_accumulator^{2/3}` after adding ‖g_t‖²,
+//! then adds ‖d_t‖²/a to the estimator accumulator and steps with
+//! `η = lr / estimator_accumulator^{1/3}` — the exponents, update order and recursion above. The
+//! clip `a ≤ 1` is inactive for `a₀ ≥ c^{3/2}`.
 
 use super::{
-    AlgoError, Algorithm, Ctx, Num, Roots, StepReport, axpy, check_dim, check_finite, min_one,
-    norm_sq, oracle_draw, positive,
+    AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, axpy, cbrt, check_dim,
+    check_finite, min_one, norm_sq, oracle_draw, positive, require_roots,
 };
 use crate::algo::storm::Correction;
 use crate::problem::{Behaviour, EstimatorForm, IlProblem, Weighting};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
+
+/// STORM+, as named in [`AlgoError::NeedsRoots`].
+const STORM_PLUS: &str = "STORM+";
 
 /// STORM+ configuration (see the module docs for the exact form).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StormPlusConfig {
     /// Initial value of the gradient accumulator, a₀ > 0 (paper: 1).
-    pub a0: Num,
+    pub a0: ConfigNumber,
     /// Initial value of the step-size accumulator, b₀ ≥ 0 (paper: 0).
-    pub b0: Num,
+    pub b0: ConfigNumber,
     /// Momentum scale c > 0 (paper: 1).
-    pub c: Num,
+    pub c: ConfigNumber,
     /// Step-size scale s > 0 (paper: 1).
-    pub eta_scale: Num,
+    pub eta_scale: ConfigNumber,
     /// The old-point term.
     pub correction: Correction,
     /// Which form of eq. 3.15.
@@ -61,10 +59,10 @@ impl StormPlusConfig {
     /// The paper's constants (a₀ = 1, b₀ = 0, c = 1, s = 1) with the given correction.
     pub fn paper(correction: Correction, form: EstimatorForm) -> Self {
         StormPlusConfig {
-            a0: Num::ratio(1, 1),
-            b0: Num::ratio(0, 1),
-            c: Num::ratio(1, 1),
-            eta_scale: Num::ratio(1, 1),
+            a0: ConfigNumber::ratio(1, 1),
+            b0: ConfigNumber::ratio(0, 1),
+            c: ConfigNumber::ratio(1, 1),
+            eta_scale: ConfigNumber::ratio(1, 1),
             correction,
             form,
         }
@@ -74,9 +72,9 @@ impl StormPlusConfig {
 impl StormPlusConfig {
     /// The constants of the authors' released optimiser: both accumulators start at 1
     /// (a₀ = b₀ = 1), c = 1, and the step-size scale `lr` (s).
-    pub fn released_code(lr: Num, correction: Correction, form: EstimatorForm) -> Self {
+    pub fn released_code(lr: ConfigNumber, correction: Correction, form: EstimatorForm) -> Self {
         StormPlusConfig {
-            b0: Num::ratio(1, 1),
+            b0: ConfigNumber::ratio(1, 1),
             eta_scale: lr,
             ..StormPlusConfig::paper(correction, form)
         }
@@ -99,7 +97,7 @@ pub struct StormPlus<S> {
     d: Option<DVector<S>>,
 }
 
-impl<S: Roots> StormPlus<S> {
+impl<S: Scalar> StormPlus<S> {
     /// The current iterate (as [`Algorithm::theta`], without naming the problem type).
     pub fn theta(&self) -> &DVector<S> {
         &self.theta
@@ -108,17 +106,21 @@ impl<S: Roots> StormPlus<S> {
     /// Validate and build.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] naming `a0`, `b0`, `c` or `eta_scale`.
+    /// [`AlgoError::InvalidParameter`] naming `a0`, `b0`, `c` or `eta_scale`;
+    /// [`AlgoError::NeedsRoots`] for a scalar without cube roots.
     pub fn new(config: &StormPlusConfig) -> Result<Self, AlgoError> {
         let a0 = S::from_rational(&positive(&config.a0, "a0", true)?);
         let b0 = S::from_rational(&positive(&config.b0, "b0", false)?);
+        let c = S::from_rational(&positive(&config.c, "c", true)?);
+        let scale = S::from_rational(&positive(&config.eta_scale, "eta_scale", true)?);
+        require_roots::<S>(STORM_PLUS, "cube roots")?;
         Ok(StormPlus {
             grad_acc: a0.clone(),
             est_acc: b0.clone(),
             a0,
             b0,
-            c: S::from_rational(&positive(&config.c, "c", true)?),
-            scale: S::from_rational(&positive(&config.eta_scale, "eta_scale", true)?),
+            c,
+            scale,
             correction: config.correction,
             form: config.form,
             a_next: S::one(),
@@ -130,7 +132,7 @@ impl<S: Roots> StormPlus<S> {
     /// Fold in `‖g_t‖²` and `‖d_t‖²`: update a_{t+1} and the step-size accumulator.
     fn accumulate(&mut self, g: &DVector<S>, d: &DVector<S>) -> Result<(), AlgoError> {
         self.grad_acc += norm_sq(g);
-        let r = self.grad_acc.cbrt();
+        let r = cbrt(&self.grad_acc, STORM_PLUS)?;
         self.a_next = min_one(self.c.clone() / r.square(), "a = min(1, c·acc^(−2/3))")?;
         self.est_acc += norm_sq(d) / &self.a_next;
         if !self.a_next.is_finite() || !self.est_acc.is_finite() {
@@ -140,7 +142,7 @@ impl<S: Roots> StormPlus<S> {
     }
 }
 
-impl<S: Roots, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
+impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
     fn name(&self) -> &'static str {
         if self.correction == Correction::Unweighted {
             "storm-plus"
@@ -153,7 +155,7 @@ impl<S: Roots, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
         &mut self,
         problem: &P,
         theta0: DVector<S>,
-        ctx: &mut Ctx<'_>,
+        ctx: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
         check_dim(problem.dim(), &theta0)?;
         self.grad_acc = self.a0.clone();
@@ -165,7 +167,7 @@ impl<S: Roots, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
         Ok(())
     }
 
-    fn step(&mut self, problem: &P, ctx: &mut Ctx<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
         let d = self
             .d
             .take()
@@ -175,7 +177,7 @@ impl<S: Roots, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
                 "η = (b₀ + Σ‖d‖²/a)^(−1/3) with a zero sum",
             ));
         }
-        let eta = self.scale.clone() / self.est_acc.cbrt();
+        let eta = self.scale.clone() / cbrt(&self.est_acc, STORM_PLUS)?;
         let a = self.a_next.clone();
         let new = axpy(&-eta, &d, &self.theta);
         check_finite(&new, "θ")?;

@@ -44,7 +44,7 @@ pub use oracle::Baselined;
 pub use running::RunningOptimum;
 pub use terms::DecisionTerms;
 
-use crate::algo::Num;
+use crate::algo::ConfigNumber;
 use serde::{Deserialize, Serialize};
 
 /// Which baseline the oracle subtracts (JSON: `{"kind": "constant", "value": "1/2"}`).
@@ -60,13 +60,13 @@ pub enum Baseline {
     /// One number b for every decision: `g_b = g − b Σ_i ψ_i`.
     Constant {
         /// b.
-        value: Num,
+        value: ConfigNumber,
     },
     /// b_1, b_2, … per decision index: `g_b = g − Σ_i b_i ψ_i`. A decision beyond the list is an
     /// error.
     TimeIndexed {
         /// b_1, b_2, ….
-        values: Vec<Num>,
+        values: Vec<ConfigNumber>,
     },
     /// The variance-minimising constant(s) `E[g·ψ_i]/E‖ψ_i‖²` estimated from earlier iterations'
     /// trajectories ([`RunningOptimum`]).
@@ -75,7 +75,7 @@ pub enum Baseline {
         time_indexed: bool,
         /// Factor in [0, 1] applied to the past statistics at every iteration (absent: 1).
         #[serde(default, skip_serializing_if = "Option::is_none")]
-        decay: Option<Num>,
+        decay: Option<ConfigNumber>,
     },
     /// Leave-one-out across the m ≥ 2 trajectories of one gradient.
     LeaveOneOut,

@@ -75,7 +75,7 @@ impl<S: Scalar> Dual<S> {
     }
 
     /// Apply a scalar function with known derivative: `f(self)` with gradient `f'(v)·g`.
-    fn chain(&self, value: S, derivative: S) -> Self {
+    pub(super) fn chain(&self, value: S, derivative: S) -> Self {
         Self {
             v: value,
             g: self.g.iter().map(|gi| derivative.clone() * gi).collect(),

@@ -5,11 +5,14 @@
 //! | trait | adds | implemented for |
 //! |---|---|---|
 //! | [`Scalar`] | field operations (by value and by reference), exact construction from integer ratios, lossy [`Scalar::to_f64`], *certain* comparison | `f64`, `f32`, [`BigRational`], [`Interval`], [`Dual<S>`] |
+//! | [`Roots`] | the capability query [`Roots::HAS_ROOTS`] and `try_sqrt`/`try_cbrt`, which a scalar without roots declines with `None`; a supertrait of [`Scalar`] | every scalar: roots in `f64`, `f32`, [`Interval`] (outward-rounded) and `Dual<S>` when `S` has them; none in [`BigRational`] |
 //! | [`Sqrt`] | `sqrt` | `f64`, `f32`, [`Interval`], `Dual<S: Sqrt>` |
 //! | [`Real`] | `exp`, `ln`, `sin`, `cos` | `f64`, `f32`, `Dual<S: Real>`, and [`Interval`] with the `mpfr` feature |
 //!
 //! Rationals are not [`Sqrt`]: a square root of a rational is rarely rational, and the kit never
-//! rounds an exact computation silently.
+//! rounds an exact computation silently. [`Roots`] lets code bounded by [`Scalar`] alone use roots
+//! where the scalar has them and reject, when it is built, a configuration that needs them where
+//! it has not (the algorithms' `AlgoError::NeedsRoots`).
 //!
 //! Comparison is tri-state ([`Scalar::certain_cmp`]): an interval that straddles a threshold cannot be
 //! ordered, and generic code that branches on such a comparison returns [`Undecidable`] instead of
@@ -20,6 +23,7 @@ mod float;
 mod interval;
 mod rational;
 mod report;
+mod roots;
 
 pub use dual::Dual;
 pub use inari::Interval;
@@ -27,6 +31,7 @@ pub use interval::{enclose_rational, interval_contains_rational};
 pub use num_rational::BigRational;
 pub use rational::{MAX_DIGITS, MAX_EXPONENT, ParseExactError, parse_exact, parse_exact_list};
 pub use report::JsonScalar;
+pub use roots::Roots;
 
 use std::cmp::Ordering;
 use std::fmt::Debug;
@@ -43,6 +48,7 @@ pub trait Scalar:
     + Send
     + Sync
     + 'static
+    + Roots
     + Add<Output = Self>
     + Sub<Output = Self>
     + Mul<Output = Self>

@@ -6,14 +6,14 @@
 //! * DAgger and sampled RRM converge to θ_PS; SGD, STORM and IS-STORM approach θ_PO
 //!   (statistical tests over many seeds; the tolerance policy is stated at `STAT_Z`).
 
+use crate::fixture::AliasedTwoState;
 use ilopt::algo::dagger::{BetaSchedule, DaggerConfig};
 use ilopt::algo::dataset::{InnerConfig, Retrain};
-use ilopt::algo::fixture::AliasedTwoState;
 use ilopt::algo::rrm::{ExactRrm, RrmConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
 use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
 use ilopt::algo::{
-    AlgorithmConfig, Num, RunConfig, RunRecord, Runner, StoppingRule, Termination, replay,
+    AlgorithmConfig, ConfigNumber, RunConfig, RunRecord, Runner, StoppingRule, Termination, replay,
 };
 use ilopt::problem::{EstimatorForm, OracleError};
 use ilopt::scalar::{BigRational, Scalar};
@@ -127,7 +127,7 @@ fn tail_means(algorithm: &AlgorithmConfig, seeds: u64, k: u64) -> Vec<f64> {
         .map(|seed| {
             let cfg = RunConfig {
                 algorithm: algorithm.clone(),
-                theta0: vec![Num::ratio(1, 2)],
+                theta0: vec![ConfigNumber::ratio(1, 2)],
                 seed,
                 stop: StoppingRule::iterations(k),
             };
@@ -147,7 +147,7 @@ const K: u64 = 4000;
 fn sgd_approaches_the_performative_optimum() {
     // η = 1/512: the iterates stay well inside the simplex (the score 1/θ is unbounded at 0).
     let sgd = AlgorithmConfig::Sgd(SgdConfig {
-        step: SgdStep::constant(Num::ratio(1, 512)),
+        step: SgdStep::constant(ConfigNumber::ratio(1, 512)),
         form: EstimatorForm::Causal,
     });
     check_converges_to("sgd", &tail_means(&sgd, SEEDS, K), THETA_PO, THETA_PS);
@@ -158,7 +158,7 @@ fn storm(correction: Correction) -> AlgorithmConfig {
     // boundary, and a larger L only shrinks the steps).
     AlgorithmConfig::Storm(StormConfig {
         schedule: StormSchedule::Thesis {
-            l: Num::ratio(16, 1),
+            l: ConfigNumber::ratio(16, 1),
         },
         correction,
         form: EstimatorForm::Causal,
@@ -193,7 +193,7 @@ fn finals(algorithm: &AlgorithmConfig, seeds: u64, iterations: u64) -> Vec<f64> 
         .map(|seed| {
             let cfg = RunConfig {
                 algorithm: algorithm.clone(),
-                theta0: vec![Num::ratio(1, 2)],
+                theta0: vec![ConfigNumber::ratio(1, 2)],
                 seed,
                 stop: StoppingRule::iterations(iterations),
             };
@@ -207,7 +207,7 @@ fn finals(algorithm: &AlgorithmConfig, seeds: u64, iterations: u64) -> Vec<f64> 
 /// One full-batch gradient step of size 1/4 is the exact argmin of the M1 dataset loss (the
 /// Brier loss in θ has curvature 4): θ ← fraction of expert labels 0 (state B) in the data.
 fn argmin() -> InnerConfig {
-    InnerConfig::gradient_descent(Num::ratio(1, 4), 1)
+    InnerConfig::gradient_descent(ConfigNumber::ratio(1, 4), 1)
 }
 
 #[test]
@@ -216,7 +216,7 @@ fn dagger_converges_to_the_performative_stable_point() {
     let dagger = AlgorithmConfig::Dagger(DaggerConfig {
         trajectories_per_iteration: 50,
         beta: BetaSchedule::Exponential {
-            p: Num::ratio(1, 2),
+            p: ConfigNumber::ratio(1, 2),
         },
         aggregate: true,
         retrain: Retrain::FromScratch,
@@ -254,12 +254,12 @@ fn f64_and_rational_rrm_iterates_agree() {
 /// Drive a STORM-type algorithm with a vanishing step (θ stays at θ₀ to within 10⁻⁹) and return
 /// the directions d_k of `steps` steps.
 fn directions(mut alg: ilopt::algo::storm::Storm<f64>, steps: usize, seed: u64) -> Vec<f64> {
-    use ilopt::algo::{Algorithm, Ctx};
+    use ilopt::algo::{Algorithm, StepContext};
     use rand::SeedableRng;
     let problem = ToyProblem::<f64>::new(&m1());
     let mut rng = ilopt::problem::KitRng::seed_from_u64(seed);
     let mut cost = ilopt::problem::Cost::default();
-    let mut ctx = Ctx {
+    let mut ctx = StepContext {
         rng: &mut rng,
         cost: &mut cost,
     };
@@ -283,19 +283,20 @@ fn printed_algorithm_4_does_not_track_the_gradient() {
         .gradient[0]
         .clone();
     assert_eq!(grad, q(1, 1));
-    let schedule = StormSchedule::constant(Num::Float(1e-12), Num::ratio(1, 2));
+    let schedule = StormSchedule::constant(ConfigNumber::Float(1e-12), ConfigNumber::ratio(1, 2));
     let corrected = ilopt::algo::storm::Storm::new(&StormConfig {
         schedule: schedule.clone(),
         correction: Correction::Unweighted,
         form: EstimatorForm::Causal,
     })
     .unwrap();
-    let printed =
-        ilopt::algo::printed::printed_algorithm_4(&ilopt::algo::printed::PrintedAlgorithm4Config {
+    let printed = ilopt::algo::as_printed::printed_algorithm_4(
+        &ilopt::algo::as_printed::PrintedAlgorithm4Config {
             schedule,
             form: EstimatorForm::Causal,
-        })
-        .unwrap();
+        },
+    )
+    .unwrap();
     // Per-run means over 2000 steps, 32 seeds; the same tolerance policy as above (BIAS covers
     // the 10⁻⁹ drift of θ and the d₁ start-up of the average).
     let runs = |alg: &ilopt::algo::storm::Storm<f64>| -> Vec<f64> {
@@ -321,26 +322,26 @@ fn printed_algorithm_4_does_not_track_the_gradient() {
 #[ignore = "measurement table for reports (≈ 10 s in release)"]
 fn measure_every_algorithm_on_m1() {
     use ilopt::algo::adam::{AdamConfig, AdamOptimizerConfig};
+    use ilopt::algo::as_printed::PrintedAlgorithm4Config;
     use ilopt::algo::bc::BcConfig;
     use ilopt::algo::forward_training::ForwardTrainingConfig;
     use ilopt::algo::o2nc::O2ncConfig;
-    use ilopt::algo::printed::PrintedAlgorithm4Config;
     use ilopt::algo::rmsprop::{RmsPropConfig, RmsPropOptimizerConfig};
     use ilopt::algo::smile::SmileConfig;
     use ilopt::algo::storm_plus::StormPlusConfig;
     let causal = EstimatorForm::Causal;
     let o2nc = O2ncConfig {
         budget: K,
-        delta: Num::ratio(1, 10),
-        g: Num::ratio(4, 1),
-        delta0: Num::ratio(1, 1),
+        delta: ConfigNumber::ratio(1, 10),
+        g: ConfigNumber::ratio(4, 1),
+        delta0: ConfigNumber::ratio(1, 1),
         form: causal,
     };
     let optimisers: Vec<(&str, AlgorithmConfig)> = vec![
         (
             "sgd η=1/512",
             AlgorithmConfig::Sgd(SgdConfig {
-                step: SgdStep::constant(Num::ratio(1, 512)),
+                step: SgdStep::constant(ConfigNumber::ratio(1, 512)),
                 form: causal,
             }),
         ),
@@ -351,9 +352,9 @@ fn measure_every_algorithm_on_m1() {
             "is-storm adaptive k=0.02 w=10 c=1000",
             AlgorithmConfig::Storm(StormConfig {
                 schedule: StormSchedule::Adaptive {
-                    k: Num::Float(0.02),
-                    w: Num::ratio(10, 1),
-                    c: Num::ratio(1000, 1),
+                    k: ConfigNumber::Float(0.02),
+                    w: ConfigNumber::ratio(10, 1),
+                    c: ConfigNumber::ratio(1000, 1),
                 },
                 correction: Correction::PerDecision,
                 form: causal,
@@ -362,22 +363,22 @@ fn measure_every_algorithm_on_m1() {
         (
             "is-storm+ (s=1/40, b0=1)",
             AlgorithmConfig::StormPlus(StormPlusConfig {
-                eta_scale: Num::ratio(1, 40),
-                b0: Num::ratio(1, 1),
+                eta_scale: ConfigNumber::ratio(1, 40),
+                b0: ConfigNumber::ratio(1, 1),
                 ..StormPlusConfig::paper(Correction::PerDecision, causal)
             }),
         ),
         (
             "adam α=1/512",
             AlgorithmConfig::Adam(AdamOptimizerConfig {
-                adam: AdamConfig::with_alpha(Num::ratio(1, 512)),
+                adam: AdamConfig::with_alpha(ConfigNumber::ratio(1, 512)),
                 form: causal,
             }),
         ),
         (
             "rmsprop η=1/512",
             AlgorithmConfig::RmsProp(RmsPropOptimizerConfig {
-                rmsprop: RmsPropConfig::with_eta(Num::ratio(1, 512)),
+                rmsprop: RmsPropConfig::with_eta(ConfigNumber::ratio(1, 512)),
                 form: causal,
             }),
         ),
@@ -390,7 +391,7 @@ fn measure_every_algorithm_on_m1() {
             "printed alg. 4 (E9) (3.43)",
             AlgorithmConfig::PrintedAlgorithm4(PrintedAlgorithm4Config {
                 schedule: StormSchedule::Thesis {
-                    l: Num::ratio(16, 1),
+                    l: ConfigNumber::ratio(16, 1),
                 },
                 form: causal,
             }),
@@ -405,7 +406,7 @@ fn measure_every_algorithm_on_m1() {
         for seed in 0..SEEDS {
             let cfg = RunConfig {
                 algorithm: a.clone(),
-                theta0: vec![Num::ratio(1, 2)],
+                theta0: vec![ConfigNumber::ratio(1, 2)],
                 seed,
                 stop: StoppingRule::iterations(K),
             };
@@ -428,7 +429,7 @@ fn measure_every_algorithm_on_m1() {
             AlgorithmConfig::Dagger(DaggerConfig {
                 trajectories_per_iteration: 50,
                 beta: BetaSchedule::Exponential {
-                    p: Num::ratio(1, 2),
+                    p: ConfigNumber::ratio(1, 2),
                 },
                 aggregate: true,
                 retrain: Retrain::FromScratch,
@@ -457,7 +458,7 @@ fn measure_every_algorithm_on_m1() {
         (
             "smile α=1/2 10×200 (distilled)",
             AlgorithmConfig::Smile(SmileConfig {
-                alpha: Num::ratio(1, 2),
+                alpha: ConfigNumber::ratio(1, 2),
                 trajectories_per_iteration: 200,
                 retrain: Retrain::FromScratch,
                 inner: argmin(),
@@ -479,7 +480,7 @@ fn measure_every_algorithm_on_m1() {
     for seed in 0..SEEDS {
         let cfg = RunConfig {
             algorithm: ft.clone(),
-            theta0: vec![Num::ratio(1, 2)],
+            theta0: vec![ConfigNumber::ratio(1, 2)],
             seed,
             stop: StoppingRule::iterations(10),
         };

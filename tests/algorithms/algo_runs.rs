@@ -5,12 +5,12 @@
 //! accounted in the same units.
 
 use ilopt::algo::adam::{AdamConfig, AdamOptimizerConfig};
+use ilopt::algo::as_printed::PrintedAlgorithm4Config;
 use ilopt::algo::bc::BcConfig;
 use ilopt::algo::dagger::{BetaSchedule, DaggerConfig};
 use ilopt::algo::dataset::{InnerConfig, Retrain};
 use ilopt::algo::forward_training::ForwardTrainingConfig;
 use ilopt::algo::o2nc::{O2nc, O2ncConfig};
-use ilopt::algo::printed::PrintedAlgorithm4Config;
 use ilopt::algo::rmsprop::{RmsPropConfig, RmsPropOptimizerConfig};
 use ilopt::algo::rrm::RrmConfig;
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
@@ -18,8 +18,8 @@ use ilopt::algo::smile::SmileConfig;
 use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
 use ilopt::algo::storm_plus::StormPlusConfig;
 use ilopt::algo::{
-    Algorithm, AlgorithmConfig, Ctx, IterationMetrics, Num, RunConfig, RunRecord, Runner,
-    StoppingRule, Termination, replay, replay_field,
+    Algorithm, AlgorithmConfig, ConfigNumber, IterationMetrics, RunConfig, RunRecord, Runner,
+    StepContext, StoppingRule, Termination, replay,
 };
 use ilopt::problem::{Cost, EstimatorForm, KitRng};
 use ilopt::scalar::{BigRational, Interval, Scalar, interval_contains_rational};
@@ -51,31 +51,31 @@ fn storm(schedule: StormSchedule, correction: Correction) -> AlgorithmConfig {
 
 /// Exact argmin of the M1 dataset loss in one full-batch step (the Brier loss has curvature 4).
 fn argmin_inner() -> InnerConfig {
-    InnerConfig::gradient_descent(Num::ratio(1, 4), 1)
+    InnerConfig::gradient_descent(ConfigNumber::ratio(1, 4), 1)
 }
 
 fn o2nc_config() -> O2ncConfig {
     O2ncConfig {
         budget: 60,
-        delta: Num::ratio(1, 10),
-        g: Num::ratio(4, 1),
-        delta0: Num::ratio(2, 1),
+        delta: ConfigNumber::ratio(1, 10),
+        g: ConfigNumber::ratio(4, 1),
+        delta0: ConfigNumber::ratio(2, 1),
         form: causal(),
     }
 }
 
 /// Field-only configurations (they run in exact rationals).
 fn field_configs() -> Vec<AlgorithmConfig> {
-    let constant = StormSchedule::constant(Num::ratio(1, 128), Num::ratio(1, 2));
+    let constant = StormSchedule::constant(ConfigNumber::ratio(1, 128), ConfigNumber::ratio(1, 2));
     vec![
         AlgorithmConfig::Sgd(SgdConfig {
-            step: SgdStep::constant(Num::ratio(1, 128)),
+            step: SgdStep::constant(ConfigNumber::ratio(1, 128)),
             form: causal(),
         }),
         AlgorithmConfig::Sgd(SgdConfig {
             step: SgdStep::InverseTime {
-                eta0: Num::ratio(1, 64),
-                k0: Num::ratio(4, 1),
+                eta0: ConfigNumber::ratio(1, 64),
+                k0: ConfigNumber::ratio(4, 1),
             },
             form: EstimatorForm::Full,
         }),
@@ -94,7 +94,7 @@ fn field_configs() -> Vec<AlgorithmConfig> {
         AlgorithmConfig::Dagger(DaggerConfig {
             trajectories_per_iteration: 10,
             beta: BetaSchedule::Exponential {
-                p: Num::ratio(1, 2),
+                p: ConfigNumber::ratio(1, 2),
             },
             aggregate: true,
             retrain: Retrain::FromScratch,
@@ -107,7 +107,7 @@ fn field_configs() -> Vec<AlgorithmConfig> {
             retrain: Retrain::WarmStart,
             inner: InnerConfig {
                 batch_size: Some(5),
-                ..InnerConfig::gradient_descent(Num::ratio(1, 8), 3)
+                ..InnerConfig::gradient_descent(ConfigNumber::ratio(1, 8), 3)
             },
         }),
         AlgorithmConfig::Rrm(RrmConfig {
@@ -116,7 +116,7 @@ fn field_configs() -> Vec<AlgorithmConfig> {
             inner: argmin_inner(),
         }),
         AlgorithmConfig::Smile(SmileConfig {
-            alpha: Num::ratio(1, 2),
+            alpha: ConfigNumber::ratio(1, 2),
             trajectories_per_iteration: 10,
             retrain: Retrain::FromScratch,
             inner: argmin_inner(),
@@ -133,41 +133,41 @@ fn root_configs() -> Vec<AlgorithmConfig> {
     vec![
         AlgorithmConfig::Sgd(SgdConfig {
             step: SgdStep::InverseSqrt {
-                eta0: Num::ratio(1, 64),
+                eta0: ConfigNumber::ratio(1, 64),
             },
             form: causal(),
         }),
         storm(
             StormSchedule::Thesis {
-                l: Num::ratio(32, 1),
+                l: ConfigNumber::ratio(32, 1),
             },
             Correction::Unweighted,
         ),
         storm(
             StormSchedule::Thesis {
-                l: Num::ratio(32, 1),
+                l: ConfigNumber::ratio(32, 1),
             },
             Correction::Trajectory,
         ),
         storm(
             StormSchedule::Adaptive {
-                k: Num::Float(0.02),
-                w: Num::ratio(10, 1),
-                c: Num::ratio(10, 1),
+                k: ConfigNumber::Float(0.02),
+                w: ConfigNumber::ratio(10, 1),
+                c: ConfigNumber::ratio(10, 1),
             },
             Correction::PerDecision,
         ),
         AlgorithmConfig::StormPlus(StormPlusConfig {
-            eta_scale: Num::ratio(1, 40),
-            b0: Num::ratio(1, 1),
+            eta_scale: ConfigNumber::ratio(1, 40),
+            b0: ConfigNumber::ratio(1, 1),
             ..StormPlusConfig::paper(Correction::PerDecision, causal())
         }),
         AlgorithmConfig::Adam(AdamOptimizerConfig {
-            adam: AdamConfig::with_alpha(Num::ratio(1, 50)),
+            adam: AdamConfig::with_alpha(ConfigNumber::ratio(1, 50)),
             form: causal(),
         }),
         AlgorithmConfig::RmsProp(RmsPropOptimizerConfig {
-            rmsprop: RmsPropConfig::with_eta(Num::ratio(1, 50)),
+            rmsprop: RmsPropConfig::with_eta(ConfigNumber::ratio(1, 50)),
             form: causal(),
         }),
         AlgorithmConfig::O2nc(o2nc_config()),
@@ -175,14 +175,14 @@ fn root_configs() -> Vec<AlgorithmConfig> {
         AlgorithmConfig::Dagger(DaggerConfig {
             trajectories_per_iteration: 10,
             beta: BetaSchedule::Constant {
-                beta: Num::ratio(1, 2),
+                beta: ConfigNumber::ratio(1, 2),
             },
             aggregate: true,
             retrain: Retrain::WarmStart,
             inner: InnerConfig {
-                rule: ilopt::algo::dataset::RuleConfig::Adam(AdamConfig::with_alpha(Num::ratio(
-                    1, 20,
-                ))),
+                rule: ilopt::algo::dataset::RuleConfig::Adam(AdamConfig::with_alpha(
+                    ConfigNumber::ratio(1, 20),
+                )),
                 iterations: 5,
                 batch_size: None,
             },
@@ -193,7 +193,7 @@ fn root_configs() -> Vec<AlgorithmConfig> {
 fn run_config(algorithm: AlgorithmConfig, seed: u64, iterations: u64) -> RunConfig {
     RunConfig {
         algorithm,
-        theta0: vec![Num::ratio(1, 2)],
+        theta0: vec![ConfigNumber::ratio(1, 2)],
         seed,
         stop: StoppingRule::iterations(iterations),
     }
@@ -209,9 +209,9 @@ fn every_algorithm_runs_on_m1_in_f64() {
         let problem = ToyProblem::<f64>::new(&mdp(file));
         let dim = ilopt::problem::IlProblem::<f64>::dim(&problem);
         let theta0 = if file == "m1-direct.json" {
-            Num::ratio(1, 2)
+            ConfigNumber::ratio(1, 2)
         } else {
-            Num::ratio(0, 1)
+            ConfigNumber::ratio(0, 1)
         };
         for algorithm in field_configs().into_iter().chain(root_configs()) {
             let cfg = RunConfig {
@@ -343,7 +343,7 @@ fn rational_runs_are_exact_and_enclosed_by_interval_runs() {
     let pf = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     for algorithm in field_configs() {
         let cfg = run_config(algorithm, 3, 4);
-        let q: RunRecord<BigRational> = replay_field(&cfg, &pq).unwrap();
+        let q: RunRecord<BigRational> = replay(&cfg, &pq).unwrap();
         let i: RunRecord<Interval> = replay(&cfg, &pi).unwrap();
         let f: RunRecord<f64> = replay(&cfg, &pf).unwrap();
         assert!(ok_end(&q.termination), "{}: {}", q.algorithm, q.termination);
@@ -367,7 +367,7 @@ fn field_builds_work_through_the_same_config_and_refuse_roots() {
     let pq = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
     for algorithm in root_configs() {
         let cfg = run_config(algorithm, 3, 2);
-        assert!(replay_field::<BigRational, _>(&cfg, &pq).is_err());
+        assert!(replay::<BigRational, _>(&cfg, &pq).is_err());
     }
 }
 
@@ -411,7 +411,7 @@ fn the_gradient_budget_and_target_loss_stop_the_run() {
     assert!(rec.cost.gradient_evaluations >= 100 && last < 100);
     // Target: F(θ) ≤ 0.9 with the exact objective of the engine (min F = 7/8 at θ = 1/4).
     let mut cfg = run_config(field_configs()[0].clone(), 8, 5000);
-    cfg.stop.target_loss = Some(Num::ratio(9, 10));
+    cfg.stop.target_loss = Some(ConfigNumber::ratio(9, 10));
     let rec = Runner::new(cfg.stop.clone())
         .unwrap()
         .with_objective(|th: &DVector<f64>| {
@@ -440,7 +440,7 @@ fn o2nc_blocks_stay_within_delta_and_output_block_means() {
     let delta = 0.1;
     let mut rng = KitRng::seed_from_u64(4);
     let mut cost = Cost::default();
-    let mut ctx = Ctx {
+    let mut ctx = StepContext {
         rng: &mut rng,
         cost: &mut cost,
     };
@@ -466,14 +466,14 @@ fn o2nc_blocks_stay_within_delta_and_output_block_means() {
 #[test]
 fn scalar_choice_does_not_change_the_interval_of_a_rational_hyper_parameter() {
     // 1/10 as a rational hyper-parameter is correctly rounded in f64 and enclosed in intervals.
-    let x = Num::ratio(1, 10);
+    let x = ConfigNumber::ratio(1, 10);
     assert_eq!(x.to::<f64>("x").unwrap(), 0.1);
     assert!(interval_contains_rational(
         x.to::<Interval>("x").unwrap(),
         &x.exact("x").unwrap()
     ));
     assert!(!x.to::<Interval>("x").unwrap().is_singleton());
-    let f = Num::Float(0.1);
+    let f = ConfigNumber::Float(0.1);
     assert!(f.to::<Interval>("x").unwrap().is_singleton());
     assert_eq!(
         f.to::<BigRational>("x").unwrap(),
@@ -496,7 +496,7 @@ fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly()
     assert!((x - x.round()).abs() < 1e-12, "{x}");
 
     let cfg = SmileConfig {
-        alpha: Num::ratio(1, 3),
+        alpha: ConfigNumber::ratio(1, 3),
         trajectories_per_iteration: 10,
         retrain: Retrain::FromScratch,
         inner: argmin_inner(),
@@ -504,7 +504,7 @@ fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly()
     let mut smile = ilopt::algo::smile::Smile::<f64, ToyProblem<f64>>::new(&cfg).unwrap();
     let mut rng = KitRng::seed_from_u64(2);
     let mut cost = Cost::default();
-    let mut ctx = Ctx {
+    let mut ctx = StepContext {
         rng: &mut rng,
         cost: &mut cost,
     };
@@ -554,13 +554,13 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
     };
     let mut rng = KitRng::seed_from_u64(17);
     let mut cost = Cost::default();
-    let mut ctx = Ctx {
+    let mut ctx = StepContext {
         rng: &mut rng,
         cost: &mut cost,
     };
     let theta0 = DVector::from_element(1, q(1, 2));
 
-    let mut bc = Bc::<BigRational, ToyProblem<BigRational>>::new_field(&BcConfig {
+    let mut bc = Bc::<BigRational, ToyProblem<BigRational>>::new(&BcConfig {
         trajectories_per_iteration: 25,
         inner: argmin_inner(),
         retrain: Retrain::FromScratch,
@@ -577,7 +577,7 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
         );
     }
 
-    let mut dagger = Dagger::<BigRational, ToyProblem<BigRational>>::new_field(&DaggerConfig {
+    let mut dagger = Dagger::<BigRational, ToyProblem<BigRational>>::new(&DaggerConfig {
         trajectories_per_iteration: 25,
         beta: BetaSchedule::Linear { iterations: 2 },
         aggregate: true,
@@ -634,21 +634,21 @@ fn every_algorithm_runs_with_every_baseline() {
     let kinds = [
         Baseline::None,
         Baseline::Constant {
-            value: Num::ratio(1, 2),
+            value: ConfigNumber::ratio(1, 2),
         },
         Baseline::TimeIndexed {
-            values: vec![Num::ratio(1, 3)],
+            values: vec![ConfigNumber::ratio(1, 3)],
         },
         Baseline::Estimated {
             time_indexed: true,
-            decay: Some(Num::ratio(9, 10)),
+            decay: Some(ConfigNumber::ratio(9, 10)),
         },
         Baseline::LeaveOneOut,
     ];
     let mut baselined = 0;
     for algorithm in field_configs().into_iter().chain(root_configs()) {
         let cfg = RunConfig {
-            theta0: vec![Num::ratio(0, 1); dim],
+            theta0: vec![ConfigNumber::ratio(0, 1); dim],
             ..run_config(algorithm, 5, 20)
         };
         let batched = ilopt::batched::Batched::new(problem.clone(), 2).unwrap();

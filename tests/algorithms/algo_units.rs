@@ -6,20 +6,20 @@
 //! The expected numbers in the tests were worked out by hand from the update formulas.
 
 use ilopt::algo::adam::{Adam, AdamConfig, AdamOptimizerConfig};
+use ilopt::algo::as_printed::{PrintedAlgorithm4Config, printed_algorithm_4};
 use ilopt::algo::dagger::{BetaSchedule, Dagger, DaggerConfig};
 use ilopt::algo::dataset::{InnerConfig, Retrain, RuleConfig};
 use ilopt::algo::o2nc::O2ncConfig;
-use ilopt::algo::printed::{PrintedAlgorithm4Config, printed_algorithm_4_field};
 use ilopt::algo::rmsprop::{RmsProp, RmsPropConfig, RmsPropOptimizerConfig};
 use ilopt::algo::sgd::{Sgd, SgdConfig, SgdStep};
 use ilopt::algo::storm::{Correction, Storm, StormConfig, StormSchedule};
 use ilopt::algo::storm_plus::{StormPlus, StormPlusConfig};
 use ilopt::algo::{
-    AlgoError, Algorithm, AlgorithmConfig, Ctx, Num, Roots, RunConfig, Runner, StoppingRule,
-    Termination,
+    AlgoError, Algorithm, AlgorithmConfig, ConfigNumber, RunConfig, Runner, StepContext,
+    StoppingRule, Termination,
 };
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
-use ilopt::scalar::{BigRational, Interval, Scalar};
+use ilopt::scalar::{BigRational, Interval, Roots, Scalar};
 use nalgebra::DVector;
 use rand::SeedableRng;
 use std::cell::Cell;
@@ -121,7 +121,7 @@ fn drive<S: Scalar, A: Algorithm<S, Scripted>>(
 ) -> Vec<S> {
     let mut rng = KitRng::seed_from_u64(0);
     let mut cost = Cost::default();
-    let mut ctx = Ctx {
+    let mut ctx = StepContext {
         rng: &mut rng,
         cost: &mut cost,
     };
@@ -136,7 +136,7 @@ fn drive<S: Scalar, A: Algorithm<S, Scripted>>(
 
 fn storm_cfg(correction: Correction) -> StormConfig {
     StormConfig {
-        schedule: StormSchedule::constant(Num::ratio(1, 4), Num::ratio(1, 2)),
+        schedule: StormSchedule::constant(ConfigNumber::ratio(1, 4), ConfigNumber::ratio(1, 2)),
         correction,
         form: EstimatorForm::Causal,
     }
@@ -151,7 +151,7 @@ fn script() -> Scripted {
 #[test]
 fn one_storm_step_in_rationals() {
     let p = script();
-    let mut s = Storm::<BigRational>::new_field(&storm_cfg(Correction::Unweighted)).unwrap();
+    let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::Unweighted)).unwrap();
     let th = drive(&mut s, &p, q(1, 1), 1);
     assert_eq!(th[1], q(3, 4));
     // d₂ = 13/4 + (1/2)(1 − 4) = 7/4.
@@ -162,7 +162,7 @@ fn one_storm_step_in_rationals() {
     let mut cost = Cost::default();
     s.step(
         &p,
-        &mut Ctx {
+        &mut StepContext {
             rng: &mut rng,
             cost: &mut cost,
         },
@@ -176,13 +176,13 @@ fn one_is_storm_step_in_rationals() {
     // Whole-trajectory weight (2 + 1)/(2 + 3/4) = 12/11: g̃ = 48/11,
     // d₂ = 13/4 + (1/2)(1 − 48/11) = 69/44.
     let p = script();
-    let mut s = Storm::<BigRational>::new_field(&storm_cfg(Correction::Trajectory)).unwrap();
+    let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::Trajectory)).unwrap();
     drive(&mut s, &p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(69, 44));
     // Per-decision weight (3 + 1)/(3 + 3/4) = 16/15: g̃ = 64/15,
     // d₂ = 13/4 + (1/2)(1 − 64/15) = 13/4 − 49/30 = 97/60.
     let p = script();
-    let mut s = Storm::<BigRational>::new_field(&storm_cfg(Correction::PerDecision)).unwrap();
+    let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::PerDecision)).unwrap();
     drive(&mut s, &p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(97, 60));
     assert_eq!(Algorithm::<BigRational, Scripted>::name(&s), "is-storm");
@@ -193,10 +193,10 @@ fn printed_algorithm_4_uses_the_e9_update() {
     // d₂ = 13/4 + (1/2)·4 = 21/4: no d₁, and the correction enters with a plus sign.
     let p = script();
     let cfg = PrintedAlgorithm4Config {
-        schedule: StormSchedule::constant(Num::ratio(1, 4), Num::ratio(1, 2)),
+        schedule: StormSchedule::constant(ConfigNumber::ratio(1, 4), ConfigNumber::ratio(1, 2)),
         form: EstimatorForm::Causal,
     };
-    let mut s = printed_algorithm_4_field::<BigRational>(&cfg).unwrap();
+    let mut s = printed_algorithm_4::<BigRational>(&cfg).unwrap();
     drive(&mut s, &p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(21, 4));
     assert_eq!(
@@ -213,13 +213,13 @@ fn explicit_storm_schedule_is_followed_and_repeats_its_last_entry() {
     let p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Explicit {
-            eta: vec![Num::ratio(1, 2), Num::ratio(1, 4)],
-            a: vec![Num::ratio(1, 1)],
+            eta: vec![ConfigNumber::ratio(1, 2), ConfigNumber::ratio(1, 4)],
+            a: vec![ConfigNumber::ratio(1, 1)],
         },
         correction: Correction::Unweighted,
         form: EstimatorForm::Causal,
     };
-    let mut s = Storm::<BigRational>::new_field(&cfg).unwrap();
+    let mut s = Storm::<BigRational>::new(&cfg).unwrap();
     let th = drive(&mut s, &p, q(1, 1), 3);
     assert_eq!(th, vec![q(1, 1), q(1, 2), q(-1, 8), q(3, 16)]);
 }
@@ -230,7 +230,7 @@ fn thesis_schedule_matches_eq_3_43() {
     let p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Thesis {
-            l: Num::ratio(2, 1),
+            l: ConfigNumber::ratio(2, 1),
         },
         correction: Correction::Unweighted,
         form: EstimatorForm::Causal,
@@ -245,7 +245,7 @@ fn thesis_schedule_matches_eq_3_43() {
     assert!((16.0 * 4.0 * eta * eta - a).abs() <= 1e-15);
     // Rationals have no cube roots.
     assert!(matches!(
-        Storm::<BigRational>::new_field(&cfg),
+        Storm::<BigRational>::new(&cfg),
         Err(AlgoError::NeedsRoots { .. })
     ));
 }
@@ -256,9 +256,9 @@ fn adaptive_schedule_matches_algorithm_4() {
     let p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Adaptive {
-            k: Num::ratio(1, 1),
-            w: Num::ratio(7, 1),
-            c: Num::ratio(1, 2),
+            k: ConfigNumber::ratio(1, 1),
+            w: ConfigNumber::ratio(7, 1),
+            c: ConfigNumber::ratio(1, 2),
         },
         correction: Correction::Unweighted,
         form: EstimatorForm::Causal,
@@ -274,7 +274,7 @@ fn adaptive_schedule_matches_algorithm_4() {
     let mut cost = Cost::default();
     s.step(
         &p,
-        &mut Ctx {
+        &mut StepContext {
             rng: &mut rng,
             cost: &mut cost,
         },
@@ -290,12 +290,12 @@ fn one_sgd_step_in_rationals_and_inverse_time_schedule() {
     let p = script();
     let cfg = SgdConfig {
         step: SgdStep::InverseTime {
-            eta0: Num::ratio(1, 3),
-            k0: Num::ratio(2, 1),
+            eta0: ConfigNumber::ratio(1, 3),
+            k0: ConfigNumber::ratio(2, 1),
         },
         form: EstimatorForm::Causal,
     };
-    let mut s = Sgd::<BigRational>::new_field(&cfg).unwrap();
+    let mut s = Sgd::<BigRational>::new(&cfg).unwrap();
     let th = drive(&mut s, &p, q(1, 1), 2);
     assert_eq!(th, vec![q(1, 1), q(2, 3), q(0, 1)]);
 }
@@ -308,10 +308,10 @@ fn one_adam_step_in_f64_from_kingma_ba() {
     let p = Scripted::new(vec![(0, 1), (0, -2)]);
     let cfg = AdamOptimizerConfig {
         adam: AdamConfig {
-            alpha: Num::ratio(1, 10),
-            beta1: Num::ratio(9, 10),
-            beta2: Num::ratio(999, 1000),
-            epsilon: Num::Float(1e-8),
+            alpha: ConfigNumber::ratio(1, 10),
+            beta1: ConfigNumber::ratio(9, 10),
+            beta2: ConfigNumber::ratio(999, 1000),
+            epsilon: ConfigNumber::Float(1e-8),
         },
         form: EstimatorForm::Causal,
     };
@@ -334,9 +334,9 @@ fn rmsprop_follows_eqs_2_14_and_2_15() {
     let p = Scripted::new(vec![(0, 3), (0, 1)]);
     let cfg = RmsPropOptimizerConfig {
         rmsprop: RmsPropConfig {
-            eta: Num::ratio(1, 8),
-            beta: Num::ratio(3, 4),
-            epsilon: Num::ratio(0, 1),
+            eta: ConfigNumber::ratio(1, 8),
+            beta: ConfigNumber::ratio(3, 4),
+            epsilon: ConfigNumber::ratio(0, 1),
         },
         form: EstimatorForm::Causal,
     };
@@ -352,9 +352,9 @@ fn rmsprop_without_epsilon_stops_on_a_zero_denominator() {
     let p = Scripted::new(vec![(0, 0)]);
     let cfg = RmsPropOptimizerConfig {
         rmsprop: RmsPropConfig {
-            eta: Num::ratio(1, 8),
-            beta: Num::ratio(3, 4),
-            epsilon: Num::ratio(0, 1),
+            eta: ConfigNumber::ratio(1, 8),
+            beta: ConfigNumber::ratio(3, 4),
+            epsilon: ConfigNumber::ratio(0, 1),
         },
         form: EstimatorForm::Causal,
     };
@@ -386,9 +386,9 @@ fn o2nc_parameters_are_exact() {
     // K = ⌊100/8⌋ = 12, M = 96, D = δ/T = 1/80.
     let cfg = O2ncConfig {
         budget: 100,
-        delta: Num::ratio(1, 10),
-        g: Num::ratio(2, 1),
-        delta0: Num::ratio(1, 1),
+        delta: ConfigNumber::ratio(1, 10),
+        g: ConfigNumber::ratio(2, 1),
+        delta0: ConfigNumber::ratio(1, 1),
         form: EstimatorForm::Causal,
     };
     let prm = cfg.parameters().unwrap();
@@ -396,7 +396,7 @@ fn o2nc_parameters_are_exact() {
     assert_eq!(prm.d, q(1, 80));
     // Huge x: T is capped at ⌊N/2⌋.
     let cfg = O2ncConfig {
-        g: Num::ratio(1000, 1),
+        g: ConfigNumber::ratio(1000, 1),
         ..cfg
     };
     let prm = cfg.parameters().unwrap();
@@ -404,9 +404,9 @@ fn o2nc_parameters_are_exact() {
     // Exactly a cube: x² = 8³ ⇔ x = 16√8 is irrational, so use x = 8 (x² = 64 = 4³) → T = 4.
     let cfg = O2ncConfig {
         budget: 40,
-        delta: Num::ratio(1, 5),
-        g: Num::ratio(1, 1),
-        delta0: Num::ratio(1, 1),
+        delta: ConfigNumber::ratio(1, 5),
+        g: ConfigNumber::ratio(1, 1),
+        delta0: ConfigNumber::ratio(1, 1),
         form: EstimatorForm::Causal,
     };
     assert_eq!(cfg.parameters().unwrap().t, 4);
@@ -416,7 +416,7 @@ fn o2nc_parameters_are_exact() {
 fn interval_cube_root_encloses() {
     for x in [0.0, 1e-300, 0.3, 2.0, 27.0, 1e10, 7.0 / 9.0] {
         let i = Interval::try_from((x, x)).unwrap();
-        let c = Roots::cbrt(&i);
+        let c = i.try_cbrt().unwrap();
         assert!(c.contains(x.cbrt()), "cbrt({x})");
         // c³ encloses x.
         assert!((c * c * c).contains(x));
@@ -433,30 +433,39 @@ fn expect_invalid<T: std::fmt::Debug>(r: Result<T, AlgoError>, name: &str) {
 
 #[test]
 fn invalid_hyper_parameters_are_rejected_by_name() {
-    let sgd = |eta: Num| {
+    let sgd = |eta: ConfigNumber| {
         Sgd::<f64>::new(&SgdConfig {
             step: SgdStep::Constant { eta },
             form: EstimatorForm::Causal,
         })
     };
-    expect_invalid(sgd(Num::Float(-0.1)), "eta");
-    expect_invalid(sgd(Num::Float(f64::NAN)), "eta");
-    expect_invalid(sgd(Num::Float(f64::INFINITY)), "eta");
-    expect_invalid(sgd(Num::ratio(0, 1)), "eta");
-    let storm = |eta: Num, a: Num| {
+    expect_invalid(sgd(ConfigNumber::Float(-0.1)), "eta");
+    expect_invalid(sgd(ConfigNumber::Float(f64::NAN)), "eta");
+    expect_invalid(sgd(ConfigNumber::Float(f64::INFINITY)), "eta");
+    expect_invalid(sgd(ConfigNumber::ratio(0, 1)), "eta");
+    let storm = |eta: ConfigNumber, a: ConfigNumber| {
         Storm::<f64>::new(&StormConfig {
             schedule: StormSchedule::Constant { eta, a },
             correction: Correction::Trajectory,
             form: EstimatorForm::Causal,
         })
     };
-    expect_invalid(storm(Num::ratio(1, 10), Num::ratio(3, 2)), "a");
-    expect_invalid(storm(Num::ratio(1, 10), Num::Float(f64::NAN)), "a");
-    expect_invalid(storm(Num::Float(-1.0), Num::ratio(1, 2)), "eta");
+    expect_invalid(
+        storm(ConfigNumber::ratio(1, 10), ConfigNumber::ratio(3, 2)),
+        "a",
+    );
+    expect_invalid(
+        storm(ConfigNumber::ratio(1, 10), ConfigNumber::Float(f64::NAN)),
+        "a",
+    );
+    expect_invalid(
+        storm(ConfigNumber::Float(-1.0), ConfigNumber::ratio(1, 2)),
+        "eta",
+    );
     expect_invalid(
         Storm::<f64>::new(&StormConfig {
             schedule: StormSchedule::Thesis {
-                l: Num::ratio(-1, 1),
+                l: ConfigNumber::ratio(-1, 1),
             },
             correction: Correction::Unweighted,
             form: EstimatorForm::Causal,
@@ -467,7 +476,7 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         Storm::<f64>::new(&StormConfig {
             schedule: StormSchedule::Explicit {
                 eta: vec![],
-                a: vec![Num::ratio(1, 2)],
+                a: vec![ConfigNumber::ratio(1, 2)],
             },
             correction: Correction::Unweighted,
             form: EstimatorForm::Causal,
@@ -475,7 +484,7 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         "eta",
     );
     let mut adam = AdamConfig::with_alpha(0.01);
-    adam.beta1 = Num::ratio(1, 1);
+    adam.beta1 = ConfigNumber::ratio(1, 1);
     expect_invalid(
         Adam::<f64>::new(&AdamOptimizerConfig {
             adam,
@@ -491,9 +500,9 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         "eta",
     );
     let mut sp = StormPlusConfig::paper(Correction::Unweighted, EstimatorForm::Causal);
-    sp.a0 = Num::ratio(0, 1);
+    sp.a0 = ConfigNumber::ratio(0, 1);
     expect_invalid(StormPlus::<f64>::new(&sp), "a0");
-    let dagger = |beta: Num, n: u64| {
+    let dagger = |beta: ConfigNumber, n: u64| {
         Dagger::<f64, Scripted>::new(&DaggerConfig {
             trajectories_per_iteration: n,
             beta: BetaSchedule::Constant { beta },
@@ -502,14 +511,17 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
             inner: InnerConfig::gradient_descent(0.5, 1),
         })
     };
-    expect_invalid(dagger(Num::ratio(3, 2), 1), "beta");
-    expect_invalid(dagger(Num::Float(-0.25), 1), "beta");
-    expect_invalid(dagger(Num::ratio(1, 2), 0), "trajectories_per_iteration");
+    expect_invalid(dagger(ConfigNumber::ratio(3, 2), 1), "beta");
+    expect_invalid(dagger(ConfigNumber::Float(-0.25), 1), "beta");
+    expect_invalid(
+        dagger(ConfigNumber::ratio(1, 2), 0),
+        "trajectories_per_iteration",
+    );
     expect_invalid(
         Dagger::<f64, Scripted>::new(&DaggerConfig {
             trajectories_per_iteration: 1,
             beta: BetaSchedule::Exponential {
-                p: Num::ratio(2, 1),
+                p: ConfigNumber::ratio(2, 1),
             },
             aggregate: true,
             retrain: Retrain::WarmStart,
@@ -521,7 +533,7 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         Dagger::<f64, Scripted>::new(&DaggerConfig {
             trajectories_per_iteration: 1,
             beta: BetaSchedule::Constant {
-                beta: Num::ratio(0, 1),
+                beta: ConfigNumber::ratio(0, 1),
             },
             aggregate: true,
             retrain: Retrain::WarmStart,
@@ -535,18 +547,18 @@ fn invalid_hyper_parameters_are_rejected_by_name() {
         }),
         "inner.iterations",
     );
-    let o2nc = |budget: u64, delta: Num| {
+    let o2nc = |budget: u64, delta: ConfigNumber| {
         O2ncConfig {
             budget,
             delta,
-            g: Num::ratio(1, 1),
-            delta0: Num::ratio(1, 1),
+            g: ConfigNumber::ratio(1, 1),
+            delta0: ConfigNumber::ratio(1, 1),
             form: EstimatorForm::Causal,
         }
         .parameters()
     };
-    expect_invalid(o2nc(0, Num::ratio(1, 10)), "budget");
-    expect_invalid(o2nc(100, Num::ratio(-1, 10)), "delta");
+    expect_invalid(o2nc(0, ConfigNumber::ratio(1, 10)), "budget");
+    expect_invalid(o2nc(100, ConfigNumber::ratio(-1, 10)), "delta");
     expect_invalid(
         Runner::<f64>::new(StoppingRule::gradient_budget(0)),
         "stop.max_gradient_evaluations",
@@ -565,17 +577,17 @@ fn field_builds_refuse_what_needs_roots() {
         form: EstimatorForm::Causal,
     });
     assert!(matches!(
-        adam.build_field::<BigRational, Scripted>(),
+        adam.build::<BigRational, Scripted>(),
         Err(AlgoError::NeedsRoots { .. })
     ));
     let sgd = AlgorithmConfig::Sgd(SgdConfig {
         step: SgdStep::InverseSqrt {
-            eta0: Num::ratio(1, 2),
+            eta0: ConfigNumber::ratio(1, 2),
         },
         form: EstimatorForm::Causal,
     });
     assert!(matches!(
-        sgd.build_field::<BigRational, Scripted>(),
+        sgd.build::<BigRational, Scripted>(),
         Err(AlgoError::NeedsRoots { .. })
     ));
     assert!(sgd.build::<f64, Scripted>().is_ok());
@@ -604,23 +616,23 @@ fn a_non_finite_iterate_stops_the_run() {
 #[test]
 fn num_round_trips_exactly_through_json() {
     for n in [
-        Num::Float(0.1),
-        Num::ratio(1, 3),
-        Num::Float(-2.5e-300),
-        Num::ratio(-7, 1),
+        ConfigNumber::Float(0.1),
+        ConfigNumber::ratio(1, 3),
+        ConfigNumber::Float(-2.5e-300),
+        ConfigNumber::ratio(-7, 1),
     ] {
         let text = serde_json::to_string(&n).unwrap();
-        let back: Num = serde_json::from_str(&text).unwrap();
+        let back: ConfigNumber = serde_json::from_str(&text).unwrap();
         assert_eq!(back, n, "{text}");
         assert_eq!(
             back.to::<f64>("x").unwrap().to_bits(),
             n.to::<f64>("x").unwrap().to_bits()
         );
     }
-    let dec: Num = serde_json::from_str("\"0.05\"").unwrap();
-    assert_eq!(dec, Num::ratio(1, 20));
-    let nan = Num::Float(f64::NAN);
-    let back: Num = serde_json::from_str(&serde_json::to_string(&nan).unwrap()).unwrap();
+    let dec: ConfigNumber = serde_json::from_str("\"0.05\"").unwrap();
+    assert_eq!(dec, ConfigNumber::ratio(1, 20));
+    let nan = ConfigNumber::Float(f64::NAN);
+    let back: ConfigNumber = serde_json::from_str(&serde_json::to_string(&nan).unwrap()).unwrap();
     assert!(back.exact("x").is_err());
 }
 
@@ -628,11 +640,11 @@ fn num_round_trips_exactly_through_json() {
 fn run_config_round_trips_through_json() {
     let cfg = RunConfig {
         algorithm: AlgorithmConfig::Storm(storm_cfg(Correction::PerDecision)),
-        theta0: vec![Num::Float(0.3)],
+        theta0: vec![ConfigNumber::Float(0.3)],
         seed: 7,
         stop: StoppingRule {
             max_iterations: Some(5),
-            target_loss: Some(Num::ratio(1, 8)),
+            target_loss: Some(ConfigNumber::ratio(1, 8)),
             ..Default::default()
         },
     };
@@ -701,13 +713,13 @@ impl IlProblem<f64> for Recording {
 
 #[test]
 fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
+    use ilopt::algo::as_printed::printed_algorithm_5;
     use ilopt::algo::o2nc::O2nc;
-    use ilopt::algo::printed::printed_algorithm_5;
     let cfg = O2ncConfig {
         budget: 40,
-        delta: Num::ratio(1, 2),
-        g: Num::ratio(1, 1),
-        delta0: Num::ratio(1, 1),
+        delta: ConfigNumber::ratio(1, 2),
+        g: ConfigNumber::ratio(1, 1),
+        delta0: ConfigNumber::ratio(1, 1),
         form: EstimatorForm::Causal,
     };
     for printed in [false, true] {
@@ -722,7 +734,7 @@ fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
         };
         let mut rng = KitRng::seed_from_u64(1);
         let mut cost = Cost::default();
-        let mut ctx = Ctx {
+        let mut ctx = StepContext {
             rng: &mut rng,
             cost: &mut cost,
         };
@@ -760,7 +772,7 @@ fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
     // have mean F'(p); tolerance 6 standard errors (see tests/algorithms/algo_m1.rs for the policy).
     // (At p = 1/2 the old-point estimate happens to be unbiased even without weights, since
     // l(A) = l(B) there, so p = 3/10 is used.)
-    use ilopt::algo::fixture::AliasedTwoState;
+    use crate::fixture::AliasedTwoState;
     let fx = AliasedTwoState::m1();
     assert_eq!(fx.derivative(&q(3, 10)), q(-9, 5));
     let target = -1.8;

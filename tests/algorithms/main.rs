@@ -6,6 +6,9 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+#[path = "../common/fixture.rs"]
+mod fixture;
+
 mod algo_m1;
 mod algo_runs;
 mod algo_units;

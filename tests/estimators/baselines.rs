@@ -5,7 +5,7 @@
 //! baseline), and the `f64` oracle against the exact one on the same trajectories.
 
 use crate::common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
-use ilopt::algo::Num;
+use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined, DecisionTerms};
 use ilopt::exact::baseline::{baselined_moments, optimal_baselines, prefix_trajectory};
 use ilopt::exact::enumerate::{for_each_prefix, moments};
@@ -53,8 +53,8 @@ fn baselines(mdp: &ToyMdp, seed: &[(i64, i64)]) -> (Q, Vec<Q>) {
     (r(seed[0]), b)
 }
 
-fn nums(xs: &[Q]) -> Vec<Num> {
-    xs.iter().cloned().map(Num::from).collect()
+fn nums(xs: &[Q]) -> Vec<ConfigNumber> {
+    xs.iter().cloned().map(ConfigNumber::from).collect()
 }
 
 /// Every exact claim at θ (with θ′ for the weighted estimate); the first that fails.
@@ -115,7 +115,7 @@ fn check(mdp: &ToyMdp, theta: &[Q], theta_prime: &[Q], seed: &[(i64, i64)]) -> R
     let th = DVector::from_column_slice(theta);
     let th_prime = DVector::from_column_slice(theta_prime);
     let mut kinds = vec![Baseline::Constant {
-        value: Num::from(b0.clone()),
+        value: ConfigNumber::from(b0.clone()),
     }];
     if k > 0 {
         kinds.push(Baseline::TimeIndexed { values: nums(&bs) });
@@ -424,13 +424,15 @@ fn f64_baselined_oracle_agrees_with_the_exact_one() {
         (
             1,
             Baseline::Constant {
-                value: Num::ratio(1, 3),
+                value: ConfigNumber::ratio(1, 3),
             },
         ),
         (
             1,
             Baseline::TimeIndexed {
-                values: (0..k).map(|i| Num::ratio(i as i64 - 1, 2)).collect(),
+                values: (0..k)
+                    .map(|i| ConfigNumber::ratio(i as i64 - 1, 2))
+                    .collect(),
             },
         ),
         (4, Baseline::LeaveOneOut),
@@ -489,7 +491,7 @@ fn invalid_baselines_are_clear_errors() {
         1,
         &Baseline::Estimated {
             time_indexed: true,
-            decay: Some(Num::ratio(3, 2)),
+            decay: Some(ConfigNumber::ratio(3, 2)),
         },
     )
     .unwrap_err();
@@ -498,7 +500,7 @@ fn invalid_baselines_are_clear_errors() {
         p.clone(),
         1,
         &Baseline::Constant {
-            value: Num::ratio(1, 2),
+            value: ConfigNumber::ratio(1, 2),
         },
     )
     .unwrap();
@@ -560,14 +562,14 @@ fn the_configuration_round_trips_through_json() {
     for b in [
         Baseline::None,
         Baseline::Constant {
-            value: Num::ratio(1, 3),
+            value: ConfigNumber::ratio(1, 3),
         },
         Baseline::TimeIndexed {
-            values: vec![Num::ratio(1, 2), Num::from(0.25)],
+            values: vec![ConfigNumber::ratio(1, 2), ConfigNumber::from(0.25)],
         },
         Baseline::Estimated {
             time_indexed: false,
-            decay: Some(Num::ratio(9, 10)),
+            decay: Some(ConfigNumber::ratio(9, 10)),
         },
         Baseline::LeaveOneOut,
     ] {

@@ -21,7 +21,7 @@ use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::record::constant::Constant;
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
-use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
+use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use nalgebra::DVector;
 use rand::SeedableRng;
@@ -142,11 +142,11 @@ pub fn sgd_row<P: IlProblem<f64>>(
         let cfg = RunConfig {
             algorithm: AlgorithmConfig::Sgd(SgdConfig {
                 step: SgdStep::Constant {
-                    eta: Num::Float(eta),
+                    eta: ConfigNumber::Float(eta),
                 },
                 form: EstimatorForm::Causal,
             }),
-            theta0: theta1.iter().map(|x| Num::Float(*x)).collect(),
+            theta0: theta1.iter().map(|x| ConfigNumber::Float(*x)).collect(),
             seed: 100 + r as u64,
             stop: StoppingRule::iterations(s.k - 1),
         };

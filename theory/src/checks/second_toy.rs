@@ -18,7 +18,7 @@ use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
-use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
+use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
 use ilopt::exact::forward::forward;
 use ilopt::problem::EstimatorForm;
 use ilopt::scalar::{BigRational, Interval};
@@ -85,10 +85,10 @@ pub fn sgd_sample(
     let pf = ToyProblem::<f64>::new(mdp);
     let cfg = |seed: u64| RunConfig {
         algorithm: AlgorithmConfig::Sgd(SgdConfig {
-            step: SgdStep::constant(Num::ratio(s.eta.0, s.eta.1)),
+            step: SgdStep::constant(ConfigNumber::ratio(s.eta.0, s.eta.1)),
             form: EstimatorForm::Causal,
         }),
-        theta0: theta1.iter().map(|t| Num::Float(*t)).collect(),
+        theta0: theta1.iter().map(|t| ConfigNumber::Float(*t)).collect(),
         seed,
         stop: StoppingRule::iterations(s.k - 1),
     };

@@ -18,10 +18,10 @@ use crate::checks::montecarlo::{McSettings, Runs};
 use crate::checks::tracking::{Momentum, StormRange, StormTracker, Tracking};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::{Sample, assess};
+use ilopt::algo::as_printed::PrintedAlgorithm4Config;
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
-use ilopt::algo::printed::PrintedAlgorithm4Config;
 use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
-use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
+use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
 use ilopt::exact::forward::forward;
 use ilopt::problem::{EstimatorForm, Weighting};
 use ilopt::scalar::Interval;
@@ -54,7 +54,7 @@ fn simulate(
     for r in 0..runs {
         let cfg = RunConfig {
             algorithm: algorithm.clone(),
-            theta0: vec![Num::Float(theta1)],
+            theta0: vec![ConfigNumber::Float(theta1)],
             seed: r as u64,
             stop: StoppingRule::iterations(k - 1),
         };
@@ -246,7 +246,9 @@ pub fn fixed_schedule_samples(
 ) -> Result<(Runs, Tracking), String> {
     let tracker = RefCell::new(StormTracker::new(range, k.g_inf.value, k.g_f.value));
     let (_, l) = variant_l(k, variant);
-    let schedule = StormSchedule::Thesis { l: Num::Float(l) };
+    let schedule = StormSchedule::Thesis {
+        l: ConfigNumber::Float(l),
+    };
     let algorithm = match variant {
         StormVariant::Weighted(w) => AlgorithmConfig::Storm(StormConfig {
             schedule,

@@ -377,7 +377,9 @@ pub fn dagger_row(m: &Instance, s: DaggerSizes) -> Check {
     use crate::stats::Sample;
     use ilopt::algo::dagger::{BetaSchedule, DaggerConfig};
     use ilopt::algo::dataset::{InnerConfig, Retrain};
-    use ilopt::algo::{AlgorithmConfig, Num, RunConfig, Runner, StoppingRule, Termination};
+    use ilopt::algo::{
+        AlgorithmConfig, ConfigNumber, RunConfig, Runner, StoppingRule, Termination,
+    };
     let name = format!("M({}, {}, {}, {})", m.mu_a, m.p0, m.p1, m.t);
     let mut row = Check::builder(
         "5e",
@@ -419,13 +421,13 @@ pub fn dagger_row(m: &Instance, s: DaggerSizes) -> Check {
         algorithm: AlgorithmConfig::Dagger(DaggerConfig {
             trajectories_per_iteration: s.trajectories,
             beta: BetaSchedule::Constant {
-                beta: Num::ratio(0, 1),
+                beta: ConfigNumber::ratio(0, 1),
             },
             aggregate: true,
             retrain: Retrain::FromScratch,
-            inner: InnerConfig::gradient_descent(Num::ratio(1, 4), 1),
+            inner: InnerConfig::gradient_descent(ConfigNumber::ratio(1, 4), 1),
         }),
-        theta0: vec![Num::ratio(1, 2)],
+        theta0: vec![ConfigNumber::ratio(1, 2)],
         seed,
         stop: StoppingRule::iterations(s.iterations),
     };

@@ -143,7 +143,7 @@ pub fn printed_storm_update(mdp: &ToyMdp, theta: &[Q], a: &Q) -> Check {
     c
 }
 
-/// Row 4f at the points the kit's **printed Algorithm 4** (`ilopt::algo::printed`, erratum E9)
+/// Row 4f at the points the kit's **printed Algorithm 4** (`ilopt::algo::as_printed`, erratum E9)
 /// visits: run it in exact rationals with the constant schedule η, a from θ₁ (seeded, `steps`
 /// steps), read d_k = (θ_k − θ_{k+1})/η off its iterates, and check at every visited pair the
 /// property STORM's analysis needs of the update (eq. 3.40, Lemma 3.3's E_{k+1}B = 0):
@@ -160,12 +160,17 @@ pub fn printed_algorithm_4_visited(
     steps: u64,
     seed: u64,
 ) -> Check {
-    use ilopt::algo::printed::PrintedAlgorithm4Config;
+    use ilopt::algo::as_printed::PrintedAlgorithm4Config;
     use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
-    use ilopt::algo::{AlgorithmConfig, IterationMetrics, Num, RunConfig, Runner, StoppingRule};
+    use ilopt::algo::{
+        AlgorithmConfig, ConfigNumber, IterationMetrics, RunConfig, Runner, StoppingRule,
+    };
     use ilopt::problem::EstimatorForm;
     let p = ToyProblem::<Q>::new(mdp);
-    let schedule = StormSchedule::constant(Num::ratio(eta.0, eta.1), Num::ratio(a.0, a.1));
+    let schedule = StormSchedule::constant(
+        ConfigNumber::ratio(eta.0, eta.1),
+        ConfigNumber::ratio(a.0, a.1),
+    );
     let (eta_q, a_q) = (
         Q::new(eta.0.into(), eta.1.into()),
         Q::new(a.0.into(), a.1.into()),
@@ -175,7 +180,7 @@ pub fn printed_algorithm_4_visited(
     let worst = |algorithm: AlgorithmConfig, weighted: bool| -> Result<(Q, usize), String> {
         let cfg = RunConfig {
             algorithm,
-            theta0: vec![Num::Exact(theta1.clone())],
+            theta0: vec![ConfigNumber::Exact(theta1.clone())],
             seed,
             stop: StoppingRule::iterations(steps),
         };
@@ -185,7 +190,7 @@ pub fn printed_algorithm_4_visited(
             .and_then(|r| {
                 r.keep_history(false)
                     .with_observer(observer)
-                    .run_config_field(&cfg, &p)
+                    .run_config(&cfg, &p)
             })
             .map_err(|e| e.to_string())?;
         let th = visited.into_inner();
@@ -272,7 +277,7 @@ pub fn printed_algorithm_4_visited(
     }
 }
 
-/// Row 4e at the points the kit's **printed Algorithm 5** (`ilopt::algo::printed`, E11) visits:
+/// Row 4e at the points the kit's **printed Algorithm 5** (`ilopt::algo::as_printed`, E11) visits:
 /// run it in `f64` (it needs square roots) for budget N and radius δ from θ₀ (seeded), and at
 /// every visited pair (w_n, θ_n) — both `f64`, hence exact rationals — check exactly in ℚ the
 /// property its analysis needs, `E_{τ∼p(·;θ_n)}[g(w_n, τ)] = ∇F(w_n)` (it samples at θ_n). The
@@ -287,7 +292,9 @@ pub fn printed_algorithm_5_visited(
     seed: u64,
 ) -> Check {
     use ilopt::algo::o2nc::O2ncConfig;
-    use ilopt::algo::{AlgorithmConfig, IterationMetrics, Num, RunConfig, Runner, StoppingRule};
+    use ilopt::algo::{
+        AlgorithmConfig, ConfigNumber, IterationMetrics, RunConfig, Runner, StoppingRule,
+    };
     use ilopt::problem::EstimatorForm;
     let claim = format!(
         "printed Algorithm 5 (N = {n}, δ = {}/{}), at every (w_n, θ_n) it visits: E_{{τ∼p(·;θ_n)}}[∇f(w_n, τ)] = ∇F(w_n)",
@@ -296,14 +303,14 @@ pub fn printed_algorithm_5_visited(
     let run = || -> Result<(Q, Q, usize), String> {
         let config = O2ncConfig {
             budget: n,
-            delta: Num::ratio(delta.0, delta.1),
-            g: Num::Float(g),
-            delta0: Num::Float(delta0),
+            delta: ConfigNumber::ratio(delta.0, delta.1),
+            g: ConfigNumber::Float(g),
+            delta0: ConfigNumber::Float(delta0),
             form: EstimatorForm::Causal,
         };
         let cfg = RunConfig {
             algorithm: AlgorithmConfig::PrintedAlgorithm5(config),
-            theta0: vec![Num::Float(theta0)],
+            theta0: vec![ConfigNumber::Float(theta0)],
             seed,
             stop: StoppingRule::iterations(n),
         };

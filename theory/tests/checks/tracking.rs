@@ -56,7 +56,7 @@ fn storm_range_bounds_the_worst_case_increment() {
 /// IS-STORM (trajectory weights) holds.
 #[test]
 fn tracking_row_flags_a_dropped_weight_at_long_steps() {
-    use ilopt::algo::Num;
+    use ilopt::algo::ConfigNumber;
     use ilopt::algo::config::AlgorithmConfig;
     use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
     use ilopt::problem::EstimatorForm;
@@ -66,7 +66,7 @@ fn tracking_row_flags_a_dropped_weight_at_long_steps() {
     let g = quick_global_constants();
     let config = |correction| {
         AlgorithmConfig::Storm(StormConfig {
-            schedule: StormSchedule::constant(Num::ratio(1, 4), Num::ratio(1, 4)),
+            schedule: StormSchedule::constant(ConfigNumber::ratio(1, 4), ConfigNumber::ratio(1, 4)),
             correction,
             form: EstimatorForm::Causal,
         })

@@ -9,7 +9,7 @@ use crate::checks::tracking::{O2ncTracker, Tracking};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::o2nc::O2ncConfig;
-use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
+use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
 use ilopt::problem::EstimatorForm;
 use ilopt::scalar::{BigRational, Interval, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
@@ -86,9 +86,9 @@ fn o2nc_config(
 ) -> Result<(O2ncConfig, ilopt::algo::o2nc::O2ncParameters), String> {
     let config = O2ncConfig {
         budget: n,
-        delta: Num::ratio(delta.0, delta.1),
-        g: Num::Float(k_consts.g2.value.sqrt().next_up()),
-        delta0: Num::Exact(BigRational::from_float(k_consts.b_f.value).expect("finite")),
+        delta: ConfigNumber::ratio(delta.0, delta.1),
+        g: ConfigNumber::Float(k_consts.g2.value.sqrt().next_up()),
+        delta0: ConfigNumber::Exact(BigRational::from_float(k_consts.b_f.value).expect("finite")),
         form: EstimatorForm::Causal,
     };
     let params = config.parameters().map_err(|e| e.to_string())?;
@@ -151,7 +151,7 @@ pub fn o2nc_sample_tracked(
     for r in 0..runs {
         let cfg = RunConfig {
             algorithm: algorithm.clone(),
-            theta0: vec![Num::Float(theta0)],
+            theta0: vec![ConfigNumber::Float(theta0)],
             seed: r as u64,
             stop: StoppingRule::iterations(params.m + 1),
         };

@@ -9,7 +9,7 @@ use crate::certify::box_constants::ToyConstants;
 use crate::record::check::{Check, Method, Role};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
-use ilopt::algo::{IterationMetrics, Num, Runner, StoppingRule, Termination};
+use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
 use ilopt::problem::EstimatorForm;
 use ilopt::scalar::Interval;
 use ilopt::toy::{ToyMdp, ToyProblem};
@@ -32,10 +32,10 @@ pub fn sgd_sample(
     let pf = ToyProblem::<f64>::new(mdp);
     let cfg = |seed: u64| RunConfig {
         algorithm: AlgorithmConfig::Sgd(SgdConfig {
-            step: SgdStep::constant(Num::ratio(eta.0, eta.1)),
+            step: SgdStep::constant(ConfigNumber::ratio(eta.0, eta.1)),
             form: EstimatorForm::Causal,
         }),
-        theta0: vec![Num::Float(theta1)],
+        theta0: vec![ConfigNumber::Float(theta1)],
         seed,
         stop: StoppingRule::iterations(k - 1),
     };

@@ -12,9 +12,8 @@
 use super::AlgoError;
 use super::o2nc::{O2nc, O2ncConfig, SamplePoint};
 use super::storm::{Correction, Storm, StormSchedule, Update};
-use super::{RootOps, Roots};
 use crate::problem::EstimatorForm;
-use crate::scalar::{Scalar, Sqrt};
+use crate::scalar::Scalar;
 use serde::{Deserialize, Serialize};
 
 /// Configuration of the printed Algorithm 4 (no importance weights, E9 update).
@@ -34,29 +33,18 @@ fn storm_config(c: &PrintedAlgorithm4Config) -> super::storm::StormConfig {
     }
 }
 
-/// Algorithm 4 as printed (E9), for a scalar with cube roots. Its name is
-/// `"printed-algorithm-4"`.
+/// Algorithm 4 as printed (E9). Its name is `"printed-algorithm-4"`.
 ///
 /// # Errors
 /// As [`Storm::new`].
-pub fn printed_algorithm_4<S: Roots>(c: &PrintedAlgorithm4Config) -> Result<Storm<S>, AlgoError> {
-    Storm::with_roots(&storm_config(c), RootOps::all(), Update::PrintedE9)
-}
-
-/// Algorithm 4 as printed (E9) for any scalar (`constant`/`explicit` schedules only).
-///
-/// # Errors
-/// As [`Storm::new_field`].
-pub fn printed_algorithm_4_field<S: Scalar>(
-    c: &PrintedAlgorithm4Config,
-) -> Result<Storm<S>, AlgoError> {
-    Storm::with_roots(&storm_config(c), RootOps::none(), Update::PrintedE9)
+pub fn printed_algorithm_4<S: Scalar>(c: &PrintedAlgorithm4Config) -> Result<Storm<S>, AlgoError> {
+    Storm::with_update(&storm_config(c), Update::PrintedE9)
 }
 
 /// Algorithm 5 as printed (E11): sampling at θ_n. Its name is `"printed-algorithm-5"`.
 ///
 /// # Errors
 /// As [`O2nc::new`].
-pub fn printed_algorithm_5<S: Sqrt>(c: &O2ncConfig) -> Result<O2nc<S>, AlgoError> {
+pub fn printed_algorithm_5<S: Scalar>(c: &O2ncConfig) -> Result<O2nc<S>, AlgoError> {
     O2nc::with_sampling(c, SamplePoint::Theta)
 }

@@ -1,21 +1,32 @@
 //! A small self-contained [`IlProblem`]: the aliased two-state family M(μ_A, p₀, p₁, T) of
 //! math.md §6 under the direct parameterisation P1, written independently of the toy-MDP module so
-//! that the algorithms can be tested (and later cross-checked against `ilopt::toy`).
+//! that the algorithms can be tested and cross-checked against `ilopt::toy`. A test fixture,
+//! declared once by the algorithms test crate (`tests/algorithms/main.rs`).
 //!
 //! States A (= 0), B (= 1); actions 0, 1; expert a*(A) = 1, a*(B) = 0; μ = (μ_A, 1 − μ_A);
 //! action 1 leads to A w.p. p₁, action 0 w.p. p₀, whatever the state. The learner cannot see the
 //! state: θ = (p) with π_θ(1) = p, p ∈ (0, 1). Brier loss l(A) = 2(1 − p)², l(B) = 2p².
 //! Closed forms (math.md §6): `F(p) = A₂p² + A₁p + A₀`, RRM map `G(p) = (μ_A + (T−2)(p₀ + Δp))/(T−1)`.
 //!
-//! Sampling uses one dyadic uniform ([`crate::algo::dyadic_uniform`]) per decision, compared with
+//! Sampling uses one dyadic uniform ([`ilopt::algo::dyadic_uniform`]) per decision, compared with
 //! [`Scalar::certain_cmp`], so every scalar follows the same trajectory for the same seed.
 
-use super::{AlgoError, UNIFORM_DENOMINATOR, invalid};
-use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
-use crate::scalar::{BigRational, Scalar, Undecidable};
+#![allow(dead_code)]
+
+use ilopt::algo::{AlgoError, UNIFORM_DENOMINATOR};
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
+use ilopt::scalar::{BigRational, Scalar, Undecidable};
 use nalgebra::DVector;
 use rand::RngCore;
 use std::cmp::Ordering;
+
+/// [`AlgoError::InvalidParameter`] for `name`.
+fn invalid(name: &'static str, reason: impl Into<String>) -> AlgoError {
+    AlgoError::InvalidParameter {
+        name,
+        reason: reason.into(),
+    }
+}
 
 /// The M-family problem of math.md §6 with the direct parameterisation.
 #[derive(Debug, Clone, PartialEq)]
