@@ -23,6 +23,7 @@ pub mod expert;
 pub mod lqg;
 pub mod policy;
 pub mod problem;
+pub mod sampling;
 pub mod scalar;
 pub mod task;
 pub mod tolerance;

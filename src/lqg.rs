@@ -20,8 +20,9 @@
 //! [`DMatrix`]es over any [`Scalar`]; the arithmetic is written here because nalgebra's own products
 //! need `num_traits::Zero`, which intervals and duals do not implement.
 
-use crate::policy::{LinearGaussian, Policy, PolicyError, standard_normal};
+use crate::policy::{LinearGaussian, Policy, PolicyError};
 use crate::problem::KitRng;
+use crate::sampling::standard_normal;
 use crate::scalar::{Dual, Scalar, Sqrt};
 use nalgebra::DMatrix;
 use std::cmp::Ordering;

@@ -411,7 +411,7 @@ impl Roots for Interval {
     }
 }
 
-pub use crate::problem::{UNIFORM_DENOMINATOR, dyadic_uniform};
+pub use crate::sampling::{UNIFORM_DENOMINATOR, dyadic_uniform};
 
 /// `a·x + y`, entrywise.
 pub(crate) fn axpy<S: Scalar>(a: &S, x: &DVector<S>, y: &DVector<S>) -> DVector<S> {

@@ -21,9 +21,10 @@
 
 use super::{
     LikelihoodRatio, Policy, PolicyError, check_out, check_positive, check_size, check_vec,
-    mat_vec, outer, standard_normal,
+    mat_vec, outer,
 };
 use crate::problem::KitRng;
+use crate::sampling::standard_normal;
 use crate::scalar::{Real, Scalar};
 use std::borrow::Borrow;
 use std::marker::PhantomData;

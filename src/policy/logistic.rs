@@ -17,7 +17,8 @@ use super::{
     check_vec_scalar,
 };
 use crate::problem::KitRng;
-use crate::scalar::{Real, Scalar, Undecidable};
+use crate::sampling::{dyadic_uniform, sample_binary};
+use crate::scalar::{Real, Scalar};
 use std::borrow::Borrow;
 
 /// Whether the logit `z` and its `f64` approximation are finite (the check of
@@ -133,38 +134,6 @@ fn non_finite_logit<S: Scalar>(phi: &[S]) -> PolicyError {
         "phi"
     };
     PolicyError::NonFinite { param }
-}
-
-/// [`sample_categorical`](crate::toy::sample_categorical) on the two probabilities `[q, p]`,
-/// written out for two actions (the same decisions and errors, with fewer branches in the
-/// roll-out's hot loop): action 0 iff `q ≠ 0` and (`p = 0` or certainly `u < q`), otherwise 1
-/// — i.e. the last action of positive probability is the fallback, and action 0 is taken when
-/// `u < q` certainly; the comparison is undecidable (an error) only when it is needed, with both
-/// probabilities non-zero. (`sample_categorical` compares `u` with the running sum
-/// `0 + q`; adding an exact zero changes no comparison in any of the kit's scalars — `f64`
-/// comparisons treat `−0` and `+0` alike, interval and rational sums with 0 are exact, a dual
-/// compares its value — so the sum, a dependent addition on the roll-out's latency chain, is
-/// left out.)
-#[inline]
-fn sample_two<S: Scalar>(u: &S, q: S, p: &S) -> Result<usize, Undecidable> {
-    let q_zero = q.is_certainly_zero();
-    let p_zero = p.is_certainly_zero();
-    // Compared unconditionally (the result is used only when both are non-zero): the decision is
-    // one expression of three flags, with no branch but the error's.
-    let cmp = u.certain_cmp(&q);
-    if cmp.is_none() & !q_zero & !p_zero {
-        return Err(undecidable_sample());
-    }
-    let zero = !q_zero & (p_zero | (cmp == Some(std::cmp::Ordering::Less)));
-    Ok(usize::from(!zero))
-}
-
-#[cold]
-#[inline(never)]
-fn undecidable_sample() -> Undecidable {
-    Undecidable {
-        what: "categorical sampling",
-    }
 }
 
 /// [`Policy::causal_sum_trusted`] of [`Logistic`] with `N` features known at compile time: the
@@ -409,8 +378,8 @@ impl<S: Real> Policy<S> for Logistic {
     #[inline]
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
         let p = self.prob_one(theta, phi)?;
-        let u: S = crate::problem::dyadic_uniform(rng);
-        Ok(sample_two(&u, S::one() - &p, &p)?)
+        let u: S = dyadic_uniform(rng);
+        Ok(sample_binary(&u, S::one() - &p, &p)?)
     }
 
     /// As [`Policy::sample`] without the θ check (θ validated once by the caller).
@@ -423,8 +392,8 @@ impl<S: Real> Policy<S> for Logistic {
         rng: &mut KitRng,
     ) -> Result<usize, PolicyError> {
         let p = logistic_sigmoid(&trusted_logit(theta, phi, self.features)?)?;
-        let u: S = crate::problem::dyadic_uniform(rng);
-        Ok(sample_two(&u, S::one() - &p, &p)?)
+        let u: S = dyadic_uniform(rng);
+        Ok(sample_binary(&u, S::one() - &p, &p)?)
     }
 
     /// With `∇_θ l_t = 4(p − y)p(1 − p)φ` and `ψ_t = (a − p)φ` used entry by entry, never stored:
@@ -557,8 +526,8 @@ impl<S: Real> LikelihoodRatio<S> for Logistic {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampling::sample_categorical;
     use crate::scalar::Interval;
-    use crate::toy::sample_categorical;
 
     /// The fixed-dimension causal pass (1 to 8 features) and the fallback (more features) against
     /// the default decision-by-decision pass: bit-for-bit, and the same first error.
@@ -729,9 +698,9 @@ mod tests {
         assert_trusted_as_checked(&pi, &theta, &phi);
     }
 
-    /// `sample_two` is `sample_categorical` on `[q, p]`: same actions, same errors.
+    /// `sample_binary` is `sample_categorical` on `[q, p]`: same actions, same errors.
     #[test]
-    fn sample_two_is_the_two_action_categorical() {
+    fn sample_binary_is_the_two_action_categorical() {
         let points = [
             0.0,
             0.25,
@@ -745,7 +714,7 @@ mod tests {
             for &u in &points {
                 let q = 1.0 - p;
                 assert_eq!(
-                    sample_two(&u, q, &p),
+                    sample_binary(&u, q, &p),
                     sample_categorical(&[q, p], &u),
                     "p = {p}, u = {u}"
                 );
@@ -753,7 +722,7 @@ mod tests {
         }
         // Both probabilities zero, and intervals: decided, undecidable.
         assert_eq!(
-            sample_two(&0.5, 0.0, &0.0),
+            sample_binary(&0.5, 0.0, &0.0),
             sample_categorical(&[0.0, 0.0], &0.5)
         );
         let iv = |a: f64, b: f64| Interval::try_from((a, b)).unwrap();
@@ -764,8 +733,8 @@ mod tests {
             (iv(0.3, 0.3), iv(0.0, 0.0)),
         ] {
             let p = Interval::one() - q;
-            assert_eq!(sample_two(&u, q, &p), sample_categorical(&[q, p], &u));
+            assert_eq!(sample_binary(&u, q, &p), sample_categorical(&[q, p], &u));
         }
-        assert!(sample_two(&iv(0.45, 0.45), iv(0.4, 0.5), &iv(0.5, 0.6)).is_err());
+        assert!(sample_binary(&iv(0.45, 0.45), iv(0.4, 0.5), &iv(0.5, 0.6)).is_err());
     }
 }

@@ -19,9 +19,10 @@
 use super::softmax::{check_action, log_softmax, sample_probs, score_logits};
 use super::{
     LikelihoodRatio, Policy, PolicyError, brier_logit_gradient, check_positive, check_size,
-    check_vec, from_f64_exact, mat_vec, outer, softmax_probs, standard_normal,
+    check_vec, from_f64_exact, mat_vec, outer, softmax_probs,
 };
 use crate::problem::KitRng;
+use crate::sampling::standard_normal;
 use crate::scalar::{Real, Scalar};
 
 /// `tanh x`, evaluated overflow-free as `(1 − e^{−2x})/(1 + e^{−2x})` for `x ≥ 0` and

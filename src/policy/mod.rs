@@ -101,14 +101,6 @@ pub fn from_f64_exact<S: Scalar>(x: f64, param: &'static str) -> Result<S, Polic
     S::from_binary64(x).ok_or(PolicyError::NonFinite { param })
 }
 
-/// A standard normal draw `ε ∼ N(0, 1)` as an exact scalar (rand_distr's ziggurat in `f64`, then
-/// [`from_f64_exact`]).
-pub fn standard_normal<S: Scalar>(rng: &mut KitRng) -> S {
-    let x: f64 = rand::Rng::sample(rng, rand_distr::StandardNormal);
-    // The ziggurat only returns finite values.
-    from_f64_exact(x, "standard normal draw").unwrap_or_else(|_| S::zero())
-}
-
 /// The interface the gradient oracle needs from a learner over features (eq. 3.15): the loss on
 /// the policy's output with its gradient, the score ∇_θ log π_θ(a|s), and sampling.
 pub trait Policy<S: Scalar> {

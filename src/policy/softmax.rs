@@ -24,8 +24,8 @@ use super::{
     mat_vec, outer,
 };
 use crate::problem::KitRng;
+use crate::sampling::{dyadic_uniform, sample_categorical};
 use crate::scalar::{Real, Scalar};
-use crate::toy::{dyadic_uniform, sample_categorical};
 
 /// The exact shift used by [`softmax_probs`] and [`log_softmax`]: the largest logit's `f64` value.
 fn shift<S: Scalar>(logits: &[S]) -> Result<S, PolicyError> {
