@@ -21,6 +21,7 @@ pub mod exact;
 /// expert of eq. 4.1.
 pub mod expert;
 pub mod lqg;
+pub mod oracle;
 pub mod policy;
 pub mod problem;
 pub mod sampling;

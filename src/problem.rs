@@ -222,7 +222,7 @@ pub trait IlProblem<S: Scalar> {
     ///
     /// The default assembles it from [`IlProblem::decision_terms`] (one pass, storing each
     /// decision's score); a problem may override it with a faster pass (the real tasks fold the
-    /// baseline into the plain estimator's loop, see [`crate::policy::Policy::causal_sum_shifted_trusted`]).
+    /// baseline into the plain estimator's loop, see [`crate::oracle::EstimatorKernel::causal_sum_trusted`]).
     ///
     /// # Errors
     /// As [`IlProblem::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list is

@@ -88,3 +88,49 @@ pub fn standard_normal<S: Scalar>(rng: &mut KitRng) -> S {
     // The ziggurat only returns finite values.
     S::from_binary64(x).unwrap_or_else(S::zero)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::Interval;
+
+    /// `sample_binary` is `sample_categorical` on `[q, p]`: same actions, same errors.
+    #[test]
+    fn sample_binary_is_the_two_action_categorical() {
+        let points = [
+            0.0,
+            0.25,
+            0.5,
+            0.75,
+            1.0,
+            f64::MIN_POSITIVE,
+            1.0 - f64::EPSILON / 2.0,
+        ];
+        for &p in &points {
+            for &u in &points {
+                let q = 1.0 - p;
+                assert_eq!(
+                    sample_binary(&u, q, &p),
+                    sample_categorical(&[q, p], &u),
+                    "p = {p}, u = {u}"
+                );
+            }
+        }
+        // Both probabilities zero, and intervals: decided, undecidable.
+        assert_eq!(
+            sample_binary(&0.5, 0.0, &0.0),
+            sample_categorical(&[0.0, 0.0], &0.5)
+        );
+        let iv = |a: f64, b: f64| Interval::try_from((a, b)).unwrap();
+        for (u, q) in [
+            (iv(0.1, 0.1), iv(0.4, 0.5)),
+            (iv(0.45, 0.45), iv(0.4, 0.5)),
+            (iv(0.6, 0.6), iv(0.4, 0.5)),
+            (iv(0.3, 0.3), iv(0.0, 0.0)),
+        ] {
+            let p = Interval::one() - q;
+            assert_eq!(sample_binary(&u, q, &p), sample_categorical(&[q, p], &u));
+        }
+        assert!(sample_binary(&iv(0.45, 0.45), iv(0.4, 0.5), &iv(0.5, 0.6)).is_err());
+    }
+}

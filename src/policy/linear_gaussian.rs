@@ -90,6 +90,27 @@ impl<S: Scalar> LinearGaussian<S> {
 }
 
 impl<S: Scalar, A> LinearGaussian<S, A> {
+    /// The loss `‖Wφ − π*(s)‖²` of [`Policy::loss_into`], the same operations without the
+    /// gradient and without checking θ and φ (validated by the caller).
+    ///
+    /// # Errors
+    /// [`PolicyError::Shape`] / [`PolicyError::NonFinite`] for a bad label.
+    pub(crate) fn loss_unchecked(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+    ) -> Result<S, PolicyError> {
+        check_vec("label", label, self.actions)?;
+        let n = self.features;
+        let mut loss = S::zero();
+        for (i, y) in label.iter().enumerate() {
+            let r = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi) - y;
+            loss += r.square();
+        }
+        Ok(loss)
+    }
+
     /// The same policy with actions stored as `B` (e.g. `[S; 2]` for the obstacle task: sampling
     /// then allocates nothing).
     ///
@@ -258,25 +279,6 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
             for (g, x) in grad[i * n..(i + 1) * n].iter_mut().zip(phi) {
                 *g = two_r.clone() * x;
             }
-        }
-        Ok(loss)
-    }
-
-    /// [`Policy::loss_into`]'s loss, the same operations without the gradient and the θ, φ
-    /// checks.
-    fn loss_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        label: &[S],
-        _scratch: &mut [S],
-    ) -> Result<S, PolicyError> {
-        check_vec("label", label, self.actions)?;
-        let n = self.features;
-        let mut loss = S::zero();
-        for (i, y) in label.iter().enumerate() {
-            let r = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi) - y;
-            loss += r.square();
         }
         Ok(loss)
     }

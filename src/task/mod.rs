@@ -34,6 +34,8 @@ pub mod obstacle;
 pub use horizon::{AfterEnd, Horizon};
 
 use crate::baseline::{DecisionTerms, Given};
+use crate::oracle::EstimatorKernel;
+use crate::oracle::kernel::accumulate;
 use crate::policy::{LikelihoodRatio, Policy, PolicyError};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::{Real, Scalar};
@@ -130,7 +132,7 @@ pub struct TaskTrajectory<S, L, A> {
     /// Number of feature rows stored.
     rows: usize,
     /// `true` when every feature entry is known to be finite: a learner's roll-out, where every φ
-    /// went through [`Policy::sample_trusted`], which checks φ. The estimators then skip their own
+    /// went through [`EstimatorKernel::sample_trusted`], which checks φ. The estimators then skip their own
     /// pass over the features. `false`: unknown (checked when needed).
     features_finite: bool,
     /// a_t.
@@ -362,7 +364,7 @@ fn causal_pass<S, P, L, A>(
 ) -> Result<(Vec<S>, S), OracleError>
 where
     S: Real,
-    P: LikelihoodRatio<S, Action = A>,
+    P: LikelihoodRatio<S, Action = A> + EstimatorKernel<S>,
     L: Borrow<P::Label>,
 {
     let d = policy.param_dim();
@@ -380,7 +382,7 @@ where
         // Scratch only if the policy's pass asks for it (the logistic policy's does not).
         let mut scratch = Vec::new();
         policy
-            .causal_sum_trusted(theta, rows, labels, actions, &mut g, &mut scratch)
+            .causal_sum_trusted(theta, rows, labels, actions, None, &mut g, &mut scratch)
             .map_err(policy_error)?;
         return Ok((g, log_w));
     }
@@ -505,38 +507,6 @@ where
                 .fold(true, |ok, x| ok & Scalar::is_finite(x)))
 }
 
-/// One decision's terms of the causal estimator: `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then
-/// `Σ_{i<t} ψ_i += ψ_t` (`w = None`: the weight is exactly 1, and `1·x = x` in every scalar, so
-/// the multiplication is skipped). A separate function so that the compiler knows the slices do
-/// not overlap.
-#[inline]
-fn accumulate<S: Scalar>(
-    g: &mut [S],
-    w: Option<&S>,
-    l: &S,
-    grad: &[S],
-    score: &[S],
-    score_sum: &mut [S],
-) {
-    let terms = g.iter_mut().zip(grad).zip(score_sum.iter());
-    match w {
-        Some(w) => {
-            let wl = w.clone() * l;
-            for ((gj, dj), sj) in terms {
-                *gj += w.clone() * dj + wl.clone() * sj;
-            }
-        }
-        None => {
-            for ((gj, dj), sj) in terms {
-                *gj += dj.clone() + l.clone() * sj;
-            }
-        }
-    }
-    for (sj, pj) in score_sum.iter_mut().zip(score) {
-        *sj += pj;
-    }
-}
-
 /// The full form `Σ_t ∇l_t + (Σ_t l_t) Σ_{i<n} ψ_i`, in two passes (the total loss first), each
 /// without per-decision allocation. An absorbed trajectory adds its absorbing losses to the total
 /// and its last decision's score to the sum (`Σ_{i≤n} ψ_i`: that action caused the end).
@@ -578,7 +548,7 @@ where
 
 /// The learner θ's action at φ (θ checked by the caller), inlined into each roll-out loop.
 #[inline(always)]
-fn sample_learner<S: Scalar, P: Policy<S>>(
+fn sample_learner<S: Scalar, P: EstimatorKernel<S>>(
     policy: &P,
     theta: &[S],
     phi: &[S],
@@ -621,7 +591,7 @@ impl<T, P> TaskProblem<T, P> {
     where
         S: Scalar,
         T: Task<S>,
-        P: Policy<S>,
+        P: EstimatorKernel<S>,
         F: FnMut(usize, &[S], T::Action, &mut KitRng) -> Result<T::Action, OracleError>,
     {
         let steps = match self.horizon {
@@ -657,7 +627,7 @@ impl<T, P> TaskProblem<T, P> {
     where
         S: Scalar,
         T: Task<S>,
-        P: Policy<S>,
+        P: EstimatorKernel<S>,
         F: FnMut(usize, &[S], T::Action, &mut KitRng) -> Result<T::Action, OracleError>,
     {
         let (limit, after_end) = match self.horizon {
@@ -714,7 +684,7 @@ impl<S, T, P> IlProblem<S> for TaskProblem<T, P>
 where
     S: Real,
     T: Task<S>,
-    P: LikelihoodRatio<S, Action = T::Action>,
+    P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S>,
     T::Label: Borrow<P::Label>,
 {
     type Trajectory = TaskTrajectory<S, T::Label, T::Action>;
@@ -862,7 +832,7 @@ where
 
     /// Without an absorbing tail, on a trajectory whose features are known valid, the baseline
     /// is folded into the plain estimator's loop as per-decision loss shifts
-    /// `δ_t = b_t − b_{t−1}` ([`Policy::causal_sum_shifted_trusted`]); otherwise assembled from
+    /// `δ_t = b_t − b_{t−1}` ([`EstimatorKernel::causal_sum_trusted`]); otherwise assembled from
     /// the [`DecisionTerms`].
     fn baselined_estimate(
         &self,
@@ -902,12 +872,12 @@ where
             }
             let mut scratch = Vec::new();
             self.policy
-                .causal_sum_shifted_trusted(
+                .causal_sum_trusted(
                     theta.as_slice(),
                     &t.feature_data,
                     &t.labels,
                     &t.actions,
-                    &shifts,
+                    Some(&shifts),
                     &mut g,
                     &mut scratch,
                 )

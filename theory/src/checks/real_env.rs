@@ -30,6 +30,7 @@
 
 use crate::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::env::obstacle::ObstacleConfig;
+use ilopt::oracle::EstimatorKernel;
 use ilopt::policy::{LikelihoodRatio, LinearGaussian, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::task::cartpole::{self, CartPoleTask};
@@ -226,7 +227,7 @@ pub fn mutated_estimate<T, P>(
 ) -> Result<DVector<f64>, String>
 where
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let d = p.policy.param_dim();
@@ -297,7 +298,7 @@ pub fn rollout_marking_resets<T, P>(
 ) -> Result<(TaskTrajectory<f64, T::Label, T::Action>, Vec<usize>), String>
 where
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
 {
     let e = |x: &dyn std::fmt::Display| x.to_string();
     let (limit, after_end) = match p.horizon {
@@ -375,7 +376,7 @@ pub fn samples<T, P>(
 where
     TaskProblem<T, P>: Sync,
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let sample_at = match e {
@@ -420,7 +421,7 @@ pub fn effective_sample_size<T, P>(
 where
     TaskProblem<T, P>: Sync,
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let logs = par_map(n, |i| {
@@ -690,7 +691,7 @@ pub fn task_rows<T, P>(
 where
     TaskProblem<T, P>: Sync,
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let p = s.problem;
