@@ -1,4 +1,4 @@
-//! Learner policies over feature vectors φ(s) ∈ Sⁿ (issue 5, item 4): the parameterisations the
+//! Learner policies over feature vectors φ(s) ∈ Sⁿ: the parameterisations the
 //! environments use, each generic over the weakest scalar layer that works, with **analytic**
 //! gradients of the loss and of the log-probability (the two ingredients of the estimator of
 //! eq. 3.15, math.md §1.1).
@@ -139,7 +139,7 @@ pub trait Policy<S: Scalar> {
     /// [`Policy::param_dim`]) and returns `l`. Bit-for-bit the values of [`Policy::loss`].
     ///
     /// The default calls [`Policy::loss`] and copies; the policies of this module override it
-    /// with a version that allocates nothing (the hot loop of the oracle, issue 8).
+    /// with a version that allocates nothing (the oracle's hot loop).
     ///
     /// # Errors
     /// As [`Policy::loss`], and [`PolicyError::Shape`] for a `grad` of the wrong length.
