@@ -355,6 +355,15 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
 }
 
 impl<S: Scalar, A: ActionVector<S>> LikelihoodRatio<S> for LinearGaussian<S, A> {
+    /// `−‖a − Wφ‖²/(2σ²)`: the log-density without its normaliser `−m ln σ − (m/2) ln 2π`, which
+    /// does not depend on W (and needs a logarithm, which [`Scalar`] does not have).
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &A) -> Result<S, PolicyError> {
+        let action: &[S] = action.borrow();
+        check_vec("action", action, self.actions)?;
+        let r = residual(action, &self.mean(theta, phi)?);
+        Ok(-(crate::scalar::norm_sq(&r) / (S::from_i64(2) * &self.sigma_sq)))
+    }
+
     /// Exact: [`LinearGaussian::log_ratio`].
     fn log_likelihood_ratio(
         &self,

@@ -250,13 +250,7 @@ impl<S: Real> Policy<S> for Logistic {
 }
 
 impl<S: Real> LikelihoodRatio<S> for Logistic {
-    fn log_likelihood_ratio(
-        &self,
-        theta: &[S],
-        theta_other: &[S],
-        phi: &[S],
-        action: &usize,
-    ) -> Result<S, PolicyError> {
-        Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &usize) -> Result<S, PolicyError> {
+        Logistic::log_prob(self, theta, phi, *action)
     }
 }

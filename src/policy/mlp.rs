@@ -355,26 +355,14 @@ impl<S: Real> Policy<S> for MlpGaussian<S> {
 }
 
 impl<S: Real> LikelihoodRatio<S> for MlpSoftmax {
-    fn log_likelihood_ratio(
-        &self,
-        theta: &[S],
-        theta_other: &[S],
-        phi: &[S],
-        action: &usize,
-    ) -> Result<S, PolicyError> {
-        Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &usize) -> Result<S, PolicyError> {
+        MlpSoftmax::log_prob(self, theta, phi, *action)
     }
 }
 
 impl<S: Real> LikelihoodRatio<S> for MlpGaussian<S> {
-    fn log_likelihood_ratio(
-        &self,
-        theta: &[S],
-        theta_other: &[S],
-        phi: &[S],
-        action: &Vec<S>,
-    ) -> Result<S, PolicyError> {
-        Ok(self.log_prob_unnormalised(theta, phi, action)?
-            - self.log_prob_unnormalised(theta_other, phi, action)?)
+    /// [`MlpGaussian::log_prob_unnormalised`].
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &Vec<S>) -> Result<S, PolicyError> {
+        self.log_prob_unnormalised(theta, phi, action)
     }
 }

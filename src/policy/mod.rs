@@ -241,11 +241,21 @@ pub(crate) fn check_out<S>(
     Ok(())
 }
 
-/// The per-decision likelihood ratio of importance-weighted estimates (math.md §4):
-/// `log π_θ(a|s) − log π_θ'(a|s)`, so that the weight of one decision is its exponential and the
-/// trajectory weight `w_{θ→θ'}` is the exponential of the sum over decisions.
+/// The log-probability of an action and the per-decision likelihood ratio of importance-weighted
+/// estimates (math.md §4): `log π_θ(a|s) − log π_θ'(a|s)`, so that the weight of one decision is
+/// its exponential and the trajectory weight `w_{θ→θ'}` is the exponential of the sum over
+/// decisions.
 pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
-    /// `log π_θ(a|s) − log π_{θ_other}(a|s)`.
+    /// `log π_θ(a|s)` up to an additive term that does not depend on θ (the Gaussian policies
+    /// leave out their normaliser, so that the value exists in every scalar of their layer).
+    ///
+    /// # Errors
+    /// As [`Policy::score`].
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &Self::Action) -> Result<S, PolicyError>;
+
+    /// `log π_θ(a|s) − log π_{θ_other}(a|s)`. The default is the difference of
+    /// [`LikelihoodRatio::log_prob`]s; a policy may override it with an exact or cheaper form
+    /// (the linear-Gaussian policy's).
     ///
     /// # Errors
     /// As [`Policy::score`].
@@ -255,7 +265,9 @@ pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
         theta_other: &[S],
         phi: &[S],
         action: &Self::Action,
-    ) -> Result<S, PolicyError>;
+    ) -> Result<S, PolicyError> {
+        Ok(self.log_prob(theta, phi, action)? - self.log_prob(theta_other, phi, action)?)
+    }
 }
 
 /// Check that a slice has `expected` entries, all finite.

@@ -385,14 +385,8 @@ impl<S: Real> Policy<S> for Softmax {
 }
 
 impl<S: Real> LikelihoodRatio<S> for Softmax {
-    fn log_likelihood_ratio(
-        &self,
-        theta: &[S],
-        theta_other: &[S],
-        phi: &[S],
-        action: &usize,
-    ) -> Result<S, PolicyError> {
-        Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &usize) -> Result<S, PolicyError> {
+        Softmax::log_prob(self, theta, phi, *action)
     }
 }
 

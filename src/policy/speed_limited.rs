@@ -202,7 +202,12 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
 }
 
 impl<S: Sqrt, A: ActionVector<S>> LikelihoodRatio<S> for SpeedLimitedGaussian<S, A> {
-    /// P3's ratio (sampling is unchanged).
+    /// P3's log-probability (sampling is unchanged).
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &A) -> Result<S, PolicyError> {
+        self.inner.log_prob(theta, phi, action)
+    }
+
+    /// P3's ratio.
     fn log_likelihood_ratio(
         &self,
         theta: &[S],
