@@ -88,9 +88,8 @@ fn fixed_step<S: Real, const N: usize>(
 /// `Ok(false)` (with `g` untouched) tells the caller that some decision failed, for the default
 /// pass to find and report the first failure.
 ///
-/// Not inlined: a function of its own per dimension, whose accumulators the register allocator
-/// sees alone.
-#[inline(never)]
+/// Inlined into [`causal_sum_plain`] and [`causal_sum_shifted`], where `shifts` is a constant.
+#[inline(always)]
 fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     theta: &[S],
     features: &[S],
@@ -129,6 +128,32 @@ fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     }
     g.clone_from_slice(&acc);
     Ok(true)
+}
+
+/// [`causal_sum_fixed`] without shifts: a function of its own per dimension (not inlined), whose
+/// accumulators the register allocator sees alone.
+#[inline(never)]
+fn causal_sum_plain<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    g: &mut [S],
+) -> Result<bool, PolicyError> {
+    causal_sum_fixed::<S, L, N>(theta, features, labels, actions, None, g)
+}
+
+/// [`causal_sum_fixed`] with per-decision loss shifts (a baseline), a function of its own.
+#[inline(never)]
+fn causal_sum_shifted<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    shifts: &[S],
+    g: &mut [S],
+) -> Result<bool, PolicyError> {
+    causal_sum_fixed::<S, L, N>(theta, features, labels, actions, Some(shifts), g)
 }
 
 impl<S: Real> EstimatorKernel<S> for Logistic {
@@ -192,7 +217,12 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         macro_rules! fixed {
             ($($n:literal)*) => {
                 match Policy::<S>::feature_dim(self) {
-                    $($n => causal_sum_fixed::<S, L, $n>(theta, features, labels, actions, shifts, g)?,)*
+                    $($n => match shifts {
+                        None => causal_sum_plain::<S, L, $n>(theta, features, labels, actions, g)?,
+                        Some(shifts) => {
+                            causal_sum_shifted::<S, L, $n>(theta, features, labels, actions, shifts, g)?
+                        }
+                    },)*
                     _ => false,
                 }
             };
