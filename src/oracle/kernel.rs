@@ -4,7 +4,7 @@
 //!
 //! Every method has a default built on [`Policy`]'s checked, allocation-free methods; a policy
 //! opts in by implementing [`EstimatorKernel`] (an empty `impl` takes the defaults). The logistic
-//! policy overrides the causal passes with fixed-dimension loops ([`super::logistic`]), the
+//! policy overrides the causal passes with fixed-dimension loops (module `logistic`), the
 //! linear-Gaussian policies override the loss without its gradient. Every override returns the
 //! default's values bit for bit and the default's first error.
 
@@ -64,7 +64,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// `score_sum` (which holds `Σ_{i<t} ψ_i` on entry). `grad` and `score` are scratch of length
     /// [`Policy::param_dim`].
     ///
-    /// The default is [`Policy::loss_score_into`] then [`accumulate`] with unit weight.
+    /// The default is [`Policy::loss_score_into`] then `accumulate` with unit weight.
     ///
     /// # Errors
     /// As [`Policy::loss_score_into`].
@@ -98,7 +98,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// `scratch` is working storage the implementation sizes as it needs (the default:
     /// `3 ·` [`Policy::param_dim`] entries; the logistic policy's fixed-dimension loop needs
     /// none). The default runs [`EstimatorKernel::causal_step_trusted`] decision after decision
-    /// ([`causal_sum_by_steps`]).
+    /// (`causal_sum_by_steps`).
     ///
     /// # Errors
     /// As [`EstimatorKernel::causal_step_trusted`] at the first failing decision.

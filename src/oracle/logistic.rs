@@ -200,7 +200,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         Ok(l)
     }
 
-    /// With a compile-time dimension for 1 to 8 features ([`causal_sum_fixed`]), else (and to
+    /// With a compile-time dimension for 1 to 8 features (`causal_sum_fixed`), else (and to
     /// report a failing decision) the default loop over
     /// [`EstimatorKernel::causal_step_trusted`].
     #[inline]
