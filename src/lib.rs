@@ -21,8 +21,10 @@ pub mod exact;
 /// expert of eq. 4.1.
 pub mod expert;
 pub mod lqg;
+pub mod oracle;
 pub mod policy;
 pub mod problem;
+pub mod sampling;
 pub mod scalar;
 pub mod task;
 pub mod tolerance;

@@ -20,8 +20,9 @@
 //! [`DMatrix`]es over any [`Scalar`]; the arithmetic is written here because nalgebra's own products
 //! need `num_traits::Zero`, which intervals and duals do not implement.
 
-use crate::policy::{LinearGaussian, Policy, PolicyError, standard_normal};
+use crate::policy::{LinearGaussian, Policy, PolicyError};
 use crate::problem::KitRng;
+use crate::sampling::standard_normal;
 use crate::scalar::{Dual, Scalar, Sqrt};
 use nalgebra::DMatrix;
 use std::cmp::Ordering;
@@ -465,9 +466,9 @@ impl<S: Scalar> LqgSystem<S> {
         for t in 0..steps {
             let s = &trajectory.states[t];
             let label = self.expert(s)?;
-            let (l, dl) = policy.loss(theta, s, &label)?;
+            let (l, loss_grad) = policy.loss(theta, s, &label)?;
             for j in 0..d {
-                g[j] += dl[j].clone() + l.clone() * &score_sum[j];
+                g[j] += loss_grad[j].clone() + l.clone() * &score_sum[j];
             }
             total += l;
             if t + 1 < steps {

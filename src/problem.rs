@@ -23,20 +23,6 @@ use std::ops::{Add, AddAssign};
 /// The kit's RNG: ChaCha8, seeded and serialisable so that every run can be replayed.
 pub type KitRng = rand_chacha::ChaCha8Rng;
 
-/// `2⁵³`: the denominator of [`dyadic_uniform`].
-pub const UNIFORM_DENOMINATOR: i64 = 1 << 53;
-
-/// A uniform draw on `[0, 1)` as the dyadic rational `k / 2⁵³` (k from the top 53 bits of one
-/// `u64`), built exactly in every scalar: the same seed gives the same number in `f64`, in
-/// rationals and in intervals (a singleton). Every sampler of the kit draws through it, so runs in
-/// different scalars with one seed follow the same path.
-#[inline]
-pub fn dyadic_uniform<S: Scalar>(rng: &mut KitRng) -> S {
-    use rand::RngCore;
-    let k = (rng.next_u64() >> 11) as i64;
-    S::from_ratio(k, UNIFORM_DENOMINATOR)
-}
-
 /// What an oracle call consumed. The units are the same for every algorithm.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Cost {
@@ -236,7 +222,7 @@ pub trait IlProblem<S: Scalar> {
     ///
     /// The default assembles it from [`IlProblem::decision_terms`] (one pass, storing each
     /// decision's score); a problem may override it with a faster pass (the real tasks fold the
-    /// baseline into the plain estimator's loop, see [`crate::policy::Policy::causal_sum_shifted_trusted`]).
+    /// baseline into the plain estimator's loop, see [`crate::oracle::EstimatorKernel::causal_sum_trusted`]).
     ///
     /// # Errors
     /// As [`IlProblem::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list is

@@ -9,6 +9,7 @@
 //! score) are also checked directly: zero allocations over many steps. CartPole is checked with
 //! both the logistic and the softmax policy.
 
+use ilopt::oracle::EstimatorKernel;
 use ilopt::policy::{
     LikelihoodRatio, LinearGaussian, Logistic, Policy, Softmax, SpeedLimitedGaussian,
 };
@@ -118,7 +119,7 @@ fn as_softmax(theta: &DVector<f64>) -> DVector<f64> {
 /// likelihood ratio, environment step) with policy `P`: zero allocations.
 fn cartpole_step_primitives<P>(p: &TaskProblem<CartPoleTask<f64>, P>, theta: &DVector<f64>)
 where
-    P: LikelihoodRatio<f64, Action = usize, Label = usize>,
+    P: LikelihoodRatio<f64, Action = usize, Label = usize> + EstimatorKernel<f64>,
 {
     let th = theta.as_slice();
     let other: Vec<f64> = th.iter().map(|x| 0.5 * x).collect();
@@ -174,7 +175,7 @@ fn softmax_loss_and_score_allocate() {
 /// one constant.
 fn cartpole_per_call<P>(p: &TaskProblem<CartPoleTask<f64>, P>, thetas: &[DVector<f64>; 3])
 where
-    P: LikelihoodRatio<f64, Action = usize, Label = usize>,
+    P: LikelihoodRatio<f64, Action = usize, Label = usize> + EstimatorKernel<f64>,
 {
     let mut rng = KitRng::seed_from_u64(11);
     let mut cost = Cost::default();
@@ -317,7 +318,7 @@ fn pull_n(n: usize) -> DVector<f64> {
 /// episode length and at most 3 (roll-out) / 2 (estimate).
 fn obstacle_per_call<P>(p: &TaskProblem<ObstacleTask<[f64; 2]>, P>, n: usize)
 where
-    P: LikelihoodRatio<f64, Action = [f64; 2], Label = [f64]>,
+    P: LikelihoodRatio<f64, Action = [f64; 2], Label = [f64]> + EstimatorKernel<f64>,
 {
     let mut rng = KitRng::seed_from_u64(5);
     let mut cost = Cost::default();
@@ -487,7 +488,7 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
 fn fixed_per_call<T, P>(p: &TaskProblem<T, P>, thetas: &[DVector<f64>], seed: u64) -> (usize, usize)
 where
     T: ilopt::task::Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: std::borrow::Borrow<P::Label>,
 {
     let mut rng = KitRng::seed_from_u64(seed);

@@ -32,9 +32,8 @@ use crate::stats::derive_seed;
 use ilopt::algo::{AlgorithmConfig, StepContext};
 use ilopt::batched::Batched;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
-use ilopt::env::obstacle::{
-    ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome, VoExpertParams, VoExpertPolicy,
-};
+use ilopt::env::obstacle::{ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome};
+use ilopt::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
 use ilopt::policy::{LinearGaussian, Policy, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
 use ilopt::task::cartpole::{self, CartPoleEpisode, CartPoleExpert, CartPoleTask};

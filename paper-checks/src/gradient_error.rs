@@ -32,9 +32,10 @@
 
 use crate::error::Error;
 use crate::stats::{Summary, derive_seed, fnv1a};
-use ilopt::env::obstacle::{ObstacleConfig, VoExpertParams};
+use ilopt::env::obstacle::ObstacleConfig;
 use ilopt::exact::enumerate::moments;
 use ilopt::exact::forward::forward;
+use ilopt::expert::vo_policy::VoExpertParams;
 use ilopt::policy::{LinearGaussian, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use ilopt::scalar::{BigRational, Scalar, parse_exact_list};

@@ -31,7 +31,7 @@
 //!
 //! # Randomness
 //! Randomness never depends on the scalar: algorithms draw uniforms only through
-//! [`dyadic_uniform`] (a 53-bit dyadic rational built exactly in every scalar), and the problem
+//! [`dyadic_uniform`](crate::sampling::dyadic_uniform) (a 53-bit dyadic rational built exactly in every scalar), and the problem
 //! samples trajectories from the same RNG. So an interval run with the same seed follows the same
 //! trajectories as the `f64` run and its iterates enclose the `f64` iterates.
 //!
@@ -83,8 +83,6 @@ pub use learner::{DataSchedule, DatasetLearner};
 pub use runner::{
     IterationMetrics, Observer, RunRecord, Runner, StoppingRule, Termination, replay,
 };
-
-pub use crate::problem::{UNIFORM_DENOMINATOR, dyadic_uniform};
 
 pub(crate) use algorithm::oracle_draw;
 pub(crate) use config_number::{in_range, positive};

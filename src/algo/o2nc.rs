@@ -14,13 +14,14 @@
 //! ```
 //!
 //! Outputs ([`Algorithm::outputs`]): `w̄ᵏ = (1/T) Σ_t w_{(k−1)T+t}`, k = 1..K. The run finishes
-//! after M steps. `s_n` is a dyadic uniform ([`crate::algo::dyadic_uniform`]).
+//! after M steps. `s_n` is a dyadic uniform ([`crate::sampling::dyadic_uniform`]).
 
 use super::{
     AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, axpy, check_dim, check_finite,
-    dyadic_uniform, invalid, norm_sq, positive, require_roots, scale, sqrt,
+    invalid, norm_sq, positive, require_roots, scale, sqrt,
 };
 use crate::problem::{Behaviour, EstimatorForm, IlProblem};
+use crate::sampling::dyadic_uniform;
 use crate::scalar::{BigRational, Scalar};
 use nalgebra::DVector;
 use num_bigint::BigInt;

@@ -149,9 +149,9 @@ impl<S: Scalar> CartPoleParams<S> {
 /// The CartPole transition `s ↦ s'` and termination test.
 ///
 /// The constants ([`CartPoleParams::gymnasium`]) are built at every step rather than stored: in
-/// `f64` they are then compile-time constants, which made the roll-out's hot loop about 7% faster
-/// than reading them from a stored struct (issue 8, `benches/oracle_probe.rs`), and in the other
-/// scalars building them costs little next to the step's sine and cosine.
+/// `f64` they are then compile-time constants, cheaper in the roll-out's hot loop than loads from
+/// a stored struct, and in the other scalars building them costs little next to the step's sine
+/// and cosine.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CartPoleDynamics<S> {
     scalar: PhantomData<fn() -> S>,

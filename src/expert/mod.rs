@@ -3,3 +3,5 @@ pub mod lqr;
 pub mod ppo;
 
 pub mod vo;
+
+pub mod vo_policy;

@@ -21,9 +21,10 @@
 
 use super::{
     LikelihoodRatio, Policy, PolicyError, check_out, check_positive, check_size, check_vec,
-    mat_vec, outer, standard_normal,
+    mat_vec, outer,
 };
 use crate::problem::KitRng;
+use crate::sampling::standard_normal;
 use crate::scalar::{Real, Scalar};
 use std::borrow::Borrow;
 use std::marker::PhantomData;
@@ -89,6 +90,27 @@ impl<S: Scalar> LinearGaussian<S> {
 }
 
 impl<S: Scalar, A> LinearGaussian<S, A> {
+    /// The loss `‖Wφ − π*(s)‖²` of [`Policy::loss_into`], the same operations without the
+    /// gradient and without checking θ and φ (validated by the caller).
+    ///
+    /// # Errors
+    /// [`PolicyError::Shape`] / [`PolicyError::NonFinite`] for a bad label.
+    pub(crate) fn loss_unchecked(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+    ) -> Result<S, PolicyError> {
+        check_vec("label", label, self.actions)?;
+        let n = self.features;
+        let mut loss = S::zero();
+        for (i, y) in label.iter().enumerate() {
+            let r = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi) - y;
+            loss += r.square();
+        }
+        Ok(loss)
+    }
+
     /// The same policy with actions stored as `B` (e.g. `[S; 2]` for the obstacle task: sampling
     /// then allocates nothing).
     ///
@@ -261,25 +283,6 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
         Ok(loss)
     }
 
-    /// [`Policy::loss_into`]'s loss, the same operations without the gradient and the θ, φ
-    /// checks.
-    fn loss_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        label: &[S],
-        _scratch: &mut [S],
-    ) -> Result<S, PolicyError> {
-        check_vec("label", label, self.actions)?;
-        let n = self.features;
-        let mut loss = S::zero();
-        for (i, y) in label.iter().enumerate() {
-            let r = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi) - y;
-            loss += r.square();
-        }
-        Ok(loss)
-    }
-
     /// As [`Policy::score`], row by row of W without a temporary for the mean.
     fn score_into(
         &self,
@@ -352,6 +355,15 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
 }
 
 impl<S: Scalar, A: ActionVector<S>> LikelihoodRatio<S> for LinearGaussian<S, A> {
+    /// `−‖a − Wφ‖²/(2σ²)`: the log-density without its normaliser `−m ln σ − (m/2) ln 2π`, which
+    /// does not depend on W (and needs a logarithm, which [`Scalar`] does not have).
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &A) -> Result<S, PolicyError> {
+        let action: &[S] = action.borrow();
+        check_vec("action", action, self.actions)?;
+        let r = residual(action, &self.mean(theta, phi)?);
+        Ok(-(crate::scalar::norm_sq(&r) / (S::from_i64(2) * &self.sigma_sq)))
+    }
+
     /// Exact: [`LinearGaussian::log_ratio`].
     fn log_likelihood_ratio(
         &self,

@@ -19,9 +19,10 @@
 use super::softmax::{check_action, log_softmax, sample_probs, score_logits};
 use super::{
     LikelihoodRatio, Policy, PolicyError, brier_logit_gradient, check_positive, check_size,
-    check_vec, from_f64_exact, mat_vec, outer, softmax_probs, standard_normal,
+    check_vec, from_f64_exact, mat_vec, outer, softmax_probs,
 };
 use crate::problem::KitRng;
+use crate::sampling::standard_normal;
 use crate::scalar::{Real, Scalar};
 
 /// `tanh x`, evaluated overflow-free as `(1 − e^{−2x})/(1 + e^{−2x})` for `x ≥ 0` and
@@ -354,26 +355,14 @@ impl<S: Real> Policy<S> for MlpGaussian<S> {
 }
 
 impl<S: Real> LikelihoodRatio<S> for MlpSoftmax {
-    fn log_likelihood_ratio(
-        &self,
-        theta: &[S],
-        theta_other: &[S],
-        phi: &[S],
-        action: &usize,
-    ) -> Result<S, PolicyError> {
-        Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &usize) -> Result<S, PolicyError> {
+        MlpSoftmax::log_prob(self, theta, phi, *action)
     }
 }
 
 impl<S: Real> LikelihoodRatio<S> for MlpGaussian<S> {
-    fn log_likelihood_ratio(
-        &self,
-        theta: &[S],
-        theta_other: &[S],
-        phi: &[S],
-        action: &Vec<S>,
-    ) -> Result<S, PolicyError> {
-        Ok(self.log_prob_unnormalised(theta, phi, action)?
-            - self.log_prob_unnormalised(theta_other, phi, action)?)
+    /// [`MlpGaussian::log_prob_unnormalised`].
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &Vec<S>) -> Result<S, PolicyError> {
+        self.log_prob_unnormalised(theta, phi, action)
     }
 }

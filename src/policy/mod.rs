@@ -1,4 +1,4 @@
-//! Learner policies over feature vectors φ(s) ∈ Sⁿ (issue 5, item 4): the parameterisations the
+//! Learner policies over feature vectors φ(s) ∈ Sⁿ: the parameterisations the
 //! environments use, each generic over the weakest scalar layer that works, with **analytic**
 //! gradients of the loss and of the log-probability (the two ingredients of the estimator of
 //! eq. 3.15, math.md §1.1).
@@ -22,9 +22,9 @@
 //! with one seed therefore follow the same path, as long as interval comparisons stay decidable.
 
 mod linear_gaussian;
-mod logistic;
+pub(crate) mod logistic;
 mod mlp;
-mod softmax;
+pub(crate) mod softmax;
 mod speed_limited;
 
 pub use linear_gaussian::{ActionVector, LinearGaussian};
@@ -101,14 +101,6 @@ pub fn from_f64_exact<S: Scalar>(x: f64, param: &'static str) -> Result<S, Polic
     S::from_binary64(x).ok_or(PolicyError::NonFinite { param })
 }
 
-/// A standard normal draw `ε ∼ N(0, 1)` as an exact scalar (rand_distr's ziggurat in `f64`, then
-/// [`from_f64_exact`]).
-pub fn standard_normal<S: Scalar>(rng: &mut KitRng) -> S {
-    let x: f64 = rand::Rng::sample(rng, rand_distr::StandardNormal);
-    // The ziggurat only returns finite values.
-    from_f64_exact(x, "standard normal draw").unwrap_or_else(|_| S::zero())
-}
-
 /// The interface the gradient oracle needs from a learner over features (eq. 3.15): the loss on
 /// the policy's output with its gradient, the score ∇_θ log π_θ(a|s), and sampling.
 pub trait Policy<S: Scalar> {
@@ -143,31 +135,11 @@ pub trait Policy<S: Scalar> {
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng)
     -> Result<Self::Action, PolicyError>;
 
-    /// The loss alone, `l` of [`Policy::loss_into`] bit for bit, for a θ and φ the caller has
-    /// already checked (finite, of the policy's lengths): what a trajectory's loss needs, without
-    /// the gradient. `scratch` has [`Policy::param_dim`] entries; its contents afterwards are
-    /// unspecified.
-    ///
-    /// The default calls [`Policy::loss_into`] (the gradient is computed and discarded); the
-    /// linear-Gaussian policies override it to skip the gradient and the per-call θ and φ checks.
-    ///
-    /// # Errors
-    /// As [`Policy::loss_into`].
-    fn loss_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        label: &Self::Label,
-        scratch: &mut [S],
-    ) -> Result<S, PolicyError> {
-        self.loss_into(theta, phi, label, scratch)
-    }
-
     /// [`Policy::loss`] without allocating: writes `∇_θ l` into `grad` (length
     /// [`Policy::param_dim`]) and returns `l`. Bit-for-bit the values of [`Policy::loss`].
     ///
     /// The default calls [`Policy::loss`] and copies; the policies of this module override it
-    /// with a version that allocates nothing (the hot loop of the oracle, issue 8).
+    /// with a version that allocates nothing (the oracle's hot loop).
     ///
     /// # Errors
     /// As [`Policy::loss`], and [`PolicyError::Shape`] for a `grad` of the wrong length.
@@ -220,180 +192,6 @@ pub trait Policy<S: Scalar> {
         self.score_into(theta, phi, action, score)?;
         Ok(l)
     }
-
-    /// [`Policy::sample`] for a θ the caller has already validated — `theta` has
-    /// [`Policy::param_dim`] entries, all finite, as the oracle checks once per roll-out — so that
-    /// a policy may skip its per-call θ check in the roll-out's hot loop. φ is still checked, length
-    /// and finiteness, exactly as [`Policy::sample`] checks it: the oracle relies on this to mark a
-    /// learner's roll-out as having finite features and to skip its own pass over them.
-    ///
-    /// For such a θ the action, the random draws and the errors are exactly those of
-    /// [`Policy::sample`]; for any other θ the outcome is unspecified (an error, a panic or a
-    /// meaningless action, never undefined behaviour). The default calls [`Policy::sample`].
-    ///
-    /// # Errors
-    /// As [`Policy::sample`].
-    #[inline]
-    fn sample_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        rng: &mut KitRng,
-    ) -> Result<Self::Action, PolicyError> {
-        self.sample(theta, phi, rng)
-    }
-
-    /// One decision of the causal estimator of eq. 3.15 with unit weight, for inputs the caller
-    /// has already validated (θ as in [`Policy::sample_trusted`], and φ with
-    /// [`Policy::feature_dim`] entries, all finite — the oracle checks a whole trajectory once):
-    /// returns `l_t` and updates `g += ∇_θ l_t + l_t Σ_{i<t} ψ_i` entry by entry, then
-    /// `score_sum += ψ_t` (`score_sum` holds `Σ_{i<t} ψ_i` on entry). `grad` and `score` are
-    /// scratch of length [`Policy::param_dim`] that the default fills with `∇_θ l_t` and `ψ_t`.
-    ///
-    /// The default is [`Policy::loss_score_into`] followed by those two loops; a policy may fuse
-    /// them (the logistic policy never materialises `∇_θ l_t` and `ψ_t`, both multiples of φ).
-    /// For validated inputs the results are bit-for-bit those of the default and the errors
-    /// those of [`Policy::loss_score_into`]; for other inputs the outcome is unspecified (never
-    /// undefined behaviour).
-    ///
-    /// # Errors
-    /// As [`Policy::loss_score_into`].
-    #[allow(clippy::too_many_arguments)] // the estimator's whole per-decision state
-    #[inline]
-    fn causal_step_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        label: &Self::Label,
-        action: &Self::Action,
-        grad: &mut [S],
-        score: &mut [S],
-        g: &mut [S],
-        score_sum: &mut [S],
-    ) -> Result<S, PolicyError> {
-        let l = self.loss_score_into(theta, phi, label, action, grad, score)?;
-        causal_accumulate(g, &l, grad, score, score_sum);
-        Ok(l)
-    }
-
-    /// The whole unit-weight causal estimator of eq. 3.15 over one trajectory, for validated
-    /// inputs (θ as in [`Policy::sample_trusted`]; `features` holds φ(s_1), …, φ(s_n) row after
-    /// row, each with [`Policy::feature_dim`] finite entries; `labels` and `actions` have one entry
-    /// per row): adds `Σ_t [∇_θ l_t + l_t Σ_{i<t} ψ_i]` to `g`. `scratch` is working storage
-    /// that an implementation sizes as it needs (the default: `3 ·` [`Policy::param_dim`] zeros;
-    /// the logistic policy's fixed-dimension loop needs none and leaves it empty, so the caller
-    /// allocates nothing for it).
-    ///
-    /// The default runs [`Policy::causal_step_trusted`] decision after decision (`scratch` holds
-    /// `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`); a policy may override it with a faster loop (the logistic
-    /// policy runs it with a compile-time dimension for up to 8 features). For validated inputs
-    /// the results are bit-for-bit those of the default and the error is the default's (the first
-    /// failing decision's); for other inputs the outcome is unspecified (never undefined
-    /// behaviour).
-    ///
-    /// # Errors
-    /// As [`Policy::causal_step_trusted`] at the first failing decision.
-    #[inline]
-    fn causal_sum_trusted<L: std::borrow::Borrow<Self::Label>>(
-        &self,
-        theta: &[S],
-        features: &[S],
-        labels: &[L],
-        actions: &[Self::Action],
-        g: &mut [S],
-        scratch: &mut Vec<S>,
-    ) -> Result<(), PolicyError> {
-        causal_sum_by_steps(self, theta, features, labels, actions, g, scratch)
-    }
-
-    /// [`Policy::causal_sum_trusted`] with a per-decision shift of the losses that multiply the
-    /// score sums: adds `Σ_t [∇_θ l_t + (l_t + δ_t) Σ_{i<t} ψ_i]` to `g` (`shifts[t] = δ_t`, one
-    /// per row). With `δ_t = b_t − b_{t−1}` (b_0 = 0, b_t = 0 after the last scored decision)
-    /// this is the baselined estimator `g − Σ_i b_i ψ_i` of [`crate::baseline`], by summation by
-    /// parts: `Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`. One addition per decision more
-    /// than the plain pass.
-    ///
-    /// The default adds `δ_t Σ_{i<t} ψ_i` before each [`Policy::causal_step_trusted`]; a policy
-    /// may override it with a faster loop (the logistic policy does). Inputs as for
-    /// [`Policy::causal_sum_trusted`].
-    ///
-    /// # Errors
-    /// As [`Policy::causal_step_trusted`] at the first failing decision.
-    #[allow(clippy::too_many_arguments)] // the plain pass's arguments and the shifts
-    #[inline]
-    fn causal_sum_shifted_trusted<L: std::borrow::Borrow<Self::Label>>(
-        &self,
-        theta: &[S],
-        features: &[S],
-        labels: &[L],
-        actions: &[Self::Action],
-        shifts: &[S],
-        g: &mut [S],
-        scratch: &mut Vec<S>,
-    ) -> Result<(), PolicyError> {
-        let d = self.param_dim();
-        scratch.clear();
-        scratch.resize(3 * d, S::zero());
-        let (grad, rest) = scratch.split_at_mut(d);
-        let (score, score_sum) = rest.split_at_mut(d);
-        let rows = features.chunks_exact(self.feature_dim().max(1));
-        for (((phi, y), a), delta) in rows.zip(labels).zip(actions).zip(shifts) {
-            for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
-                *gj += delta.clone() * sj;
-            }
-            self.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
-        }
-        Ok(())
-    }
-}
-
-/// The default [`Policy::causal_sum_trusted`]: [`Policy::causal_step_trusted`] decision after
-/// decision, with `scratch` resized to `3 · param_dim` zeros and split into `∇l_t`, `ψ_t` and
-/// `Σ_{i<t} ψ_i`.
-#[allow(clippy::too_many_arguments)] // the method's arguments and the policy
-#[inline]
-pub(crate) fn causal_sum_by_steps<S, P, L>(
-    policy: &P,
-    theta: &[S],
-    features: &[S],
-    labels: &[L],
-    actions: &[P::Action],
-    g: &mut [S],
-    scratch: &mut Vec<S>,
-) -> Result<(), PolicyError>
-where
-    S: Scalar,
-    P: Policy<S> + ?Sized,
-    L: std::borrow::Borrow<P::Label>,
-{
-    let d = policy.param_dim();
-    scratch.clear();
-    scratch.resize(3 * d, S::zero());
-    let (grad, rest) = scratch.split_at_mut(d);
-    let (score, score_sum) = rest.split_at_mut(d);
-    let rows = features.chunks_exact(policy.feature_dim().max(1));
-    for ((phi, y), a) in rows.zip(labels).zip(actions) {
-        policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
-    }
-    Ok(())
-}
-
-/// `g += ∇l_t + l_t Σ_{i<t} ψ_i` entry by entry, then `Σ_{i<t} ψ_i += ψ_t`: the unit-weight update
-/// of the causal estimator (the default [`Policy::causal_step_trusted`]).
-#[inline]
-pub(crate) fn causal_accumulate<S: Scalar>(
-    g: &mut [S],
-    l: &S,
-    grad: &[S],
-    score: &[S],
-    score_sum: &mut [S],
-) {
-    for ((gj, dj), sj) in g.iter_mut().zip(grad).zip(score_sum.iter()) {
-        *gj += dj.clone() + l.clone() * sj;
-    }
-    for (sj, pj) in score_sum.iter_mut().zip(score) {
-        *sj += pj;
-    }
 }
 
 /// Copy `src` into `dst`, checking the length (the default `*_into` methods of [`Policy`]).
@@ -443,11 +241,21 @@ pub(crate) fn check_out<S>(
     Ok(())
 }
 
-/// The per-decision likelihood ratio of importance-weighted estimates (math.md §4):
-/// `log π_θ(a|s) − log π_θ'(a|s)`, so that the weight of one decision is its exponential and the
-/// trajectory weight `w_{θ→θ'}` is the exponential of the sum over decisions.
+/// The log-probability of an action and the per-decision likelihood ratio of importance-weighted
+/// estimates (math.md §4): `log π_θ(a|s) − log π_θ'(a|s)`, so that the weight of one decision is
+/// its exponential and the trajectory weight `w_{θ→θ'}` is the exponential of the sum over
+/// decisions.
 pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
-    /// `log π_θ(a|s) − log π_{θ_other}(a|s)`.
+    /// `log π_θ(a|s)` up to an additive term that does not depend on θ (the Gaussian policies
+    /// leave out their normaliser, so that the value exists in every scalar of their layer).
+    ///
+    /// # Errors
+    /// As [`Policy::score`].
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &Self::Action) -> Result<S, PolicyError>;
+
+    /// `log π_θ(a|s) − log π_{θ_other}(a|s)`. The default is the difference of
+    /// [`LikelihoodRatio::log_prob`]s; a policy may override it with an exact or cheaper form
+    /// (the linear-Gaussian policy's).
     ///
     /// # Errors
     /// As [`Policy::score`].
@@ -457,7 +265,9 @@ pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
         theta_other: &[S],
         phi: &[S],
         action: &Self::Action,
-    ) -> Result<S, PolicyError>;
+    ) -> Result<S, PolicyError> {
+        Ok(self.log_prob(theta, phi, action)? - self.log_prob(theta_other, phi, action)?)
+    }
 }
 
 /// Check that a slice has `expected` entries, all finite.

@@ -24,8 +24,8 @@ use super::{
     mat_vec, outer,
 };
 use crate::problem::KitRng;
+use crate::sampling::{dyadic_uniform, sample_categorical};
 use crate::scalar::{Real, Scalar};
-use crate::toy::{dyadic_uniform, sample_categorical};
 
 /// The exact shift used by [`softmax_probs`] and [`log_softmax`]: the largest logit's `f64` value.
 fn shift<S: Scalar>(logits: &[S]) -> Result<S, PolicyError> {
@@ -385,14 +385,8 @@ impl<S: Real> Policy<S> for Softmax {
 }
 
 impl<S: Real> LikelihoodRatio<S> for Softmax {
-    fn log_likelihood_ratio(
-        &self,
-        theta: &[S],
-        theta_other: &[S],
-        phi: &[S],
-        action: &usize,
-    ) -> Result<S, PolicyError> {
-        Ok(self.log_prob(theta, phi, *action)? - self.log_prob(theta_other, phi, *action)?)
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &usize) -> Result<S, PolicyError> {
+        Softmax::log_prob(self, theta, phi, *action)
     }
 }
 

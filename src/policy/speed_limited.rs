@@ -54,7 +54,44 @@ impl<S: Scalar, A> SpeedLimitedGaussian<S, A> {
     }
 }
 
-impl<S: Sqrt, A> SpeedLimitedGaussian<S, A> {
+impl<S: Sqrt, A: ActionVector<S>> SpeedLimitedGaussian<S, A> {
+    /// The loss of [`Policy::loss_into`], the same operations without the gradient and without
+    /// checking θ and φ (validated by the caller). `scratch` has `θ`'s length; its contents
+    /// afterwards are unspecified.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_into`] for a bad label, an undecidable speed limit or a non-finite loss.
+    pub(crate) fn loss_unchecked(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        scratch: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let k = self.inner.actions();
+        let n = Policy::<S>::feature_dim(&self.inner);
+        check_vec("label", label, k)?;
+        let mut n2 = S::zero();
+        for i in 0..k {
+            let m = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi);
+            n2 += m.square();
+            scratch[i * n] = m;
+        }
+        if !certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
+            return self.inner.loss_unchecked(theta, phi, label);
+        }
+        let s = self.v_max.clone() / n2.sqrt();
+        let mut loss = S::zero();
+        for (i, y) in label.iter().enumerate() {
+            let r = s.clone() * &scratch[i * n] - y;
+            loss += r.square();
+        }
+        if !loss.is_finite() {
+            return Err(PolicyError::NonFinite { param: "loss" });
+        }
+        Ok(loss)
+    }
+
     /// The executed mean `c(Wφ)` (module docs).
     ///
     /// # Errors
@@ -152,39 +189,6 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
         Ok(loss)
     }
 
-    /// [`Policy::loss_into`]'s loss, the same operations without the gradient and the θ, φ
-    /// checks.
-    fn loss_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        label: &[S],
-        scratch: &mut [S],
-    ) -> Result<S, PolicyError> {
-        let k = self.inner.actions();
-        let n = Policy::<S>::feature_dim(&self.inner);
-        check_vec("label", label, k)?;
-        let mut n2 = S::zero();
-        for i in 0..k {
-            let m = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi);
-            n2 += m.square();
-            scratch[i * n] = m;
-        }
-        if !certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
-            return self.inner.loss_trusted(theta, phi, label, scratch);
-        }
-        let s = self.v_max.clone() / n2.sqrt();
-        let mut loss = S::zero();
-        for (i, y) in label.iter().enumerate() {
-            let r = s.clone() * &scratch[i * n] - y;
-            loss += r.square();
-        }
-        if !loss.is_finite() {
-            return Err(PolicyError::NonFinite { param: "loss" });
-        }
-        Ok(loss)
-    }
-
     /// P3's score without allocating.
     fn score_into(
         &self,
@@ -198,7 +202,12 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
 }
 
 impl<S: Sqrt, A: ActionVector<S>> LikelihoodRatio<S> for SpeedLimitedGaussian<S, A> {
-    /// P3's ratio (sampling is unchanged).
+    /// P3's log-probability (sampling is unchanged).
+    fn log_prob(&self, theta: &[S], phi: &[S], action: &A) -> Result<S, PolicyError> {
+        self.inner.log_prob(theta, phi, action)
+    }
+
+    /// P3's ratio.
     fn log_likelihood_ratio(
         &self,
         theta: &[S],

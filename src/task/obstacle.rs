@@ -13,9 +13,8 @@
 //! inline, so that a roll-out allocates nothing per step. Both give the same numbers.
 
 use super::Task;
-use crate::env::obstacle::{
-    ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome, VoExpertParams, VoExpertPolicy,
-};
+use crate::env::obstacle::{ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome};
+use crate::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
 use crate::policy::ActionVector;
 use crate::problem::{KitRng, OracleError};
 use std::marker::PhantomData;

@@ -10,5 +10,5 @@ pub mod table;
 
 pub use format::{MAX_ACTIONS, MAX_HORIZON, MAX_STATES, Termination, ToyError, ToyMdp};
 pub use policy::{PolicyKind, PolicySpec};
-pub use problem::{ToyExample, ToyProblem, ToyTrajectory, dyadic_uniform, sample_categorical};
+pub use problem::{ToyExample, ToyProblem, ToyTrajectory};
 pub use table::PolicyTable;

@@ -20,7 +20,8 @@ use super::table::PolicyTable;
 use super::{Termination, ToyMdp, estimator::prefix_loss};
 use crate::baseline::DecisionTerms;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
-use crate::scalar::{Scalar, Undecidable, certainly_less};
+use crate::sampling::{dyadic_uniform, sample_categorical};
+use crate::scalar::Scalar;
 use nalgebra::DVector;
 use rand::Rng;
 
@@ -58,28 +59,6 @@ pub struct ToyProblem<S> {
     /// The reset law (empty unless the MDP resets).
     reset_law: Vec<S>,
     c: S,
-}
-
-pub use crate::problem::dyadic_uniform;
-
-/// Sample from a categorical distribution with a given uniform `u` (see the module docs).
-///
-/// # Errors
-/// [`Undecidable`] when interval arithmetic cannot order `u` and a cumulative probability.
-#[inline]
-pub fn sample_categorical<S: Scalar>(probs: &[S], u: &S) -> Result<usize, Undecidable> {
-    let last = probs
-        .iter()
-        .rposition(|p| !p.is_certainly_zero())
-        .unwrap_or(probs.len() - 1);
-    let mut cum = S::zero();
-    for (a, p) in probs.iter().enumerate().take(last) {
-        cum += p;
-        if !p.is_certainly_zero() && certainly_less(u, &cum, "categorical sampling")? {
-            return Ok(a);
-        }
-    }
-    Ok(last)
 }
 
 impl<S: Scalar> ToyProblem<S> {

@@ -8,13 +8,14 @@
 //! state: θ = (p) with π_θ(1) = p, p ∈ (0, 1). Brier loss l(A) = 2(1 − p)², l(B) = 2p².
 //! Closed forms (math.md §6): `F(p) = A₂p² + A₁p + A₀`, RRM map `G(p) = (μ_A + (T−2)(p₀ + Δp))/(T−1)`.
 //!
-//! Sampling uses one dyadic uniform ([`ilopt::algo::dyadic_uniform`]) per decision, compared with
+//! Sampling uses one dyadic uniform ([`ilopt::sampling::dyadic_uniform`]) per decision, compared with
 //! [`Scalar::certain_cmp`], so every scalar follows the same trajectory for the same seed.
 
 #![allow(dead_code)]
 
-use ilopt::algo::{AlgoError, UNIFORM_DENOMINATOR};
+use ilopt::algo::AlgoError;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
+use ilopt::sampling::UNIFORM_DENOMINATOR;
 use ilopt::scalar::{BigRational, Scalar, Undecidable};
 use nalgebra::DVector;
 use rand::RngCore;

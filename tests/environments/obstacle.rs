@@ -1,9 +1,8 @@
 //! The obstacle-avoidance task (thesis §4.1.1) driven by its velocity-obstacle expert (§4.1.2).
 
-use ilopt::env::obstacle::{
-    ObstacleConfig, ObstacleEnv, ObstacleError, Outcome, VoExpertParams, VoExpertPolicy,
-};
+use ilopt::env::obstacle::{ObstacleConfig, ObstacleEnv, ObstacleError, Outcome};
 use ilopt::expert::vo::{Cone, vo_expert};
+use ilopt::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
 use ilopt::problem::KitRng;
 use rand::SeedableRng;
 

@@ -10,6 +10,7 @@ use ilopt::baseline::{Baseline, Baselined, DecisionTerms};
 use ilopt::exact::baseline::{baselined_moments, optimal_baselines, prefix_trajectory};
 use ilopt::exact::enumerate::{for_each_prefix, moments};
 use ilopt::exact::forward::forward;
+use ilopt::oracle::EstimatorKernel;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::scalar::{BigRational, Interval, Scalar, dot, norm_sq};
 use ilopt::tolerance::all_agree;
@@ -596,7 +597,8 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
 
     fn check<P>(p: &TaskProblem<CartPoleTask<f64>, P>, theta: &DVector<f64>)
     where
-        P: ilopt::policy::LikelihoodRatio<f64, Action = usize, Label = usize>,
+        P: ilopt::policy::LikelihoodRatio<f64, Action = usize, Label = usize>
+            + EstimatorKernel<f64>,
     {
         let mut rng = KitRng::seed_from_u64(21);
         let mut cost = Cost::default();

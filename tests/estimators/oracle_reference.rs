@@ -5,6 +5,7 @@
 //! linear-Gaussian policy; and golden hashes computed by the pre-issue-8 code pin roll-outs and
 //! estimates across versions.
 
+use ilopt::oracle::EstimatorKernel;
 use ilopt::policy::{LikelihoodRatio, LinearGaussian, Logistic, Policy, Softmax};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::scalar::{Real, Scalar};
@@ -104,7 +105,7 @@ fn bits(v: &[f64]) -> Vec<u64> {
 fn check_problem<T, P>(p: &TaskProblem<T, P>, th: &DVector<f64>, th2: &DVector<f64>, seeds: u64)
 where
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let mut c = Cost::default();

@@ -3,8 +3,9 @@
 
 use crate::common::{example, q};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
+use ilopt::sampling::sample_categorical;
 use ilopt::scalar::{BigRational, Interval, Scalar, Undecidable, interval_contains_rational};
-use ilopt::toy::{ToyMdp, ToyProblem, ToyTrajectory, sample_categorical};
+use ilopt::toy::{ToyMdp, ToyProblem, ToyTrajectory};
 use nalgebra::DVector;
 use rand::SeedableRng;
 

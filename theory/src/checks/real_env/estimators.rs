@@ -2,6 +2,7 @@
 //! old-point terms of IS-STORM, and the mutated negative controls, each sampled over seeded
 //! trajectories; and the effective sample size of the importance weights.
 
+use ilopt::oracle::EstimatorKernel;
 use ilopt::policy::LikelihoodRatio;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::task::{AfterEnd, Horizon, Task, TaskProblem, TaskTrajectory};
@@ -72,7 +73,7 @@ pub fn mutated_estimate<T, P>(
 ) -> Result<DVector<f64>, String>
 where
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let d = p.policy.param_dim();
@@ -143,7 +144,7 @@ pub fn rollout_marking_resets<T, P>(
 ) -> Result<(TaskTrajectory<f64, T::Label, T::Action>, Vec<usize>), String>
 where
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
 {
     let e = |x: &dyn std::fmt::Display| x.to_string();
     let (limit, after_end) = match p.horizon {
@@ -221,7 +222,7 @@ pub fn samples<T, P>(
 where
     TaskProblem<T, P>: Sync,
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let sample_at = match e {
@@ -266,7 +267,7 @@ pub fn effective_sample_size<T, P>(
 where
     TaskProblem<T, P>: Sync,
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let logs = par_map(n, |i| {

@@ -44,6 +44,7 @@ pub use tasks::{
 
 use crate::protocol::RealSizes;
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
+use ilopt::oracle::EstimatorKernel;
 use ilopt::policy::LikelihoodRatio;
 use ilopt::problem::Weighting;
 use ilopt::task::{Task, TaskProblem};
@@ -226,7 +227,7 @@ pub fn task_rows<T, P>(
 where
     TaskProblem<T, P>: Sync,
     T: Task<f64>,
-    P: LikelihoodRatio<f64, Action = T::Action>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let p = s.problem;

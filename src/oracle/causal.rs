@@ -1,0 +1,97 @@
+//! The causal estimator of eq. 3.15 (math.md §1.1), optionally importance-weighted (math.md §4),
+//! in one pass over a trajectory.
+
+use super::{Decisions, Scratch, features_valid, policy_error};
+use crate::oracle::EstimatorKernel;
+use crate::oracle::kernel::accumulate;
+use crate::policy::LikelihoodRatio;
+use crate::problem::OracleError;
+use crate::scalar::Real;
+use std::borrow::Borrow;
+
+/// The causal estimator `Σ_t [w_{1:t−1} ∇l_t + w_{1:t−1} l_t Σ_{i<t} ψ_i]` in one pass over the
+/// trajectory (math.md §4 for the weights): with `ratio = None` every weight is 1 (eq. 3.15);
+/// with `Some(θ_new)` the per-decision prefix weights `w_{1:t−1} = exp(Σ_{i<t} log π_θ(a_i|s_i) −
+/// log π_θnew(a_i|s_i))` are accumulated along the way. Returns `g` and the log of the whole
+/// trajectory's weight: the sum of the log-ratios of every decision that weighs a loss
+/// (decisions 1..n−1; 1..n when the trajectory absorbed), zero without `ratio`.
+///
+/// An absorbed trajectory adds its absorbing losses `L_abs = Σ_{t>n} l_t` to the loss-to-go of
+/// every decision: `+ w_{1:n} L_abs Σ_{i≤n} ψ_i` (they carry no `∇l`: they do not depend on θ
+/// but through the law of the end state).
+///
+/// Per decision: one [`Policy::loss_score_into`](crate::policy::Policy::loss_score_into) into
+/// preallocated buffers and O(d) field operations ([`accumulate`]), no allocation; on validated
+/// features without weights or tail, the whole pass is the policy's
+/// [`EstimatorKernel::causal_sum_trusted`]. When the loss fails at one decision and the
+/// likelihood ratio at an earlier one, the ratio's error is reported.
+pub(crate) fn causal_pass<S, P, L, A>(
+    policy: &P,
+    theta: &[S],
+    ratio: Option<&[S]>,
+    per_decision: bool,
+    t: &Decisions<'_, S, L, A>,
+) -> Result<(Vec<S>, S), OracleError>
+where
+    S: Real,
+    P: LikelihoodRatio<S, Action = A> + EstimatorKernel<S>,
+    L: Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    let n = t.len();
+    let mut g = vec![S::zero(); d];
+    let mut log_w = S::zero();
+    // θ has been checked by the caller; with every φ checked here once, the per-decision calls can
+    // skip the policy's own checks (`causal_step_trusted`). Otherwise the checked calls below
+    // report the first failure.
+    let trusted = !per_decision && features_valid(policy, t);
+    let tail = t.absorbed;
+    if trusted && ratio.is_none() && tail.is_none() {
+        // The plain causal estimator: the whole pass in the policy (one loop it may specialise).
+        let (rows, actions, labels) = (t.feature_data, t.actions, t.labels);
+        // Scratch only if the policy's pass asks for it (the logistic policy's does not).
+        let mut scratch = Vec::new();
+        policy
+            .causal_sum_trusted(theta, rows, labels, actions, None, &mut g, &mut scratch)
+            .map_err(policy_error)?;
+        return Ok((g, log_w));
+    }
+    let mut scratch = Scratch::new(d);
+    let (grad, score, score_sum) = scratch.parts();
+    for (step, ((phi, a), y)) in t.feature_rows().zip(t.actions).zip(t.labels).enumerate() {
+        if trusted {
+            policy
+                .causal_step_trusted(theta, phi, y.borrow(), a, grad, score, &mut g, score_sum)
+                .map_err(policy_error)?;
+        } else {
+            let l = policy
+                .loss_score_into(theta, phi, y.borrow(), a, grad, score)
+                .map_err(policy_error)?;
+            if per_decision {
+                let w = log_w.exp();
+                accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
+            } else {
+                accumulate(&mut g, None, &l, grad, score, score_sum);
+            }
+        }
+        if let Some(theta_new) = ratio
+            && (step + 1 < n || tail.is_some())
+        {
+            log_w += policy
+                .log_likelihood_ratio(theta, theta_new, phi, a)
+                .map_err(policy_error)?;
+        }
+    }
+    if let Some(tail) = tail {
+        // `score_sum` now holds Σ_{i≤n} ψ_i.
+        let wl = if per_decision {
+            log_w.exp() * tail
+        } else {
+            tail.clone()
+        };
+        for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
+            *gj += wl.clone() * sj;
+        }
+    }
+    Ok((g, log_w))
+}

@@ -1,0 +1,228 @@
+//! The estimator's per-decision kernel: the loss, sampling and causal accumulation of eq. 3.15 for
+//! inputs the oracle has validated once per trajectory, so that a policy may skip its per-call
+//! checks and fuse the per-decision work.
+//!
+//! Every method has a default built on [`Policy`]'s checked, allocation-free methods; a policy
+//! opts in by implementing [`EstimatorKernel`] (an empty `impl` takes the defaults). The logistic
+//! policy overrides the causal passes with fixed-dimension loops (module `logistic`), the
+//! linear-Gaussian policies override the loss without its gradient. Every override returns the
+//! default's values bit for bit and the default's first error.
+
+use crate::policy::{
+    ActionVector, LinearGaussian, MlpGaussian, MlpSoftmax, Policy, PolicyError, Softmax,
+    SpeedLimitedGaussian,
+};
+use crate::problem::KitRng;
+use crate::scalar::{Real, Scalar, Sqrt};
+use std::borrow::Borrow;
+
+/// The per-decision operations of the gradient oracle (eq. 3.15, math.md §1.1) on validated
+/// inputs: θ has [`Policy::param_dim`] finite entries (checked once per roll-out or estimate), and
+/// where stated φ has [`Policy::feature_dim`] finite entries (checked once per trajectory).
+///
+/// For validated inputs every method returns exactly the values and errors of its default; for
+/// other inputs the outcome is unspecified (an error, a panic or a meaningless value, never
+/// undefined behaviour).
+pub trait EstimatorKernel<S: Scalar>: Policy<S> {
+    /// The loss `l(s, θ)` of [`Policy::loss_into`] without its gradient, for a validated θ and φ.
+    /// `scratch` has [`Policy::param_dim`] entries; its contents afterwards are unspecified.
+    ///
+    /// The default calls [`Policy::loss_into`] (the gradient is computed and discarded).
+    ///
+    /// # Errors
+    /// As [`Policy::loss_into`].
+    fn loss_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &Self::Label,
+        scratch: &mut [S],
+    ) -> Result<S, PolicyError> {
+        self.loss_into(theta, phi, label, scratch)
+    }
+
+    /// `a ∼ π_θ(·|s)` as [`Policy::sample`] for a validated θ; φ is still checked (length and
+    /// finiteness) exactly as [`Policy::sample`] checks it: the oracle relies on this to mark a
+    /// learner's roll-out as having finite features.
+    ///
+    /// The default calls [`Policy::sample`].
+    ///
+    /// # Errors
+    /// As [`Policy::sample`].
+    #[inline]
+    fn sample_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<Self::Action, PolicyError> {
+        self.sample(theta, phi, rng)
+    }
+
+    /// One decision of the unit-weight causal estimator of eq. 3.15 on a validated θ and φ:
+    /// returns `l_t`, adds `∇_θ l_t + l_t Σ_{i<t} ψ_i` to `g` entry by entry, then `ψ_t` to
+    /// `score_sum` (which holds `Σ_{i<t} ψ_i` on entry). `grad` and `score` are scratch of length
+    /// [`Policy::param_dim`].
+    ///
+    /// The default is [`Policy::loss_score_into`] then `accumulate` with unit weight.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_score_into`].
+    #[allow(clippy::too_many_arguments)] // the estimator's whole per-decision state
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &Self::Label,
+        action: &Self::Action,
+        grad: &mut [S],
+        score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let l = self.loss_score_into(theta, phi, label, action, grad, score)?;
+        accumulate(g, None, &l, grad, score, score_sum);
+        Ok(l)
+    }
+
+    /// The unit-weight causal estimator of eq. 3.15 over one trajectory,
+    /// `g += Σ_t [∇_θ l_t + (l_t + δ_t) Σ_{i<t} ψ_i]`, on validated inputs: `features` holds
+    /// φ(s_1), …, φ(s_n) row after row, `labels` and `actions` one entry per row, and `shifts`
+    /// either `None` (every `δ_t = 0`: eq. 3.15 itself) or one `δ_t` per row.
+    ///
+    /// With `δ_t = b_t − b_{t−1}` (b_0 = 0, b_t = 0 after the last scored decision) this is the
+    /// baselined estimator `g − Σ_i b_i ψ_i` of [`crate::baseline`], by summation by parts:
+    /// `Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`.
+    ///
+    /// `scratch` is working storage the implementation sizes as it needs (the default:
+    /// `3 ·` [`Policy::param_dim`] entries; the logistic policy's fixed-dimension loop needs
+    /// none). The default runs [`EstimatorKernel::causal_step_trusted`] decision after decision
+    /// (`causal_sum_by_steps`).
+    ///
+    /// # Errors
+    /// As [`EstimatorKernel::causal_step_trusted`] at the first failing decision.
+    #[allow(clippy::too_many_arguments)] // the trajectory, the shifts and the output
+    #[inline]
+    fn causal_sum_trusted<L: Borrow<Self::Label>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[Self::Action],
+        shifts: Option<&[S]>,
+        g: &mut [S],
+        scratch: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        causal_sum_by_steps(self, theta, features, labels, actions, shifts, g, scratch)
+    }
+}
+
+/// The default [`EstimatorKernel::causal_sum_trusted`]: per decision, `g += δ_t Σ_{i<t} ψ_i`
+/// (with shifts) then [`EstimatorKernel::causal_step_trusted`], with `scratch` resized to
+/// `3 · param_dim` zeros and split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`.
+#[allow(clippy::too_many_arguments)] // the method's arguments and the policy
+#[inline]
+pub(crate) fn causal_sum_by_steps<S, P, L>(
+    policy: &P,
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[P::Action],
+    shifts: Option<&[S]>,
+    g: &mut [S],
+    scratch: &mut Vec<S>,
+) -> Result<(), PolicyError>
+where
+    S: Scalar,
+    P: EstimatorKernel<S> + ?Sized,
+    L: Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    scratch.clear();
+    scratch.resize(3 * d, S::zero());
+    let (grad, rest) = scratch.split_at_mut(d);
+    let (score, score_sum) = rest.split_at_mut(d);
+    let rows = features.chunks_exact(policy.feature_dim().max(1));
+    let decisions = rows.zip(labels).zip(actions);
+    match shifts {
+        None => {
+            for ((phi, y), a) in decisions {
+                policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+            }
+        }
+        Some(shifts) => {
+            for (((phi, y), a), delta) in decisions.zip(shifts) {
+                for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
+                    *gj += delta.clone() * sj;
+                }
+                policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One decision's terms of the causal estimator (eq. 3.15; math.md §4 for the weight):
+/// `g += w ∇l_t + w l_t Σ_{i<t} ψ_i` entry by entry, then `Σ_{i<t} ψ_i += ψ_t`. `w = None`: the
+/// weight is exactly 1, and `1·x = x` in every scalar, so the multiplication is skipped. A
+/// function of its own so that the compiler knows the slices do not overlap.
+#[inline]
+pub(crate) fn accumulate<S: Scalar>(
+    g: &mut [S],
+    w: Option<&S>,
+    l: &S,
+    grad: &[S],
+    score: &[S],
+    score_sum: &mut [S],
+) {
+    let terms = g.iter_mut().zip(grad).zip(score_sum.iter());
+    match w {
+        Some(w) => {
+            let wl = w.clone() * l;
+            for ((gj, dj), sj) in terms {
+                *gj += w.clone() * dj + wl.clone() * sj;
+            }
+        }
+        None => {
+            for ((gj, dj), sj) in terms {
+                *gj += dj.clone() + l.clone() * sj;
+            }
+        }
+    }
+    for (sj, pj) in score_sum.iter_mut().zip(score) {
+        *sj += pj;
+    }
+}
+
+impl<S: Real> EstimatorKernel<S> for Softmax {}
+
+impl<S: Real> EstimatorKernel<S> for MlpSoftmax {}
+
+impl<S: Real> EstimatorKernel<S> for MlpGaussian<S> {}
+
+/// The loss without the gradient and the θ, φ checks.
+impl<S: Scalar, A: ActionVector<S>> EstimatorKernel<S> for LinearGaussian<S, A> {
+    fn loss_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        _scratch: &mut [S],
+    ) -> Result<S, PolicyError> {
+        self.loss_unchecked(theta, phi, label)
+    }
+}
+
+/// The loss without the gradient and the θ, φ checks.
+impl<S: Sqrt, A: ActionVector<S>> EstimatorKernel<S> for SpeedLimitedGaussian<S, A> {
+    fn loss_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        scratch: &mut [S],
+    ) -> Result<S, PolicyError> {
+        self.loss_unchecked(theta, phi, label, scratch)
+    }
+}

@@ -1,0 +1,412 @@
+//! The estimator kernel of the [`Logistic`] policy: sampling with φ's check folded into the
+//! logit's, and the causal pass of eq. 3.15 with a compile-time dimension for 1 to 8 features.
+//!
+//! With `p = σ(θ·φ)`, `∇_θ l_t = 4(p − y)p(1 − p)φ` and `ψ_t = (a − p)φ` are multiples of φ
+//! ([`brier`], [`score_coefficient`]), so the pass never stores them: per decision
+//! `g_j += 4(p − y)p(1 − p)φ_j + l_t Σ_j` and `Σ_j += (a − p)φ_j`, the operations of the default
+//! kernel in the same order.
+
+use super::kernel::{EstimatorKernel, causal_sum_by_steps};
+use crate::policy::logistic::{brier, finite_logit, score_coefficient, sigmoid_of_finite};
+use crate::policy::softmax::check_action;
+use crate::policy::{Logistic, Policy, PolicyError, check_out, check_vec_scalar, logistic_sigmoid};
+use crate::problem::KitRng;
+use crate::sampling::{dyadic_uniform, sample_binary};
+use crate::scalar::{Real, Scalar};
+use std::borrow::Borrow;
+
+/// `z = θ·φ` with θ trusted (checked by the caller) and φ checked: its length, and its entries'
+/// finiteness — where non-finite numbers propagate through sums and products
+/// ([`Scalar::NON_FINITE_PROPAGATES`]: floats, rationals), by one test of `z` instead of one per
+/// entry, the entries being looked at only to name the culprit. The same result and errors as
+/// `check_vec_scalar("phi", …)` followed by the dot product and the sigmoid's test of `z`.
+#[inline]
+fn trusted_logit<S: Scalar>(theta: &[S], phi: &[S], features: usize) -> Result<S, PolicyError> {
+    if S::NON_FINITE_PROPAGATES {
+        check_out("phi", phi, features)?;
+    } else {
+        check_vec_scalar("phi", phi, features)?;
+    }
+    let z = crate::scalar::dot(theta, phi);
+    if S::NON_FINITE_PROPAGATES && !z.is_finite() {
+        return Err(non_finite_logit(phi));
+    }
+    Ok(z)
+}
+
+/// The error for a non-finite `θ·φ` with a finite θ: φ's if one of its entries is non-finite,
+/// else the logit's (an overflow).
+///
+/// Inlined although it is an error path: a call that takes φ's address would keep a φ built in
+/// a local array in memory ([`Task::push_features_then`](crate::task::Task::push_features_then)),
+/// and the roll-out's `θ·φ` would load it back from there, on the roll-out's critical path.
+#[inline(always)]
+fn non_finite_logit<S: Scalar>(phi: &[S]) -> PolicyError {
+    let param = if phi.iter().all(Scalar::is_finite) {
+        "logit"
+    } else {
+        "phi"
+    };
+    PolicyError::NonFinite { param }
+}
+
+/// One decision of [`causal_sum_fixed`] on the `[S; N]` accumulators: adds
+/// `∇_θ l_t + (l_t + δ_t) Σ_{i<t} ψ_i` to `acc` and `ψ_t` to `score_sum` (`delta = None`:
+/// `δ_t = 0`, and no addition). Returns whether a check failed (label or action not in {0, 1}, a
+/// non-finite logit) — a flag, not a branch.
+#[inline(always)]
+fn fixed_step<S: Real, const N: usize>(
+    theta: &[S; N],
+    phi: &[S; N],
+    label: usize,
+    action: usize,
+    delta: Option<&S>,
+    acc: &mut [S; N],
+    score_sum: &mut [S; N],
+) -> bool {
+    let z = crate::scalar::dot(theta, phi);
+    let failed = (label > 1) | (action > 1) | !finite_logit(&z);
+    let p = sigmoid_of_finite(&z);
+    let (l, dz) = brier(&p, label);
+    let l = match delta {
+        Some(delta) => l + delta,
+        None => l,
+    };
+    let c = score_coefficient(p, action);
+    for ((gj, sj), x) in acc.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+        *gj += dz.clone() * x + l.clone() * &*sj;
+        *sj += c.clone() * x;
+    }
+    failed
+}
+
+/// [`EstimatorKernel::causal_sum_trusted`] of [`Logistic`] with `N` features known at compile
+/// time: the operations of [`EstimatorKernel::causal_step_trusted`] in the same order, with `g`
+/// and `Σ_{i<t} ψ_i` in `[S; N]` locals (registers for `f64`) and fully unrolled loops.
+///
+/// The per-decision checks are not branches: their failures are collected in a flag, and
+/// `Ok(false)` (with `g` untouched) tells the caller that some decision failed, for the default
+/// pass to find and report the first failure.
+///
+/// Inlined into [`causal_sum_plain`] and [`causal_sum_shifted`], where `shifts` is a constant.
+#[inline(always)]
+fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    shifts: Option<&[S]>,
+    g: &mut [S],
+) -> Result<bool, PolicyError> {
+    let theta: &[S; N] = theta.try_into().map_err(|_| PolicyError::Shape {
+        param: "theta",
+        expected: N,
+        got: theta.len(),
+    })?;
+    check_out("g", g, N)?;
+    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
+    let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
+    let (rows, _) = features.as_chunks::<N>();
+    let decisions = rows.iter().zip(labels).zip(actions);
+    let mut failed = false;
+    match shifts {
+        None => {
+            for ((phi, label), action) in decisions {
+                let (label, action) = (*label.borrow(), *action);
+                failed |= fixed_step(theta, phi, label, action, None, &mut acc, &mut score_sum);
+            }
+        }
+        Some(shifts) => {
+            for (((phi, label), action), delta) in decisions.zip(shifts) {
+                let (label, action, delta) = (*label.borrow(), *action, Some(delta));
+                failed |= fixed_step(theta, phi, label, action, delta, &mut acc, &mut score_sum);
+            }
+        }
+    }
+    if failed {
+        return Ok(false);
+    }
+    g.clone_from_slice(&acc);
+    Ok(true)
+}
+
+/// [`causal_sum_fixed`] without shifts: a function of its own per dimension (not inlined), whose
+/// accumulators the register allocator sees alone.
+#[inline(never)]
+fn causal_sum_plain<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    g: &mut [S],
+) -> Result<bool, PolicyError> {
+    causal_sum_fixed::<S, L, N>(theta, features, labels, actions, None, g)
+}
+
+/// [`causal_sum_fixed`] with per-decision loss shifts (a baseline), a function of its own.
+#[inline(never)]
+fn causal_sum_shifted<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    shifts: &[S],
+    g: &mut [S],
+) -> Result<bool, PolicyError> {
+    causal_sum_fixed::<S, L, N>(theta, features, labels, actions, Some(shifts), g)
+}
+
+impl<S: Real> EstimatorKernel<S> for Logistic {
+    /// As [`Policy::sample`] without the θ check. `#[inline(always)]`: it is the policy's part of
+    /// the roll-out's hot loop.
+    #[inline(always)]
+    fn sample_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<usize, PolicyError> {
+        let features = Policy::<S>::feature_dim(self);
+        let p = logistic_sigmoid(&trusted_logit(theta, phi, features)?)?;
+        let u: S = dyadic_uniform(rng);
+        Ok(sample_binary(&u, S::one() - &p, &p)?)
+    }
+
+    /// With `∇_θ l_t` and `ψ_t` used entry by entry, never stored (`grad` and `score` untouched).
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        action: &usize,
+        _grad: &mut [S],
+        _score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let features = Policy::<S>::feature_dim(self);
+        check_action(*label, 2)?;
+        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+        let (l, dz) = brier(&p, *label);
+        check_action(*action, 2)?;
+        let c = score_coefficient(p, *action);
+        check_out("g", g, features)?;
+        check_out("score_sum", score_sum, features)?;
+        for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+            *gj += dz.clone() * x + l.clone() * &*sj;
+            *sj += c.clone() * x;
+        }
+        Ok(l)
+    }
+
+    /// With a compile-time dimension for 1 to 8 features (`causal_sum_fixed`), else (and to
+    /// report a failing decision) the default loop over
+    /// [`EstimatorKernel::causal_step_trusted`].
+    #[inline]
+    fn causal_sum_trusted<L: Borrow<usize>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[usize],
+        shifts: Option<&[S]>,
+        g: &mut [S],
+        scratch: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        macro_rules! fixed {
+            ($($n:literal)*) => {
+                match Policy::<S>::feature_dim(self) {
+                    $($n => match shifts {
+                        None => causal_sum_plain::<S, L, $n>(theta, features, labels, actions, g)?,
+                        Some(shifts) => {
+                            causal_sum_shifted::<S, L, $n>(theta, features, labels, actions, shifts, g)?
+                        }
+                    },)*
+                    _ => false,
+                }
+            };
+        }
+        if fixed!(1 2 3 4 5 6 7 8) {
+            return Ok(());
+        }
+        // More than 8 features, or a decision failed a check: the default pass reports the first.
+        causal_sum_by_steps(self, theta, features, labels, actions, shifts, g, scratch)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fixed-dimension causal pass (1 to 8 features) and the fallback (more features) against
+    /// the default decision-by-decision pass: bit-for-bit, and the same first error.
+    #[test]
+    fn causal_sum_matches_the_default_bit_for_bit() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = KitRng::seed_from_u64(9);
+        for n in 1..=10 {
+            let pi = Logistic::new(n).unwrap();
+            for steps in [1, 2, 7, 60] {
+                let theta: Vec<f64> = (0..n).map(|_| 4.0 * rng.random::<f64>() - 2.0).collect();
+                let features: Vec<f64> = (0..n * steps)
+                    .map(|_| 2.0 * rng.random::<f64>() - 1.0)
+                    .collect();
+                let labels: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let run = |features: &[f64], labels: &[usize], actions: &[usize], fast: bool| {
+                    let mut g = vec![0.0; n];
+                    let mut scratch = Vec::new();
+                    let r = if fast {
+                        pi.causal_sum_trusted(
+                            &theta,
+                            features,
+                            labels,
+                            actions,
+                            None,
+                            &mut g,
+                            &mut scratch,
+                        )
+                    } else {
+                        causal_sum_by_steps(
+                            &pi,
+                            &theta,
+                            features,
+                            labels,
+                            actions,
+                            None,
+                            &mut g,
+                            &mut scratch,
+                        )
+                    };
+                    r.map(|()| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                };
+                let both = |features: &[f64], labels: &[usize], actions: &[usize]| {
+                    let fast = run(features, labels, actions, true);
+                    assert_eq!(
+                        fast,
+                        run(features, labels, actions, false),
+                        "n = {n}, {steps} steps"
+                    );
+                    fast
+                };
+                assert!(both(&features, &labels, &actions).is_ok());
+                // Failing decisions: a bad action, a bad label, an overflowing logit, and two of
+                // them (the first is reported, in the default's order within a decision: label,
+                // logit, action).
+                let (early, late) = (steps / 3, steps / 2);
+                let mut bad_actions = actions.clone();
+                bad_actions[late] = 2;
+                let mut bad_labels = labels.clone();
+                bad_labels[early] = 7;
+                let mut overflow = features.clone();
+                for (j, x) in overflow[late * n..(late + 1) * n].iter_mut().enumerate() {
+                    *x = f64::MAX.copysign(theta[j]);
+                }
+                let err = both(&features, &labels, &bad_actions);
+                assert!(matches!(err, Err(PolicyError::Action { action: 2, .. })));
+                let err = both(&features, &bad_labels, &actions);
+                assert!(matches!(err, Err(PolicyError::Action { action: 7, .. })));
+                // The row's logit Σ|θ_j|·MAX overflows unless Σ|θ_j| < 1 (then both passes
+                // agree on an infinite gradient instead).
+                let overflows = !theta
+                    .iter()
+                    .fold(0.0, |z, t| z + t.abs() * f64::MAX)
+                    .is_finite();
+                let logit = PolicyError::NonFinite { param: "logit" };
+                let err = both(&overflow, &labels, &actions);
+                assert_eq!(err.is_err(), overflows);
+                if overflows {
+                    assert_eq!(err, Err(logit.clone()));
+                }
+                let err = both(&overflow, &bad_labels, &bad_actions);
+                assert!(matches!(err, Err(PolicyError::Action { action: 7, .. })));
+                let mut same_step = bad_actions.clone();
+                same_step[early] = 3;
+                let err = both(&overflow, &labels, &same_step);
+                let first = if early == late && overflows {
+                    logit
+                } else {
+                    PolicyError::Action {
+                        action: 3,
+                        actions: 2,
+                    }
+                };
+                assert_eq!(err, Err(first));
+            }
+        }
+    }
+
+    /// `sample_trusted` of `pi` against `sample` (φ checked entry by entry): the same result.
+    fn assert_trusted_as_checked<S: Real>(pi: &Logistic, theta: &[S], phi: &[S]) {
+        use rand::SeedableRng;
+        let run = |trusted: bool| {
+            let mut rng = KitRng::seed_from_u64(3);
+            if trusted {
+                pi.sample_trusted(theta, phi, &mut rng)
+            } else {
+                pi.sample(theta, phi, &mut rng)
+            }
+        };
+        assert_eq!(run(true), run(false), "phi = {phi:?}");
+    }
+
+    /// `sample_trusted` (φ's finiteness checked through the logit, for floats) fails exactly as
+    /// `sample` does: a non-finite feature is φ's error, an overflowing logit the logit's — in
+    /// `f64`, and in duals (entry by entry, as in intervals, where `[0, 0]·[1, ∞]` is finite; see
+    /// `sample_trusted_checks_unbounded_interval_features`).
+    #[test]
+    fn sample_trusted_fails_as_sample_does() {
+        use crate::scalar::Dual;
+        use rand::SeedableRng;
+        let pi = Logistic::new(3).unwrap();
+        let theta = [0.0, 2.0, -1.0];
+        let big = f64::MAX;
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, big, 0.5] {
+            for j in 0..3 {
+                let mut phi = [0.25, -0.5, 1.0];
+                phi[j] = bad;
+                assert_trusted_as_checked(&pi, &theta, &phi);
+                assert_trusted_as_checked(
+                    &pi,
+                    &theta.map(Dual::constant),
+                    &phi.map(Dual::constant),
+                );
+            }
+        }
+        // The three outcomes occur: φ's error, the logit's, and a sample.
+        let sample = |phi: [f64; 3]| pi.sample_trusted(&theta, &phi, &mut KitRng::seed_from_u64(3));
+        assert_eq!(
+            sample([0.0, f64::NAN, 0.0]),
+            Err(PolicyError::NonFinite { param: "phi" })
+        );
+        assert_eq!(
+            sample([f64::INFINITY, 0.0, 0.0]),
+            Err(PolicyError::NonFinite { param: "phi" })
+        );
+        assert_eq!(
+            sample([0.0, big, -big]),
+            Err(PolicyError::NonFinite { param: "logit" })
+        );
+        assert!(sample([0.0; 3]).is_ok());
+    }
+
+    /// An unbounded interval feature with a zero weight gives a finite logit (`[0, 0]·[1, ∞] =
+    /// [0, 0]`), and is still φ's error.
+    #[cfg(feature = "mpfr")]
+    #[test]
+    fn sample_trusted_checks_unbounded_interval_features() {
+        use crate::scalar::Interval;
+        use rand::SeedableRng;
+        let pi = Logistic::new(3).unwrap();
+        let theta = [0.0, 2.0, -1.0].map(|x| Interval::from_binary64(x).unwrap());
+        let unbounded = Interval::try_from((1.0, f64::INFINITY)).unwrap();
+        let phi = [unbounded, Interval::one(), Interval::one()];
+        assert!((theta[0] * unbounded).is_finite());
+        assert_eq!(
+            pi.sample_trusted(&theta, &phi, &mut KitRng::seed_from_u64(3)),
+            Err(PolicyError::NonFinite { param: "phi" })
+        );
+        assert_trusted_as_checked(&pi, &theta, &phi);
+    }
+}

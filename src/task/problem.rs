@@ -1,0 +1,347 @@
+//! A task with a learner policy as an [`IlProblem`]: roll-outs with seeded RNGs, expert labels at
+//! every visited state, and the estimator passes of [`crate::oracle`] on the recorded trajectory.
+
+use super::rollout::sample_learner;
+use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
+use crate::baseline::{DecisionTerms, Given};
+use crate::oracle::{
+    EstimatorKernel, baselined_pass, causal_pass, features_valid, full_pass, policy_error,
+    terms_pass,
+};
+use crate::policy::LikelihoodRatio;
+use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
+use crate::scalar::{Real, Scalar};
+use nalgebra::DVector;
+use rand::Rng;
+use std::borrow::Borrow;
+
+/// A task with a learner policy: an [`IlProblem`].
+#[derive(Debug, Clone)]
+pub struct TaskProblem<T, P> {
+    /// The environment with its expert.
+    pub task: T,
+    /// The learner's policy class.
+    pub policy: P,
+    /// What one trajectory is (the objective).
+    pub horizon: Horizon,
+}
+
+impl<T, P> TaskProblem<T, P> {
+    /// The task and policy with one episode per trajectory ([`Horizon::Episodic`]).
+    pub fn episodic(task: T, policy: P) -> Self {
+        Self {
+            task,
+            policy,
+            horizon: Horizon::Episodic,
+        }
+    }
+
+    /// The task and policy under the thesis's fixed-horizon objective.
+    ///
+    /// # Errors
+    /// [`OracleError::Environment`] if `steps` is 0.
+    pub fn fixed(
+        task: T,
+        policy: P,
+        steps: usize,
+        after_end: AfterEnd,
+    ) -> Result<Self, OracleError> {
+        if steps == 0 {
+            return Err(OracleError::Environment(
+                "a fixed horizon needs at least 1 decision, got 0".into(),
+            ));
+        }
+        Ok(Self {
+            task,
+            policy,
+            horizon: Horizon::fixed(steps, after_end),
+        })
+    }
+}
+
+fn check_theta<S: Scalar>(theta: &DVector<S>, dim: usize) -> Result<(), OracleError> {
+    if theta.len() != dim {
+        return Err(OracleError::Dimension {
+            expected: dim,
+            got: theta.len(),
+        });
+    }
+    if !theta.iter().all(Scalar::is_finite) {
+        return Err(OracleError::NonFinite("θ"));
+    }
+    Ok(())
+}
+
+fn check_trajectory<S, L, A>(t: &TaskTrajectory<S, L, A>) -> Result<(), OracleError> {
+    if t.rows != t.len() || t.labels.len() != t.len() || t.is_empty() {
+        return Err(OracleError::Trajectory(format!(
+            "{} features, {} actions, {} labels",
+            t.rows,
+            t.len(),
+            t.labels.len()
+        )));
+    }
+    Ok(())
+}
+
+impl<S, T, P> IlProblem<S> for TaskProblem<T, P>
+where
+    S: Real,
+    T: Task<S>,
+    P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S>,
+    T::Label: Borrow<P::Label>,
+{
+    type Trajectory = TaskTrajectory<S, T::Label, T::Action>;
+    type Labelled = TaskExample<S, T::Label>;
+
+    fn dim(&self) -> usize {
+        self.policy.param_dim()
+    }
+
+    fn rollout(
+        &self,
+        behaviour: &Behaviour<'_, S>,
+        rng: &mut KitRng,
+        cost: &mut Cost,
+    ) -> Result<Self::Trajectory, OracleError> {
+        let d = self.dim();
+        match behaviour {
+            Behaviour::Learner(th) => check_theta(th, d)?,
+            Behaviour::Mixture {
+                expert_weight,
+                learners,
+            } => {
+                let all = std::iter::once(*expert_weight).chain(learners.iter().map(|l| l.0));
+                if all.clone().any(|w| !(0.0..=1.0).contains(&w))
+                    || (all.sum::<f64>() - 1.0).abs() > 1e-9
+                {
+                    return Err(OracleError::Behaviour(
+                        "mixture weights must lie in [0, 1] and sum to 1".into(),
+                    ));
+                }
+                for (_, th) in learners {
+                    check_theta(th, d)?;
+                }
+            }
+            Behaviour::NonStationary(steps) => {
+                for th in steps.iter().flatten() {
+                    check_theta(th, d)?;
+                }
+            }
+            _ => {}
+        }
+        // One loop per kind of behaviour, each with its action choice compiled in: the learner's
+        // roll-out (the oracle's hot loop) carries no mixture or schedule code. Every learner θ
+        // of `behaviour` was checked above.
+        let act = |learner: Option<&DVector<S>>, phi: &[S], expert, rng: &mut KitRng| match learner
+        {
+            Some(th) => sample_learner(&self.policy, th.as_slice(), phi, rng),
+            None => Ok(expert),
+        };
+        let t = match behaviour {
+            Behaviour::Learner(th) => {
+                // θ's slice taken once: the loop then holds its address and length in registers.
+                let th = th.as_slice();
+                let mut t = self.rollout_with(rng, |_, phi, _, rng| {
+                    sample_learner(&self.policy, th, phi, rng)
+                })?;
+                // Every φ was checked by `sample_trusted`.
+                t.features_finite = true;
+                t
+            }
+            Behaviour::Expert => self.rollout_with(rng, |_, _, expert, _| Ok(expert))?,
+            Behaviour::Mixture {
+                expert_weight,
+                learners,
+            } => self.rollout_with(rng, |_, phi, expert, rng| {
+                let x: f64 = rng.random();
+                let learner = if x < *expert_weight {
+                    None
+                } else {
+                    let mut acc = *expert_weight;
+                    let mut pick = learners.last().map(|l| l.1);
+                    for (w, th) in learners {
+                        acc += w;
+                        if x < acc {
+                            pick = Some(*th);
+                            break;
+                        }
+                    }
+                    pick
+                };
+                act(learner, phi, expert, rng)
+            })?,
+            Behaviour::NonStationary(steps) => self
+                .rollout_with(rng, |step, phi, expert, rng| {
+                    act(steps.get(step).copied().flatten(), phi, expert, rng)
+                })?,
+        };
+        cost.trajectories += 1;
+        cost.env_steps += t.len() as u64;
+        cost.expert_queries += t.len() as u64;
+        Ok(t)
+    }
+
+    fn estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        form: EstimatorForm,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let th = theta.as_slice();
+        let g = match form {
+            EstimatorForm::Causal => {
+                causal_pass(&self.policy, th, None, false, &trajectory.decisions())?.0
+            }
+            EstimatorForm::Full => full_pass(&self.policy, th, &trajectory.decisions())?,
+        };
+        cost.gradient_evaluations += trajectory.len() as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the gradient estimate"));
+        }
+        Ok(DVector::from_vec(g))
+    }
+
+    fn weighted_estimate(
+        &self,
+        theta_old: &DVector<S>,
+        theta_new: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weighting: Weighting,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        check_theta(theta_old, self.dim())?;
+        check_theta(theta_new, self.dim())?;
+        check_trajectory(trajectory)?;
+        // Term t carries w_{1:t−1} = Π_{i<t} π_old(a_i|s_i)/π_new(a_i|s_i); the last decision
+        // never weighs a loss.
+        let (old, new) = (theta_old.as_slice(), theta_new.as_slice());
+        let g = match weighting {
+            Weighting::PerDecision => {
+                causal_pass(&self.policy, old, Some(new), true, &trajectory.decisions())?.0
+            }
+            Weighting::Trajectory => {
+                let (g, log_w) =
+                    causal_pass(&self.policy, old, Some(new), false, &trajectory.decisions())?;
+                let w = log_w.exp();
+                g.into_iter().map(|x| x * &w).collect()
+            }
+        };
+        cost.gradient_evaluations += trajectory.len() as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the weighted gradient estimate"));
+        }
+        Ok(DVector::from_vec(g))
+    }
+
+    /// The pass of [`crate::oracle`]'s `baselined_pass`: the baseline folded into the causal
+    /// kernel as loss shifts where the trajectory allows it, otherwise from the [`DecisionTerms`].
+    fn baselined_estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        baseline: Given<'_, S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let t = trajectory;
+        let n = t.len();
+        let scored = if t.absorbed.is_some() { n } else { n - 1 };
+        if !baseline.covers(scored) {
+            return Err(crate::problem::too_few_baselines(scored));
+        }
+        let mut g = vec![S::zero(); self.dim()];
+        baselined_pass(
+            &self.policy,
+            theta.as_slice(),
+            &t.decisions(),
+            baseline,
+            scored,
+            &mut g,
+        )?;
+        cost.gradient_evaluations += n as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(DVector::from_vec(g))
+    }
+
+    fn decision_terms(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
+        out: &mut DecisionTerms<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        check_theta(theta, self.dim())?;
+        if let Some((theta_new, _)) = weights {
+            check_theta(theta_new, self.dim())?;
+        }
+        check_trajectory(trajectory)?;
+        let ratio = weights.map(|(new, w)| (new.as_slice(), w));
+        terms_pass(
+            &self.policy,
+            theta.as_slice(),
+            ratio,
+            &trajectory.decisions(),
+            out,
+        )?;
+        cost.gradient_evaluations += trajectory.len() as u64;
+        Ok(())
+    }
+
+    fn trajectory_loss(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+    ) -> Result<S, OracleError> {
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let mut total = trajectory.absorbed.clone().unwrap_or_else(S::zero);
+        let mut grad = vec![S::zero(); self.dim()];
+        // θ is checked above; with every φ checked once, the loss alone is computed per decision
+        // (the same values as `loss_into`'s, without its gradient).
+        let trusted = features_valid(&self.policy, &trajectory.decisions());
+        for (phi, y) in trajectory.feature_rows().zip(&trajectory.labels) {
+            let th = theta.as_slice();
+            total += if trusted {
+                self.policy.loss_trusted(th, phi, y.borrow(), &mut grad)
+            } else {
+                self.policy.loss_into(th, phi, y.borrow(), &mut grad)
+            }
+            .map_err(policy_error)?;
+        }
+        Ok(total)
+    }
+
+    fn labelled_states(&self, trajectory: &Self::Trajectory) -> Vec<Self::Labelled> {
+        trajectory
+            .feature_rows()
+            .zip(&trajectory.labels)
+            .map(|(f, l)| TaskExample {
+                features: f.to_vec(),
+                label: l.clone(),
+            })
+            .collect()
+    }
+
+    fn supervised(
+        &self,
+        theta: &DVector<S>,
+        example: &Self::Labelled,
+        cost: &mut Cost,
+    ) -> Result<(S, DVector<S>), OracleError> {
+        check_theta(theta, self.dim())?;
+        let (l, g) = self
+            .policy
+            .loss(theta.as_slice(), &example.features, example.label.borrow())
+            .map_err(policy_error)?;
+        cost.gradient_evaluations += 1;
+        Ok((l, DVector::from_vec(g)))
+    }
+}
