@@ -17,6 +17,7 @@ use crate::experiment::{
     run_key, run_key_of, run_spec,
 };
 use crate::progress::Progress;
+pub use crate::report::theory::TheoryTable;
 use crate::shard::{Mode, Units, unit_key};
 use crate::stats::fnv1a;
 use crate::tuning::{
@@ -125,8 +126,8 @@ pub struct Results {
     /// The tuning of every row (both tasks, table order; rows without a grid have one point and
     /// no tuning runs).
     pub tuning: Vec<TuningResult>,
-    /// The theorem-check table (Markdown).
-    pub theory_markdown: String,
+    /// The theorem-check table.
+    pub theory: TheoryTable,
     /// Configurations computed in this run (the others were reused).
     pub computed: Vec<String>,
     /// Files removed from `runs/` and `timings/` because no row of this profile produces them.
@@ -261,13 +262,31 @@ fn theory_key(profile: &Profile, version: &str) -> String {
     )
 }
 
-/// The cached theorem table (`runs/theory.json`): the Markdown and the key it was computed
-/// under.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct TheoryCache {
-    key_hash: String,
-    markdown: String,
-    rows: serde_json::Value,
+/// The cached theorem table (`runs/theory.json`): the check records and the key they were
+/// computed under.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TheoryCache {
+    /// [`theory_key`] of the profile and code that computed the checks.
+    pub key_hash: String,
+    /// Every check of the table, in table order.
+    pub checks: Vec<ilopt_theory::check::Check>,
+}
+
+/// Write `ilopt-theory`'s renderings of `checks` beside the appendix: its Markdown table
+/// (`theory.md`) and its JSON report (`theory.json`).
+fn write_theory_copies(
+    markdown_file: &Path,
+    json_file: &Path,
+    checks: &[ilopt_theory::check::Check],
+) -> Result<(), Error> {
+    write_atomic(
+        json_file,
+        &to_json("theory", &ilopt_theory::report::json(checks))?,
+    )?;
+    write_atomic(
+        markdown_file,
+        ilopt_theory::report::markdown(checks).as_bytes(),
+    )
 }
 
 /// The benches of a profile: one per (task, objective) used by its rows.
@@ -519,7 +538,7 @@ enum Experiments {
 
 /// The three concurrent stages' results (`None`: not this run's share, or missing in a merge).
 struct Stages {
-    theory: Option<String>,
+    theory: Option<TheoryTable>,
     gradient: Option<GradientErrorResult>,
     experiments: Experiments,
 }
@@ -558,7 +577,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     };
     let units = Units::new(&runs_dir, mode, opts.redo);
     let st = stages(profile, opts, &progress, &benches, &units)?;
-    let (theory_markdown, gradient_error, (tuning, rows, computed)) =
+    let (theory, gradient_error, (tuning, rows, computed)) =
         match (st.theory, st.gradient, st.experiments) {
             (Some(t), Some(g), Experiments::Done(a, b, c)) => (t, g, (a, b, c)),
             (t, g, e) => {
@@ -604,7 +623,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         cartpole: it.next().unwrap_or_default(),
         baselines,
         tuning,
-        theory_markdown,
+        theory,
         computed,
         removed_stale,
     })
@@ -686,16 +705,14 @@ fn stages(
 
     let seeds: Vec<u32> = (0..profile.seeds).collect();
 
-    let theory_job = || -> Result<Option<String>, Error> {
+    let theory_job = || -> Result<Option<TheoryTable>, Error> {
         let theory_json = opts.out.join("theory.json");
         if let Some(c) = theory_cached.clone() {
-            if sharded.is_some() {
-                return Ok(Some(c.markdown));
+            if sharded.is_none() {
+                // The copies beside the appendix follow the cached table the key names.
+                write_theory_copies(&theory_file, &theory_json, &c.checks)?;
             }
-            // The copies beside the appendix follow the cached table the key names.
-            write_atomic(&theory_file, c.markdown.as_bytes())?;
-            write_atomic(&theory_json, &to_json("theory", &c.rows)?)?;
-            return Ok(Some(c.markdown));
+            return Ok(Some(TheoryTable::Checks(c.checks)));
         }
         if profile.theory_profile == "none" {
             // No table this time: a table left by an earlier profile must not sit beside it.
@@ -704,7 +721,7 @@ fn stages(
                     std::fs::remove_file(f).map_err(|e| Error::io(f, e))?;
                 }
             }
-            return Ok(Some("*Not run: the profile sets `theory_profile = \"none\"`. Run `cargo run --release -p ilopt-theory` or a profile with `theory_profile = \"quick\"`.*\n".into()));
+            return Ok(Some(TheoryTable::NotRun));
         }
         if !computes(&tkey) {
             return Ok(None);
@@ -715,16 +732,14 @@ fn stages(
             ilopt_theory::suite::Profile::Quick
         };
         // The whole table, real-environment rows included (as `ilopt-theory`'s binary prints it).
-        let rows = ilopt_theory::suite::whole_table(p).map_err(Error::Theory)?;
+        let checks = ilopt_theory::suite::whole_table(p).map_err(Error::Theory)?;
         let cache = TheoryCache {
             key_hash: tkey.clone(),
-            markdown: ilopt_theory::report::markdown(&rows),
-            rows: ilopt_theory::report::json(&rows),
+            checks,
         };
-        write_atomic(&theory_json, &to_json("theory", &cache.rows)?)?;
-        write_atomic(&theory_file, cache.markdown.as_bytes())?;
+        write_theory_copies(&theory_file, &theory_json, &cache.checks)?;
         write_atomic(&theory_cache_file, &to_json("theory cache", &cache)?)?;
-        Ok(Some(cache.markdown))
+        Ok(Some(TheoryTable::Checks(cache.checks)))
     };
 
     let gradient_job = || -> Result<Option<GradientErrorResult>, Error> {

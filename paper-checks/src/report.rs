@@ -704,29 +704,6 @@ fn speedup_all_cells(r: &Results) -> Vec<Vec<String>> {
     rows
 }
 
-/// Check ids of the theorem table per erratum (parsed from its Markdown: first and last column).
-fn checks_by_erratum(theory_md: &str) -> std::collections::BTreeMap<String, Vec<String>> {
-    let mut m: std::collections::BTreeMap<String, Vec<String>> = Default::default();
-    for line in theory_md.lines() {
-        if !line.starts_with("| ") || line.starts_with("| #") {
-            continue;
-        }
-        let cols: Vec<&str> = line.split(" | ").collect();
-        if cols.len() < 3 {
-            continue;
-        }
-        let id = cols[0].trim_start_matches("| ").trim().to_string();
-        let e = cols[cols.len() - 1]
-            .trim_end_matches(" |")
-            .trim()
-            .to_string();
-        if e.starts_with('E') {
-            m.entry(e).or_default().push(id);
-        }
-    }
-    m
-}
-
 /// Kit-vs-thesis rows of a gradient-call table.
 fn calls_table(rows: &[ConvergenceRow], thesis: &[(&str, f64, f64)]) -> Vec<[String; 5]> {
     let mut out = Vec::new();
@@ -1140,9 +1117,9 @@ fn document(x: &Inputs<'_>) -> Vec<Block> {
     }));
 
     d.push(h("Theorem checks (`ilopt-theory`)"));
-    d.extend(theory::blocks(&r.theory_markdown, "tab:pc-theory"));
+    d.extend(theory::blocks(&r.theory, "tab:pc-theory"));
     d.push(h("Errata (math.md §0)"));
-    let by = checks_by_erratum(&r.theory_markdown);
+    let by = theory::checks_by_erratum(r.theory.checks());
     d.push(Block::Table(Table {
         caption: None,
         label: "tab:pc-errata".into(),
