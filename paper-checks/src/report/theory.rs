@@ -8,29 +8,11 @@
 //! that use them; each check's details refer to the table's rows.
 
 use super::doc::{Block, Table};
+use crate::results::TheoryTable;
 use ilopt_theory::check::{Check, Method, Role, Verdict};
 use ilopt_theory::constants::Provenance;
 use ilopt_theory::report::{power, status, two_sided_power};
 use std::collections::BTreeMap;
-
-/// The theorem-check table of a run: the checks, or the note that the profile ran none.
-#[derive(Debug, Clone, PartialEq)]
-pub enum TheoryTable {
-    /// The profile sets `theory_profile = "none"`.
-    NotRun,
-    /// Every check of the table, in table order.
-    Checks(Vec<Check>),
-}
-
-impl TheoryTable {
-    /// The checks (none when not run).
-    pub fn checks(&self) -> &[Check] {
-        match self {
-            TheoryTable::NotRun => &[],
-            TheoryTable::Checks(c) => c,
-        }
-    }
-}
 
 /// A number with four significant digits, in scientific notation outside [10⁻³, 10⁴); `—` for
 /// none (the format of `ilopt-theory`'s table).
