@@ -147,7 +147,7 @@ fn theory_key(profile: &Profile, version: &str) -> String {
 /// computed under.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TheoryCache {
-    /// [`theory_key`] of the profile and code that computed the checks.
+    /// The cache key of the profile's theorem table and of the code that computed the checks.
     pub key_hash: String,
     /// Every check of the table, in table order.
     pub checks: Vec<ilopt_theory::check::Check>,
