@@ -1,8 +1,9 @@
 //! The appendix: aggregated tables (kit vs thesis), claim verdicts, figures, CSV/JSON data, the
 //! theorem-check and errata tables, Markdown and LaTeX.
 //!
-//! Confidence intervals are Student-t 95% intervals over seeds ([`crate::stats::Summary`]). Verdicts are
-//! computed from the numbers by the rules stated next to each claim; nothing is tuned.
+//! Confidence intervals are Student-t 95% intervals over seeds ([`crate::stats::Summary`]).
+//! Verdicts are computed from the numbers by the rules stated next to each claim; nothing is
+//! tuned.
 
 use crate::config::Profile;
 use crate::error::Error;
