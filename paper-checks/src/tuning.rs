@@ -1,7 +1,7 @@
 //! The pre-registered hyper-parameter protocol.
 //!
 //! **Grid.** Each algorithm row of a profile may carry a `grid`: dimensions, each a dotted path
-//! into the row's [`AlgorithmConfig`] (its JSON form) or `"m"` (trajectories per gradient through
+//! into the row's [`AlgorithmConfig`](ilopt::algo::AlgorithmConfig) (its JSON form) or `"m"` (trajectories per gradient through
 //! [`ilopt::batched::Batched`]), with the values tried. The grid is their Cartesian product, the
 //! first dimension varying slowest ([`crate::grid::points`]); the grid order is the profile's order.
 //!
