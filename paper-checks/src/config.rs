@@ -5,6 +5,7 @@
 //! `replay` uses), written as TOML tables, so the appendix runs exactly what a user can replay.
 
 use crate::error::Error;
+pub use crate::grid::GridDim;
 use ilopt::algo::AlgorithmConfig;
 use ilopt::task::{AfterEnd, Horizon};
 use serde::{Deserialize, Serialize};
@@ -143,18 +144,6 @@ pub enum Role {
     Control,
 }
 
-/// One dimension of a pre-registered tuning grid: a dotted path into the algorithm's config
-/// (its JSON form, e.g. `"alpha"`, `"step.eta"`, `"schedule"`, `"inner.rule.alpha"`) or `"m"`
-/// (trajectories per gradient, via [`ilopt::batched::Batched`]), and the values tried, in order.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct GridDim {
-    /// The path.
-    pub path: String,
-    /// The values (grid order).
-    pub values: Vec<serde_json::Value>,
-}
-
 /// Which expert labels CartPole's states.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -239,6 +228,14 @@ impl AlgorithmEntry {
         self.horizon
             .or(task.horizon)
             .unwrap_or_else(|| default_horizon(task_name))
+    }
+
+    /// The row's grid points in grid order ([`crate::grid::points`]).
+    ///
+    /// # Errors
+    /// As [`crate::grid::points`].
+    pub fn grid_points(&self) -> Result<Vec<crate::grid::GridPoint>, String> {
+        crate::grid::points(&self.config, self.m, &self.grid)
     }
 
     /// Whether the algorithm draws its gradients from the oracle (m applies), rather than
@@ -402,7 +399,7 @@ impl Profile {
                 if !labels.insert(a.label.clone()) {
                     return Err(field(file, &format!("{here}.label"), "duplicate label"));
                 }
-                let slug = crate::pipeline::slug(&a.label);
+                let slug = crate::naming::slug(&a.label);
                 if let Some(other) = slugs.insert(slug.clone(), a.label.clone()) {
                     return Err(field(
                         file,
@@ -446,7 +443,8 @@ impl Profile {
                     }
                 }
                 // The algorithm's own validation (names the hyper-parameter), at every grid point.
-                let points = crate::tuning::grid_points(a)
+                let points = a
+                    .grid_points()
                     .map_err(|e| field(file, &format!("{here}.grid"), e))?;
                 for p in &points {
                     if p.m > 1 && !a.is_oracle_method() {

@@ -750,7 +750,8 @@ pub fn run_seed(
             seed_index,
             eval_key: eval_key(kind, seed_index),
             stop_at_convergence: false,
-            hyper_parameters: crate::tuning::grid_points(entry)
+            hyper_parameters: entry
+                .grid_points()
                 .ok()
                 .and_then(|p| p.into_iter().next())
                 .map_or_else(String::new, |p| p.describe()),

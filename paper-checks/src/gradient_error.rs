@@ -52,7 +52,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GradientError {
-    /// Independent repetitions (streams of estimates) per route (≥ 2; the issue asks ≥ 100).
+    /// Independent repetitions (streams of estimates) per route (≥ 2; the protocol uses ≥ 100).
     pub repetitions: u32,
     /// Bootstrap resamples of the repetitions for the slope's interval (≥ 100).
     pub bootstrap: u32,

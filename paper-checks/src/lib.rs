@@ -15,13 +15,17 @@ pub mod config;
 pub mod error;
 pub mod experiment;
 pub mod gradient_error;
+pub mod grid;
+pub mod naming;
 pub mod pipeline;
 pub mod plots;
 pub mod progress;
 pub mod provenance;
 pub mod report;
+pub mod results;
 pub mod shard;
 pub mod stats;
+pub mod storage;
 pub mod tuning;
 pub mod verdict;
 
@@ -40,12 +44,12 @@ pub fn regenerate(
     profile_text: &str,
     opts: &pipeline::Options,
     png: bool,
-) -> Result<pipeline::Results, Error> {
+) -> Result<results::Results, Error> {
     let start = std::time::Instant::now();
     let r = pipeline::run(profile, opts)?;
     let stages = progress::Progress::new(0, opts.progress);
     stages.stage("figures and documents", || {
-        report::write(profile, profile_text, &r, &opts.out, png)
+        report::write(profile, &r, &opts.out, png)
     })?;
     stages.finish();
     provenance::write(

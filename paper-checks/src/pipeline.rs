@@ -13,15 +13,20 @@
 use crate::config::{AlgorithmEntry, Profile, TaskSection};
 use crate::error::Error;
 use crate::experiment::{
-    Baseline, Bench, Checkpoint, RunSpec, SeedRun, SeedTiming, TaskKind, baseline_seed, eval_key,
-    run_key, run_key_of, run_spec,
+    Baseline, Bench, RunSpec, TaskKind, baseline_seed, eval_key, run_key, run_key_of, run_spec,
 };
+use crate::grid::GridPoint;
+use crate::naming::slug;
 use crate::progress::Progress;
+use crate::results::{
+    BaselineResult, ConfigResult, ConfigTiming, ConfigWithTiming, GradientErrorResult, Results,
+    TheoryTable,
+};
 use crate::shard::{Mode, Units, unit_key};
 use crate::stats::fnv1a;
+use crate::storage::{mkdir, read_json, to_json, write_atomic};
 use crate::tuning::{
-    GridPoint, PointResult, TuningResult, TuningRun, grid_points, select, selection_score,
-    tuning_eval_key, tuning_seed,
+    PointResult, TuningResult, TuningRun, select, selection_score, tuning_eval_key, tuning_seed,
 };
 use ilopt::task::Horizon;
 use rayon::prelude::*;
@@ -62,129 +67,6 @@ impl Options {
             mode: Mode::All,
         }
     }
-}
-
-/// All results of one algorithm on one task.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ConfigResult {
-    /// The task.
-    pub task: TaskKind,
-    /// The algorithm's label.
-    pub label: String,
-    /// Hash of everything that determines the results (reuse key).
-    pub key_hash: String,
-    /// The algorithm entry as configured.
-    pub entry: AlgorithmEntry,
-    /// Per-seed results, in seed order.
-    pub runs: Vec<SeedRun>,
-}
-
-/// Wall times of one configuration.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ConfigTiming {
-    /// The task.
-    pub task: TaskKind,
-    /// The algorithm's label.
-    pub label: String,
-    /// Per-seed timings, in seed order.
-    pub runs: Vec<SeedTiming>,
-    /// Wall time of the whole configuration (all seeds, evaluation included).
-    pub wall_seconds: f64,
-}
-
-/// A configuration's results with its timings (absent when reused without a timing file).
-pub type ConfigWithTiming = (ConfigResult, Option<ConfigTiming>);
-
-pub use crate::gradient_error::GradientErrorResult;
-
-/// A baseline policy's evaluation on every seed's evaluation episodes (the episodes the learners'
-/// checkpoints of that seed meet).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct BaselineResult {
-    /// The task.
-    pub task: TaskKind,
-    /// Which baseline.
-    pub baseline: Baseline,
-    /// Its label in tables and figures.
-    pub label: String,
-    /// One evaluation per seed, in seed order (iteration 0, zero cost).
-    pub runs: Vec<Checkpoint>,
-}
-
-/// Everything the reports need.
-#[derive(Debug, Clone)]
-pub struct Results {
-    /// Fig. 4.2.
-    pub gradient_error: GradientErrorResult,
-    /// Obstacle configurations in table order.
-    pub obstacle: Vec<(ConfigResult, Option<ConfigTiming>)>,
-    /// CartPole configurations in table order.
-    pub cartpole: Vec<(ConfigResult, Option<ConfigTiming>)>,
-    /// The baselines of both tasks (obstacle first, table order).
-    pub baselines: Vec<BaselineResult>,
-    /// The tuning of every row (both tasks, table order; rows without a grid have one point and
-    /// no tuning runs).
-    pub tuning: Vec<TuningResult>,
-    /// The theorem-check table (Markdown).
-    pub theory_markdown: String,
-    /// Configurations computed in this run (the others were reused).
-    pub computed: Vec<String>,
-    /// Files removed from `runs/` and `timings/` because no row of this profile produces them.
-    pub removed_stale: Vec<String>,
-}
-
-/// Write `bytes` to `path` atomically (a temporary file in the same directory, then rename).
-///
-/// # Errors
-/// [`Error::Io`].
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
-    let tmp = path.with_extension(format!(
-        "{}.tmp",
-        path.extension().and_then(|e| e.to_str()).unwrap_or("")
-    ));
-    // A failed write or rename (full disk, permissions) must not leave the temporary behind.
-    let cleanup = |e: std::io::Error, at: &Path| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(at, e)
-    };
-    std::fs::write(&tmp, bytes).map_err(|e| cleanup(e, &tmp))?;
-    std::fs::rename(&tmp, path).map_err(|e| cleanup(e, path))
-}
-
-/// Serialise as pretty JSON with a trailing newline.
-///
-/// # Errors
-/// [`Error::Serialise`].
-pub fn to_json<T: Serialize>(what: &str, v: &T) -> Result<Vec<u8>, Error> {
-    let mut s = serde_json::to_string_pretty(v).map_err(|e| Error::Serialise {
-        what: what.into(),
-        message: e.to_string(),
-    })?;
-    s.push('\n');
-    Ok(s.into_bytes())
-}
-
-fn read_json<T: for<'de> Deserialize<'de>>(path: &Path) -> Option<T> {
-    let text = std::fs::read_to_string(path).ok()?;
-    serde_json::from_str(&text).ok()
-}
-
-/// A file-name-safe slug of a label.
-pub fn slug(label: &str) -> String {
-    label
-        .chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() {
-                c.to_ascii_lowercase()
-            } else {
-                '-'
-            }
-        })
-        .collect()
-}
-
-fn mkdir(p: &Path) -> Result<(), Error> {
-    std::fs::create_dir_all(p).map_err(|e| Error::io(p, e))
 }
 
 /// What determines a task's runs apart from the algorithm rows: the section without its rows,
@@ -261,13 +143,31 @@ fn theory_key(profile: &Profile, version: &str) -> String {
     )
 }
 
-/// The cached theorem table (`runs/theory.json`): the Markdown and the key it was computed
-/// under.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-struct TheoryCache {
-    key_hash: String,
-    markdown: String,
-    rows: serde_json::Value,
+/// The cached theorem table (`runs/theory.json`): the check records and the key they were
+/// computed under.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TheoryCache {
+    /// The cache key of the profile's theorem table and of the code that computed the checks.
+    pub key_hash: String,
+    /// Every check of the table, in table order.
+    pub checks: Vec<ilopt_theory::check::Check>,
+}
+
+/// Write `ilopt-theory`'s renderings of `checks` beside the appendix: its Markdown table
+/// (`theory.md`) and its JSON report (`theory.json`).
+fn write_theory_copies(
+    markdown_file: &Path,
+    json_file: &Path,
+    checks: &[ilopt_theory::check::Check],
+) -> Result<(), Error> {
+    write_atomic(
+        json_file,
+        &to_json("theory", &ilopt_theory::report::json(checks))?,
+    )?;
+    write_atomic(
+        markdown_file,
+        ilopt_theory::report::markdown(checks).as_bytes(),
+    )
 }
 
 /// The benches of a profile: one per (task, objective) used by its rows.
@@ -334,7 +234,9 @@ fn tune(
         (TaskKind::Cartpole, &profile.cartpole),
     ] {
         for e in &t.algorithms {
-            let points = grid_points(e).map_err(|m| Error::experiment(&e.label, m))?;
+            let points = e
+                .grid_points()
+                .map_err(|m| Error::experiment(&e.label, m))?;
             let key = tuning_key(profile, kind, t, e, &opts.source_version);
             let file = runs_dir.join(format!("tuning-{}-{}.json", kind.name(), slug(&e.label)));
             if e.grid.is_empty() || e.hyper_parameters_of.is_some() {
@@ -519,7 +421,7 @@ enum Experiments {
 
 /// The three concurrent stages' results (`None`: not this run's share, or missing in a merge).
 struct Stages {
-    theory: Option<String>,
+    theory: Option<TheoryTable>,
     gradient: Option<GradientErrorResult>,
     experiments: Experiments,
 }
@@ -531,7 +433,7 @@ fn progress_for(profile: &Profile, opts: &Options) -> Progress {
         .iter()
         .flat_map(|t| &t.algorithms)
         .filter(|e| !e.grid.is_empty() && e.hyper_parameters_of.is_none())
-        .map(|e| grid_points(e).map_or(0, |p| p.len()) * profile.tuning_seeds as usize)
+        .map(|e| e.grid_points().map_or(0, |p| p.len()) * profile.tuning_seeds as usize)
         .sum();
     let report_total: usize =
         tasks.iter().map(|t| t.algorithms.len()).sum::<usize>() * profile.seeds as usize;
@@ -558,7 +460,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     };
     let units = Units::new(&runs_dir, mode, opts.redo);
     let st = stages(profile, opts, &progress, &benches, &units)?;
-    let (theory_markdown, gradient_error, (tuning, rows, computed)) =
+    let (theory, gradient_error, (tuning, rows, computed)) =
         match (st.theory, st.gradient, st.experiments) {
             (Some(t), Some(g), Experiments::Done(a, b, c)) => (t, g, (a, b, c)),
             (t, g, e) => {
@@ -604,7 +506,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         cartpole: it.next().unwrap_or_default(),
         baselines,
         tuning,
-        theory_markdown,
+        theory,
         computed,
         removed_stale,
     })
@@ -686,16 +588,14 @@ fn stages(
 
     let seeds: Vec<u32> = (0..profile.seeds).collect();
 
-    let theory_job = || -> Result<Option<String>, Error> {
+    let theory_job = || -> Result<Option<TheoryTable>, Error> {
         let theory_json = opts.out.join("theory.json");
         if let Some(c) = theory_cached.clone() {
-            if sharded.is_some() {
-                return Ok(Some(c.markdown));
+            if sharded.is_none() {
+                // The copies beside the appendix follow the cached table the key names.
+                write_theory_copies(&theory_file, &theory_json, &c.checks)?;
             }
-            // The copies beside the appendix follow the cached table the key names.
-            write_atomic(&theory_file, c.markdown.as_bytes())?;
-            write_atomic(&theory_json, &to_json("theory", &c.rows)?)?;
-            return Ok(Some(c.markdown));
+            return Ok(Some(TheoryTable::Checks(c.checks)));
         }
         if profile.theory_profile == "none" {
             // No table this time: a table left by an earlier profile must not sit beside it.
@@ -704,7 +604,7 @@ fn stages(
                     std::fs::remove_file(f).map_err(|e| Error::io(f, e))?;
                 }
             }
-            return Ok(Some("*Not run: the profile sets `theory_profile = \"none\"`. Run `cargo run --release -p ilopt-theory` or a profile with `theory_profile = \"quick\"`.*\n".into()));
+            return Ok(Some(TheoryTable::NotRun));
         }
         if !computes(&tkey) {
             return Ok(None);
@@ -715,16 +615,14 @@ fn stages(
             ilopt_theory::suite::Profile::Quick
         };
         // The whole table, real-environment rows included (as `ilopt-theory`'s binary prints it).
-        let rows = ilopt_theory::suite::whole_table(p).map_err(Error::Theory)?;
+        let checks = ilopt_theory::suite::whole_table(p).map_err(Error::Theory)?;
         let cache = TheoryCache {
             key_hash: tkey.clone(),
-            markdown: ilopt_theory::report::markdown(&rows),
-            rows: ilopt_theory::report::json(&rows),
+            checks,
         };
-        write_atomic(&theory_json, &to_json("theory", &cache.rows)?)?;
-        write_atomic(&theory_file, cache.markdown.as_bytes())?;
+        write_theory_copies(&theory_file, &theory_json, &cache.checks)?;
         write_atomic(&theory_cache_file, &to_json("theory cache", &cache)?)?;
-        Ok(Some(cache.markdown))
+        Ok(Some(TheoryTable::Checks(cache.checks)))
     };
 
     let gradient_job = || -> Result<Option<GradientErrorResult>, Error> {

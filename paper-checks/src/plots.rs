@@ -360,10 +360,10 @@ impl Figure {
     /// [`Error::Experiment`] if drawing fails, [`Error::Io`] if writing fails.
     pub fn write(&self, svg_path: &Path, png: bool) -> Result<(), Error> {
         let svg = self.to_svg().map_err(|e| plot_err(svg_path, e))?;
-        crate::pipeline::write_atomic(svg_path, svg.as_bytes())?;
+        crate::storage::write_atomic(svg_path, svg.as_bytes())?;
         if png {
             let png_bytes = render_png(&svg).map_err(|e| plot_err(svg_path, e))?;
-            crate::pipeline::write_atomic(&svg_path.with_extension("png"), &png_bytes)?;
+            crate::storage::write_atomic(&svg_path.with_extension("png"), &png_bytes)?;
         }
         Ok(())
     }

@@ -8,7 +8,9 @@
 
 use crate::config::Profile;
 use crate::error::Error;
-use crate::pipeline::{Options, Results, to_json, write_atomic};
+use crate::pipeline::Options;
+use crate::results::Results;
+use crate::storage::{to_json, write_atomic};
 use std::path::Path;
 use std::process::Command;
 

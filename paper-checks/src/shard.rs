@@ -12,7 +12,7 @@
 //! a single run's.
 
 use crate::error::Error;
-use crate::pipeline::{to_json, write_atomic};
+use crate::storage::{to_json, write_atomic};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use std::path::{Path, PathBuf};

@@ -1,9 +1,9 @@
 //! The pre-registered hyper-parameter protocol.
 //!
 //! **Grid.** Each algorithm row of a profile may carry a `grid`: dimensions, each a dotted path
-//! into the row's [`AlgorithmConfig`] (its JSON form) or `"m"` (trajectories per gradient through
+//! into the row's [`AlgorithmConfig`](ilopt::algo::AlgorithmConfig) (its JSON form) or `"m"` (trajectories per gradient through
 //! [`ilopt::batched::Batched`]), with the values tried. The grid is their Cartesian product, the
-//! first dimension varying slowest ([`grid_points`]); the grid order is the profile's order.
+//! first dimension varying slowest ([`crate::grid::points`]); the grid order is the profile's order.
 //!
 //! **Tuning seeds.** Every grid point is run on `tuning_seeds` seeds whose RNG seeds are derived
 //! from the key `"tuning|<run key>"` ([`tuning_seed`]) and whose evaluation episodes come from
@@ -19,132 +19,10 @@
 //! Every point's result is kept ([`TuningResult`]) and published as the appendix's sensitivity
 //! table; the selected point is recorded in the provenance.
 
-use crate::config::AlgorithmEntry;
 use crate::experiment::{RunStatus, TaskKind};
+use crate::grid::GridPoint;
 use crate::stats::derive_seed;
-use ilopt::algo::AlgorithmConfig;
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
-
-/// One point of a row's grid.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct GridPoint {
-    /// Position in grid order.
-    pub index: usize,
-    /// The value of each dimension (path, value), in the grid's dimension order.
-    pub values: Vec<(String, Value)>,
-    /// The algorithm config at this point.
-    pub config: AlgorithmConfig,
-    /// Trajectories per gradient.
-    pub m: usize,
-}
-
-impl GridPoint {
-    /// `path=value, …` (or `as configured` for a row without a grid).
-    pub fn describe(&self) -> String {
-        if self.values.is_empty() {
-            return format!("as configured, m={}", self.m);
-        }
-        self.values
-            .iter()
-            .map(|(p, v)| format!("{p}={}", compact(v)))
-            .collect::<Vec<_>>()
-            .join(", ")
-    }
-}
-
-/// A JSON value in one line without quotes around plain strings.
-pub fn compact(v: &Value) -> String {
-    match v {
-        Value::String(s) => s.clone(),
-        Value::Object(o) => {
-            let parts: Vec<String> = o
-                .iter()
-                .map(|(k, v)| format!("{k}={}", compact(v)))
-                .collect();
-            format!("{{{}}}", parts.join(" "))
-        }
-        other => other.to_string(),
-    }
-}
-
-fn set_path(root: &mut Value, path: &str, value: Value) -> Result<(), String> {
-    let mut cur = root;
-    let parts: Vec<&str> = path.split('.').collect();
-    for (i, p) in parts.iter().enumerate() {
-        let obj = cur
-            .as_object_mut()
-            .ok_or_else(|| format!("`{path}`: `{p}` is not inside a table"))?;
-        if i + 1 == parts.len() {
-            if !obj.contains_key(*p) {
-                return Err(format!(
-                    "`{path}`: the config has no field `{p}` to tune (a grid sets existing fields)"
-                ));
-            }
-            obj.insert((*p).to_string(), value);
-            return Ok(());
-        }
-        cur = obj
-            .get_mut(*p)
-            .ok_or_else(|| format!("`{path}`: the config has no field `{p}`"))?;
-    }
-    Err(format!("`{path}`: empty path"))
-}
-
-/// The row's grid points in grid order (one point, the config as given, without a grid).
-///
-/// # Errors
-/// A message naming the dimension when a path does not exist, a dimension is empty or repeated,
-/// `m` is not a positive integer, or a point is not a valid config.
-pub fn grid_points(entry: &AlgorithmEntry) -> Result<Vec<GridPoint>, String> {
-    let base = serde_json::to_value(&entry.config).map_err(|e| e.to_string())?;
-    let base_m = entry.m.unwrap_or(1);
-    let mut seen = std::collections::BTreeSet::new();
-    for d in &entry.grid {
-        if d.values.is_empty() {
-            return Err(format!("dimension `{}` has no values", d.path));
-        }
-        if !seen.insert(d.path.clone()) {
-            return Err(format!("dimension `{}` repeated", d.path));
-        }
-    }
-    let total: usize = entry.grid.iter().map(|d| d.values.len()).product();
-    let mut out = Vec::with_capacity(total);
-    for index in 0..total {
-        // Mixed radix, the last dimension varying fastest.
-        let mut rest = index;
-        let mut picks = vec![0usize; entry.grid.len()];
-        for (k, d) in entry.grid.iter().enumerate().rev() {
-            picks[k] = rest % d.values.len();
-            rest /= d.values.len();
-        }
-        let mut json = base.clone();
-        let mut m = base_m;
-        let mut values = Vec::new();
-        for (d, &i) in entry.grid.iter().zip(&picks) {
-            let v = d.values[i].clone();
-            if d.path == "m" {
-                m = v
-                    .as_u64()
-                    .filter(|&x| x >= 1)
-                    .ok_or_else(|| format!("`m` values must be integers ≥ 1, got {v}"))?
-                    as usize;
-            } else {
-                set_path(&mut json, &d.path, v.clone())?;
-            }
-            values.push((d.path.clone(), v));
-        }
-        let config: AlgorithmConfig = serde_json::from_value(json)
-            .map_err(|e| format!("grid point {index} is not a valid config: {e}"))?;
-        out.push(GridPoint {
-            index,
-            values,
-            config,
-            m,
-        });
-    }
-    Ok(out)
-}
 
 /// The RNG seed of tuning seed `index` of a run key: the key namespace `"tuning|…"`, disjoint
 /// in construction from the report seeds' `"<run key>"` (and checked by the pipeline).
@@ -250,8 +128,8 @@ mod tests {
     use super::*;
     use crate::config::GridDim;
 
-    fn entry(grid: Vec<GridDim>) -> AlgorithmEntry {
-        AlgorithmEntry {
+    fn entry(grid: Vec<GridDim>) -> crate::config::AlgorithmEntry {
+        crate::config::AlgorithmEntry {
             label: "Adam".into(),
             role: Default::default(),
             note: None,
@@ -278,7 +156,7 @@ mod tests {
                 values: vec![1.into(), 16.into()],
             },
         ]);
-        let pts = grid_points(&e).unwrap();
+        let pts = e.grid_points().unwrap();
         assert_eq!(pts.len(), 4);
         assert_eq!(pts[1].m, 16);
         assert_eq!(pts[1].describe(), "alpha=0.001, m=16");
@@ -287,7 +165,7 @@ mod tests {
             path: "alhpa".into(),
             values: vec![0.1.into()],
         }]);
-        assert!(grid_points(&bad).unwrap_err().contains("alhpa"));
+        assert!(bad.grid_points().unwrap_err().contains("alhpa"));
     }
 
     #[test]
@@ -336,7 +214,7 @@ mod profile_tests {
             ] {
                 for e in &t.algorithms {
                     let h = e.horizon(t, kind.name());
-                    for pt in grid_points(e).unwrap() {
+                    for pt in e.grid_points().unwrap() {
                         let rk = run_key_of(kind, &e.label, &pt.config, pt.m, h);
                         for s in 0..p.seeds {
                             report.insert(derive_seed(&rk, u64::from(s)));

@@ -1,4 +1,4 @@
-//! The appendix pipeline's reproducibility contract (issue 6): byte-identical data across reruns
+//! The appendix pipeline's reproducibility contract: byte-identical data across reruns
 //! and thread counts, resumption that skips finished configurations, and configuration errors
 //! that name the file and the field.
 
@@ -172,14 +172,14 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
         md.contains("as selected for STORM"),
         "the control row's borrowing"
     );
-    let sgd_runs: paper_checks::pipeline::ConfigResult =
+    let sgd_runs: paper_checks::results::ConfigResult =
         serde_json::from_slice(&std::fs::read(a.join("runs/obstacle-sgd.json")).expect("SGD runs"))
             .expect("SGD runs parse");
     assert!(sgd_runs.runs.iter().all(|r| r.hyper_parameters == chosen));
     // The baselines are evaluated on the learners' episodes: the experts succeed on every one
     // (the VO expert reaches the goal, PPO balances 500 steps) with zero loss against
     // themselves, and ignoring the obstacle does not beat the expert.
-    let baselines: Vec<paper_checks::pipeline::BaselineResult> =
+    let baselines: Vec<paper_checks::results::BaselineResult> =
         serde_json::from_slice(&fa["baselines.json"]).expect("baselines.json parses");
     let labels: Vec<&str> = baselines.iter().map(|b| b.label.as_str()).collect();
     assert_eq!(labels, ["Expert (VO)", "Straight to goal", "Expert (PPO)"]);
@@ -393,7 +393,7 @@ fn labels_sharing_a_file_name_are_refused() {
 fn a_failed_atomic_write_leaves_no_temporary() {
     let d = temp_dir("atomic");
     std::fs::create_dir_all(d.join("target.json")).expect("a directory where the file goes");
-    let err = paper_checks::pipeline::write_atomic(&d.join("target.json"), b"data")
+    let err = paper_checks::storage::write_atomic(&d.join("target.json"), b"data")
         .expect_err("cannot replace a directory by a file");
     assert!(err.to_string().contains("target.json"), "{err}");
     assert!(!d.join("target.json.tmp").exists());
@@ -531,7 +531,10 @@ fn the_committed_profiles_are_valid() {
             .join("configs")
             .join(name);
         let profile = Profile::load(&p).unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert!(profile.seeds >= 10, "{name}: issue 6 asks for ≥ 10 seeds");
+        assert!(
+            profile.seeds >= 10,
+            "{name}: the protocol asks for ≥ 10 seeds"
+        );
     }
 }
 

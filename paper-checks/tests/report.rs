@@ -1,12 +1,17 @@
-//! The appendix's rendering: the kit-vs-thesis speed-up table and the figures' clamping and
-//! tick labels, checked on hand-made numbers.
+//! The appendix's rendering: the kit-vs-thesis speed-up table, the figures' clamping and tick
+//! labels, and the theorem-check section built from check records, on hand-made numbers.
 
 use paper_checks::experiment::{SeedTiming, TaskKind};
-use paper_checks::pipeline::ConfigTiming;
+use paper_checks::pipeline::TheoryCache;
 use paper_checks::plots::{Figure, Marker, Series, Style, fmt_tick, style_for};
+use paper_checks::report::doc::{self, Block, Table};
 use paper_checks::report::speedup::{
     SpeedupRow, TimeBasis, kit_time, speedup_cells, speedup_row, speedup_total,
 };
+use paper_checks::report::theory;
+use paper_checks::results::ConfigTiming;
+use paper_checks::results::TheoryTable;
+use paper_checks::storage::{read_json, to_json, write_atomic};
 
 fn timing(train: &[f64], converge: &[Option<f64>]) -> ConfigTiming {
     ConfigTiming {
@@ -230,4 +235,228 @@ fn the_legend_lists_only_drawn_series() {
         !svg.contains("\nSTORM\n"),
         "an undrawn series in the legend"
     );
+}
+
+fn constant(
+    name: &str,
+    value: f64,
+    provenance: ilopt_theory::constants::Provenance,
+    how: &str,
+) -> ilopt_theory::constants::Constant {
+    ilopt_theory::constants::Constant {
+        name: name.into(),
+        value,
+        rational: String::new(),
+        provenance,
+        how: how.into(),
+        certificate: None,
+        charts: vec![],
+        attained: None,
+    }
+}
+
+/// A thesis row with an erratum and a negative control that its check detects, sharing a
+/// constant.
+fn two_checks() -> Vec<ilopt_theory::check::Check> {
+    use ilopt_theory::check::{Check, Measured, Method, Role, Verdict};
+    use ilopt_theory::constants::Provenance;
+    let lf = constant(
+        "L_F",
+        2.029554,
+        Provenance::Rigorous,
+        "interval branch-and-bound (727 boxes)",
+    );
+    let thesis = Check {
+        id: "1a".into(),
+        result: "(3.41)".into(),
+        claim: "F smooth".into(),
+        assumptions: vec![],
+        constants: vec![
+            lf.clone(),
+            constant("B_F", 0.5, Provenance::Exact, "F(θ₁) − inf F over |θ| ≤ 1"),
+        ],
+        bound: Some(2.0),
+        measured: Some(Measured::exact(1.0)),
+        tightness: Some(0.5),
+        method: Method::Rigorous,
+        verdict: Verdict::Holds,
+        erratum: Some("E2".into()),
+        role: Role::Thesis,
+        details: "first".into(),
+    };
+    let control = Check {
+        id: "1a.control".into(),
+        result: "(3.41)".into(),
+        claim: "a bound a quarter of the true one".into(),
+        assumptions: vec![],
+        constants: vec![lf],
+        bound: Some(0.5),
+        measured: Some(Measured {
+            value: 1.0,
+            lcb: Some(0.75),
+            ucb: None,
+            runs: Some(100),
+            alpha: Some(0.01),
+        }),
+        tightness: None,
+        method: Method::Statistical,
+        verdict: Verdict::Fails,
+        erratum: None,
+        role: Role::NegativeControl,
+        details: "second | x".into(),
+    };
+    vec![thesis, control]
+}
+
+fn tables(blocks: &[Block]) -> Vec<&Table> {
+    blocks
+        .iter()
+        .filter_map(|b| match b {
+            Block::Table(t) => Some(t),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn the_theory_section_is_rendered_from_the_check_records() {
+    let checks = two_checks();
+    let b = theory::blocks(&TheoryTable::Checks(checks.clone()), "tab:t");
+    let t = tables(&b);
+    // The check table split in two, then the constants.
+    assert_eq!(t.len(), 3, "{b:?}");
+    assert_eq!(t[0].label, "tab:t-1-claims");
+    assert_eq!(
+        t[0].header,
+        ["#", "result", "claim", "role", "verdict", "erratum"]
+    );
+    assert_eq!(
+        t[0].rows,
+        [
+            ["1a", "(3.41)", "F smooth", "thesis", "**holds**", "E2"],
+            [
+                "1a.control",
+                "(3.41)",
+                "a bound a quarter of the true one",
+                "negative control",
+                "**fails**",
+                "—"
+            ],
+        ]
+    );
+    assert_eq!(t[1].label, "tab:t-1-numbers");
+    assert_eq!(
+        t[1].rows,
+        [
+            [
+                "1a",
+                "rigorous",
+                "2.000",
+                "1.000",
+                "—",
+                "0.5000",
+                "**holds**"
+            ],
+            [
+                "1a.control",
+                "statistical",
+                "0.5000",
+                "1.000 (0.7500)",
+                "0.2500",
+                "—",
+                "**fails**"
+            ],
+        ]
+    );
+    // The power of the statistical row, the controls and the status.
+    assert!(b.contains(&Block::List(vec![
+        "**1a.control** (negative control): B = 0.5000, flags B < 0.7500, minimum detectable \
+         violation 0.2500 → **fails**"
+            .into()
+    ])));
+    assert!(b.contains(&Block::Para(
+        "Uninformative rows: none. Negative controls: 1a.control detected.".into()
+    )));
+    assert!(b.contains(&Block::Para(
+        "**Status: every negative control detected**".into()
+    )));
+    // Each constant once, with the checks using it; the details refer to it.
+    let k = t[2];
+    assert_eq!(k.label, "tab:t-constants");
+    assert_eq!(
+        k.rows,
+        [
+            [
+                "K1",
+                "L_F",
+                "2.029554",
+                "rigorous upper bound",
+                "interval branch-and-bound (727 boxes)",
+                "1a, 1a.control"
+            ],
+            [
+                "K2",
+                "B_F",
+                "0.500000",
+                "exact",
+                "F(θ₁) − inf F over |θ| ≤ 1",
+                "1a"
+            ],
+        ]
+    );
+    assert_eq!(
+        b.last(),
+        Some(&Block::List(vec![
+            "**1a** first Constants: K1, K2 (table of constants).".into(),
+            "**1a.control** second \\| x Constants: K1 (table of constants).".into(),
+        ]))
+    );
+    let md = doc::markdown(&b);
+    assert_eq!(
+        md.matches("interval branch-and-bound (727 boxes)").count(),
+        1,
+        "{md}"
+    );
+    // The errata table's column: the checks of each erratum.
+    let by = theory::checks_by_erratum(&checks);
+    assert_eq!(by.len(), 1);
+    assert_eq!(by["E2"], ["1a"]);
+}
+
+#[test]
+fn an_undetected_control_fails_the_status_and_no_table_is_a_note() {
+    let mut checks = two_checks();
+    checks[1].verdict = ilopt_theory::check::Verdict::Holds;
+    let b = theory::blocks(&TheoryTable::Checks(checks), "tab:t");
+    assert!(b.contains(&Block::Para(
+        "Uninformative rows: none. Negative controls: 1a.control NOT detected.".into()
+    )));
+    assert!(b.contains(&Block::Para(
+        "**Status: FAILS — negative control(s) not detected: 1a.control**".into()
+    )));
+    let none = theory::blocks(&TheoryTable::NotRun, "tab:t");
+    assert_eq!(none.len(), 1);
+    assert!(matches!(&none[0], Block::Para(p) if p.starts_with("*Not run")));
+    assert!(theory::checks_by_erratum(TheoryTable::NotRun.checks()).is_empty());
+}
+
+#[test]
+fn the_theory_cache_round_trips_the_check_records() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let file = dir.path().join("theory.json");
+    let cache = TheoryCache {
+        key_hash: "0123456789abcdef".into(),
+        checks: two_checks(),
+    };
+    write_atomic(&file, &to_json("theory cache", &cache).expect("serialises")).expect("writes");
+    let back: TheoryCache = read_json(&file).expect("reads back");
+    assert_eq!(back, cache);
+    // The renderings of the records read back are those of the records computed.
+    assert_eq!(
+        ilopt_theory::report::markdown(&back.checks),
+        ilopt_theory::report::markdown(&cache.checks)
+    );
+    // A cache of another shape (no records) is a miss, not an error.
+    std::fs::write(&file, "{\"key_hash\": \"x\", \"markdown\": \"| # |\"}").expect("writes");
+    assert!(read_json::<TheoryCache>(&file).is_none());
 }

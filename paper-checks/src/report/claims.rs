@@ -5,15 +5,33 @@
 //! Only rows whose role is `thesis` enter a claim (the thesis's algorithms on each task); extra
 //! and control rows are reported in the tables, never in a thesis claim.
 
-use super::{Claim, num};
+use super::aggregate::num;
 use crate::experiment::{Checkpoint, RunStatus, SeedRun};
 use crate::gradient_error::SlopeCi;
-use crate::pipeline::{ConfigResult, ConfigTiming, Results};
+use crate::results::{ConfigResult, ConfigTiming, Results};
 use crate::stats::Summary;
 use crate::verdict::{
     MedianCi, Outcome, Tally, Verdict, cap_for_failures, extreme, least, less, most, within,
 };
+use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, FisherSnedecor};
+
+/// A qualitative claim of chapter 4 with its verdict.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Claim {
+    /// Identifier.
+    pub id: String,
+    /// Where in the thesis.
+    pub source: String,
+    /// The claim.
+    pub claim: String,
+    /// The rule applied.
+    pub rule: String,
+    /// The numbers.
+    pub evidence: String,
+    /// The verdict.
+    pub verdict: Verdict,
+}
 
 /// Confidence level of every interval of a claim.
 const LEVEL: f64 = 0.95;
@@ -147,24 +165,37 @@ fn censored(v: Verdict, xs: &[f64], cap: f64) -> Verdict {
     }
 }
 
-/// The deterministic claims (runtime claims: [`timing_claims`]).
+/// A claim with its verdict.
+fn claim(id: &str, source: &str, claim: &str, rule: &str, evidence: String, v: Verdict) -> Claim {
+    Claim {
+        id: id.into(),
+        source: source.into(),
+        claim: claim.into(),
+        rule: rule.into(),
+        evidence,
+        verdict: v,
+    }
+}
+
+/// The deterministic claims (runtime claims: [`timing_claims`]), in the order of the chapter:
+/// Fig. 4.2's rate, the obstacle task's success rates, extremes and gradient calls, then
+/// CartPole's.
 ///
 /// `reset_cap` is the cap of Fig. 4.9's count (resets before one full episode): a run at the cap
 /// never completed an episode, so its count is censored and says nothing about a variance.
 pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
-    let mut out = Vec::new();
-    let mut push = |id: &str, source: &str, claim: &str, rule: &str, ev: String, v: Verdict| {
-        out.push(Claim {
-            id: id.into(),
-            source: source.into(),
-            claim: claim.into(),
-            rule: rule.into(),
-            evidence: ev,
-            verdict: v,
-        });
-    };
+    let mut out = vec![gradient_error_claim(r)];
+    out.extend(obstacle_success_claims(&r.obstacle));
+    out.extend(obstacle_extreme_claims(&r.obstacle));
+    out.extend(obstacle_calls_claims(&r.obstacle));
+    out.extend(cartpole_claims(&r.cartpole, reset_cap));
+    out
+}
+
+/// O1: the gradient-estimate error decays at ≈ 1/√N (Fig. 4.2), by the slope of each route.
+fn gradient_error_claim(r: &Results) -> Claim {
     let (toy, obst) = (&r.gradient_error.toy, &r.gradient_error.obstacle);
-    push(
+    claim(
         "O1",
         "§4.1.3, Fig. 4.2",
         "the gradient-estimate error decays at ≈ 1/√N",
@@ -178,36 +209,29 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
             crate::gradient_error::slope_text(obst)
         ),
         Verdict::all(&[slope_verdict(&toy.slope), slope_verdict(&obst.slope)]),
-    );
+    )
+}
 
-    let o = &r.obstacle;
+/// O2–O5: the obstacle task's final success rates (Fig. 4.3).
+fn obstacle_success_claims(o: &[Row]) -> Vec<Claim> {
+    let mut out = Vec::new();
     let success = |c: &ConfigResult| last_value(c, |k| Some(k.score), Some(0.0));
-    let level = |id: &str, label: &str, claim: &str, lo: f64, hi: f64| {
+    // A thesis row's final success rate lies in [lo, hi].
+    let level = |id: &str, label: &str, text: &str, lo: f64, hi: f64| {
         let rule = format!(
             "the 95% t-interval of the final success rate (diverged runs count as 0) lies in \
              [{}%, {}%]: reproduced; disjoint from it: not reproduced; else inconclusive",
             num(100.0 * lo),
             num(100.0 * hi)
         );
-        match thesis(o, label) {
+        let (ev, v) = match thesis(o, label) {
             Some(c) => {
                 let s = success(c);
-                (
-                    id.to_string(),
-                    claim.to_string(),
-                    rule,
-                    evidence([(c, ci_text(&s))]),
-                    within(&s, lo, hi),
-                )
+                (evidence([(c, ci_text(&s))]), within(&s, lo, hi))
             }
-            None => (
-                id.to_string(),
-                claim.to_string(),
-                rule,
-                format!("no thesis row {label}"),
-                Verdict::Inconclusive,
-            ),
-        }
+            None => (format!("no thesis row {label}"), Verdict::Inconclusive),
+        };
+        claim(id, "§4.1.3, Fig. 4.3", text, &rule, ev, v)
     };
     // BC ≈ 70 %, and constant: the per-seed change from the first checkpoint to the last.
     if let Some(bc) = thesis(o, "BC") {
@@ -218,7 +242,7 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
             .filter_map(|r| Some(r.checkpoints.last()?.score - r.checkpoints.get(1)?.score))
             .collect();
         let d = Summary::of(&change);
-        push(
+        out.push(claim(
             "O2",
             "§4.1.3, Fig. 4.3",
             "BC's success rate is ≈ 70% and stays constant as expert trajectories increase",
@@ -235,9 +259,9 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
                 })
             ),
             Verdict::all(&[within(&s, 0.6, 0.8), within(&d, -0.1, 0.1)]),
-        );
+        ));
     }
-    for (id, label, claim, lo, hi) in [
+    for (id, label, text, lo, hi) in [
         ("O3", "SGD", "SGD's success rate is ≈ 82.5%", 0.725, 0.925),
         (
             "O4",
@@ -247,14 +271,13 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
             0.90,
         ),
     ] {
-        let (id, claim, rule, ev, v) = level(id, label, claim, lo, hi);
-        push(&id, "§4.1.3, Fig. 4.3", &claim, &rule, ev, v);
+        out.push(level(id, label, text, lo, hi));
     }
     let trio: Vec<&ConfigResult> = ["STORM", "DAgger", "Adam"]
         .iter()
         .filter_map(|l| thesis(o, l))
         .collect();
-    push(
+    out.push(claim(
         "O5",
         "§4.1.3, Fig. 4.3",
         "STORM, DAgger and Adam reach ≈ 90% success for many expert trajectories",
@@ -267,7 +290,14 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
                 .map(|c| within(&success(c), 0.8, 1.0))
                 .collect::<Vec<_>>(),
         ),
-    );
+    ));
+    out
+}
+
+/// O6–O8: the obstacle task's extremes: BC's crashes, STORM's gradient norm, DAgger's loss
+/// (Figs. 4.4–4.6).
+fn obstacle_extreme_claims(o: &[Row]) -> Vec<Claim> {
+    let mut out = Vec::new();
     let optimisers = |labels: &[&str]| -> Vec<&ConfigResult> {
         labels.iter().filter_map(|l| thesis(o, l)).collect()
     };
@@ -302,7 +332,7 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
     };
     let crashes = |c: &ConfigResult| last_value(c, |k| Some(f64::from(k.crashes)), None);
     let (ev, v) = extreme_claim("BC", &all_obstacle, &crashes, true);
-    push(
+    out.push(claim(
         "O6",
         "§4.1.3, Fig. 4.4",
         "BC has the most crashes",
@@ -311,11 +341,11 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
          BC's: not reproduced; else inconclusive",
         ev,
         v,
-    );
+    ));
     let opt = optimisers(&["SGD", "Adam", "RMSProp", "STORM"]);
     let grad_x = |c: &ConfigResult| last_value(c, |k| k.grad_x, None);
     let (ev, v) = extreme_claim("STORM", &opt, &grad_x, false);
-    push(
+    out.push(claim(
         "O7",
         "§4.1.3, Fig. 4.5",
         "in the x direction STORM converges faster than the other optimisers (lowest gradient norm)",
@@ -324,10 +354,10 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
          verdict at inconclusive, a majority of diverged runs makes it not reproduced",
         ev,
         v,
-    );
+    ));
     let loss = |c: &ConfigResult| last_value(c, |k| Some(k.loss), None);
     let (ev, v) = extreme_claim("DAgger", &all_obstacle, &loss, false);
-    push(
+    out.push(claim(
         "O8",
         "§4.1.3, Fig. 4.6",
         "DAgger's loss is very low at every iteration",
@@ -335,17 +365,53 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
          row's (diverged runs left out, and a DAgger divergence caps the verdict)",
         ev,
         v,
-    );
-    let calls_ev = |set: &[&ConfigResult]| {
-        evidence(
-            set.iter()
-                .map(|c| (*c, format!("median calls {}", calls(c).text(num)))),
-        )
+    ));
+    out
+}
+
+/// The rule of the gradient-call claims (Tables 4.1 and 4.3).
+const MEDIAN_RULE: &str = "medians of the gradient calls to sustained convergence with \
+     distribution-free 95% intervals (order statistics); runs that never converged or diverged \
+     count as +∞";
+
+/// The gradient-call medians of `set`, as evidence.
+fn calls_evidence(set: &[&ConfigResult]) -> String {
+    evidence(
+        set.iter()
+            .map(|c| (*c, format!("median calls {}", calls(c).text(num)))),
+    )
+}
+
+/// "DAgger needs the most gradient calls to converge" on the rows `set` (O10, C1).
+fn dagger_most_calls(id: &str, source: &str, set: &[&ConfigResult]) -> Claim {
+    let verdict = match set.iter().find(|c| c.label == "DAgger") {
+        None => Verdict::Inconclusive,
+        Some(d) => {
+            let others: Vec<MedianCi> = set
+                .iter()
+                .filter(|c| c.label != "DAgger")
+                .map(|c| calls(c))
+                .collect();
+            most(&calls(d), &others.iter().collect::<Vec<_>>())
+        }
     };
+    claim(
+        id,
+        source,
+        "DAgger needs the most gradient calls to converge",
+        &format!(
+            "{MEDIAN_RULE}; DAgger's interval wholly above every other's: reproduced; DAgger's \
+             median +∞, or another's interval wholly above it or +∞: not reproduced"
+        ),
+        calls_evidence(set),
+        verdict,
+    )
+}
+
+/// O9–O10: STORM needs the fewest gradient calls, DAgger the most (Table 4.1).
+fn obstacle_calls_claims(o: &[Row]) -> Vec<Claim> {
+    let mut out = Vec::new();
     let t41 = in_order(o, &["STORM", "SGD", "RMSProp", "DAgger", "Adam"]);
-    let median_rule = "medians of the gradient calls to sustained convergence with \
-                       distribution-free 95% intervals (order statistics); runs that never \
-                       converged or diverged count as +∞";
     if let Some(storm) = t41.iter().find(|c| c.label == "STORM") {
         let others: Vec<MedianCi> = t41
             .iter()
@@ -353,70 +419,47 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
             .map(|c| calls(c))
             .collect();
         let v = least(&calls(storm), &others.iter().collect::<Vec<_>>());
-        push(
+        out.push(claim(
             "O9",
             "Table 4.1",
             "STORM needs the fewest gradient calls to converge",
             &format!(
-                "{median_rule}; STORM's interval wholly below every other's: reproduced; some \
+                "{MEDIAN_RULE}; STORM's interval wholly below every other's: reproduced; some \
                  wholly below STORM's, or STORM's median +∞: not reproduced; a STORM divergence \
                  caps the verdict"
             ),
-            calls_ev(&t41),
+            calls_evidence(&t41),
             cap_for_failures(v, &[tally(storm)]),
-        );
+        ));
     }
-    let most_claim = |set: &[&ConfigResult]| -> Verdict {
-        let Some(d) = set.iter().find(|c| c.label == "DAgger") else {
-            return Verdict::Inconclusive;
-        };
-        let others: Vec<MedianCi> = set
-            .iter()
-            .filter(|c| c.label != "DAgger")
-            .map(|c| calls(c))
-            .collect();
-        most(&calls(d), &others.iter().collect::<Vec<_>>())
-    };
-    let most_rule = format!(
-        "{median_rule}; DAgger's interval wholly above every other's: reproduced; DAgger's median \
-         +∞, or another's interval wholly above it or +∞: not reproduced"
-    );
-    push(
-        "O10",
-        "Table 4.1",
-        "DAgger needs the most gradient calls to converge",
-        &most_rule,
-        calls_ev(&t41),
-        most_claim(&t41),
-    );
-    let c = &r.cartpole;
+    out.push(dagger_most_calls("O10", "Table 4.1", &t41));
+    out
+}
+
+/// C1–C4: CartPole's gradient calls (Table 4.3), rewards (Fig. 4.10) and the variance of the
+/// crashes (Fig. 4.9).
+fn cartpole_claims(c: &[Row], reset_cap: u32) -> Vec<Claim> {
+    let mut out = Vec::new();
     let t43 = in_order(c, &["STORM", "RMSProp", "DAgger", "Adam"]);
-    push(
-        "C1",
-        "Table 4.3",
-        "DAgger needs the most gradient calls to converge",
-        &most_rule,
-        calls_ev(&t43),
-        most_claim(&t43),
-    );
+    out.push(dagger_most_calls("C1", "Table 4.3", &t43));
     if let (Some(st), Some(ad), Some(rm)) =
         (thesis(c, "STORM"), thesis(c, "Adam"), thesis(c, "RMSProp"))
     {
-        push(
+        out.push(claim(
             "C2",
             "§4.2.2, Fig. 4.8, Table 4.3",
             "STORM takes more gradient calls to converge than Adam and RMSProp",
             &format!(
-                "{median_rule}; Adam's and RMSProp's intervals each wholly below STORM's: \
+                "{MEDIAN_RULE}; Adam's and RMSProp's intervals each wholly below STORM's: \
                  reproduced; either's median +∞ or STORM's wholly below: not reproduced; \
                  divergences of Adam or RMSProp cap the verdict"
             ),
-            calls_ev(&[st, ad, rm]),
+            calls_evidence(&[st, ad, rm]),
             cap_for_failures(
                 Verdict::all(&[less(&calls(ad), &calls(st)), less(&calls(rm), &calls(st))]),
                 &[tally(ad), tally(rm)],
             ),
-        );
+        ));
     }
     let rewards: Vec<&ConfigResult> = c
         .iter()
@@ -424,7 +467,7 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
         .filter(|x| x.entry.role == crate::config::Role::Thesis)
         .collect();
     let reward = |x: &ConfigResult| last_value(x, |k| Some(k.reward), Some(0.0));
-    push(
+    out.push(claim(
         "C3",
         "§4.2.2, Fig. 4.10",
         "rewards increase to the maximum episode reward of 500",
@@ -438,7 +481,7 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
                 .map(|x| within(&reward(x), 475.0, 500.0))
                 .collect::<Vec<_>>(),
         ),
-    );
+    ));
     let resets = |x: &ConfigResult| -> Vec<f64> {
         x.runs
             .iter()
@@ -461,7 +504,7 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
                 )
             }
         };
-        push(
+        out.push(claim(
             "C4",
             "§4.2.2, Fig. 4.9",
             "among STORM, Adam and RMSProp the variance of STORM's crashes is the lowest",
@@ -495,7 +538,7 @@ pub fn claims(r: &Results, reset_cap: u32) -> Vec<Claim> {
                 &xs,
                 f64::from(reset_cap),
             ),
-        );
+        ));
     }
     out
 }

@@ -47,17 +47,9 @@ pub enum Block {
         /// Caption (plain text).
         caption: String,
     },
-    /// Text already rendered for each format (e.g. the theorem-check table that `ilopt-theory`
-    /// writes as Markdown): printed verbatim.
-    Raw {
-        /// The Markdown text.
-        markdown: String,
-        /// The LaTeX text.
-        latex: String,
-    },
 }
 
-/// Render as Markdown: every block followed by a blank line (raw blocks verbatim).
+/// Render as Markdown: every block followed by a blank line.
 pub fn markdown(blocks: &[Block]) -> String {
     let mut o = String::new();
     for b in blocks {
@@ -90,7 +82,6 @@ pub fn markdown(blocks: &[Block]) -> String {
                 // The image, then its caption as text (Markdown viewers do not show alt text).
                 let _ = writeln!(o, "![{caption}]({path})\n\n*{caption}.*\n");
             }
-            Block::Raw { markdown, .. } => o += markdown,
         }
     }
     o
@@ -141,7 +132,6 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
                     caption_text(caption)
                 );
             }
-            Block::Raw { latex, .. } => o += latex,
         }
     }
     o
@@ -472,116 +462,6 @@ pub fn escape(s: &str) -> String {
     tex::text(s)
 }
 
-/// Blocks from simple Markdown (`## ` headings, paragraphs, `- ` lists with indented
-/// continuation items, pipe tables): enough for the theorem-check section, so the LaTeX
-/// rendering carries it too. Tables get `label` and a column specification of `l`s.
-pub fn from_markdown(md: &str, label: &str) -> Vec<Block> {
-    let mut out = Vec::new();
-    let mut lines = md.lines().peekable();
-    let cells = |line: &str| -> Vec<String> {
-        let inner = line.trim().trim_start_matches('|').trim_end_matches('|');
-        // Split on `|` not preceded by a backslash.
-        let mut v = Vec::new();
-        let mut cur = String::new();
-        let mut prev = ' ';
-        for c in inner.chars() {
-            if c == '|' && prev != '\\' {
-                v.push(cur.trim().to_string());
-                cur.clear();
-            } else {
-                cur.push(c);
-            }
-            prev = c;
-        }
-        v.push(cur.trim().to_string());
-        // Cells hold the text itself; the Markdown renderer escapes `|` again.
-        v.into_iter()
-            .map(|c| c.replace("\\|", "|"))
-            .collect::<Vec<_>>()
-    };
-    let mut k = 0;
-    while let Some(line) = lines.next() {
-        let t = line.trim_end();
-        if t.is_empty() {
-            continue;
-        }
-        if let Some(h) = t.strip_prefix("## ") {
-            out.push(Block::Heading {
-                level: 2,
-                text: h.to_string(),
-            });
-        } else if t.starts_with('|') {
-            let header = cells(t);
-            let mut rows = Vec::new();
-            while let Some(l) = lines.peek() {
-                if !l.trim_start().starts_with('|') {
-                    break;
-                }
-                let l = lines.next().unwrap_or_default();
-                if l.contains("---") && l.chars().all(|c| matches!(c, '|' | '-' | ':' | ' ')) {
-                    continue;
-                }
-                rows.push(cells(l));
-            }
-            k += 1;
-            // The column with the longest text wraps (p{4cm}); the others are `l`.
-            let wide = (0..header.len())
-                .max_by_key(|&j| {
-                    rows.iter()
-                        .map(|r: &Vec<String>| r.get(j).map_or(0, String::len))
-                        .sum::<usize>()
-                })
-                .filter(|_| header.len() > 4);
-            let spec: String = (0..header.len())
-                .map(|j| if Some(j) == wide { "p{4cm}" } else { "l" })
-                .collect();
-            out.push(Block::Table(Table {
-                caption: None,
-                label: format!("{label}-{k}"),
-                spec,
-                header,
-                rows,
-            }));
-        } else if let Some(item) = t.strip_prefix("- ") {
-            let mut items = vec![item.to_string()];
-            while let Some(l) = lines.peek() {
-                let lt = l.trim_start();
-                if let Some(more) = lt.strip_prefix("- ") {
-                    if l.starts_with(' ') {
-                        if let Some(last) = items.last_mut() {
-                            *last += "; ";
-                            *last += more;
-                        }
-                    } else {
-                        items.push(more.to_string());
-                    }
-                    lines.next();
-                } else {
-                    break;
-                }
-            }
-            out.push(Block::List(items));
-        } else {
-            let mut p = t.to_string();
-            while let Some(l) = lines.peek() {
-                let lt = l.trim();
-                if lt.is_empty()
-                    || lt.starts_with('|')
-                    || lt.starts_with("- ")
-                    || lt.starts_with('#')
-                {
-                    break;
-                }
-                p.push(' ');
-                p += lt;
-                lines.next();
-            }
-            out.push(Block::Para(p));
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -615,21 +495,5 @@ mod tests {
         );
         assert!(t.contains("1 & p$|$q \\\\"), "{t}");
         assert!(t.contains("\\toprule") && t.contains("\\bottomrule"), "{t}");
-    }
-
-    #[test]
-    fn markdown_tables_and_lists_parse() {
-        let md = "| # | x |\n|---|---|\n| 1 | a \\| b |\n\n**Details.**\n\n- one\n  - sub\n- two\n";
-        let b = from_markdown(md, "tab:t");
-        assert_eq!(b.len(), 3, "{b:?}");
-        match &b[0] {
-            Block::Table(t) => {
-                assert_eq!(t.header, vec!["#", "x"]);
-                assert_eq!(t.rows, vec![vec!["1".to_string(), "a | b".to_string()]]);
-            }
-            other => panic!("{other:?}"),
-        }
-        assert_eq!(b[1], Block::Para("**Details.**".into()));
-        assert_eq!(b[2], Block::List(vec!["one; sub".into(), "two".into()]));
     }
 }

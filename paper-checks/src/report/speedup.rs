@@ -4,9 +4,9 @@
 //! Wall times depend on the machine, so the appendix compares them only as speed-ups and says on
 //! what the kit ran ([`Machine`]); the thesis does not describe its machine.
 
-use super::{ci, num};
-use crate::pipeline::{ConfigResult, ConfigTiming};
+use super::aggregate::{ci, num};
 use crate::provenance::Machine;
+use crate::results::{ConfigResult, ConfigTiming};
 use crate::stats::Summary;
 
 /// What a kit wall time measures.
@@ -77,7 +77,7 @@ pub fn kit_time(t: &ConfigTiming) -> (Summary, TimeBasis) {
     let conv: Vec<f64> = t.runs.iter().filter_map(|r| r.converge_seconds).collect();
     let seeds = t.runs.len();
     if conv.is_empty() {
-        // Issue 17 item 10: no ratio for a method that did not converge (the row shows "—").
+        // No ratio for a method that did not converge (the row shows "—").
         (Summary::of(&[]), TimeBasis::WholeRun { seeds })
     } else {
         (

@@ -2,11 +2,11 @@
 //! convergence and divergence rules, θ₁, the selected hyper-parameters of every row, the run
 //! statuses, and the whole tuning grid's results (the sensitivity table).
 
+use super::aggregate::num;
 use super::doc::{Block, Table};
-use super::num;
 use crate::config::{Profile, Role, TaskSection};
 use crate::experiment::{RunStatus, TaskKind};
-use crate::pipeline::Results;
+use crate::results::Results;
 use crate::tuning::TuningResult;
 
 fn strings(xs: &[&str]) -> Vec<String> {

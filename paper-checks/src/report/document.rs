@@ -1,0 +1,538 @@
+//! The appendix document: the chapter-4 tables beside the thesis's, the claims, the tuning, the
+//! theorem checks and the errata, with the figures in their sections, as [`Block`]s rendered
+//! to `appendix.md` and `appendix.tex`.
+
+use super::aggregate::{ConvergenceRow, ci, last, num, percent, runtime};
+use super::claims::Claim;
+use super::doc::{self, Block, Table};
+use super::figures::NamedFigure;
+use super::thesis::{ERRATA, THESIS_T41, THESIS_T42, THESIS_T43, THESIS_T44};
+use super::{speedup, theory, tuning};
+use crate::config::Profile;
+use crate::error::Error;
+use crate::experiment::{Checkpoint, SeedRun, TaskKind};
+use crate::results::{ConfigResult, ConfigTiming, Results};
+use crate::stats::Summary;
+use crate::storage::write_atomic;
+use std::path::Path;
+
+/// The final-checkpoint table's rows of a task's baselines (evaluated on every seed's episodes).
+fn baseline_rows(r: &Results, task: TaskKind) -> Vec<Vec<String>> {
+    r.baselines
+        .iter()
+        .filter(|b| b.task == task)
+        .map(|b| {
+            let s = |f: &dyn Fn(&Checkpoint) -> f64| {
+                Summary::of(&b.runs.iter().map(f).collect::<Vec<_>>())
+            };
+            vec![
+                format!("*{}* (reference, no training)", b.label),
+                if task == TaskKind::Obstacle {
+                    ci(&percent(&s(&|c| c.score)))
+                } else {
+                    ci(&s(&|c| c.reward))
+                },
+                ci(&s(&|c| f64::from(c.crashes))),
+                ci(&s(&|c| c.loss)),
+                "—".into(),
+            ]
+        })
+        .collect()
+}
+
+/// Both tasks' speed-up rows (Table 4.2's, then Table 4.4's, each with its total).
+fn speedup_all_cells(r: &Results) -> Vec<Vec<String>> {
+    let mut rows = speedup::speedup_cells("4.2", &speedup::speedup_rows(&r.obstacle, &THESIS_T42));
+    rows.extend(speedup::speedup_cells(
+        "4.4",
+        &speedup::speedup_rows(&r.cartpole, &THESIS_T44),
+    ));
+    rows
+}
+
+/// Kit-vs-thesis rows of a gradient-call table.
+fn calls_table(rows: &[ConvergenceRow], thesis: &[(&str, f64, f64)]) -> Vec<[String; 5]> {
+    let mut out = Vec::new();
+    for row in rows {
+        if row.label == "BC" {
+            continue;
+        }
+        let th = thesis
+            .iter()
+            .find(|t| t.0 == row.label)
+            .map_or("—".into(), |t| format!("{} ± {}", num(t.1), num(t.2)));
+        out.push([
+            row.label.clone(),
+            ci(&row.gradient_calls),
+            format!("{}/{}", row.converged, row.seeds),
+            ci(&row.total_gradient_calls),
+            th,
+        ]);
+    }
+    out
+}
+
+fn runtime_table(
+    set: &[(ConfigResult, Option<ConfigTiming>)],
+    thesis: &[(&str, f64)],
+) -> Vec<[String; 4]> {
+    set.iter()
+        .filter(|c| c.0.label != "BC")
+        .map(|(c, t)| {
+            let (conv, total) = runtime(t.as_ref());
+            [
+                c.label.clone(),
+                ci(&conv),
+                ci(&total),
+                thesis
+                    .iter()
+                    .find(|x| x.0 == c.label)
+                    .map_or("—".into(), |x| num(x.1)),
+            ]
+        })
+        .collect()
+}
+
+fn final_rows(rows: &[ConvergenceRow], obstacle: bool) -> Vec<Vec<String>> {
+    rows.iter()
+        .map(|r| {
+            vec![
+                r.label.clone(),
+                if obstacle {
+                    ci(&percent(&r.final_score))
+                } else {
+                    ci(&r.final_reward)
+                },
+                ci(&r.final_crashes),
+                ci(&r.final_loss),
+                format!("{}", r.failed_runs),
+            ]
+        })
+        .collect()
+}
+
+/// A task's two cost tables (gradient calls to converge; runtime), kit next to thesis.
+fn cost_tables(
+    (calls_no, runtime_no): (&str, &str),
+    rows: &[ConvergenceRow],
+    configs: &[(ConfigResult, Option<ConfigTiming>)],
+    thesis_calls: &[(&str, f64, f64)],
+    thesis_runtime: &[(&str, f64)],
+) -> [Block; 2] {
+    [
+        Block::Table(Table {
+            caption: Some(format!(
+                "**Table {calls_no}: gradient calls to converge** (kit vs thesis):"
+            )),
+            label: format!("tab:pc-{}", calls_no.replace('.', "-")),
+            header: strings(&[
+                "algorithm",
+                "kit: gradient calls to converge",
+                "kit: converged",
+                "kit: gradient calls of the whole run",
+                "thesis",
+            ]),
+            rows: calls_table(rows, thesis_calls)
+                .into_iter()
+                .map(|a| a.to_vec())
+                .collect(),
+            spec: "lrrrr".into(),
+        }),
+        Block::Table(Table {
+            caption: Some(format!(
+                "**Table {runtime_no}: runtime in seconds** (kit vs thesis; machine-dependent):"
+            )),
+            label: format!("tab:pc-{}", runtime_no.replace('.', "-")),
+            header: strings(&["algorithm", "kit: to converge", "kit: whole run", "thesis"]),
+            rows: runtime_table(configs, thesis_runtime)
+                .into_iter()
+                .map(|a| a.to_vec())
+                .collect(),
+            spec: "lrrr".into(),
+        }),
+    ]
+}
+
+fn strings(v: &[&str]) -> Vec<String> {
+    v.iter().map(|s| (*s).to_string()).collect()
+}
+
+/// What the objective does with episodes that end early, with CartPole's numbers: the loss at
+/// θ₀ and at the last checkpoint, and the final reward, of every algorithm that descends F
+/// directly (all but BC and DAgger).
+fn episode_length_note(r: &Results) -> String {
+    let mean_at =
+        |c: &ConfigResult, pick: fn(&SeedRun) -> Option<&Checkpoint>, f: fn(&Checkpoint) -> f64| {
+            let xs: Vec<f64> = c.runs.iter().filter_map(pick).map(f).collect();
+            xs.iter().sum::<f64>() / xs.len().max(1) as f64
+        };
+    let rows: Vec<String> = r
+        .cartpole
+        .iter()
+        .filter(|(c, _)| !c.label.starts_with("DAgger"))
+        .map(|(c, _)| {
+            format!(
+                "{}: loss {} → {}, reward {} → {}",
+                c.label,
+                num(mean_at(c, |s| s.checkpoints.first(), |k| k.loss)),
+                num(mean_at(c, last, |k| k.loss)),
+                num(mean_at(c, |s| s.checkpoints.first(), |k| k.reward)),
+                num(mean_at(c, last, |k| k.reward)),
+            )
+        })
+        .collect();
+    format!(
+        "**Objective.** Every row but the controls minimises the thesis's F (eqs. 3.1–3.16): a fixed \
+         horizon of T decisions (CartPole T = 500: after a crash the environment resets and the \
+         stream goes on, the thesis's protocol; obstacle task T = 200: after the episode ends the \
+         remaining steps cost 0 after success and (2·v_max)² after a crash). The rows marked \
+         *control* minimise the episodic objective instead (the loss summed over each episode's own \
+         length), under which a short episode is cheap; comparing a control with its row shows \
+         what the choice of objective does. CartPole, mean evaluation loss and reward at θ₀ → at \
+         the last checkpoint (deterministic policy): {}.",
+        if rows.is_empty() {
+            "no such algorithm in this profile".to_string()
+        } else {
+            rows.join("; ")
+        }
+    )
+}
+
+/// The obstacle section's description of the learner (from the profile).
+fn obstacle_learner_text(profile: &Profile) -> String {
+    use ilopt::task::obstacle::ObstacleFeatures;
+    let features = match profile.obstacle.features.unwrap_or_default() {
+        ObstacleFeatures::Basic => {
+            "the 9 basic features (goal − agent, obstacle − agent, obstacle \
+             velocity, agent velocity, 1)"
+                .to_string()
+        }
+        f @ ObstacleFeatures::Rbf {
+            per_axis,
+            width,
+            x_range,
+            y_range,
+        } => format!(
+            "{} features: the 9 basic ones (goal − agent, obstacle − agent, obstacle velocity, agent \
+             velocity, 1), the unit vector to the goal, and for each of {per_axis} × {per_axis} centres c \
+             over the obstacle's relative position r (x in [{}, {}], y in [{}, {}]) the bump \
+             exp(−‖r − c‖²/(2·{width}²)) and its products with the obstacle's velocity \
+             (`ObstacleFeatures::Rbf`)",
+            f.dim(),
+            x_range[0],
+            x_range[1],
+            y_range[0],
+            y_range[1]
+        ),
+    };
+    format!(
+        "The learner (the thesis does not state one) is linear-Gaussian (P3, σ_π = {}) over {features}; \
+         its loss is that of the executed velocity, ‖clip(Wφ) − π*(s)‖², bounded by (v_max + ‖π*‖)² \
+         (`SpeedLimitedGaussian`). The expert is the velocity-obstacle expert of eq. 4.1.",
+        profile.obstacle.sigma.unwrap_or(0.02)
+    )
+}
+
+/// Everything the appendix needs to say, in order.
+pub struct Inputs<'a> {
+    /// The profile run.
+    pub profile: &'a Profile,
+    /// Its results.
+    pub results: &'a Results,
+    /// The obstacle task's convergence rows, in table order.
+    pub obstacle_rows: &'a [ConvergenceRow],
+    /// CartPole's convergence rows, in table order.
+    pub cartpole_rows: &'a [ConvergenceRow],
+    /// The deterministic claims with their verdicts.
+    pub claims: &'a [Claim],
+    /// The runtime claims with their verdicts.
+    pub timing_claims: &'a [Claim],
+    /// Every figure, in document order.
+    pub figures: &'a [NamedFigure],
+    /// Whether PNG files were written beside the SVGs.
+    pub png: bool,
+    /// The machine the run's wall times were measured on.
+    pub machine: &'a crate::provenance::Machine,
+}
+
+/// The appendix as blocks, rendered by [`doc::markdown`] and [`doc::latex`].
+pub fn document(x: &Inputs<'_>) -> Vec<Block> {
+    let (profile, r) = (x.profile, x.results);
+    let mut d = Vec::new();
+    let h = |text: &str| Block::Heading {
+        level: 2,
+        text: text.into(),
+    };
+    let figures = |d: &mut Vec<Block>, which: &[&str]| {
+        let ext = if x.png { "png" } else { "svg" };
+        for (name, fig, f) in x.figures {
+            if which.contains(fig) {
+                d.push(Block::Figure {
+                    path: format!("figures/{name}.{ext}"),
+                    caption: f.title.clone(),
+                });
+            }
+        }
+    };
+    d.push(Block::Heading {
+        level: 1,
+        text: "Appendix: thesis chapter 4, regenerated".into(),
+    });
+    d.push(Block::Para(format!(
+        "Generated by `cargo run --release -p paper-checks{}` (profile `{}`, {} seeds per configuration). \
+         Every number below is computed from the per-seed data in this directory (`checkpoints.csv`, \
+         `runs/*.json`, `gradient_error.csv`); configurations and seeds are in `provenance.json`, wall \
+         times in `timings.json` / `timings.csv`.",
+        if profile.name == "full" {
+            " -- --full"
+        } else {
+            ""
+        },
+        profile.name,
+        profile.seeds
+    )));
+    d.push(h("Definitions (applied to every algorithm alike)"));
+    d.push(Block::List(vec![
+        format!(
+            "**Evaluation.** At each checkpoint (fixed gradient-call counts, below) the learned \
+             policy acts deterministically — the linear-Gaussian mean `Wφ(s)` as the environment executes it \
+             (clipped to the maximum speed) (obstacle), the most probable action of the softmax (CartPole) — \
+             on {} (obstacle) / {} (CartPole) seeded episodes, the same episodes for every algorithm, \
+             checkpoint and reference policy of a seed. Crash (obstacle) = the discs overlap; crash \
+             (CartPole) = the episode terminates before 500 steps. Loss = mean per-decision supervised loss on \
+             the states the deterministic policy visits (obstacle: squared error of the executed velocity \
+             against the velocity-obstacle expert's, split into x and y; CartPole: Brier loss against the \
+             {} expert's action).",
+            profile.obstacle.eval_episodes,
+            profile.cartpole.eval_episodes,
+            profile.cartpole.expert.unwrap_or_default().name(),
+        ),
+        "**Reference policies** (no training; rows in *italics*, dashed lines in the figures): the \
+         task's expert, and on the obstacle task *straight to goal* — full speed at the goal, ignoring \
+         the obstacle. They are evaluated on the same episodes as the learners and bracket what \
+         imitation achieves."
+            .into(),
+        format!(
+            "**Converge.** A run converges at the first checkpoint of the first window of `sustain` consecutive checkpoints whose score is ≥ the task's threshold (sustained convergence; a diverged run never converges): \
+             score = success rate (obstacle, threshold {}) or mean episode reward / 500 (CartPole, threshold \
+             {}). *Gradient calls to converge* = cumulative per-state gradient evaluations (`Cost::gradient_evaluations`, \
+             the same unit for the oracle methods and the dataset learners' inner updates) at that checkpoint; \
+             *runtime* = training wall time up to it (evaluation excluded). The tables' means of gradient calls are \
+             over the seeds that converged (their number is given); the claims compare medians over \
+             all seeds, a run that did not converge or diverged counting +∞.",
+            profile.obstacle.converge_score, profile.cartpole.converge_score,
+        ),
+        "**Confidence intervals.** Mean ± half-width of the 95% Student-t interval over seeds, \
+         `t(0.975, n−1)·s/√n`, in every table; figures shade the same interval at each checkpoint. \
+         The thesis's ± values are its own (their meaning is not stated). Claims are judged on \
+         intervals only (rules beside each claim): reproduced, not reproduced, or inconclusive when \
+         the intervals overlap."
+            .into(),
+        "**Hyper-parameters** are selected by the pre-registered tuning protocol below (see `provenance.json`)."
+            .into(),
+        episode_length_note(r),
+    ]));
+    d.extend(tuning::blocks(profile, r));
+
+    d.push(h(
+        "Fig. 4.2: gradient-estimate error vs number of trajectories",
+    ));
+    d.push(Block::Para(crate::gradient_error::description(
+        &profile.gradient_error,
+        &r.gradient_error,
+    )));
+    figures(&mut d, &["Fig. 4.2"]);
+    for (route, label, head) in [
+        (
+            &r.gradient_error.toy,
+            "tab:pc-fig-4-2a",
+            &["N", "RMSE [95% CI]", "σ/√N", "RMSE / (σ/√N)"][..],
+        ),
+        (
+            &r.gradient_error.obstacle,
+            "tab:pc-fig-4-2b",
+            &[
+                "N",
+                "RMSE vs reference [95% CI]",
+                "ref. variance removed [95% CI]",
+                "σ̂/√N",
+                "ratio",
+            ][..],
+        ),
+    ] {
+        d.push(Block::Table(Table {
+            caption: Some(if route.reference_trajectories.is_some() {
+                "RMSE by N on the obstacle task (the data of thesis Fig. 4.2 (b))".into()
+            } else {
+                "RMSE by N on the toy MDP against the exact ∇F (the data of thesis Fig. 4.2 (a))"
+                    .into()
+            }),
+            label: label.into(),
+            header: strings(head),
+            rows: crate::gradient_error::table_rows(route),
+            spec: "r".repeat(head.len()),
+        }));
+    }
+
+    for (heading, para, figs, task, head1, obstacle, rows, configs, nos, tc, tr) in [
+        (
+            "Obstacle avoidance (§4.1): Figs. 4.3–4.6, Tables 4.1–4.2",
+            Some(obstacle_learner_text(profile)),
+            &["Fig. 4.3", "Fig. 4.4", "Fig. 4.5", "Fig. 4.6"][..],
+            "obstacle",
+            "success rate (%)",
+            true,
+            x.obstacle_rows,
+            &r.obstacle,
+            ("4.1", "4.2"),
+            &THESIS_T41[..],
+            &THESIS_T42[..],
+        ),
+        (
+            "CartPole (§4.2): Figs. 4.8–4.10, Tables 4.3–4.4",
+            Some(match profile.cartpole.expert.unwrap_or_default() {
+                crate::config::CartPoleExpertChoice::Ppo => "The expert is the committed PPO policy \
+                    (`experts/cartpole-ppo.json`, acting greedily), as in the thesis; the learner is a \
+                    linear softmax over the state and a bias."
+                    .to_string(),
+                crate::config::CartPoleExpertChoice::Lqr => "The expert is the kit's LQR controller \
+                    (the thesis uses PPO); the learner is a linear softmax over the state and a bias."
+                    .to_string(),
+            }),
+            &["Fig. 4.8", "Fig. 4.9", "Fig. 4.10"][..],
+            "cartpole",
+            "mean reward",
+            false,
+            x.cartpole_rows,
+            &r.cartpole,
+            ("4.3", "4.4"),
+            &THESIS_T43[..],
+            &THESIS_T44[..],
+        ),
+    ] {
+        d.push(h(heading));
+        if let Some(p) = para {
+            d.push(Block::Para(p));
+        }
+        figures(&mut d, figs);
+        d.push(Block::Table(Table {
+            caption: Some("**Final checkpoint** (all seeds):".into()),
+            label: format!("tab:pc-final-{task}"),
+            header: strings(&["algorithm", head1, "crashes", "loss", "failed runs"]),
+            rows: final_rows(rows, obstacle)
+                .into_iter()
+                .chain(baseline_rows(
+                    r,
+                    if obstacle {
+                        TaskKind::Obstacle
+                    } else {
+                        TaskKind::Cartpole
+                    },
+                ))
+                .collect(),
+            spec: "lrrrr".into(),
+        }));
+        d.extend(cost_tables(nos, rows, configs, tc, tr));
+    }
+
+    d.push(h("Kit time vs thesis (Tables 4.2 and 4.4)"));
+    d.push(Block::Para(speedup::speedup_intro(x.machine)));
+    d.push(Block::Table(Table {
+        caption: None,
+        label: "tab:pc-speedup".into(),
+        header: strings(&speedup::SPEEDUP_HEAD),
+        rows: speedup_all_cells(r),
+        spec: "llrlrr".into(),
+    }));
+
+    d.push(h("Claims of chapter 4 and verdicts"));
+    d.push(Block::Para(
+        "Each verdict is computed from the numbers by the stated rule.".into(),
+    ));
+    d.push(Block::Table(Table {
+        caption: None,
+        label: "tab:pc-claims".into(),
+        header: strings(&["#", "where", "claim", "rule", "numbers", "verdict"]),
+        rows: x
+            .claims
+            .iter()
+            .chain(x.timing_claims)
+            .map(|c| {
+                vec![
+                    c.id.clone(),
+                    c.source.clone(),
+                    c.claim.clone(),
+                    c.rule.clone(),
+                    c.evidence.clone(),
+                    format!("**{}**", c.verdict.text()),
+                ]
+            })
+            .collect(),
+        spec: "llp{3cm}p{3.5cm}p{3.5cm}l".into(),
+    }));
+
+    d.push(h("Theorem checks (`ilopt-theory`)"));
+    d.extend(theory::blocks(&r.theory, "tab:pc-theory"));
+    d.push(h("Errata (math.md §0)"));
+    let by = theory::checks_by_erratum(r.theory.checks());
+    d.push(Block::Table(Table {
+        caption: None,
+        label: "tab:pc-errata".into(),
+        header: strings(&["#", "thesis statement", "problem", "correction", "check"]),
+        rows: ERRATA
+            .iter()
+            .map(|(id, w, p, c)| {
+                vec![
+                    (*id).into(),
+                    (*w).into(),
+                    (*p).into(),
+                    (*c).into(),
+                    by.get(*id)
+                        .map_or("— (no numerical check)".into(), |v| v.join(", ")),
+                ]
+            })
+            .collect(),
+        spec: "llp{4.5cm}p{4.5cm}l".into(),
+    }));
+    d
+}
+
+/// The LaTeX fragment's opening comment.
+const LATEX_PREAMBLE: &str = "% Generated by paper-checks. \\input{} into a document whose preamble loads\n\
+     % amsmath, amssymb, booktabs, longtable, array, graphicx, float and pdflscape\n\
+     % (appendix-standalone.tex does).\n\
+     % Figures are referenced relative to this file's directory.\n";
+
+/// The complete LaTeX document around `appendix.tex` (`pdflatex appendix-standalone.tex` in the
+/// output directory builds the PDF).
+pub fn latex_standalone() -> String {
+    format!(
+        "% Generated by paper-checks: the appendix as a complete document.\n\
+         % Build: pdflatex -interaction=nonstopmode -halt-on-error appendix-standalone.tex (twice, for the\n\
+         % longtables' column widths).\n\
+         \\documentclass[10pt,a4paper]{{article}}\n\
+         {}\
+         \\setlength{{\\emergencystretch}}{{3em}}\n\
+         \\begin{{document}}\n\
+         \\input{{appendix}}\n\
+         \\end{{document}}\n",
+        doc::LATEX_PACKAGES
+    )
+}
+
+/// Write `appendix.md`, `appendix.tex` (a fragment to `\\input`) and
+/// `appendix-standalone.tex` (the complete document around it) into `out`.
+///
+/// # Errors
+/// [`Error::Io`].
+pub fn write_documents(blocks: &[Block], out: &Path) -> Result<(), Error> {
+    write_atomic(&out.join("appendix.md"), doc::markdown(blocks).as_bytes())?;
+    write_atomic(
+        &out.join("appendix.tex"),
+        doc::latex(blocks, LATEX_PREAMBLE).as_bytes(),
+    )?;
+    write_atomic(
+        &out.join("appendix-standalone.tex"),
+        latex_standalone().as_bytes(),
+    )
+}

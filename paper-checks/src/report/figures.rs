@@ -1,0 +1,302 @@
+//! The chapter-4 figures (Figs. 4.2–4.10): per-checkpoint bands over seeds with the reference
+//! policies as dashed lines, and their SVG/PNG files.
+
+use crate::config::Profile;
+use crate::error::Error;
+use crate::experiment::{Checkpoint, TaskKind};
+use crate::plots::{Figure, Series};
+use crate::results::{ConfigResult, Results};
+use crate::stats::Summary;
+use std::path::Path;
+
+/// One figure: its file stem, the thesis figure it regenerates, and the figure.
+pub type NamedFigure = (&'static str, &'static str, Figure);
+
+/// Per-checkpoint band of a metric across seeds: (x = mean of `xf`, summary of `yf`).
+fn band(
+    c: &ConfigResult,
+    xf: impl Fn(&Checkpoint) -> f64,
+    yf: impl Fn(&Checkpoint) -> Option<f64>,
+) -> Series {
+    // Checkpoints are aligned by their nominal call count, on the schedule of the longest run (a
+    // diverged run stops early: its checkpoints are those it reached).
+    let schedule: Vec<u64> = c
+        .runs
+        .iter()
+        .max_by_key(|r| r.checkpoints.len())
+        .map(|r| r.checkpoints.iter().map(|k| k.at_calls).collect())
+        .unwrap_or_default();
+    let mut s = Series::new(c.label.clone());
+    s.off_schedule = c
+        .runs
+        .iter()
+        .flat_map(|r| &r.checkpoints)
+        .filter(|k| !schedule.contains(&k.at_calls))
+        .count();
+    for it in schedule {
+        let cps: Vec<&Checkpoint> = c
+            .runs
+            .iter()
+            .filter_map(|r| r.checkpoints.iter().find(|k| k.at_calls == it))
+            .collect();
+        let all: Vec<f64> = cps.iter().filter_map(|c| yf(c)).collect();
+        let ys: Vec<f64> = all.iter().copied().filter(|y| y.is_finite()).collect();
+        s.non_finite += all.len() - ys.len();
+        if ys.is_empty() {
+            continue;
+        }
+        let x = cps.iter().map(|c| xf(c)).sum::<f64>() / cps.len() as f64;
+        let sm = Summary::of(&ys);
+        s.x.push(x);
+        s.mean.push(sm.mean);
+        s.lo.push(if sm.half_width.is_finite() {
+            sm.lo()
+        } else {
+            sm.mean
+        });
+        s.hi.push(if sm.half_width.is_finite() {
+            sm.hi()
+        } else {
+            sm.mean
+        });
+    }
+    s
+}
+
+/// A dashed reference line (no band: its band is the line itself).
+fn reference_series(label: String, x: Vec<f64>, mean: Vec<f64>) -> Series {
+    Series {
+        label,
+        x,
+        lo: mean.clone(),
+        hi: mean.clone(),
+        mean,
+        reference: true,
+        non_finite: 0,
+        off_schedule: 0,
+    }
+}
+
+/// Horizontal dashed lines at the mean of `f` over each baseline of `task` (reference policies,
+/// no training), across the x range of the figure's learner curves.
+fn baseline_lines(
+    r: &Results,
+    task: TaskKind,
+    f: impl Fn(&Checkpoint) -> f64,
+    over: &[Series],
+) -> Vec<Series> {
+    let xs = || {
+        over.iter()
+            .flat_map(|s| s.x.iter().copied())
+            .filter(|x| *x > 0.0)
+    };
+    let (Some(x0), Some(x1)) = (xs().reduce(f64::min), xs().reduce(f64::max)) else {
+        return vec![];
+    };
+    r.baselines
+        .iter()
+        .filter(|b| b.task == task)
+        .filter_map(|b| {
+            let m = b.runs.iter().map(&f).sum::<f64>() / b.runs.len().max(1) as f64;
+            // A reference without the quantity (no gradient estimate) is not drawn at all.
+            m.is_finite()
+                .then(|| reference_series(format!("{} (ref.)", b.label), vec![x0, x1], vec![m, m]))
+        })
+        .collect()
+}
+
+/// Every figure of the appendix, in document order: Fig. 4.2's panels, then the obstacle
+/// figures (4.3–4.6) and the CartPole figures (4.8–4.10).
+pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
+    let mut figs: Vec<NamedFigure> = Vec::new();
+    for (name, f) in crate::gradient_error::figures(&r.gradient_error) {
+        figs.push((name, "Fig. 4.2", f));
+    }
+    let it = |c: &Checkpoint| c.iteration as f64;
+    let traj = |c: &Checkpoint| c.trajectories as f64;
+    let gc = |c: &Checkpoint| c.gradient_evaluations as f64;
+    let by_iteration: (&str, &dyn Fn(&Checkpoint) -> f64) = ("iteration (parameter updates)", &it);
+    let by_trajectories: (&str, &dyn Fn(&Checkpoint) -> f64) = (
+        "expert-labelled trajectories rolled out (cumulative count)",
+        &traj,
+    );
+    let obstacle_fig = |title: &str,
+                        y: &str,
+                        log_y: bool,
+                        f: &dyn Fn(&Checkpoint) -> Option<f64>,
+                        skip_dataset: bool,
+                        (x_label, xf): (&str, &dyn Fn(&Checkpoint) -> f64)| {
+        let series: Vec<Series> = r
+            .obstacle
+            .iter()
+            .filter(|c| !(skip_dataset && matches!(c.0.label.as_str(), "BC" | "DAgger")))
+            .map(|c| band(&c.0, xf, f))
+            .collect();
+        let lines = baseline_lines(r, TaskKind::Obstacle, |c| f(c).unwrap_or(f64::NAN), &series);
+        Figure {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y.into(),
+            log_x: false,
+            log_y,
+            y_range: None,
+            series: series.into_iter().chain(lines).collect(),
+        }
+    };
+    let n_obs = f64::from(profile.obstacle.eval_episodes);
+    figs.push((
+        "fig4-3-success",
+        "Fig. 4.3",
+        obstacle_fig(
+            "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policies)",
+            "success rate (fraction of episodes)",
+            false,
+            &|c| Some(c.score),
+            false,
+            by_trajectories,
+        )
+        .clamped((0.0, 1.0)),
+    ));
+    figs.push((
+        "fig4-4-crashes",
+        "Fig. 4.4",
+        obstacle_fig(
+            &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% CI band; dashed: reference policies)"),
+            &format!("crashes (episodes out of {n_obs})"),
+            false,
+            &|c| Some(f64::from(c.crashes)),
+            false,
+            by_trajectories,
+        )
+        .clamped((0.0, n_obs)),
+    ));
+    // Figs. 4.5 (gradient-estimate rows, oracle methods only) and 4.6 (loss rows), against
+    // iterations on a log y axis.
+    type Metric<'a> = &'a dyn Fn(&Checkpoint) -> Option<f64>;
+    let rows: [(&str, &str, String, &str, Metric<'_>, bool); 4] = [
+        (
+            "fig4-5a-gradient-x",
+            "Fig. 4.5",
+            " (a): obstacle task, norm of the x-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band)".into(),
+            "‖gradient estimate, x-row‖ (log scale)",
+            &|c| c.grad_x,
+            true,
+        ),
+        (
+            "fig4-5b-gradient-y",
+            "Fig. 4.5",
+            " (b): obstacle task, norm of the y-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band)".into(),
+            "‖gradient estimate, y-row‖ (log scale)",
+            &|c| c.grad_y,
+            true,
+        ),
+        (
+            "fig4-6a-loss-x",
+            "Fig. 4.6",
+            " (a): obstacle task, loss of the x velocity per decision (mean over seeds, 95% CI band)".into(),
+            "x-velocity squared error (log scale)",
+            &|c| c.loss_x,
+            false,
+        ),
+        (
+            "fig4-6b-loss-y",
+            "Fig. 4.6",
+            " (b): obstacle task, loss of the y velocity per decision (mean over seeds, 95% CI band)".into(),
+            "y-velocity squared error (log scale)",
+            &|c| c.loss_y,
+            false,
+        ),
+    ];
+    for (name, fig, what, y, f, oracle_only) in rows {
+        figs.push((
+            name,
+            fig,
+            obstacle_fig(
+                &format!("{fig}{what}"),
+                y,
+                true,
+                f,
+                oracle_only,
+                by_iteration,
+            )
+            .clamped((0.0, f64::INFINITY)),
+        ));
+    }
+    let cart_fig = |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| {
+        // Checkpoints are evenly spaced in gradient calls: a linear axis in millions shows the
+        // start (0 calls) of every algorithm alike.
+        let series: Vec<Series> = r
+            .cartpole
+            .iter()
+            .map(|c| band(&c.0, |k| gc(k) / 1e6, f))
+            .collect();
+        let lines = baseline_lines(r, TaskKind::Cartpole, |c| f(c).unwrap_or(f64::NAN), &series);
+        Figure {
+            title: title.into(),
+            x_label: "gradient calls (millions, cumulative)".into(),
+            y_label: y.into(),
+            log_x: false,
+            log_y,
+            y_range: None,
+            series: series.into_iter().chain(lines).collect(),
+        }
+    };
+    figs.push((
+        "fig4-8-loss",
+        "Fig. 4.8",
+        cart_fig(
+            "Fig. 4.8: CartPole, Brier loss per decision against the expert's action (mean over seeds, 95% CI band; dashed: reference policy)",
+            "Brier loss per decision",
+            false,
+            &|c| Some(c.loss),
+        )
+        .clamped((0.0, f64::INFINITY)),
+    ));
+    figs.push((
+        "fig4-9-crashes",
+        "Fig. 4.9",
+        cart_fig(
+            &format!(
+                "Fig. 4.9: CartPole, resets until one full 500-step episode, capped at {} (mean over seeds, 95% CI band; dashed: reference policy)",
+                profile.cartpole.full_episode_cap
+            ),
+            "resets before a full episode (count)",
+            false,
+            &|c| c.resets_to_full_episode.map(f64::from),
+        )
+        .clamped((0.0, f64::from(profile.cartpole.full_episode_cap))),
+    ));
+    figs.push((
+        "fig4-10-reward",
+        "Fig. 4.10",
+        cart_fig(
+            "Fig. 4.10: CartPole, mean episode reward of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policy)",
+            "episode reward (steps, max. 500)",
+            false,
+            &|c| Some(c.reward),
+        )
+        .clamped((0.0, 500.0)),
+    ));
+    figs
+}
+
+/// Write every figure as `dir/<name>.svg` (and `.png` when `png`); returns whether the PNGs
+/// were written (a failed PNG rendering falls back to SVG only, with a warning).
+///
+/// # Errors
+/// [`Error::Io`] or a plotting failure.
+pub fn write_figures(figs: &[NamedFigure], dir: &Path, png: bool) -> Result<bool, Error> {
+    let mut png_ok = png;
+    for (name, _, f) in figs {
+        match f.write(&dir.join(format!("{name}.svg")), png_ok) {
+            Ok(()) => {}
+            Err(e) if png_ok => {
+                eprintln!("warning: PNG rendering failed ({e}); writing SVG only");
+                png_ok = false;
+                f.write(&dir.join(format!("{name}.svg")), false)?;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(png_ok)
+}
