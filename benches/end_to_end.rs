@@ -1,11 +1,11 @@
-//! End-to-end runs through the library's runner (issue 8, item 5), one seed each, sizes of
+//! End-to-end runs through the library's runner, one seed each, sizes of
 //! paper-checks' quick profile:
 //!
 //! * a Table 4.1-like run: STORM (η = 10⁻⁸, a = 1/2, causal, unweighted) with the linear-Gaussian
 //!   policy (σ_π = 0.02) on the obstacle task, θ₀ = 0, 40 iterations — with the default `Vec<f64>`
 //!   actions and with inline `[f64; 2]` actions (the same run). (The quick profile's η = 10⁻⁶ (and 10⁻⁷)
-//!   with one trajectory per step diverges at iteration 8 with seed 1, before and after issue 8
-//!   alike: a non-finite estimate.)
+//!   with one trajectory per step diverges at iteration 8 with seed 1:
+//!   a non-finite estimate.)
 //! * a Table 4.3-like run: STORM (η = 0.01, a = 1/2) with the logistic policy on CartPole-v1 (LQR
 //!   expert), θ₀ = 0, 200 iterations.
 //!

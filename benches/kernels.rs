@@ -1,7 +1,7 @@
-//! Throughput of the kit's hot kernels (issue 8): CartPole steps, the velocity-obstacle expert,
+//! Throughput of the kit's hot kernels: CartPole steps, the velocity-obstacle expert,
 //! the toy oracle (roll-out + eq. 3.15 estimate), the exact engine (prefixes per second, rational
 //! and `f64`), and the CartPole oracle with the softmax policy.
-//! Run with `cargo bench --bench kernels`. The oracle hot paths of issue 8 (CartPole + logistic,
+//! Run with `cargo bench --bench kernels`. The oracle hot paths (CartPole + logistic,
 //! generic against hand-specialised; the obstacle task) are in `benches/oracle.rs`, whole runs
 //! through the runner in `benches/end_to_end.rs`; `benches/README.md` records the figures.
 

@@ -1,4 +1,4 @@
-//! Issue 8's benchmarks of the oracle hot paths, in trajectory-steps per second:
+//! Benchmarks of the oracle hot paths, in trajectory-steps per second:
 //!
 //! 1. CartPole: the environment step; roll-out (LQR labels, logistic policy) + causal estimate of
 //!    eq. 3.15, generic `TaskProblem<CartPoleTask<f64>, Logistic>` next to the hand-specialised
@@ -185,7 +185,7 @@ fn cartpole(c: &mut Criterion) {
                 fast.rollout(black_box(&CARTPOLE_THETA), &mut rng, &mut t);
                 // The whole gradient through `black_box`: with only `g[0]` used, the compiler
                 // could drop the other entries' arithmetic (it did while the estimate was inlined
-                // here: a yardstick ≈ 4 % too fast, issue 8).
+                // here: a yardstick ≈ 4 % too fast).
                 acc += black_box(Specialised::estimate(black_box(&CARTPOLE_THETA), &t))[0];
             }
             acc

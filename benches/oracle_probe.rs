@@ -1,5 +1,5 @@
-//! The CartPole + logistic oracle, generic against hand-specialised (issue 8: "the f64
-//! instantiation of the generic oracle is within 10% of a hand-specialised f64 version"), timed
+//! The CartPole + logistic oracle, generic against hand-specialised (the target: the f64
+//! instantiation of the generic oracle within 10% of a hand-specialised f64 version), timed
 //! for shared machines, where criterion's means swing with the neighbours' load.
 //!
 //! The modes are interleaved episode by episode (every mode runs seed 0, then every mode seed 1,

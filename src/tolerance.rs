@@ -1,4 +1,4 @@
-//! The kit's one tolerance policy (STYLE.md 12): how a value computed in scalar `S` is judged
+//! The kit's one tolerance policy (conventions.md 12): how a value computed in scalar `S` is judged
 //! against the exact value of the same quantity.
 //!
 //! | scalar | passes when | why this is justified |

@@ -1,4 +1,4 @@
-//! No heap allocation per step in the hot loops of a roll-out and of the oracle (issue 8).
+//! No heap allocation per step in the hot loops of a roll-out and of the oracle.
 //!
 //! A counting global allocator counts, per thread, every `alloc`/`alloc_zeroed`/`realloc`. The
 //! definition checked here: **the number of allocations of a roll-out or an estimate does not

@@ -1,6 +1,6 @@
 //! A hand-specialised `f64` CartPole + LQR-labels + logistic-policy oracle: plain arrays, no
 //! traits, no error paths — the yardstick for the generic `TaskProblem<CartPoleTask<f64>,
-//! Logistic>` (issue 8: "generic code must cost nothing in f64").
+//! Logistic>`: generic code must cost nothing in f64.
 //!
 //! It follows the generic code operation by operation (same RNG draws, same order of floating-point
 //! operations), so the gradients are bit-for-bit the same; `tests/estimators/specialised.rs` checks that on
@@ -67,7 +67,7 @@ impl Specialised {
     ///
     /// A function of its own (`#[inline(never)]`), as the generic roll-out loop
     /// (`TaskProblem::rollout_into`) is, so that both benchmarks compile and call the same code.
-    /// (Measured, issue 8: inlined into criterion's closure it runs no faster, once the closure
+    /// (Measured: inlined into criterion's closure it runs no faster, once the closure
     /// uses the whole gradient; a variant compiled through an `#[inline(always)]` helper was
     /// vectorised differently and ran 11–12 % slower.)
     #[inline(never)]
@@ -128,7 +128,7 @@ impl Specialised {
     /// The causal estimator of eq. 3.15 with the Brier loss `2(p − y)²` and the score `(a − p)φ`;
     /// a function of its own, as the generic estimate's fixed-length pass is. Callers that use
     /// only part of the result must still pass all of it through `black_box`: inlined, the
-    /// arithmetic of unused entries is dropped (measured, issue 8: only `g[0]` was computed).
+    /// arithmetic of unused entries is dropped (measured: only `g[0]` was computed).
     #[inline(never)]
     pub fn estimate(theta: &[f64; D], t: &Trajectory) -> [f64; D] {
         let mut g = [0.0; D];

@@ -1,5 +1,5 @@
 //! The properties checked by the fuzz targets, shared word for word with the proptest suites
-//! (`tests/hostile_input.rs`) and the regression tests (`tests/fuzz_regressions.rs`), which include
+//! (`tests/inputs/hostile_input.rs`) and the regression tests (`tests/inputs/fuzz_regressions.rs`), which include
 //! this file with `#[path = "../fuzz/src/props.rs"] mod props;`.
 //!
 //! Every `check_*` function panics (a fuzzer "crash") exactly when a property is violated; a clean

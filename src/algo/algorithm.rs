@@ -55,7 +55,7 @@ pub struct StepContext<'a> {
 }
 
 /// An algorithm: hyper-parameters + state, initialised once and stepped by the runner
-/// (STYLE.md 5). It drives the problem only through [`IlProblem`].
+/// (conventions.md 5). It drives the problem only through [`IlProblem`].
 pub trait Algorithm<S: Scalar, P: IlProblem<S> + ?Sized> {
     /// A short stable name (`"sgd"`, `"is-storm"`, …).
     fn name(&self) -> &'static str;

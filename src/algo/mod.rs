@@ -1,6 +1,6 @@
 //! The algorithms of the thesis, generic over the scalar, driven by one runner.
 //!
-//! Design (DESIGN.md, STYLE.md 5–7): each algorithm is a struct of *validated* hyper-parameters
+//! Design (conventions.md 5–7): each algorithm is a struct of *validated* hyper-parameters
 //! plus state, with [`Algorithm::init`] and [`Algorithm::step`]. One [`runner::Runner`] owns the
 //! loop, the stopping rule, the observers, the seeded [`crate::problem::KitRng`] and the termination reason; every
 //! run records an [`config::RunConfig`] (algorithm + hyper-parameters + seed + stopping rule) that

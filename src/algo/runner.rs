@@ -1,4 +1,4 @@
-//! The runner (STYLE.md 5–7, argmin's `Executor` without argmin): it owns the loop, the stopping
+//! The runner (conventions.md 5–7, argmin's `Executor` without argmin): it owns the loop, the stopping
 //! rule, the observers, the seeded [`KitRng`], the cumulative [`Cost`] and the termination reason.
 //!
 //! Per iteration it records [`IterationMetrics`]: iteration, θ, cumulative cost (trajectories,

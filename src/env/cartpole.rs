@@ -7,7 +7,7 @@
 //! Action `0` pushes the cart left with 10 N, action `1` right.
 //!
 //! One step (the "euler" integrator, `τ = 0.02` s), in exactly Gymnasium's order of operations, so
-//! that in `f64` every state is bit-for-bit Gymnasium's float64 state (`tests/cartpole.rs` checks
+//! that in `f64` every state is bit-for-bit Gymnasium's float64 state (`tests/environments/cartpole.rs` checks
 //! 4 800 steps against data written by Gymnasium itself, `scripts/cartpole_reference.py`):
 //!
 //! ```text
@@ -37,7 +37,7 @@
 //! round-to-nearest result of the same operation on contained floats, and every `f64` constant is
 //! the rounding of the exact one. For `sin`/`cos`, (b) also needs the libm that `f64` calls (glibc,
 //! which numpy calls too) to be faithfully rounded; glibc documents errors of at most 1 ulp, and the
-//! enclosure test in `tests/cartpole.rs` found the `f64` run inside on every step it checks (2 400
+//! enclosure test in `tests/environments/cartpole.rs` found the `f64` run inside on every step it checks (2 400
 //! steps of 24 trajectories; widths about 1e-11 after 100 steps, 2e-8 after 200 balanced steps).
 //! A termination test an interval cannot decide is [`EnvError::Undecidable`].
 //!

@@ -1,4 +1,4 @@
-//! Environments with Gymnasium's semantics, generic over the scalar (DESIGN.md, "Data flow").
+//! Environments with Gymnasium's semantics, generic over the scalar (conventions.md, "Data flow").
 //!
 //! An [`Env`] is reset with the run's seeded [`KitRng`] and stepped with an action; a step returns
 //! a [`Step`]: the next observation, the reward, and the two end-of-episode flags of Gymnasium's
@@ -9,7 +9,7 @@
 //! * stepping before the first reset, or after an episode has ended, is an error
 //!   ([`EnvError::NotReset`], [`EnvError::EpisodeOver`]) rather than an assertion or a warning;
 //! * a comparison the scalar cannot decide (an interval straddling a termination threshold) is an
-//!   error ([`EnvError::Undecidable`]), never a guess (STYLE.md 3);
+//!   error ([`EnvError::Undecidable`]), never a guess (conventions.md 3);
 //! * a non-finite state is an error ([`EnvError::NonFinite`]), never a silent NaN.
 
 use crate::problem::KitRng;

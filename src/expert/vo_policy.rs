@@ -42,7 +42,7 @@ impl Default for VoExpertParams {
 ///
 /// Clipping to `v_max` is not part of eq. 4.1: `‖v_r + u*‖` can exceed `v_max` (the projection is
 /// taken from the obstacle's velocity `v_o`), and the rescaled velocity may re-enter the collision
-/// cone slightly. The default `safety_margin` absorbs this (tests/obstacle.rs: without it, 1000
+/// cone slightly. The default `safety_margin` absorbs this (tests/environments/obstacle.rs: without it, 1000
 /// seeded episodes show a few sub-`10⁻⁴` grazes, all after clipped steps).
 #[derive(Debug, Clone, PartialEq)]
 pub struct VoExpertPolicy {

@@ -1,4 +1,4 @@
-//! The scalar layer: one generic core, many number types (DESIGN.md, "The spine").
+//! The scalar layer: one generic core, many number types (conventions.md, "The spine").
 //!
 //! Traits are layered like simba/nalgebra, each layer as small as it can be:
 //!
@@ -16,7 +16,7 @@
 //!
 //! Comparison is tri-state ([`Scalar::certain_cmp`]): an interval that straddles a threshold cannot be
 //! ordered, and generic code that branches on such a comparison returns [`Undecidable`] instead of
-//! guessing (STYLE.md 3).
+//! guessing (conventions.md 3).
 
 mod dual;
 mod float;

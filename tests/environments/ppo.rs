@@ -1,4 +1,4 @@
-//! The PPO expert for CartPole-v1 (issue 5, item 3): the committed weights, file validation,
+//! The PPO expert for CartPole-v1: the committed weights, file validation,
 //! reproducible training, and the comparison with the LQR expert on the same seeded episodes.
 
 use ilopt::env::Env;

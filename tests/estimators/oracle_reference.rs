@@ -1,4 +1,4 @@
-//! The allocation-free oracle of `TaskProblem` (issue 8) against the straightforward computation it
+//! The allocation-free oracle of `TaskProblem` against the straightforward computation it
 //! replaced: per-decision `Policy::loss`/`Policy::score` vectors first, then the sums of eq. 3.15
 //! (kept here verbatim as the reference). Every output must agree **bit for bit** in `f64`, on
 //! CartPole with the logistic and softmax policies and on the obstacle task with the
@@ -16,7 +16,7 @@ use nalgebra::DVector;
 use rand::SeedableRng;
 use std::borrow::Borrow;
 
-/// Per-decision losses, gradients and scores, as the oracle computed them before issue 8.
+/// Per-decision losses, gradients and scores, as the oracle computed them before its allocation-free rewrite.
 #[allow(clippy::type_complexity)]
 fn terms<S: Scalar, P: Policy<S>, L: Borrow<P::Label>>(
     policy: &P,
@@ -246,7 +246,7 @@ fn hash_problem<P: IlProblem<f64>>(p: &P, th: &DVector<f64>, th2: &DVector<f64>)
     h
 }
 
-/// Hashes of the same computations by the code before issue 8 (commit c7339ac): roll-outs,
+/// Hashes of the same computations by the code before the allocation-free rewrite (commit c7339ac): roll-outs,
 /// estimates of every form and trajectory losses on 40 seeds per problem.
 #[test]
 fn outputs_match_the_pre_issue_8_code() {

@@ -1,5 +1,5 @@
 //! The hand-specialised `f64` CartPole + logistic oracle of `benches/support/specialised.rs` (the
-//! yardstick of the generic code's speed, issue 8) computes exactly what the generic
+//! yardstick of the generic code's speed) computes exactly what the generic
 //! `TaskProblem<CartPoleTask<f64>, Logistic>` computes: the same trajectories from the same seeds
 //! and bit-identical causal gradients.
 

@@ -1,4 +1,4 @@
-//! The feature policies of `ilopt::policy` (issue 5, item 4): every analytic gradient against
+//! The feature policies of `ilopt::policy`: every analytic gradient against
 //! forward-mode dual derivatives of the *value* code (an independent route):
 //!
 //! * linear-Gaussian (P3): loss and score exactly, with `Dual<BigRational>` (the score is the

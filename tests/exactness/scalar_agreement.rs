@@ -1,4 +1,4 @@
-//! One test body for every scalar type (STYLE.md 10): the exact engine and the oracle's estimates
+//! One test body for every scalar type (conventions.md 10): the exact engine and the oracle's estimates
 //! computed in `f64`, `f32`, intervals, rationals and duals agree with the exact rational values
 //! under the kit's tolerance policy (`ilopt::tolerance`): rationals equal, intervals contain the
 //! exact value, f64 lies inside the interval run of the same code.

@@ -1,4 +1,4 @@
-//! Issue 7: every subcommand of the `ilopt` binary with bad arguments. Each must fail with exit
+//! Every subcommand of the `ilopt` binary with bad arguments. Each must fail with exit
 //! status 1 (a failure) or 2 (a usage error) — never 101, a panic — print a message on stderr that
 //! names the bad argument, print nothing on stdout, and never print `NaN`/`inf` as a result.
 

@@ -1,4 +1,4 @@
-//! Regression tests for what the fuzz targets (`fuzz/`, issue 7) found: each crashing input is
+//! Regression tests for what the fuzz targets (`fuzz/`) found: each crashing input is
 //! inlined and run through the target's own property (`fuzz/src/props.rs`), with a note on the
 //! cause and the fix. A target's seed corpus is replayed here too, so `cargo test` covers it.
 

@@ -1,10 +1,10 @@
 //! The theorem-check table as Markdown and JSON (for the appendix).
 
 use crate::record::check::{Check, Method, Role, Verdict};
-use crate::record::constant::Provenance;
 
-/// Four significant digits, scientific notation outside [10⁻³, 10⁴).
-fn fmt(x: Option<f64>) -> String {
+/// A table number: four significant digits, scientific notation outside [10⁻³, 10⁴), `—` for
+/// none.
+pub fn number(x: Option<f64>) -> String {
     x.map_or_else(
         || "—".into(),
         |v| {
@@ -22,24 +22,6 @@ fn fmt(x: Option<f64>) -> String {
 
 fn escape(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
-}
-
-fn verdict_name(v: Verdict) -> &'static str {
-    match v {
-        Verdict::Holds => "holds",
-        Verdict::Fails => "fails",
-        Verdict::Inconclusive => "inconclusive",
-        Verdict::Uninformative => "uninformative",
-    }
-}
-
-fn role_name(r: Role) -> &'static str {
-    match r {
-        Role::Thesis => "thesis",
-        Role::Corrected => "corrected",
-        Role::NegativeControl => "negative control",
-        Role::Probe => "probe (wrong algorithm)",
-    }
 }
 
 /// A statistical bound check's power: it flags every claimed bound below its LCB, and its
@@ -97,8 +79,8 @@ pub fn markdown(checks: &[Check]) -> String {
         let measured = c.measured.as_ref().map_or_else(
             || "—".into(),
             |m| match m.lcb {
-                Some(l) => format!("{} ({})", fmt(Some(m.value)), fmt(Some(l))),
-                None => fmt(Some(m.value)),
+                Some(l) => format!("{} ({})", number(Some(m.value)), number(Some(l))),
+                None => number(Some(m.value)),
             },
         );
         out += &format!(
@@ -106,19 +88,13 @@ pub fn markdown(checks: &[Check]) -> String {
             c.id,
             escape(&c.result),
             escape(&c.claim),
-            role_name(c.role),
-            match c.method {
-                Method::Exact => "exact",
-                Method::Rigorous => "rigorous",
-                Method::Statistical => "statistical",
-                Method::Sampled => "sampled",
-                Method::Estimate => "estimate",
-            },
-            fmt(c.bound),
+            c.role.name(),
+            c.method.name(),
+            number(c.bound),
             measured,
-            fmt(power(c).map(|p| p.1).or(two_sided_power(c).map(|p| p.2))),
-            fmt(c.tightness),
-            verdict_name(c.verdict),
+            number(power(c).map(|p| p.1).or(two_sided_power(c).map(|p| p.2))),
+            number(c.tightness),
+            c.verdict.name(),
             c.erratum.as_deref().unwrap_or("—"),
         );
     }
@@ -130,23 +106,23 @@ pub fn markdown(checks: &[Check]) -> String {
             out += &format!(
                 "- **{}** ({}): H₀ mean 0, X̄ = {}, interval [{}, {}], minimum detectable bias {} → **{}**\n",
                 c.id,
-                role_name(c.role),
-                fmt(c.measured.as_ref().map(|m| m.value)),
-                fmt(Some(lcb)),
-                fmt(Some(ucb)),
-                fmt(Some(mdb)),
-                verdict_name(c.verdict)
+                c.role.name(),
+                number(c.measured.as_ref().map(|m| m.value)),
+                number(Some(lcb)),
+                number(Some(ucb)),
+                number(Some(mdb)),
+                c.verdict.name()
             );
         }
         if let Some((lcb, mdv)) = power(c) {
             out += &format!(
                 "- **{}** ({}): B = {}, flags B < {}, minimum detectable violation {} → **{}**\n",
                 c.id,
-                role_name(c.role),
-                fmt(c.bound),
-                fmt(Some(lcb)),
-                fmt(Some(mdv)),
-                verdict_name(c.verdict)
+                c.role.name(),
+                number(c.bound),
+                number(Some(lcb)),
+                number(Some(mdv)),
+                c.verdict.name()
             );
         }
     }
@@ -209,11 +185,7 @@ pub fn markdown(checks: &[Check]) -> String {
     for c in checks {
         out += &format!("- **{}** {}\n", c.id, escape(&c.details));
         for k in &c.constants {
-            let prov = match k.provenance {
-                Provenance::Exact => "exact",
-                Provenance::Rigorous => "rigorous upper bound",
-                Provenance::Estimate => "ESTIMATE (not a certificate)",
-            };
+            let prov = k.provenance.name();
             out += &format!(
                 "  - {} = {:.6} ({prov}; {})\n",
                 k.name,

@@ -10,67 +10,12 @@
 use super::doc::{Block, Table};
 use crate::results::TheoryTable;
 use ilopt_theory::check::{Check, Method, Role, Verdict};
-use ilopt_theory::constants::Provenance;
-use ilopt_theory::report::{power, status, two_sided_power};
+use ilopt_theory::report::{number, power, status, two_sided_power};
 use std::collections::BTreeMap;
-
-/// A number with four significant digits, in scientific notation outside [10⁻³, 10⁴); `—` for
-/// none (the format of `ilopt-theory`'s table).
-fn number(x: Option<f64>) -> String {
-    x.map_or_else(
-        || "—".into(),
-        |v| {
-            if v == 0.0 {
-                "0".into()
-            } else if (1e-3..1e4).contains(&v.abs()) {
-                let digits = (3 - v.abs().log10().floor() as i32).max(0) as usize;
-                format!("{v:.digits$}")
-            } else {
-                format!("{v:.3e}")
-            }
-        },
-    )
-}
 
 /// Free text as one table cell or list item: on one line, without surrounding blanks.
 fn one_line(s: &str) -> String {
     s.replace('\n', " ").trim().to_string()
-}
-
-fn verdict_name(v: Verdict) -> &'static str {
-    match v {
-        Verdict::Holds => "holds",
-        Verdict::Fails => "fails",
-        Verdict::Inconclusive => "inconclusive",
-        Verdict::Uninformative => "uninformative",
-    }
-}
-
-fn role_name(r: Role) -> &'static str {
-    match r {
-        Role::Thesis => "thesis",
-        Role::Corrected => "corrected",
-        Role::NegativeControl => "negative control",
-        Role::Probe => "probe (wrong algorithm)",
-    }
-}
-
-fn method_name(m: Method) -> &'static str {
-    match m {
-        Method::Exact => "exact",
-        Method::Rigorous => "rigorous",
-        Method::Statistical => "statistical",
-        Method::Sampled => "sampled",
-        Method::Estimate => "estimate",
-    }
-}
-
-fn certificate_name(p: Provenance) -> &'static str {
-    match p {
-        Provenance::Exact => "exact",
-        Provenance::Rigorous => "rigorous upper bound",
-        Provenance::Estimate => "ESTIMATE (not a certificate)",
-    }
 }
 
 /// The claim half of a check's row: id, result, claim, role, verdict, erratum.
@@ -79,8 +24,8 @@ fn claim_cells(c: &Check) -> Vec<String> {
         one_line(&c.id),
         one_line(&c.result),
         one_line(&c.claim),
-        role_name(c.role).into(),
-        format!("**{}**", verdict_name(c.verdict)),
+        c.role.name().into(),
+        format!("**{}**", c.verdict.name()),
         one_line(c.erratum.as_deref().unwrap_or("—")),
     ]
 }
@@ -98,12 +43,12 @@ fn number_cells(c: &Check) -> Vec<String> {
     let detectable = power(c).map(|p| p.1).or(two_sided_power(c).map(|p| p.2));
     vec![
         one_line(&c.id),
-        method_name(c.method).into(),
+        c.method.name().into(),
         number(c.bound),
         measured,
         number(detectable),
         number(c.tightness),
-        format!("**{}**", verdict_name(c.verdict)),
+        format!("**{}**", c.verdict.name()),
     ]
 }
 
@@ -151,23 +96,23 @@ fn power_items(checks: &[Check]) -> Vec<String> {
             items.push(format!(
                 "**{}** ({}): H₀ mean 0, X̄ = {}, interval [{}, {}], minimum detectable bias {} → **{}**",
                 c.id,
-                role_name(c.role),
+                c.role.name(),
                 number(c.measured.as_ref().map(|m| m.value)),
                 number(Some(lcb)),
                 number(Some(ucb)),
                 number(Some(bias)),
-                verdict_name(c.verdict)
+                c.verdict.name()
             ));
         }
         if let Some((lcb, violation)) = power(c) {
             items.push(format!(
                 "**{}** ({}): B = {}, flags B < {}, minimum detectable violation {} → **{}**",
                 c.id,
-                role_name(c.role),
+                c.role.name(),
                 number(c.bound),
                 number(Some(lcb)),
                 number(Some(violation)),
-                verdict_name(c.verdict)
+                c.verdict.name()
             ));
         }
     }
@@ -261,7 +206,7 @@ impl ConstantRow {
         ConstantRow {
             name: k.name.trim().to_string(),
             value: format!("{:.6}", k.value),
-            certificate: certificate_name(k.provenance).into(),
+            certificate: k.provenance.name().into(),
             how: one_line(&k.how),
         }
     }

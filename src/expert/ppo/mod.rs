@@ -56,7 +56,7 @@
 //! (the default [`PpoConfig`], 100 096 environment steps in 391 iterations; 14.5 s of CPU time,
 //! 16.7 s wall, on a shared 2-core x86-64 VM, single-threaded). With the default configuration,
 //! training seeds 1 to 8 each gave a greedy mean return of 500 (every episode 500) on the
-//! standard evaluation; the stored expert is seed 1. `tests/ppo.rs` retrains it (an ignored test,
+//! standard evaluation; the stored expert is seed 1. `tests/environments/ppo.rs` retrains it (an ignored test,
 //! run in release) and checks the weights bit for bit.
 //!
 //! [`PpoExpert::load`] validates a file: format and version, the configuration
@@ -65,8 +65,8 @@
 //!
 //! # Evaluation
 //! [`evaluate_cartpole`] runs episode `i` of CartPole-v1 from a [`KitRng`] seeded with
-//! `first_seed + i` (the protocol of `tests/cartpole.rs`), so different controllers can be compared
-//! on the same initial states. On seeds `0..100` (`tests/ppo.rs` checks both are ≥ 495):
+//! `first_seed + i` (the protocol of `tests/environments/cartpole.rs`), so different controllers can be compared
+//! on the same initial states. On seeds `0..100` (`tests/environments/ppo.rs` checks both are ≥ 495):
 //!
 //! | expert | mean return | min return |
 //! |---|---|---|

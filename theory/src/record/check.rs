@@ -22,6 +22,16 @@ pub enum Verdict {
 }
 
 impl Verdict {
+    /// The verdict as the table prints it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Holds => "holds",
+            Verdict::Fails => "fails",
+            Verdict::Inconclusive => "inconclusive",
+            Verdict::Uninformative => "uninformative",
+        }
+    }
+
     /// `Holds` if `ok`, else `Fails`.
     pub fn from_bool(ok: bool) -> Self {
         if ok { Verdict::Holds } else { Verdict::Fails }
@@ -288,6 +298,31 @@ impl CheckBuilder {
             erratum: self.erratum,
             role: self.role,
             details: self.details,
+        }
+    }
+}
+
+impl Method {
+    /// The method as the table prints it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Exact => "exact",
+            Method::Rigorous => "rigorous",
+            Method::Statistical => "statistical",
+            Method::Sampled => "sampled",
+            Method::Estimate => "estimate",
+        }
+    }
+}
+
+impl Role {
+    /// The role as the table prints it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Thesis => "thesis",
+            Role::Corrected => "corrected",
+            Role::NegativeControl => "negative control",
+            Role::Probe => "probe (wrong algorithm)",
         }
     }
 }

@@ -50,6 +50,17 @@ fn rational_form(value: f64) -> String {
     BigRational::from_float(value).map_or_else(|| "inf".into(), |q| q.to_string())
 }
 
+impl Provenance {
+    /// The certificate kind as the tables print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Provenance::Exact => "exact",
+            Provenance::Rigorous => "rigorous upper bound",
+            Provenance::Estimate => "ESTIMATE (not a certificate)",
+        }
+    }
+}
+
 impl Constant {
     /// An exact rational constant.
     pub fn exact(name: &str, q: &BigRational, how: &str) -> Self {
