@@ -24,6 +24,77 @@ fn escape(s: &str) -> String {
     s.replace('|', "\\|").replace('\n', " ")
 }
 
+/// The paragraph that explains the power of the statistical rows.
+pub const POWER_NOTE: &str = "**Power.** A statistical row flags every claimed bound B below its \
+     LCB; its minimum detectable violation is X̄ − LCB. It is *uninformative* when its LCB is ≤ 0 \
+     or its B is at least the largest value its statistic can take.";
+
+/// Each statistical row's power: the interval and minimum detectable bias of a two-sided row,
+/// the smallest flagged bound and minimum detectable violation of a bound row.
+pub fn power_items(checks: &[Check]) -> Vec<String> {
+    let mut items = Vec::new();
+    for c in checks.iter().filter(|c| c.method == Method::Statistical) {
+        if let Some((lcb, ucb, bias)) = two_sided_power(c) {
+            items.push(format!(
+                "**{}** ({}): H₀ mean 0, X̄ = {}, interval [{}, {}], minimum detectable bias {} → **{}**",
+                c.id,
+                c.role.name(),
+                number(c.measured.as_ref().map(|m| m.value)),
+                number(Some(lcb)),
+                number(Some(ucb)),
+                number(Some(bias)),
+                c.verdict.name()
+            ));
+        }
+        if let Some((lcb, violation)) = power(c) {
+            items.push(format!(
+                "**{}** ({}): B = {}, flags B < {}, minimum detectable violation {} → **{}**",
+                c.id,
+                c.role.name(),
+                number(c.bound),
+                number(Some(lcb)),
+                number(Some(violation)),
+                c.verdict.name()
+            ));
+        }
+    }
+    items
+}
+
+/// `id detected` / `id <missed>` for every row of `role` (detected: the check refuted it).
+pub fn detections(checks: &[Check], role: Role, missed: &str) -> Vec<String> {
+    checks
+        .iter()
+        .filter(|c| c.role == role)
+        .map(|c| {
+            let seen = if c.verdict == Verdict::Fails {
+                "detected"
+            } else {
+                missed
+            };
+            format!("{} {seen}", c.id)
+        })
+        .collect()
+}
+
+/// The probes' detections and what the checks can resolve of the wrong algorithms.
+pub fn probes_note(probes: &[String]) -> String {
+    format!(
+        "Probes (wrong algorithms run through the checks of the corrected ones at the same \
+         sizes, reported, not required): {}. The bound rows (2c, 3b) detect none of these \
+         errors: on M1 they do not raise the bounded quantity. The tracking rows (2e, 3d) test \
+         the property the proofs rest on along each algorithm's iterates; they detect the \
+         printed Algorithm 4, which is therefore a negative control there (2e.printed4, \
+         required by the status). The biases of the unweighted STORM (E10) and the printed \
+         Algorithm 5 (E11) are proportional to the step (η_k‖d_k‖, resp. ‖θ_n − w_n‖ ≤ δ/T), \
+         below the tracking rows' minimum detectable bias at these sizes, so rows \
+         2e.unweighted and 3d.printed5 stay probes; a probe that is not detected is a finding \
+         about the check's resolution, not a failure of the table. The exact rows 4d–4f detect \
+         all three errors.",
+        probes.join("; ")
+    )
+}
+
 /// A statistical bound check's power: it flags every claimed bound below its LCB, and its
 /// minimum detectable violation is X̄ − LCB (see [`crate::stats`]). `None` for rows without a
 /// bound or an LCB.
@@ -98,71 +169,19 @@ pub fn markdown(checks: &[Check]) -> String {
             c.erratum.as_deref().unwrap_or("—"),
         );
     }
-    out += "\n**Power.** A statistical row flags every claimed bound B below its LCB; its minimum \
-            detectable violation is X̄ − LCB. It is *uninformative* when its LCB is ≤ 0 or its B is \
-            at least the largest value its statistic can take.\n\n";
-    for c in checks.iter().filter(|c| c.method == Method::Statistical) {
-        if let Some((lcb, ucb, mdb)) = two_sided_power(c) {
-            out += &format!(
-                "- **{}** ({}): H₀ mean 0, X̄ = {}, interval [{}, {}], minimum detectable bias {} → **{}**\n",
-                c.id,
-                c.role.name(),
-                number(c.measured.as_ref().map(|m| m.value)),
-                number(Some(lcb)),
-                number(Some(ucb)),
-                number(Some(mdb)),
-                c.verdict.name()
-            );
-        }
-        if let Some((lcb, mdv)) = power(c) {
-            out += &format!(
-                "- **{}** ({}): B = {}, flags B < {}, minimum detectable violation {} → **{}**\n",
-                c.id,
-                c.role.name(),
-                number(c.bound),
-                number(Some(lcb)),
-                number(Some(mdv)),
-                c.verdict.name()
-            );
-        }
+    out += &format!("\n{POWER_NOTE}\n\n");
+    for item in power_items(checks) {
+        out += &format!("- {item}\n");
     }
     let uninformative: Vec<&str> = checks
         .iter()
         .filter(|c| c.verdict == Verdict::Uninformative)
         .map(|c| c.id.as_str())
         .collect();
-    // `id detected` / `id <missed>` for every row of `role` (detected = the check refuted it).
-    let detections = |role: Role, missed: &str| -> Vec<String> {
-        checks
-            .iter()
-            .filter(|c| c.role == role)
-            .map(|c| {
-                let seen = if c.verdict == Verdict::Fails {
-                    "detected"
-                } else {
-                    missed
-                };
-                format!("{} {seen}", c.id)
-            })
-            .collect()
-    };
-    let controls = detections(Role::NegativeControl, "NOT detected");
-    let probes = detections(Role::Probe, "not detected");
+    let controls = detections(checks, Role::NegativeControl, "NOT detected");
+    let probes = detections(checks, Role::Probe, "not detected");
     if !probes.is_empty() {
-        out += &format!(
-            "\nProbes (wrong algorithms run through the checks of the corrected ones at the same \
-             sizes, reported, not required): {}. The bound rows (2c, 3b) detect none of these \
-             errors: on M1 they do not raise the bounded quantity. The tracking rows (2e, 3d) test \
-             the property the proofs rest on along each algorithm's iterates; they detect the \
-             printed Algorithm 4, which is therefore a negative control there (2e.printed4, \
-             required by the status). The biases of the unweighted STORM (E10) and the printed \
-             Algorithm 5 (E11) are proportional to the step (η_k‖d_k‖, resp. ‖θ_n − w_n‖ ≤ δ/T), \
-             below the tracking rows' minimum detectable bias at these sizes, so rows \
-             2e.unweighted and 3d.printed5 stay probes; a probe that is not detected is a finding \
-             about the check's resolution, not a failure of the table. The exact rows 4d–4f detect \
-             all three errors.\n",
-            probes.join("; ")
-        );
+        out += &format!("\n{}\n", probes_note(&probes));
     }
     out += &format!(
         "\nUninformative rows: {}. Negative controls: {}.\n\n**Status: {}**\n",
