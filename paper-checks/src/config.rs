@@ -210,6 +210,11 @@ pub struct AlgorithmEntry {
     /// Trajectories per gradient m of the oracle methods (default 1; a grid may tune it).
     #[serde(default)]
     pub m: Option<usize>,
+    /// A baseline (control variate, [`ilopt::baseline::Baseline`]) subtracted from every
+    /// decision's loss-to-go in the oracle methods' estimates (absent: none, eq. 3.15 as it is;
+    /// a grid may tune it with the path `"baseline"`).
+    #[serde(default)]
+    pub baseline: Option<ilopt::baseline::Baseline>,
     /// The algorithm and its hyper-parameters (ilopt's [`AlgorithmConfig`]): the grid's base.
     pub config: AlgorithmConfig,
     /// The pre-registered tuning grid (the Cartesian product of the dimensions, the first
@@ -235,7 +240,7 @@ impl AlgorithmEntry {
     /// # Errors
     /// As [`crate::grid::points`].
     pub fn grid_points(&self) -> Result<Vec<crate::grid::GridPoint>, String> {
-        crate::grid::points(&self.config, self.m, &self.grid)
+        crate::grid::points(&self.config, self.m, self.baseline.as_ref(), &self.grid)
     }
 
     /// Whether the algorithm draws its gradients from the oracle (m applies), rather than
@@ -453,6 +458,24 @@ impl Profile {
                             &format!("{here}.grid"),
                             "m applies to the oracle methods only",
                         ));
+                    }
+                    if p.baseline != ilopt::baseline::Baseline::None {
+                        let where_ = if a.grid.iter().any(|d| d.path == "baseline") {
+                            format!("{here}.grid")
+                        } else {
+                            format!("{here}.baseline")
+                        };
+                        if !a.is_oracle_method() {
+                            return Err(field(
+                                file,
+                                &where_,
+                                "a baseline applies to the oracle methods only",
+                            ));
+                        }
+                        // The oracle's own checks (values, decay, leave-one-out's m ≥ 2).
+                        ilopt::baseline::Baselined::<(), f64>::new((), p.m, &p.baseline).map_err(
+                            |e| field(file, &where_, format!("{e} (grid point {})", p.describe())),
+                        )?;
                     }
                     type Obs = ilopt::task::TaskProblem<
                         ilopt::task::obstacle::ObstacleTask,

@@ -30,6 +30,7 @@ use crate::config::{AlgorithmEntry, CartPoleExpertChoice, TaskSection, Theta1};
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::algo::{AlgorithmConfig, StepContext};
+use ilopt::baseline::{Baseline as OracleBaseline, Baselined};
 use ilopt::batched::Batched;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::{ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome};
@@ -281,7 +282,7 @@ pub type ObstacleProblem = TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGauss
 /// appendix's baseline rows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Baseline {
+pub enum ReferencePolicy {
     /// The task's expert (the velocity-obstacle expert; CartPole's PPO or LQR expert).
     Expert,
     /// Obstacle task: full speed straight at the goal, ignoring the obstacle,
@@ -289,23 +290,23 @@ pub enum Baseline {
     StraightToGoal,
 }
 
-impl Baseline {
+impl ReferencePolicy {
     /// Its label in tables and figures.
     pub fn label(self, bench: &Bench) -> String {
         match (self, bench) {
-            (Baseline::Expert, Bench::Obstacle { .. }) => "Expert (VO)".into(),
-            (Baseline::Expert, Bench::Cartpole { expert, .. }) => {
+            (ReferencePolicy::Expert, Bench::Obstacle { .. }) => "Expert (VO)".into(),
+            (ReferencePolicy::Expert, Bench::Cartpole { expert, .. }) => {
                 format!("Expert ({})", expert.name())
             }
-            (Baseline::StraightToGoal, _) => "Straight to goal".into(),
+            (ReferencePolicy::StraightToGoal, _) => "Straight to goal".into(),
         }
     }
 
     /// The baselines of a task, in table order.
-    pub fn of(kind: TaskKind) -> &'static [Baseline] {
+    pub fn of(kind: TaskKind) -> &'static [ReferencePolicy] {
         match kind {
-            TaskKind::Obstacle => &[Baseline::Expert, Baseline::StraightToGoal],
-            TaskKind::Cartpole => &[Baseline::Expert],
+            TaskKind::Obstacle => &[ReferencePolicy::Expert, ReferencePolicy::StraightToGoal],
+            TaskKind::Cartpole => &[ReferencePolicy::Expert],
         }
     }
 }
@@ -471,35 +472,43 @@ impl Bench {
     }
 
     /// Evaluate a baseline policy on the same episodes as the learners.
-    fn evaluate_baseline(&self, b: Baseline, episodes: u32, key: &str) -> Result<Eval, Error> {
+    fn evaluate_baseline(
+        &self,
+        b: ReferencePolicy,
+        episodes: u32,
+        key: &str,
+    ) -> Result<Eval, Error> {
         let err = |x: &dyn std::fmt::Display| Error::experiment(format!("baseline ({key})"), x);
         match (self, b) {
-            (Bench::Obstacle { expert, .. }, Baseline::Expert) => self.evaluate_obstacle(
+            (Bench::Obstacle { expert, .. }, ReferencePolicy::Expert) => self.evaluate_obstacle(
                 &mut |obs, _| expert.act(obs).map_err(|x| err(&x)),
                 episodes,
                 key,
             ),
-            (Bench::Obstacle { env, .. }, Baseline::StraightToGoal) => self.evaluate_obstacle(
-                &mut |obs, _| {
-                    let d = [
-                        env.goal[0] - obs.agent_pos[0],
-                        env.goal[1] - obs.agent_pos[1],
-                    ];
-                    let n = d[0].hypot(d[1]);
-                    Ok(if n > 0.0 {
-                        let v = env.agent_max_speed / n;
-                        [d[0] * v, d[1] * v]
-                    } else {
-                        [0.0, 0.0]
-                    })
-                },
-                episodes,
-                key,
-            ),
-            (Bench::Cartpole { .. }, Baseline::Expert) => {
+            (Bench::Obstacle { env, .. }, ReferencePolicy::StraightToGoal) => self
+                .evaluate_obstacle(
+                    &mut |obs, _| {
+                        let d = [
+                            env.goal[0] - obs.agent_pos[0],
+                            env.goal[1] - obs.agent_pos[1],
+                        ];
+                        let n = d[0].hypot(d[1]);
+                        Ok(if n > 0.0 {
+                            let v = env.agent_max_speed / n;
+                            [d[0] * v, d[1] * v]
+                        } else {
+                            [0.0, 0.0]
+                        })
+                    },
+                    episodes,
+                    key,
+                ),
+            (Bench::Cartpole { .. }, ReferencePolicy::Expert) => {
                 self.evaluate_cartpole(&mut |_, _, label| Ok((label, 0.0)), episodes, key)
             }
-            (Bench::Cartpole { .. }, Baseline::StraightToGoal) => Err(err(&"CartPole has no goal")),
+            (Bench::Cartpole { .. }, ReferencePolicy::StraightToGoal) => {
+                Err(err(&"CartPole has no goal"))
+            }
         }
     }
 
@@ -659,16 +668,26 @@ fn mean_estimate<P: IlProblem<f64>>(
 }
 
 /// The identity of a row's runs at given hyper-parameters: task, label, the algorithm's config
-/// (JSON), m and the objective. Run seeds are derived from it and the seed index only.
+/// (JSON), m, the objective and the baseline (named only when there is one, so that the keys
+/// of rows without one do not depend on the option). Run seeds are derived from it and the
+/// seed index only.
 pub fn run_key_of(
     kind: TaskKind,
     label: &str,
     config: &AlgorithmConfig,
     m: usize,
     horizon: Horizon,
+    baseline: &OracleBaseline,
 ) -> String {
     let json = serde_json::to_string(config).unwrap_or_default();
-    format!("{}|{label}|{json}|m={m}|{}", kind.name(), horizon.label())
+    let key = format!("{}|{label}|{json}|m={m}|{}", kind.name(), horizon.label());
+    match baseline {
+        OracleBaseline::None => key,
+        b => format!(
+            "{key}|baseline={}",
+            serde_json::to_string(b).unwrap_or_default()
+        ),
+    }
 }
 
 /// [`run_key_of`] for a row at its configured hyper-parameters.
@@ -679,6 +698,7 @@ pub fn run_key(kind: TaskKind, task: &TaskSection, entry: &AlgorithmEntry) -> St
         &entry.config,
         entry.m.unwrap_or(1),
         entry.horizon(task, kind.name()),
+        &entry.baseline.clone().unwrap_or_default(),
     )
 }
 
@@ -693,6 +713,8 @@ pub struct RunSpec<'a> {
     pub config: &'a AlgorithmConfig,
     /// Trajectories per gradient (oracle methods; 1 = the plain problem).
     pub m: usize,
+    /// The oracle's baseline ([`OracleBaseline::None`]: eq. 3.15 as it is).
+    pub baseline: OracleBaseline,
     /// The run key (seed derivation of θ₁ and of Fig. 4.5's estimates).
     pub key: String,
     /// The run's RNG seed.
@@ -745,6 +767,7 @@ pub fn run_seed(
             task,
             config: &entry.config,
             m,
+            baseline: entry.baseline.clone().unwrap_or_default(),
             seed: derive_seed(&key, u64::from(seed_index)),
             key,
             seed_index,
@@ -767,24 +790,28 @@ pub fn run_seed(
 /// status is [`RunStatus::Diverged`] and it keeps the checkpoints reached.
 pub fn run_spec(bench: &Bench, spec: &RunSpec<'_>) -> Result<(SeedRun, SeedTiming), Error> {
     match bench {
-        Bench::Obstacle { problem, .. } => {
-            if spec.m > 1 {
-                let b = Batched::new(problem.clone(), spec.m)
-                    .map_err(|e| Error::experiment("minibatch", e))?;
-                drive(bench, &b, spec)
-            } else {
-                drive(bench, problem, spec)
-            }
-        }
-        Bench::Cartpole { problem, .. } => {
-            if spec.m > 1 {
-                let b = Batched::new(problem.clone(), spec.m)
-                    .map_err(|e| Error::experiment("minibatch", e))?;
-                drive(bench, &b, spec)
-            } else {
-                drive(bench, problem, spec)
-            }
-        }
+        Bench::Obstacle { problem, .. } => drive_with(bench, problem, spec),
+        Bench::Cartpole { problem, .. } => drive_with(bench, problem, spec),
+    }
+}
+
+/// [`drive`] on `problem` as the spec wants it: with its baseline ([`Baselined`], m
+/// trajectories per gradient), m trajectories per gradient ([`Batched`]), or as it is.
+fn drive_with<P: IlProblem<f64> + Clone>(
+    bench: &Bench,
+    problem: &P,
+    spec: &RunSpec<'_>,
+) -> Result<(SeedRun, SeedTiming), Error> {
+    if spec.baseline != OracleBaseline::None {
+        let b = Baselined::<P, f64>::new(problem.clone(), spec.m, &spec.baseline)
+            .map_err(|e| Error::experiment("baseline", e))?;
+        drive(bench, &b, spec)
+    } else if spec.m > 1 {
+        let b =
+            Batched::new(problem.clone(), spec.m).map_err(|e| Error::experiment("minibatch", e))?;
+        drive(bench, &b, spec)
+    } else {
+        drive(bench, problem, spec)
     }
 }
 
@@ -942,7 +969,7 @@ pub fn baseline_seed(
     bench: &Bench,
     kind: TaskKind,
     task: &TaskSection,
-    baseline: Baseline,
+    baseline: ReferencePolicy,
     seed_index: u32,
 ) -> Result<Checkpoint, Error> {
     let ev = bench.evaluate_baseline(baseline, task.eval_episodes, &eval_key(kind, seed_index))?;

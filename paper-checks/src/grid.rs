@@ -1,13 +1,16 @@
 //! A row's pre-registered tuning grid: its dimensions (dotted paths into the algorithm's config,
-//! or `"m"`) and its points, the Cartesian product of the dimensions' values.
+//! `"m"` or `"baseline"`) and its points, the Cartesian product of the dimensions' values.
 
 use ilopt::algo::AlgorithmConfig;
+use ilopt::baseline::Baseline;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 /// One dimension of a pre-registered tuning grid: a dotted path into the algorithm's config
-/// (its JSON form, e.g. `"alpha"`, `"step.eta"`, `"schedule"`, `"inner.rule.alpha"`) or `"m"`
-/// (trajectories per gradient, via [`ilopt::batched::Batched`]), and the values tried, in order.
+/// (its JSON form, e.g. `"alpha"`, `"step.eta"`, `"schedule"`, `"inner.rule.alpha"`), `"m"`
+/// (trajectories per gradient, via [`ilopt::batched::Batched`]) or `"baseline"` (a
+/// [`Baseline`] in its JSON form, e.g. `{ kind = "leave-one-out" }`), and the values tried, in
+/// order.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GridDim {
@@ -28,19 +31,36 @@ pub struct GridPoint {
     pub config: AlgorithmConfig,
     /// Trajectories per gradient.
     pub m: usize,
+    /// The oracle's baseline ([`Baseline::None`]: eq. 3.15 as it is).
+    #[serde(default)]
+    pub baseline: Baseline,
 }
 
 impl GridPoint {
     /// `path=value, …` (or `as configured` for a row without a grid).
     pub fn describe(&self) -> String {
         if self.values.is_empty() {
-            return format!("as configured, m={}", self.m);
+            return match &self.baseline {
+                Baseline::None => format!("as configured, m={}", self.m),
+                b => format!(
+                    "as configured, m={}, baseline={}",
+                    self.m,
+                    compact(&serde_json::to_value(b).unwrap_or_default())
+                ),
+            };
         }
-        self.values
+        let mut parts: Vec<String> = self
+            .values
             .iter()
             .map(|(p, v)| format!("{p}={}", compact(v)))
-            .collect::<Vec<_>>()
-            .join(", ")
+            .collect();
+        if self.baseline != Baseline::None && !self.values.iter().any(|(p, _)| p == "baseline") {
+            parts.push(format!(
+                "baseline={}",
+                compact(&serde_json::to_value(&self.baseline).unwrap_or_default())
+            ));
+        }
+        parts.join(", ")
     }
 }
 
@@ -82,16 +102,17 @@ fn set_path(root: &mut Value, path: &str, value: Value) -> Result<(), String> {
     Err(format!("`{path}`: empty path"))
 }
 
-/// The points of the grid `dims` around `config` with `m` trajectories per gradient, in grid
-/// order (the first dimension varying slowest); without dimensions, one point: the config as
+/// The points of the grid `dims` around `config` with `m` trajectories per gradient and
+/// `baseline` (absent: none), in grid order (the first dimension varying slowest); without dimensions, one point: the config as
 /// given.
 ///
 /// # Errors
 /// A message naming the dimension when a path does not exist, a dimension is empty or repeated,
-/// `m` is not a positive integer, or a point is not a valid config.
+/// `m` is not a positive integer, a baseline is not one, or a point is not a valid config.
 pub fn points(
     config: &AlgorithmConfig,
     m: Option<usize>,
+    baseline: Option<&Baseline>,
     dims: &[GridDim],
 ) -> Result<Vec<GridPoint>, String> {
     let base = serde_json::to_value(config).map_err(|e| e.to_string())?;
@@ -117,6 +138,7 @@ pub fn points(
         }
         let mut json = base.clone();
         let mut m = base_m;
+        let mut baseline = baseline.cloned().unwrap_or_default();
         let mut values = Vec::new();
         for (d, &i) in dims.iter().zip(&picks) {
             let v = d.values[i].clone();
@@ -126,6 +148,9 @@ pub fn points(
                     .filter(|&x| x >= 1)
                     .ok_or_else(|| format!("`m` values must be integers ≥ 1, got {v}"))?
                     as usize;
+            } else if d.path == "baseline" {
+                baseline = serde_json::from_value(v.clone())
+                    .map_err(|e| format!("`baseline` value {v} is not a baseline: {e}"))?;
             } else {
                 set_path(&mut json, &d.path, v.clone())?;
             }
@@ -138,6 +163,7 @@ pub fn points(
             values,
             config,
             m,
+            baseline,
         });
     }
     Ok(out)

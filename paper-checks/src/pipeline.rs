@@ -13,7 +13,8 @@
 use crate::config::{AlgorithmEntry, Profile, TaskSection};
 use crate::error::Error;
 use crate::experiment::{
-    Baseline, Bench, RunSpec, TaskKind, baseline_seed, eval_key, run_key, run_key_of, run_spec,
+    Bench, ReferencePolicy, RunSpec, TaskKind, baseline_seed, eval_key, run_key, run_key_of,
+    run_spec,
 };
 use crate::grid::GridPoint;
 use crate::naming::slug;
@@ -211,6 +212,10 @@ fn at_point(e: &AlgorithmEntry, p: &GridPoint) -> AlgorithmEntry {
     let mut x = e.clone();
     x.config = p.config.clone();
     x.m = Some(p.m);
+    x.baseline = match &p.baseline {
+        ilopt::baseline::Baseline::None => None,
+        b => Some(b.clone()),
+    };
     x.grid.clear();
     x
 }
@@ -286,7 +291,7 @@ fn tune(
                 .map(|(&(i, s), ukey)| {
                     units.get(ukey, || {
                         let p = &points[i];
-                        let rk = run_key_of(*kind, &e.label, &p.config, p.m, h);
+                        let rk = run_key_of(*kind, &e.label, &p.config, p.m, h, &p.baseline);
                         let seed = tuning_seed(&rk, s);
                         let (run, _) = run_spec(
                             bench,
@@ -295,6 +300,7 @@ fn tune(
                                 task: t,
                                 config: &p.config,
                                 m: p.m,
+                                baseline: p.baseline.clone(),
                                 key: format!("tuning|{rk}"),
                                 seed,
                                 seed_index: s,
@@ -718,6 +724,7 @@ fn stages(
                                     task: t,
                                     config: &e.config,
                                     m: e.m.unwrap_or(1),
+                                    baseline: e.baseline.clone().unwrap_or_default(),
                                     key: rk.clone(),
                                     seed: crate::stats::derive_seed(&rk, u64::from(s)),
                                     seed_index: s,
@@ -879,7 +886,7 @@ fn baselines_job(
         (TaskKind::Cartpole, &profile.cartpole),
     ] {
         let bench = benches.of_task(kind);
-        for &b in Baseline::of(kind) {
+        for &b in ReferencePolicy::of(kind) {
             let runs = seeds
                 .par_iter()
                 .map(|&s| baseline_seed(bench, kind, t, b, s))

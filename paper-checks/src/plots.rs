@@ -146,6 +146,9 @@ pub fn style_for(label: &str) -> Style {
         "STORM" => s(VERMILLION, Marker::Circle, true, false),
         "IS-STORM (trajectory)" => s(REDDISH_PURPLE, Marker::Cross, true, false),
         "IS-STORM (per-decision)" => s(REDDISH_PURPLE, Marker::Plus, true, true),
+        "SGD + baseline" => s(SKY_BLUE, Marker::TriangleDown, false, true),
+        "STORM + baseline" => s(VERMILLION, Marker::Circle, false, true),
+        "IS-STORM + baseline" => s(DARK_YELLOW, Marker::Square, false, true),
         // Fig. 4.2's estimates.
         "RMSE (95% CI)" | "vs reference (95% CI)" => s(BLUE, Marker::Circle, true, false),
         "− ref. variance (95% CI)" => s(VERMILLION, Marker::Square, true, false),

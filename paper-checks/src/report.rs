@@ -11,6 +11,7 @@ use crate::results::Results;
 use std::path::Path;
 
 pub mod aggregate;
+pub mod beyond;
 pub mod claims;
 pub mod data;
 pub mod doc;

@@ -2,7 +2,7 @@
 //! the baselines, the tuning, the Fig. 4.2 study and the theorem-check table.
 
 use crate::config::AlgorithmEntry;
-use crate::experiment::{Baseline, Checkpoint, SeedRun, SeedTiming, TaskKind};
+use crate::experiment::{Checkpoint, ReferencePolicy, SeedRun, SeedTiming, TaskKind};
 pub use crate::gradient_error::GradientErrorResult;
 use crate::tuning::TuningResult;
 use ilopt_theory::check::Check;
@@ -46,7 +46,7 @@ pub struct BaselineResult {
     /// The task.
     pub task: TaskKind,
     /// Which baseline.
-    pub baseline: Baseline,
+    pub baseline: ReferencePolicy,
     /// Its label in tables and figures.
     pub label: String,
     /// One evaluation per seed, in seed order (iteration 0, zero cost).

@@ -135,6 +135,7 @@ mod tests {
             note: None,
             horizon: None,
             m: None,
+            baseline: None,
             config: serde_json::from_str(
                 r#"{"algorithm":"adam","form":"causal","alpha":0.005,"beta1":0.9,"beta2":0.999,"epsilon":1e-8}"#,
             )
@@ -166,6 +167,46 @@ mod tests {
             values: vec![0.1.into()],
         }]);
         assert!(bad.grid_points().unwrap_err().contains("alhpa"));
+    }
+
+    #[test]
+    fn a_baseline_grid_dimension_sets_the_points_baseline_and_keys_name_it() {
+        use ilopt::baseline::Baseline;
+        let mut e = entry(vec![GridDim {
+            path: "baseline".into(),
+            values: vec![
+                serde_json::json!({"kind": "none"}),
+                serde_json::json!({"kind": "leave-one-out"}),
+            ],
+        }]);
+        e.m = Some(16);
+        let pts = e.grid_points().unwrap();
+        assert_eq!(pts[0].baseline, Baseline::None);
+        assert_eq!(pts[1].baseline, Baseline::LeaveOneOut);
+        assert_eq!(pts[1].describe(), "baseline={kind=leave-one-out}");
+        let key = |b: &Baseline| {
+            crate::experiment::run_key_of(
+                crate::experiment::TaskKind::Cartpole,
+                "Adam",
+                &pts[0].config,
+                16,
+                ilopt::task::Horizon::Episodic,
+                b,
+            )
+        };
+        // Without a baseline the key is the one rows had before the option existed.
+        assert!(!key(&Baseline::None).contains("baseline"));
+        assert!(key(&Baseline::LeaveOneOut).ends_with(r#"|baseline={"kind":"leave-one-out"}"#));
+        // A baseline fixed outside the grid is named in the point's description.
+        e.grid = vec![GridDim {
+            path: "alpha".into(),
+            values: vec![0.01.into()],
+        }];
+        e.baseline = Some(Baseline::LeaveOneOut);
+        assert_eq!(
+            e.grid_points().unwrap()[0].describe(),
+            "alpha=0.01, baseline={kind=leave-one-out}"
+        );
     }
 
     #[test]
@@ -215,7 +256,7 @@ mod profile_tests {
                 for e in &t.algorithms {
                     let h = e.horizon(t, kind.name());
                     for pt in e.grid_points().unwrap() {
-                        let rk = run_key_of(kind, &e.label, &pt.config, pt.m, h);
+                        let rk = run_key_of(kind, &e.label, &pt.config, pt.m, h, &pt.baseline);
                         for s in 0..p.seeds {
                             report.insert(derive_seed(&rk, u64::from(s)));
                         }

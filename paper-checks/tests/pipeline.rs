@@ -512,6 +512,30 @@ fn bad_profiles_are_rejected_naming_file_and_field() {
             "expert",
         ),
         (
+            "leave-one-out with one trajectory per gradient",
+            TINY.replace(
+                "label = \"SGD\"\n",
+                "label = \"SGD\"\nbaseline = { kind = \"leave-one-out\" }\n",
+            ),
+            "obstacle.algorithms[0] (SGD).baseline",
+        ),
+        (
+            "a baseline for a dataset learner",
+            TINY.replace(
+                "label = \"DAgger\"\n",
+                "label = \"DAgger\"\nbaseline = { kind = \"constant\", value = 1 }\n",
+            ),
+            "oracle methods only",
+        ),
+        (
+            "a grid value that is not a baseline",
+            TINY.replace(
+                "path = \"m\", values = [1, 2]",
+                "path = \"baseline\", values = [{ kind = \"best\" }]",
+            ),
+            "is not a baseline",
+        ),
+        (
             "theory profile",
             TINY.replace("theory_profile = \"none\"", "theory_profile = \"huge\""),
             "theory_profile",

@@ -38,7 +38,8 @@ const LEVEL: f64 = 0.95;
 
 type Row = (ConfigResult, Option<ConfigTiming>);
 
-fn outcome(r: &SeedRun) -> Outcome {
+/// A run's outcome for the verdict rules.
+pub(crate) fn outcome(r: &SeedRun) -> Outcome {
     match &r.status {
         RunStatus::Converged {
             gradient_evaluations,
@@ -66,7 +67,7 @@ fn tally(c: &ConfigResult) -> Tally {
 }
 
 /// Calls to sustained convergence, +∞ for runs that did not converge.
-fn calls(c: &ConfigResult) -> MedianCi {
+pub(crate) fn calls(c: &ConfigResult) -> MedianCi {
     let xs: Vec<f64> = c.runs.iter().map(|r| outcome(r).cost()).collect();
     MedianCi::of(&xs, LEVEL)
 }

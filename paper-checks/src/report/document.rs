@@ -435,6 +435,8 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
         d.extend(cost_tables(nos, rows, configs, tc, tr));
     }
 
+    d.extend(super::beyond::blocks(r, x.obstacle_rows, x.cartpole_rows));
+
     d.push(h("Kit time vs thesis (Tables 4.2 and 4.4)"));
     d.push(Block::Para(speedup::speedup_intro(x.machine)));
     d.push(Block::Table(Table {
