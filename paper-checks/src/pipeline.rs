@@ -489,7 +489,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
                 });
             }
         };
-    let baselines = progress.stage("baselines (expert, zero policy)", || {
+    let baselines = progress.stage("reference policies (expert, straight to goal)", || {
         baselines_job(profile, &benches, &seeds)
     })?;
     write_atomic(

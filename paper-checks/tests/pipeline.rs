@@ -582,7 +582,7 @@ fn without_a_terminal_every_stage_prints_one_line_with_its_time() {
         "theorem-check table",
         "Fig. 4.2 study",
         "tuning and report runs",
-        "baselines (expert, zero policy)",
+        "reference policies (expert, straight to goal)",
         "figures and documents",
     ] {
         assert!(

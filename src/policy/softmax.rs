@@ -95,7 +95,11 @@ pub fn brier_logit_gradient<S: Scalar>(probs: &[S], expert: usize) -> (S, Vec<S>
         })
         .collect();
     let loss = crate::scalar::norm_sq(&r);
-    let mean_r = crate::scalar::dot(&r, probs);
+    // Left to right, as the in-place pass sums it (whatever the number of actions).
+    let mean_r = r
+        .iter()
+        .zip(probs)
+        .fold(S::zero(), |acc, (x, p)| acc + x.clone() * p);
     let grad = probs
         .iter()
         .zip(&r)

@@ -47,6 +47,35 @@ macro_rules! impl_float {
             fn is_finite(&self) -> bool {
                 <$t>::is_finite(*self)
             }
+            #[inline]
+            fn dot_slices(x: &[Self], y: &[Self]) -> Self {
+                use super::{DOT_LANES, DOT_LANES_FROM};
+                let n = x.len().min(y.len());
+                let (x, y) = (&x[..n], &y[..n]);
+                if n < DOT_LANES_FROM {
+                    return x.iter().zip(y).fold(0.0, |acc, (a, b)| acc + a * b);
+                }
+                let mut acc = [0.0 as $t; DOT_LANES];
+                for (cx, cy) in x.chunks_exact(DOT_LANES).zip(y.chunks_exact(DOT_LANES)) {
+                    for l in 0..DOT_LANES {
+                        acc[l] += cx[l] * cy[l];
+                    }
+                }
+                let full = n - n % DOT_LANES;
+                let tail = x[full..]
+                    .iter()
+                    .zip(&y[full..])
+                    .fold(0.0, |acc, (a, b)| acc + a * b);
+                // Pairwise: (0+1) + (2+3), …, then the tail.
+                let mut width = DOT_LANES;
+                while width > 1 {
+                    width /= 2;
+                    for l in 0..width {
+                        acc[l] += acc[l + width];
+                    }
+                }
+                acc[0] + tail
+            }
         }
 
         impl Sqrt for $t {

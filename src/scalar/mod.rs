@@ -124,7 +124,26 @@ pub trait Scalar:
     fn is_certainly_zero(&self) -> bool {
         self.certain_cmp(&Self::zero()) == Some(Ordering::Equal)
     }
+    /// `Σ xᵢ yᵢ` over equally long slices ([`dot`] checks the lengths). The default adds the
+    /// products left to right from 0; exact types give the exact sum, intervals an enclosure.
+    /// Floats override it for long slices with [`DOT_LANES`] partial sums added at the end
+    /// (a different rounding, the same error bound `γ_n Σ|xᵢyᵢ|`), so that the loop runs in
+    /// vector registers; below [`DOT_LANES_FROM`] terms they keep the left-to-right order.
+    #[inline]
+    fn dot_slices(x: &[Self], y: &[Self]) -> Self {
+        x.iter()
+            .zip(y)
+            .fold(Self::zero(), |acc, (a, b)| acc + a.clone() * b)
+    }
 }
+
+/// Partial sums of the floats' [`Scalar::dot_slices`] (two AVX2 registers of `f64`).
+pub const DOT_LANES: usize = 8;
+
+/// The length from which the floats' [`Scalar::dot_slices`] uses [`DOT_LANES`] partial sums:
+/// shorter products (CartPole's five features, the PPO expert's four inputs) keep the
+/// left-to-right order, bit for bit.
+pub const DOT_LANES_FROM: usize = 16;
 
 /// A [`Scalar`] with a square root (enclosing for intervals).
 pub trait Sqrt: Scalar {
@@ -177,9 +196,7 @@ pub fn sum<'a, S: Scalar>(xs: impl IntoIterator<Item = &'a S>) -> S {
 #[inline]
 pub fn dot<S: Scalar>(x: &[S], y: &[S]) -> S {
     assert_eq!(x.len(), y.len(), "dot: length mismatch");
-    x.iter()
-        .zip(y)
-        .fold(S::zero(), |acc, (a, b)| acc + a.clone() * b)
+    S::dot_slices(x, y)
 }
 
 /// Squared Euclidean norm `Σ xᵢ²`.

@@ -177,12 +177,14 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         eta0,
     };
     rows.push(sgd_row(
+        "7a",
         "CartPole, fixed-500-reset, softmax learner",
         &cp,
         &cartpole_theta(),
         es(0.1, 0.5, 0.01),
     ));
     rows.push(sgd_row(
+        "7b",
         "obstacle, fixed-200-absorb, linear-Gaussian learner",
         &ob,
         &obstacle_theta(),

@@ -77,8 +77,10 @@ fn mean_and_trace<P: IlProblem<f64>>(
     Ok((mean, sq / (m as f64 - 1.0)))
 }
 
-/// The row for one task. `theta1` is the SGD start; probe points are θ₁ plus seeded perturbations.
+/// The row `id` for one task. `theta1` is the SGD start; probe points are θ₁ plus seeded
+/// perturbations.
 pub fn sgd_row<P: IlProblem<f64>>(
+    id: &str,
     name: &str,
     p: &P,
     theta1: &DVector<f64>,
@@ -87,7 +89,7 @@ pub fn sgd_row<P: IlProblem<f64>>(
     let result = "SGD, eq. 3.27 (real task, estimated constants)";
     let fail = |d: String| {
         Check::builder(
-            "7",
+            id,
             result,
             format!("{name}: (1/K) Σ E‖∇F(θ_k)‖² ≤ Lησ² + 2B_F/(ηK)"),
             Role::Thesis,
@@ -191,7 +193,7 @@ pub fn sgd_row<P: IlProblem<f64>>(
         Verdict::Uninformative
     };
     Check::builder(
-        "7",
+        id,
         result,
         format!("{name}: (1/K) Σ E‖∇F(θ_k)‖² ≤ L̂ησ̂² + 2B̂_F/(ηK), K = {}, η = {eta:.4}", s.k),
         Role::Thesis,
