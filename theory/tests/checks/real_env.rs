@@ -171,7 +171,7 @@ fn check7_estimated_constants_are_labelled() {
         stride: 10,
         eta0: 0.01,
     };
-    let r = sgd_row("CartPole, fixed-500-reset", &p, &cartpole_theta(), s);
+    let r = sgd_row("7a", "CartPole, fixed-500-reset", &p, &cartpole_theta(), s);
     assert_eq!(r.method, Method::Estimate);
     assert!(
         r.constants
