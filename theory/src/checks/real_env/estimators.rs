@@ -201,6 +201,9 @@ pub enum Estimator {
     Weighted(DVector<f64>, Weighting),
     /// A mutation (this module), trajectories from θ.
     Mutated(Mutation),
+    /// The library's baselined estimate (`ilopt::baseline::Baselined`): each sample the mean
+    /// of m baselined eq. 3.15 estimates at θ, trajectories from θ.
+    Baselined(ilopt::baseline::Baseline, usize),
 }
 
 /// Seeds of estimator `k`'s N trajectories: `k·10⁷ + i`.
@@ -220,7 +223,7 @@ pub fn samples<T, P>(
     k: u64,
 ) -> Result<Vec<DVector<f64>>, String>
 where
-    TaskProblem<T, P>: Sync,
+    TaskProblem<T, P>: Sync + Clone,
     T: Task<f64>,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
@@ -231,6 +234,19 @@ where
     };
     par_map(n, |i| {
         let mut rng = KitRng::seed_from_u64(estimator_seed(k, i));
+        if let Estimator::Baselined(b, m) = e {
+            // A fresh oracle per sample: an estimated baseline then learns only from earlier
+            // trajectories of the same sample, and samples stay independent.
+            let q = ilopt::baseline::Baselined::<_, f64>::new(p.clone(), *m, b)
+                .map_err(|e| e.to_string())?;
+            let mut c = Cost::default();
+            let t = q
+                .rollout(&Behaviour::Learner(theta), &mut rng, &mut c)
+                .map_err(|e| e.to_string())?;
+            return q
+                .estimate(theta, &t, EstimatorForm::Causal, &mut c)
+                .map_err(|e| e.to_string());
+        }
         if let Estimator::Mutated(m) = e {
             let (t, starts) = rollout_marking_resets(p, theta, &mut rng)?;
             return mutated_estimate(p, theta, &t, &starts, *m);
@@ -246,7 +262,9 @@ where
             Estimator::Weighted(x, w) => p
                 .weighted_estimate(theta, x, &t, *w, &mut c)
                 .map_err(|e| e.to_string()),
-            Estimator::Mutated(_) => unreachable!("rolled out below"),
+            Estimator::Mutated(_) | Estimator::Baselined(..) => {
+                unreachable!("returned above")
+            }
         }
     })
 }

@@ -33,7 +33,7 @@ mod estimators;
 mod reference;
 mod tasks;
 
-pub use comparison::{Comparison, POWER_Z, compare, normal_upper_quantile};
+pub use comparison::{Comparison, POWER_Z, compare, normal_upper_quantile, variance_ratio};
 pub use estimators::{
     Estimator, Mutation, effective_sample_size, mutated_estimate, rollout_marking_resets, samples,
 };
@@ -43,6 +43,10 @@ pub use tasks::{
 };
 
 use crate::protocol::RealSizes;
+
+/// Trajectories per sample of the baselined rows (6a.b, 6b.b): the chapter-4 "+ baseline" rows'
+/// m.
+pub const BASELINE_M: usize = 16;
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::oracle::EstimatorKernel;
 use ilopt::policy::LikelihoodRatio;
@@ -225,7 +229,7 @@ pub fn task_rows<T, P>(
     z: RealSizes,
 ) -> Result<Vec<Check>, String>
 where
-    TaskProblem<T, P>: Sync,
+    TaskProblem<T, P>: Sync + Clone,
     T: Task<f64>,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
@@ -250,8 +254,21 @@ where
     for (i, m) in s.controls.iter().enumerate() {
         controls.push((m.label().into(), run(Estimator::Mutated(*m), 2 + i as u64)?));
     }
-    let oracle = run(Estimator::Oracle, 20)?;
+    let plain = samples(p, theta, &Estimator::Oracle, z.n_oracle, 20)?;
+    let oracle = compare(&plain, &r, z.alpha);
     let inclusive = run(Estimator::Mutated(Mutation::Inclusive), 21)?;
+    // The same number of trajectories as the oracle row, BASELINE_M per sample.
+    let leave_one_out = ilopt::baseline::Baseline::LeaveOneOut;
+    let baselined_samples = samples(
+        p,
+        theta,
+        &Estimator::Baselined(leave_one_out, BASELINE_M),
+        (z.n_oracle / BASELINE_M).max(2),
+        24,
+    )?;
+    let baselined = compare(&baselined_samples, &r, z.alpha);
+    let (ratio, ratio_lo, ratio_hi) =
+        variance_ratio(&plain, &baselined_samples, BASELINE_M, 400, 25);
     let weighted: Vec<(Weighting, Comparison, f64)> =
         [(Weighting::Trajectory, 22), (Weighting::PerDecision, 23)]
             .into_iter()
@@ -304,6 +321,25 @@ where
         if let Some(last) = rows.last_mut() {
             last.role = Role::Corrected;
         }
+    }
+    rows.push(row_from(
+        &format!("6{tag}.b"),
+        format!(
+            "{name}: E[g_b(θ, τ)] = ∇F(θ), g_b = g − Σ_i b_i ψ_i with the leave-one-out baseline over m = {BASELINE_M} trajectories (docs/math.md §9; beyond the thesis)"
+        ),
+        RowKind::Claim,
+        None,
+        &baselined,
+        &r,
+        z.alpha,
+        &refs,
+        &format!(
+            "; {} samples of m = {BASELINE_M} trajectories (as many trajectories as row 6{tag}); variance per trajectory tr Var(g)/tr Var(g_b) = {ratio:.3} [{ratio_lo:.3}, {ratio_hi:.3}] (95% bootstrap interval, 400 resamples)",
+            baselined.n
+        ),
+    ));
+    if let Some(last) = rows.last_mut() {
+        last.role = Role::Corrected;
     }
     rows.push(row_from(
         &format!("6{tag}.incl"),
