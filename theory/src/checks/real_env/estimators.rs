@@ -38,6 +38,10 @@ pub enum Mutation {
     Lagged,
     /// The causal sum mis-indexed as `Σ_{i>t}` (the inequality reversed).
     Reversed,
+    /// A baseline that looks at the decision it multiplies: `b_i` = the trajectory's own
+    /// loss-to-go after decision i (a function of a_i), which cancels every score term and leaves
+    /// `Σ_t ∇l_t`. Biased: `E[b_i ψ_i] ≠ 0` once b_i depends on a_i (docs/math.md §9).
+    PeekingBaseline,
     /// The causal sum mis-indexed as `Σ_{i≤t}`. **Unbiased** (E[ψ_t | s_t] = 0 and l_t depends on
     /// s_t only): a mutation the check must *not* flag.
     Inclusive,
@@ -54,6 +58,9 @@ impl Mutation {
             Mutation::DropCrossReset => "dropped score terms (score sum restarted at each reset)",
             Mutation::Lagged => "mis-indexed causal sum (Σ_{i<t−1} ψ_i)",
             Mutation::Reversed => "mis-indexed causal sum (Σ_{i>t} ψ_i)",
+            Mutation::PeekingBaseline => {
+                "a baseline that peeks at a_i (b_i = its own loss-to-go: no score terms)"
+            }
             Mutation::Inclusive => "mis-indexed causal sum (Σ_{i≤t} ψ_i, unbiased)",
         }
     }
@@ -107,6 +114,7 @@ where
         match m {
             Mutation::Lagged => g += &before_prev * l,
             Mutation::Reversed => g += &psi * loss_before,
+            Mutation::PeekingBaseline => {}
             _ => g += &before * l,
         }
         loss_before += l;
@@ -120,7 +128,7 @@ where
         {
             let sum = match m {
                 Mutation::DropEndScore => &before - &psi,
-                Mutation::DropTail => DVector::zeros(d),
+                Mutation::DropTail | Mutation::PeekingBaseline => DVector::zeros(d),
                 _ => before.clone(),
             };
             g += sum * tail;

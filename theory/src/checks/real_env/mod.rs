@@ -267,6 +267,10 @@ where
         24,
     )?;
     let baselined = compare(&baselined_samples, &r, z.alpha);
+    // The baselined row's own control: a baseline that peeks at a_i (the plain rows are not
+    // asked to resolve it; their noise is the variance the baseline removes).
+    let peeking_label = Mutation::PeekingBaseline.label();
+    let peeking = run(Estimator::Mutated(Mutation::PeekingBaseline), 26)?;
     let (ratio, ratio_lo, ratio_hi) =
         variance_ratio(&plain, &baselined_samples, BASELINE_M, 400, 25);
     let weighted: Vec<(Weighting, Comparison, f64)> =
@@ -322,6 +326,8 @@ where
             last.role = Role::Corrected;
         }
     }
+    let mut refs_b = refs.clone();
+    refs_b.push((peeking_label.to_string(), &peeking));
     rows.push(row_from(
         &format!("6{tag}.b"),
         format!(
@@ -332,7 +338,7 @@ where
         &baselined,
         &r,
         z.alpha,
-        &refs,
+        &refs_b,
         &format!(
             "; {} samples of m = {BASELINE_M} trajectories (as many trajectories as row 6{tag}); variance per trajectory tr Var(g)/tr Var(g_b) = {ratio:.3} [{ratio_lo:.3}, {ratio_hi:.3}] (95% bootstrap interval, 400 resamples)",
             baselined.n
@@ -365,5 +371,16 @@ where
             "",
         ));
     }
+    rows.push(row_from(
+        &format!("6{tag}.b.ctl"),
+        format!("{name}: control of row 6{tag}.b, {peeking_label}: E ≠ ∇F(θ), must be flagged"),
+        RowKind::Control,
+        None,
+        &peeking,
+        &r,
+        z.alpha,
+        &[],
+        "",
+    ));
     Ok(rows)
 }
