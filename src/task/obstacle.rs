@@ -124,17 +124,36 @@ impl ObstacleFeatures {
             let (vx, vy) = (obs.obstacle_vel[0] / s, obs.obstacle_vel[1] / s);
             let k = (per_axis - 1) as f64;
             let c = -1.0 / (2.0 * width * width);
+            let centre =
+                |range: [f64; 2], i: usize| range[0] + (range[1] - range[0]) * i as f64 / k;
+            // The Gaussian is separable, exp(c(Δx² + Δy²)) = exp(cΔx²)·exp(cΔy²): 2n `exp`s
+            // instead of n² (the y factors on the stack; a grid wider than the buffer takes the
+            // two-dimensional form).
+            let mut ey = [0.0f64; SEPARABLE_MAX];
+            let separable = per_axis <= SEPARABLE_MAX;
+            if separable {
+                for (j, e) in ey.iter_mut().enumerate().take(per_axis) {
+                    *e = (c * (ry - centre(y_range, j)).powi(2)).exp();
+                }
+            }
             for i in 0..per_axis {
-                let cx = x_range[0] + (x_range[1] - x_range[0]) * i as f64 / k;
+                let cx = centre(x_range, i);
+                let ex = (c * (rx - cx).powi(2)).exp();
                 for j in 0..per_axis {
-                    let cy = y_range[0] + (y_range[1] - y_range[0]) * j as f64 / k;
-                    let e = (c * ((rx - cx).powi(2) + (ry - cy).powi(2))).exp();
+                    let e = if separable {
+                        ex * ey[j]
+                    } else {
+                        (c * ((rx - cx).powi(2) + (ry - centre(y_range, j)).powi(2))).exp()
+                    };
                     out.extend_from_slice(&[e, e * vx, e * vy]);
                 }
             }
         }
     }
 }
+
+/// The widest RBF grid (centres per axis) whose features are computed in the separable form.
+const SEPARABLE_MAX: usize = 64;
 
 /// The obstacle task with its expert; actions and labels are stored as `A` (module docs).
 #[derive(Debug, Clone)]
@@ -358,6 +377,43 @@ mod tests {
         assert!((b[0] - e).abs() < 1e-15 && (b[1] - 0.5 * e).abs() < 1e-15);
         // The far corner (2, 1): distance √5, e = exp(−10).
         assert!((bump(2, 2)[0] - (-10.0f64).exp()).abs() < 1e-18);
+    }
+
+    /// The separable form against the two-dimensional Gaussian, on a grid that takes the
+    /// separable path and one wider than its buffer (the two-dimensional path).
+    #[test]
+    fn separable_rbf_features_agree_with_the_two_dimensional_gaussian() {
+        for per_axis in [9, SEPARABLE_MAX + 1] {
+            let f = ObstacleFeatures::Rbf {
+                per_axis,
+                width: 0.2,
+                x_range: [-0.5, 2.0],
+                y_range: [-1.0, 1.0],
+            };
+            for (k, pos) in [[0.3, 0.1], [1.7, -0.9], [-0.4, 0.8], [5.0, 3.0]]
+                .iter()
+                .enumerate()
+            {
+                let o = obs(*pos, [0.01, 0.002 * k as f64]);
+                let mut v = Vec::new();
+                f.push(&o, [2.5, 0.0], 0.02, &mut v);
+                let r = feature_array(&o, [2.5, 0.0]);
+                let (rx, ry) = (r[2], r[3]);
+                let step =
+                    |lo: f64, hi: f64, i: usize| lo + (hi - lo) * i as f64 / (per_axis - 1) as f64;
+                for i in 0..per_axis {
+                    for j in 0..per_axis {
+                        let (cx, cy) = (step(-0.5, 2.0, i), step(-1.0, 1.0, j));
+                        let want = (-((rx - cx).powi(2) + (ry - cy).powi(2)) / 0.08).exp();
+                        let got = v[FEATURES + 2 + 3 * (per_axis * i + j)];
+                        assert!(
+                            (got - want).abs() <= 1e-12 * want,
+                            "per_axis {per_axis}, centre ({i}, {j}): {got:e} vs {want:e}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
