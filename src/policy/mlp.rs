@@ -19,7 +19,7 @@
 use super::softmax::{check_action, log_softmax, sample_probs, score_logits};
 use super::{
     LikelihoodRatio, Policy, PolicyError, brier_logit_gradient, check_positive, check_size,
-    check_vec, from_f64_exact, mat_vec, outer, softmax_probs,
+    check_vec, from_f64_exact, mat_vec_in_order, outer, softmax_probs,
 };
 use crate::problem::KitRng;
 use crate::sampling::standard_normal;
@@ -126,12 +126,12 @@ impl Mlp {
         check_vec("theta", theta, self.param_dim())?;
         check_vec("phi", phi, self.inputs)?;
         let (w1, b1, w2, b2) = self.split(theta);
-        let hidden = mat_vec(w1, phi, self.hidden)
+        let hidden = mat_vec_in_order(w1, phi, self.hidden)
             .into_iter()
             .zip(b1)
             .map(|(a, b)| tanh(&(a + b)))
             .collect::<Result<Vec<S>, _>>()?;
-        let output = mat_vec(w2, &hidden, self.outputs)
+        let output = mat_vec_in_order(w2, &hidden, self.outputs)
             .into_iter()
             .zip(b2)
             .map(|(a, b)| a + b)

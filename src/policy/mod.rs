@@ -318,6 +318,22 @@ pub(crate) fn mat_vec<S: Scalar>(m: &[S], x: &[S], rows: usize) -> Vec<S> {
         .collect()
 }
 
+/// `y = Mx` with each row's sum taken left to right from 0, whatever its length (not the floats'
+/// partial sums of [`crate::scalar::Scalar::dot_slices`]): the tanh MLP's layers, whose order the
+/// PPO expert's greedy pass repeats operation for operation and with which the committed expert
+/// was trained.
+pub(crate) fn mat_vec_in_order<S: Scalar>(m: &[S], x: &[S], rows: usize) -> Vec<S> {
+    let cols = x.len();
+    (0..rows)
+        .map(|i| {
+            m[i * cols..(i + 1) * cols]
+                .iter()
+                .zip(x)
+                .fold(S::zero(), |acc, (a, b)| acc + a.clone() * b)
+        })
+        .collect()
+}
+
 /// The row-major outer product `u vᵀ` (the shape of every gradient with respect to a weight matrix).
 pub(crate) fn outer<S: Scalar>(u: &[S], v: &[S]) -> Vec<S> {
     u.iter()
