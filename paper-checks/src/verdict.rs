@@ -210,6 +210,30 @@ impl MedianCi {
     }
 }
 
+impl MedianCi {
+    /// The estimate for a table whose other column gives n: `median [lo, hi]`, or `∞` alone when
+    /// the median and both ends are +∞ (most runs never converged).
+    pub fn cell(&self, num: impl Fn(f64) -> String) -> String {
+        let all_infinite = [self.median, self.lo, self.hi]
+            .iter()
+            .all(|x| x.is_infinite() && *x > 0.0);
+        let f = |x: f64| {
+            if x.is_infinite() {
+                "∞".to_string()
+            } else {
+                num(x)
+            }
+        };
+        if all_infinite {
+            "∞".to_string()
+        } else if self.lo.is_nan() {
+            format!("{} (too few for an interval)", f(self.median))
+        } else {
+            format!("{} [{}, {}]", f(self.median), f(self.lo), f(self.hi))
+        }
+    }
+}
+
 /// "`a` needs less than `b`" for costs with median intervals: reproduced if `a`'s interval lies
 /// wholly below `b`'s, not reproduced if `b`'s lies wholly below `a`'s or `a` did not converge
 /// in most runs (median +∞), inconclusive otherwise (overlap, or an interval too small to exist).
@@ -318,6 +342,20 @@ pub fn cap_for_failures(v: Verdict, favoured: &[Tally]) -> Verdict {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_cell_drops_n_and_prints_a_wholly_infinite_estimate_as_infinity() {
+        let num = |x: f64| format!("{x}");
+        let never = MedianCi::of(&[f64::INFINITY; 10], 0.95);
+        assert_eq!(never.cell(num), "∞");
+        assert!(never.text(num).contains("n = 10"));
+        let some = MedianCi::of(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0], 0.95);
+        let cell = some.cell(num);
+        assert!(cell.starts_with("5.5 [") && !cell.contains("n ="), "{cell}");
+        let inf = f64::INFINITY;
+        let half = MedianCi::of(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, inf, inf, inf, inf], 0.95);
+        assert!(half.cell(num).ends_with(", ∞]"), "{}", half.cell(num));
+    }
 
     fn ci(xs: &[f64]) -> MedianCi {
         MedianCi::of(xs, 0.95)

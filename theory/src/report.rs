@@ -138,6 +138,23 @@ pub fn status(checks: &[Check]) -> Result<(), String> {
     }
 }
 
+/// The sentence naming the uninformative rows and each negative control's detection:
+/// "Uninformative rows: …. Negative controls: …."
+pub fn uninformative_and_controls(checks: &[Check]) -> String {
+    let uninformative: Vec<&str> = checks
+        .iter()
+        .filter(|c| c.verdict == Verdict::Uninformative)
+        .map(|c| c.id.as_str())
+        .collect();
+    let controls = detections(checks, Role::NegativeControl, "NOT detected");
+    let or_none = |v: String| if v.is_empty() { "none".into() } else { v };
+    format!(
+        "Uninformative rows: {}. Negative controls: {}.",
+        or_none(uninformative.join(", ")),
+        or_none(controls.join("; "))
+    )
+}
+
 /// The Markdown table (one row per check), the closing note (every statistical row with its
 /// power and verdict, the uninformative rows, the controls and the overall status), then the
 /// details with the constants and their provenance.
@@ -173,28 +190,13 @@ pub fn markdown(checks: &[Check]) -> String {
     for item in power_items(checks) {
         out += &format!("- {item}\n");
     }
-    let uninformative: Vec<&str> = checks
-        .iter()
-        .filter(|c| c.verdict == Verdict::Uninformative)
-        .map(|c| c.id.as_str())
-        .collect();
-    let controls = detections(checks, Role::NegativeControl, "NOT detected");
     let probes = detections(checks, Role::Probe, "not detected");
     if !probes.is_empty() {
         out += &format!("\n{}\n", probes_note(&probes));
     }
     out += &format!(
-        "\nUninformative rows: {}. Negative controls: {}.\n\n**Status: {}**\n",
-        if uninformative.is_empty() {
-            "none".to_string()
-        } else {
-            uninformative.join(", ")
-        },
-        if controls.is_empty() {
-            "none".to_string()
-        } else {
-            controls.join("; ")
-        },
+        "\n{}\n\n**Status: {}**\n",
+        uninformative_and_controls(checks),
         match status(checks) {
             Ok(()) => "every negative control detected".to_string(),
             Err(e) => format!("FAILS — {e}"),

@@ -163,7 +163,7 @@ pub fn blocks(
                     vec![
                         c.label.clone(),
                         format!("{}/{}", row.converged, row.seeds),
-                        calls(c).text(num),
+                        calls(c).cell(num),
                         if *obstacle {
                             ci(&percent(&row.final_score))
                         } else {

@@ -561,18 +561,18 @@ pub fn timing_claims(r: &Results) -> Vec<Claim> {
             &["STORM", "RMSProp", "DAgger", "Adam"][..],
         ),
     ] {
-        let times: Vec<(String, Summary)> = labels
+        let times: Vec<(String, Summary, usize)> = labels
             .iter()
             .filter_map(|l| {
-                let (_, t) = set
+                let (c, t) = set
                     .iter()
                     .find(|x| x.0.label == *l && x.0.entry.role == crate::config::Role::Thesis)?;
-                let xs: Vec<f64> = t.as_ref()?.runs.iter().map(|r| r.train_seconds).collect();
-                Some(((*l).to_string(), Summary::of(&xs)))
+                let (xs, diverged) = completed_times(c, t.as_ref()?);
+                Some(((*l).to_string(), Summary::of(&xs), diverged))
             })
             .collect();
         let verdict = match times.iter().find(|t| t.0 == "DAgger") {
-            Some((_, d)) => extreme(
+            Some((_, d, _)) => extreme(
                 d,
                 &times
                     .iter()
@@ -588,11 +588,13 @@ pub fn timing_claims(r: &Results) -> Vec<Claim> {
             source: table.into(),
             claim: "DAgger's runtime is much higher than the other algorithms'".into(),
             rule: "DAgger's training wall time per run (equal gradient-call budgets) has a 95% \
-                   t-interval wholly above every other thesis row's"
+                   t-interval wholly above every other thesis row's; diverged runs are left out (they \
+                   stop at their first non-finite or out-of-bound parameter), and a row with fewer \
+                   than two other runs makes its comparison inconclusive"
                 .into(),
             evidence: times
                 .iter()
-                .map(|(l, s)| format!("{l} {} s", ci_text(s)))
+                .map(|(l, s, diverged)| runtime_text(l, s, *diverged))
                 .collect::<Vec<_>>()
                 .join("; "),
             verdict,
@@ -601,9 +603,110 @@ pub fn timing_claims(r: &Results) -> Vec<Claim> {
     out
 }
 
+/// The training times (from `t`) of the runs of `c` that did not diverge, and how many diverged
+/// (a diverged run stops at its first non-finite or out-of-bound parameter, so its time says
+/// nothing about the method's cost).
+fn completed_times(c: &ConfigResult, t: &ConfigTiming) -> (Vec<f64>, usize) {
+    let diverged: Vec<u32> = c
+        .runs
+        .iter()
+        .filter(|r| r.status.is_diverged())
+        .map(|r| r.seed_index)
+        .collect();
+    let kept = t
+        .runs
+        .iter()
+        .filter(|r| !diverged.contains(&r.seed_index))
+        .map(|r| r.train_seconds)
+        .collect();
+    (kept, diverged.len())
+}
+
+/// `label mean [lo, hi] (n = k) s`, saying how many diverged runs were left out, or `label —`
+/// when no run completed.
+fn runtime_text(label: &str, s: &Summary, diverged: usize) -> String {
+    let left_out = match diverged {
+        0 => String::new(),
+        1 => "; 1 diverged run left out".to_string(),
+        d => format!("; {d} diverged runs left out"),
+    };
+    if s.n == 0 {
+        format!("{label} — (all {diverged} runs diverged)")
+    } else {
+        format!("{label} {} s{left_out}", ci_text(s))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn timed(statuses: &[RunStatus]) -> (ConfigResult, ConfigTiming) {
+        let runs = statuses.iter().enumerate().map(|(i, status)| SeedRun {
+            seed_index: i as u32,
+            seed: i as u64,
+            termination: String::new(),
+            theta: vec![],
+            checkpoints: vec![],
+            converged: None,
+            status: status.clone(),
+            hyper_parameters: Default::default(),
+        });
+        let timing = (0..statuses.len()).map(|i| crate::experiment::SeedTiming {
+            seed_index: i as u32,
+            train_seconds: 1.0 + i as f64,
+            checkpoint_seconds: vec![],
+            converge_seconds: None,
+        });
+        (
+            ConfigResult {
+                task: crate::experiment::TaskKind::Obstacle,
+                label: "STORM".into(),
+                key_hash: String::new(),
+                entry: serde_json::from_value(serde_json::json!({
+                    "label": "STORM",
+                    "config": {"algorithm": "adam", "form": "causal", "alpha": 0.005,
+                               "beta1": 0.9, "beta2": 0.999, "epsilon": 1e-8}
+                }))
+                .unwrap(),
+                runs: runs.collect(),
+            },
+            ConfigTiming {
+                task: crate::experiment::TaskKind::Obstacle,
+                label: "STORM".into(),
+                runs: timing.collect(),
+                wall_seconds: 0.0,
+            },
+        )
+    }
+
+    #[test]
+    fn runtimes_leave_diverged_runs_out_and_say_so() {
+        let diverged = RunStatus::Diverged {
+            reason: "non-finite θ".into(),
+            gradient_evaluations: 3,
+        };
+        let (c, t) = timed(&[
+            RunStatus::NotConverged,
+            diverged.clone(),
+            RunStatus::NotConverged,
+        ]);
+        let (xs, d) = completed_times(&c, &t);
+        assert_eq!((xs, d), (vec![1.0, 3.0], 1));
+        let text = runtime_text("STORM", &Summary::of(&[1.0, 3.0]), 1);
+        assert!(text.contains("n = 2") && text.contains("1 diverged run left out"));
+        let (c, t) = timed(&[diverged.clone(), diverged]);
+        let (xs, d) = completed_times(&c, &t);
+        assert!(xs.is_empty());
+        let all = Summary::of(&xs);
+        assert_eq!(
+            runtime_text("STORM", &all, d),
+            "STORM — (all 2 runs diverged)"
+        );
+        // A row without runs cannot lose to DAgger: the comparison is inconclusive.
+        let dagger = Summary::of(&[10.0, 11.0, 12.0]);
+        assert_eq!(extreme(&dagger, &[&all], true), Verdict::Inconclusive);
+    }
 
     #[test]
     fn a_variance_of_censored_counts_is_never_a_lower_variance() {

@@ -9,9 +9,10 @@
 
 use super::doc::{Block, Table};
 use crate::results::TheoryTable;
-use ilopt_theory::check::{Check, Role, Verdict};
+use ilopt_theory::check::{Check, Role};
 use ilopt_theory::report::{
     POWER_NOTE, detections, number, power, power_items, probes_note, status, two_sided_power,
+    uninformative_and_controls,
 };
 use std::collections::BTreeMap;
 
@@ -97,18 +98,7 @@ fn notes(checks: &[Check]) -> Vec<Block> {
     if !probes.is_empty() {
         out.push(Block::Para(probes_note(&probes)));
     }
-    let uninformative: Vec<&str> = checks
-        .iter()
-        .filter(|c| c.verdict == Verdict::Uninformative)
-        .map(|c| c.id.as_str())
-        .collect();
-    let controls = detections(checks, Role::NegativeControl, "NOT detected");
-    let or_none = |v: String| if v.is_empty() { "none".into() } else { v };
-    out.push(Block::Para(format!(
-        "Uninformative rows: {}. Negative controls: {}.",
-        or_none(uninformative.join(", ")),
-        or_none(controls.join("; "))
-    )));
+    out.push(Block::Para(uninformative_and_controls(checks)));
     out.push(Block::Para(format!(
         "**Status: {}**",
         match status(checks) {
