@@ -73,31 +73,48 @@ impl Sample {
     /// (with a small prior, 10⁻⁶b², so the first bets are finite). The threshold carries a relative
     /// margin of 10⁻⁹ for the rounding of the product (≤ R ulps).
     pub fn betting_rejects(&self, m: f64, alpha: f64) -> bool {
+        self.rejects_with(m, alpha, &self.plug_in_bets(alpha))
+    }
+
+    /// The predictable plug-in bets `λ̂_t = √(2 ln(1/α) / (R σ̂²_{t−1}))` of
+    /// [`Sample::betting_rejects`], one per run; they do not depend on the candidate m.
+    fn plug_in_bets(&self, alpha: f64) -> Vec<f64> {
+        let r = self.values.len() as f64;
+        let log_term = 2.0 * (1.0 / alpha).ln();
+        let prior = 1e-6 * self.range * self.range;
+        let (mut sum, mut sq, mut t) = (0.0f64, prior, 0.0f64);
+        let mut bets = Vec::with_capacity(self.values.len());
+        for &x in &self.values {
+            let x = x.max(0.0);
+            let var = sq / (t + 1.0);
+            bets.push((log_term / (r * var)).sqrt());
+            // Running mean before this run, then the squared deviation from it (predictable).
+            let mean_before = if t > 0.0 { sum / t } else { x };
+            sq += (x - mean_before).powi(2);
+            sum += x;
+            t += 1.0;
+        }
+        bets
+    }
+
+    /// The betting test for candidate `m` with the plug-in `bets` of [`Sample::plug_in_bets`].
+    fn rejects_with(&self, m: f64, alpha: f64, bets: &[f64]) -> bool {
         if m <= 0.0 {
             // Every X ≥ 0, so "E X ≤ 0" is refuted by any positive run only in the limit; a
             // non-positive bound is handled by the caller (the statistic's lower end is ≥ 0).
             return false;
         }
         let threshold = (1.0 / alpha) * (1.0 + 1e-9);
-        let r = self.values.len() as f64;
-        let log_term = 2.0 * (1.0 / alpha).ln();
-        let prior = 1e-6 * self.range * self.range;
-        let (mut capital, mut sum, mut sq, mut t) = (1.0f64, 0.0f64, prior, 0.0f64);
-        for &x in &self.values {
+        let cap = 0.5 / m;
+        let mut capital = 1.0f64;
+        for (&x, &bet) in self.values.iter().zip(bets) {
             // X ≥ 0 is what makes every factor positive; a value rounded below 0 counts as 0
             // (which only lowers the capital).
             let x = x.max(0.0);
-            let var = sq / (t + 1.0);
-            let lambda = (log_term / (r * var)).sqrt().min(0.5 / m);
-            capital *= 1.0 + lambda * (x - m);
+            capital *= 1.0 + bet.min(cap) * (x - m);
             if capital >= threshold {
                 return true;
             }
-            // Running mean before this run, then the squared deviation from it (predictable).
-            let mean_before = if t > 0.0 { sum / t } else { x };
-            sq += (x - mean_before).powi(2);
-            sum += x;
-            t += 1.0;
         }
         false
     }
@@ -105,8 +122,9 @@ impl Sample {
     /// Betting lower confidence bound at level α: the supremum of the rejected m (bisection,
     /// 100 steps, returning a rejected m, so every B ≤ it is rejected too). 0 if none is rejected.
     pub fn betting_lcb(&self, alpha: f64) -> f64 {
+        let bets = self.plug_in_bets(alpha);
         let (mut lo, mut hi) = (0.0f64, self.range.max(self.mean));
-        if self.betting_rejects(hi, alpha) {
+        if self.rejects_with(hi, alpha, &bets) {
             return hi;
         }
         for _ in 0..100 {
@@ -114,7 +132,7 @@ impl Sample {
             if mid <= lo || mid >= hi {
                 break;
             }
-            if self.betting_rejects(mid, alpha) {
+            if self.rejects_with(mid, alpha, &bets) {
                 lo = mid;
             } else {
                 hi = mid;

@@ -14,6 +14,7 @@ use crate::bounds::{
     cutkosky_orabona, cutkosky_orabona_params, storm_fixed, storm_schedule, upper,
 };
 use crate::certify::global::GlobalConstants;
+use crate::checks::montecarlo::GradientCells;
 use crate::checks::montecarlo::{McSettings, Runs};
 use crate::checks::tracking::{Momentum, StormRange, StormTracker, Tracking};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
@@ -22,9 +23,7 @@ use ilopt::algo::as_printed::PrintedAlgorithm4Config;
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
 use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
-use ilopt::exact::forward::forward;
 use ilopt::problem::{EstimatorForm, Weighting};
-use ilopt::scalar::Interval;
 use ilopt::toy::{ToyMdp, ToyProblem};
 use std::cell::RefCell;
 
@@ -48,7 +47,7 @@ fn simulate(
     stat: Statistic,
     tracker: Option<&RefCell<StormTracker>>,
 ) -> Result<Runs, String> {
-    let pi = ToyProblem::<Interval>::new(mdp);
+    let cells = RefCell::new(GradientCells::new(mdp));
     let pf = ToyProblem::<f64>::new(mdp);
     let (mut lows, mut mids) = (Vec::with_capacity(runs), Vec::with_capacity(runs));
     for r in 0..runs {
@@ -65,13 +64,9 @@ fn simulate(
         }
         let observer = |m: &IterationMetrics<f64>| {
             let mut a = acc.borrow_mut();
-            let th = Interval::try_from((m.theta[0], m.theta[0]));
-            let g = th
-                .map_err(|e| format!("{e:?}"))
-                .and_then(|t| forward(&pi, &[t]).map_err(|e| e.to_string()));
-            match g {
+            match cells.borrow_mut().enclose(&m.theta.as_slice()[..1]) {
                 Ok(f) => {
-                    let gi = f.gradient[0];
+                    let gi = f[0];
                     // After step k the runner reports θ_{k+1} and d_{k+1} (iteration 0: θ₁, no d).
                     if let (Some(t), Some(d)) = (tracker, &m.estimate) {
                         t.borrow_mut().observe(m.iteration + 1, d[0], gi);

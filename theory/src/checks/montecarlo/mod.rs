@@ -1,14 +1,17 @@
 //! Checks 1 and 3: the SGD bound (3.27) and the online-to-non-convex bounds (§3.4, eq. 3.71) by
 //! Monte Carlo over seeded runs of the kit's own algorithms on M1 (P2'), with **exact ∇F at the
-//! iterates** (forward DP in interval arithmetic; the *lower* end of each per-run statistic is
+//! iterates** (forward DP in interval arithmetic, by cells: [`GradientCells`]; the *lower* end of each per-run statistic is
 //! used for the decision so rounding can never raise a false alarm — math.md §7.2) and the
 //! decision rule of [`crate::stats`] at a stated false-alarm probability.
 //!
 //! Every check takes a `claim_scale`: 1 checks the theorem; a small value checks a deliberately
 //! wrong (understated) bound, which the check must flag.
 
+mod cells;
 mod o2nc;
 mod sgd;
+
+pub use cells::{CELL_WIDTH, GradientCells};
 
 pub use o2nc::{
     O2ncSample, O2ncVariant, o2nc, o2nc_rows, o2nc_sample, o2nc_sample_tracked, o2nc_variant,
@@ -18,9 +21,7 @@ pub use sgd::{sgd, sgd_row, sgd_sample, sgd_with_control};
 use crate::bounds::upper;
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::{Sample, assess};
-use ilopt::exact::forward::forward;
 use ilopt::scalar::Interval;
-use ilopt::toy::ToyProblem;
 
 /// Monte-Carlo sizes and level.
 #[derive(Debug, Clone, Copy)]
@@ -29,17 +30,6 @@ pub struct McSettings {
     pub runs: usize,
     /// False-alarm probability of this check (after Bonferroni).
     pub alpha: f64,
-}
-
-/// Enclosure of ∇F(θ) at a point θ (f64 coordinates, exactly).
-fn grad_enclosure(p: &ToyProblem<Interval>, theta: &[f64]) -> Result<Vec<Interval>, String> {
-    let th: Vec<Interval> = theta
-        .iter()
-        .map(|x| Interval::try_from((*x, *x)).map_err(|e| format!("θ = {x}: {e:?}")))
-        .collect::<Result<_, _>>()?;
-    forward(p, &th)
-        .map(|f| f.gradient)
-        .map_err(|e| e.to_string())
 }
 
 /// (lower, midpoint) of ‖v‖² for an interval vector.

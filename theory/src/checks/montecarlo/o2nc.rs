@@ -2,7 +2,7 @@
 //! the kit's Algorithm 5 (IL-correct, and the printed one as a probe), with the per-step values
 //! the tracking row 3d tests.
 
-use super::{McSettings, Runs, grad_enclosure, inconclusive, measure, scale_prefix};
+use super::{GradientCells, McSettings, Runs, inconclusive, measure, scale_prefix};
 use crate::bounds::{O2ncParams, o2nc_theorem};
 use crate::certify::box_constants::ToyConstants;
 use crate::checks::tracking::{O2ncTracker, Tracking};
@@ -144,7 +144,7 @@ pub fn o2nc_sample_tracked(
         O2ncVariant::Printed => AlgorithmConfig::PrintedAlgorithm5(config),
     };
     let (t, kb) = (params.t as usize, params.k as usize);
-    let pi = ToyProblem::<Interval>::new(mdp);
+    let mut cells = GradientCells::new(mdp);
     let pf = ToyProblem::<f64>::new(mdp);
     let (mut lows, mut mids) = (vec![], vec![]);
     let mut worst_spread = 0.0f64;
@@ -186,7 +186,7 @@ pub fn o2nc_sample_tracked(
         let ws: Vec<f64> = steps.iter().map(|s| s.1).collect();
         let grads = ws
             .iter()
-            .map(|w| grad_enclosure(&pi, &[*w]).map(|g| g[0]))
+            .map(|w| cells.enclose(&[*w]).map(|g| g[0]))
             .collect::<Result<Vec<Interval>, String>>()?;
         tracker.start_run(theta0);
         for ((theta, _, g), grad) in steps.iter().zip(&grads) {

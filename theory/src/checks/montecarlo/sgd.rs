@@ -1,9 +1,7 @@
 //! Check 1: the SGD bound (3.27) over seeded runs of the kit's SGD, and its scaled negative
 //! control from the same sample.
 
-use super::{
-    McSettings, Runs, grad_enclosure, inconclusive, measure, norm_sq_bounds, scale_prefix,
-};
+use super::{GradientCells, McSettings, Runs, inconclusive, measure, norm_sq_bounds, scale_prefix};
 use crate::bounds::{sgd_constant, sgd_step_admissible};
 use crate::certify::box_constants::ToyConstants;
 use crate::record::check::{Check, Method, Role};
@@ -11,7 +9,6 @@ use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
 use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
 use ilopt::problem::EstimatorForm;
-use ilopt::scalar::Interval;
 use ilopt::toy::{ToyMdp, ToyProblem};
 use std::cell::RefCell;
 
@@ -28,7 +25,7 @@ pub fn sgd_sample(
     k: u64,
     runs: usize,
 ) -> Result<Runs, String> {
-    let pi = ToyProblem::<Interval>::new(mdp);
+    let cells = RefCell::new(GradientCells::new(mdp));
     let pf = ToyProblem::<f64>::new(mdp);
     let cfg = |seed: u64| RunConfig {
         algorithm: AlgorithmConfig::Sgd(SgdConfig {
@@ -44,7 +41,7 @@ pub fn sgd_sample(
         let acc = RefCell::new((0.0f64, 0.0f64, None::<String>));
         let observer = |m: &IterationMetrics<f64>| {
             let mut a = acc.borrow_mut();
-            match grad_enclosure(&pi, m.theta.as_slice()) {
+            match cells.borrow_mut().enclose(m.theta.as_slice()) {
                 Ok(g) => {
                     let (lo, mid) = norm_sq_bounds(&g);
                     a.0 += lo;
