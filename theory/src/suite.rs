@@ -5,7 +5,9 @@ use crate::certify::global::{GlobalConstants, GlobalSizes};
 use crate::certify::recheck::coverage_for;
 use crate::checks::constants::{global_row, toy_row};
 use crate::checks::montecarlo::McSettings;
-use crate::checks::{o2nc_formula, schedule, second_toy, statistical, thm31, unbiased};
+use crate::checks::{
+    baselined_sgd, o2nc_formula, schedule, second_toy, statistical, thm31, unbiased,
+};
 use crate::protocol::{
     CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes,
     STATISTICAL_CLAIMS, Sizes, real_sizes,
@@ -107,6 +109,18 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     };
     let g = global_constants(&m1, s)?;
     rows.extend(statistical::toy_rows(&m1, &k, &g, s, mc));
+    rows.extend(baselined_sgd::rows(
+        &m1,
+        &k,
+        domain,
+        baselined_sgd::Sizes {
+            tol: s.bnb_tol,
+            max_boxes: 200_000,
+            k: s.sgd_k,
+        },
+        mc,
+        coverage,
+    ));
     rows.push(global_row(&g, "M1 (P2', c = 1/2, θ₁ = 0)", coverage));
     rows.extend(second_toy::rows(second_toy::sizes(
         profile == Profile::Full,
@@ -156,10 +170,11 @@ pub fn whole_table(profile: Profile) -> Result<Vec<Check>, String> {
 pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
     use crate::checks::estimated::{EstimateSizes, sgd_row};
     use crate::checks::real_env::{
-        Mutation, TaskSetup, cartpole_fixed, cartpole_theta, obstacle_problem, obstacle_theta,
-        task_rows,
+        At, BASELINE_M, Mutation, TaskSetup, cartpole_fixed, cartpole_theta, dagger_solution,
+        obstacle_problem, obstacle_theta, task_rows, variance_rows,
     };
     use ilopt::task::{AfterEnd, Horizon};
+    use nalgebra::DVector;
     let full = profile == Profile::Full;
     let cp = cartpole_fixed()?;
     let ob = obstacle_problem(REAL_SIGMA, Horizon::fixed(200, AfterEnd::Absorb))?;
@@ -213,6 +228,44 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
             note: OBSTACLE_Z_TREND.into(),
         },
         os,
+    )?);
+    // The variance the leave-one-out baseline removes, at θ = 0 and at a DAgger solution.
+    let n_var = if full { 8000 } else { 2000 };
+    let rounds = 30;
+    let points = |theta: DVector<f64>, dagger: DVector<f64>| {
+        [
+            At {
+                suffix: "0",
+                what: "θ = 0".into(),
+                theta: DVector::zeros(theta.len()),
+            },
+            At {
+                suffix: "D",
+                what: format!(
+                    "a DAgger solution (Alg. 2, {rounds} rounds, Adam α = 0.01, seed 1; ‖θ‖ = {:.3})",
+                    dagger.norm()
+                ),
+                theta: dagger,
+            },
+        ]
+    };
+    let cp_dagger = dagger_solution(&cp, rounds, 1)?;
+    rows.extend(variance_rows(
+        "a",
+        "CartPole, fixed-500-reset",
+        &cp,
+        &points(cartpole_theta(), cp_dagger),
+        n_var,
+        BASELINE_M,
+    )?);
+    let ob_dagger = dagger_solution(&ob, rounds, 1)?;
+    rows.extend(variance_rows(
+        "b",
+        "obstacle, fixed-200-absorb",
+        &ob,
+        &points(obstacle_theta(), ob_dagger),
+        n_var,
+        BASELINE_M,
     )?);
     if full {
         rows.extend(task_rows(

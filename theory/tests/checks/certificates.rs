@@ -337,3 +337,48 @@ fn second_toy_rows_at_a_small_size() {
         Verdict::Fails
     );
 }
+
+/// The baselined variance (σ²_b of row 1.b): the second route equals the engine's exact moments
+/// of g_b at rational points (b = 0 is the plain variance), its certificate re-checks, and a
+/// certificate lowered consistently below a value the function attains fails the re-check.
+#[test]
+fn the_baselined_variance_certificate_is_rechecked_and_a_lowered_one_fails() {
+    use ilopt::exact::baseline::baselined_moments;
+    use ilopt_theory::certify::box_constants::{recheck_sigma2_baselined, sigma2_baselined};
+    let m1 = m1_tied();
+    let p = ToyProblem::<Q>::new(&m1);
+    for (b, (n, d)) in [(q("0"), (0, 1)), (q("1/8"), (1, 8)), (q("5/8"), (5, 8))] {
+        let quantity = Quantity::BaselinedVariance {
+            numerator: n,
+            denominator: d,
+        };
+        for t in ["-3", "0", "1/3", "5/2"] {
+            let th = q(t);
+            let m =
+                baselined_moments(&p, std::slice::from_ref(&th), std::slice::from_ref(&b)).unwrap();
+            let var = m.second_moment - m.expected_estimate[0].clone() * &m.expected_estimate[0];
+            let second = pieces(&m1, quantity, &[Chart::Core], std::slice::from_ref(&th)).unwrap();
+            assert_eq!(second[0], var, "Var g_b at θ = {t}, b = {b}");
+            if b == q("0") {
+                let plain = pieces(&m1, Quantity::Variance, &[Chart::Core], &[th]).unwrap();
+                assert_eq!(second, plain);
+            }
+        }
+    }
+    let b = q("1/8");
+    let c = sigma2_baselined(&m1, &b, &DOMAIN, 1e-2, 200_000).unwrap();
+    assert!(recheck_sigma2_baselined(&m1, &b, &c, &DOMAIN, Coverage::All).passed());
+    // Re-checked as another b's variance, the certificate fails: the re-check reads b.
+    assert!(!recheck_sigma2_baselined(&m1, &q("2"), &c, &DOMAIN, Coverage::All).passed());
+    let mut low = c.clone();
+    let cert = low.certificate.as_mut().unwrap();
+    let cap = cert.lower * 0.999;
+    for x in &mut cert.certificate {
+        x.enclosure[1] = x.enclosure[1].min(cap);
+        x.enclosure[0] = x.enclosure[0].min(cap);
+    }
+    cert.upper = cap;
+    low.value = cap;
+    let r = recheck_sigma2_baselined(&m1, &b, &low, &DOMAIN, Coverage::All);
+    assert!(!r.passed(), "{r:?}");
+}

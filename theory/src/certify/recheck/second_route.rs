@@ -232,6 +232,14 @@ pub enum Quantity {
     Hessian,
     /// Var_θ g = E‖g‖² − ‖E g‖² (σ² with c = 1).
     Variance,
+    /// Var_θ g_b of the baselined estimator `g_b = g − b Σ_i ψ_i` with one constant
+    /// b = `numerator/denominator` for every decision (docs/math.md §9).
+    BaselinedVariance {
+        /// b's numerator.
+        numerator: i64,
+        /// b's denominator (> 0).
+        denominator: i64,
+    },
     /// E‖g‖² (G², σ² with c = 0).
     SecondMoment,
     /// ‖E g‖² = ‖∇F‖² (G_F²).
@@ -350,10 +358,31 @@ pub fn pieces<S: Scalar>(
                 return Err("one coordinate per group".into());
             }
             let pol = PolicyJets::new(&derivs, &vec![None; groups], 0);
+            let baseline = match q {
+                Quantity::BaselinedVariance {
+                    numerator,
+                    denominator,
+                } if denominator > 0 => Some(
+                    Jet::constant(S::from_i64(numerator), 0)
+                        .div(&Jet::constant(S::from_i64(denominator), 0)),
+                ),
+                Quantity::BaselinedVariance { .. } => {
+                    return Err("a baseline's denominator must be positive".into());
+                }
+                _ => None,
+            };
             let mut eg = vec![S::zero(); groups];
             let (mut m2, mut each) = (S::zero(), vec![]);
             for pre in enumerate(&m, &pol, 0) {
-                let g = estimate(&m, &pol, groups, &pre, None, 0);
+                let mut g = estimate(&m, &pol, groups, &pre, None, 0);
+                if let Some(b) = &baseline {
+                    // g_b = g − b Σ_i ψ(a_i|s_i), every action of the prefix a scored decision.
+                    for (t, &a) in pre.actions.iter().enumerate() {
+                        let o = m.groups[pre.states[t]];
+                        let psi = pol.dpi[o][a].div(&pol.pi[o][a]);
+                        g[o] = g[o].sub(&psi.mul(b));
+                    }
+                }
                 let n2 = norm2(&g);
                 for (e, gi) in eg.iter_mut().zip(&g) {
                     *e += pre.prob.v.clone() * &gi.v;
@@ -363,7 +392,7 @@ pub fn pieces<S: Scalar>(
             }
             let eg2 = eg.iter().fold(S::zero(), |a, x| a + x.clone() * x);
             Ok(match q {
-                Quantity::Variance => vec![m2 - eg2],
+                Quantity::Variance | Quantity::BaselinedVariance { .. } => vec![m2 - eg2],
                 Quantity::SecondMoment => vec![m2],
                 Quantity::GradientSq => vec![eg2],
                 _ => each,

@@ -82,7 +82,9 @@ impl GradientCells {
     /// # Errors
     /// If θ is not finite or a forward pass fails.
     pub fn enclose(&mut self, theta: &[f64]) -> Result<Vec<Interval>, String> {
-        let near = theta.first().is_some_and(|x| x.is_finite() && x.abs() < CELL_RANGE);
+        let near = theta
+            .first()
+            .is_some_and(|x| x.is_finite() && x.abs() < CELL_RANGE);
         if self.dim != 1 || theta.len() != 1 || !near {
             return self.at_point(theta);
         }

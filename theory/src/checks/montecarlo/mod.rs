@@ -16,7 +16,7 @@ pub use cells::{CELL_WIDTH, GradientCells};
 pub use o2nc::{
     O2ncSample, O2ncVariant, o2nc, o2nc_rows, o2nc_sample, o2nc_sample_tracked, o2nc_variant,
 };
-pub use sgd::{sgd, sgd_row, sgd_sample, sgd_with_control};
+pub use sgd::{sgd, sgd_row, sgd_sample, sgd_sample_on, sgd_with_control};
 
 use crate::bounds::upper;
 use crate::record::check::{Check, Measured, Method, Role, Verdict};

@@ -8,7 +8,7 @@ use crate::record::check::{Check, Method, Role};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
 use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
-use ilopt::problem::EstimatorForm;
+use ilopt::problem::{EstimatorForm, IlProblem};
 use ilopt::toy::{ToyMdp, ToyProblem};
 use std::cell::RefCell;
 
@@ -25,8 +25,24 @@ pub fn sgd_sample(
     k: u64,
     runs: usize,
 ) -> Result<Runs, String> {
+    sgd_sample_on(mdp, &ToyProblem::<f64>::new(mdp), theta1, eta, k, runs)
+}
+
+/// [`sgd_sample`] with the kit's SGD run on `oracle`, a gradient oracle for F of `mdp` (the plain
+/// toy problem, or one with a baseline): ∇F at the iterates is `mdp`'s.
+///
+/// # Errors
+/// As [`sgd_sample`].
+pub fn sgd_sample_on<P: IlProblem<f64>>(
+    mdp: &ToyMdp,
+    oracle: &P,
+    theta1: f64,
+    eta: (i64, i64),
+    k: u64,
+    runs: usize,
+) -> Result<Runs, String> {
     let cells = RefCell::new(GradientCells::new(mdp));
-    let pf = ToyProblem::<f64>::new(mdp);
+    let pf = oracle;
     let cfg = |seed: u64| RunConfig {
         algorithm: AlgorithmConfig::Sgd(SgdConfig {
             step: SgdStep::constant(ConfigNumber::ratio(eta.0, eta.1)),
@@ -54,7 +70,7 @@ pub fn sgd_sample(
             runner
                 .keep_history(false)
                 .with_observer(observer)
-                .run_config(&cfg(r as u64), &pf)
+                .run_config(&cfg(r as u64), pf)
         });
         let (lo, mid, err) = acc.into_inner();
         match rec {

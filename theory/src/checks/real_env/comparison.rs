@@ -103,17 +103,11 @@ pub fn compare(samples: &[DVector<f64>], r: &Reference, alpha: f64) -> Compariso
     }
 }
 
-/// `Σ_j s_j²`: the trace of the sample covariance of `xs` (n ≥ 2).
-fn total_variance(xs: &[&DVector<f64>]) -> f64 {
-    let n = xs.len() as f64;
-    let mean = xs.iter().fold(DVector::zeros(xs[0].len()), |a, x| a + *x) / n;
-    xs.iter().map(|x| (*x - &mean).norm_squared()).sum::<f64>() / (n - 1.0)
-}
-
 /// The variance reduction of a baselined estimator, per trajectory: `tr Var(g) / tr Var(g_b)`
 /// from `plain` samples (one trajectory each) and `baselined` samples (each the mean of `m`
 /// trajectories, so `Var(g_b) = m·Var(sample)`), with a 95% bootstrap percentile interval
-/// (`reps` resamples of both sets, seeded). Returns (ratio, lower, upper).
+/// (`reps` resamples of both sets, seeded): the total of [`super::variance::reduction`].
+/// Returns (ratio, lower, upper).
 pub fn variance_ratio(
     plain: &[DVector<f64>],
     baselined: &[DVector<f64>],
@@ -121,30 +115,8 @@ pub fn variance_ratio(
     reps: usize,
     seed: u64,
 ) -> (f64, f64, f64) {
-    use rand::{Rng, SeedableRng};
-    let ratio = |a: &[&DVector<f64>], b: &[&DVector<f64>]| {
-        total_variance(a) / (m as f64 * total_variance(b))
-    };
-    fn all(v: &[DVector<f64>]) -> Vec<&DVector<f64>> {
-        v.iter().collect()
-    }
-    fn draw<'a>(v: &'a [DVector<f64>], rng: &mut ilopt::problem::KitRng) -> Vec<&'a DVector<f64>> {
-        (0..v.len())
-            .map(|_| &v[rng.random_range(0..v.len())])
-            .collect()
-    }
-    let point = ratio(&all(plain), &all(baselined));
-    let mut rng = ilopt::problem::KitRng::seed_from_u64(seed);
-    let mut boot: Vec<f64> = (0..reps)
-        .map(|_| {
-            let a = draw(plain, &mut rng);
-            let b = draw(baselined, &mut rng);
-            ratio(&a, &b)
-        })
-        .collect();
-    boot.sort_by(f64::total_cmp);
-    let at = |q: f64| boot[((q * reps as f64) as usize).min(reps - 1)];
-    (point, at(0.025), at(0.975))
+    let t = super::variance::reduction(plain, baselined, m, reps, seed).total;
+    (t.value, t.lo, t.hi)
 }
 
 #[cfg(test)]

@@ -32,6 +32,7 @@ mod comparison;
 mod estimators;
 mod reference;
 mod tasks;
+mod variance;
 
 pub use comparison::{Comparison, POWER_Z, compare, normal_upper_quantile, variance_ratio};
 pub use estimators::{
@@ -40,6 +41,9 @@ pub use estimators::{
 pub use reference::{Reference, reference};
 pub use tasks::{
     ObstacleProblem, cartpole_fixed, cartpole_theta, obstacle_problem, obstacle_theta,
+};
+pub use variance::{
+    At, Ratio, Reduction, dagger_solution, reduction, reduction_verdict, variance_rows,
 };
 
 use crate::protocol::RealSizes;
