@@ -40,11 +40,72 @@ pub fn m1_tied() -> ToyMdp {
 /// The exact, rigorous and toy Monte-Carlo part of the suite (checks 1, 2a–2d, 3, 4, 5, 8, 8b,
 /// and the Monte-Carlo negative controls of [`statistical`]).
 ///
+/// The global constants and the STORM rows that need them run on a second thread while this one
+/// computes the rest; every part is seeded on its own, so the rows (in the same order) are the
+/// same whatever the machine's number of cores.
+///
 /// # Errors
 /// A message if a rigorous constant cannot be enclosed.
 pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, String> {
     let s = profile.sizes();
     let m1 = m1_tied();
+    let alpha = bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS);
+    std::thread::scope(|scope| {
+        let (send, receive) = std::sync::mpsc::channel();
+        let m1_global = &m1;
+        let storm = scope.spawn(move || -> Result<Vec<Check>, String> {
+            let g = global_constants(m1_global, s);
+            // The receiver may be gone if the other part failed; then nothing needs `g`.
+            let _ = send.send(g.clone());
+            Ok(statistical::storm_rows(m1_global, &g?, s, alpha))
+        });
+        let mut rows = exact_rows(profile, &m1)?;
+        let k = box_constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
+            .map_err(|e| e.to_string())?;
+        let coverage = coverage_for(profile == Profile::Full);
+        rows.push(toy_row(
+            &k,
+            "M1 (P2', c = 1/2, θ₁ = 0)",
+            domain,
+            coverage,
+            "8",
+        ));
+        let second = second_toy::rows(second_toy::sizes(profile == Profile::Full))?;
+        let mc = McSettings {
+            runs: s.runs,
+            alpha,
+        };
+        let g = receive
+            .recv()
+            .map_err(|_| "the global constants' thread ended without a result".to_string())??;
+        rows.extend(statistical::toy_rows(&m1, &k, &g, s, mc));
+        rows.extend(baselined_sgd::rows(
+            &m1,
+            &k,
+            domain,
+            baselined_sgd::Sizes {
+                tol: s.bnb_tol,
+                max_boxes: 200_000,
+                k: s.sgd_k,
+            },
+            mc,
+            coverage,
+        ));
+        rows.push(global_row(&g, "M1 (P2', c = 1/2, θ₁ = 0)", coverage));
+        rows.extend(second);
+        rows.extend(
+            storm
+                .join()
+                .map_err(|_| "the STORM rows' thread panicked".to_string())??,
+        );
+        Ok(rows)
+    })
+}
+
+/// The exact rows on M1 (schedule, O2NC formula, unbiasedness identities, the printed
+/// Algorithms 4 and 5 at the points they visit, Theorem 3.1 with the kit's DAgger).
+fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
+    let s = profile.sizes();
     let mut rows = schedule::rows(s.schedule_k);
     rows.push(o2nc_formula::row(s.o2nc_cases, 1));
     let thetas = ["0", "1/3", "-2", "5/2", "1", "2"];
@@ -63,7 +124,7 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
     // Algorithm 5's hyper-parameters G = 2 ≥ √(sup E g²) ≈ 1.87 and Δ₀ = B_F = 1/2; the
     // printed Algorithm 4 in exact rationals for 3 steps (the rationals grow ≈ 8× per step).
     rows.push(unbiased::printed_algorithm_5_visited(
-        &m1,
+        m1,
         0.0,
         40,
         (1, 10),
@@ -72,7 +133,7 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
         0,
     ));
     rows.push(unbiased::printed_algorithm_4_visited(
-        &m1,
+        m1,
         &q("0"),
         (1, 20),
         (1, 2),
@@ -93,39 +154,6 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
                 }),
         );
     }
-    let k = box_constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
-        .map_err(|e| e.to_string())?;
-    let coverage = coverage_for(profile == Profile::Full);
-    rows.push(toy_row(
-        &k,
-        "M1 (P2', c = 1/2, θ₁ = 0)",
-        domain,
-        coverage,
-        "8",
-    ));
-    let mc = McSettings {
-        runs: s.runs,
-        alpha: bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS),
-    };
-    let g = global_constants(&m1, s)?;
-    rows.extend(statistical::toy_rows(&m1, &k, &g, s, mc));
-    rows.extend(baselined_sgd::rows(
-        &m1,
-        &k,
-        domain,
-        baselined_sgd::Sizes {
-            tol: s.bnb_tol,
-            max_boxes: 200_000,
-            k: s.sgd_k,
-        },
-        mc,
-        coverage,
-    ));
-    rows.push(global_row(&g, "M1 (P2', c = 1/2, θ₁ = 0)", coverage));
-    rows.extend(second_toy::rows(second_toy::sizes(
-        profile == Profile::Full,
-    ))?);
-    rows.extend(statistical::storm_rows(&m1, &g, s, mc.alpha));
     Ok(rows)
 }
 
