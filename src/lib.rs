@@ -85,6 +85,7 @@ pub mod batched;
 /// Command-line front ends (the `ilopt` binary's subcommands).
 pub mod cli;
 pub mod env;
+pub mod evaluate;
 pub mod exact;
 /// Experts that label states (thesis ch. 4): the CartPole LQR controller and the velocity-obstacle
 /// expert of eq. 4.1.

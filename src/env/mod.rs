@@ -34,6 +34,16 @@ pub struct Step<S, O> {
 }
 
 impl<S, O> Step<S, O> {
+    /// A step's outcome: the observation, the reward, and Gymnasium's two end-of-episode flags.
+    pub fn new(observation: O, reward: S, terminated: bool, truncated: bool) -> Self {
+        Self {
+            observation,
+            reward,
+            terminated,
+            truncated,
+        }
+    }
+
     /// `terminated || truncated`: the episode is over and the environment needs a reset.
     pub fn done(&self) -> bool {
         self.terminated || self.truncated

@@ -30,12 +30,14 @@
 //!   not the thesis's objective).
 
 pub mod cartpole;
+mod env_task;
 mod horizon;
 pub mod obstacle;
 mod problem;
 mod rollout;
 mod trajectory;
 
+pub use env_task::{EnvEpisode, EnvTask};
 pub use horizon::{AfterEnd, Horizon};
 pub use problem::TaskProblem;
 pub use trajectory::{TaskExample, TaskTrajectory};
