@@ -1,0 +1,337 @@
+//! One seeded run: its key and seed, θ₁, the driver that trains and evaluates at the
+//! checkpoints ([`run_spec`]), and the reference policies' seeds.
+
+use super::{
+    Bench, Checkpoint, ReferencePolicy, SeedRun, SeedTiming, TaskKind, status_of, sustained,
+};
+use crate::config::{AlgorithmEntry, TaskSection, Theta1};
+use crate::error::Error;
+use crate::stats::derive_seed;
+use ilopt::algo::{AlgorithmConfig, StepContext};
+use ilopt::baseline::{Baseline as OracleBaseline, Baselined};
+use ilopt::batched::Batched;
+use ilopt::problem::{Cost, IlProblem, KitRng};
+use ilopt::task::Horizon;
+use nalgebra::DVector;
+use rand::SeedableRng;
+
+/// CartPole-v1's episode length.
+pub fn cartpole_max_steps() -> usize {
+    ilopt::env::cartpole::MAX_EPISODE_STEPS
+}
+
+/// The identity of a row's runs at given hyper-parameters: task, label, the algorithm's config
+/// (JSON), m, the objective and the baseline (named only when there is one, so that the keys
+/// of rows without one do not depend on the option). Run seeds are derived from it and the
+/// seed index only.
+pub fn run_key_of(
+    kind: TaskKind,
+    label: &str,
+    config: &AlgorithmConfig,
+    m: usize,
+    horizon: Horizon,
+    baseline: &OracleBaseline,
+) -> String {
+    let json = serde_json::to_string(config).unwrap_or_default();
+    let key = format!("{}|{label}|{json}|m={m}|{}", kind.name(), horizon.label());
+    match baseline {
+        OracleBaseline::None => key,
+        b => format!(
+            "{key}|baseline={}",
+            serde_json::to_string(b).unwrap_or_default()
+        ),
+    }
+}
+
+/// [`run_key_of`] for a row at its configured hyper-parameters.
+pub fn run_key(kind: TaskKind, task: &TaskSection, entry: &AlgorithmEntry) -> String {
+    run_key_of(
+        kind,
+        &entry.label,
+        &entry.config,
+        entry.m.unwrap_or(1),
+        entry.horizon(task, kind.name()),
+        &entry.baseline.clone().unwrap_or_default(),
+    )
+}
+
+/// One run to carry out.
+#[derive(Debug, Clone)]
+pub struct RunSpec<'a> {
+    /// The task.
+    pub kind: TaskKind,
+    /// Its section (budget, checkpoints, bound, θ₁, evaluation).
+    pub task: &'a TaskSection,
+    /// The algorithm.
+    pub config: &'a AlgorithmConfig,
+    /// Trajectories per gradient (oracle methods; 1 = the plain problem).
+    pub m: usize,
+    /// The oracle's baseline ([`OracleBaseline::None`]: eq. 3.15 as it is).
+    pub baseline: OracleBaseline,
+    /// The run key (seed derivation of θ₁ and of Fig. 4.5's estimates).
+    pub key: String,
+    /// The run's RNG seed.
+    pub seed: u64,
+    /// The seed's index.
+    pub seed_index: u32,
+    /// The evaluation episodes' key.
+    pub eval_key: String,
+    /// Stop at sustained convergence (tuning runs; report runs use the whole budget).
+    pub stop_at_convergence: bool,
+    /// Hyper-parameters, for the record.
+    pub hyper_parameters: String,
+}
+
+/// θ₁ of a run.
+fn theta1(law: Theta1, dim: usize, key: &str) -> DVector<f64> {
+    match law {
+        Theta1::Zero => DVector::zeros(dim),
+        Theta1::Normal { std } => {
+            use rand::Rng;
+            let mut rng = KitRng::seed_from_u64(derive_seed(&format!("{key}|theta1"), 0));
+            DVector::from_fn(dim, |_, _| {
+                // Box–Muller.
+                let u: f64 = 1.0 - rng.random::<f64>();
+                let v: f64 = rng.random::<f64>();
+                std * (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+            })
+        }
+    }
+}
+
+/// Run one seed of one row (the report's runs: the row's configured hyper-parameters, the report
+/// seed and evaluation episodes).
+///
+/// # Errors
+/// As [`run_spec`].
+pub fn run_seed(
+    bench: &Bench,
+    kind: TaskKind,
+    task: &TaskSection,
+    entry: &AlgorithmEntry,
+    seed_index: u32,
+) -> Result<(SeedRun, SeedTiming), Error> {
+    let key = run_key(kind, task, entry);
+    let m = entry.m.unwrap_or(1);
+    run_spec(
+        bench,
+        &RunSpec {
+            kind,
+            task,
+            config: &entry.config,
+            m,
+            baseline: entry.baseline.clone().unwrap_or_default(),
+            seed: derive_seed(&key, u64::from(seed_index)),
+            key,
+            seed_index,
+            eval_key: eval_key(kind, seed_index),
+            stop_at_convergence: false,
+            hyper_parameters: entry
+                .grid_points()
+                .ok()
+                .and_then(|p| p.into_iter().next())
+                .map_or_else(String::new, |p| p.describe()),
+        },
+    )
+}
+
+/// Carry out one run and evaluate its checkpoints.
+///
+/// # Errors
+/// [`Error::Experiment`] if the run cannot start or an evaluation fails. A run that fails
+/// mid-way (a non-finite iterate, a failing step, ‖θ‖ beyond the bound) is *not* an error: its
+/// status is [`RunStatus::Diverged`] and it keeps the checkpoints reached.
+pub fn run_spec(bench: &Bench, spec: &RunSpec<'_>) -> Result<(SeedRun, SeedTiming), Error> {
+    match bench {
+        Bench::Obstacle { problem, .. } => drive_with(bench, problem, spec),
+        Bench::Cartpole { problem, .. } => drive_with(bench, problem, spec),
+    }
+}
+
+/// [`drive`] on `problem` as the spec wants it: with its baseline ([`Baselined`], m
+/// trajectories per gradient), m trajectories per gradient ([`Batched`]), or as it is.
+fn drive_with<P: IlProblem<f64> + Clone>(
+    bench: &Bench,
+    problem: &P,
+    spec: &RunSpec<'_>,
+) -> Result<(SeedRun, SeedTiming), Error> {
+    if spec.baseline != OracleBaseline::None {
+        let b = Baselined::<P, f64>::new(problem.clone(), spec.m, &spec.baseline)
+            .map_err(|e| Error::experiment("baseline", e))?;
+        drive(bench, &b, spec)
+    } else if spec.m > 1 {
+        let b =
+            Batched::new(problem.clone(), spec.m).map_err(|e| Error::experiment("minibatch", e))?;
+        drive(bench, &b, spec)
+    } else {
+        drive(bench, problem, spec)
+    }
+}
+
+/// The run loop: steps until the budget, divergence or (tuning) sustained convergence; the
+/// checkpoints at the fixed call counts; training time without the evaluations.
+fn drive<P: IlProblem<f64>>(
+    bench: &Bench,
+    problem: &P,
+    spec: &RunSpec<'_>,
+) -> Result<(SeedRun, SeedTiming), Error> {
+    let task = spec.task;
+    let what = format!(
+        "{} / {} / seed {}",
+        spec.kind.name(),
+        spec.key,
+        spec.seed_index
+    );
+    let mut algorithm = spec
+        .config
+        .build::<f64, P>()
+        .map_err(|e| Error::experiment(&what, e))?;
+    let mut rng = KitRng::seed_from_u64(spec.seed);
+    let mut cost = Cost::default();
+    let mut train = std::time::Duration::ZERO;
+    let mut clock = std::time::Instant::now();
+    algorithm
+        .init(
+            problem,
+            theta1(task.theta1, bench.dim(), &spec.key),
+            &mut StepContext {
+                rng: &mut rng,
+                cost: &mut cost,
+            },
+        )
+        .map_err(|e| Error::experiment(&what, e))?;
+    let mut checkpoints: Vec<Checkpoint> = Vec::new();
+    let mut seconds = Vec::new();
+    let mut next = 0u64;
+    let mut iteration = 0u64;
+    let mut diverged: Option<(String, u64)> = None;
+    loop {
+        let theta = algorithm.theta();
+        let norm = theta.norm();
+        if !norm.is_finite() {
+            diverged = Some(("non-finite θ".into(), cost.gradient_evaluations));
+        } else if norm > task.norm_bound {
+            diverged = Some((
+                format!("‖θ‖ = {norm:.3e} > {:e}", task.norm_bound),
+                cost.gradient_evaluations,
+            ));
+        }
+        if diverged.is_some() {
+            break;
+        }
+        // Checkpoints due (a step that crosses several call counts serves each).
+        if next <= task.budget && cost.gradient_evaluations >= next {
+            train += clock.elapsed();
+            let ev = bench.evaluate(theta.as_slice(), task.eval_episodes, &spec.eval_key)?;
+            let grad = bench.gradient_xy(
+                theta,
+                task.grad_trajectories,
+                derive_seed(
+                    &format!("{}|grad", spec.key),
+                    iteration * 1000 + u64::from(spec.seed_index),
+                ),
+            )?;
+            let full = bench.resets_to_full_episode(
+                theta.as_slice(),
+                task.full_episode_cap,
+                &spec.eval_key,
+            )?;
+            let mut c =
+                Checkpoint::from_eval(&ev, spec.kind, task.eval_episodes, iteration, &cost, grad);
+            c.resets_to_full_episode = full;
+            while next <= task.budget && cost.gradient_evaluations >= next {
+                let mut c = c.clone();
+                c.at_calls = next;
+                checkpoints.push(c);
+                seconds.push(train.as_secs_f64());
+                next = if next == task.budget {
+                    u64::MAX
+                } else {
+                    (next + task.checkpoint_every).min(task.budget)
+                };
+            }
+            clock = std::time::Instant::now();
+            if spec.stop_at_convergence {
+                let scores: Vec<f64> = checkpoints.iter().map(|c| c.score).collect();
+                if sustained(&scores, task.converge_score, task.sustain).is_some() {
+                    break;
+                }
+            }
+        }
+        if cost.gradient_evaluations >= task.budget {
+            break;
+        }
+        match algorithm.step(
+            problem,
+            &mut StepContext {
+                rng: &mut rng,
+                cost: &mut cost,
+            },
+        ) {
+            Ok(_) => iteration += 1,
+            Err(e) => {
+                diverged = Some((format!("step failed: {e}"), cost.gradient_evaluations));
+                break;
+            }
+        }
+    }
+    train += clock.elapsed();
+    let status = status_of(
+        &checkpoints,
+        task.converge_score,
+        task.sustain,
+        diverged.clone(),
+    );
+    let converged = status.checkpoint();
+    let termination = match &diverged {
+        Some((reason, _)) => format!("diverged: {reason}"),
+        None if cost.gradient_evaluations >= task.budget => "gradient-budget".into(),
+        None => "sustained-convergence".into(),
+    };
+    Ok((
+        SeedRun {
+            seed_index: spec.seed_index,
+            seed: spec.seed,
+            termination,
+            theta: algorithm.theta().iter().copied().collect(),
+            checkpoints,
+            converged,
+            status,
+            hyper_parameters: spec.hyper_parameters.clone(),
+        },
+        SeedTiming {
+            seed_index: spec.seed_index,
+            train_seconds: train.as_secs_f64(),
+            converge_seconds: converged.map(|i| seconds[i]),
+            checkpoint_seconds: seconds,
+        },
+    ))
+}
+
+/// The key of a seed's evaluation episodes: the same episodes for every algorithm, checkpoint
+/// and baseline of that seed (common random numbers).
+pub fn eval_key(kind: TaskKind, seed_index: u32) -> String {
+    format!("{}-eval|{seed_index}", kind.name())
+}
+
+/// A baseline evaluated on seed `seed_index`'s evaluation episodes (no training, zero cost).
+///
+/// # Errors
+/// [`Error::Experiment`] if an episode fails.
+pub fn baseline_seed(
+    bench: &Bench,
+    kind: TaskKind,
+    task: &TaskSection,
+    baseline: ReferencePolicy,
+    seed_index: u32,
+) -> Result<Checkpoint, Error> {
+    let ev = bench.evaluate_baseline(baseline, task.eval_episodes, &eval_key(kind, seed_index))?;
+    Ok(Checkpoint::from_eval(
+        &ev,
+        kind,
+        task.eval_episodes,
+        0,
+        &Cost::default(),
+        None,
+    ))
+}
