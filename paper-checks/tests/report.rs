@@ -583,3 +583,59 @@ fn small_multiples_without_a_drawn_algorithm_still_draw() {
     f.series.clear();
     f.to_svg().expect("draws");
 }
+
+/// Two sections with figures, the figures of the first also used by the second.
+fn sections_with_figures() -> Vec<Block> {
+    let heading = |text: &str| Block::Heading {
+        level: 2,
+        text: text.into(),
+    };
+    let figure = |name: &str, caption: &str| Block::Figure {
+        path: format!("figures/{name}.png"),
+        caption: caption.into(),
+    };
+    let text = "Text of the section, long enough to fill a few lines of the page. ".repeat(12);
+    vec![
+        heading("Fig. 4.2: gradient error"),
+        Block::Para(text.clone()),
+        figure(
+            "fig4-2b-gradient-error-obstacle",
+            "Fig. 4.2 (b): obstacle task",
+        ),
+        Block::Para(text.clone()),
+        heading("CartPole"),
+        Block::Para(text.clone()),
+        figure("fig4-9-crashes", "Fig. 4.9: CartPole, resets"),
+        figure("fig4-2b-gradient-error-obstacle", "Fig. 4.10: again"),
+        Block::Para(text),
+        heading("After the figures"),
+    ]
+}
+
+#[test]
+fn latex_figures_float_but_stay_in_their_section() {
+    // PAPER_CHECKS_LATEX_DIR keeps the documents (to build with pdflatex); a temporary
+    // directory otherwise.
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let dir = std::env::var_os("PAPER_CHECKS_LATEX_DIR")
+        .map_or_else(|| tmp.path().to_path_buf(), std::path::PathBuf::from);
+    std::fs::create_dir_all(&dir).expect("latex dir");
+    paper_checks::report::document::write_documents(&sections_with_figures(), &dir)
+        .expect("writes");
+    let tex = std::fs::read_to_string(dir.join("appendix.tex")).expect("reads");
+    assert_eq!(tex.matches("\\begin{figure}[htbp]").count(), 3, "{tex}");
+    assert!(!tex.contains("[H]"), "{tex}");
+    // A barrier before every heading, defined (unless the preamble did) before the first.
+    assert_eq!(
+        tex.matches("\\FloatBarrier\n\\subsection*").count(),
+        3,
+        "{tex}"
+    );
+    let defined = tex
+        .find("\\providecommand{\\FloatBarrier}")
+        .expect("defined");
+    assert!(defined < tex.find("\\FloatBarrier\n").expect("used"));
+    let standalone = std::fs::read_to_string(dir.join("appendix-standalone.tex")).expect("reads");
+    assert!(!standalone.contains("float,"), "{standalone}");
+    assert!(standalone.contains("\\input{appendix}"));
+}
