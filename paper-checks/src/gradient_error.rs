@@ -811,6 +811,7 @@ pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figu
             log_y: true,
             y_range: Some((0.0, f64::INFINITY)),
             series: vec![band(t, "RMSE (95% CI)", false), line(t, "σ/√N (exact σ)")],
+            panels: None,
         },
     )];
     let m = o.reference_trajectories.unwrap_or(0);
@@ -840,6 +841,8 @@ pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figu
                 line(o, "σ̂/√N"),
                 dashed("reference SE σ̂/√M".into(), vec![x0, x1], vec![floor, floor]),
             ],
+            // The two estimates and σ̂/√N nearly coincide: one panel each, side by side.
+            panels: Some(2),
         },
     ));
     out

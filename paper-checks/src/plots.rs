@@ -2,7 +2,9 @@
 //! rendered to PNG with resvg (system fonts through fontdb).
 
 use crate::error::Error;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::path::Path;
 
 /// One curve: x, mean and the band `[lo, hi]` (same lengths).
@@ -63,6 +65,10 @@ pub struct Figure {
     pub y_range: Option<(f64, f64)>,
     /// The curves.
     pub series: Vec<Series>,
+    /// `Some(columns)`: small multiples, one panel per drawn non-reference series in a grid of
+    /// that many columns, every panel on the same axes and with the reference lines; `None`:
+    /// every series on one plot.
+    pub panels: Option<usize>,
 }
 
 /// The Okabe–Ito palette (distinguishable under the common colour-vision deficiencies).
@@ -196,6 +202,21 @@ const LEGEND_FONT: u32 = 16;
 const NOTE_FONT: u32 = 15;
 /// Legend row height in pixels.
 const LEGEND_ROW: u32 = 24;
+/// Small multiples: the panel titles' font size (plotters size: the SVG's is `size / 1.24`, so
+/// 19 prints at 7.4 pt) and line height, the width of the style sample before a title, in pixels.
+const TITLE_FONT: u32 = 19;
+const TITLE_ROW: u32 = 22;
+const TITLE_SAMPLE: i32 = 30;
+/// Small multiples, in pixels: the strip for the rotated y description, the y tick labels'
+/// width (left column), the x tick labels' height, the gap between columns, the right margin,
+/// the top margin and the height of the x description under the grid.
+const Y_DESC_WIDTH: u32 = 26;
+const PANEL_Y_TICKS: u32 = 48;
+const PANEL_X_TICKS: u32 = 26;
+const PANEL_GAP: u32 = 28;
+const PANEL_RIGHT: u32 = 22;
+const PANEL_TOP: u32 = 6;
+const X_DESC_HEIGHT: u32 = 30;
 
 /// Draw `marker` centred at pixel `c` on `area` (pixel coordinates).
 fn draw_marker<DB: DrawingBackend>(
@@ -357,6 +378,13 @@ impl Figure {
         self
     }
 
+    /// The figure as small multiples, `columns` panels to a row (see [`Figure::panels`]).
+    #[must_use]
+    pub fn in_panels(mut self, columns: usize) -> Self {
+        self.panels = Some(columns);
+        self
+    }
+
     /// Write the figure as SVG (and `.png` next to it if `png`).
     ///
     /// # Errors
@@ -446,52 +474,40 @@ impl Figure {
     }
 
     fn draw(&self, out: &mut String) -> Result<(), Box<dyn std::error::Error + '_>> {
-        let (pts, notes) = self.points();
-        let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        for p in pts.iter().flatten() {
-            x0 = x0.min(p.0);
-            x1 = x1.max(p.0);
-            y0 = y0.min(p.2.unwrap_or(p.1));
-            y1 = y1.max(p.3);
+        match self.panels {
+            Some(columns) => self.draw_panels(out, columns),
+            None => self.draw_single(out),
         }
-        if x0 > x1 {
-            (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
-        }
-        if x1 - x0 < 1e-12 {
-            x1 = x0 + 1.0;
-        }
-        if y1 - y0 < 1e-12 {
-            y1 = y0 + 1.0;
-        }
-        let pad = 0.05 * (y1 - y0);
-        let (y0, y1) = (y0 - pad, y1 + pad);
-        // The legend lists the series that are drawn, in columns under the plot.
-        let styles: Vec<Style> = self.series.iter().map(|s| style_for(&s.label)).collect();
-        let shown: Vec<usize> = (0..self.series.len())
+    }
+
+    /// The styles of the series, and the indices of the series that have drawn points.
+    fn styles_and_shown(&self, pts: &[Vec<BandPoint>]) -> (Vec<Style>, Vec<usize>) {
+        let styles = self.series.iter().map(|s| style_for(&s.label)).collect();
+        let shown = (0..self.series.len())
             .filter(|&i| !pts[i].is_empty())
             .collect();
-        let longest = shown
+        (styles, shown)
+    }
+
+    /// Every series on one plot, the legend under it in columns, then the notes.
+    fn draw_single(&self, out: &mut String) -> Result<(), Box<dyn std::error::Error + '_>> {
+        let (pts, notes) = self.points();
+        let (x0, x1, y0, y1) = extent(&pts);
+        let (styles, shown) = self.styles_and_shown(&pts);
+        let entries: Vec<(&str, Style)> = shown
             .iter()
-            .map(|&i| self.series[i].label.chars().count())
-            .max()
-            .unwrap_or(0) as u32;
-        let column_width = 48 + longest * LEGEND_FONT * 55 / 100;
-        let columns = ((WIDTH - 20) / column_width.max(1)).clamp(1, 4);
-        let legend_rows = (shown.len() as u32).div_ceil(columns);
-        let legend_height = legend_rows * LEGEND_ROW + 8;
-        let note_chars = ((WIDTH - 24) * 100 / (NOTE_FONT * 52)) as usize;
-        let note_lines: Vec<String> = notes
-            .iter()
-            .flat_map(|n| wrap(&format!("Note: {n}."), note_chars))
+            .map(|&i| (self.series[i].label.as_str(), styles[i]))
             .collect();
-        let note_height = (NOTE_FONT + 5) * note_lines.len() as u32 + 6;
+        let legend = LegendLayout::of(&entries);
+        let note_lines = note_lines(&notes);
+        let note_height = notes_height(&note_lines);
         {
             let root =
-                SVGBackend::with_string(out, (WIDTH, PLOT_HEIGHT + legend_height + note_height))
+                SVGBackend::with_string(out, (WIDTH, PLOT_HEIGHT + legend.height + note_height))
                     .into_drawing_area();
             root.fill(&WHITE)?;
             let (plot_area, rest) = root.split_vertically(PLOT_HEIGHT);
-            let (legend_area, note_area) = rest.split_vertically(legend_height);
+            let (legend_area, note_area) = rest.split_vertically(legend.height);
             let mut chart = ChartBuilder::on(&plot_area)
                 .margin(10)
                 .margin_right(24)
@@ -515,63 +531,454 @@ impl Figure {
                 .draw()?;
             // Bands first (light fill and thin edges), so no band covers another series' line.
             for (i, v) in pts.iter().enumerate() {
-                let (s, st) = (&self.series[i], &styles[i]);
-                if s.reference || v.len() < 2 {
-                    continue;
+                if !self.series[i].reference {
+                    draw_band(&mut chart, v, &styles[i], y0, 0.10)?;
                 }
-                let lo: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.2.unwrap_or(y0))).collect();
-                let hi: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.3)).collect();
-                let mut poly = lo.clone();
-                poly.extend(hi.iter().rev());
-                chart.draw_series(std::iter::once(Polygon::new(poly, st.color.mix(0.10))))?;
-                let edge = ShapeStyle::from(&st.color.mix(0.45)).stroke_width(1);
-                chart.draw_series(LineSeries::new(lo, edge))?;
-                chart.draw_series(LineSeries::new(hi, edge))?;
             }
             for (i, v) in pts.iter().enumerate() {
-                let st = &styles[i];
-                let style = ShapeStyle::from(&st.color).stroke_width(2);
-                let line: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.1)).collect();
-                if st.dashed {
-                    chart.draw_series(DashedLineSeries::new(line.clone(), 9, 5, style))?;
-                } else {
-                    chart.draw_series(LineSeries::new(line.clone(), style))?;
-                }
-                for p in &line {
-                    draw_marker(&root, chart.backend_coord(p), st)?;
-                }
+                draw_line(&mut chart, &root, v, &styles[i])?;
             }
-            let font = ("sans-serif", LEGEND_FONT).into_font();
-            let origin = legend_area.get_base_pixel();
-            for (k, &i) in shown.iter().enumerate() {
-                let (col, row) = (k as u32 % columns, k as u32 / columns);
-                let x = origin.0 + 16 + (col * column_width) as i32;
-                let y = origin.1 + 4 + (row * LEGEND_ROW + LEGEND_ROW / 2) as i32;
-                let st = &styles[i];
-                let style = ShapeStyle::from(&st.color).stroke_width(2);
-                if st.dashed {
-                    root.draw(&PathElement::new(vec![(x, y), (x + 10, y)], style))?;
-                    root.draw(&PathElement::new(vec![(x + 16, y), (x + 30, y)], style))?;
-                } else {
-                    root.draw(&PathElement::new(vec![(x, y), (x + 30, y)], style))?;
-                }
-                draw_marker(&root, (x + 15, y), st)?;
-                root.draw(&Text::new(
-                    self.series[i].label.clone(),
-                    (x + 38, y - (LEGEND_FONT as i32) / 2 - 1),
-                    font.clone(),
-                ))?;
-            }
-            for (k, n) in note_lines.iter().enumerate() {
-                note_area.draw(&Text::new(
-                    n.clone(),
-                    (12, 2 + (NOTE_FONT as i32 + 5) * k as i32),
-                    ("sans-serif", NOTE_FONT).into_font(),
-                ))?;
-            }
+            legend.draw(&root, legend_area.get_base_pixel(), &entries)?;
+            draw_notes(&note_area, &note_lines)?;
             root.present()?;
         }
         Ok(())
+    }
+
+    /// Small multiples: one panel per drawn non-reference series, `columns` to a row, titled
+    /// with the series' label and drawn in its style, every panel on the same axes with the
+    /// reference lines; the axis descriptions once (left and below the grid), a legend for the
+    /// reference lines only, then the notes.
+    fn draw_panels(
+        &self,
+        out: &mut String,
+        columns: usize,
+    ) -> Result<(), Box<dyn std::error::Error + '_>> {
+        let (pts, notes) = self.points();
+        let (x0, x1, y0, y1) = extent(&pts);
+        let (styles, shown) = self.styles_and_shown(&pts);
+        let (refs, algos): (Vec<usize>, Vec<usize>) =
+            shown.iter().partition(|&&i| self.series[i].reference);
+        let grid = Grid::new(
+            columns,
+            &algos
+                .iter()
+                .map(|&i| self.series[i].label.as_str())
+                .collect::<Vec<_>>(),
+            text_width(&self.y_label, AXIS_FONT) as u32 + 12,
+        );
+        let ref_entries: Vec<(&str, Style)> = refs
+            .iter()
+            .map(|&i| (self.series[i].label.as_str(), styles[i]))
+            .collect();
+        let legend = if ref_entries.is_empty() {
+            LegendLayout::none()
+        } else {
+            LegendLayout::of(&ref_entries)
+        };
+        let note_lines = note_lines(&notes);
+        let below = grid.height() + X_DESC_HEIGHT;
+        let height = below + legend.height + notes_height(&note_lines);
+        {
+            let root = SVGBackend::with_string(out, (WIDTH, height)).into_drawing_area();
+            root.fill(&WHITE)?;
+            let (lx, ly) = (self.log_x, self.log_y);
+            let (sx, sy) = (x1 - x0, y1 - y0);
+            let fx = |v: &f64| fmt_tick(*v, lx, sx);
+            let fy = |v: &f64| fmt_tick(*v, ly, sy);
+            let blank = |_: &f64| String::new();
+            for (k, &i) in algos.iter().enumerate() {
+                let cell = grid.cell(k);
+                let area = root.clone().shrink(cell.origin, cell.size);
+                let mut chart = ChartBuilder::on(&area)
+                    .x_label_area_size(PANEL_X_TICKS)
+                    .y_label_area_size(if cell.column == 0 { PANEL_Y_TICKS } else { 0 })
+                    .build_cartesian_2d(x0..x1, y0..y1)?;
+                // Tick labels on the outer edges only: the panels share their axes.
+                let bottom = k + grid.columns >= algos.len();
+                chart
+                    .configure_mesh()
+                    .x_labels(label_count(x0, x1, lx).min(grid.plot_width as usize / 45))
+                    .y_labels(label_count(y0, y1, ly).min(grid.plot_height as usize / 28))
+                    .x_label_formatter(if bottom { &fx } else { &blank })
+                    .y_label_formatter(&fy)
+                    .light_line_style(WHITE.mix(0.0))
+                    .bold_line_style(RGBColor(235, 235, 235))
+                    .axis_style(RGBColor(90, 90, 90))
+                    .label_style(("sans-serif", TICK_FONT))
+                    .draw()?;
+                draw_frame(&root, cell.plot)?;
+                draw_band(&mut chart, &pts[i], &styles[i], y0, 0.16)?;
+                for &j in &refs {
+                    draw_line(&mut chart, &root, &pts[j], &styles[j])?;
+                }
+                draw_line(&mut chart, &root, &pts[i], &styles[i])?;
+                draw_title(&root, &grid.titles[k], cell.title, &styles[i])?;
+            }
+            self.draw_axis_descriptions(&root, &grid)?;
+            let (legend_area, note_area) = root
+                .split_vertically(below)
+                .1
+                .split_vertically(legend.height);
+            legend.draw(&root, legend_area.get_base_pixel(), &ref_entries)?;
+            draw_notes(&note_area, &note_lines)?;
+            root.present()?;
+        }
+        Ok(())
+    }
+
+    /// The y description rotated along the left edge of the grid, the x description centred
+    /// under it.
+    fn draw_axis_descriptions(&self, root: &Area<'_>, grid: &Grid) -> DrawResult {
+        let font = ("sans-serif", AXIS_FONT).into_font();
+        let (left, top) = grid.plots_origin();
+        let (w, h) = grid.plots_size();
+        let y_style = TextStyle::from(font.clone().transform(FontTransform::Rotate270))
+            .pos(Pos::new(HPos::Center, VPos::Top));
+        root.draw(&Text::new(
+            self.y_label.clone(),
+            (4, top + h as i32 / 2),
+            y_style,
+        ))?;
+        let x_style = TextStyle::from(font).pos(Pos::new(HPos::Center, VPos::Top));
+        root.draw(&Text::new(
+            self.x_label.clone(),
+            (left + w as i32 / 2, grid.height() as i32 + 4),
+            x_style,
+        ))
+    }
+}
+
+/// The SVG drawing surface, and a chart on part of it with `f64` axes (log axes in log10 units).
+type Area<'b> = DrawingArea<SVGBackend<'b>, plotters::coord::Shift>;
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+type DrawResult = Result<(), DrawingAreaErrorKind<std::io::Error>>;
+
+/// The axes' extent `(x0, x1, y0, y1)` over every drawn point and band, the y range padded by 5%
+/// (a unit range when nothing is drawn or the range is empty).
+fn extent(pts: &[Vec<BandPoint>]) -> (f64, f64, f64, f64) {
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for p in pts.iter().flatten() {
+        x0 = x0.min(p.0);
+        x1 = x1.max(p.0);
+        y0 = y0.min(p.2.unwrap_or(p.1));
+        y1 = y1.max(p.3);
+    }
+    if x0 > x1 {
+        (x0, x1, y0, y1) = (0.0, 1.0, 0.0, 1.0);
+    }
+    if x1 - x0 < 1e-12 {
+        x1 = x0 + 1.0;
+    }
+    if y1 - y0 < 1e-12 {
+        y1 = y0 + 1.0;
+    }
+    let pad = 0.05 * (y1 - y0);
+    (x0, x1, y0 - pad, y1 + pad)
+}
+
+/// A series' band: a light fill of opacity `fill` with thin edges; a band low of `None` runs
+/// to `y0`, the bottom of the axis. Nothing for fewer than two points.
+fn draw_band(
+    chart: &mut Chart<'_, '_>,
+    v: &[BandPoint],
+    st: &Style,
+    y0: f64,
+    fill: f64,
+) -> DrawResult {
+    if v.len() < 2 {
+        return Ok(());
+    }
+    let lo: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.2.unwrap_or(y0))).collect();
+    let hi: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.3)).collect();
+    let mut poly = lo.clone();
+    poly.extend(hi.iter().rev());
+    chart.draw_series(std::iter::once(Polygon::new(poly, st.color.mix(fill))))?;
+    let edge = ShapeStyle::from(&st.color.mix(0.45)).stroke_width(1);
+    chart.draw_series(LineSeries::new(lo, edge))?;
+    chart.draw_series(LineSeries::new(hi, edge))?;
+    Ok(())
+}
+
+/// A series' mean line (solid or dashed) with its markers, drawn on `root` at the chart's
+/// pixel coordinates.
+fn draw_line(
+    chart: &mut Chart<'_, '_>,
+    root: &Area<'_>,
+    v: &[BandPoint],
+    st: &Style,
+) -> DrawResult {
+    let style = ShapeStyle::from(&st.color).stroke_width(2);
+    let line: Vec<(f64, f64)> = v.iter().map(|p| (p.0, p.1)).collect();
+    if st.dashed {
+        chart.draw_series(DashedLineSeries::new(line.clone(), 9, 5, style))?;
+    } else {
+        chart.draw_series(LineSeries::new(line.clone(), style))?;
+    }
+    for p in &line {
+        draw_marker(root, chart.backend_coord(p), st)?;
+    }
+    Ok(())
+}
+
+/// A line-and-marker sample of `st`, `width` pixels long, starting at `(x, y)`.
+fn draw_sample(root: &Area<'_>, (x, y): (i32, i32), width: i32, st: &Style) -> DrawResult {
+    let style = ShapeStyle::from(&st.color).stroke_width(2);
+    if st.dashed {
+        // Two dashes around the marker (10 and 14 pixels with a 6-pixel gap at width 30).
+        root.draw(&PathElement::new(vec![(x, y), (x + width / 3, y)], style))?;
+        root.draw(&PathElement::new(
+            vec![(x + width * 8 / 15, y), (x + width, y)],
+            style,
+        ))?;
+    } else {
+        root.draw(&PathElement::new(vec![(x, y), (x + width, y)], style))?;
+    }
+    draw_marker(root, (x + width / 2, y), st)
+}
+
+/// The legend's layout: entries in up to four columns as wide as the longest label needs.
+struct LegendLayout {
+    columns: u32,
+    column_width: u32,
+    height: u32,
+}
+
+impl LegendLayout {
+    /// The layout for `entries` (label, style).
+    fn of(entries: &[(&str, Style)]) -> Self {
+        let longest = entries
+            .iter()
+            .map(|(l, _)| l.chars().count())
+            .max()
+            .unwrap_or(0) as u32;
+        let column_width = 48 + longest * LEGEND_FONT * 55 / 100;
+        let columns = ((WIDTH - 20) / column_width.max(1)).clamp(1, 4);
+        let rows = (entries.len() as u32).div_ceil(columns);
+        LegendLayout {
+            columns,
+            column_width,
+            height: rows * LEGEND_ROW + 8,
+        }
+    }
+
+    /// No legend.
+    fn none() -> Self {
+        LegendLayout {
+            columns: 1,
+            column_width: 0,
+            height: 0,
+        }
+    }
+
+    /// Draw `entries` row by row from `origin` (pixels on `root`).
+    fn draw(&self, root: &Area<'_>, origin: (i32, i32), entries: &[(&str, Style)]) -> DrawResult {
+        let font = ("sans-serif", LEGEND_FONT).into_font();
+        for (k, (label, st)) in entries.iter().enumerate() {
+            let (col, row) = (k as u32 % self.columns, k as u32 / self.columns);
+            let x = origin.0 + 16 + (col * self.column_width) as i32;
+            let y = origin.1 + 4 + (row * LEGEND_ROW + LEGEND_ROW / 2) as i32;
+            draw_sample(root, (x, y), 30, st)?;
+            root.draw(&Text::new(
+                (*label).to_string(),
+                (x + 38, y - (LEGEND_FONT as i32) / 2 - 1),
+                font.clone(),
+            ))?;
+        }
+        Ok(())
+    }
+}
+
+/// The notes as wrapped lines, each note starting with "Note:".
+fn note_lines(notes: &[String]) -> Vec<String> {
+    let chars = ((WIDTH - 24) * 100 / (NOTE_FONT * 52)) as usize;
+    notes
+        .iter()
+        .flat_map(|n| wrap(&format!("Note: {n}."), chars))
+        .collect()
+}
+
+/// The height in pixels the note lines take.
+fn notes_height(lines: &[String]) -> u32 {
+    (NOTE_FONT + 5) * lines.len() as u32 + 6
+}
+
+/// The note lines, top left of `area`.
+fn draw_notes(area: &Area<'_>, lines: &[String]) -> DrawResult {
+    for (k, n) in lines.iter().enumerate() {
+        area.draw(&Text::new(
+            n.clone(),
+            (12, 2 + (NOTE_FONT as i32 + 5) * k as i32),
+            ("sans-serif", NOTE_FONT).into_font(),
+        ))?;
+    }
+    Ok(())
+}
+
+/// A thin frame around a panel's plot rectangle `(x, y, width, height)` (pixels), so panels
+/// without their own axes stay delimited.
+fn draw_frame(root: &Area<'_>, (x, y, w, h): (i32, i32, i32, i32)) -> DrawResult {
+    let style = ShapeStyle::from(&RGBColor(150, 150, 150)).stroke_width(1);
+    root.draw(&PathElement::new(
+        vec![(x, y), (x + w, y), (x + w, y + h), (x, y + h), (x, y)],
+        style,
+    ))
+}
+
+/// A panel's title: a sample of the series' style, then its label (one or more lines), from
+/// `(x, y)` (pixels, top left).
+fn draw_title(root: &Area<'_>, lines: &[String], (x, y): (i32, i32), st: &Style) -> DrawResult {
+    let row = TITLE_ROW as i32;
+    draw_sample(root, (x + 1, y + row / 2), TITLE_SAMPLE - 8, st)?;
+    let style = TextStyle::from(("sans-serif", TITLE_FONT).into_font())
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    for (k, line) in lines.iter().enumerate() {
+        root.draw(&Text::new(
+            line.clone(),
+            (x + TITLE_SAMPLE, y + row / 2 + row * k as i32),
+            style.clone(),
+        ))?;
+    }
+    Ok(())
+}
+
+/// The estimated width in pixels of `text` in the sans-serif font at plotters size `size`
+/// (the SVG's font size is `size / 1.24`), from DejaVu Sans's approximate advance widths in em.
+fn text_width(text: &str, size: u32) -> f64 {
+    let em: f64 = text
+        .chars()
+        .map(|c| match c {
+            'i' | 'j' | 'l' | 'I' | '.' | ',' | ':' | '\'' => 0.3,
+            ' ' | '(' | ')' | '-' | 'f' | 't' | 'r' => 0.4,
+            'm' | 'w' | 'M' | 'W' => 0.95,
+            c if c.is_ascii_uppercase() => 0.72,
+            _ => 0.62,
+        })
+        .sum();
+    em * f64::from(size) / 1.24
+}
+
+/// `text` split at spaces into lines no wider than `width` pixels at `size` (a single word
+/// wider than that stays whole).
+fn wrap_to_width(text: &str, width: f64, size: u32) -> Vec<String> {
+    let mut lines: Vec<String> = Vec::new();
+    for w in text.split(' ') {
+        match lines.last_mut() {
+            Some(cur) if text_width(&format!("{cur} {w}"), size) <= width => {
+                cur.push(' ');
+                cur.push_str(w);
+            }
+            _ => lines.push(w.to_string()),
+        }
+    }
+    lines
+}
+
+/// One panel's place in the grid, in pixels.
+struct Cell {
+    /// Column (0: the leftmost, which carries the y tick labels).
+    column: usize,
+    /// The chart area's top-left corner and size (plot plus its tick-label areas).
+    origin: (u32, u32),
+    size: (u32, u32),
+    /// The plot rectangle `(x, y, width, height)`.
+    plot: (i32, i32, i32, i32),
+    /// The title's top-left corner.
+    title: (i32, i32),
+}
+
+/// The small-multiples grid: equal plots, a title block above each row as tall as its longest
+/// wrapped title, tick labels only on the left column and under the bottom panel of each column.
+struct Grid {
+    columns: usize,
+    plot_width: u32,
+    plot_height: u32,
+    /// Each panel's title lines.
+    titles: Vec<Vec<String>>,
+    /// Each row's top edge, and the grid's bottom edge last.
+    row_tops: Vec<u32>,
+}
+
+impl Grid {
+    /// The grid for panels titled `labels`, `columns` to a row, its plots and titles spanning
+    /// at least `min_height` pixels from top to bottom (room for the rotated y description).
+    fn new(columns: usize, labels: &[&str], min_height: u32) -> Self {
+        let columns = columns.clamp(1, labels.len().max(1));
+        let gaps = PANEL_GAP * (columns as u32 - 1);
+        let plot_width =
+            (WIDTH - Y_DESC_WIDTH - PANEL_Y_TICKS - PANEL_RIGHT - gaps) / columns as u32;
+        let title_width = f64::from(plot_width + PANEL_GAP) - f64::from(TITLE_SAMPLE as u32) - 4.0;
+        let titles: Vec<Vec<String>> = labels
+            .iter()
+            .map(|l| wrap_to_width(l, title_width, TITLE_FONT))
+            .collect();
+        let title_heights: Vec<u32> = titles
+            .chunks(columns)
+            .map(|row| row.iter().map(Vec::len).max().unwrap_or(1) as u32 * TITLE_ROW + 4)
+            .collect();
+        let rows = title_heights.len().max(1) as u32;
+        let fixed = title_heights.iter().sum::<u32>() + (rows - 1) * PANEL_X_TICKS;
+        let plot_height = (plot_width * 3 / 5)
+            .clamp(110, 260)
+            .max(min_height.saturating_sub(fixed).div_ceil(rows));
+        let mut row_tops = vec![PANEL_TOP];
+        for h in title_heights {
+            let last = *row_tops.last().unwrap_or(&0);
+            row_tops.push(last + h + plot_height + PANEL_X_TICKS);
+        }
+        Grid {
+            columns,
+            plot_width,
+            plot_height,
+            titles,
+            row_tops,
+        }
+    }
+
+    /// The grid's height in pixels (to the bottom of the last row's tick labels).
+    fn height(&self) -> u32 {
+        *self.row_tops.last().unwrap_or(&PANEL_TOP)
+    }
+
+    /// The top-left corner of the leftmost plots (pixels).
+    fn plots_origin(&self) -> (i32, i32) {
+        ((Y_DESC_WIDTH + PANEL_Y_TICKS) as i32, PANEL_TOP as i32)
+    }
+
+    /// The width and height spanned by the plots and the rows' titles (pixels).
+    fn plots_size(&self) -> (u32, u32) {
+        let n = self.columns as u32;
+        (
+            n * self.plot_width + (n - 1) * PANEL_GAP,
+            self.height().saturating_sub(PANEL_TOP + PANEL_X_TICKS),
+        )
+    }
+
+    /// The place of panel `k`.
+    fn cell(&self, k: usize) -> Cell {
+        let (column, row) = (k % self.columns, k / self.columns);
+        let left = Y_DESC_WIDTH + PANEL_Y_TICKS + column as u32 * (self.plot_width + PANEL_GAP);
+        let lines = self.titles[row * self.columns..]
+            .iter()
+            .take(self.columns)
+            .map(Vec::len)
+            .max()
+            .unwrap_or(1) as u32;
+        let title_top = self.row_tops[row];
+        let top = title_top + lines * TITLE_ROW + 4;
+        let ticks = if column == 0 { PANEL_Y_TICKS } else { 0 };
+        Cell {
+            column,
+            origin: (left - ticks, top),
+            size: (self.plot_width + ticks, self.plot_height + PANEL_X_TICKS),
+            plot: (
+                left as i32,
+                top as i32,
+                self.plot_width as i32,
+                self.plot_height as i32,
+            ),
+            title: (left as i32, title_top as i32),
+        }
     }
 }
 

@@ -97,6 +97,7 @@ fn figure(range: Option<(f64, f64)>, log_y: bool) -> Figure {
         log_y,
         y_range: range,
         series: vec![s],
+        panels: None,
     }
 }
 
@@ -171,6 +172,7 @@ fn figure_of(labels: &[&str]) -> Figure {
                 s
             })
             .collect(),
+        panels: None,
     }
 }
 
@@ -195,20 +197,26 @@ fn each_algorithm_keeps_its_colour_and_marker_in_every_figure() {
         &["SGD", "Adam", "RMSProp", "STORM"][..],
         &["STORM"][..],
     ] {
-        let svg = figure_of(labels).to_svg().expect("draws");
+        // On one plot and in small multiples alike.
+        for panels in [None, Some(2)] {
+            let mut f = figure_of(labels);
+            f.panels = panels;
+            let svg = f.to_svg().expect("draws");
+            assert!(
+                svg.to_uppercase().contains(&format!("STROKE=\"{storm}\"")),
+                "STORM not in {storm} in {labels:?} ({panels:?})"
+            );
+        }
+    }
+    for panels in [None, Some(2)] {
+        let mut f = figure_of(&["SGD", "Adam", "RMSProp", "DAgger"]);
+        f.panels = panels;
+        let without = f.to_svg().expect("draws").to_uppercase();
         assert!(
-            svg.to_uppercase().contains(&format!("STROKE=\"{storm}\"")),
-            "STORM not in {storm} in {labels:?}"
+            !without.contains(&storm),
+            "STORM's colour used without STORM ({panels:?})"
         );
     }
-    let without = figure_of(&["SGD", "Adam", "RMSProp", "DAgger"])
-        .to_svg()
-        .expect("draws")
-        .to_uppercase();
-    assert!(
-        !without.contains(&storm),
-        "STORM's colour used without STORM"
-    );
     // Reference lines are grey and carry no marker.
     for r in [
         "Expert (VO) (ref.)",
@@ -459,4 +467,175 @@ fn the_theory_cache_round_trips_the_check_records() {
     // A cache of another shape (no records) is a miss, not an error.
     std::fs::write(&file, "{\"key_hash\": \"x\", \"markdown\": \"| # |\"}").expect("writes");
     assert!(read_json::<TheoryCache>(&file).is_none());
+}
+
+/// Fig. 4.9's situation: most algorithms sit on the cap, a few fall to 0, a reference line.
+fn capped_panels() -> Figure {
+    let x: Vec<f64> = (0..11).map(|k| f64::from(k) * 0.2).collect();
+    let mut series: Vec<Series> = ALGORITHMS
+        .iter()
+        .enumerate()
+        .map(|(a, label)| {
+            let mut s = Series::new(*label);
+            s.x.clone_from(&x);
+            s.mean = x
+                .iter()
+                .map(|t| {
+                    if a % 3 == 0 {
+                        100.0 * (-3.0 * t).exp()
+                    } else {
+                        100.0
+                    }
+                })
+                .collect();
+            s.lo = s.mean.iter().map(|m| m - 15.0).collect();
+            s.hi = s.mean.iter().map(|m| m + 15.0).collect();
+            s
+        })
+        .collect();
+    let mut reference = Series::new("Expert (PPO) (ref.)");
+    reference.x = vec![0.0, 2.0];
+    reference.mean = vec![0.0, 0.0];
+    reference.lo.clone_from(&reference.mean);
+    reference.hi.clone_from(&reference.mean);
+    reference.reference = true;
+    series.push(reference);
+    Figure {
+        title: "t".into(),
+        x_label: "gradient calls (millions, cumulative)".into(),
+        y_label: "resets before a full episode (count)".into(),
+        log_x: false,
+        log_y: false,
+        y_range: Some((0.0, 100.0)),
+        series,
+        panels: Some(3),
+    }
+}
+
+/// The text of every `<text>` element of an SVG written by plotters.
+fn svg_texts(svg: &str) -> Vec<&str> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| t.split_once('>'))
+        .filter_map(|(_, rest)| rest.split_once("</text>"))
+        .map(|(text, _)| text.trim())
+        .collect()
+}
+
+#[test]
+fn small_multiples_draw_one_titled_panel_per_algorithm() {
+    // PAPER_CHECKS_FIGURE_DIR keeps the files for a look; a temporary directory otherwise.
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let dir = std::env::var_os("PAPER_CHECKS_FIGURE_DIR")
+        .map_or_else(|| tmp.path().to_path_buf(), std::path::PathBuf::from);
+    std::fs::create_dir_all(&dir).expect("figure dir");
+    let svg_path = dir.join("small-multiples.svg");
+    capped_panels().write(&svg_path, true).expect("writes");
+    assert!(std::fs::metadata(dir.join("small-multiples.png")).is_ok_and(|m| m.len() > 0));
+    let svg = std::fs::read_to_string(&svg_path).expect("reads");
+    let texts = svg_texts(&svg);
+    // One title per algorithm (titles may wrap: the words appear in order, once), the
+    // reference line in the legend only, each axis described once.
+    for label in ALGORITHMS {
+        let hits = texts.iter().filter(|t| **t == label).count();
+        let wrapped = texts
+            .windows(2)
+            .filter(|w| format!("{} {}", w[0], w[1]) == label)
+            .count();
+        assert_eq!(hits + wrapped, 1, "{label}: {texts:?}");
+    }
+    assert_eq!(
+        texts
+            .iter()
+            .filter(|t| **t == "Expert (PPO) (ref.)")
+            .count(),
+        1
+    );
+    assert_eq!(
+        texts
+            .iter()
+            .filter(|t| **t == "gradient calls (millions, cumulative)")
+            .count(),
+        1
+    );
+    assert_eq!(
+        texts
+            .iter()
+            .filter(|t| **t == "resets before a full episode (count)")
+            .count(),
+        1
+    );
+    // Every panel draws the reference line: one dashed polyline pair per panel at least.
+    let grey = hex(&style_for("Expert (PPO) (ref.)"));
+    assert!(
+        svg.to_uppercase()
+            .matches(&format!("STROKE=\"{grey}\""))
+            .count()
+            >= ALGORITHMS.len()
+    );
+}
+
+#[test]
+fn small_multiples_without_a_drawn_algorithm_still_draw() {
+    let mut f = capped_panels();
+    f.series.retain(|s| s.reference);
+    assert!(f.to_svg().expect("draws").contains("Expert (PPO) (ref.)"));
+    f.series.clear();
+    f.to_svg().expect("draws");
+}
+
+/// Two sections with figures, the figures of the first also used by the second.
+fn sections_with_figures() -> Vec<Block> {
+    let heading = |text: &str| Block::Heading {
+        level: 2,
+        text: text.into(),
+    };
+    let figure = |name: &str, caption: &str| Block::Figure {
+        path: format!("figures/{name}.png"),
+        caption: caption.into(),
+    };
+    let text = "Text of the section, long enough to fill a few lines of the page. ".repeat(12);
+    vec![
+        heading("Fig. 4.2: gradient error"),
+        Block::Para(text.clone()),
+        figure(
+            "fig4-2b-gradient-error-obstacle",
+            "Fig. 4.2 (b): obstacle task",
+        ),
+        Block::Para(text.clone()),
+        heading("CartPole"),
+        Block::Para(text.clone()),
+        figure("fig4-9-crashes", "Fig. 4.9: CartPole, resets"),
+        figure("fig4-2b-gradient-error-obstacle", "Fig. 4.10: again"),
+        Block::Para(text),
+        heading("After the figures"),
+    ]
+}
+
+#[test]
+fn latex_figures_float_but_stay_in_their_section() {
+    // PAPER_CHECKS_LATEX_DIR keeps the documents (to build with pdflatex); a temporary
+    // directory otherwise.
+    let tmp = tempfile::tempdir().expect("temp dir");
+    let dir = std::env::var_os("PAPER_CHECKS_LATEX_DIR")
+        .map_or_else(|| tmp.path().to_path_buf(), std::path::PathBuf::from);
+    std::fs::create_dir_all(&dir).expect("latex dir");
+    paper_checks::report::document::write_documents(&sections_with_figures(), &dir)
+        .expect("writes");
+    let tex = std::fs::read_to_string(dir.join("appendix.tex")).expect("reads");
+    assert_eq!(tex.matches("\\begin{figure}[htbp]").count(), 3, "{tex}");
+    assert!(!tex.contains("[H]"), "{tex}");
+    // A barrier before every heading, defined (unless the preamble did) before the first.
+    assert_eq!(
+        tex.matches("\\FloatBarrier\n\\subsection*").count(),
+        3,
+        "{tex}"
+    );
+    let defined = tex
+        .find("\\providecommand{\\FloatBarrier}")
+        .expect("defined");
+    assert!(defined < tex.find("\\FloatBarrier\n").expect("used"));
+    let standalone = std::fs::read_to_string(dir.join("appendix-standalone.tex")).expect("reads");
+    assert!(!standalone.contains("float,"), "{standalone}");
+    assert!(standalone.contains("\\input{appendix}"));
 }

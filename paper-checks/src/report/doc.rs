@@ -89,22 +89,37 @@ pub fn markdown(blocks: &[Block]) -> String {
 
 /// The packages [`latex`]'s output needs, as `\usepackage` lines (the standalone document loads
 /// them; a thesis that `\input`s the fragment loads them in its preamble).
-pub const LATEX_PACKAGES: &str = "\\usepackage{amsmath,amssymb}\n\\usepackage{booktabs,longtable,array}\n\\usepackage{graphicx,float,pdflscape}\n";
+pub const LATEX_PACKAGES: &str = "\\usepackage{amsmath,amssymb}\n\\usepackage{booktabs,longtable,array}\n\\usepackage{graphicx,pdflscape}\n";
+
+/// Opens [`latex`]'s output: `\FloatBarrier` (unless the preamble defines it, e.g. with the
+/// `placeins` package) from the LaTeX kernel alone, so no extra package is needed. With floats
+/// still waiting it ends the page (they go to the top of the next one, before what follows) and,
+/// if some still wait, clears the page; otherwise it does nothing.
+const FLOAT_BARRIER: &str = "\\makeatletter\n\
+\\providecommand{\\IloptIfFloatsWait}[2]{\\begingroup\\let\\@elt\\relax\n\
+  \\edef\\@tempa{\\@botlist\\@deferlist\\@dbldeferlist}%\n\
+  \\ifx\\@tempa\\@empty\\aftergroup\\@secondoftwo\\else\\aftergroup\\@firstoftwo\\fi\n\
+  \\endgroup{#1}{#2}}\n\
+\\providecommand{\\FloatBarrier}{\\par\\IloptIfFloatsWait{\\newpage\\IloptIfFloatsWait{\\clearpage}{}}{}}\n\
+\\makeatother\n";
 
 /// Render as LaTeX after `preamble` (comment lines): `\section*`/`\subsection*` headings,
 /// booktabs `longtable`s whose columns are sized to fit the line ([`column_layout`]), and figures
-/// placed where they stand (`[H]`). Captions are numbered by LaTeX alone: a leading thesis number
+/// as floats (`[htbp]`: here, or at the top or bottom of a page, or on a page of floats, so no
+/// page is cut short for a figure), kept inside their section by a `\FloatBarrier` before
+/// every heading. Captions are numbered by LaTeX alone: a leading thesis number
 /// ("Table 4.1: …", "Fig. 4.3: …") moves to the caption's end. A table without a caption is
 /// captioned with its section's heading.
 pub fn latex(blocks: &[Block], preamble: &str) -> String {
     let mut o = String::from(preamble);
+    o += FLOAT_BARRIER;
     let mut section = String::new();
     for b in blocks {
         match b {
             Block::Heading { level, text } => {
                 section.clone_from(text);
                 let cmd = if *level <= 1 { "section" } else { "subsection" };
-                let _ = writeln!(o, "\\{cmd}*{{{}}}\n", inline(text));
+                let _ = writeln!(o, "\\FloatBarrier\n\\{cmd}*{{{}}}\n", inline(text));
             }
             Block::Para(t) => {
                 let _ = writeln!(o, "{}\n", inline(t));
@@ -128,7 +143,7 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
                 };
                 let _ = writeln!(
                     o,
-                    "\\begin{{figure}}[H]\n\\centering\n{svg_note}\\includegraphics[width=\\linewidth]{{{path}}}\n\\caption{{{}}}\n\\end{{figure}}\n",
+                    "\\begin{{figure}}[htbp]\n\\centering\n{svg_note}\\includegraphics[width=\\linewidth]{{{path}}}\n\\caption{{{}}}\n\\end{{figure}}\n",
                     caption_text(caption)
                 );
             }

@@ -141,6 +141,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             log_y,
             y_range: None,
             series: series.into_iter().chain(lines).collect(),
+            panels: None,
         }
     };
     let n_obs = f64::from(profile.obstacle.eval_episodes);
@@ -239,6 +240,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             log_y,
             y_range: None,
             series: series.into_iter().chain(lines).collect(),
+            panels: None,
         }
     };
     figs.push((
@@ -264,7 +266,9 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             false,
             &|c| c.resets_to_full_episode.map(f64::from),
         )
-        .clamped((0.0, f64::from(profile.cartpole.full_episode_cap))),
+        .clamped((0.0, f64::from(profile.cartpole.full_episode_cap)))
+        // Most algorithms sit on the cap: one panel each, so none hides another.
+        .in_panels(3),
     ));
     figs.push((
         "fig4-10-reward",
