@@ -191,17 +191,18 @@ pub fn style_for(label: &str) -> Style {
 }
 
 /// Canvas width in SVG pixels. The LaTeX appendix includes figures at the line width (345 pt in
-/// a 10 pt article), 0.48 pt per pixel: the smallest text below (15 px) prints at 7.2 pt.
+/// a 10 pt article), 0.48 pt per pixel. Font sizes below are plotters sizes; the SVG's is
+/// `size / 1.24`, so the smallest (19) is 15.3 px and prints at 7.35 pt.
 const WIDTH: u32 = 720;
 /// Height of the plot (axes and labels), in pixels.
 const PLOT_HEIGHT: u32 = 440;
-/// Font sizes in pixels: tick labels, axis descriptions, legend, notes.
-const TICK_FONT: u32 = 16;
-const AXIS_FONT: u32 = 17;
-const LEGEND_FONT: u32 = 16;
-const NOTE_FONT: u32 = 15;
+/// Font sizes (plotters sizes): tick labels, axis descriptions, legend, notes.
+const TICK_FONT: u32 = 19;
+const AXIS_FONT: u32 = 20;
+const LEGEND_FONT: u32 = 19;
+const NOTE_FONT: u32 = 19;
 /// Legend row height in pixels.
-const LEGEND_ROW: u32 = 24;
+const LEGEND_ROW: u32 = 27;
 /// Small multiples: the panel titles' font size (plotters size: the SVG's is `size / 1.24`, so
 /// 19 prints at 7.4 pt) and line height, the width of the style sample before a title, in pixels.
 const TITLE_FONT: u32 = 19;
@@ -211,8 +212,8 @@ const TITLE_SAMPLE: i32 = 30;
 /// width (left column), the x tick labels' height, the gap between columns, the right margin,
 /// the top margin and the height of the x description under the grid.
 const Y_DESC_WIDTH: u32 = 26;
-const PANEL_Y_TICKS: u32 = 48;
-const PANEL_X_TICKS: u32 = 26;
+const PANEL_Y_TICKS: u32 = 56;
+const PANEL_X_TICKS: u32 = 30;
 const PANEL_GAP: u32 = 28;
 const PANEL_RIGHT: u32 = 22;
 const PANEL_TOP: u32 = 6;
@@ -511,8 +512,8 @@ impl Figure {
             let mut chart = ChartBuilder::on(&plot_area)
                 .margin(10)
                 .margin_right(24)
-                .x_label_area_size(50)
-                .y_label_area_size(78)
+                .x_label_area_size(58)
+                .y_label_area_size(92)
                 .build_cartesian_2d(x0..x1, y0..y1)?;
             let (lx, ly) = (self.log_x, self.log_y);
             let (sx, sy) = (x1 - x0, y1 - y0);

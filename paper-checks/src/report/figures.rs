@@ -259,7 +259,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         "Fig. 4.9",
         cart_fig(
             &format!(
-                "Fig. 4.9: CartPole, resets until one full 500-step episode, capped at {} (mean over seeds, 95% CI band; dashed: reference policy)",
+                "Fig. 4.9: CartPole, resets until one full 500-step episode, capped at {} (mean over seeds, 95% CI band; one panel per algorithm)",
                 profile.cartpole.full_episode_cap
             ),
             "resets before a full episode (count)",
