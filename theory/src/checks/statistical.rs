@@ -10,7 +10,9 @@
 //! * 2d (adaptive schedule, secondary);
 //! * 2e, 2e.pd (IS-STORM), the control `2e.printed4` (E9) and the probe `2e.unweighted` (E10):
 //!   the property Theorem S's proof rests on, E[u_{k+1} | F_k] = 0 for the tracking-error
-//!   increment, from the **same runs** as 2c ([`crate::checks::tracking`]);
+//!   increment, from the **same runs** as 2c ([`crate::checks::tracking`]); and 2e.c with its
+//!   control `2e.c.unweighted` (E10), the same property along long steps from θ₁ = 0, where the
+//!   unweighted term's bias is large ([`long_step_tracking_rows`]);
 //! * 3d (Algorithm 5, IL-correct) and the probe `3d.printed5` (E11):
 //!   E[g_n − ∇F(w_n) | Δ_n, F_{n−1}] = 0, from the same runs as 3b.
 //!
@@ -212,6 +214,89 @@ pub fn storm_tracking_spec(
     }
 }
 
+/// The constant schedule of rows 2e.c and 2e.c.unweighted: η = a = 1/4, the first
+/// [`LONG_STEPS_K`] iterates from θ₁ = 0 of [`LONG_STEPS_RUNS`] runs. Far from the minimiser and at
+/// long steps the unweighted old-point term's bias is large (b(0, 1) = 5/12 on M1, math.md §4);
+/// near the minimiser, where the runs of row 2e spend their steps, it nearly vanishes.
+pub const LONG_STEPS: (i64, i64) = (1, 4);
+/// Iterates K of rows 2e.c and 2e.c.unweighted.
+pub const LONG_STEPS_K: u64 = 10;
+/// Runs R of rows 2e.c and 2e.c.unweighted.
+pub const LONG_STEPS_RUNS: usize = 10_000;
+
+/// Rows 2e.c (IS-STORM, trajectory weights) and its control 2e.c.unweighted (eq. 3.40 verbatim,
+/// E10): the tracking property of row 2e along a constant schedule of long steps
+/// ([`LONG_STEPS`]), both at the same K, R and α and through the same verdict code. The property
+/// holds for any schedule when the old-point term is unbiased; without the weight the bias is
+/// visible here, so the Monte-Carlo check itself, not only the exact rows 4d–4f, detects E10.
+pub fn long_step_tracking_rows(mdp: &ToyMdp, g: &GlobalConstants, alpha: f64) -> Vec<Check> {
+    use ilopt::algo::ConfigNumber;
+    use ilopt::algo::config::AlgorithmConfig;
+    use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
+    use ilopt::problem::EstimatorForm;
+    let (n, d) = LONG_STEPS;
+    let a = n as f64 / d as f64;
+    let mut rows = vec![];
+    for (variant, correction, id, name, role) in [
+        (
+            StormVariant::Weighted(Weighting::Trajectory),
+            Correction::Trajectory,
+            "2e.c",
+            "IS-STORM (trajectory weights)",
+            Role::Corrected,
+        ),
+        (
+            StormVariant::Unweighted,
+            Correction::Unweighted,
+            "2e.c.unweighted",
+            "STORM with the unweighted old-point term (eq. 3.40 verbatim, E10)",
+            Role::NegativeControl,
+        ),
+    ] {
+        let algorithm = AlgorithmConfig::Storm(StormConfig {
+            schedule: StormSchedule::constant(ConfigNumber::ratio(n, d), ConfigNumber::ratio(n, d)),
+            correction,
+            form: EstimatorForm::Causal,
+        });
+        let range = m1_storm_range(variant, g);
+        let tracking = storm::tracking_sample(
+            mdp,
+            g,
+            &algorithm,
+            tracking::Momentum::Constant(a),
+            0.0,
+            LONG_STEPS_K,
+            LONG_STEPS_RUNS,
+            range,
+        );
+        let w = match range {
+            StormRange::Recursion { w } => w,
+            StormRange::Printed => f64::NAN,
+        };
+        let (g_inf, g_f) = (g.g_inf.value, g.g_f.value);
+        let c = g_inf + g_f + (1.0 - a) * (g_f + w);
+        let spec = TrackingSpec {
+            id: id.into(),
+            result: "STORM, Theorem S step 1 (Lemma 3.3): the tracking error's increment has conditional mean 0".into(),
+            claim: format!(
+                "E[sign(d_k) u_{{k+1}} | F_k] = 0, u_{{k+1}} = ε_{{k+1}} − (1 − a)ε_k, along {name}'s first {LONG_STEPS_K} iterates from θ₁ = 0, constant η = a = {n}/{d}{}",
+                if role == Role::NegativeControl { ": must be flagged" } else { "" }
+            ),
+            assumptions: vec![
+                format!("|u_{{k+1}}| ≤ c = G_∞ + G_F + (1 − a)(G_F + W) = {c:.4}, W ≥ sup |g̃| = {w:.4}"),
+                "the property needs only an unbiased old-point term (identity I3), for any schedule".into(),
+            ],
+            role,
+            erratum: "E10".into(),
+            context: format!(
+                "R = {LONG_STEPS_RUNS} runs of their own: long steps far from the minimiser, where the unweighted term's bias is large (b(0, 1) = 5/12); per step z = sign(d_k)u_{{k+1}}/c, c = {c:.4}"
+            ),
+        };
+        rows.push(tracking::row(spec, &tracking, alpha));
+    }
+    rows
+}
+
 /// Rows 2c, 2c.ctl, 2c.pd, 2c.unweighted, 2c.printed4 (K = `s.storm_k`, R = `s.storm_runs`),
 /// 2d, then 2e, 2e.pd, 2e.unweighted, 2e.printed4 from the runs of the 2c rows, on `mdp` (M1) from
 /// θ₁ = 0 with the global constants `g`, each at level `alpha`.
@@ -250,5 +335,6 @@ pub fn storm_rows(mdp: &ToyMdp, g: &GlobalConstants, s: Sizes, alpha: f64) -> Ve
         mdp, g, 0.0, 1.0, ADAPTIVE_K, mc, 1.0,
     ));
     rows.extend(tracking_rows);
+    rows.extend(long_step_tracking_rows(mdp, g, alpha));
     rows
 }
