@@ -14,7 +14,9 @@
 //!   control `2e.c.unweighted` (E10), the same property along long steps from θ₁ = 0, where the
 //!   unweighted term's bias is large ([`long_step_tracking_rows`]);
 //! * 3d (Algorithm 5, IL-correct) and the probe `3d.printed5` (E11):
-//!   E[g_n − ∇F(w_n) | Δ_n, F_{n−1}] = 0, from the same runs as 3b.
+//!   E[g_n − ∇F(w_n) | Δ_n, F_{n−1}] = 0, from the same runs as 3b; and 3d.c with its control
+//!   `3d.c.printed5` (E11), the same property along short runs with a wide radius, where the
+//!   printed algorithm's bias is large ([`wide_radius_tracking_rows`]).
 //!
 //! The printed Algorithm 4 is flagged with a huge margin and is a negative control (the table's
 //! status requires it). The unweighted STORM and the printed Algorithm 5 are not: their biases are
@@ -83,7 +85,59 @@ pub fn toy_rows(
         ));
     }
     rows.extend(tracking_rows);
+    rows.extend(wide_radius_tracking_rows(mdp, k, g, mc.alpha));
     rows
+}
+
+/// Budget N and radius δ of rows 3d.c and 3d.c.printed5: a short run with a wide radius, so that
+/// the steps Δ_n (‖Δ_n‖ ≤ δ/T) and with them the printed Algorithm 5's bias, O(‖θ_n − w_n‖), are
+/// large; [`WIDE_RADIUS_RUNS`] runs.
+pub const WIDE_RADIUS: (u64, (i64, i64)) = (6, (2, 1));
+/// Runs R of rows 3d.c and 3d.c.printed5.
+pub const WIDE_RADIUS_RUNS: usize = 40_000;
+
+/// Rows 3d.c (Algorithm 5, IL-correct) and its control 3d.c.printed5 (τ_n ∼ θ_n, E11): the
+/// premise of row 3d along short runs with a wide radius ([`WIDE_RADIUS`]), both at the same N,
+/// δ, R and α and through the same verdict code, so the Monte-Carlo check itself detects E11.
+pub fn wide_radius_tracking_rows(
+    mdp: &ToyMdp,
+    k: &ToyConstants,
+    g: &GlobalConstants,
+    alpha: f64,
+) -> Vec<Check> {
+    let (n, delta) = WIDE_RADIUS;
+    let c = (g.g_inf.value + g.g_f.value) * (1.0 + 1e-12);
+    [O2ncVariant::IlCorrect, O2ncVariant::Printed]
+        .into_iter()
+        .map(|variant| {
+            let sample = montecarlo::o2nc_sample_tracked(
+                mdp,
+                k,
+                0.0,
+                n,
+                delta,
+                WIDE_RADIUS_RUNS,
+                variant,
+                (g.g_inf.value, g.g_f.value),
+            );
+            let mut spec = o2nc_tracking_spec(variant, n, c);
+            spec.claim = spec.claim.replace(
+                &format!("δ = {}/{}", O2NC_DELTA.0, O2NC_DELTA.1),
+                &format!("δ = {}/{}", delta.0, delta.1),
+            );
+            if variant == O2ncVariant::Printed {
+                spec.id = "3d.c.printed5".into();
+                spec.role = Role::NegativeControl;
+                spec.claim.push_str(": must be flagged");
+            } else {
+                spec.id = "3d.c".into();
+            }
+            spec.context = format!(
+                "R = {WIDE_RADIUS_RUNS} runs of their own: a short budget and a wide radius, where the printed algorithm's bias O(‖θ_n − w_n‖) is large; per step z = sign(Δ_n)(g_n − ∇F(w_n))/c, c = G_∞ + G_F = {c:.4}"
+            );
+            tracking::row(spec, &sample.map(|x| x.tracking), alpha)
+        })
+        .collect()
 }
 
 /// What row 3d states for one Algorithm 5 variant (range c = G_∞ + G_F).

@@ -67,3 +67,29 @@ fn tracking_row_flags_a_dropped_weight_at_long_steps() {
         ]
     );
 }
+
+/// The table's rows 3d.c and 3d.c.printed5 (Algorithm 5 over short runs with a wide radius,
+/// N = 6, δ = 2, R = 4·10⁴): the IL-correct algorithm holds and the printed one (τ_n ∼ θ_n, E11)
+/// is flagged by the same statistic.
+#[test]
+fn tracking_row_flags_the_printed_algorithm_5_at_a_wide_radius() {
+    use crate::common::q;
+    use ilopt_theory::certify::box_constants::compute;
+    use ilopt_theory::checks::statistical::wide_radius_tracking_rows;
+    let m1 = m1_tied();
+    let k = compute(
+        &m1,
+        &[q("0")],
+        Some(&q("7/8")),
+        &[[-400.0, 400.0]],
+        1e-2,
+        200_000,
+    )
+    .unwrap();
+    let rows = wide_radius_tracking_rows(&m1, &k, quick_global_constants(), table_alpha());
+    let verdicts: Vec<(&str, Verdict)> = rows.iter().map(|r| (r.id.as_str(), r.verdict)).collect();
+    assert_eq!(
+        verdicts,
+        [("3d.c", Verdict::Holds), ("3d.c.printed5", Verdict::Fails)]
+    );
+}
