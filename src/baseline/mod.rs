@@ -36,11 +36,13 @@
 
 mod given;
 mod oracle;
+mod recorded;
 mod running;
 mod terms;
 
 pub use given::Given;
 pub use oracle::Baselined;
+pub use recorded::RecordedPass;
 pub use running::RunningOptimum;
 pub use terms::DecisionTerms;
 

@@ -1,6 +1,6 @@
 //! [`Baselined`]: m trajectories per oracle call, each estimate with a baseline.
 
-use super::{Baseline, DecisionTerms, Given, RunningOptimum};
+use super::{Baseline, DecisionTerms, Given, RecordedPass, RunningOptimum};
 use crate::batched::Batched;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::Scalar;
@@ -20,11 +20,12 @@ enum Kind<S> {
     LeaveOneOut,
 }
 
-/// Reused storage of one oracle call: per trajectory its [`DecisionTerms`], the leave-one-out
-/// sums `Σ_k L_i^{(k)}`, one estimate.
+/// Reused storage of one oracle call: per trajectory its [`DecisionTerms`] or its
+/// [`RecordedPass`], the leave-one-out sums `Σ_k L_i^{(k)}`, one estimate.
 #[derive(Debug, Clone)]
 struct Buffers<S> {
     terms: Vec<DecisionTerms<S>>,
+    records: Vec<RecordedPass<S>>,
     totals: Vec<S>,
     g: Vec<S>,
 }
@@ -43,7 +44,10 @@ struct Buffers<S> {
 /// Leave-one-out: trajectory j's `b_i^{(j)} = (1/(m−1)) Σ_{k≠j} L_i^{(k)}` with `L_i^{(k)}` the
 /// loss-to-go of trajectory k at its decision i (0 where k took fewer decisions; in a weighted
 /// estimate the weighted loss-to-go). It is a function of the other trajectories only, which are
-/// independent of τ_j.
+/// independent of τ_j. The unweighted estimate takes each trajectory's plain pass with its scores
+/// recorded ([`IlProblem::recorded_estimate`]), then subtracts `Σ_i b_i^{(j)} ψ_i^{(j)}`
+/// ([`IlProblem::subtract_recorded`]); the weighted one assembles it from [`DecisionTerms`], as
+/// [`Baselined::estimate_by_terms`] does for every kind.
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
 /// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines
@@ -119,6 +123,7 @@ impl<P, S: Scalar> Baselined<P, S> {
             kind,
             buffers: RefCell::new(Buffers {
                 terms: Vec::new(),
+                records: Vec::new(),
                 totals: Vec::new(),
                 g: Vec::new(),
             }),
@@ -144,7 +149,99 @@ impl<P, S: Scalar> Baselined<P, S> {
     }
 }
 
+/// The error of a leave-one-out minibatch with fewer than two trajectories.
+fn too_few_for_leave_one_out(m: usize) -> OracleError {
+    invalid(format!(
+        "leave-one-out needs at least 2 trajectories per gradient, got {m}"
+    ))
+}
+
+/// `T_i = Σ_k L_i^{(k)}` into `totals`, over the longest trajectory's decisions (`L_i^{(k)} = 0`
+/// where trajectory k took fewer decisions).
+fn loss_to_go_totals<'a, S: Scalar + 'a>(
+    loss_to_go: impl Iterator<Item = &'a [S]> + Clone,
+    totals: &mut Vec<S>,
+) {
+    let n = loss_to_go.clone().map(<[S]>::len).max().unwrap_or(0);
+    totals.clear();
+    totals.resize(n, S::zero());
+    for l in loss_to_go {
+        for (x, y) in totals.iter_mut().zip(l) {
+            *x += y;
+        }
+    }
+}
+
 impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
+    /// The mean causal estimate over `batch` assembled from every trajectory's [`DecisionTerms`]
+    /// ([`IlProblem::decision_terms`]) for every kind of baseline: the reference route, with the
+    /// results of [`IlProblem::estimate`] (the same mathematics; in floating point up to the
+    /// order of the sums where `estimate` takes a fused pass). An estimated baseline observes
+    /// the trajectories as `estimate` does.
+    ///
+    /// # Errors
+    /// As [`IlProblem::estimate`].
+    pub fn estimate_by_terms(
+        &self,
+        theta: &DVector<S>,
+        batch: &[P::Trajectory],
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let inner = self.inner();
+        self.baselined(batch, true, |t, out| {
+            inner.decision_terms(theta, t, None, out, cost)
+        })
+    }
+
+    /// The mean leave-one-out estimate over `batch`, `(1/m) Σ_j [g_j − Σ_i b_i^{(j)} ψ_i^{(j)}]`
+    /// with `b_i^{(j)} = (T_i − L_i^{(j)})/(m − 1)`, from each trajectory's [`RecordedPass`]: one
+    /// plain pass per trajectory that records its losses-to-go and scores, then the baseline's
+    /// part subtracted from the recorded scores. No allocation per step.
+    fn leave_one_out(
+        &self,
+        theta: &DVector<S>,
+        batch: &[P::Trajectory],
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let m = batch.len();
+        if m == 0 {
+            return Err(OracleError::Trajectory("an empty minibatch".into()));
+        }
+        if m < 2 {
+            return Err(too_few_for_leave_one_out(m));
+        }
+        let inner = self.inner();
+        let mut buffers = self.buffers.borrow_mut();
+        let Buffers {
+            records, totals, ..
+        } = &mut *buffers;
+        if records.len() < m {
+            records.resize_with(m, RecordedPass::new);
+        }
+        let records = &mut records[..m];
+        for (t, r) in batch.iter().zip(records.iter_mut()) {
+            inner.recorded_estimate(theta, t, r, cost)?;
+        }
+        loss_to_go_totals(records.iter().map(|r| &r.loss_to_go[..]), totals);
+        let others = S::from_i64(m as i64 - 1);
+        let mut sum = DVector::from_element(inner.dim(), S::zero());
+        for (t, r) in batch.iter().zip(records.iter()) {
+            for (s, x) in sum.iter_mut().zip(r.estimate()) {
+                *s += x;
+            }
+            let b = |i: usize| (totals[i].clone() - r.loss_to_go(i)) / &others;
+            inner.subtract_recorded(t, r, b, sum.as_mut_slice());
+        }
+        let m = S::from_i64(m as i64);
+        for x in sum.iter_mut() {
+            *x = x.clone() / &m;
+        }
+        if !sum.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(sum)
+    }
+
     /// The mean baselined estimate over `batch`, each trajectory's terms from `fill`.
     fn baselined(
         &self,
@@ -156,8 +253,13 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         if m == 0 {
             return Err(OracleError::Trajectory("an empty minibatch".into()));
         }
+        if m < 2 && matches!(self.kind, Kind::LeaveOneOut) {
+            return Err(too_few_for_leave_one_out(m));
+        }
         let mut buffers = self.buffers.borrow_mut();
-        let Buffers { terms, totals, g } = &mut *buffers;
+        let Buffers {
+            terms, totals, g, ..
+        } = &mut *buffers;
         if terms.len() < m {
             terms.resize_with(m, DecisionTerms::new);
         }
@@ -268,6 +370,9 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
             return Err(invalid("baselines apply to the causal form of eq. 3.15"));
         }
         let inner = self.inner();
+        if matches!(self.kind, Kind::LeaveOneOut) {
+            return self.leave_one_out(theta, trajectory, cost);
+        }
         let given = match &self.kind {
             Kind::Constant(b) => Some(Given::Constant(b)),
             Kind::TimeIndexed(bs) => Some(Given::TimeIndexed(bs)),
@@ -290,9 +395,7 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
             }
             return Ok(g);
         }
-        self.baselined(trajectory, true, |t, out| {
-            inner.decision_terms(theta, t, None, out, cost)
-        })
+        self.estimate_by_terms(theta, trajectory, cost)
     }
 
     fn weighted_estimate(
