@@ -391,7 +391,8 @@ fn vec_actions_allocate_per_step() {
 
 /// The baselined oracle (`ilopt::baseline`): once its reused buffers have seen the longest
 /// trajectory, every estimate allocates one constant number of times whatever the episodes'
-/// lengths (its per-decision terms are written into those buffers, never per step).
+/// lengths (its per-decision terms, or for leave-one-out the recorded losses-to-go and scores,
+/// are written into those buffers, never per step).
 #[test]
 fn baselined_estimates_allocate_per_call_not_per_step() {
     use ilopt::algo::ConfigNumber;
@@ -416,6 +417,7 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
             },
         ),
         (2, Baseline::LeaveOneOut),
+        (3, Baseline::LeaveOneOut),
     ] {
         let p = Baselined::<_, f64>::new(cartpole(), m, &kind).unwrap();
         let mut rng = KitRng::seed_from_u64(5);

@@ -194,7 +194,9 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
     }
 
     /// The mean leave-one-out estimate over `batch`, `(1/m) Σ_j [g_j − Σ_i b_i^{(j)} ψ_i^{(j)}]`
-    /// with `b_i^{(j)} = (T_i − L_i^{(j)})/(m − 1)`, from each trajectory's [`RecordedPass`]: one
+    /// with `b_i^{(j)} = (T_i − L_i^{(j)})/(m − 1)` and `T_i = Σ_k L_i^{(k)}`, computed as
+    /// `(1/m) [Σ_j g_j − (1/(m − 1)) Σ_j Σ_i (T_i − L_i^{(j)}) ψ_i^{(j)}]` from each
+    /// trajectory's [`RecordedPass`]: one
     /// plain pass per trajectory that records its losses-to-go and scores, then the baseline's
     /// part subtracted from the recorded scores. No allocation per step.
     fn leave_one_out(
@@ -213,7 +215,10 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         let inner = self.inner();
         let mut buffers = self.buffers.borrow_mut();
         let Buffers {
-            records, totals, ..
+            records,
+            totals,
+            g: correction,
+            ..
         } = &mut *buffers;
         if records.len() < m {
             records.resize_with(m, RecordedPass::new);
@@ -223,18 +228,22 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
             inner.recorded_estimate(theta, t, r, cost)?;
         }
         loss_to_go_totals(records.iter().map(|r| &r.loss_to_go[..]), totals);
-        let others = S::from_i64(m as i64 - 1);
-        let mut sum = DVector::from_element(inner.dim(), S::zero());
+        // Σ_j Σ_i (m − 1) b_i^{(j)} ψ_i^{(j)} is gathered with a minus sign in `correction`, and
+        // divided by m − 1 once.
+        let d = inner.dim();
+        correction.clear();
+        correction.resize(d, S::zero());
+        let mut sum = DVector::from_element(d, S::zero());
         for (t, r) in batch.iter().zip(records.iter()) {
             for (s, x) in sum.iter_mut().zip(r.estimate()) {
                 *s += x;
             }
-            let b = |i: usize| (totals[i].clone() - r.loss_to_go(i)) / &others;
-            inner.subtract_recorded(t, r, b, sum.as_mut_slice());
+            let b = |i: usize| totals[i].clone() - &r.loss_to_go[i];
+            inner.subtract_recorded(t, r, b, correction);
         }
-        let m = S::from_i64(m as i64);
-        for x in sum.iter_mut() {
-            *x = x.clone() / &m;
+        let (others, m) = (S::from_i64(m as i64 - 1), S::from_i64(m as i64));
+        for (x, c) in sum.iter_mut().zip(correction.iter()) {
+            *x = (x.clone() + c.clone() / &others) / &m;
         }
         if !sum.iter().all(Scalar::is_finite) {
             return Err(OracleError::NonFinite("the baselined gradient estimate"));

@@ -236,7 +236,8 @@ fn causal_sum_recording_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     Ok(true)
 }
 
-/// `g −= Σ_{i<n} b(i) c_i φ_i` with `N` features known at compile time (`g` in an `[S; N]` local).
+/// `g −= Σ_{i<n} b(i) c_i φ_i` with `N` features known at compile time: even and odd decisions
+/// in two `[S; N]` locals (two independent chains of additions), added to `g` at the end.
 #[inline(never)]
 fn subtract_fixed<S: Scalar, const N: usize>(
     features: &[S],
@@ -245,15 +246,27 @@ fn subtract_fixed<S: Scalar, const N: usize>(
     mut b: impl FnMut(usize) -> S,
     g: &mut [S],
 ) {
-    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
+    let mut even: [S; N] = std::array::from_fn(|_| S::zero());
+    let mut odd: [S; N] = std::array::from_fn(|_| S::zero());
     let (rows, _) = features.as_chunks::<N>();
-    for (i, (phi, c)) in rows.iter().zip(coefficients).take(n).enumerate() {
-        let bc = b(i) * c;
-        for (a, x) in acc.iter_mut().zip(phi) {
-            *a -= bc.clone() * x;
+    let n = n.min(rows.len()).min(coefficients.len());
+    let (pairs, last) = rows[..n].as_chunks::<2>();
+    for (k, (pair, c)) in pairs.iter().zip(coefficients.chunks_exact(2)).enumerate() {
+        let (b0, b1) = (b(2 * k) * &c[0], b(2 * k + 1) * &c[1]);
+        for ((e, o), (x0, x1)) in even.iter_mut().zip(odd.iter_mut()).zip(pair[0].iter().zip(&pair[1])) {
+            *e += b0.clone() * x0;
+            *o += b1.clone() * x1;
         }
     }
-    g.clone_from_slice(&acc);
+    if let Some(phi) = last.first() {
+        let bc = b(n - 1) * &coefficients[n - 1];
+        for (e, x) in even.iter_mut().zip(phi) {
+            *e += bc.clone() * x;
+        }
+    }
+    for ((gj, e), o) in g.iter_mut().zip(even).zip(odd) {
+        *gj -= e + o;
+    }
 }
 
 impl<S: Real> EstimatorKernel<S> for Logistic {
