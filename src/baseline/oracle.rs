@@ -156,19 +156,45 @@ fn too_few_for_leave_one_out(m: usize) -> OracleError {
     ))
 }
 
-/// `T_i = Σ_k L_i^{(k)}` into `totals`, over the longest trajectory's decisions (`L_i^{(k)} = 0`
-/// where trajectory k took fewer decisions).
-fn loss_to_go_totals<'a, S: Scalar + 'a>(
-    loss_to_go: impl Iterator<Item = &'a [S]> + Clone,
+/// `S_t = Σ_k l_t^{(k)}` into `totals`, step by step over the longest list of per-step losses
+/// (`l_t^{(k)} = 0` beyond trajectory k's steps).
+fn step_totals<'a, S: Scalar + 'a>(
+    losses: impl Iterator<Item = &'a [S]> + Clone,
     totals: &mut Vec<S>,
 ) {
-    let n = loss_to_go.clone().map(<[S]>::len).max().unwrap_or(0);
+    let n = losses.clone().map(<[S]>::len).max().unwrap_or(0);
     totals.clear();
     totals.resize(n, S::zero());
-    for l in loss_to_go {
+    for l in losses {
         for (x, y) in totals.iter_mut().zip(l) {
             *x += y;
         }
+    }
+}
+
+/// Trajectory j's `(m − 1) b_i^{(j)} = Σ_{k≠j} L_i^{(k)} = Σ_{t>i} (S_t − l_t^{(j)})` for its `n`
+/// scored decisions, from the step totals `S_t` and its own per-step losses `own`: a running sum
+/// from the last step, for calls with i = n − 1 down to 0 (the order of
+/// [`IlProblem::subtract_recorded`]).
+fn others_loss_to_go<'a, S: Scalar>(
+    totals: &'a [S],
+    own: &'a [S],
+    n: usize,
+) -> impl FnMut(usize) -> S + 'a {
+    let other = move |t: usize| match own.get(t) {
+        Some(l) => totals[t].clone() - l,
+        None => totals[t].clone(),
+    };
+    // The steps after the last scored decision: Σ_{t≥n} (S_t − l_t^{(j)}).
+    let mut acc = (n..totals.len()).rev().fold(S::zero(), |a, t| a + other(t));
+    let mut pending = S::zero();
+    let mut expected = n;
+    move |i| {
+        expected -= 1;
+        debug_assert_eq!(i, expected, "decisions from the last to the first");
+        acc += &pending;
+        pending = other(i);
+        acc.clone()
     }
 }
 
@@ -194,8 +220,8 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
     }
 
     /// The mean leave-one-out estimate over `batch`, `(1/m) Σ_j [g_j − Σ_i b_i^{(j)} ψ_i^{(j)}]`
-    /// with `b_i^{(j)} = (T_i − L_i^{(j)})/(m − 1)` and `T_i = Σ_k L_i^{(k)}`, computed as
-    /// `(1/m) [Σ_j g_j − (1/(m − 1)) Σ_j Σ_i (T_i − L_i^{(j)}) ψ_i^{(j)}]` from each
+    /// with `b_i^{(j)} = (1/(m − 1)) Σ_{k≠j} L_i^{(k)}`, computed as
+    /// `(1/m) [Σ_j g_j − (1/(m − 1)) Σ_j Σ_i (Σ_{k≠j} L_i^{(k)}) ψ_i^{(j)}]` from each
     /// trajectory's [`RecordedPass`]: one
     /// plain pass per trajectory that records its losses-to-go and scores, then the baseline's
     /// part subtracted from the recorded scores. No allocation per step.
@@ -227,7 +253,7 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         for (t, r) in batch.iter().zip(records.iter_mut()) {
             inner.recorded_estimate(theta, t, r, cost)?;
         }
-        loss_to_go_totals(records.iter().map(|r| &r.loss_to_go[..]), totals);
+        step_totals(records.iter().map(RecordedPass::losses), totals);
         // Σ_j Σ_i (m − 1) b_i^{(j)} ψ_i^{(j)} is gathered with a minus sign in `correction`, and
         // divided by m − 1 once.
         let d = inner.dim();
@@ -238,7 +264,7 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
             for (s, x) in sum.iter_mut().zip(r.estimate()) {
                 *s += x;
             }
-            let b = |i: usize| totals[i].clone() - &r.loss_to_go[i];
+            let b = others_loss_to_go(totals, r.losses(), r.decisions());
             inner.subtract_recorded(t, r, b, correction);
         }
         let (others, m) = (S::from_i64(m as i64 - 1), S::from_i64(m as i64));

@@ -5,8 +5,9 @@ use super::DecisionTerms;
 use crate::scalar::Scalar;
 
 /// The causal estimator of eq. 3.15 on one trajectory, `g = Σ_t [∇l_t + l_t Σ_{i<t} ψ_i]`, with
-/// the loss-to-go `L_i = Σ_{t>i} l_t` of every scored decision (the absorbing tail included) and a
-/// record of the scores ψ_i, so that `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) can be formed
+/// the per-step losses `l_t` (the absorbing tail as one more step), from which the loss-to-go of
+/// decision i is `L_i = Σ_{t>i} l_t`, the number of scored decisions, and a record of the scores
+/// ψ_i, so that `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) can be formed
 /// for baselines b_i known only after every trajectory's pass — leave-one-out, where
 /// `b_i^{(j)} = (Σ_{k≠j} L_i^{(k)})/(m − 1)`.
 ///
@@ -18,8 +19,10 @@ use crate::scalar::Scalar;
 pub struct RecordedPass<S> {
     /// g, d entries.
     pub(crate) estimate: Vec<S>,
-    /// L_1, …, L_n of the scored decisions.
-    pub(crate) loss_to_go: Vec<S>,
+    /// l_t per step, then the absorbing tail's `L_abs` if any.
+    pub(crate) losses: Vec<S>,
+    /// The number of scored decisions.
+    pub(crate) decisions: usize,
     /// The scores ψ_i in the filling problem's form.
     pub(crate) scores: Vec<S>,
     /// Whether `scores` holds ψ_i as rows of d entries (the default form).
@@ -39,7 +42,8 @@ impl<S: Scalar> RecordedPass<S> {
     pub fn new() -> Self {
         Self {
             estimate: Vec::new(),
-            loss_to_go: Vec::new(),
+            losses: Vec::new(),
+            decisions: 0,
             scores: Vec::new(),
             score_rows: true,
             terms: DecisionTerms::new(),
@@ -53,12 +57,13 @@ impl<S: Scalar> RecordedPass<S> {
 
     /// The number n of scored decisions.
     pub fn decisions(&self) -> usize {
-        self.loss_to_go.len()
+        self.decisions
     }
 
-    /// `L_i = Σ_{t>i} l_t` (0-based `i`), the absorbing tail included.
-    pub fn loss_to_go(&self, i: usize) -> &S {
-        &self.loss_to_go[i]
+    /// The per-step losses `l_t` (0-based t), steps after the last decision included: `L_i` is
+    /// the sum of the entries after entry i.
+    pub fn losses(&self) -> &[S] {
+        &self.losses
     }
 
     /// The per-decision terms to fill for [`RecordedPass::fill_from_terms`].
@@ -66,8 +71,8 @@ impl<S: Scalar> RecordedPass<S> {
         &mut self.terms
     }
 
-    /// g, every `L_i` and ψ_i as rows of d entries from the (unweighted) [`DecisionTerms`] of
-    /// [`RecordedPass::terms_mut`]: `g = D + Σ_i L_i ψ_i`.
+    /// g, the per-step losses and ψ_i as rows of d entries from the (unweighted)
+    /// [`DecisionTerms`] of [`RecordedPass::terms_mut`]: `g = D + Σ_i L_i ψ_i`.
     ///
     /// # Panics
     /// If the terms carry importance weights.
@@ -77,13 +82,13 @@ impl<S: Scalar> RecordedPass<S> {
             t.scale().is_none() && t.prefix_weight(0).is_none(),
             "recorded pass: unweighted terms only"
         );
+        self.losses.clear();
+        self.losses.extend_from_slice(t.step_losses());
+        self.decisions = t.decisions();
         t.finish();
         self.estimate.clear();
         self.estimate.resize(t.dim(), S::zero());
         t.estimate_into(|_| None, &mut self.estimate);
-        self.loss_to_go.clear();
-        self.loss_to_go
-            .extend((0..t.decisions()).map(|i| t.loss_to_go(i)));
         self.scores.clear();
         for i in 0..t.decisions() {
             self.scores.extend_from_slice(t.score(i));
@@ -91,7 +96,8 @@ impl<S: Scalar> RecordedPass<S> {
         self.score_rows = true;
     }
 
-    /// `g −= Σ_{i<n} b(i) ψ_i` over the n scored decisions, for scores stored as rows.
+    /// `g −= Σ_{i<n} b(i) ψ_i` over the n scored decisions, for scores stored as rows; `b` is
+    /// called once per decision, from the last to the first.
     ///
     /// # Panics
     /// If the scores are not stored as rows.

@@ -150,7 +150,9 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// `g −= Σ_{i<n} b(i) ψ_i` (0-based i), the baseline's part of `g_b = g − Σ_i b_i ψ_i`
     /// ([`crate::baseline`]), with ψ_i read from the `scores` that
     /// [`EstimatorKernel::causal_sum_recorded`] wrote for the same `features` (`n` at most the
-    /// number of decisions recorded). The default reads rows of [`Policy::param_dim`] entries.
+    /// number of decisions recorded). `b` is called once per decision, from the last to the first
+    /// (so that it may compute a loss-to-go as it goes). The default reads rows of
+    /// [`Policy::param_dim`] entries.
     fn subtract_scores_trusted(
         &self,
         features: &[S],
@@ -202,7 +204,8 @@ where
     Ok(())
 }
 
-/// `g −= Σ_{i<n} b(i) ψ_i` for ψ_i stored as consecutive rows of `d` entries.
+/// `g −= Σ_{i<n} b(i) ψ_i` for ψ_i stored as consecutive rows of `d` entries, `b` called from the
+/// last decision to the first.
 pub(crate) fn subtract_score_rows<S: Scalar>(
     scores: &[S],
     d: usize,
@@ -210,7 +213,8 @@ pub(crate) fn subtract_score_rows<S: Scalar>(
     mut b: impl FnMut(usize) -> S,
     g: &mut [S],
 ) {
-    for (i, row) in scores.chunks_exact(d.max(1)).take(n).enumerate() {
+    let rows = scores.chunks_exact(d.max(1)).take(n).enumerate();
+    for (i, row) in rows.rev() {
         let bi = b(i);
         for (gj, pj) in g.iter_mut().zip(row) {
             *gj -= bi.clone() * pj;

@@ -236,8 +236,9 @@ fn causal_sum_recording_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     Ok(true)
 }
 
-/// `g −= Σ_{i<n} b(i) c_i φ_i` with `N` features known at compile time: even and odd decisions
-/// in two `[S; N]` locals (two independent chains of additions), added to `g` at the end.
+/// `g −= Σ_{i<n} b(i) c_i φ_i` with `N` features known at compile time, `b` called from the last
+/// decision to the first: decisions taken in pairs into two `[S; N]` locals (two independent
+/// chains of additions), added to `g` at the end.
 #[inline(never)]
 fn subtract_fixed<S: Scalar, const N: usize>(
     features: &[S],
@@ -246,26 +247,30 @@ fn subtract_fixed<S: Scalar, const N: usize>(
     mut b: impl FnMut(usize) -> S,
     g: &mut [S],
 ) {
-    let mut even: [S; N] = std::array::from_fn(|_| S::zero());
-    let mut odd: [S; N] = std::array::from_fn(|_| S::zero());
+    let mut second: [S; N] = std::array::from_fn(|_| S::zero());
+    let mut first: [S; N] = std::array::from_fn(|_| S::zero());
     let (rows, _) = features.as_chunks::<N>();
     let n = n.min(rows.len()).min(coefficients.len());
-    let (pairs, last) = rows[..n].as_chunks::<2>();
-    for (k, (pair, c)) in pairs.iter().zip(coefficients.chunks_exact(2)).enumerate() {
-        let (b0, b1) = (b(2 * k) * &c[0], b(2 * k + 1) * &c[1]);
-        for ((e, o), (x0, x1)) in even.iter_mut().zip(odd.iter_mut()).zip(pair[0].iter().zip(&pair[1])) {
-            *e += b0.clone() * x0;
-            *o += b1.clone() * x1;
+    let (head, pairs) = rows[..n].as_rchunks::<2>();
+    let (c_head, c_pairs) = coefficients[..n].split_at(head.len());
+    let starts = (head.len()..n).step_by(2);
+    for ((pair, c), i) in pairs.iter().zip(c_pairs.chunks_exact(2)).zip(starts).rev() {
+        let b1 = b(i + 1) * &c[1];
+        let b0 = b(i) * &c[0];
+        let terms = first.iter_mut().zip(second.iter_mut());
+        for ((f, s), (x0, x1)) in terms.zip(pair[0].iter().zip(&pair[1])) {
+            *s += b1.clone() * x1;
+            *f += b0.clone() * x0;
         }
     }
-    if let Some(phi) = last.first() {
-        let bc = b(n - 1) * &coefficients[n - 1];
-        for (e, x) in even.iter_mut().zip(phi) {
-            *e += bc.clone() * x;
+    if let (Some(phi), Some(c)) = (head.first(), c_head.first()) {
+        let bc = b(0) * c;
+        for (f, x) in first.iter_mut().zip(phi) {
+            *f += bc.clone() * x;
         }
     }
-    for ((gj, e), o) in g.iter_mut().zip(even).zip(odd) {
-        *gj -= e + o;
+    for ((gj, f), s) in g.iter_mut().zip(first).zip(second) {
+        *gj -= f + s;
     }
 }
 
@@ -388,7 +393,8 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     }
 
     /// `g −= Σ_{i<n} b(i) c_i φ_i` from the coefficients of
-    /// [`EstimatorKernel::causal_sum_recorded`]; `g` in registers for 1 to 8 features.
+    /// [`EstimatorKernel::causal_sum_recorded`], `b` called from the last decision to the first;
+    /// in registers for 1 to 8 features.
     fn subtract_scores_trusted(
         &self,
         features: &[S],
@@ -407,8 +413,8 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
             };
         }
         fixed!(1 2 3 4 5 6 7 8);
-        let rows = features.chunks_exact(dim.max(1));
-        for (i, (phi, c)) in rows.zip(scores).take(n).enumerate() {
+        let rows = features.chunks_exact(dim.max(1)).zip(scores).take(n);
+        for (i, (phi, c)) in rows.enumerate().rev() {
             let bc = b(i) * c;
             for (gj, x) in g.iter_mut().zip(phi) {
                 *gj -= bc.clone() * x;

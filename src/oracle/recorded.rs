@@ -11,8 +11,8 @@ use std::borrow::Borrow;
 
 /// Fills `out` on a trajectory whose θ and features are validated: the plain causal estimate
 /// `g = Σ_t [∇l_t + l_t Σ_{i<t} ψ_i]` plus, when it absorbed, `L_abs Σ_{i≤n} ψ_i` (as in
-/// `causal_pass`); the loss-to-go `L_i = Σ_{t>i} l_t + L_abs` of the scored decisions (1..n−1;
-/// 1..n when it absorbed); and the scores in the policy's form
+/// `causal_pass`); the per-step losses `l_t`, then `L_abs`; the number of scored decisions (n − 1;
+/// n when it absorbed); and the scores in the policy's form
 /// ([`EstimatorKernel::causal_sum_recorded`]).
 pub(crate) fn recorded_pass<S, P, L, A>(
     policy: &P,
@@ -36,16 +36,10 @@ where
             t.labels,
             t.actions,
             &mut out.estimate,
-            &mut out.loss_to_go,
+            &mut out.losses,
             &mut out.scores,
         )
         .map_err(policy_error)?;
-    // The per-step losses become suffix sums in place, in the order of `DecisionTerms::finish`.
-    let mut acc = t.absorbed.cloned().unwrap_or_else(S::zero);
-    for l in out.loss_to_go.iter_mut().rev() {
-        let step = std::mem::replace(l, acc.clone());
-        acc += step;
-    }
     let scored = if let Some(tail) = t.absorbed {
         policy.subtract_scores_trusted(
             t.feature_data,
@@ -54,10 +48,11 @@ where
             |_| -tail.clone(),
             &mut out.estimate,
         );
+        out.losses.push(tail.clone());
         n
     } else {
         n - 1
     };
-    out.loss_to_go.truncate(scored);
+    out.decisions = scored;
     Ok(())
 }

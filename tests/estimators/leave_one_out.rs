@@ -62,7 +62,12 @@ fn compare_routes<S, P>(
         }
         // One trajectory has no other to take its baseline from: an error on both routes.
         for r in [
-            o.estimate(theta, &batch[..1].to_vec(), EstimatorForm::Causal, &mut Cost::default()),
+            o.estimate(
+                theta,
+                &batch[..1].to_vec(),
+                EstimatorForm::Causal,
+                &mut Cost::default(),
+            ),
             o.estimate_by_terms(theta, &batch[..1], &mut Cost::default()),
         ] {
             assert!(
@@ -94,8 +99,12 @@ macro_rules! toy_leave_one_out_matches_terms {
                 let mut rng = KitRng::seed_from_u64(21);
                 let batch: Vec<ToyTrajectory> = (0..24)
                     .map(|_| {
-                        pf.rollout(&Behaviour::Learner(&theta_f), &mut rng, &mut Cost::default())
-                            .unwrap()
+                        pf.rollout(
+                            &Behaviour::Learner(&theta_f),
+                            &mut rng,
+                            &mut Cost::default(),
+                        )
+                        .unwrap()
                     })
                     .collect();
                 let p = ToyProblem::<$s>::new(&mdp);
@@ -105,11 +114,24 @@ macro_rules! toy_leave_one_out_matches_terms {
     };
 }
 
-toy_leave_one_out_matches_terms!(toy_leave_one_out_fast_route_equals_terms_exactly, BigRational, equal);
-toy_leave_one_out_matches_terms!(toy_leave_one_out_fast_route_agrees_with_terms_in_f64, f64, close);
+toy_leave_one_out_matches_terms!(
+    toy_leave_one_out_fast_route_equals_terms_exactly,
+    BigRational,
+    equal
+);
+toy_leave_one_out_matches_terms!(
+    toy_leave_one_out_fast_route_agrees_with_terms_in_f64,
+    f64,
+    close
+);
 
 /// `n` roll-outs of `p` at θ.
-fn rollouts<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>, n: usize, seed: u64) -> Vec<P::Trajectory> {
+fn rollouts<P: IlProblem<f64>>(
+    p: &P,
+    theta: &DVector<f64>,
+    n: usize,
+    seed: u64,
+) -> Vec<P::Trajectory> {
     let mut rng = KitRng::seed_from_u64(seed);
     (0..n)
         .map(|_| {
@@ -147,7 +169,11 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
                 .unwrap();
             if t.absorbed.is_none() {
                 assert_eq!(
-                    recorded.estimate().iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                    recorded
+                        .estimate()
+                        .iter()
+                        .map(|x| x.to_bits())
+                        .collect::<Vec<_>>(),
                     plain.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
                     "{what}: the recorded pass's estimate is the plain one"
                 );
@@ -159,8 +185,15 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
     let lqr = || CartPoleTask::<f64>::with_lqr().unwrap();
     let logistic = || Logistic::new(cartpole::FEATURES).unwrap();
     let balancing = DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1]);
-    check(&TaskProblem::episodic(lqr(), logistic()), &balancing, "logistic, episodic");
-    for (after_end, what) in [(AfterEnd::Reset, "logistic, reset"), (AfterEnd::Absorb, "logistic, absorb")] {
+    check(
+        &TaskProblem::episodic(lqr(), logistic()),
+        &balancing,
+        "logistic, episodic",
+    );
+    for (after_end, what) in [
+        (AfterEnd::Reset, "logistic, reset"),
+        (AfterEnd::Absorb, "logistic, absorb"),
+    ] {
         let p = TaskProblem::fixed(lqr(), logistic(), 150, after_end).unwrap();
         check(&p, &DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]), what);
     }
@@ -186,7 +219,9 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
     w[obstacle::FEATURES + 1] = 1.0;
     let w = DVector::from_vec(w);
     assert!(
-        rollouts(&obstacle, &w, 12, 8).iter().any(|t| t.absorbed.is_some()),
+        rollouts(&obstacle, &w, 12, 8)
+            .iter()
+            .any(|t| t.absorbed.is_some()),
         "an absorbing tail among the obstacle trajectories"
     );
     check(&obstacle, &w, "linear-Gaussian, obstacle, absorb");
