@@ -270,14 +270,15 @@ pub trait IlProblem<S: Scalar> {
         Ok(())
     }
 
-    /// `g −= Σ_i b(i) ψ_i` over the scored decisions of `recorded`, which
-    /// [`IlProblem::recorded_estimate`] filled on `trajectory` (0-based i): the baseline's part of
-    /// `g_b = g − Σ_i b_i ψ_i`. The default reads ψ_i as rows of d entries.
+    /// `g −= Σ_i b_i ψ_i` over the n scored decisions of `recorded`, which
+    /// [`IlProblem::recorded_estimate`] filled on `trajectory`: the baseline's part of
+    /// `g_b = g − Σ_i b_i ψ_i`. `b` yields the baselines from the last decision to the first,
+    /// `b_{n−1}, …, b_0` (0-based). The default reads ψ_i as rows of d entries.
     fn subtract_recorded(
         &self,
         trajectory: &Self::Trajectory,
         recorded: &RecordedPass<S>,
-        b: impl FnMut(usize) -> S,
+        b: impl Iterator<Item = S>,
         g: &mut [S],
     ) {
         let _ = trajectory;

@@ -173,29 +173,27 @@ fn step_totals<'a, S: Scalar + 'a>(
 }
 
 /// Trajectory j's `(m − 1) b_i^{(j)} = Σ_{k≠j} L_i^{(k)} = Σ_{t>i} (S_t − l_t^{(j)})` for its `n`
-/// scored decisions, from the step totals `S_t` and its own per-step losses `own`: a running sum
-/// from the last step, for calls with i = n − 1 down to 0 (the order of
-/// [`IlProblem::subtract_recorded`]).
+/// scored decisions, from the step totals `S_t` and its own per-step losses `own`, yielded from
+/// the last decision to the first (the order of [`IlProblem::subtract_recorded`]) by a running
+/// sum from the last step.
 fn others_loss_to_go<'a, S: Scalar>(
     totals: &'a [S],
     own: &'a [S],
     n: usize,
-) -> impl FnMut(usize) -> S + 'a {
+) -> impl Iterator<Item = S> + 'a {
     let other = move |t: usize| match own.get(t) {
         Some(l) => totals[t].clone() - l,
         None => totals[t].clone(),
     };
     // The steps after the last scored decision: Σ_{t≥n} (S_t − l_t^{(j)}).
-    let mut acc = (n..totals.len()).rev().fold(S::zero(), |a, t| a + other(t));
-    let mut pending = S::zero();
-    let mut expected = n;
-    move |i| {
-        expected -= 1;
-        debug_assert_eq!(i, expected, "decisions from the last to the first");
-        acc += &pending;
-        pending = other(i);
-        acc.clone()
-    }
+    let after = (n..totals.len()).rev().fold(S::zero(), |a, t| a + other(t));
+    // Decision i's sum, then step i's term for decision i − 1.
+    let (totals, own) = (&totals[..n], &own[..n]);
+    totals.iter().zip(own).rev().scan(after, |acc, (s, l)| {
+        let c = acc.clone();
+        *acc += s.clone() - l;
+        Some(c)
+    })
 }
 
 impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {

@@ -96,12 +96,12 @@ impl<S: Scalar> RecordedPass<S> {
         self.score_rows = true;
     }
 
-    /// `g −= Σ_{i<n} b(i) ψ_i` over the n scored decisions, for scores stored as rows; `b` is
-    /// called once per decision, from the last to the first.
+    /// `g −= Σ_{i<n} b_i ψ_i` over the n scored decisions, for scores stored as rows; `b` yields
+    /// `b_{n−1}, …, b_0`.
     ///
     /// # Panics
     /// If the scores are not stored as rows.
-    pub fn subtract_rows(&self, b: impl FnMut(usize) -> S, g: &mut [S]) {
+    pub fn subtract_rows(&self, b: impl Iterator<Item = S>, g: &mut [S]) {
         assert!(self.score_rows, "recorded pass: scores not stored as rows");
         crate::oracle::kernel::subtract_score_rows(
             &self.scores,

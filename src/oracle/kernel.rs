@@ -147,18 +147,18 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         causal_sum_recording_rows(self, theta, features, labels, actions, g, losses, scores)
     }
 
-    /// `g −= Σ_{i<n} b(i) ψ_i` (0-based i), the baseline's part of `g_b = g − Σ_i b_i ψ_i`
+    /// `g −= Σ_{i<n} b_i ψ_i` (0-based i), the baseline's part of `g_b = g − Σ_i b_i ψ_i`
     /// ([`crate::baseline`]), with ψ_i read from the `scores` that
     /// [`EstimatorKernel::causal_sum_recorded`] wrote for the same `features` (`n` at most the
-    /// number of decisions recorded). `b` is called once per decision, from the last to the first
-    /// (so that it may compute a loss-to-go as it goes). The default reads rows of
-    /// [`Policy::param_dim`] entries.
+    /// number of decisions recorded). `b` yields the baselines from the last decision to the
+    /// first, `b_{n−1}, …, b_0` (so that a loss-to-go can be summed as it goes); decisions it has
+    /// no item for are left out. The default reads rows of [`Policy::param_dim`] entries.
     fn subtract_scores_trusted(
         &self,
         features: &[S],
         scores: &[S],
         n: usize,
-        b: impl FnMut(usize) -> S,
+        b: impl Iterator<Item = S>,
         g: &mut [S],
     ) {
         let _ = features;
@@ -204,18 +204,17 @@ where
     Ok(())
 }
 
-/// `g −= Σ_{i<n} b(i) ψ_i` for ψ_i stored as consecutive rows of `d` entries, `b` called from the
-/// last decision to the first.
+/// `g −= Σ_{i<n} b_i ψ_i` for ψ_i stored as consecutive rows of `d` entries, `b` yielding
+/// `b_{n−1}, …, b_0`.
 pub(crate) fn subtract_score_rows<S: Scalar>(
     scores: &[S],
     d: usize,
     n: usize,
-    mut b: impl FnMut(usize) -> S,
+    b: impl Iterator<Item = S>,
     g: &mut [S],
 ) {
-    let rows = scores.chunks_exact(d.max(1)).take(n).enumerate();
-    for (i, row) in rows.rev() {
-        let bi = b(i);
+    let rows = scores.chunks_exact(d.max(1)).take(n);
+    for (row, bi) in rows.rev().zip(b) {
         for (gj, pj) in g.iter_mut().zip(row) {
             *gj -= bi.clone() * pj;
         }

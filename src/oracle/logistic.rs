@@ -236,15 +236,15 @@ fn causal_sum_recording_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     Ok(true)
 }
 
-/// `g −= Σ_{i<n} b(i) c_i φ_i` with `N` features known at compile time, `b` called from the last
-/// decision to the first: decisions taken in pairs into two `[S; N]` locals (two independent
-/// chains of additions), added to `g` at the end.
+/// `g −= Σ_{i<n} b_i c_i φ_i` with `N` features known at compile time, `b` yielding
+/// `b_{n−1}, …, b_0`: decisions taken in pairs into two `[S; N]` locals (two independent chains
+/// of additions), added to `g` at the end.
 #[inline(never)]
 fn subtract_fixed<S: Scalar, const N: usize>(
     features: &[S],
     coefficients: &[S],
     n: usize,
-    mut b: impl FnMut(usize) -> S,
+    mut b: impl Iterator<Item = S>,
     g: &mut [S],
 ) {
     let mut second: [S; N] = std::array::from_fn(|_| S::zero());
@@ -253,18 +253,19 @@ fn subtract_fixed<S: Scalar, const N: usize>(
     let n = n.min(rows.len()).min(coefficients.len());
     let (head, pairs) = rows[..n].as_rchunks::<2>();
     let (c_head, c_pairs) = coefficients[..n].split_at(head.len());
-    let starts = (head.len()..n).step_by(2);
-    for ((pair, c), i) in pairs.iter().zip(c_pairs.chunks_exact(2)).zip(starts).rev() {
-        let b1 = b(i + 1) * &c[1];
-        let b0 = b(i) * &c[0];
+    for (pair, c) in pairs.iter().zip(c_pairs.as_chunks::<2>().0).rev() {
+        let (Some(b1), Some(b0)) = (b.next(), b.next()) else {
+            break;
+        };
+        let (b1, b0) = (b1 * &c[1], b0 * &c[0]);
         let terms = first.iter_mut().zip(second.iter_mut());
         for ((f, s), (x0, x1)) in terms.zip(pair[0].iter().zip(&pair[1])) {
             *s += b1.clone() * x1;
             *f += b0.clone() * x0;
         }
     }
-    if let (Some(phi), Some(c)) = (head.first(), c_head.first()) {
-        let bc = b(0) * c;
+    if let (Some(phi), Some(c), Some(b0)) = (head.first(), c_head.first(), b.next()) {
+        let bc = b0 * c;
         for (f, x) in first.iter_mut().zip(phi) {
             *f += bc.clone() * x;
         }
@@ -392,15 +393,15 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         Ok(())
     }
 
-    /// `g −= Σ_{i<n} b(i) c_i φ_i` from the coefficients of
-    /// [`EstimatorKernel::causal_sum_recorded`], `b` called from the last decision to the first;
-    /// in registers for 1 to 8 features.
+    /// `g −= Σ_{i<n} b_i c_i φ_i` from the coefficients of
+    /// [`EstimatorKernel::causal_sum_recorded`], `b` yielding `b_{n−1}, …, b_0`; in registers for
+    /// 1 to 8 features.
     fn subtract_scores_trusted(
         &self,
         features: &[S],
         scores: &[S],
         n: usize,
-        mut b: impl FnMut(usize) -> S,
+        b: impl Iterator<Item = S>,
         g: &mut [S],
     ) {
         let dim = Policy::<S>::feature_dim(self);
@@ -414,8 +415,8 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         }
         fixed!(1 2 3 4 5 6 7 8);
         let rows = features.chunks_exact(dim.max(1)).zip(scores).take(n);
-        for (i, (phi, c)) in rows.enumerate().rev() {
-            let bc = b(i) * c;
+        for ((phi, c), bi) in rows.rev().zip(b) {
+            let bc = bi * c;
             for (gj, x) in g.iter_mut().zip(phi) {
                 *gj -= bc.clone() * x;
             }

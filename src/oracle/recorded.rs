@@ -45,7 +45,7 @@ where
             t.feature_data,
             &out.scores,
             n,
-            |_| -tail.clone(),
+            std::iter::repeat_n(-tail.clone(), n),
             &mut out.estimate,
         );
         out.losses.push(tail.clone());

@@ -324,7 +324,7 @@ where
         &self,
         trajectory: &Self::Trajectory,
         recorded: &RecordedPass<S>,
-        b: impl FnMut(usize) -> S,
+        b: impl Iterator<Item = S>,
         g: &mut [S],
     ) {
         if recorded.score_rows {
