@@ -187,7 +187,7 @@ fn others_loss_to_go<'a, S: Scalar>(
     };
     // The steps after the last scored decision: Σ_{t≥n} (S_t − l_t^{(j)}).
     let after = (n..totals.len()).rev().fold(S::zero(), |a, t| a + other(t));
-    // Decision i's sum, then step i's term for decision i − 1.
+    // Yields decision i's sum, then adds step i's term, which decision i − 1's sum includes.
     let (totals, own) = (&totals[..n], &own[..n]);
     totals.iter().zip(own).rev().scan(after, |acc, (s, l)| {
         let c = acc.clone();
