@@ -8,7 +8,8 @@
 //! 3. the VO expert alone (solves per second);
 //! 4. the baselined causal estimate (`ilopt::baseline`) on the CartPole trajectories of (1): one
 //!    constant baseline (m = 1) and leave-one-out over pairs (m = 2), beside the plain estimate of
-//!    the same trajectories; and roll-out + estimate with the constant baseline.
+//!    the same trajectories; and roll-out + estimate with the constant baseline, and with
+//!    leave-one-out over pairs beside the plain mean of pairs.
 //! 5. the fixed-horizon objective (streams of T decisions, reset or absorbing) through the same
 //!    roll-out and estimator: CartPole (LQR labels) with resets and absorbing ends, CartPole with
 //!    the experiments' PPO labels and softmax learner, the obstacle task with absorbing ends.
@@ -168,6 +169,17 @@ fn cartpole(c: &mut Criterion) {
         "roll-out + causal estimate, constant baseline, generic (f64)",
         |b| b.iter(|| oracle_pass(&constant, black_box(&theta))),
     );
+    // Pairs rolled out per seed: the whole oracle call with leave-one-out against the plain mean.
+    g.throughput(Throughput::Elements(steps_of(&loo, &theta)));
+    g.bench_function(
+        "roll-out + causal estimate, pairs, no baseline, generic (f64)",
+        |b| b.iter(|| oracle_pass(&plain_pairs, black_box(&theta))),
+    );
+    g.bench_function(
+        "roll-out + causal estimate, pairs, leave-one-out baseline, generic (f64)",
+        |b| b.iter(|| oracle_pass(&loo, black_box(&theta))),
+    );
+    g.throughput(Throughput::Elements(steps_of(&generic, &theta)));
 
     let gain = *LqrExpert::cartpole().unwrap().gain();
     let fast = Specialised {

@@ -14,7 +14,7 @@
 //! Every call adds what it cost to a [`Cost`], so "gradient calls" (Tables 4.1, 4.3) mean one thing
 //! across algorithms.
 
-use crate::baseline::{DecisionTerms, Given};
+use crate::baseline::{DecisionTerms, Given, RecordedPass};
 use crate::scalar::{Scalar, Undecidable};
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -243,6 +243,46 @@ pub trait IlProblem<S: Scalar> {
         let mut g = vec![S::zero(); theta.len()];
         terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
         Ok(DVector::from_vec(g))
+    }
+
+    /// The causal estimator of eq. 3.15 at θ on one trajectory with its scores recorded
+    /// ([`RecordedPass`]): the plain estimate g, every scored decision's loss-to-go `L_i`, and the
+    /// scores ψ_i in the problem's own form, so that [`IlProblem::subtract_recorded`] can form
+    /// `g_b = g − Σ_i b_i ψ_i` for baselines known only after the pass (leave-one-out in
+    /// [`crate::baseline::Baselined`]). Counts the same gradient evaluations as
+    /// [`IlProblem::estimate`].
+    ///
+    /// The default fills `out` from [`IlProblem::decision_terms`] (ψ_i as rows of d entries); a
+    /// problem may override it with a faster pass, together with
+    /// [`IlProblem::subtract_recorded`].
+    ///
+    /// # Errors
+    /// As [`IlProblem::decision_terms`].
+    fn recorded_estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        out: &mut RecordedPass<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        self.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
+        out.fill_from_terms();
+        Ok(())
+    }
+
+    /// `g −= Σ_i b_i ψ_i` over the n scored decisions of `recorded`, which
+    /// [`IlProblem::recorded_estimate`] filled on `trajectory`: the baseline's part of
+    /// `g_b = g − Σ_i b_i ψ_i`. `b` yields the baselines from the last decision to the first,
+    /// `b_{n−1}, …, b_0` (0-based). The default reads ψ_i as rows of d entries.
+    fn subtract_recorded(
+        &self,
+        trajectory: &Self::Trajectory,
+        recorded: &RecordedPass<S>,
+        b: impl Iterator<Item = S>,
+        g: &mut [S],
+    ) {
+        let _ = trajectory;
+        recorded.subtract_rows(b, g);
     }
 
     /// `Σ_{t=1}^{T−1} l(s_t, θ)` on a trajectory: an unbiased estimate of F(θ) when τ ∼ p(·; θ).

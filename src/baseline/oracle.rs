@@ -1,6 +1,6 @@
 //! [`Baselined`]: m trajectories per oracle call, each estimate with a baseline.
 
-use super::{Baseline, DecisionTerms, Given, RunningOptimum};
+use super::{Baseline, DecisionTerms, Given, RecordedPass, RunningOptimum};
 use crate::batched::Batched;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::Scalar;
@@ -20,11 +20,12 @@ enum Kind<S> {
     LeaveOneOut,
 }
 
-/// Reused storage of one oracle call: per trajectory its [`DecisionTerms`], the leave-one-out
-/// sums `Σ_k L_i^{(k)}`, one estimate.
+/// Reused storage of one oracle call: per trajectory its [`DecisionTerms`] or its
+/// [`RecordedPass`], the leave-one-out sums `Σ_k L_i^{(k)}`, one estimate.
 #[derive(Debug, Clone)]
 struct Buffers<S> {
     terms: Vec<DecisionTerms<S>>,
+    records: Vec<RecordedPass<S>>,
     totals: Vec<S>,
     g: Vec<S>,
 }
@@ -43,7 +44,10 @@ struct Buffers<S> {
 /// Leave-one-out: trajectory j's `b_i^{(j)} = (1/(m−1)) Σ_{k≠j} L_i^{(k)}` with `L_i^{(k)}` the
 /// loss-to-go of trajectory k at its decision i (0 where k took fewer decisions; in a weighted
 /// estimate the weighted loss-to-go). It is a function of the other trajectories only, which are
-/// independent of τ_j.
+/// independent of τ_j. The unweighted estimate takes each trajectory's plain pass with its scores
+/// recorded ([`IlProblem::recorded_estimate`]), then subtracts `Σ_i b_i^{(j)} ψ_i^{(j)}`
+/// ([`IlProblem::subtract_recorded`]); the weighted one assembles it from [`DecisionTerms`], as
+/// [`Baselined::estimate_by_terms`] does for every kind.
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
 /// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines
@@ -119,6 +123,7 @@ impl<P, S: Scalar> Baselined<P, S> {
             kind,
             buffers: RefCell::new(Buffers {
                 terms: Vec::new(),
+                records: Vec::new(),
                 totals: Vec::new(),
                 g: Vec::new(),
             }),
@@ -144,7 +149,132 @@ impl<P, S: Scalar> Baselined<P, S> {
     }
 }
 
+/// The error of a leave-one-out minibatch with fewer than two trajectories.
+fn too_few_for_leave_one_out(m: usize) -> OracleError {
+    invalid(format!(
+        "leave-one-out needs at least 2 trajectories per gradient, got {m}"
+    ))
+}
+
+/// `S_t = Σ_k l_t^{(k)}` into `totals`, step by step over the longest list of per-step losses
+/// (`l_t^{(k)} = 0` beyond trajectory k's steps).
+fn step_totals<'a, S: Scalar + 'a>(
+    losses: impl Iterator<Item = &'a [S]> + Clone,
+    totals: &mut Vec<S>,
+) {
+    let n = losses.clone().map(<[S]>::len).max().unwrap_or(0);
+    totals.clear();
+    totals.resize(n, S::zero());
+    for l in losses {
+        for (x, y) in totals.iter_mut().zip(l) {
+            *x += y;
+        }
+    }
+}
+
+/// Trajectory j's `(m − 1) b_i^{(j)} = Σ_{k≠j} L_i^{(k)} = Σ_{t>i} (S_t − l_t^{(j)})` for its `n`
+/// scored decisions, from the step totals `S_t` and its own per-step losses `own`, yielded from
+/// the last decision to the first (the order of [`IlProblem::subtract_recorded`]) by a running
+/// sum from the last step.
+fn others_loss_to_go<'a, S: Scalar>(
+    totals: &'a [S],
+    own: &'a [S],
+    n: usize,
+) -> impl Iterator<Item = S> + 'a {
+    let other = move |t: usize| match own.get(t) {
+        Some(l) => totals[t].clone() - l,
+        None => totals[t].clone(),
+    };
+    // The steps after the last scored decision: Σ_{t≥n} (S_t − l_t^{(j)}).
+    let after = (n..totals.len()).rev().fold(S::zero(), |a, t| a + other(t));
+    // Yields decision i's sum, then adds step i's term, which decision i − 1's sum includes.
+    let (totals, own) = (&totals[..n], &own[..n]);
+    totals.iter().zip(own).rev().scan(after, |acc, (s, l)| {
+        let c = acc.clone();
+        *acc += s.clone() - l;
+        Some(c)
+    })
+}
+
 impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
+    /// The mean causal estimate over `batch` assembled from every trajectory's [`DecisionTerms`]
+    /// ([`IlProblem::decision_terms`]) for every kind of baseline: the reference route, with the
+    /// results of [`IlProblem::estimate`] (the same mathematics; in floating point up to the
+    /// order of the sums where `estimate` takes a fused pass). An estimated baseline observes
+    /// the trajectories as `estimate` does.
+    ///
+    /// # Errors
+    /// As [`IlProblem::estimate`].
+    pub fn estimate_by_terms(
+        &self,
+        theta: &DVector<S>,
+        batch: &[P::Trajectory],
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let inner = self.inner();
+        self.baselined(batch, true, |t, out| {
+            inner.decision_terms(theta, t, None, out, cost)
+        })
+    }
+
+    /// The mean leave-one-out estimate over `batch`, `(1/m) Σ_j [g_j − Σ_i b_i^{(j)} ψ_i^{(j)}]`
+    /// with `b_i^{(j)} = (1/(m − 1)) Σ_{k≠j} L_i^{(k)}`, computed as
+    /// `(1/m) [Σ_j g_j − (1/(m − 1)) Σ_j Σ_i (Σ_{k≠j} L_i^{(k)}) ψ_i^{(j)}]` from each
+    /// trajectory's [`RecordedPass`]: one
+    /// plain pass per trajectory that records its losses-to-go and scores, then the baseline's
+    /// part subtracted from the recorded scores. No allocation per step.
+    fn leave_one_out(
+        &self,
+        theta: &DVector<S>,
+        batch: &[P::Trajectory],
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let m = batch.len();
+        if m == 0 {
+            return Err(OracleError::Trajectory("an empty minibatch".into()));
+        }
+        if m < 2 {
+            return Err(too_few_for_leave_one_out(m));
+        }
+        let inner = self.inner();
+        let mut buffers = self.buffers.borrow_mut();
+        let Buffers {
+            records,
+            totals,
+            g: correction,
+            ..
+        } = &mut *buffers;
+        if records.len() < m {
+            records.resize_with(m, RecordedPass::new);
+        }
+        let records = &mut records[..m];
+        for (t, r) in batch.iter().zip(records.iter_mut()) {
+            inner.recorded_estimate(theta, t, r, cost)?;
+        }
+        step_totals(records.iter().map(RecordedPass::losses), totals);
+        // Σ_j Σ_i (m − 1) b_i^{(j)} ψ_i^{(j)} is gathered with a minus sign in `correction`, and
+        // divided by m − 1 once.
+        let d = inner.dim();
+        correction.clear();
+        correction.resize(d, S::zero());
+        let mut sum = DVector::from_element(d, S::zero());
+        for (t, r) in batch.iter().zip(records.iter()) {
+            for (s, x) in sum.iter_mut().zip(r.estimate()) {
+                *s += x;
+            }
+            let b = others_loss_to_go(totals, r.losses(), r.decisions());
+            inner.subtract_recorded(t, r, b, correction);
+        }
+        let (others, m) = (S::from_i64(m as i64 - 1), S::from_i64(m as i64));
+        for (x, c) in sum.iter_mut().zip(correction.iter()) {
+            *x = (x.clone() + c.clone() / &others) / &m;
+        }
+        if !sum.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(sum)
+    }
+
     /// The mean baselined estimate over `batch`, each trajectory's terms from `fill`.
     fn baselined(
         &self,
@@ -156,8 +286,13 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         if m == 0 {
             return Err(OracleError::Trajectory("an empty minibatch".into()));
         }
+        if m < 2 && matches!(self.kind, Kind::LeaveOneOut) {
+            return Err(too_few_for_leave_one_out(m));
+        }
         let mut buffers = self.buffers.borrow_mut();
-        let Buffers { terms, totals, g } = &mut *buffers;
+        let Buffers {
+            terms, totals, g, ..
+        } = &mut *buffers;
         if terms.len() < m {
             terms.resize_with(m, DecisionTerms::new);
         }
@@ -268,6 +403,9 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
             return Err(invalid("baselines apply to the causal form of eq. 3.15"));
         }
         let inner = self.inner();
+        if matches!(self.kind, Kind::LeaveOneOut) {
+            return self.leave_one_out(theta, trajectory, cost);
+        }
         let given = match &self.kind {
             Kind::Constant(b) => Some(Given::Constant(b)),
             Kind::TimeIndexed(bs) => Some(Given::TimeIndexed(bs)),
@@ -290,9 +428,7 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
             }
             return Ok(g);
         }
-        self.baselined(trajectory, true, |t, out| {
-            inner.decision_terms(theta, t, None, out, cost)
-        })
+        self.estimate_by_terms(theta, trajectory, cost)
     }
 
     fn weighted_estimate(

@@ -31,9 +31,10 @@ pub struct DecisionTerms<S> {
     direct: Vec<S>,
     /// ψ_1, …, ψ_n, `d` entries each.
     scores: Vec<S>,
-    /// Per step its (weighted) loss until [`DecisionTerms::finish`], then the suffix sums
-    /// `Σ_{u≥t} l_u`.
+    /// Per step its (weighted) loss.
     losses: Vec<S>,
+    /// After [`DecisionTerms::finish`], the suffix sums `Σ_{u≥t} l_u`.
+    suffix: Vec<S>,
     /// `w_{1:i}` per decision; empty when every weight is 1.
     prefix_weights: Vec<S>,
     scale: Option<S>,
@@ -54,6 +55,7 @@ impl<S: Scalar> DecisionTerms<S> {
             direct: Vec::new(),
             scores: Vec::new(),
             losses: Vec::new(),
+            suffix: Vec::new(),
             prefix_weights: Vec::new(),
             scale: None,
             finished: false,
@@ -128,10 +130,12 @@ impl<S: Scalar> DecisionTerms<S> {
             self.decisions() <= self.losses.len(),
             "a decision without its step"
         );
+        self.suffix.clear();
+        self.suffix.resize(self.losses.len(), S::zero());
         let mut acc = S::zero();
-        for l in self.losses.iter_mut().rev() {
-            acc += &*l;
-            *l = acc.clone();
+        for (l, s) in self.losses.iter().zip(self.suffix.iter_mut()).rev() {
+            acc += l;
+            *s = acc.clone();
         }
         self.finished = true;
     }
@@ -157,7 +161,13 @@ impl<S: Scalar> DecisionTerms<S> {
     /// Before [`DecisionTerms::finish`].
     pub fn loss_to_go(&self, i: usize) -> S {
         assert!(self.finished, "loss-to-go before finish");
-        self.losses.get(i + 1).cloned().unwrap_or_else(S::zero)
+        self.suffix.get(i + 1).cloned().unwrap_or_else(S::zero)
+    }
+
+    /// The per-step (weighted) losses, steps after the last decision included: `L_i` is the sum
+    /// of the entries after entry i.
+    pub fn step_losses(&self) -> &[S] {
+        &self.losses
     }
 
     /// `w_{1:i}` (0-based `i`), `None` when it is 1.
@@ -180,7 +190,7 @@ impl<S: Scalar> DecisionTerms<S> {
         assert_eq!(out.len(), self.d, "estimate: wrong output length");
         out.clone_from_slice(&self.direct);
         for i in 0..self.decisions() {
-            let mut coef = self.losses.get(i + 1).cloned().unwrap_or_else(S::zero);
+            let mut coef = self.suffix.get(i + 1).cloned().unwrap_or_else(S::zero);
             if let Some(b) = baseline(i) {
                 match self.prefix_weights.get(i) {
                     Some(w) => coef -= w.clone() * b,

@@ -116,6 +116,109 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     ) -> Result<(), PolicyError> {
         causal_sum_by_steps(self, theta, features, labels, actions, shifts, g, scratch)
     }
+
+    /// The unit-weight causal estimator of eq. 3.15 over one trajectory, `g += Σ_t [∇_θ l_t +
+    /// l_t Σ_{i<t} ψ_i]` (the inputs of [`EstimatorKernel::causal_sum_trusted`], no shifts), that
+    /// also records every decision's loss `l_t` into `losses` (one entry per row) and its score
+    /// ψ_t into `scores`, in a form of the policy's choosing that
+    /// [`EstimatorKernel::subtract_scores_trusted`] reads back. It serves baselines known only
+    /// after the pass, such as leave-one-out, where b_i depends on every trajectory's losses:
+    /// `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]).
+    ///
+    /// `losses` and `scores` are cleared, then refilled with their capacity reserved once: kept
+    /// between calls, they allocate nothing per decision. The default records ψ_t as rows of
+    /// [`Policy::param_dim`] entries, with [`Policy::loss_score_into`] per decision
+    /// (`causal_sum_recording_rows`).
+    ///
+    /// # Errors
+    /// As [`Policy::loss_score_into`] at the first failing decision; `g`, `losses` and `scores`
+    /// are then unspecified.
+    #[allow(clippy::too_many_arguments)] // the trajectory, the output and its records
+    fn causal_sum_recorded<L: Borrow<Self::Label>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[Self::Action],
+        g: &mut [S],
+        losses: &mut Vec<S>,
+        scores: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        causal_sum_recording_rows(self, theta, features, labels, actions, g, losses, scores)
+    }
+
+    /// `g −= Σ_{i<n} b_i ψ_i` (0-based i), the baseline's part of `g_b = g − Σ_i b_i ψ_i`
+    /// ([`crate::baseline`]), with ψ_i read from the `scores` that
+    /// [`EstimatorKernel::causal_sum_recorded`] wrote for the same `features` (`n` at most the
+    /// number of decisions recorded). `b` yields the baselines from the last decision to the
+    /// first, `b_{n−1}, …, b_0` (so that a loss-to-go can be summed as it goes); decisions it has
+    /// no item for are left out. The default reads rows of [`Policy::param_dim`] entries.
+    fn subtract_scores_trusted(
+        &self,
+        features: &[S],
+        scores: &[S],
+        n: usize,
+        b: impl Iterator<Item = S>,
+        g: &mut [S],
+    ) {
+        let _ = features;
+        subtract_score_rows(scores, self.param_dim(), n, b, g);
+    }
+}
+
+/// The default [`EstimatorKernel::causal_sum_recorded`]: per decision
+/// [`Policy::loss_score_into`] (with the policy's checks), `accumulate` with unit weight, then
+/// `l_t` and the row ψ_t appended to the records.
+#[allow(clippy::too_many_arguments)] // the method's arguments and the policy
+pub(crate) fn causal_sum_recording_rows<S, P, L>(
+    policy: &P,
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[P::Action],
+    g: &mut [S],
+    losses: &mut Vec<S>,
+    scores: &mut Vec<S>,
+) -> Result<(), PolicyError>
+where
+    S: Scalar,
+    P: Policy<S> + ?Sized,
+    L: Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    let n = actions.len();
+    losses.clear();
+    losses.reserve(n);
+    scores.clear();
+    scores.reserve(n * d);
+    let mut buf = vec![S::zero(); 3 * d];
+    let (grad, rest) = buf.split_at_mut(d);
+    let (score, score_sum) = rest.split_at_mut(d);
+    let rows = features.chunks_exact(policy.feature_dim().max(1));
+    for ((phi, y), a) in rows.zip(labels).zip(actions) {
+        let l = policy.loss_score_into(theta, phi, y.borrow(), a, grad, score)?;
+        accumulate(g, None, &l, grad, score, score_sum);
+        losses.push(l);
+        scores.extend_from_slice(score);
+    }
+    Ok(())
+}
+
+/// `g −= Σ_{i<n} b_i ψ_i` for ψ_i stored as consecutive rows of `d` entries, `b` yielding
+/// `b_{n−1}, …, b_0`.
+pub(crate) fn subtract_score_rows<S: Scalar>(
+    scores: &[S],
+    d: usize,
+    n: usize,
+    b: impl Iterator<Item = S>,
+    g: &mut [S],
+) {
+    let rows = scores.chunks_exact(d.max(1)).take(n);
+    for (row, bi) in rows.rev().zip(b) {
+        for (gj, pj) in g.iter_mut().zip(row) {
+            *gj -= bi.clone() * pj;
+        }
+    }
 }
 
 /// The default [`EstimatorKernel::causal_sum_trusted`]: per decision, `g += δ_t Σ_{i<t} ψ_i`

@@ -156,6 +156,125 @@ fn causal_sum_shifted<S: Real, L: Borrow<usize>, const N: usize>(
     causal_sum_fixed::<S, L, N>(theta, features, labels, actions, Some(shifts), g)
 }
 
+/// One decision of the causal pass on a validated θ and φ, with the checks of
+/// [`EstimatorKernel::causal_step_trusted`]: adds `∇_θ l_t + l_t Σ_{i<t} ψ_i` to `g` and ψ_t to
+/// `score_sum`, and returns `l_t` with the score's coefficient `c_t = a_t − p_t` (ψ_t = c_t φ_t).
+#[allow(clippy::too_many_arguments)] // the decision and the estimator's state
+#[inline]
+fn causal_step_coefficient<S: Real>(
+    features: usize,
+    theta: &[S],
+    phi: &[S],
+    label: usize,
+    action: usize,
+    g: &mut [S],
+    score_sum: &mut [S],
+) -> Result<(S, S), PolicyError> {
+    check_action(label, 2)?;
+    let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
+    let (l, dz) = brier(&p, label);
+    check_action(action, 2)?;
+    let c = score_coefficient(p, action);
+    check_out("g", g, features)?;
+    check_out("score_sum", score_sum, features)?;
+    for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+        *gj += dz.clone() * x + l.clone() * &*sj;
+        *sj += c.clone() * x;
+    }
+    Ok((l, c))
+}
+
+/// [`EstimatorKernel::causal_sum_recorded`] of [`Logistic`] with `N` features known at compile
+/// time: the unshifted pass of [`causal_sum_fixed`] (the same operations, so the same `g`) that
+/// also writes each decision's `l_t` into `losses` and its score coefficient `c_t = a_t − p_t`
+/// into `coefficients` (ψ_t = c_t φ_t, so one number records the score). `Ok(false)` (with `g`
+/// untouched) when a decision failed a check, as in [`causal_sum_fixed`].
+#[inline(never)]
+fn causal_sum_recording_fixed<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    g: &mut [S],
+    losses: &mut Vec<S>,
+    coefficients: &mut Vec<S>,
+) -> Result<bool, PolicyError> {
+    let theta: &[S; N] = theta.try_into().map_err(|_| PolicyError::Shape {
+        param: "theta",
+        expected: N,
+        got: theta.len(),
+    })?;
+    check_out("g", g, N)?;
+    let n = actions.len();
+    losses.clear();
+    losses.resize(n, S::zero());
+    coefficients.clear();
+    coefficients.resize(n, S::zero());
+    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
+    let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
+    let (rows, _) = features.as_chunks::<N>();
+    let records = losses.iter_mut().zip(coefficients.iter_mut());
+    let mut failed = false;
+    for (((phi, label), action), (lo, co)) in rows.iter().zip(labels).zip(actions).zip(records) {
+        let (label, action) = (*label.borrow(), *action);
+        let z = crate::scalar::dot(theta, phi);
+        failed |= (label > 1) | (action > 1) | !finite_logit(&z);
+        let p = sigmoid_of_finite(&z);
+        let (l, dz) = brier(&p, label);
+        let c = score_coefficient(p, action);
+        for ((gj, sj), x) in acc.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+            *gj += dz.clone() * x + l.clone() * &*sj;
+            *sj += c.clone() * x;
+        }
+        *lo = l;
+        *co = c;
+    }
+    if failed {
+        return Ok(false);
+    }
+    g.clone_from_slice(&acc);
+    Ok(true)
+}
+
+/// `g −= Σ_{i<n} b_i c_i φ_i` with `N` features known at compile time, `b` yielding
+/// `b_{n−1}, …, b_0`: decisions taken in pairs into two `[S; N]` locals (two independent chains
+/// of additions), added to `g` at the end.
+#[inline(never)]
+fn subtract_fixed<S: Scalar, const N: usize>(
+    features: &[S],
+    coefficients: &[S],
+    n: usize,
+    mut b: impl Iterator<Item = S>,
+    g: &mut [S],
+) {
+    let mut second: [S; N] = std::array::from_fn(|_| S::zero());
+    let mut first: [S; N] = std::array::from_fn(|_| S::zero());
+    let (rows, _) = features.as_chunks::<N>();
+    let n = n.min(rows.len()).min(coefficients.len());
+    let (head, pairs) = rows[..n].as_rchunks::<2>();
+    let (c_head, c_pairs) = coefficients[..n].split_at(head.len());
+    for (pair, c) in pairs.iter().zip(c_pairs.as_chunks::<2>().0).rev() {
+        let (Some(b1), Some(b0)) = (b.next(), b.next()) else {
+            break;
+        };
+        let (b1, b0) = (b1 * &c[1], b0 * &c[0]);
+        let terms = first.iter_mut().zip(second.iter_mut());
+        for ((f, s), (x0, x1)) in terms.zip(pair[0].iter().zip(&pair[1])) {
+            *s += b1.clone() * x1;
+            *f += b0.clone() * x0;
+        }
+    }
+    if let (Some(phi), Some(c), Some(b0)) = (head.first(), c_head.first(), b.next()) {
+        let bc = b0 * c;
+        for (f, x) in first.iter_mut().zip(phi) {
+            *f += bc.clone() * x;
+        }
+    }
+    for ((gj, f), s) in g.iter_mut().zip(first).zip(second) {
+        *gj -= f + s;
+    }
+}
+
 impl<S: Real> EstimatorKernel<S> for Logistic {
     /// As [`Policy::sample`] without the θ check. `#[inline(always)]`: it is the policy's part of
     /// the roll-out's hot loop.
@@ -186,17 +305,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         score_sum: &mut [S],
     ) -> Result<S, PolicyError> {
         let features = Policy::<S>::feature_dim(self);
-        check_action(*label, 2)?;
-        let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
-        let (l, dz) = brier(&p, *label);
-        check_action(*action, 2)?;
-        let c = score_coefficient(p, *action);
-        check_out("g", g, features)?;
-        check_out("score_sum", score_sum, features)?;
-        for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
-            *gj += dz.clone() * x + l.clone() * &*sj;
-            *sj += c.clone() * x;
-        }
+        let (l, _) = causal_step_coefficient(features, theta, phi, *label, *action, g, score_sum)?;
         Ok(l)
     }
 
@@ -232,6 +341,86 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         }
         // More than 8 features, or a decision failed a check: the default pass reports the first.
         causal_sum_by_steps(self, theta, features, labels, actions, shifts, g, scratch)
+    }
+
+    /// Records the score ψ_t = c_t φ_t by its coefficient `c_t = a_t − p_t` alone (one entry per
+    /// decision); with a compile-time dimension for 1 to 8 features
+    /// (`causal_sum_recording_fixed`), else (and to report a failing decision) decision by
+    /// decision with the checks of [`EstimatorKernel::causal_step_trusted`].
+    fn causal_sum_recorded<L: Borrow<usize>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[usize],
+        g: &mut [S],
+        losses: &mut Vec<S>,
+        scores: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        let n = Policy::<S>::feature_dim(self);
+        macro_rules! fixed {
+            ($($n:literal)*) => {
+                match n {
+                    $($n => causal_sum_recording_fixed::<S, L, $n>(
+                        theta, features, labels, actions, g, losses, scores,
+                    )?,)*
+                    _ => false,
+                }
+            };
+        }
+        if fixed!(1 2 3 4 5 6 7 8) {
+            return Ok(());
+        }
+        losses.clear();
+        losses.reserve(actions.len());
+        scores.clear();
+        scores.reserve(actions.len());
+        let mut score_sum = vec![S::zero(); n];
+        let rows = features.chunks_exact(n.max(1));
+        for ((phi, label), action) in rows.zip(labels).zip(actions) {
+            let (l, c) = causal_step_coefficient(
+                n,
+                theta,
+                phi,
+                *label.borrow(),
+                *action,
+                g,
+                &mut score_sum,
+            )?;
+            losses.push(l);
+            scores.push(c);
+        }
+        Ok(())
+    }
+
+    /// `g −= Σ_{i<n} b_i c_i φ_i` from the coefficients of
+    /// [`EstimatorKernel::causal_sum_recorded`], `b` yielding `b_{n−1}, …, b_0`; in registers for
+    /// 1 to 8 features.
+    fn subtract_scores_trusted(
+        &self,
+        features: &[S],
+        scores: &[S],
+        n: usize,
+        b: impl Iterator<Item = S>,
+        g: &mut [S],
+    ) {
+        let dim = Policy::<S>::feature_dim(self);
+        macro_rules! fixed {
+            ($($n:literal)*) => {
+                match dim {
+                    $($n => return subtract_fixed::<S, $n>(features, scores, n, b, g),)*
+                    _ => {}
+                }
+            };
+        }
+        fixed!(1 2 3 4 5 6 7 8);
+        let rows = features.chunks_exact(dim.max(1)).zip(scores).take(n);
+        for ((phi, c), bi) in rows.rev().zip(b) {
+            let bc = bi * c;
+            for (gj, x) in g.iter_mut().zip(phi) {
+                *gj -= bc.clone() * x;
+            }
+        }
     }
 }
 

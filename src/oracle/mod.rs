@@ -20,6 +20,7 @@ mod causal;
 mod full;
 pub mod kernel;
 mod logistic;
+mod recorded;
 mod terms;
 
 pub use kernel::EstimatorKernel;
@@ -27,6 +28,7 @@ pub use kernel::EstimatorKernel;
 pub(crate) use baselined::baselined_pass;
 pub(crate) use causal::causal_pass;
 pub(crate) use full::full_pass;
+pub(crate) use recorded::recorded_pass;
 pub(crate) use terms::terms_pass;
 
 use crate::policy::{Policy, PolicyError};

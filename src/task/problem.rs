@@ -3,10 +3,10 @@
 
 use super::rollout::sample_learner;
 use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
-use crate::baseline::{DecisionTerms, Given};
+use crate::baseline::{DecisionTerms, Given, RecordedPass};
 use crate::oracle::{
     EstimatorKernel, baselined_pass, causal_pass, features_valid, full_pass, policy_error,
-    terms_pass,
+    recorded_pass, terms_pass,
 };
 use crate::policy::LikelihoodRatio;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -293,6 +293,51 @@ where
         )?;
         cost.gradient_evaluations += trajectory.len() as u64;
         Ok(())
+    }
+
+    /// On validated features, the policy's fused pass that records the scores
+    /// ([`EstimatorKernel::causal_sum_recorded`]); otherwise the checked route of
+    /// [`IlProblem::decision_terms`], which reports the first invalid input.
+    fn recorded_estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        out: &mut RecordedPass<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let t = trajectory.decisions();
+        if !features_valid(&self.policy, &t) {
+            self.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
+            out.fill_from_terms();
+            return Ok(());
+        }
+        recorded_pass(&self.policy, theta.as_slice(), &t, out)?;
+        cost.gradient_evaluations += trajectory.len() as u64;
+        Ok(())
+    }
+
+    /// Through [`EstimatorKernel::subtract_scores_trusted`] when the policy's pass recorded the
+    /// scores, else from rows.
+    fn subtract_recorded(
+        &self,
+        trajectory: &Self::Trajectory,
+        recorded: &RecordedPass<S>,
+        b: impl Iterator<Item = S>,
+        g: &mut [S],
+    ) {
+        if recorded.score_rows {
+            recorded.subtract_rows(b, g);
+        } else {
+            self.policy.subtract_scores_trusted(
+                &trajectory.feature_data,
+                &recorded.scores,
+                recorded.decisions(),
+                b,
+                g,
+            );
+        }
     }
 
     fn trajectory_loss(
