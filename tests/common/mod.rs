@@ -191,3 +191,26 @@ pub fn mdp_and_two_thetas() -> impl Strategy<Value = (ToyMdp, Vec<BigRational>, 
         (Just(m), a, b)
     })
 }
+
+/// The obstacle task with the basic features' linear-Gaussian learner.
+pub type ObstacleProblem = ilopt::task::TaskProblem<
+    ilopt::task::obstacle::ObstacleTask<Vec<f64>>,
+    ilopt::policy::LinearGaussian<f64>,
+>;
+
+/// The obstacle task under the thesis's fixed horizon (T = 200, absorbing ends) with the basic
+/// features' linear-Gaussian learner (σ = 0.3), and a θ that heads right and up at unit gain.
+pub fn absorbing_obstacle_problem() -> (ObstacleProblem, nalgebra::DVector<f64>) {
+    use ilopt::task::obstacle::{self, ObstacleTask};
+    let problem = ilopt::task::TaskProblem::fixed(
+        ObstacleTask::thesis().unwrap(),
+        ilopt::policy::LinearGaussian::new(2, obstacle::FEATURES, 0.3).unwrap(),
+        200,
+        ilopt::task::AfterEnd::Absorb,
+    )
+    .unwrap();
+    let mut w = vec![0.0; 2 * obstacle::FEATURES];
+    w[0] = 1.0;
+    w[obstacle::FEATURES + 1] = 1.0;
+    (problem, nalgebra::DVector::from_vec(w))
+}

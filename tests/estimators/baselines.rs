@@ -663,9 +663,8 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
 /// absorbing tail), to the kit's f64 derivative tolerance.
 #[test]
 fn task_decision_terms_reproduce_the_task_estimators() {
-    use ilopt::policy::{LinearGaussian, Logistic};
+    use ilopt::policy::Logistic;
     use ilopt::task::cartpole::{self, CartPoleTask};
-    use ilopt::task::obstacle::{self, ObstacleTask};
     use ilopt::task::{AfterEnd, TaskProblem};
     use ilopt::tolerance::derivative_f64_agrees;
 
@@ -717,19 +716,9 @@ fn task_decision_terms_reproduce_the_task_estimators() {
         &DVector::from_vec(vec![0.25, 1.1, 7.5, 2.0, 0.15]),
         "cartpole",
     );
-    let obstacle = TaskProblem::fixed(
-        ObstacleTask::thesis().unwrap(),
-        LinearGaussian::new(2, obstacle::FEATURES, 0.3).unwrap(),
-        200,
-        AfterEnd::Absorb,
-    )
-    .unwrap();
-    let mut w = vec![0.0; 2 * obstacle::FEATURES];
-    w[0] = 1.0;
-    w[obstacle::FEATURES + 1] = 1.0;
+    let (obstacle, w) = crate::common::absorbing_obstacle_problem();
     let mut w_new = w.clone();
     w_new[1] = 0.05;
-    let (w, w_new) = (DVector::from_vec(w), DVector::from_vec(w_new));
     check(&obstacle, &w, &w_new, "obstacle");
     // The same roll-outs (same seed) include absorbing tails.
     let mut rng = KitRng::seed_from_u64(4);

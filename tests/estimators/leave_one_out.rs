@@ -147,9 +147,8 @@ fn rollouts<P: IlProblem<f64>>(
 /// bit.
 #[test]
 fn task_leave_one_out_fast_route_agrees_with_terms() {
-    use ilopt::policy::{LinearGaussian, Logistic, Softmax};
+    use ilopt::policy::{Logistic, Softmax};
     use ilopt::task::cartpole::{self, CartPoleTask};
-    use ilopt::task::obstacle::{self, ObstacleTask};
     use ilopt::task::{AfterEnd, Horizon, TaskProblem};
 
     fn check<T, P>(p: &TaskProblem<T, P>, theta: &DVector<f64>, what: &str)
@@ -207,17 +206,7 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
         &DVector::from_vec(vec![0.1, -0.2, 0.3, 0.5, 0.0, 0.2, 0.1, -0.4, 0.3, 0.1]),
         "softmax, episodic",
     );
-    let obstacle = TaskProblem::fixed(
-        ObstacleTask::thesis().unwrap(),
-        LinearGaussian::new(2, obstacle::FEATURES, 0.3).unwrap(),
-        200,
-        AfterEnd::Absorb,
-    )
-    .unwrap();
-    let mut w = vec![0.0; 2 * obstacle::FEATURES];
-    w[0] = 1.0;
-    w[obstacle::FEATURES + 1] = 1.0;
-    let w = DVector::from_vec(w);
+    let (obstacle, w) = crate::common::absorbing_obstacle_problem();
     assert!(
         rollouts(&obstacle, &w, 12, 8)
             .iter()
