@@ -11,10 +11,10 @@
 //! coordinates of the velocity).
 //!
 //! **Budget and checkpoints**: every run of a task gets the same budget of
-//! gradient calls (per-state gradient evaluations, [`Cost`]; DAgger's full-batch retraining
+//! gradient calls (per-state gradient evaluations, [`Cost`](ilopt::problem::Cost); DAgger's full-batch retraining
 //! counts epochs × |D|), and is evaluated at the fixed call counts 0, `checkpoint_every`, …,
 //! `budget` (at the first iterate whose cumulative calls reach each). θ₁ is the task's
-//! [`Theta1`] (zero unless a profile says otherwise).
+//! [`Theta1`](crate::config::Theta1) (zero unless a profile says otherwise).
 //!
 //! **Score and sustained convergence** (one definition for every algorithm): the score of a
 //! checkpoint is the obstacle task's success rate, or CartPole's mean episode reward divided by

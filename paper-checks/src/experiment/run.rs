@@ -140,7 +140,7 @@ pub fn run_seed(
 /// # Errors
 /// [`Error::Experiment`] if the run cannot start or an evaluation fails. A run that fails
 /// mid-way (a non-finite iterate, a failing step, ‖θ‖ beyond the bound) is *not* an error: its
-/// status is [`RunStatus::Diverged`] and it keeps the checkpoints reached.
+/// status is [`RunStatus::Diverged`](super::RunStatus::Diverged) and it keeps the checkpoints reached.
 pub fn run_spec(bench: &Bench, spec: &RunSpec<'_>) -> Result<(SeedRun, SeedTiming), Error> {
     match bench {
         Bench::Obstacle { problem, .. } => drive_with(bench, problem, spec),

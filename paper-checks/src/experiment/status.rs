@@ -5,8 +5,8 @@ use serde::{Deserialize, Serialize};
 
 /// How a run ended (serialised with a `status` tag: `converged`, `not-converged`, `diverged`).
 ///
-/// Wall times are kept out of it (they live in [`SeedTiming`], so that the results files are
-/// byte-identical across reruns): the time to convergence is [`SeedTiming::converge_seconds`].
+/// Wall times are kept out of it (they live in [`SeedTiming`](super::SeedTiming), so that the results files are
+/// byte-identical across reruns): the time to convergence is [`SeedTiming::converge_seconds`](super::SeedTiming::converge_seconds).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "status", rename_all = "kebab-case")]
 pub enum RunStatus {
