@@ -178,7 +178,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         (
             "fig4-5a-gradient-x",
             "Fig. 4.5",
-            " (a): obstacle task, norm of the x-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band)".into(),
+            " (a): obstacle task, norm of the x-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band; one panel per algorithm)".into(),
             "‖gradient estimate, x-row‖ (log scale)",
             &|c| c.grad_x,
             true,
@@ -186,7 +186,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         (
             "fig4-5b-gradient-y",
             "Fig. 4.5",
-            " (b): obstacle task, norm of the y-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band)".into(),
+            " (b): obstacle task, norm of the y-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band; one panel per algorithm)".into(),
             "‖gradient estimate, y-row‖ (log scale)",
             &|c| c.grad_y,
             true,
@@ -194,7 +194,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         (
             "fig4-6a-loss-x",
             "Fig. 4.6",
-            " (a): obstacle task, loss of the x velocity per decision (mean over seeds, 95% CI band)".into(),
+            " (a): obstacle task, loss of the x velocity per decision (mean over seeds, 95% CI band; one panel per algorithm)".into(),
             "x-velocity squared error (log scale)",
             &|c| c.loss_x,
             false,
@@ -202,7 +202,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         (
             "fig4-6b-loss-y",
             "Fig. 4.6",
-            " (b): obstacle task, loss of the y velocity per decision (mean over seeds, 95% CI band)".into(),
+            " (b): obstacle task, loss of the y velocity per decision (mean over seeds, 95% CI band; one panel per algorithm)".into(),
             "y-velocity squared error (log scale)",
             &|c| c.loss_y,
             false,
@@ -220,7 +220,9 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
                 oracle_only,
                 by_iteration,
             )
-            .clamped((0.0, f64::INFINITY)),
+            .clamped((0.0, f64::INFINITY))
+            // The norms of a dozen methods overlap over a decade: one panel each.
+            .in_panels(3),
         ));
     }
     let cart_fig = |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| {
@@ -247,12 +249,13 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         "fig4-8-loss",
         "Fig. 4.8",
         cart_fig(
-            "Fig. 4.8: CartPole, Brier loss per decision against the expert's action (mean over seeds, 95% CI band; dashed: reference policy)",
+            "Fig. 4.8: CartPole, Brier loss per decision against the expert's action (mean over seeds, 95% CI band; dashed: reference policy; one panel per algorithm)",
             "Brier loss per decision",
             false,
             &|c| Some(c.loss),
         )
-        .clamped((0.0, f64::INFINITY)),
+        .clamped((0.0, f64::INFINITY))
+        .in_panels(3),
     ));
     figs.push((
         "fig4-9-crashes",
@@ -274,12 +277,13 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         "fig4-10-reward",
         "Fig. 4.10",
         cart_fig(
-            "Fig. 4.10: CartPole, mean episode reward of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policy)",
+            "Fig. 4.10: CartPole, mean episode reward of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policy; one panel per algorithm)",
             "episode reward (steps, max. 500)",
             false,
             &|c| Some(c.reward),
         )
-        .clamped((0.0, 500.0)),
+        .clamped((0.0, 500.0))
+        .in_panels(3),
     ));
     figs
 }
