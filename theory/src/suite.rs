@@ -285,6 +285,7 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         &points(cartpole_theta(), cp_dagger),
         n_var,
         BASELINE_M,
+        cs.alpha,
     )?);
     let ob_dagger = dagger_solution(&ob, rounds, 1)?;
     rows.extend(variance_rows(
@@ -294,6 +295,7 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         &points(obstacle_theta(), ob_dagger),
         n_var,
         BASELINE_M,
+        os.alpha,
     )?);
     if full {
         rows.extend(task_rows(

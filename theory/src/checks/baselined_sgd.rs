@@ -37,15 +37,22 @@ pub struct Sizes {
     pub k: u64,
 }
 
-fn undecided(id: &str, why: String) -> Check {
-    Check::builder(
-        id,
-        "SGD, eq. 3.27, with a baseline (beyond the thesis)",
-        "(3.27) for g_b",
-        Role::Corrected,
-    )
-    .details(why)
-    .decided(Method::Statistical, Verdict::Inconclusive)
+/// Rows 1.b and 1.b.ctl when they cannot be computed: both inconclusive, so the undetected control
+/// fails the table's status instead of going missing.
+fn undecided(why: &str) -> Vec<Check> {
+    [("1.b", Role::Corrected), ("1.b.ctl", Role::NegativeControl)]
+        .into_iter()
+        .map(|(id, role)| {
+            Check::builder(
+                id,
+                "SGD, eq. 3.27, with a baseline (beyond the thesis)",
+                "(3.27) for g_b",
+                role,
+            )
+            .details(format!("not computed: {why}"))
+            .decided(Method::Statistical, Verdict::Inconclusive)
+        })
+        .collect()
 }
 
 /// Rows 1.b and 1.b.ctl (the bound × [`CONTROL_SCALE`]) on `mdp` from θ₁ = 0 over `domain` (row
@@ -60,7 +67,7 @@ pub fn rows(
 ) -> Vec<Check> {
     match try_rows(mdp, k, domain, s, mc, coverage) {
         Ok(r) => r,
-        Err(e) => vec![undecided("1.b", e)],
+        Err(e) => undecided(&e),
     }
 }
 
@@ -153,4 +160,51 @@ fn try_rows(
         out.push(row);
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::status;
+    use crate::suite::m1_tied;
+
+    /// A suite that cannot compute row 1.b (here: an MDP of horizon 4, outside the box argument)
+    /// still emits its control, undetected, so the table's status fails instead of passing with
+    /// the control missing.
+    #[test]
+    fn an_uncomputable_row_keeps_its_control_and_fails_the_status() {
+        let m1 = m1_tied();
+        let domain = [[-1.0, 1.0]];
+        let k = crate::certify::box_constants::compute(
+            &m1,
+            &[BigRational::from_integer(0.into())],
+            None,
+            &domain,
+            0.5,
+            2_000,
+        )
+        .expect("coarse constants");
+        let mut longer = m1.clone();
+        longer.horizon = 4;
+        let rows = rows(
+            &longer,
+            &k,
+            &domain,
+            Sizes {
+                tol: 0.5,
+                max_boxes: 2_000,
+                k: 4,
+            },
+            McSettings {
+                runs: 10,
+                alpha: 0.01,
+            },
+            Coverage::Sample(4),
+        );
+        let ids: Vec<&str> = rows.iter().map(|c| c.id.as_str()).collect();
+        assert_eq!(ids, ["1.b", "1.b.ctl"]);
+        assert!(rows.iter().all(|c| c.verdict == Verdict::Inconclusive));
+        let err = status(&rows).expect_err("an undetected control fails the status");
+        assert!(err.contains("1.b.ctl"), "{err}");
+    }
 }

@@ -105,8 +105,8 @@ pub fn compare(samples: &[DVector<f64>], r: &Reference, alpha: f64) -> Compariso
 
 /// The variance reduction of a baselined estimator, per trajectory: `tr Var(g) / tr Var(g_b)`
 /// from `plain` samples (one trajectory each) and `baselined` samples (each the mean of `m`
-/// trajectories, so `Var(g_b) = m·Var(sample)`), with a 95% bootstrap percentile interval
-/// (`reps` resamples of both sets, seeded): the total of [`super::variance::reduction`].
+/// trajectories, so `Var(g_b) = m·Var(sample)`), with its interval at level 1 − `alpha` (`reps`
+/// bootstrap resamples of both sets, seeded): the total of [`super::variance::reduction`].
 /// Returns (ratio, lower, upper).
 pub fn variance_ratio(
     plain: &[DVector<f64>],
@@ -114,8 +114,9 @@ pub fn variance_ratio(
     m: usize,
     reps: usize,
     seed: u64,
+    alpha: f64,
 ) -> (f64, f64, f64) {
-    let t = super::variance::reduction(plain, baselined, m, reps, seed).total;
+    let t = super::variance::reduction(plain, baselined, m, reps, seed, alpha).total;
     (t.value, t.lo, t.hi)
 }
 
@@ -132,7 +133,7 @@ mod tests {
     }
 
     /// Samples ±a (one trajectory each) against ±b (means of m): the ratio is a²/(m·b²)
-    /// exactly, and the bootstrap interval contains it.
+    /// exactly, and its interval contains it.
     #[test]
     fn variance_ratio_is_the_per_trajectory_ratio() {
         use nalgebra::DVector;
@@ -142,7 +143,7 @@ mod tests {
         let baselined: Vec<DVector<f64>> = (0..100)
             .map(|i| DVector::from_vec(vec![if i % 2 == 0 { 0.5 } else { -0.5 }, 0.0]))
             .collect();
-        let (r, lo, hi) = variance_ratio(&plain, &baselined, 16, 200, 1);
+        let (r, lo, hi) = variance_ratio(&plain, &baselined, 16, 200, 1, 0.05);
         // s² of ±a over an even n is a²·n/(n − 1).
         let expect = (16.0 * 200.0 / 199.0) / (16.0 * 0.25 * 100.0 / 99.0);
         assert!((r - expect).abs() < 1e-12, "{r} vs {expect}");

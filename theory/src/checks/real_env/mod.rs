@@ -276,7 +276,7 @@ where
     let peeking_label = Mutation::PeekingBaseline.label();
     let peeking = run(Estimator::Mutated(Mutation::PeekingBaseline), 26)?;
     let (ratio, ratio_lo, ratio_hi) =
-        variance_ratio(&plain, &baselined_samples, BASELINE_M, 400, 25);
+        variance_ratio(&plain, &baselined_samples, BASELINE_M, 400, 25, z.alpha);
     let weighted: Vec<(Weighting, Comparison, f64)> =
         [(Weighting::Trajectory, 22), (Weighting::PerDecision, 23)]
             .into_iter()
@@ -344,8 +344,9 @@ where
         z.alpha,
         &refs_b,
         &format!(
-            "; {} samples of m = {BASELINE_M} trajectories (as many trajectories as row 6{tag}); variance per trajectory tr Var(g)/tr Var(g_b) = {ratio:.3} [{ratio_lo:.3}, {ratio_hi:.3}] (95% bootstrap interval, 400 resamples)",
-            baselined.n
+            "; {} samples of m = {BASELINE_M} trajectories (as many trajectories as row 6{tag}); variance per trajectory tr Var(g)/tr Var(g_b) = {ratio:.3} [{ratio_lo:.3}, {ratio_hi:.3}] (level 1 − α, α = {a:.0e}: log ratio ± z·bootstrap s.e., 400 resamples)",
+            baselined.n,
+            a = z.alpha
         ),
     ));
     if let Some(last) = rows.last_mut() {

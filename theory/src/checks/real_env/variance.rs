@@ -3,13 +3,16 @@
 //!
 //! Per trajectory, coordinate j: `r_j = Var(g_j) / Var(g_{b,j})`, from `N` plain estimates (one
 //! trajectory each) and `N/m` baselined ones (each the mean of m trajectories, so
-//! `Var(g_b) = m·Var(sample)`); the total `tr Var(g) / tr Var(g_b)` likewise. Intervals are 95%
-//! bootstrap percentile intervals (both sets resampled, seeded). The claim "the baseline reduces
+//! `Var(g_b) = m·Var(sample)`); the total `tr Var(g) / tr Var(g_b)` likewise. Intervals are at
+//! level 1 − α, the α of the other real-environment rows: log r̂ ± z_{α/2}·s, where s is the
+//! bootstrap standard error of log r̂ (both sets resampled, seeded; a normal interval on the log
+//! scale, since percentiles at α = 10⁻³ would need far more resamples). The claim "the baseline reduces
 //! the variance" holds when the total's interval lies above 1, fails when it lies below 1, and is
 //! inconclusive otherwise. Its negative control: a constant baseline far below every loss-to-go
 //! (b = −4·F̂, F̂ the mean loss of a trajectory), unbiased like every constant but with a larger
 //! variance, which the same rule must find to fail.
 
+use super::comparison::normal_upper_quantile;
 use super::estimators::{Estimator, samples};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
@@ -23,7 +26,7 @@ use nalgebra::DVector;
 use rand::{Rng, SeedableRng};
 use std::borrow::Borrow;
 
-/// A ratio with its 95% bootstrap interval.
+/// A ratio with its interval at level 1 − α (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ratio {
     /// The point estimate.
@@ -74,18 +77,25 @@ fn ratios(plain: &[&DVector<f64>], baselined: &[&DVector<f64>], m: usize) -> Vec
 }
 
 /// The variance reduction of `baselined` (means of `m` trajectories) against `plain` (one
-/// trajectory each), with `reps` bootstrap resamples from `seed`.
+/// trajectory each), with intervals at level 1 − `alpha` from `reps` bootstrap resamples drawn
+/// from `seed` (module docs).
 ///
 /// # Panics
-/// If either set has fewer than two samples, or the dimensions differ.
+/// If either set has fewer than two samples, `reps < 2`, `alpha` is outside (0, 1), or the
+/// dimensions differ.
 pub fn reduction(
     plain: &[DVector<f64>],
     baselined: &[DVector<f64>],
     m: usize,
     reps: usize,
     seed: u64,
+    alpha: f64,
 ) -> Reduction {
     assert!(plain.len() >= 2 && baselined.len() >= 2, "two samples each");
+    assert!(
+        reps >= 2 && alpha > 0.0 && alpha < 1.0,
+        "reps ≥ 2, α in (0, 1)"
+    );
     fn draw<'a>(v: &'a [DVector<f64>], rng: &mut KitRng) -> Vec<&'a DVector<f64>> {
         (0..v.len())
             .map(|_| &v[rng.random_range(0..v.len())])
@@ -102,14 +112,17 @@ pub fn reduction(
             ratios(&a, &b, m)
         })
         .collect();
+    let z = normal_upper_quantile(alpha / 2.0);
     let interval = |k: usize| {
-        let mut xs: Vec<f64> = boot.iter().map(|r| r[k]).collect();
-        xs.sort_by(f64::total_cmp);
-        let at = |q: f64| xs[((q * reps as f64) as usize).min(reps - 1)];
+        let logs: Vec<f64> = boot.iter().map(|r| r[k].ln()).collect();
+        let mean = logs.iter().sum::<f64>() / reps as f64;
+        let var = logs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (reps - 1) as f64;
+        let half = z * var.sqrt();
+        let log_point = point[k].ln();
         Ratio {
             value: point[k],
-            lo: at(0.025),
-            hi: at(0.975),
+            lo: (log_point - half).exp(),
+            hi: (log_point + half).exp(),
         }
     };
     Reduction {
@@ -208,6 +221,7 @@ pub fn variance_rows<T, P>(
     at: &[At<'_>],
     n: usize,
     m: usize,
+    alpha: f64,
 ) -> Result<Vec<Check>, String>
 where
     TaskProblem<T, P>: Sync + Clone,
@@ -227,7 +241,7 @@ where
             batches,
             seed + 1,
         )?;
-        let r = reduction(&plain, &loo, m, 400, seed + 2);
+        let r = reduction(&plain, &loo, m, 400, seed + 2, alpha);
         let f = mean_loss(p, &point.theta, 200)?;
         let what = format!("{} (F̂ = {f:.3}, 200 roll-outs)", point.what);
         rows.push(row(
@@ -235,6 +249,7 @@ where
             &format!("{name}, {what}: the leave-one-out baseline (m = {m}) reduces the variance per trajectory, tr Var(g_b) < tr Var(g)"),
             Role::Corrected,
             &r,
+            alpha,
         ));
         if i + 1 == at.len() {
             let b = -4.0 * f;
@@ -248,19 +263,20 @@ where
                 batches,
                 seed + 3,
             )?;
-            let rc = reduction(&plain, &ctl, m, 400, seed + 2);
+            let rc = reduction(&plain, &ctl, m, 400, seed + 2, alpha);
             rows.push(row(
                 &format!("6{tag}.b.var.ctl"),
                 &format!("{name}, {what}: a constant baseline b = −4·F̂ = {b:.3e} (unbiased, far below every loss-to-go) reduces the variance — must fail"),
                 Role::NegativeControl,
                 &rc,
+                alpha,
             ));
         }
     }
     Ok(rows)
 }
 
-fn row(id: &str, claim: &str, role: Role, r: &Reduction) -> Check {
+fn row(id: &str, claim: &str, role: Role, r: &Reduction, alpha: f64) -> Check {
     let per = r
         .per_coordinate
         .iter()
@@ -274,7 +290,9 @@ fn row(id: &str, claim: &str, role: Role, r: &Reduction) -> Check {
         claim,
         role,
     )
-    .assumptions(["i.i.d. trajectories; 95% bootstrap percentile intervals (400 resamples)"])
+    .assumptions([format!(
+        "i.i.d. trajectories; intervals at level 1 − α, α = {alpha:.0e}: log ratio ± z·(bootstrap s.e., 400 resamples)"
+    )])
     .bound(1.0)
     .measured(
         Measured::statistic(r.total.value)
@@ -310,7 +328,7 @@ mod tests {
     fn per_coordinate_ratios_and_the_verdict() {
         let plain = alternating(200, 4.0, 1.0);
         let reduced = alternating(100, 0.5, 0.5);
-        let r = reduction(&plain, &reduced, 16, 200, 1);
+        let r = reduction(&plain, &reduced, 16, 200, 1, 0.05);
         let scale = (200.0 / 199.0) / (100.0 / 99.0);
         assert!((r.per_coordinate[0].value - scale * 16.0 / (16.0 * 0.25)).abs() < 1e-12);
         assert!((r.per_coordinate[1].value - scale * 1.0 / (16.0 * 0.25)).abs() < 1e-12);
@@ -321,7 +339,7 @@ mod tests {
         assert_eq!(reduction_verdict(&r), Verdict::Holds);
         let raised = alternating(100, 2.0, 2.0);
         assert_eq!(
-            reduction_verdict(&reduction(&plain, &raised, 16, 200, 1)),
+            reduction_verdict(&reduction(&plain, &raised, 16, 200, 1, 0.05)),
             Verdict::Fails
         );
     }
@@ -337,7 +355,7 @@ mod tests {
         };
         let plain = noise(40, 4.0, &mut rng);
         let baselined = noise(40, 1.0, &mut rng);
-        let r = reduction(&plain, &baselined, 16, 400, 2);
+        let r = reduction(&plain, &baselined, 16, 400, 2, 0.05);
         assert!(r.total.lo < 1.0 && r.total.hi > 1.0, "{:?}", r.total);
         assert_eq!(reduction_verdict(&r), Verdict::Inconclusive);
     }
