@@ -18,6 +18,7 @@ pub mod protocol;
 pub mod record;
 pub mod report;
 pub mod schedule;
+pub mod stage;
 pub mod stats;
 pub mod suite;
 

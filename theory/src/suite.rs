@@ -13,6 +13,7 @@ use crate::protocol::{
     STATISTICAL_CLAIMS, Sizes, real_sizes,
 };
 use crate::record::check::Check;
+use crate::stage::timed;
 use crate::stats::bonferroni;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, parse_exact};
@@ -54,23 +55,26 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
         let (send, receive) = std::sync::mpsc::channel();
         let m1_global = &m1;
         let storm = scope.spawn(move || -> Result<Vec<Check>, String> {
-            let g = global_constants(m1_global, s);
+            let g = timed("global constants", || global_constants(m1_global, s));
             // The receiver may be gone if the other part failed; then nothing needs `g`.
             let _ = send.send(g.clone());
-            Ok(statistical::storm_rows(m1_global, &g?, s, alpha))
+            let g = g?;
+            Ok(timed("STORM rows", || {
+                statistical::storm_rows(m1_global, &g, s, alpha)
+            }))
         });
-        let mut rows = exact_rows(profile, &m1)?;
-        let k = box_constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
-            .map_err(|e| e.to_string())?;
+        let mut rows = timed("exact rows", || exact_rows(profile, &m1))?;
+        let k = timed("box constants", || {
+            box_constants::compute(&m1, &[q("0")], Some(&q("7/8")), domain, s.bnb_tol, 200_000)
+        })
+        .map_err(|e| e.to_string())?;
         let coverage = coverage_for(profile == Profile::Full);
-        rows.push(toy_row(
-            &k,
-            "M1 (P2', c = 1/2, θ₁ = 0)",
-            domain,
-            coverage,
-            "8",
-        ));
-        let second = second_toy::rows(second_toy::sizes(profile == Profile::Full))?;
+        rows.push(timed("row 8 (re-check)", || {
+            toy_row(&k, "M1 (P2', c = 1/2, θ₁ = 0)", domain, coverage, "8")
+        }));
+        let second = timed("second toy", || {
+            second_toy::rows(second_toy::sizes(profile == Profile::Full))
+        })?;
         let mc = McSettings {
             runs: s.runs,
             alpha,
@@ -78,20 +82,26 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
         let g = receive
             .recv()
             .map_err(|_| "the global constants' thread ended without a result".to_string())??;
-        rows.extend(statistical::toy_rows(&m1, &k, &g, s, mc));
-        rows.extend(baselined_sgd::rows(
-            &m1,
-            &k,
-            domain,
-            baselined_sgd::Sizes {
-                tol: s.bnb_tol,
-                max_boxes: 200_000,
-                k: s.sgd_k,
-            },
-            mc,
-            coverage,
-        ));
-        rows.push(global_row(&g, "M1 (P2', c = 1/2, θ₁ = 0)", coverage));
+        rows.extend(timed("toy Monte-Carlo rows", || {
+            statistical::toy_rows(&m1, &k, &g, s, mc)
+        }));
+        rows.extend(timed("row 1.b", || {
+            baselined_sgd::rows(
+                &m1,
+                &k,
+                domain,
+                baselined_sgd::Sizes {
+                    tol: s.bnb_tol,
+                    max_boxes: 200_000,
+                    k: s.sgd_k,
+                },
+                mc,
+                coverage,
+            )
+        }));
+        rows.push(timed("global constants' re-check", || {
+            global_row(&g, "M1 (P2', c = 1/2, θ₁ = 0)", coverage)
+        }));
         rows.extend(second);
         rows.extend(
             storm
@@ -177,15 +187,24 @@ pub fn global_constants(m1: &ToyMdp, s: Sizes) -> Result<GlobalConstants, String
 }
 
 /// The whole table: [`exact_suite`] on the box holding every SGD iterate of check 1 (η = 0.05,
-/// K = 1000, G_∞ in closed form), then [`real_environments`].
+/// K = 1000, G_∞ in closed form), then [`real_environments`] (computed on a thread of its own
+/// meanwhile; the rows and their order do not depend on the number of cores).
 ///
 /// # Errors
 /// As the two parts.
 pub fn whole_table(profile: Profile) -> Result<Vec<Check>, String> {
     let r = 1000.0 * 0.05 * tied_softmax_g_inf_closed_form(3, 0.5);
-    let mut rows = exact_suite(profile, &[[-r, r]])?;
-    rows.extend(real_environments(profile)?);
-    Ok(rows)
+    // The real-environment rows share nothing with the exact suite: they run on a thread of
+    // their own, seeded as before, and their rows follow the exact suite's.
+    std::thread::scope(|scope| {
+        let real = scope.spawn(|| real_environments(profile));
+        let mut rows = exact_suite(profile, &[[-r, r]])?;
+        rows.extend(
+            real.join()
+                .map_err(|_| "the real-environment rows' thread panicked".to_string())??,
+        );
+        Ok(rows)
+    })
 }
 
 /// Checks 6 and 7 on CartPole (softmax learner, LQR expert; T = 500 with resets) and the
@@ -219,44 +238,52 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         stride: 20,
         eta0,
     };
-    rows.push(sgd_row(
-        "7a",
-        "CartPole, fixed-500-reset, softmax learner",
-        &cp,
-        &cartpole_theta(),
-        es(0.1, 0.5, 0.01),
-    ));
-    rows.push(sgd_row(
-        "7b",
-        "obstacle, fixed-200-absorb, linear-Gaussian learner",
-        &ob,
-        &obstacle_theta(),
-        es(0.005, 0.01, 0.01),
-    ));
-    rows.extend(task_rows(
-        "a",
-        &TaskSetup {
-            name: "CartPole, fixed-500-reset".into(),
-            problem: &cp,
-            theta: cartpole_theta(),
-            eta: CARTPOLE_STORM_ETA,
-            controls: vec![Mutation::DropCrossReset, Mutation::Reversed],
-            note: String::new(),
-        },
-        cs,
-    )?);
-    rows.extend(task_rows(
-        "b",
-        &TaskSetup {
-            name: "obstacle, fixed-200-absorb".into(),
-            problem: &ob,
-            theta: obstacle_theta(),
-            eta: OBSTACLE_STORM_ETA,
-            controls: vec![Mutation::DropTail, Mutation::DropEndScore],
-            note: OBSTACLE_Z_TREND.into(),
-        },
-        os,
-    )?);
+    rows.push(timed("row 7a", || {
+        sgd_row(
+            "7a",
+            "CartPole, fixed-500-reset, softmax learner",
+            &cp,
+            &cartpole_theta(),
+            es(0.1, 0.5, 0.01),
+        )
+    }));
+    rows.push(timed("row 7b", || {
+        sgd_row(
+            "7b",
+            "obstacle, fixed-200-absorb, linear-Gaussian learner",
+            &ob,
+            &obstacle_theta(),
+            es(0.005, 0.01, 0.01),
+        )
+    }));
+    rows.extend(timed("rows 6a", || {
+        task_rows(
+            "a",
+            &TaskSetup {
+                name: "CartPole, fixed-500-reset".into(),
+                problem: &cp,
+                theta: cartpole_theta(),
+                eta: CARTPOLE_STORM_ETA,
+                controls: vec![Mutation::DropCrossReset, Mutation::Reversed],
+                note: String::new(),
+            },
+            cs,
+        )
+    })?);
+    rows.extend(timed("rows 6b", || {
+        task_rows(
+            "b",
+            &TaskSetup {
+                name: "obstacle, fixed-200-absorb".into(),
+                problem: &ob,
+                theta: obstacle_theta(),
+                eta: OBSTACLE_STORM_ETA,
+                controls: vec![Mutation::DropTail, Mutation::DropEndScore],
+                note: OBSTACLE_Z_TREND.into(),
+            },
+            os,
+        )
+    })?);
     // The variance the leave-one-out baseline removes, at θ = 0 and at a DAgger solution.
     let n_var = if full { 8000 } else { 2000 };
     let rounds = 30;
@@ -277,47 +304,53 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
             },
         ]
     };
-    let cp_dagger = dagger_solution(&cp, rounds, 1)?;
-    rows.extend(variance_rows(
-        "a",
-        "CartPole, fixed-500-reset",
-        &cp,
-        &points(cartpole_theta(), cp_dagger),
-        n_var,
-        BASELINE_M,
-        cs.alpha,
-    )?);
-    let ob_dagger = dagger_solution(&ob, rounds, 1)?;
-    rows.extend(variance_rows(
-        "b",
-        "obstacle, fixed-200-absorb",
-        &ob,
-        &points(obstacle_theta(), ob_dagger),
-        n_var,
-        BASELINE_M,
-        os.alpha,
-    )?);
+    rows.extend(timed("rows 6a.b.var", || {
+        let cp_dagger = dagger_solution(&cp, rounds, 1)?;
+        variance_rows(
+            "a",
+            "CartPole, fixed-500-reset",
+            &cp,
+            &points(cartpole_theta(), cp_dagger),
+            n_var,
+            BASELINE_M,
+            cs.alpha,
+        )
+    })?);
+    rows.extend(timed("rows 6b.b.var", || {
+        let ob_dagger = dagger_solution(&ob, rounds, 1)?;
+        variance_rows(
+            "b",
+            "obstacle, fixed-200-absorb",
+            &ob,
+            &points(obstacle_theta(), ob_dagger),
+            n_var,
+            BASELINE_M,
+            os.alpha,
+        )
+    })?);
     if full {
-        rows.extend(task_rows(
-            "e",
-            &TaskSetup {
-                name: "obstacle, episodic (control objective)".into(),
-                problem: &ob_episodic,
-                theta: obstacle_theta(),
-                eta: OBSTACLE_STORM_ETA,
-                controls: vec![Mutation::Reversed],
-                note: OBSTACLE_Z_TREND.into(),
-            },
-            // The episodic F is far from quadratic at h = 0.05 (Richardson's O(h²) term ≈ 350
-            // of its s.e., and the oracle "fails" with z ≈ 23 growing like √N: the reference's
-            // bias); h = 0.01 resolves it.
-            RealSizes {
-                h: 0.01,
-                n_oracle: 8000,
-                n_fd: 8000,
-                ..os
-            },
-        )?);
+        rows.extend(timed("rows 6e", || {
+            task_rows(
+                "e",
+                &TaskSetup {
+                    name: "obstacle, episodic (control objective)".into(),
+                    problem: &ob_episodic,
+                    theta: obstacle_theta(),
+                    eta: OBSTACLE_STORM_ETA,
+                    controls: vec![Mutation::Reversed],
+                    note: OBSTACLE_Z_TREND.into(),
+                },
+                // The episodic F is far from quadratic at h = 0.05 (Richardson's O(h²) term ≈ 350
+                // of its s.e., and the oracle "fails" with z ≈ 23 growing like √N: the reference's
+                // bias); h = 0.01 resolves it.
+                RealSizes {
+                    h: 0.01,
+                    n_oracle: 8000,
+                    n_fd: 8000,
+                    ..os
+                },
+            )
+        })?);
     }
     Ok(rows)
 }
