@@ -75,7 +75,7 @@
 
 use crate::env::cartpole::{CartPole, MAX_EPISODE_STEPS};
 use crate::env::{Env, EnvError};
-use crate::policy::{Mlp, MlpSoftmax, PolicyError, from_f64_exact, log_softmax, softmax_probs};
+use crate::policy::{Mlp, MlpSoftmax, PolicyError, from_f64_exact};
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar, Undecidable};
 use rand::seq::SliceRandom;
@@ -356,6 +356,7 @@ impl PpoConfig {
 }
 
 mod adam;
+mod batch;
 mod file;
 mod greedy;
 mod network;
@@ -365,6 +366,7 @@ mod trainer;
 mod tests;
 
 use adam::{Adam, clip_global_norm};
+use batch::BatchMlp;
 pub use file::PpoExpertFile;
 pub use greedy::{FAST_TANH_ERROR, PpoGreedy, fast_tanh};
 pub use network::{Evaluation, PpoExpert, evaluate_cartpole};
