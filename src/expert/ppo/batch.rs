@@ -5,10 +5,12 @@
 //! and gradients are those of the generic network bit for bit; only the loops differ. The first
 //! layer runs across the hidden units with W₁ stored by columns (one `h`-long column per input),
 //! tanh calls `exp` once per unit and finishes across the whole batch, the output layer runs
-//! four samples at a time (four independent sums, each still in hidden-unit order), and the
-//! per-sample gradients are added into the batch's gradient in sample order, as the trainer's
-//! `grad += g` did, with ∂/∂W₁ accumulated by columns and written in the [`Mlp`] layout at the
-//! end. The weights are checked once per [`BatchMlp::load`], not per sample.
+//! four samples and all outputs at a time (independent sums, each still in hidden-unit order),
+//! and the back-propagation is one pass over the hidden units per sample that adds the sample's
+//! gradient into the batch's in sample order (the generic path's `grad += g`), with ∂/∂W₁
+//! accumulated by columns and written in the [`Mlp`] layout at the end. The weights are checked
+//! once per [`BatchMlp::load`], not per sample; the observations and the pre-activations once
+//! per batch.
 
 use super::*;
 use crate::policy::check_vec;
@@ -32,8 +34,6 @@ pub(super) struct BatchMlp<const K: usize> {
     t: Vec<f64>,
     /// Outputs, one row per sample.
     out: Vec<[f64; K]>,
-    /// One sample's back-propagated hidden gradient `γ`.
-    gamma: Vec<f64>,
     /// ∂/∂W₁ of the batch by columns (as `w1t`).
     gw1t: Vec<f64>,
 }
@@ -48,7 +48,6 @@ impl<const K: usize> BatchMlp<K> {
             u: Vec::new(),
             t: Vec::new(),
             out: Vec::new(),
-            gamma: vec![0.0; hidden],
             gw1t: vec![0.0; N * hidden],
         }
     }
@@ -96,15 +95,12 @@ impl<const K: usize> BatchMlp<K> {
         self.out.resize(m, [0.0; K]);
         let b1 = &self.theta[h * N..h * N + h];
         // x_i = Σ_j (W₁)_ij φ_j from 0, in j order, then + (b₁)_i.
-        for (x, phi) in self.u.chunks_exact_mut(h).zip(obs) {
-            x.fill(0.0);
-            for (col, &p) in self.w1t.chunks_exact(h).zip(phi) {
-                for (xi, &w) in x.iter_mut().zip(col) {
-                    *xi += w * p;
-                }
-            }
-            for (xi, &b) in x.iter_mut().zip(b1) {
-                *xi += b;
+        let (c0, rest) = self.w1t.split_at(h);
+        let (c1, rest) = rest.split_at(h);
+        let (c2, c3) = rest.split_at(h);
+        for (x, &[p0, p1, p2, p3]) in self.u.chunks_exact_mut(h).zip(obs) {
+            for i in 0..h {
+                x[i] = 0.0 + c0[i] * p0 + c1[i] * p1 + c2[i] * p2 + c3[i] * p3 + b1[i];
             }
         }
         if !self.u.iter().fold(true, |ok, x| ok & x.is_finite()) {
@@ -129,17 +125,18 @@ impl<const K: usize> BatchMlp<K> {
             let (u0, rest) = u.split_at(h);
             let (u1, rest) = rest.split_at(h);
             let (u2, u3) = rest.split_at(h);
-            for r in 0..K {
-                let w = &w2[r * h..(r + 1) * h];
-                let mut acc = [0.0; 4];
-                for i in 0..h {
-                    acc[0] += w[i] * u0[i];
-                    acc[1] += w[i] * u1[i];
-                    acc[2] += w[i] * u2[i];
-                    acc[3] += w[i] * u3[i];
+            let mut acc = [[0.0; 4]; K];
+            for i in 0..h {
+                for (a, w) in acc.iter_mut().zip(w2.chunks_exact(h)) {
+                    a[0] += w[i] * u0[i];
+                    a[1] += w[i] * u1[i];
+                    a[2] += w[i] * u2[i];
+                    a[3] += w[i] * u3[i];
                 }
-                for (ol, a) in o.iter_mut().zip(acc) {
-                    ol[r] = a + b2[r];
+            }
+            for (r, a) in acc.iter().enumerate() {
+                for (ol, al) in o.iter_mut().zip(a) {
+                    ol[r] = al + b2[r];
                 }
             }
         }
@@ -169,26 +166,24 @@ impl<const K: usize> BatchMlp<K> {
         let (_, rest) = grad.split_at_mut(h * N);
         let (gb1, rest) = rest.split_at_mut(h);
         let (gw2, gb2) = rest.split_at_mut(K * h);
-        for ((u, phi), d) in self.u.chunks_exact(h).zip(obs).zip(delta) {
-            // γ_i = (Σ_r (W₂)_ri δ_r from 0, in r order) · (1 − u_i²).
-            for (i, (g, &ui)) in self.gamma.iter_mut().zip(u).enumerate() {
+        let (g0, rest) = self.gw1t.split_at_mut(h);
+        let (g1, rest) = rest.split_at_mut(h);
+        let (g2, g3) = rest.split_at_mut(h);
+        for ((u, &[p0, p1, p2, p3]), d) in self.u.chunks_exact(h).zip(obs).zip(delta) {
+            for i in 0..h {
+                // γ_i = (Σ_r (W₂)_ri δ_r from 0, in r order) · (1 − u_i²).
                 let mut back = 0.0;
                 for r in 0..K {
                     back += w2[r * h + i] * d[r];
                 }
-                *g = back * (1.0 - ui * ui);
-            }
-            for (col, &p) in self.gw1t.chunks_exact_mut(h).zip(phi) {
-                for (a, &g) in col.iter_mut().zip(&self.gamma) {
-                    *a += g * p;
-                }
-            }
-            for (a, &g) in gb1.iter_mut().zip(&self.gamma) {
-                *a += g;
-            }
-            for (row, &dr) in gw2.chunks_exact_mut(h).zip(d) {
-                for (a, &ui) in row.iter_mut().zip(u) {
-                    *a += dr * ui;
+                let g = back * (1.0 - u[i] * u[i]);
+                g0[i] += g * p0;
+                g1[i] += g * p1;
+                g2[i] += g * p2;
+                g3[i] += g * p3;
+                gb1[i] += g;
+                for r in 0..K {
+                    gw2[r * h + i] += d[r] * u[i];
                 }
             }
             for (a, &dr) in gb2.iter_mut().zip(d) {
