@@ -90,7 +90,8 @@ fn run() -> Result<ExitCode, Box<dyn std::error::Error>> {
         summary.episodes,
         evaluation.mean_return,
     );
-    // The same evaluation through the public helper (a consistency check of the expert's API).
+    // The same evaluation through the public helper and the expert's exact forward pass (a
+    // consistency check of the expert's API: `evaluate` acts through its greedy labeller).
     let again = evaluate_cartpole(|s| expert.action(s), evaluation.first_seed, EVAL_EPISODES)?;
     assert_eq!(again, evaluation, "evaluation is deterministic");
     if evaluation.mean_return < TARGET_MEAN_RETURN && !args.allow_below_target {

@@ -364,7 +364,7 @@ fn divergence_is_an_error_naming_the_iteration() {
 /// The recorded command retrains the committed expert bit for bit (same platform), and full
 /// training reaches the target.
 #[test]
-#[ignore = "trains PPO to ≥ 495 (≈ 15–30 s in release, ≈ 40 s at opt-level 1)"]
+#[ignore = "trains PPO for 100 096 steps to ≥ 495 (run it in release)"]
 fn retraining_reproduces_the_committed_expert() {
     let file = PpoExpertFile::read(committed_path()).unwrap();
     let (expert, summary) = train(&file.config, file.seed, |_| {}).unwrap();

@@ -25,8 +25,11 @@
 //! entropy:    c_H π_b (ln π_b + H)   (the gradient of −c_H H, H = −Σ_b π_b ln π_b)
 //! ```
 //!
-//! Each network has its own Adam optimiser (Kingma & Ba 2015; a minimal private one) with optional
-//! global-norm gradient clipping. [`PpoConfig::envs`] copies of CartPole are stepped one after the
+//! Each network has its own Adam optimiser (Kingma & Ba 2015) with optional global-norm gradient
+//! clipping: a minimal private one on the flat `f64` weights, with the bias corrections from
+//! `β^t` by `powi` and the learning rate annealed per step. The kit's [`crate::algo::adam`]
+//! keeps running products of `β` and rounds `(1 − β₂)g²` in another order, so it would not
+//! reproduce the stored expert's weights. [`PpoConfig::envs`] copies of CartPole are stepped one after the
 //! other (as Gymnasium's synchronous vector environment with auto-reset), each for
 //! [`PpoConfig::steps_per_env`] steps per iteration; then [`PpoConfig::epochs`] passes over the
 //! shuffled batch in mini-batches. With [`PpoConfig::anneal`], the learning rates and ε decay
@@ -42,8 +45,10 @@
 //! **Determinism.** Everything is `f64`, single-threaded, and every draw (network initialisation,
 //! resets, action samples, mini-batch shuffles) comes from one [`KitRng`] seeded with the run's
 //! seed, in a fixed order: the same configuration and seed give bit-identical weights (on one
-//! platform: `exp`/`ln` come from the system's libm). A NaN or infinity anywhere in training is a
-//! [`PpoError`] naming the iteration, never a silent NaN.
+//! platform: `exp`/`ln` come from the system's libm). The trainer evaluates the networks with
+//! `f64` batch passes over each mini-batch that perform the generic [`Mlp`] passes' operations
+//! in the same order (`tests.rs` compares them, and the update, bit for bit). A NaN or infinity
+//! anywhere in training is a [`PpoError`] naming the iteration, never a silent NaN.
 //!
 //! # The stored expert and how to retrain it
 //! `experts/cartpole-ppo.json` holds the configuration, the seed, both networks' weights, the
@@ -53,11 +58,11 @@
 //! cargo run --release --example train_ppo -- --seed 1 --out experts/cartpole-ppo.json
 //! ```
 //!
-//! (the default [`PpoConfig`], 100 096 environment steps in 391 iterations; 14.5 s of CPU time,
-//! 16.7 s wall, on a shared 2-core x86-64 VM, single-threaded). With the default configuration,
-//! training seeds 1 to 8 each gave a greedy mean return of 500 (every episode 500) on the
-//! standard evaluation; the stored expert is seed 1. `tests/environments/ppo.rs` retrains it (an ignored test,
-//! run in release) and checks the weights bit for bit.
+//! (the default [`PpoConfig`], 100 096 environment steps in 391 iterations, single-threaded; its
+//! time and where it goes are in `benches/README.md`, "PPO expert training"). With the default
+//! configuration, training seeds 1 to 8 each gave a greedy mean return of 500 (every episode
+//! 500) on the standard evaluation; the stored expert is seed 1. `tests/environments/ppo.rs`
+//! retrains it (an ignored test, run in release) and checks the weights bit for bit.
 //!
 //! [`PpoExpert::load`] validates a file: format and version, the configuration
 //! ([`PpoConfig::validate`]), the number of weights of each network (from the hidden width) and
@@ -75,7 +80,7 @@
 
 use crate::env::cartpole::{CartPole, MAX_EPISODE_STEPS};
 use crate::env::{Env, EnvError};
-use crate::policy::{Mlp, MlpSoftmax, PolicyError, from_f64_exact, log_softmax, softmax_probs};
+use crate::policy::{Mlp, MlpSoftmax, PolicyError, from_f64_exact};
 use crate::problem::KitRng;
 use crate::scalar::{Real, Scalar, Undecidable};
 use rand::seq::SliceRandom;
@@ -356,6 +361,7 @@ impl PpoConfig {
 }
 
 mod adam;
+mod batch;
 mod file;
 mod greedy;
 mod network;
@@ -365,6 +371,7 @@ mod trainer;
 mod tests;
 
 use adam::{Adam, clip_global_norm};
+use batch::BatchMlp;
 pub use file::PpoExpertFile;
 pub use greedy::{FAST_TANH_ERROR, PpoGreedy, fast_tanh};
 pub use network::{Evaluation, PpoExpert, evaluate_cartpole};

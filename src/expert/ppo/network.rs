@@ -152,12 +152,15 @@ impl PpoExpert {
         Ok(f.output[0])
     }
 
-    /// The greedy actor's [`evaluate_cartpole`] on the standard seeds (`0..100`).
+    /// The greedy actor's [`evaluate_cartpole`] on the standard seeds (`0..100`), acting through
+    /// [`PpoExpert::greedy_in`]`::<f64>` (the actions of [`PpoExpert::action`], without its
+    /// per-call allocations).
     ///
     /// # Errors
     /// As [`evaluate_cartpole`].
     pub fn evaluate(&self) -> Result<Evaluation, PpoError> {
-        evaluate_cartpole(|s| self.action(s), EVAL_FIRST_SEED, EVAL_EPISODES)
+        let greedy = self.greedy_in::<f64>()?;
+        evaluate_cartpole(|s| greedy.action(s), EVAL_FIRST_SEED, EVAL_EPISODES)
     }
 
     /// Loads and validates a stored expert ([`PpoExpertFile::read`]).

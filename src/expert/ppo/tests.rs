@@ -1,6 +1,8 @@
 //! Unit tests of the PPO trainer, network and file format.
 
+use super::trainer::{Sample, softmax_and_log};
 use super::*;
+use crate::policy::{log_softmax, softmax_probs};
 
 /// The logit gradient of the surrogate and of the entropy against central differences.
 #[test]
@@ -118,5 +120,234 @@ fn truncation_bootstraps_and_termination_does_not() {
         let delta = 1.0 + gamma * last.value - before.value;
         assert_eq!(before.advantage, delta + gamma * lambda * last.advantage);
         assert_eq!(last.target, last.advantage + last.value);
+    }
+}
+
+/// The mini-batch update written with the generic [`Mlp`] passes, one sample at a time (a
+/// reference for [`PpoTrainer::update`], which must give the same weights bit for bit).
+fn reference_update(
+    t: &mut PpoTrainer,
+    iteration: usize,
+    schedule: f64,
+    batch: &[Sample],
+    chunk: &[usize],
+) -> Result<[f64; 5], PpoError> {
+    let net_err = |source| PpoError::Network { iteration, source };
+    let non_finite = |what| PpoError::NonFinite { iteration, what };
+    let n = chunk.len() as f64;
+    let (mean, std) = if t.config.normalize_advantages {
+        let mean = chunk.iter().map(|&i| batch[i].advantage).sum::<f64>() / n;
+        let var = chunk
+            .iter()
+            .map(|&i| (batch[i].advantage - mean).powi(2))
+            .sum::<f64>()
+            / n;
+        (mean, var.sqrt() + 1e-8)
+    } else {
+        (0.0, 1.0)
+    };
+    let eps = t.config.clip_epsilon * schedule;
+    let c_h = t.config.entropy_coefficient;
+    let mut actor_grad = vec![0.0; t.actor.len()];
+    let mut critic_grad = vec![0.0; t.critic.len()];
+    let mut sums = [0.0; 5];
+    for &i in chunk {
+        let s = &batch[i];
+        let adv = (s.advantage - mean) / std;
+        // Actor.
+        let f = t
+            .actor_net
+            .net()
+            .forward(&t.actor, &s.obs)
+            .map_err(net_err)?;
+        let probs = softmax_probs(&f.output).map_err(net_err)?;
+        let log_probs: Vec<f64> = (0..ACTIONS)
+            .map(|b| log_softmax(&f.output, b))
+            .collect::<Result<_, _>>()
+            .map_err(net_err)?;
+        let log_ratio = log_probs[s.action] - s.log_prob;
+        let ratio = log_ratio.exp();
+        let unclipped = ratio * adv;
+        let clipped = ratio.clamp(1.0 - eps, 1.0 + eps) * adv;
+        let entropy = -probs
+            .iter()
+            .zip(&log_probs)
+            .map(|(p, l)| p * l)
+            .sum::<f64>();
+        let mut dz = [0.0; ACTIONS];
+        if unclipped <= clipped {
+            for b in 0..ACTIONS {
+                let e = if b == s.action { 1.0 } else { 0.0 };
+                dz[b] = -adv * ratio * (e - probs[b]) / n;
+            }
+        }
+        if c_h > 0.0 {
+            for b in 0..ACTIONS {
+                dz[b] += c_h * probs[b] * (log_probs[b] + entropy) / n;
+            }
+        }
+        let g = t
+            .actor_net
+            .net()
+            .backward(&t.actor, &s.obs, &f, &dz)
+            .map_err(net_err)?;
+        actor_grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+        // Critic.
+        let f = t.critic_net.forward(&t.critic, &s.obs).map_err(net_err)?;
+        let err = f.output[0] - s.target;
+        let g = t
+            .critic_net
+            .backward(&t.critic, &s.obs, &f, &[err / n])
+            .map_err(net_err)?;
+        critic_grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+        sums[0] += unclipped.min(clipped);
+        sums[1] += 0.5 * err * err;
+        sums[2] += entropy;
+        sums[3] += (ratio - 1.0) - log_ratio;
+        sums[4] += f64::from(u8::from((ratio - 1.0).abs() > eps));
+    }
+    if !sums.iter().all(|x| x.is_finite()) {
+        return Err(non_finite("loss"));
+    }
+    if !actor_grad.iter().all(|x| x.is_finite()) {
+        return Err(non_finite("actor gradient"));
+    }
+    if !critic_grad.iter().all(|x| x.is_finite()) {
+        return Err(non_finite("critic gradient"));
+    }
+    clip_global_norm(&mut actor_grad, t.config.max_grad_norm);
+    clip_global_norm(&mut critic_grad, t.config.max_grad_norm);
+    t.actor_adam.step(
+        &mut t.actor,
+        &actor_grad,
+        t.config.actor_learning_rate * schedule,
+    );
+    t.critic_adam.step(
+        &mut t.critic,
+        &critic_grad,
+        t.config.critic_learning_rate * schedule,
+    );
+    if !t.actor.iter().all(|x| x.is_finite()) {
+        return Err(non_finite("actor weights"));
+    }
+    if !t.critic.iter().all(|x| x.is_finite()) {
+        return Err(non_finite("critic weights"));
+    }
+    Ok(sums)
+}
+
+/// Random weights with non-zero biases, for the pass comparisons.
+fn random_weights(net: &Mlp, rng: &mut KitRng) -> Vec<f64> {
+    let mut w: Vec<f64> = net.init(rng);
+    for x in w.iter_mut().filter(|x| **x == 0.0) {
+        *x = rng.random::<f64>() - 0.5;
+    }
+    w
+}
+
+/// [`BatchMlp`]'s outputs and batch gradient equal the generic network's per-sample forward
+/// passes and in-order sum of back-propagated gradients, bit for bit (both tanh branches, batch
+/// sizes that are and are not multiples of four, and a zero input).
+#[test]
+fn batch_passes_match_the_generic_network_bit_for_bit() {
+    fn check<const K: usize>(hidden: usize, samples: usize, rng: &mut KitRng) {
+        let net = Mlp::new(OBSERVATION_DIM, hidden, K).unwrap();
+        let theta = random_weights(&net, rng);
+        let mut obs: Vec<[f64; 4]> = (0..samples)
+            .map(|_| std::array::from_fn(|_| 6.0 * (rng.random::<f64>() - 0.5)))
+            .collect();
+        obs[0] = [0.0; 4];
+        let delta: Vec<[f64; K]> = (0..samples)
+            .map(|_| std::array::from_fn(|_| rng.random::<f64>() - 0.5))
+            .collect();
+        let mut pass = BatchMlp::<K>::new(hidden);
+        pass.load(&theta).unwrap();
+        pass.forward(&obs).unwrap();
+        let mut grad = vec![f64::NAN; theta.len()];
+        pass.backward(&obs, &delta, &mut grad);
+        let mut expected = vec![0.0; theta.len()];
+        for (s, (phi, d)) in obs.iter().zip(&delta).enumerate() {
+            let f = net.forward(&theta, phi).unwrap();
+            let got = pass.outputs()[s];
+            assert_eq!(
+                f.output.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                got.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                "output of sample {s}"
+            );
+            let g = net.backward(&theta, phi, &f, d).unwrap();
+            expected.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+        }
+        for (i, (a, b)) in grad.iter().zip(&expected).enumerate() {
+            assert_eq!(a.to_bits(), b.to_bits(), "gradient entry {i}: {a} vs {b}");
+        }
+    }
+    let mut rng = KitRng::seed_from_u64(17);
+    for samples in [1, 4, 7, 256] {
+        check::<2>(64, samples, &mut rng);
+        check::<1>(64, samples, &mut rng);
+        check::<3>(5, samples, &mut rng);
+    }
+}
+
+/// [`softmax_and_log`] equals [`softmax_probs`] and [`log_softmax`] bit for bit.
+#[test]
+fn softmax_and_log_match_the_generic_functions() {
+    for z in [[0.3, -0.4], [-700.0, 30.0], [0.0, 0.0], [1e-300, -1e-300]] {
+        let (p, lp) = softmax_and_log(&z).unwrap();
+        let expected = softmax_probs(&z).unwrap();
+        for b in 0..ACTIONS {
+            assert_eq!(p[b].to_bits(), expected[b].to_bits(), "{z:?}");
+            assert_eq!(
+                lp[b].to_bits(),
+                log_softmax(&z, b).unwrap().to_bits(),
+                "{z:?}"
+            );
+        }
+    }
+    assert!(softmax_and_log(&[f64::NAN, 0.0]).is_err());
+}
+
+/// [`PpoTrainer::update`] gives the reference update's weights, optimiser state and sums bit for
+/// bit, with and without the entropy bonus and advantage normalisation, on mini-batches of the
+/// rollout's size and smaller.
+#[test]
+fn update_matches_the_reference_update_bit_for_bit() {
+    for config in [
+        PpoConfig {
+            total_steps: 2048,
+            ..PpoConfig::default()
+        },
+        PpoConfig {
+            hidden: 7,
+            envs: 3,
+            steps_per_env: 10,
+            total_steps: 300,
+            minibatch_size: 7,
+            entropy_coefficient: 0.05,
+            normalize_advantages: false,
+            max_grad_norm: None,
+            ..PpoConfig::default()
+        },
+    ] {
+        let mut fast = PpoTrainer::new(&config, 5).unwrap();
+        let mut reference = fast.clone();
+        for iteration in 1..=3 {
+            let mut batch: Vec<Sample> = Vec::new();
+            fast.rollout(iteration, &mut batch).unwrap();
+            let mut batch_ref: Vec<Sample> = Vec::new();
+            reference.rollout(iteration, &mut batch_ref).unwrap();
+            let order: Vec<usize> = (0..batch.len()).rev().collect();
+            for chunk in order.chunks(config.minibatch_size) {
+                let a = fast.update(iteration, 0.9, &batch, chunk).unwrap();
+                let b =
+                    reference_update(&mut reference, iteration, 0.9, &batch_ref, chunk).unwrap();
+                assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+            }
+            let bits = |w: &[f64]| w.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast.actor), bits(&reference.actor));
+            assert_eq!(bits(&fast.critic), bits(&reference.critic));
+            assert_eq!(bits(&fast.actor_adam.m), bits(&reference.actor_adam.m));
+            assert_eq!(bits(&fast.critic_adam.v), bits(&reference.critic_adam.v));
+        }
     }
 }

@@ -50,6 +50,19 @@ pub(super) struct Worker {
     pub(super) episode_return: f64,
 }
 
+/// The buffers of a mini-batch update, reused from one to the next.
+#[derive(Debug, Clone)]
+pub(super) struct Scratch {
+    /// The mini-batch's observations, in its order.
+    pub(super) obs: Vec<[f64; OBSERVATION_DIM]>,
+    /// Per sample, the gradient of its loss term with respect to the logits and to the value.
+    pub(super) actor_delta: Vec<[f64; ACTIONS]>,
+    pub(super) critic_delta: Vec<[f64; 1]>,
+    /// The mini-batch's gradients ([`Mlp`] layout).
+    pub(super) actor_grad: Vec<f64>,
+    pub(super) critic_grad: Vec<f64>,
+}
+
 /// One step of a rollout.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Sample {
@@ -76,6 +89,10 @@ pub struct PpoTrainer {
     pub(super) critic_adam: Adam,
     pub(super) workers: Vec<Worker>,
     pub(super) rng: KitRng,
+    /// The actor's and the critic's batch passes, and the mini-batch buffers.
+    pub(super) actor_pass: BatchMlp<ACTIONS>,
+    pub(super) critic_pass: BatchMlp<1>,
+    pub(super) scratch: Scratch,
     pub(super) iteration: usize,
     pub(super) env_steps: usize,
     pub(super) episodes: usize,
@@ -111,6 +128,15 @@ impl PpoTrainer {
         Ok(PpoTrainer {
             actor_adam: Adam::new(actor.len(), config),
             critic_adam: Adam::new(critic.len(), config),
+            actor_pass: BatchMlp::new(config.hidden),
+            critic_pass: BatchMlp::new(config.hidden),
+            scratch: Scratch {
+                obs: Vec::with_capacity(config.minibatch_size),
+                actor_delta: Vec::with_capacity(config.minibatch_size),
+                critic_delta: Vec::with_capacity(config.minibatch_size),
+                actor_grad: vec![0.0; actor.len()],
+                critic_grad: vec![0.0; critic.len()],
+            },
             config: config.clone(),
             seed,
             actor_net,
@@ -241,23 +267,22 @@ impl PpoTrainer {
         let mut episodes = 0;
         let mut return_sum = 0.0;
         let net_err = |source| PpoError::Network { iteration, source };
+        self.actor_pass.load(&self.actor).map_err(net_err)?;
+        self.critic_pass.load(&self.critic).map_err(net_err)?;
         for w in 0..self.workers.len() {
             let start = batch.len();
             // Per step: reward, terminated, the value to bootstrap from at a truncation, ended.
             let mut ends: Vec<(f64, bool, f64, bool)> = Vec::with_capacity(steps);
             for _ in 0..steps {
                 let obs = self.workers[w].obs;
-                let logits = self
-                    .actor_net
-                    .net()
-                    .forward(&self.actor, &obs)
-                    .map_err(net_err)?
-                    .output;
-                let probs = softmax_probs(&logits).map_err(net_err)?;
+                self.actor_pass.forward(&[obs]).map_err(net_err)?;
+                let (probs, log_probs) =
+                    softmax_and_log(&self.actor_pass.outputs()[0]).map_err(net_err)?;
                 let u: f64 = self.rng.random();
                 let action = usize::from(u >= probs[0]);
-                let log_prob = log_softmax(&logits, action).map_err(net_err)?;
-                let value = self.value(&obs, iteration)?;
+                let log_prob = log_probs[action];
+                self.critic_pass.forward(&[obs]).map_err(net_err)?;
+                let value = self.critic_pass.outputs()[0][0];
                 let worker = &mut self.workers[w];
                 let step = worker
                     .env
@@ -343,23 +368,32 @@ impl PpoTrainer {
         };
         let eps = self.config.clip_epsilon * schedule;
         let c_h = self.config.entropy_coefficient;
-        let mut actor_grad = vec![0.0; self.actor.len()];
-        let mut critic_grad = vec![0.0; self.critic.len()];
+        let Scratch {
+            obs,
+            actor_delta,
+            critic_delta,
+            actor_grad,
+            critic_grad,
+        } = &mut self.scratch;
+        obs.clear();
+        obs.extend(chunk.iter().map(|&i| batch[i].obs));
+        self.actor_pass.load(&self.actor).map_err(net_err)?;
+        self.actor_pass.forward(obs).map_err(net_err)?;
+        self.critic_pass.load(&self.critic).map_err(net_err)?;
+        self.critic_pass.forward(obs).map_err(net_err)?;
+        actor_delta.clear();
+        critic_delta.clear();
         let mut sums = [0.0; 5];
-        for &i in chunk {
+        let outputs = self
+            .actor_pass
+            .outputs()
+            .iter()
+            .zip(self.critic_pass.outputs());
+        for (&i, (logits, value)) in chunk.iter().zip(outputs) {
             let s = &batch[i];
             let adv = (s.advantage - mean) / std;
             // Actor.
-            let f = self
-                .actor_net
-                .net()
-                .forward(&self.actor, &s.obs)
-                .map_err(net_err)?;
-            let probs = softmax_probs(&f.output).map_err(net_err)?;
-            let log_probs: Vec<f64> = (0..ACTIONS)
-                .map(|b| log_softmax(&f.output, b))
-                .collect::<Result<_, _>>()
-                .map_err(net_err)?;
+            let (probs, log_probs) = softmax_and_log(logits).map_err(net_err)?;
             let log_ratio = log_probs[s.action] - s.log_prob;
             let ratio = log_ratio.exp();
             let unclipped = ratio * adv;
@@ -381,29 +415,18 @@ impl PpoTrainer {
                     dz[b] += c_h * probs[b] * (log_probs[b] + entropy) / n;
                 }
             }
-            let g = self
-                .actor_net
-                .net()
-                .backward(&self.actor, &s.obs, &f, &dz)
-                .map_err(net_err)?;
-            actor_grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+            actor_delta.push(dz);
             // Critic.
-            let f = self
-                .critic_net
-                .forward(&self.critic, &s.obs)
-                .map_err(net_err)?;
-            let err = f.output[0] - s.target;
-            let g = self
-                .critic_net
-                .backward(&self.critic, &s.obs, &f, &[err / n])
-                .map_err(net_err)?;
-            critic_grad.iter_mut().zip(&g).for_each(|(a, b)| *a += b);
+            let err = value[0] - s.target;
+            critic_delta.push([err / n]);
             sums[0] += unclipped.min(clipped);
             sums[1] += 0.5 * err * err;
             sums[2] += entropy;
             sums[3] += (ratio - 1.0) - log_ratio;
             sums[4] += f64::from(u8::from((ratio - 1.0).abs() > eps));
         }
+        self.actor_pass.backward(obs, actor_delta, actor_grad);
+        self.critic_pass.backward(obs, critic_delta, critic_grad);
         if !sums.iter().all(|x| x.is_finite()) {
             return Err(non_finite("loss"));
         }
@@ -413,16 +436,16 @@ impl PpoTrainer {
         if !critic_grad.iter().all(|x| x.is_finite()) {
             return Err(non_finite("critic gradient"));
         }
-        clip_global_norm(&mut actor_grad, self.config.max_grad_norm);
-        clip_global_norm(&mut critic_grad, self.config.max_grad_norm);
+        clip_global_norm(actor_grad, self.config.max_grad_norm);
+        clip_global_norm(critic_grad, self.config.max_grad_norm);
         self.actor_adam.step(
             &mut self.actor,
-            &actor_grad,
+            actor_grad,
             self.config.actor_learning_rate * schedule,
         );
         self.critic_adam.step(
             &mut self.critic,
-            &critic_grad,
+            critic_grad,
             self.config.critic_learning_rate * schedule,
         );
         if !self.actor.iter().all(|x| x.is_finite()) {
@@ -458,4 +481,32 @@ pub(super) fn networks(hidden: usize) -> Result<(MlpSoftmax, Mlp), PolicyError> 
         MlpSoftmax::new(OBSERVATION_DIM, hidden, ACTIONS)?,
         Mlp::new(OBSERVATION_DIM, hidden, 1)?,
     ))
+}
+
+/// `(softmax(z), log softmax(z))`: the operations of [`crate::policy::softmax_probs`] and of
+/// [`crate::policy::log_softmax`]
+/// for each action, in their order, sharing the exponentials and the logarithm of their sum
+/// (which both compute identically).
+///
+/// # Errors
+/// [`PolicyError::NonFinite`] for non-finite logits or probabilities, as
+/// [`crate::policy::softmax_probs`].
+pub(super) fn softmax_and_log(
+    z: &[f64; ACTIONS],
+) -> Result<([f64; ACTIONS], [f64; ACTIONS]), PolicyError> {
+    let mut c = f64::NEG_INFINITY;
+    for &x in z {
+        if !x.is_finite() {
+            return Err(PolicyError::NonFinite { param: "logits" });
+        }
+        c = c.max(x);
+    }
+    let e = z.map(|x| (x - c).exp());
+    let total = e.iter().fold(0.0, |acc, x| acc + x);
+    let probs = e.map(|x| x / total);
+    if !probs.iter().all(|p| p.is_finite()) {
+        return Err(PolicyError::NonFinite { param: "softmax" });
+    }
+    let ln_total = total.ln();
+    Ok((probs, z.map(|x| x - c - ln_total)))
 }
