@@ -7,11 +7,11 @@
 //! checkpoints (CartPole: mean reward and 500-step episodes; obstacle: success rate; toy: the
 //! exact F(θ)).
 
+use super::run::RunError;
 use super::run::config::RunFile;
 use super::run::evaluation::evaluate;
 use super::run::records::SavedTheta;
 use super::run::task::Bench;
-use super::run::RunError;
 use crate::evaluate::objective;
 use crate::problem::OracleError;
 use clap::Args;

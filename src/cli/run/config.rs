@@ -223,9 +223,41 @@ pub struct LoadedConfig {
     pub file: RunFile,
     /// The config file.
     pub path: PathBuf,
+    /// The `[algorithm]` table as written in the file (its numbers as the user wrote them).
+    pub raw_algorithm: Option<toml::Value>,
 }
 
 impl LoadedConfig {
+    /// The resolved config as TOML (what `config.toml` in the output directory holds): every
+    /// default filled in, the algorithm's numbers as the file wrote them (the kit writes a number
+    /// it did not read as an exact fraction, e.g. `"1/2"`).
+    ///
+    /// # Errors
+    /// A message if the config cannot be written as TOML.
+    pub fn to_toml(&self) -> Result<String, String> {
+        #[derive(Serialize)]
+        struct Out<'a> {
+            task: &'a TaskSection,
+            policy: &'a PolicySection,
+            algorithm: toml::Value,
+            run: &'a RunSection,
+            evaluation: &'a EvaluationSection,
+        }
+        let f = &self.file;
+        let mut algorithm = toml::Value::try_from(&f.algorithm).map_err(|e| e.to_string())?;
+        if let Some(raw) = &self.raw_algorithm {
+            overlay(&mut algorithm, raw);
+        }
+        toml::to_string(&Out {
+            task: &f.task,
+            policy: &f.policy,
+            algorithm,
+            run: &f.run,
+            evaluation: &f.evaluation,
+        })
+        .map_err(|e| e.to_string())
+    }
+
     /// An [`RunError::Invalid`] for `key` of this config.
     pub fn invalid(&self, key: &str, message: impl std::fmt::Display) -> RunError {
         invalid(&self.path, key, message)
@@ -273,15 +305,8 @@ impl RunFile {
         Ok(LoadedConfig {
             file,
             path: path.to_path_buf(),
+            raw_algorithm: raw.get("algorithm").cloned(),
         })
-    }
-
-    /// The resolved config as TOML (what `config.toml` in the output directory holds).
-    ///
-    /// # Errors
-    /// A message if the config cannot be written as TOML.
-    pub fn to_toml(&self) -> Result<String, String> {
-        toml::to_string(self).map_err(|e| e.to_string())
     }
 
     /// Whether the algorithm is one of the dataset learners (BC, DAgger, RRM, SMILe, forward
@@ -304,7 +329,10 @@ impl RunFile {
         let p = &mut self.policy;
         let not_for = |key: &str, set: bool| -> Result<(), RunError> {
             if set {
-                Err(bad(key, &format!("not a key of the {} task", t.name.name())))
+                Err(bad(
+                    key,
+                    &format!("not a key of the {} task", t.name.name()),
+                ))
             } else {
                 Ok(())
             }
@@ -424,13 +452,13 @@ impl RunFile {
         if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
             return Err(bad("run.seeds", &format!("seed {} is repeated", w[0])));
         }
-        if let Theta0::Values(v) = &r.theta0 {
-            if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
-                return Err(bad(
-                    "run.theta0",
-                    &format!("entry {i} (0-based) is not finite: {x}"),
-                ));
-            }
+        if let Theta0::Values(v) = &r.theta0
+            && let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite())
+        {
+            return Err(bad(
+                "run.theta0",
+                &format!("entry {i} (0-based) is not finite: {x}"),
+            ));
         }
         let budget = r.budget_calls;
         let e = &mut self.evaluation;
@@ -449,6 +477,23 @@ impl RunFile {
             ));
         }
         Ok(())
+    }
+}
+
+/// Replace the values of `written` by those of `raw` at the same keys (tables recursively).
+fn overlay(written: &mut toml::Value, raw: &toml::Value) {
+    match (written, raw) {
+        (toml::Value::Table(w), toml::Value::Table(r)) => {
+            for (k, rv) in r {
+                match w.get_mut(k) {
+                    Some(wv) => overlay(wv, rv),
+                    None => {
+                        w.insert(k.clone(), rv.clone());
+                    }
+                }
+            }
+        }
+        (w, r) => *w = r.clone(),
     }
 }
 

@@ -52,7 +52,12 @@ pub fn episode_seed(seed: u64, j: u64) -> u64 {
 ///
 /// # Errors
 /// A message if an episode, the expert or the policy fails.
-pub fn evaluate(bench: &Bench, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
+pub fn evaluate(
+    bench: &Bench,
+    theta: &[f64],
+    episodes: u32,
+    seed: u64,
+) -> Result<Evaluation, String> {
     match bench {
         Bench::CartPoleSoftmax(p) => cartpole(
             &p.task,

@@ -84,7 +84,6 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     driver::check_algorithm(&bench, &config)?;
     let out = output::OutputDir::create(&args.out)?;
     let toml = config
-        .file
         .to_toml()
         .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
     out.write("config.toml", &toml)?;

@@ -36,9 +36,7 @@ impl OutputDir {
     /// [`RunError::Io`] if the file cannot be written or renamed.
     pub fn write(&self, name: &str, text: &str) -> Result<(), RunError> {
         let target = self.dir.join(name);
-        let tmp = self
-            .dir
-            .join(format!(".{name}.tmp-{}", std::process::id()));
+        let tmp = self.dir.join(format!(".{name}.tmp-{}", std::process::id()));
         let result = (|| {
             let mut f = std::fs::File::create(&tmp)?;
             f.write_all(text.as_bytes())?;

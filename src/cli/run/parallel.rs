@@ -49,11 +49,10 @@ pub fn run_seeds(
                 let prev = last.swap(calls, Ordering::Relaxed);
                 bar.inc(calls.saturating_sub(prev));
             };
-            let r = run_seed(bench, config, seed, &report)
-                .and_then(|(run, timing)| {
-                    out.write_seed(&run, task, policy)?;
-                    Ok((run, timing))
-                });
+            let r = run_seed(bench, config, seed, &report).and_then(|(run, timing)| {
+                out.write_seed(&run, task, policy)?;
+                Ok((run, timing))
+            });
             bar.inc(budget.saturating_sub(last.load(Ordering::Relaxed)));
             if r.is_err() {
                 failed.store(true, Ordering::SeqCst);

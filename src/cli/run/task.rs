@@ -97,7 +97,7 @@ impl Bench {
                 let env = ObstacleConfig::default();
                 let params = VoExpertParams::default();
                 let task = ObstacleTask::new(env.clone(), params)
-                    .and_then(|t| t.with_features(f.policy.features.clone().unwrap_or_default()))
+                    .and_then(|t| t.with_features(f.policy.features.unwrap_or_default()))
                     .map_err(|e| config.invalid("policy.features", e))?
                     .with_actions::<[f64; 2]>();
                 let sigma = f.policy.sigma.unwrap_or(super::config::DEFAULT_SIGMA);
@@ -121,9 +121,8 @@ impl Bench {
                     .mdp
                     .as_ref()
                     .ok_or_else(|| config.invalid("task.mdp", "required for the toy task"))?;
-                let mdp = ToyMdp::load(path).map_err(|e| {
-                    config.invalid("task.mdp", format!("{}: {e}", path.display()))
-                })?;
+                let mdp = ToyMdp::load(path)
+                    .map_err(|e| config.invalid("task.mdp", format!("{}: {e}", path.display())))?;
                 Bench::Toy(ToyProblem::new(&mdp))
             }
         })
