@@ -510,7 +510,7 @@ fn check_known_keys(
         Some(key) => Err(invalid(
             path,
             &key,
-            "unknown key (docs/run.md and docs/architecture.md list each algorithm's keys)",
+            "unknown key (docs/run.md lists each algorithm's keys)",
         )),
         None => Ok(()),
     }
