@@ -30,8 +30,7 @@ enum Command {
     /// Replay an environment from a given state and action sequence.
     #[command(subcommand)]
     Replay(ReplayCommand),
-    /// Train a learner on a task as a TOML config says, for several seeds; per-checkpoint CSV and
-    /// JSON into an output directory (`--help` lists the config keys).
+    /// Train a learner as a TOML config says, one run per seed; CSV and JSON per checkpoint.
     Run(run::RunArgs),
     /// Evaluate a saved policy parameter (`theta-seed-<n>.json`) on a config's task.
     Eval(eval::EvalArgs),

@@ -61,7 +61,7 @@ Examples: examples/run/*.toml";
 #[derive(Debug, Args)]
 #[command(after_long_help = CONFIG_KEYS)]
 pub struct RunArgs {
-    /// The config file (TOML; the keys are listed below and in docs/run.md).
+    /// The config file (TOML; `--help` lists its keys, docs/run.md describes each one).
     #[arg(long, value_name = "FILE.toml")]
     pub config: PathBuf,
     /// The output directory (created if needed; files in it are replaced).

@@ -95,7 +95,7 @@ fn progress_bar(total: u64) -> ProgressBar {
     }
     let bar = ProgressBar::new(total);
     if let Ok(style) = ProgressStyle::with_template(
-        "{elapsed_precise} [{bar:40}] {human_pos}/{human_len} gradient calls, eta {eta}",
+        "{elapsed_precise} [{wide_bar}] {human_pos}/{human_len} gradient calls, eta {eta}",
     ) {
         bar.set_style(style.progress_chars("=> "));
     }
