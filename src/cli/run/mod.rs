@@ -3,7 +3,9 @@
 //!
 //! | module | what |
 //! |---|---|
-//! | [`config`] | the TOML schema, its defaults and validation |
+//! | [`config`] | the TOML schema and its loading |
+//! | `resolve` | defaults, absolute paths, range checks |
+//! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
 //! | [`task`] | the config's task, expert, policy and objective as an IL problem |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
 //! | [`driver`] | one seed's run with its checkpoints |
@@ -15,6 +17,7 @@
 //! `seed-<n>.json` and `theta-seed-<n>.json`, `summary.json`, and `timings.json`, the only file
 //! with wall times: every other file is byte-identical across reruns and thread counts.
 
+mod algorithm_keys;
 pub mod config;
 pub mod driver;
 pub mod error;
@@ -22,6 +25,7 @@ pub mod evaluation;
 pub mod output;
 pub mod parallel;
 pub mod records;
+mod resolve;
 pub mod task;
 
 pub use config::{LoadedConfig, RunFile};
