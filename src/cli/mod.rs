@@ -2,8 +2,10 @@
 //! dispatches. Errors go to stderr with a non-zero exit status (2 for usage errors, 1 for failures);
 //! results go to stdout as JSON.
 
+pub mod eval;
 pub mod expert;
 pub mod replay;
+pub mod run;
 pub mod toy;
 
 use clap::{Parser, Subcommand};
@@ -28,6 +30,10 @@ enum Command {
     /// Replay an environment from a given state and action sequence.
     #[command(subcommand)]
     Replay(ReplayCommand),
+    /// Train a learner as a TOML config says, one run per seed; CSV and JSON per checkpoint.
+    Run(run::RunArgs),
+    /// Evaluate a saved policy parameter (`theta-seed-<n>.json`) on a config's task.
+    Eval(eval::EvalArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -76,6 +82,8 @@ pub fn main() -> ExitCode {
         Command::Replay(ReplayCommand::Cartpole(args)) => {
             replay::run(&args).map_err(|e| e.to_string())
         }
+        Command::Run(args) => run::run(&args).map_err(|e| e.to_string()),
+        Command::Eval(args) => eval::run(&args).map_err(|e| e.to_string()),
     };
     match result {
         Ok(out) => {

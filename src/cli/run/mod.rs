@@ -1,0 +1,147 @@
+//! `ilopt run --config FILE.toml --out DIR [--threads N]`: train a learner on a task as a config
+//! file says, for every seed, and write per-checkpoint CSV and JSON into `DIR`.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`config`] | the TOML schema and its loading |
+//! | `resolve` | defaults, absolute paths, range checks |
+//! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
+//! | [`task`] | the config's task, expert, policy and objective as an IL problem |
+//! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
+//! | [`driver`] | one seed's run with its checkpoints |
+//! | [`parallel`] | the seeds on a thread pool, with a progress bar |
+//! | [`records`] | what is recorded: checkpoints, runs, timings, saved θ |
+//! | [`output`] | the output directory, written atomically |
+//!
+//! The output directory holds `config.toml` (the resolved config), per seed `seed-<n>.csv`,
+//! `seed-<n>.json` and `theta-seed-<n>.json`, `summary.json`, and `timings.json`, the only file
+//! with wall times: every other file is byte-identical across reruns and thread counts.
+
+mod algorithm_keys;
+pub mod config;
+pub mod driver;
+pub mod error;
+pub mod evaluation;
+pub mod output;
+pub mod parallel;
+pub mod records;
+mod resolve;
+pub mod task;
+
+pub use config::{LoadedConfig, RunFile};
+pub use error::RunError;
+
+use clap::Args;
+use records::SeedRun;
+use serde_json::{Value, json};
+use std::path::PathBuf;
+use task::Bench;
+
+/// The keys of a config file, for `ilopt run --help` (docs/run.md has the full reference).
+pub const CONFIG_KEYS: &str = "\
+CONFIG KEYS (docs/run.md has types, defaults and ranges; relative paths are relative to the config file)
+  [task]        name = \"cartpole\" | \"obstacle\" | \"toy\"
+                expert = \"ppo\" (built in) | \"lqr\"           cartpole; default ppo
+                expert_file = \"path.json\"                   cartpole: a PPO expert file instead
+                mdp = \"path.json\"                           toy: the MDP file (required)
+                horizon = \"fixed\" | \"episodic\"              default fixed
+                steps = T                                   fixed: default cartpole 500, obstacle 200
+                after_end = \"reset\" | \"absorb\"              fixed: default cartpole reset, obstacle absorb
+  [policy]      kind = \"softmax\" | \"logistic\"               cartpole; default softmax
+                sigma = 0.1                                 obstacle: σ > 0 of the linear-Gaussian learner
+                features = { kind = \"basic\" } | { kind = \"rbf\", per_axis, width, x_range, y_range }
+  [algorithm]   algorithm = \"sgd\" | \"storm\" | \"storm-plus\" | \"adam\" | \"rms-prop\" | \"o2nc\"
+                          | \"bc\" | \"dagger\" | \"rrm\" | \"smile\" | \"forward-training\" | …
+                and that algorithm's hyper-parameters (the schema of ilopt's AlgorithmConfig)
+  [run]         budget_calls = N                            budget in gradient calls, ≥ 1 (required)
+                seeds = [1, 2, 3]                           non-empty, distinct (required)
+                trajectories_per_gradient = 1               oracle methods, ≥ 1
+                theta0 = \"zero\" | [numbers]                 default zero
+  [evaluation]  every_calls = N                             checkpoint spacing, 1..=budget; default budget/10
+                episodes = 10                               deterministic episodes per checkpoint
+Examples: examples/run/*.toml";
+
+/// Arguments of `ilopt run`.
+#[derive(Debug, Args)]
+#[command(after_long_help = CONFIG_KEYS)]
+pub struct RunArgs {
+    /// The config file (TOML; `--help` lists its keys, docs/run.md describes each one).
+    #[arg(long, value_name = "FILE.toml")]
+    pub config: PathBuf,
+    /// The output directory (created if needed; files in it are replaced).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Threads running seeds in parallel (default: the available parallelism); the output does
+    /// not depend on it.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
+    pub threads: Option<u32>,
+}
+
+/// Run `ilopt run`: returns the summary (also written to `summary.json`).
+///
+/// # Errors
+/// [`RunError`] naming the file and key at fault, or the seed whose run failed.
+pub fn run(args: &RunArgs) -> Result<Value, RunError> {
+    let config = RunFile::load(&args.config)?;
+    let bench = Bench::new(&config)?;
+    bench.theta0(&config)?;
+    driver::check_algorithm(&bench, &config)?;
+    let out = output::OutputDir::create(&args.out)?;
+    let toml = config
+        .to_toml()
+        .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
+    out.write("config.toml", &toml)?;
+    let threads = args.threads.map_or_else(
+        || std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
+        |n| n as usize,
+    );
+    let started = std::time::Instant::now();
+    let results = parallel::run_seeds(&bench, &config, &out, threads)?;
+    let runs: Vec<&SeedRun> = results.iter().map(|(r, _)| r).collect();
+    let summary = summary(&config, &bench, &runs);
+    out.write_json("summary.json", &summary)?;
+    out.write_json(
+        "timings.json",
+        &json!({
+            "threads": threads,
+            "total_seconds": started.elapsed().as_secs_f64(),
+            "seeds": results.iter().map(|(_, t)| t).collect::<Vec<_>>(),
+        }),
+    )?;
+    Ok(summary)
+}
+
+/// The summary: per seed its termination and final checkpoint, and the mean over seeds of the
+/// final checkpoint's metrics.
+fn summary(config: &LoadedConfig, bench: &Bench, runs: &[&SeedRun]) -> Value {
+    let f = &config.file;
+    let mean = |get: &dyn Fn(&records::Checkpoint) -> Option<f64>| -> Option<f64> {
+        let v: Vec<f64> = runs
+            .iter()
+            .filter_map(|r| r.checkpoints.last().and_then(get))
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    json!({
+        "task": f.task.name.name(),
+        "policy": bench.policy_name(),
+        "algorithm": runs.first().map(|r| r.algorithm.clone()),
+        "budget_calls": f.run.budget_calls,
+        "dim": bench.dim(),
+        "seeds": f.run.seeds,
+        "final_mean": {
+            "score": mean(&|c| c.score),
+            "reward": mean(&|c| c.reward),
+            "eval_loss": mean(&|c| c.eval_loss),
+            "objective": mean(&|c| c.objective),
+            "train_loss": mean(&|c| c.train_loss),
+        },
+        "runs": runs.iter().map(|r| json!({
+            "seed": r.seed,
+            "termination": r.termination,
+            "iterations": r.iterations,
+            "cost": r.cost,
+            "final": r.checkpoints.last(),
+        })).collect::<Vec<_>>(),
+    })
+}

@@ -1,0 +1,170 @@
+//! Resolving a parsed config: every default filled in, the paths made absolute against the
+//! config file's directory, every range checked, each failure naming its key.
+
+use super::config::{
+    DEFAULT_EPISODES, DEFAULT_SIGMA, ExpertChoice, HorizonKind, MAX_EPISODES, MAX_SEEDS, MAX_STEPS,
+    MAX_TRAJECTORIES, PolicyKind, RunFile, TaskName, Theta0, invalid,
+};
+use super::error::RunError;
+use crate::task::AfterEnd;
+use crate::task::obstacle::ObstacleFeatures;
+use std::path::Path;
+
+impl RunFile {
+    /// Fill the defaults, make the paths absolute and check every range.
+    pub(super) fn resolve(&mut self, dir: &Path, path: &Path) -> Result<(), RunError> {
+        let bad = |key: &str, m: &dyn std::fmt::Display| invalid(path, key, m);
+        let t = &mut self.task;
+        let p = &mut self.policy;
+        let not_for = |key: &str, set: bool| -> Result<(), RunError> {
+            if set {
+                Err(bad(
+                    key,
+                    &format!("not a key of the {} task", t.name.name()),
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        match t.name {
+            TaskName::Cartpole => {
+                not_for("task.mdp", t.mdp.is_some())?;
+                not_for("policy.sigma", p.sigma.is_some())?;
+                not_for("policy.features", p.features.is_some())?;
+                let expert = *t.expert.get_or_insert(ExpertChoice::Ppo);
+                if expert == ExpertChoice::Lqr && t.expert_file.is_some() {
+                    return Err(bad("task.expert_file", &"only with expert = \"ppo\""));
+                }
+                p.kind.get_or_insert(PolicyKind::Softmax);
+            }
+            TaskName::Obstacle => {
+                not_for("task.expert", t.expert.is_some())?;
+                not_for("task.expert_file", t.expert_file.is_some())?;
+                not_for("task.mdp", t.mdp.is_some())?;
+                not_for("policy.kind", p.kind.is_some())?;
+                let sigma = *p.sigma.get_or_insert(DEFAULT_SIGMA);
+                if !(sigma.is_finite() && sigma > 0.0) {
+                    return Err(bad(
+                        "policy.sigma",
+                        &format!("must be finite and > 0, got {sigma}"),
+                    ));
+                }
+                let features = p.features.get_or_insert_with(ObstacleFeatures::default);
+                features
+                    .validate()
+                    .map_err(|e| bad("policy.features", &e))?;
+            }
+            TaskName::Toy => {
+                for (key, set) in [
+                    ("task.expert", t.expert.is_some()),
+                    ("task.expert_file", t.expert_file.is_some()),
+                    ("task.horizon", t.horizon.is_some()),
+                    ("task.steps", t.steps.is_some()),
+                    ("task.after_end", t.after_end.is_some()),
+                    ("policy.kind", p.kind.is_some()),
+                    ("policy.sigma", p.sigma.is_some()),
+                    ("policy.features", p.features.is_some()),
+                ] {
+                    if set {
+                        return Err(bad(
+                            key,
+                            &"not a key of the toy task (the MDP file fixes the horizon, the expert and the policy)",
+                        ));
+                    }
+                }
+                if t.mdp.is_none() {
+                    return Err(bad("task.mdp", &"required for the toy task"));
+                }
+            }
+        }
+        if t.name != TaskName::Toy {
+            match *t.horizon.get_or_insert(HorizonKind::Fixed) {
+                HorizonKind::Fixed => {
+                    let (steps, after) = match t.name {
+                        TaskName::Cartpole => (500, AfterEnd::Reset),
+                        _ => (200, AfterEnd::Absorb),
+                    };
+                    let steps = *t.steps.get_or_insert(steps);
+                    t.after_end.get_or_insert(after);
+                    if !(1..=MAX_STEPS).contains(&steps) {
+                        return Err(bad(
+                            "task.steps",
+                            &format!("must lie in 1..={MAX_STEPS}, got {steps}"),
+                        ));
+                    }
+                }
+                HorizonKind::Episodic => {
+                    not_for("task.steps", t.steps.is_some())?;
+                    not_for("task.after_end", t.after_end.is_some())?;
+                }
+            }
+        }
+        for file in [&mut t.expert_file, &mut t.mdp].into_iter().flatten() {
+            let joined = if file.is_relative() {
+                dir.join(&*file)
+            } else {
+                file.clone()
+            };
+            // Canonical when the file exists (no `..` left); else absolute, and the error
+            // reading it names that path.
+            *file = std::fs::canonicalize(&joined)
+                .or_else(|_| std::path::absolute(&joined))
+                .unwrap_or(joined);
+        }
+        let r = &self.run;
+        if r.budget_calls == 0 {
+            return Err(bad("run.budget_calls", &"must be at least 1"));
+        }
+        if !(1..=MAX_TRAJECTORIES).contains(&r.trajectories_per_gradient) {
+            return Err(bad(
+                "run.trajectories_per_gradient",
+                &format!(
+                    "must lie in 1..={MAX_TRAJECTORIES}, got {}",
+                    r.trajectories_per_gradient
+                ),
+            ));
+        }
+        if r.trajectories_per_gradient > 1 && self.is_dataset_learner() {
+            return Err(bad(
+                "run.trajectories_per_gradient",
+                &"must be 1 for a dataset learner (set the algorithm's trajectories_per_iteration)",
+            ));
+        }
+        if r.seeds.is_empty() {
+            return Err(bad("run.seeds", &"give at least one seed"));
+        }
+        if r.seeds.len() > MAX_SEEDS {
+            return Err(bad("run.seeds", &format!("at most {MAX_SEEDS} seeds")));
+        }
+        let mut sorted = r.seeds.clone();
+        sorted.sort_unstable();
+        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+            return Err(bad("run.seeds", &format!("seed {} is repeated", w[0])));
+        }
+        if let Theta0::Values(v) = &r.theta0
+            && let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite())
+        {
+            return Err(bad(
+                "run.theta0",
+                &format!("entry {i} (0-based) is not finite: {x}"),
+            ));
+        }
+        let budget = r.budget_calls;
+        let e = &mut self.evaluation;
+        let every = *e.every_calls.get_or_insert((budget / 10).max(1));
+        if every == 0 || every > budget {
+            return Err(bad(
+                "evaluation.every_calls",
+                &format!("must lie in 1..=run.budget_calls = {budget}, got {every}"),
+            ));
+        }
+        let episodes = *e.episodes.get_or_insert(DEFAULT_EPISODES);
+        if !(1..=MAX_EPISODES).contains(&episodes) {
+            return Err(bad(
+                "evaluation.episodes",
+                &format!("must lie in 1..={MAX_EPISODES}, got {episodes}"),
+            ));
+        }
+        Ok(())
+    }
+}
