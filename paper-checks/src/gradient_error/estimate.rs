@@ -170,7 +170,7 @@ pub fn summarise(
 /// enumerating every trajectory in rationals.
 ///
 /// # Errors
-/// As [`toy_exact`].
+/// As [`toy_exact`](super::toy_exact).
 pub fn squared_error_sd(
     mdp: &ToyMdp,
     route: &ToyRoute,

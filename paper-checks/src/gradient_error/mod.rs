@@ -5,7 +5,7 @@
 //! - **(a) toy MDP, exact reference.** ∇F(θ) is computed in exact rationals by the exact engine's
 //!   forward DP (X2, `ilopt::exact::forward`, the route `ilopt toy eval` prints as `gradient`), and
 //!   σ² = E‖g‖² − ‖∇F‖² exactly from the enumeration's second moment (X1). The estimates are
-//!   sampled in f64 through the toy's [`IlProblem`] oracle (the one the algorithms call). The
+//!   sampled in f64 through the toy's [`IlProblem`](ilopt::problem::IlProblem) oracle (the one the algorithms call). The
 //!   reference has no noise.
 //! - **(b) the obstacle task** under the thesis's fixed-horizon objective (T = 200 decisions,
 //!   absorbing ends: success 0, crash (2·v_max)² per remaining step), the linear-Gaussian learner
