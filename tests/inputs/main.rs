@@ -8,6 +8,7 @@ mod props;
 
 mod cli_env;
 mod cli_hostile;
+mod cli_run;
 mod cli_toy;
 mod fuzz_regressions;
 mod hostile_input;
