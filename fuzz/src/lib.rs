@@ -1,7 +1,6 @@
 //! Shared code of the fuzz targets: the properties ([`props`], also used by the crate's
 //! `cargo test` suites) and `arbitrary` impls for their inputs.
 
-#[path = "props.rs"]
 pub mod props;
 
 use arbitrary::{Arbitrary, Result, Unstructured};

@@ -1,5 +1,5 @@
 //! Regression tests for what the fuzz targets (`fuzz/`) found: each crashing input is
-//! inlined and run through the target's own property (`fuzz/src/props.rs`), with a note on the
+//! inlined and run through the target's own property (`fuzz/src/props/`), with a note on the
 //! cause and the fix. A target's seed corpus is replayed here too, so `cargo test` covers it.
 
 use crate::props;

@@ -1,4 +1,4 @@
-//! Hostile input at small scale: the fuzz targets' properties (`fuzz/src/props.rs`, the
+//! Hostile input at small scale: the fuzz targets' properties (`fuzz/src/props/`, the
 //! same code) as proptest suites that run in `cargo test`. Seeded (`RngSeed::Fixed`), so every
 //! run checks the same cases; failures found by the fuzzers are pinned in `tests/inputs/fuzz_regressions.rs`.
 

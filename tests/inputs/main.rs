@@ -3,7 +3,7 @@
 //! One test binary of several modules, so that a fresh `cargo test` links the crate a few times
 //! rather than once per file.
 
-#[path = "../../fuzz/src/props.rs"]
+#[path = "../../fuzz/src/props/mod.rs"]
 mod props;
 
 mod cli_env;
