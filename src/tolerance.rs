@@ -42,9 +42,15 @@ impl Agreement for f32 {
     fn agrees(&self, exact: &BigRational, _enclosure: &Interval) -> bool {
         let e = Scalar::to_f64(exact);
         let x = f64::from(*self);
-        x.is_finite() && (x - e).abs() <= e.abs() * 2f64.powi(-10) + 2f64.powi(-20)
+        x.is_finite() && (x - e).abs() <= e.abs() * F32_REL + F32_ABS
     }
 }
+
+/// The relative part, 2⁻¹⁰, of the `f32` rule above: a smoke check (see the table for why).
+pub const F32_REL: f64 = 9.765_625e-4; // 2^-10
+
+/// The absolute part, 2⁻²⁰, of the `f32` rule above, for exact values at or near zero.
+pub const F32_ABS: f64 = 9.536_743_164_062_5e-7; // 2^-20
 
 impl<S: Agreement> Agreement for Dual<S> {
     fn agrees(&self, exact: &BigRational, enclosure: &Interval) -> bool {
