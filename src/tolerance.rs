@@ -83,7 +83,9 @@ pub fn all_agree<S: Agreement>(xs: &[S], exact: &[BigRational], enclosure: &[Int
 /// `1 + max(‖a‖∞, ‖b‖∞)` by which [`derivative_f64_error`] divides. That gives ≈ 2⁻³⁶; the
 /// constant adds a factor 2⁶ of margin. It is still far below any error a wrong formula makes
 /// (a missing term changes the gradient by O(1) of the scale), and the test suite measures the
-/// largest observed error and requires it to be at least 2⁸ below this constant.
+/// largest observed error and requires it to be at least 2⁸ below this constant. The two sides of
+/// a field law evaluated in `f64` (the scalar-law tests) are two such routes to one value, on
+/// operands bounded so that the same analysis applies.
 pub const DERIVATIVE_F64_REL: f64 = 9.313_225_746_154_785e-10; // 2^-30
 
 /// The scaled disagreement `max_j |a_j − b_j| / (1 + max(‖a‖∞, ‖b‖∞))` of two `f64` gradients;

@@ -346,6 +346,6 @@ mod tests {
         let f = |t: f64| (t.sin() * t.exp() + t.ln() * t.cos()).sqrt();
         let h = 1e-6;
         let fd = (f(0.7 + h) - f(0.7 - h)) / (2.0 * h);
-        assert!((y.gradient()[0] - fd).abs() < 1e-8);
+        approx::assert_abs_diff_eq!(y.gradient()[0], fd, epsilon = 1e-8);
     }
 }
