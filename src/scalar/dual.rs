@@ -235,8 +235,8 @@ impl<S: Scalar> Scalar for Dual<S> {
 }
 
 /// num-traits' additive identity, so that generic code written against num-traits (nalgebra's
-/// matrix products and `identity`, `num_traits::pow`, `num_traits::sum`-style folds) runs on
-/// duals. Agrees with [`Scalar::zero`]; `is_zero` means a zero value and a zero gradient.
+/// matrix products and `identity`, `num_traits::pow`) runs on duals. Agrees with
+/// [`Scalar::zero`]; `is_zero` means a zero value and a zero gradient.
 impl<S: Scalar> num_traits::Zero for Dual<S> {
     fn zero() -> Self {
         <Self as Scalar>::zero()
