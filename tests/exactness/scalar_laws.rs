@@ -151,8 +151,19 @@ impl Rat {
 
 /// A bounded interval: a point (degenerate), the tight enclosure of a ratio, or the hull of two
 /// floats.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 struct Iv(Interval);
+
+/// `[inf, sup]`: inari's own `Debug` shows its internal representation.
+fn show_interval(x: &Interval) -> String {
+    format!("[{:?}, {:?}]", x.inf(), x.sup())
+}
+
+impl Debug for Iv {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&show_interval(&self.0))
+    }
+}
 
 impl Arbitrary for Iv {
     fn arbitrary(g: &mut Gen) -> Self {
@@ -210,6 +221,10 @@ trait LawScalar: Arbitrary + Debug {
     /// Whether the computed sides `l` and `r` of law `L` at the operands `x` agree, in the form
     /// the law takes in this type.
     fn agree<L: Law>(x: [&Self; 3], l: &Self::S, r: &Self::S) -> bool;
+    /// A value, for a failure message.
+    fn show(x: &Self::S) -> String {
+        format!("{x:?}")
+    }
 }
 
 fn f64_close(l: f64, r: f64) -> bool {
@@ -282,6 +297,9 @@ impl LawScalar for Iv {
         let hi = Q::from_float(self.0.sup()).unwrap();
         let mid = (lo.clone() + &hi) / Q::from_i64(2);
         vec![lo, mid, hi]
+    }
+    fn show(x: &Interval) -> String {
+        show_interval(x)
     }
     fn agree<L: Law>(x: [&Self; 3], l: &Interval, r: &Interval) -> bool {
         let [pa, pb, pc] = x.map(Iv::points);
@@ -436,7 +454,12 @@ fn holds<W: LawScalar, L: Law>(a: W, b: W, c: W) -> TestResult {
     match L::sides(&x[0], &x[1], &x[2]) {
         None => TestResult::discard(),
         Some((l, r)) if W::agree::<L>([&a, &b, &c], &l, &r) => TestResult::passed(),
-        Some((l, r)) => TestResult::error(format!("{}: lhs {l:?}, rhs {r:?}", L::NAME)),
+        Some((l, r)) => TestResult::error(format!(
+            "{}: lhs {}, rhs {}",
+            L::NAME,
+            W::show(&l),
+            W::show(&r)
+        )),
     }
 }
 
@@ -642,8 +665,14 @@ num_traits_interop!(
 
 /// An interval with endpoints `k/16`, `|k| ≤ 2¹⁰`: sums and products of three of them are exact
 /// in binary64, so the laws of exact interval arithmetic hold without rounding.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 struct DyadicIv(Interval);
+
+impl Debug for DyadicIv {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&show_interval(&self.0))
+    }
+}
 
 impl Arbitrary for DyadicIv {
     fn arbitrary(g: &mut Gen) -> Self {
