@@ -84,7 +84,7 @@ mod tests {
         let theta = DVector::from_vec(vec![1.0 / 3.0]);
         let f = objective(&p, &theta, 20_000, 3).unwrap();
         assert!(
-            (f.mean - exact).abs() < 4.0 * f.standard_error,
+            approx::abs_diff_eq!(f.mean, exact, epsilon = 4.0 * f.standard_error),
             "{f:?} vs {exact}"
         );
         assert_eq!(objective(&p, &theta, 20_000, 3).unwrap(), f);

@@ -18,7 +18,8 @@
 //!
 //! A non-zero mean of s₁ would add Isserlis terms; the toy keeps it zero. Matrices are nalgebra
 //! [`DMatrix`]es over any [`Scalar`]; the arithmetic is written here because nalgebra's own products
-//! need `num_traits::Zero`, which intervals and duals do not implement.
+//! need `num_traits::Zero`, which intervals (inari's type, so the kit cannot add it) do not
+//! implement.
 
 use crate::policy::{LinearGaussian, Policy, PolicyError};
 use crate::problem::KitRng;

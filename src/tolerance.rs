@@ -42,9 +42,15 @@ impl Agreement for f32 {
     fn agrees(&self, exact: &BigRational, _enclosure: &Interval) -> bool {
         let e = Scalar::to_f64(exact);
         let x = f64::from(*self);
-        x.is_finite() && (x - e).abs() <= e.abs() * 2f64.powi(-10) + 2f64.powi(-20)
+        x.is_finite() && (x - e).abs() <= e.abs() * F32_REL + F32_ABS
     }
 }
+
+/// The relative part, 2⁻¹⁰, of the `f32` rule above: a smoke check (see the table for why).
+pub const F32_REL: f64 = 9.765_625e-4; // 2^-10
+
+/// The absolute part, 2⁻²⁰, of the `f32` rule above, for exact values at or near zero.
+pub const F32_ABS: f64 = 9.536_743_164_062_5e-7; // 2^-20
 
 impl<S: Agreement> Agreement for Dual<S> {
     fn agrees(&self, exact: &BigRational, enclosure: &Interval) -> bool {
@@ -77,7 +83,9 @@ pub fn all_agree<S: Agreement>(xs: &[S], exact: &[BigRational], enclosure: &[Int
 /// `1 + max(‖a‖∞, ‖b‖∞)` by which [`derivative_f64_error`] divides. That gives ≈ 2⁻³⁶; the
 /// constant adds a factor 2⁶ of margin. It is still far below any error a wrong formula makes
 /// (a missing term changes the gradient by O(1) of the scale), and the test suite measures the
-/// largest observed error and requires it to be at least 2⁸ below this constant.
+/// largest observed error and requires it to be at least 2⁸ below this constant. The two sides of
+/// a field law evaluated in `f64` (the scalar-law tests) are two such routes to one value, on
+/// operands bounded so that the same analysis applies.
 pub const DERIVATIVE_F64_REL: f64 = 9.313_225_746_154_785e-10; // 2^-30
 
 /// The scaled disagreement `max_j |a_j − b_j| / (1 + max(‖a‖∞, ‖b‖∞))` of two `f64` gradients;

@@ -266,9 +266,9 @@ mod tests {
             "line 1: malformed case: field `v_des`[0]: expected a number, got \"a\""
         );
         let u = out[0]["u"].as_array().unwrap();
-        assert!((u[0].as_f64().unwrap() - 0.75).abs() < 1e-15);
-        assert!((u[1].as_f64().unwrap() - 3f64.sqrt() / 4.0).abs() < 1e-15);
-        assert!((out[0]["J"].as_f64().unwrap() - 0.25).abs() < 1e-15);
+        approx::assert_abs_diff_eq!(u[0].as_f64().unwrap(), 0.75, epsilon = 1e-15);
+        approx::assert_abs_diff_eq!(u[1].as_f64().unwrap(), 3f64.sqrt() / 4.0, epsilon = 1e-15);
+        approx::assert_abs_diff_eq!(out[0]["J"].as_f64().unwrap(), 0.25, epsilon = 1e-15);
         let err = |k: usize| out[k]["error"].as_str().unwrap().to_owned();
         assert!(
             err(1).starts_with("line 2: inside the obstacle"),

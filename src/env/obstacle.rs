@@ -553,9 +553,9 @@ mod tests {
         assert_eq!(env.steps(), 0);
         // (3, 4) is clipped to speed 0.1 along the same direction: (0.06, 0.08).
         let s = env.step([3.0, 4.0]).unwrap();
-        assert!((s.obs.agent_vel[0] - 0.06).abs() < 1e-15);
-        assert!((s.obs.agent_vel[1] - 0.08).abs() < 1e-15);
-        assert!((s.obs.agent_pos[0] + 2.44).abs() < 1e-15);
+        approx::assert_abs_diff_eq!(s.obs.agent_vel[0], 0.06, epsilon = 1e-15);
+        approx::assert_abs_diff_eq!(s.obs.agent_vel[1], 0.08, epsilon = 1e-15);
+        approx::assert_abs_diff_eq!(s.obs.agent_pos[0], -2.44, epsilon = 1e-15);
         assert_eq!(s.outcome, Outcome::Running);
         // The obstacle moved by its step.
         assert_eq!(

@@ -343,14 +343,18 @@ mod tests {
             let grad = mean.gradient_padded(4);
             for j in 0..4 {
                 assert!(
-                    (grad[j] - a[(i, j)]).abs() <= 1e-15 * (1.0 + a[(i, j)].abs()),
+                    approx::abs_diff_eq!(
+                        grad[j],
+                        a[(i, j)],
+                        epsilon = 1e-15 * (1.0 + a[(i, j)].abs())
+                    ),
                     "A[{i},{j}]: {} vs {}",
                     grad[j],
                     a[(i, j)]
                 );
             }
             let db = (right[i].value() - left[i].value()) / 20.0;
-            assert!((db - b[i]).abs() <= 1e-15, "b[{i}]: {db} vs {}", b[i]);
+            approx::assert_abs_diff_eq!(db, b[i], epsilon = 1e-15);
         }
     }
 

@@ -515,7 +515,7 @@ mod tests {
     use super::*;
 
     fn close(a: f64, b: f64, tol: f64) -> bool {
-        (a - b).abs() <= tol
+        approx::abs_diff_eq!(a, b, epsilon = tol)
     }
 
     /// Obstacle dead ahead: r = (1,0), R = 1/2 (α = 30°), v_o = v_r = 0, v_des = (1,0), λ = 0.

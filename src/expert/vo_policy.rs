@@ -144,7 +144,10 @@ mod tests {
         let expert = VoExpertPolicy::new(&config, VoExpertParams::default()).unwrap();
         let mut obs = env.reset(&mut KitRng::seed_from_u64(4));
         let a = expert.act(&obs).unwrap();
-        assert!((a[0] - 0.1 / 1.5).abs() < 1e-15 && a[1] == 0.0, "{a:?}");
+        assert!(
+            approx::abs_diff_eq!(a[0], 0.1 / 1.5, epsilon = 1e-15) && a[1] == 0.0,
+            "{a:?}"
+        );
         let mut outcome = Outcome::Running;
         while outcome == Outcome::Running {
             let s = env.step(expert.act(&obs).unwrap()).unwrap();
@@ -167,7 +170,8 @@ mod tests {
         };
         let a = expert.act(&obs).unwrap();
         assert!(
-            (a[0] + 0.06).abs() < 1e-15 && (a[1] + 0.08).abs() < 1e-15,
+            approx::abs_diff_eq!(a[0], -0.06, epsilon = 1e-15)
+                && approx::abs_diff_eq!(a[1], -0.08, epsilon = 1e-15),
             "{a:?}"
         );
     }

@@ -254,9 +254,9 @@ mod tests {
         let p = policy::<f64>();
         let (l, _) = p.loss(&OUTSIDE, &PHI, &LABEL).unwrap();
         let c = p.executed_mean(&OUTSIDE, &PHI).unwrap();
-        assert!((c[0].hypot(c[1]) - 0.1).abs() < 1e-15);
+        approx::assert_abs_diff_eq!(c[0].hypot(c[1]), 0.1, epsilon = 1e-15);
         let direct = (c[0] - LABEL[0]).powi(2) + (c[1] - LABEL[1]).powi(2);
-        assert!((l - direct).abs() < 1e-15);
+        approx::assert_abs_diff_eq!(l, direct, epsilon = 1e-15);
         // P3's loss is about 4 (‖Wφ‖ ≈ 2.1); the executed one is bounded by (v + ‖π*‖)².
         let (l3, _) = p.inner().loss(&OUTSIDE, &PHI, &LABEL).unwrap();
         assert!(l3 > 4.0);
@@ -283,7 +283,10 @@ mod tests {
             });
             let gd = l.gradient_padded(6);
             for (a, b) in g.iter().zip(&gd) {
-                assert!((a - b).abs() <= 1e-13 * (1.0 + b.abs()), "{g:?} vs {gd:?}");
+                assert!(
+                    approx::abs_diff_eq!(*a, *b, epsilon = 1e-13 * (1.0 + b.abs())),
+                    "{g:?} vs {gd:?}"
+                );
             }
         }
     }
@@ -299,7 +302,11 @@ mod tests {
             b[j] -= h;
             let fd = (p.loss(&a, &PHI, &LABEL).unwrap().0 - p.loss(&b, &PHI, &LABEL).unwrap().0)
                 / (2.0 * h);
-            assert!((fd - g[j]).abs() < 1e-7, "{j}: {fd} vs {}", g[j]);
+            assert!(
+                approx::abs_diff_eq!(fd, g[j], epsilon = 1e-7),
+                "{j}: {fd} vs {}",
+                g[j]
+            );
         }
     }
 

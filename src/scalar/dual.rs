@@ -234,6 +234,29 @@ impl<S: Scalar> Scalar for Dual<S> {
     }
 }
 
+/// num-traits' additive identity, so that generic code written against num-traits (nalgebra's
+/// matrix products and `identity`, `num_traits::pow`) runs on duals. Agrees with
+/// [`Scalar::zero`]; `is_zero` means a zero value and a zero gradient.
+impl<S: Scalar> num_traits::Zero for Dual<S> {
+    fn zero() -> Self {
+        <Self as Scalar>::zero()
+    }
+    fn is_zero(&self) -> bool {
+        *self == <Self as Scalar>::zero()
+    }
+}
+
+/// num-traits' multiplicative identity (see the [`num_traits::Zero`] impl); agrees with
+/// [`Scalar::one`].
+impl<S: Scalar> num_traits::One for Dual<S> {
+    fn one() -> Self {
+        <Self as Scalar>::one()
+    }
+    fn is_one(&self) -> bool {
+        *self == <Self as Scalar>::one()
+    }
+}
+
 impl<S: Sqrt> Sqrt for Dual<S> {
     /// `√v`, with derivative `g / (2√v)`.
     fn sqrt(&self) -> Self {
@@ -323,6 +346,6 @@ mod tests {
         let f = |t: f64| (t.sin() * t.exp() + t.ln() * t.cos()).sqrt();
         let h = 1e-6;
         let fd = (f(0.7 + h) - f(0.7 - h)) / (2.0 * h);
-        assert!((y.gradient()[0] - fd).abs() < 1e-8);
+        approx::assert_abs_diff_eq!(y.gradient()[0], fd, epsilon = 1e-8);
     }
 }

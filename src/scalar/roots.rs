@@ -150,10 +150,10 @@ mod tests {
             let y = x.clone() * &x + Dual::from_i64(1);
             let f = |t: f64| (t * t + 1.0).sqrt();
             let fd = (f(x0 + h) - f(x0 - h)) / (2.0 * h);
-            assert!((y.try_sqrt().unwrap().gradient()[0] - fd).abs() < 1e-7);
+            approx::assert_abs_diff_eq!(y.try_sqrt().unwrap().gradient()[0], fd, epsilon = 1e-7);
             let g = |t: f64| (t * t + 1.0).cbrt();
             let fd = (g(x0 + h) - g(x0 - h)) / (2.0 * h);
-            assert!((y.try_cbrt().unwrap().gradient()[0] - fd).abs() < 1e-7);
+            approx::assert_abs_diff_eq!(y.try_cbrt().unwrap().gradient()[0], fd, epsilon = 1e-7);
         }
     }
 

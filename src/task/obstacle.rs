@@ -374,9 +374,10 @@ mod tests {
         // A neighbour at distance 1 (centre (1, 0)): e = exp(−1/(2·0.25)) = e⁻².
         let e = (-2.0f64).exp();
         let b = bump(1, 1);
-        assert!((b[0] - e).abs() < 1e-15 && (b[1] - 0.5 * e).abs() < 1e-15);
+        approx::assert_abs_diff_eq!(b[0], e, epsilon = 1e-15);
+        approx::assert_abs_diff_eq!(b[1], 0.5 * e, epsilon = 1e-15);
         // The far corner (2, 1): distance √5, e = exp(−10).
-        assert!((bump(2, 2)[0] - (-10.0f64).exp()).abs() < 1e-18);
+        approx::assert_abs_diff_eq!(bump(2, 2)[0], (-10.0f64).exp(), epsilon = 1e-18);
     }
 
     /// The separable form against the two-dimensional Gaussian, on a grid that takes the
@@ -407,7 +408,7 @@ mod tests {
                         let want = (-((rx - cx).powi(2) + (ry - cy).powi(2)) / 0.08).exp();
                         let got = v[FEATURES + 2 + 3 * (per_axis * i + j)];
                         assert!(
-                            (got - want).abs() <= 1e-12 * want,
+                            approx::abs_diff_eq!(got, want, epsilon = 1e-12 * want),
                             "per_axis {per_axis}, centre ({i}, {j}): {got:e} vs {want:e}"
                         );
                     }

@@ -7,6 +7,7 @@
 //!   (statistical tests over many seeds; the tolerance policy is stated at `STAT_Z`).
 
 use crate::fixture::AliasedTwoState;
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use ilopt::algo::dagger::{BetaSchedule, DaggerConfig};
 use ilopt::algo::dataset::{InnerConfig, Retrain};
 use ilopt::algo::rrm::{ExactRrm, RrmConfig};
@@ -68,7 +69,7 @@ fn check_converges_to(name: &str, xs: &[f64], target: f64, other: f64) {
         "{name}: the test would not discriminate"
     );
     assert!(
-        (m - target).abs() <= tol,
+        abs_diff_eq!(m, target, epsilon = tol),
         "{name}: mean {m} not within {tol} of {target}"
     );
     assert!(
@@ -247,7 +248,7 @@ fn f64_and_rational_rrm_iterates_agree() {
     for _ in 0..10 {
         tq = ilopt::exact::rrm::rrm_map(&pq, &tq).unwrap();
         tf = ilopt::exact::rrm::rrm_map(&pf, &tf).unwrap();
-        assert!((tq[0].to_f64() - tf[0]).abs() <= 1e-15);
+        assert_abs_diff_eq!(tq[0].to_f64(), tf[0], epsilon = 1e-15);
     }
 }
 
@@ -310,8 +311,8 @@ fn printed_algorithm_4_does_not_track_the_gradient() {
     let (mc, sc) = mean_se(&runs(&corrected));
     let (mp, sp) = mean_se(&runs(&printed));
     eprintln!("corrected: E d ≈ {mc:.4} (SE {sc:.4}); printed: E d ≈ {mp:.4} (SE {sp:.4})");
-    assert!((mc - 1.0).abs() <= BIAS + STAT_Z * sc);
-    assert!((mp - 1.5).abs() <= BIAS + STAT_Z * sp);
+    assert_abs_diff_eq!(mc, 1.0, epsilon = BIAS + STAT_Z * sc);
+    assert_abs_diff_eq!(mp, 1.5, epsilon = BIAS + STAT_Z * sp);
     assert!((mp - 1.0).abs() > BIAS + STAT_Z * sp);
 }
 

@@ -4,6 +4,7 @@
 //! iterates; seeded runs are bit-for-bit reproducible and replay from their JSON record; costs are
 //! accounted in the same units.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use ilopt::algo::adam::{AdamConfig, AdamOptimizerConfig};
 use ilopt::algo::as_printed::PrintedAlgorithm4Config;
 use ilopt::algo::bc::BcConfig;
@@ -458,8 +459,13 @@ fn o2nc_blocks_stay_within_delta_and_output_block_means() {
     assert_eq!(outs.len() as u64, prm.k);
     for (k, block) in ws.chunks(prm.t as usize).enumerate() {
         let mean = block.iter().sum::<f64>() / prm.t as f64;
-        assert!((outs[k][0] - mean).abs() <= 1e-12);
-        assert!(block.iter().all(|w| (w - mean).abs() <= delta), "block {k}");
+        assert_abs_diff_eq!(outs[k][0], mean, epsilon = 1e-12);
+        assert!(
+            block
+                .iter()
+                .all(|w| abs_diff_eq!(*w, mean, epsilon = delta)),
+            "block {k}"
+        );
     }
 }
 
@@ -493,7 +499,7 @@ fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly()
     assert_eq!(rec.outputs.len(), 2);
     // π₁ is trained on s₁ ∼ μ = (1/2, 1/2) only: θ₁ = fraction of B among 10 initial states.
     let x = rec.outputs[0][0] * 10.0;
-    assert!((x - x.round()).abs() < 1e-12, "{x}");
+    assert_abs_diff_eq!(x, x.round(), epsilon = 1e-12);
 
     let cfg = SmileConfig {
         alpha: ConfigNumber::ratio(1, 3),
@@ -615,8 +621,8 @@ fn the_runner_records_where_o2nc_evaluated_its_gradients() {
         .collect();
     for (k, block) in ws.chunks(prm.t as usize).enumerate() {
         let mean = block.iter().sum::<f64>() / prm.t as f64;
-        assert!((rec.outputs[k][0] - mean).abs() <= 1e-12);
-        assert!(block.iter().all(|w| (w - mean).abs() <= 0.1));
+        assert_abs_diff_eq!(rec.outputs[k][0], mean, epsilon = 1e-12);
+        assert!(block.iter().all(|w| abs_diff_eq!(*w, mean, epsilon = 0.1)));
     }
     // The SGD-type algorithms evaluate at θ and leave it empty.
     let sgd: RunRecord<f64> =

@@ -5,6 +5,7 @@
 //! `(2 + θ_old)/(2 + θ_new)` and the per-decision one `(3 + θ_old)/(3 + θ_new)` (first entry).
 //! The expected numbers in the tests were worked out by hand from the update formulas.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use ilopt::algo::adam::{Adam, AdamConfig, AdamOptimizerConfig};
 use ilopt::algo::as_printed::{PrintedAlgorithm4Config, printed_algorithm_4};
 use ilopt::algo::dagger::{BetaSchedule, Dagger, DaggerConfig};
@@ -239,10 +240,10 @@ fn thesis_schedule_matches_eq_3_43() {
     drive(&mut s, &p, 1.0, 1);
     let (eta, a) = *s.last_schedule().unwrap();
     let r = (7.0f64 / 8.0).cbrt();
-    assert!((eta - r / 8.0).abs() <= 1e-16);
-    assert!((a - r * r).abs() <= 1e-15);
+    assert_abs_diff_eq!(eta, r / 8.0, epsilon = 1e-16);
+    assert_abs_diff_eq!(a, r * r, epsilon = 1e-15);
     // 16 L² η² = a.
-    assert!((16.0 * 4.0 * eta * eta - a).abs() <= 1e-15);
+    assert_abs_diff_eq!(16.0 * 4.0 * eta * eta, a, epsilon = 1e-15);
     // Rationals have no cube roots.
     assert!(matches!(
         Storm::<BigRational>::new(&cfg),
@@ -281,7 +282,7 @@ fn adaptive_schedule_matches_algorithm_4() {
     )
     .unwrap();
     let eta2 = s.last_schedule().unwrap().0;
-    assert!((eta2 - (4.0f64 / 57.0).cbrt()).abs() <= 1e-16);
+    assert_abs_diff_eq!(eta2, (4.0f64 / 57.0).cbrt(), epsilon = 1e-16);
 }
 
 #[test]
@@ -318,13 +319,13 @@ fn one_adam_step_in_f64_from_kingma_ba() {
     let mut s = Adam::<f64>::new(&cfg).unwrap();
     let th = drive(&mut s, &p, 1.0, 2);
     let expect1 = 1.0 - 0.1 * 1.0 / (1.0 + 1e-8);
-    assert!((th[1] - expect1).abs() <= 1e-15, "{} vs {}", th[1], expect1);
+    assert_abs_diff_eq!(th[1], expect1, epsilon = 1e-15);
     // Second step, g = −2: m = 0.9·0.1 + 0.1·(−2) = −0.11, v = 0.999·0.001 + 0.001·4 = 0.004999,
     // m̂ = −0.11/0.19, v̂ = 0.004999/(1 − 0.998001).
     let mhat = -0.11 / 0.19;
     let vhat: f64 = 0.004999 / (1.0 - 0.998001);
     let expect2 = expect1 - 0.1 * mhat / (vhat.sqrt() + 1e-8);
-    assert!((th[2] - expect2).abs() <= 1e-12, "{} vs {}", th[2], expect2);
+    assert_abs_diff_eq!(th[2], expect2, epsilon = 1e-12);
 }
 
 #[test]
@@ -344,7 +345,7 @@ fn rmsprop_follows_eqs_2_14_and_2_15() {
     let th = drive(&mut s, &p, 1.0, 2);
     assert_eq!(th[1], 0.75);
     let expect = 0.75 - 0.125 / (31.0f64 / 16.0).sqrt();
-    assert!((th[2] - expect).abs() <= 1e-15);
+    assert_abs_diff_eq!(th[2], expect, epsilon = 1e-15);
 }
 
 #[test]
@@ -377,7 +378,7 @@ fn storm_plus_first_step_matches_the_paper_form() {
     let mut s = StormPlus::<f64>::new(&cfg).unwrap();
     let th = drive(&mut s, &p, 1.0, 1);
     let expect = 1.0 - 2f64.powf(-2.0 / 9.0);
-    assert!((th[1] - expect).abs() <= 1e-15, "{} vs {}", th[1], expect);
+    assert_abs_diff_eq!(th[1], expect, epsilon = 1e-15);
 }
 
 #[test]
@@ -819,7 +820,10 @@ fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
         let m = xs.iter().sum::<f64>() / n as f64;
         let var = xs.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1) as f64;
         let se = (var / n as f64).sqrt();
-        assert!((m - target).abs() <= 6.0 * se, "mean {m}, SE {se}");
+        assert!(
+            abs_diff_eq!(m, target, epsilon = 6.0 * se),
+            "mean {m}, SE {se}"
+        );
         assert!(se < 0.03);
     }
     assert_eq!(cost.trajectories, 2 * n as u64);
@@ -839,7 +843,7 @@ fn cutkosky_orabona_constants_satisfy_their_definitions() {
             w.to::<f64>("w").unwrap(),
             c.to::<f64>("c").unwrap(),
         );
-        let rel = |x: f64, y: f64| (x - y).abs() <= 1e-12 * y.abs();
+        let rel = |x: f64, y: f64| abs_diff_eq!(x, y, epsilon = 1e-12 * y.abs());
         assert!(rel(k.powi(3), b.powi(3) * g * g / l.powi(3)));
         assert!(rel(c, 28.0 * l * l + g * g / (7.0 * l * k.powi(3))));
         let w_def = (4.0 * l * k)

@@ -11,6 +11,7 @@
 //! * constructor validation.
 
 use crate::common;
+use approx::assert_abs_diff_eq;
 
 use crate::common::q;
 use ilopt::lqg::{LqgError, LqgSystem, matrix_of, theta_of};
@@ -568,6 +569,6 @@ fn monte_carlo_z_scores_are_calibrated() {
         "calibration: mean z² = {mean_sq:.3}, |z| > 1.96 in {tail} of {}",
         zs.len()
     );
-    assert!((mean_sq - 1.0).abs() <= 0.5, "mean z² = {mean_sq}");
+    assert_abs_diff_eq!(mean_sq, 1.0, epsilon = 0.5);
     assert!(tail <= 45, "{tail} of {} beyond 1.96", zs.len());
 }

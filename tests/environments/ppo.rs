@@ -1,6 +1,7 @@
 //! The PPO expert for CartPole-v1: the committed weights, file validation,
 //! reproducible training, and the comparison with the LQR expert on the same seeded episodes.
 
+use approx::assert_abs_diff_eq;
 use ilopt::env::Env;
 use ilopt::env::cartpole::{CartPole, MAX_EPISODE_STEPS};
 use ilopt::expert::lqr::LqrExpert;
@@ -54,7 +55,7 @@ fn committed_expert_reaches_495_on_100_seeded_episodes() {
         [0.1, -0.2, 0.01, 0.3],
     ] {
         let [p0, p1] = expert.probabilities(&s).unwrap();
-        assert!((p0 + p1 - 1.0).abs() < 1e-12);
+        assert_abs_diff_eq!(p0 + p1, 1.0, epsilon = 1e-12);
         assert_eq!(expert.action(&s).unwrap(), usize::from(p1 > p0));
         assert!(expert.value(&s).unwrap().is_finite());
     }
@@ -399,5 +400,5 @@ fn stochastic_actions_follow_the_probabilities() {
         .count();
     let freq = zeros as f64 / n as f64;
     let se = (p0 * (1.0 - p0) / n as f64).sqrt();
-    assert!((freq - p0).abs() <= 5.0 * se, "p0 {p0}, frequency {freq}");
+    assert_abs_diff_eq!(freq, p0, epsilon = 5.0 * se);
 }

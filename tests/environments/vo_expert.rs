@@ -7,6 +7,7 @@
 //! `v = v_o − v_r − u` (absolute error ≈ 4ε(|v_o|+|v_r|+|u|), turning the line by that over `‖v‖`);
 //! objective values are compared with a relative `1e-12` (a handful of roundings in a quadratic).
 
+use approx::abs_diff_eq;
 use ilopt::expert::vo::{
     Cone, VoError, VoSolution, constraint, objective, vo_expert, vo_expert_cone, vo_expert_generic,
 };
@@ -432,9 +433,10 @@ fn degenerate_inputs() {
 #[test]
 fn hand_computed_head_on() {
     let s = vo_expert([2.0, 0.0], [-1.0, 0.0], [0.0; 2], [1.0, 0.0], 0.0, 1.0).unwrap();
-    assert!((s.j - 1.0).abs() < 1e-15, "{s:?}");
+    assert!(abs_diff_eq!(s.j, 1.0, epsilon = 1e-15), "{s:?}");
     assert!(
-        (s.u[0] - 0.5).abs() < 1e-15 && (s.u[1] - 3f64.sqrt() / 2.0).abs() < 1e-15,
+        abs_diff_eq!(s.u[0], 0.5, epsilon = 1e-15)
+            && abs_diff_eq!(s.u[1], 3f64.sqrt() / 2.0, epsilon = 1e-15),
         "{s:?}"
     );
     // The forward cone gives the same answer here (the obstacle approaches).
@@ -554,7 +556,7 @@ fn dual_gradient_matches_the_envelope_theorem() {
         for i in 0..2 {
             let expect = 2.0 * (c.v_des[i] - c.v_r[i] - u[i]);
             assert!(
-                (grad[i] - expect).abs() <= 1e-9 * (1.0 + expect.abs()),
+                abs_diff_eq!(grad[i], expect, epsilon = 1e-9 * (1.0 + expect.abs())),
                 "case {k}: ∂J*/∂v_des[{i}] = {} vs envelope {expect} ({c:?})",
                 grad[i]
             );

@@ -1,5 +1,6 @@
 //! Minibatches: m roll-outs per oracle call, the mean of their estimates, every cost counted.
 
+use approx::assert_abs_diff_eq;
 use ilopt::batched::Batched;
 use ilopt::policy::Softmax;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
@@ -82,7 +83,7 @@ fn a_batch_is_m_independent_rollouts_and_the_mean_of_their_estimates() {
         .map(|t| p.trajectory_loss(&theta, t).unwrap())
         .sum::<f64>()
         / 3.0;
-    assert!((loss - lm).abs() <= 1e-12 * lm);
+    assert_abs_diff_eq!(loss, lm, epsilon = 1e-12 * lm);
     assert_eq!(b.labelled_states(&batch).len(), 300);
 }
 

@@ -2,6 +2,7 @@
 //! resets, absorbing ends with their stated loss, and the eq. 3.15 estimators on such streams
 //! checked against a direct evaluation of their defining sums.
 
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 use ilopt::policy::{LikelihoodRatio, LinearGaussian, Policy, Softmax};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::task::cartpole::{self, CartPoleTask};
@@ -82,7 +83,7 @@ fn causal_by_definition(
 fn assert_close(a: &[f64], b: &[f64]) {
     let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
     for (x, y) in a.iter().zip(b) {
-        assert!((x - y).abs() <= 1e-11 * scale, "{a:?}\n{b:?}");
+        assert!(abs_diff_eq!(x, y, epsilon = 1e-11 * scale), "{a:?}\n{b:?}");
     }
 }
 
@@ -122,7 +123,11 @@ fn an_absorbing_stream_charges_the_remaining_steps_and_no_gradient_evaluations()
     let tm = terms(&p, &theta, &t);
     let loss: f64 = tm.iter().map(|x| x.0).sum();
     let total = p.trajectory_loss(&theta, &t).unwrap();
-    assert!((total - (loss + 2.0 * (500 - n) as f64)).abs() <= 1e-12 * total);
+    assert_abs_diff_eq!(
+        total,
+        loss + 2.0 * (500 - n) as f64,
+        epsilon = 1e-12 * total
+    );
     let mut cost = Cost::default();
     let g = p
         .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
@@ -210,7 +215,7 @@ fn the_obstacle_task_absorbs_at_zero_loss_after_success_and_at_the_supremum_afte
             Some(x) => {
                 crashed += 1;
                 let expected = 0.04 * (200 - t.len()) as f64;
-                assert!((x - expected).abs() <= 1e-12, "{x} vs {expected}");
+                assert_abs_diff_eq!(x, expected, epsilon = 1e-12);
             }
             None => assert_eq!(t.len(), 200),
         }

@@ -7,6 +7,7 @@
 //! same errors.
 
 use crate::common::example;
+use approx::abs_diff_eq;
 use ilopt::baseline::{Baseline, Baselined, RecordedPass};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
 use ilopt::scalar::{BigRational, Scalar, parse_exact_list};
@@ -32,7 +33,7 @@ fn equal(a: &[BigRational], b: &[BigRational]) -> bool {
 /// in different orders).
 fn close(a: &[f64], b: &[f64]) -> bool {
     let scale = b.iter().fold(1.0_f64, |s, x| s.max(x.abs()));
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
+    abs_diff_eq!(a, b, epsilon = 1e-12 * scale)
 }
 
 /// Both routes on `batch` split into minibatches of m = 2, 3, 4: `same` results, equal costs.

@@ -2,6 +2,7 @@
 //! accounting, and clear errors for invalid behaviours, trajectories and parameters.
 
 use crate::common::{example, q};
+use approx::assert_abs_diff_eq;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::sampling::sample_categorical;
 use ilopt::scalar::{BigRational, Interval, Scalar, Undecidable, interval_contains_rational};
@@ -143,7 +144,7 @@ fn mixture_frequencies_match_their_weights() {
         .count();
     let freq = ones as f64 / n as f64;
     // Binomial sd = √(5/8·3/8/40000) ≈ 0.0024; 6 sd.
-    assert!((freq - 0.625).abs() < 0.015, "{freq}");
+    assert_abs_diff_eq!(freq, 0.625, epsilon = 0.015);
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! The real environments as IL problems: seeded, reproducible roll-outs with expert labels, the
 //! oracle's forms and cost accounting, and errors for bad input.
 
+use approx::assert_abs_diff_eq;
 use ilopt::policy::LinearGaussian;
 use ilopt::policy::Softmax;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -96,7 +97,11 @@ fn weighted_estimate_at_the_same_point_is_the_plain_estimate() {
         .iter()
         .map(|ex| p.supervised(&theta, ex, &mut Cost::default()).unwrap().0)
         .sum();
-    assert!((p.trajectory_loss(&theta, &t).unwrap() - total).abs() < 1e-12);
+    assert_abs_diff_eq!(
+        p.trajectory_loss(&theta, &t).unwrap(),
+        total,
+        epsilon = 1e-12
+    );
 }
 
 #[test]

@@ -12,6 +12,7 @@
 //! extreme logits, and constructor/argument validation.
 
 use crate::common;
+use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use ilopt::policy::{
     LikelihoodRatio, LinearGaussian, Logistic, Mlp, MlpGaussian, MlpSoftmax, Policy, PolicyError,
@@ -129,7 +130,7 @@ fn linear_gaussian_log_density_is_consistent() {
     let ratio = pol.log_ratio(&w, &w2, &phi, &a).unwrap();
     assert!(derivative_f64_agrees(&[diff], &[ratio]));
     let wr = pol.density_ratio(&w, &w2, &phi, &a).unwrap();
-    assert!((wr.ln() - ratio).abs() <= 1e-12 * (1.0 + ratio.abs()));
+    assert_abs_diff_eq!(wr.ln(), ratio, epsilon = 1e-12 * (1.0 + ratio.abs()));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -397,7 +398,11 @@ fn extreme_logits_stay_finite() {
     assert_eq!(lp, -700.0, "log σ(−700) = −700 − ln(1 + e⁻⁷⁰⁰)");
     // tanh agrees with std's in the moderate range.
     for x in [-3.0, -0.5, 0.0, 1e-3, 0.7, 5.0] {
-        assert!((tanh(&x).unwrap() - f64::tanh(x)).abs() <= 4.0 * f64::EPSILON);
+        assert_abs_diff_eq!(
+            tanh(&x).unwrap(),
+            f64::tanh(x),
+            epsilon = 4.0 * f64::EPSILON
+        );
     }
     assert!(matches!(
         softmax_probs(&[f64::NAN, 0.0]),
@@ -450,7 +455,11 @@ fn gaussian_sampling_follows_one_path_in_every_scalar() {
         for j in 0..2 {
             assert!(ai[j].contains(af[j]));
             assert!(ilopt::scalar::interval_contains_rational(ai[j], &aq[j]));
-            assert!((aq[j].to_f64() - af[j]).abs() <= 4.0 * f64::EPSILON * (1.0 + af[j].abs()));
+            assert_abs_diff_eq!(
+                aq[j].to_f64(),
+                af[j],
+                epsilon = 4.0 * f64::EPSILON * (1.0 + af[j].abs())
+            );
         }
     }
 }
@@ -472,7 +481,7 @@ fn softmax_sampling_frequencies_match_probabilities() {
         let mean = n as f64 * p[a];
         let sd = (n as f64 * p[a] * (1.0 - p[a])).sqrt();
         assert!(
-            (counts[a] as f64 - mean).abs() <= 5.0 * sd,
+            abs_diff_eq!(counts[a] as f64, mean, epsilon = 5.0 * sd),
             "{counts:?} vs {p:?}"
         );
     }

@@ -13,6 +13,7 @@
 //! * terminal flags that are all false change nothing.
 
 use crate::common::{example, q, terminating_mdp_and_two_thetas};
+use approx::abs_diff_eq;
 use ilopt::exact::backward::backward;
 use ilopt::exact::enumerate::{for_each_prefix, gradient_by_duals, moments};
 use ilopt::exact::forward::forward;
@@ -393,7 +394,7 @@ fn the_sampler_follows_the_exact_law() {
             let got = counts.get(key).copied().unwrap_or(0) as f64;
             let (mean, sd) = (n as f64 * p, (n as f64 * p * (1.0 - p)).sqrt());
             assert!(
-                (got - mean).abs() <= 5.0 * sd + 1.0,
+                abs_diff_eq!(got, mean, epsilon = 5.0 * sd + 1.0),
                 "{file}: prefix {key:?} seen {got} times, expected {mean} ± {sd}"
             );
         }
@@ -415,7 +416,7 @@ fn the_sampler_follows_the_exact_law() {
             (m.variance.to_f64() / n as f64).sqrt(),
         );
         assert!(
-            (mean - grad).abs() <= 5.0 * se,
+            abs_diff_eq!(mean, grad, epsilon = 5.0 * se),
             "{file}: sample mean {mean}, ∇F = {grad} ± {se}"
         );
     }

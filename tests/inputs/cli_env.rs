@@ -1,6 +1,7 @@
 //! `ilopt replay cartpole` and `ilopt expert vo` through the binary: the output contracts, both
 //! forms of negative numbers, and clear errors (exit status 1 or 2, a message, never a panic).
 
+use approx::abs_diff_eq;
 use serde_json::Value;
 use std::io::Write;
 use std::process::Command;
@@ -61,7 +62,7 @@ fn replay_prints_round_trip_states_and_flags() {
         .collect();
     for (g, w) in got.iter().zip(want) {
         assert!(
-            (g - w).abs() <= 1e-15 * w.abs().max(1e-3),
+            abs_diff_eq!(*g, w, epsilon = 1e-15 * w.abs().max(1e-3)),
             "{got:?} vs {want:?}"
         );
     }

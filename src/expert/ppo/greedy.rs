@@ -257,8 +257,8 @@ mod greedy_tests {
             worst = worst.max((fast_tanh(x) - exact).abs());
         }
         assert!(worst < 1e-6, "worst error {worst:e}");
-        assert!((fast_tanh(1e300) - 1.0).abs() < 1e-6);
-        assert!((fast_tanh(-1e300) + 1.0).abs() < 1e-6);
+        approx::assert_abs_diff_eq!(fast_tanh(1e300), 1.0, epsilon = 1e-6);
+        approx::assert_abs_diff_eq!(fast_tanh(-1e300), -1.0, epsilon = 1e-6);
     }
 
     /// The greedy labeller gives `action_in`'s action (and the filter decides most states).

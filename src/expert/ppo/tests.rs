@@ -19,7 +19,10 @@ fn logit_gradients_match_finite_differences() {
     let lp: Vec<f64> = (0..2).map(|b| log_softmax(&z, b).unwrap()).collect();
     let p: Vec<f64> = lp.iter().map(|l| l.exp()).collect();
     let r = (lp[a] - old_log_prob).exp();
-    assert!((r - 1.0).abs() < 0.2, "ratio {r} must be unclipped here");
+    assert!(
+        approx::abs_diff_eq!(r, 1.0, epsilon = 0.2),
+        "ratio {r} must be unclipped here"
+    );
     let h = -(p[0] * lp[0] + p[1] * lp[1]);
     for b in 0..2 {
         let e = if b == a { 1.0 } else { 0.0 };
@@ -31,7 +34,7 @@ fn logit_gradients_match_finite_differences() {
         zm[b] -= step;
         let numeric = (loss(&zp) - loss(&zm)) / (2.0 * step);
         assert!(
-            (analytic - numeric).abs() < 1e-8,
+            approx::abs_diff_eq!(analytic, numeric, epsilon = 1e-8),
             "logit {b}: {analytic} vs {numeric}"
         );
     }
@@ -47,14 +50,20 @@ fn adam_steps_by_the_learning_rate_for_a_constant_gradient() {
     adam.step(&mut p, &g, 0.1);
     for i in 0..2 {
         let expected = [1.0, -1.0][i] - 0.1 * g[i] / (g[i].abs() + config.adam_epsilon);
-        assert!((p[i] - expected).abs() < 1e-15, "{p:?}");
+        assert!(
+            approx::abs_diff_eq!(p[i], expected, epsilon = 1e-15),
+            "{p:?}"
+        );
     }
     // A second step with the same gradient moves by the same amount (m̂ = g, v̂ = g²).
     let before = p;
     adam.step(&mut p, &g, 0.1);
     for i in 0..2 {
         let expected = before[i] - 0.1 * g[i] / (g[i].abs() + config.adam_epsilon);
-        assert!((p[i] - expected).abs() < 1e-14, "{p:?}");
+        assert!(
+            approx::abs_diff_eq!(p[i], expected, epsilon = 1e-14),
+            "{p:?}"
+        );
     }
 }
 
@@ -62,7 +71,8 @@ fn adam_steps_by_the_learning_rate_for_a_constant_gradient() {
 fn global_norm_clipping() {
     let mut g = [3.0, 4.0];
     clip_global_norm(&mut g, Some(1.0));
-    assert!((g[0] - 0.6).abs() < 1e-15 && (g[1] - 0.8).abs() < 1e-15);
+    approx::assert_abs_diff_eq!(g[0], 0.6, epsilon = 1e-15);
+    approx::assert_abs_diff_eq!(g[1], 0.8, epsilon = 1e-15);
     let mut g = [0.3, 0.4];
     clip_global_norm(&mut g, Some(1.0));
     assert_eq!(g, [0.3, 0.4]);
