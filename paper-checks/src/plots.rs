@@ -329,7 +329,8 @@ fn tr(v: f64, scale: Scale) -> Option<f64> {
 /// and 5× each decade (so a short axis still has ticks).
 fn log1p_ticks(x0: f64, x1: f64) -> Vec<f64> {
     let decades: Vec<f64> = (0..16).map(|k| 10f64.powi(k)).collect();
-    let within = |v: &f64| tr(*v, Scale::Log1p).is_some_and(|p| p >= x0 - 1e-12 && p <= x1 + 1e-12);
+    let within =
+        |v: &f64| tr(*v, Scale::Log1p).is_some_and(|p| (x0 - 1e-12..=x1 + 1e-12).contains(&p));
     let mut values: Vec<f64> = decades.iter().copied().filter(within).collect();
     if values.len() < 3 {
         values = decades
@@ -522,9 +523,9 @@ impl Figure {
     }
 
     /// The drawn points of each series after clamping to [`Figure::y_range`] and the axes'
-    /// transforms (log10 on log axes, log10(1 + x) on a log(1 + x) axis), and the notes on what was left out: per series
-    /// `(x, mean, band low, band high)` in axis units (a band low of `None` runs to the bottom of
-    /// a log axis).
+    /// transforms (log10 on log axes, log10(1 + x) on a log(1 + x) axis), and the notes on what
+    /// was left out: per series `(x, mean, band low, band high)` in axis units (a band low of
+    /// `None` runs to the bottom of a log axis).
     pub fn points(&self) -> (Vec<Vec<BandPoint>>, Vec<String>) {
         let mut all = Vec::new();
         let (mut not_drawn, mut left_out, mut off) = (Vec::new(), Vec::new(), Vec::new());

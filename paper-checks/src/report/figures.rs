@@ -122,7 +122,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
     // The episodic control and the oracle methods roll out thousands of trajectories, BC and
     // DAgger a few dozen: a log(1 + x) axis shows both, and keeps the checkpoint at 0.
     let by_trajectories: XAxis<'_> = (
-        "expert-labelled trajectories rolled out (cumulative count, log scale of 1 + count)",
+        "expert-labelled trajectories rolled out (cumulative, log scale of 1 + count)",
         Scale::Log1p,
         &traj,
     );
@@ -161,27 +161,30 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         "fig4-3-success",
         "Fig. 4.3",
         obstacle_fig(
-            "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policies)",
+            "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policies; one panel per algorithm)",
             "success rate (fraction of episodes)",
             false,
             &|c| Some(c.score),
             false,
             by_trajectories,
         )
-        .clamped((0.0, 1.0)),
+        .clamped((0.0, 1.0))
+        // A dozen methods overlap at low success rates: one panel each.
+        .in_panels(3),
     ));
     figs.push((
         "fig4-4-crashes",
         "Fig. 4.4",
         obstacle_fig(
-            &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% CI band; dashed: reference policies)"),
+            &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% CI band; dashed: reference policies; one panel per algorithm)"),
             &format!("crashes (episodes out of {n_obs})"),
             false,
             &|c| Some(f64::from(c.crashes)),
             false,
             by_trajectories,
         )
-        .clamped((0.0, n_obs)),
+        .clamped((0.0, n_obs))
+        .in_panels(3),
     ));
     // Figs. 4.5 (gradient-estimate rows, oracle methods only) and 4.6 (loss rows), against
     // iterations on a log y axis.
