@@ -2,9 +2,11 @@
 //! rendered to PNG with resvg (system fonts through fontdb).
 
 use crate::error::Error;
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::ops::Range;
 use std::path::Path;
 
 /// One curve: x, mean and the band `[lo, hi]` (same lengths).
@@ -55,8 +57,8 @@ pub struct Figure {
     pub x_label: String,
     /// y-axis label.
     pub y_label: String,
-    /// log10 x axis.
-    pub log_x: bool,
+    /// How the x axis places values.
+    pub x_scale: Scale,
     /// log10 y axis.
     pub log_y: bool,
     /// The quantity's physical range `[min, max]` (either end may be infinite): means and bands
@@ -69,6 +71,19 @@ pub struct Figure {
     /// that many columns, every panel on the same axes and with the reference lines; `None`:
     /// every series on one plot.
     pub panels: Option<usize>,
+}
+
+/// How an axis places values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scale {
+    /// Position = value.
+    Linear,
+    /// Position = log10(value); values ≤ 0 are not drawn (and noted).
+    Log,
+    /// Position = log10(1 + value), for counts that start at 0: 0 sits at the origin and the
+    /// large counts are compressed like on a log axis. Ticks at 0 and whole decades of the value
+    /// (1, 10, 100, …), labelled with the value; values < 0 are not drawn (and noted).
+    Log1p,
 }
 
 /// The Okabe–Ito palette (distinguishable under the common colour-vision deficiencies).
@@ -296,14 +311,50 @@ fn wrap(text: &str, width: usize) -> Vec<String> {
 /// bottom of the axis (a lower end ≤ 0 on a log axis).
 pub type BandPoint = (f64, f64, Option<f64>, f64);
 
-fn tr(v: f64, log: bool) -> Option<f64> {
+/// The position of value `v` on an axis of scale `scale`: `None` if it cannot be drawn
+/// (non-finite, ≤ 0 on a log axis, < 0 on a log(1 + x) axis).
+fn tr(v: f64, scale: Scale) -> Option<f64> {
     if !v.is_finite() {
         return None;
     }
-    if log {
-        (v > 0.0).then(|| v.log10())
+    match scale {
+        Scale::Linear => Some(v),
+        Scale::Log => (v > 0.0).then(|| v.log10()),
+        Scale::Log1p => (v >= 0.0).then(|| v.ln_1p() / std::f64::consts::LN_10),
+    }
+}
+
+/// The tick positions of a log(1 + x) axis spanning positions `x0..=x1`: the values 0 and the
+/// whole decades 1, 10, 100, … within it, and when that gives fewer than three decades also 2×
+/// and 5× each decade (so a short axis still has ticks).
+fn log1p_ticks(x0: f64, x1: f64) -> Vec<f64> {
+    let decades: Vec<f64> = (0..16).map(|k| 10f64.powi(k)).collect();
+    let within =
+        |v: &f64| tr(*v, Scale::Log1p).is_some_and(|p| (x0 - 1e-12..=x1 + 1e-12).contains(&p));
+    let mut values: Vec<f64> = decades.iter().copied().filter(within).collect();
+    if values.len() < 3 {
+        values = decades
+            .iter()
+            .flat_map(|d| [*d, 2.0 * d, 5.0 * d])
+            .filter(within)
+            .collect();
+    }
+    std::iter::once(0.0)
+        .filter(within)
+        .chain(values)
+        .filter_map(|v| tr(v, Scale::Log1p))
+        .collect()
+}
+
+/// A tick label on a log(1 + x) axis, `v` the position: the value 10^v − 1, a whole count as the
+/// ticks of [`log1p_ticks`] are (rounded to remove the floating-point noise of the transform),
+/// `1eK` from a million on.
+fn fmt_log1p_tick(v: f64) -> String {
+    let x = (10f64.powf(v) - 1.0).max(0.0);
+    if x < 1e6 {
+        format!("{}", x.round())
     } else {
-        Some(v)
+        format!("1e{}", x.log10().round())
     }
 }
 
@@ -364,6 +415,58 @@ fn label_count(lo: f64, hi: f64, log: bool) -> usize {
     }
 }
 
+/// The x coordinate of a chart: plotters' `f64` range, with the tick positions fixed when
+/// `ticks` is given (plotters would tick round positions, not the whole values a log(1 + x) axis
+/// needs); no light grid lines then.
+struct XCoord {
+    inner: RangedCoordf64,
+    ticks: Option<Vec<f64>>,
+}
+
+impl XCoord {
+    /// The coordinate from `x0` to `x1` on an axis of scale `scale`.
+    fn new(x0: f64, x1: f64, scale: Scale) -> Self {
+        XCoord {
+            inner: (x0..x1).into(),
+            ticks: (scale == Scale::Log1p).then(|| log1p_ticks(x0, x1)),
+        }
+    }
+}
+
+impl Ranged for XCoord {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, hint: Hint) -> Vec<f64> {
+        match &self.ticks {
+            None => self.inner.key_points(hint),
+            Some(_) if hint.weight().allow_light_points() => vec![],
+            Some(ticks) => ticks.clone(),
+        }
+    }
+
+    fn range(&self) -> Range<f64> {
+        self.inner.range()
+    }
+
+    fn axis_pixel_range(&self, limit: (i32, i32)) -> Range<i32> {
+        self.inner.axis_pixel_range(limit)
+    }
+}
+
+/// A tick label for position `v` on an axis of scale `scale` spanning `span` positions.
+fn tick_label(v: f64, scale: Scale, span: f64) -> String {
+    match scale {
+        Scale::Linear => fmt_tick(v, false, span),
+        Scale::Log => fmt_tick(v, true, span),
+        Scale::Log1p => fmt_log1p_tick(v),
+    }
+}
+
 fn clamp_to(v: f64, range: Option<(f64, f64)>) -> f64 {
     match range {
         Some((a, b)) if v.is_finite() => v.max(a).min(b),
@@ -410,10 +513,19 @@ impl Figure {
         Ok(svg)
     }
 
+    /// The y axis's scale.
+    fn y_scale(&self) -> Scale {
+        if self.log_y {
+            Scale::Log
+        } else {
+            Scale::Linear
+        }
+    }
+
     /// The drawn points of each series after clamping to [`Figure::y_range`] and the axes'
-    /// transforms (log10 on log axes), and the notes on what was left out: per series
-    /// `(x, mean, band low, band high)` in axis units (a band low of `None` runs to the bottom of
-    /// a log axis).
+    /// transforms (log10 on log axes, log10(1 + x) on a log(1 + x) axis), and the notes on what
+    /// was left out: per series `(x, mean, band low, band high)` in axis units (a band low of
+    /// `None` runs to the bottom of a log axis).
     pub fn points(&self) -> (Vec<Vec<BandPoint>>, Vec<String>) {
         let mut all = Vec::new();
         let (mut not_drawn, mut left_out, mut off) = (Vec::new(), Vec::new(), Vec::new());
@@ -422,7 +534,7 @@ impl Figure {
             let mut skipped = 0;
             for k in 0..s.x.len() {
                 let m = clamp_to(s.mean[k], self.y_range);
-                let (Some(x), Some(m)) = (tr(s.x[k], self.log_x), tr(m, self.log_y)) else {
+                let (Some(x), Some(m)) = (tr(s.x[k], self.x_scale), tr(m, self.y_scale())) else {
                     skipped += 1;
                     continue;
                 };
@@ -431,9 +543,9 @@ impl Figure {
                 let lo = if self.log_y && lo.is_finite() && lo <= 0.0 {
                     None
                 } else {
-                    Some(tr(lo, self.log_y).unwrap_or(m).min(m))
+                    Some(tr(lo, self.y_scale()).unwrap_or(m).min(m))
                 };
-                let hi = tr(hi, self.log_y).unwrap_or(m).max(m);
+                let hi = tr(hi, self.y_scale()).unwrap_or(m).max(m);
                 v.push((x, m, lo, hi));
             }
             if skipped > 0 {
@@ -451,10 +563,10 @@ impl Figure {
         if !not_drawn.is_empty() {
             notes.push(format!(
                 "points not drawn (non-finite{}): {}",
-                if self.log_x || self.log_y {
-                    ", or ≤ 0 on a log axis"
-                } else {
-                    ""
+                match (self.x_scale, self.log_y) {
+                    (Scale::Log, _) | (_, true) => ", or ≤ 0 on a log axis",
+                    (Scale::Log1p, false) => ", or < 0 on a log(1 + x) axis",
+                    (Scale::Linear, false) => "",
                 },
                 not_drawn.join(", ")
             ));
@@ -514,16 +626,16 @@ impl Figure {
                 .margin_right(24)
                 .x_label_area_size(58)
                 .y_label_area_size(92)
-                .build_cartesian_2d(x0..x1, y0..y1)?;
-            let (lx, ly) = (self.log_x, self.log_y);
+                .build_cartesian_2d(XCoord::new(x0, x1, self.x_scale), y0..y1)?;
+            let (sx_scale, ly) = (self.x_scale, self.log_y);
             let (sx, sy) = (x1 - x0, y1 - y0);
             chart
                 .configure_mesh()
                 .x_desc(&self.x_label)
                 .y_desc(&self.y_label)
-                .x_labels(label_count(x0, x1, lx).min(8))
+                .x_labels(label_count(x0, x1, sx_scale != Scale::Linear).min(8))
                 .y_labels(label_count(y0, y1, ly))
-                .x_label_formatter(&|v| fmt_tick(*v, lx, sx))
+                .x_label_formatter(&|v| tick_label(*v, sx_scale, sx))
                 .y_label_formatter(&|v| fmt_tick(*v, ly, sy))
                 .light_line_style(WHITE.mix(0.0))
                 .bold_line_style(RGBColor(235, 235, 235))
@@ -583,9 +695,9 @@ impl Figure {
         {
             let root = SVGBackend::with_string(out, (WIDTH, height)).into_drawing_area();
             root.fill(&WHITE)?;
-            let (lx, ly) = (self.log_x, self.log_y);
+            let (sx_scale, ly) = (self.x_scale, self.log_y);
             let (sx, sy) = (x1 - x0, y1 - y0);
-            let fx = |v: &f64| fmt_tick(*v, lx, sx);
+            let fx = |v: &f64| tick_label(*v, sx_scale, sx);
             let fy = |v: &f64| fmt_tick(*v, ly, sy);
             let blank = |_: &f64| String::new();
             for (k, &i) in algos.iter().enumerate() {
@@ -594,12 +706,15 @@ impl Figure {
                 let mut chart = ChartBuilder::on(&area)
                     .x_label_area_size(PANEL_X_TICKS)
                     .y_label_area_size(if cell.column == 0 { PANEL_Y_TICKS } else { 0 })
-                    .build_cartesian_2d(x0..x1, y0..y1)?;
+                    .build_cartesian_2d(XCoord::new(x0, x1, self.x_scale), y0..y1)?;
                 // Tick labels on the outer edges only: the panels share their axes.
                 let bottom = k + grid.columns >= algos.len();
                 chart
                     .configure_mesh()
-                    .x_labels(label_count(x0, x1, lx).min(grid.plot_width as usize / 45))
+                    .x_labels(
+                        label_count(x0, x1, sx_scale != Scale::Linear)
+                            .min(grid.plot_width as usize / 45),
+                    )
                     .y_labels(label_count(y0, y1, ly).min(grid.plot_height as usize / 28))
                     .x_label_formatter(if bottom { &fx } else { &blank })
                     .y_label_formatter(&fy)
@@ -650,9 +765,10 @@ impl Figure {
     }
 }
 
-/// The SVG drawing surface, and a chart on part of it with `f64` axes (log axes in log10 units).
+/// The SVG drawing surface, and a chart on part of it with `f64` axes (positions: log10 of the
+/// value on log axes, log10(1 + value) on a log(1 + x) axis).
 type Area<'b> = DrawingArea<SVGBackend<'b>, plotters::coord::Shift>;
-type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+type Chart<'a, 'b> = ChartContext<'a, SVGBackend<'b>, Cartesian2d<XCoord, RangedCoordf64>>;
 type DrawResult = Result<(), DrawingAreaErrorKind<std::io::Error>>;
 
 /// The axes' extent `(x0, x1, y0, y1)` over every drawn point and band, the y range padded by 5%
@@ -1032,4 +1148,87 @@ pub fn render_png(svg: &str) -> Result<Vec<u8>, String> {
         &mut pixmap.as_mut(),
     );
     pixmap.encode_png().map_err(|e| e.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log1p_keeps_zero_at_the_origin_and_puts_decades_near_integers() {
+        assert_eq!(tr(0.0, Scale::Log1p), Some(0.0));
+        assert_eq!(tr(-1.0, Scale::Log1p), None);
+        assert_eq!(tr(f64::NAN, Scale::Log1p), None);
+        for k in 0..7 {
+            let d = 10f64.powi(k);
+            // 1 + (10^k − 1) is a whole decade: exactly k.
+            let p = tr(d - 1.0, Scale::Log1p).expect("drawn");
+            assert!((p - f64::from(k)).abs() < 1e-12, "{k}: {p}");
+            // The value 10^k itself sits log10(1 + 10^-k) above k, rounding to k.
+            let p = tr(d, Scale::Log1p).expect("drawn");
+            assert!((p - (f64::from(k) + (1.0 + 1.0 / d).log10())).abs() < 1e-12);
+            assert_eq!(p.round(), f64::from(k));
+        }
+        // The other scales are unchanged.
+        assert_eq!(tr(0.0, Scale::Log), None);
+        assert_eq!(tr(100.0, Scale::Log), Some(2.0));
+        assert_eq!(tr(-3.0, Scale::Linear), Some(-3.0));
+    }
+
+    #[test]
+    fn log1p_ticks_are_zero_and_whole_decades_labelled_with_the_value() {
+        let end = tr(5700.0, Scale::Log1p).expect("drawn");
+        let ticks = log1p_ticks(0.0, end);
+        assert_eq!(ticks[0], 0.0, "0 at the origin");
+        let labels: Vec<String> = ticks.iter().map(|v| fmt_log1p_tick(*v)).collect();
+        assert_eq!(labels, ["0", "1", "10", "100", "1000"]);
+        assert_eq!(tick_label(ticks[3], Scale::Log1p, end), "100");
+        // A short axis also ticks 2× and 5× each decade.
+        let short = log1p_ticks(0.0, tr(60.0, Scale::Log1p).expect("drawn"));
+        let labels: Vec<String> = short.iter().map(|v| fmt_log1p_tick(*v)).collect();
+        assert_eq!(labels, ["0", "1", "2", "5", "10", "20", "50"]);
+        // An axis that starts after 0 has no tick at 0.
+        let from_ten = log1p_ticks(tr(10.0, Scale::Log1p).expect("drawn"), end);
+        assert_eq!(fmt_log1p_tick(from_ten[0]), "10");
+        assert_eq!(fmt_log1p_tick(tr(2e7, Scale::Log1p).expect("drawn")), "1e7");
+    }
+
+    fn counts_figure(x: Vec<f64>) -> Figure {
+        let mut s = Series::new("BC");
+        s.mean = x.iter().map(|_| 0.5).collect();
+        s.lo = x.iter().map(|_| 0.4).collect();
+        s.hi = x.iter().map(|_| 0.6).collect();
+        s.x = x;
+        Figure {
+            title: "t".into(),
+            x_label: "trajectories (log scale of 1 + count)".into(),
+            y_label: "y".into(),
+            x_scale: Scale::Log1p,
+            log_y: false,
+            y_range: None,
+            series: vec![s],
+            panels: None,
+        }
+    }
+
+    #[test]
+    fn a_log1p_axis_draws_the_points_at_zero() {
+        let fig = counts_figure(vec![0.0, 9.0, 99.0, 5700.0]);
+        let (pts, notes) = fig.points();
+        assert_eq!(pts[0].len(), 4, "every point drawn");
+        assert_eq!(pts[0][0].0, 0.0);
+        assert!((pts[0][2].0 - 2.0).abs() < 1e-12);
+        assert!(notes.is_empty(), "{notes:?}");
+        for f in [fig.clone(), fig.in_panels(3)] {
+            let svg = f.to_svg().expect("draws");
+            assert!(!svg.contains("not drawn"), "a point left out");
+            for label in ["0", "1", "10", "100", "1000"] {
+                assert!(svg.contains(&format!("\n{label}\n")), "no tick {label}");
+            }
+        }
+        // A negative count cannot be drawn, and is noted.
+        let (pts, notes) = counts_figure(vec![-1.0, 0.0, 10.0]).points();
+        assert_eq!(pts[0].len(), 2);
+        assert!(notes[0].contains("< 0 on a log(1 + x) axis"), "{notes:?}");
+    }
 }

@@ -3,7 +3,7 @@
 
 use paper_checks::experiment::{SeedTiming, TaskKind};
 use paper_checks::pipeline::TheoryCache;
-use paper_checks::plots::{Figure, Marker, Series, Style, fmt_tick, style_for};
+use paper_checks::plots::{Figure, Marker, Scale, Series, Style, fmt_tick, style_for};
 use paper_checks::report::doc::{self, Block, Table};
 use paper_checks::report::speedup::{
     SpeedupRow, TimeBasis, kit_time, speedup_cells, speedup_row, speedup_total,
@@ -93,7 +93,7 @@ fn figure(range: Option<(f64, f64)>, log_y: bool) -> Figure {
         title: "t".into(),
         x_label: "x".into(),
         y_label: "y".into(),
-        log_x: false,
+        x_scale: Scale::Linear,
         log_y,
         y_range: range,
         series: vec![s],
@@ -158,7 +158,7 @@ fn figure_of(labels: &[&str]) -> Figure {
         title: "t".into(),
         x_label: "x".into(),
         y_label: "y".into(),
-        log_x: false,
+        x_scale: Scale::Linear,
         log_y: false,
         y_range: None,
         series: labels
@@ -504,7 +504,7 @@ fn capped_panels() -> Figure {
         title: "t".into(),
         x_label: "gradient calls (millions, cumulative)".into(),
         y_label: "resets before a full episode (count)".into(),
-        log_x: false,
+        x_scale: Scale::Linear,
         log_y: false,
         y_range: Some((0.0, 100.0)),
         series,

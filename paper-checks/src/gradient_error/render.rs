@@ -4,7 +4,7 @@ use super::{GradientError, GradientErrorResult, RmsePoint, RouteResult};
 
 /// Fig. 4.2's figures: (file stem, figure), (a) toy, (b) obstacle.
 pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figure)> {
-    use crate::plots::{Figure, Series};
+    use crate::plots::{Figure, Scale, Series};
     let x = |route: &RouteResult| route.rmse.iter().map(|p| p.n as f64).collect::<Vec<_>>();
     let band = |route: &RouteResult, label: &str, corrected: bool| {
         let mut s = Series::new(label);
@@ -51,7 +51,7 @@ pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figu
             ),
             x_label: "N, trajectories averaged (log scale)".into(),
             y_label: "RMSE of mean gradient (log scale)".into(),
-            log_x: true,
+            x_scale: Scale::Log,
             log_y: true,
             y_range: Some((0.0, f64::INFINITY)),
             series: vec![band(t, "RMSE (95% CI)", false), line(t, "σ/√N (exact σ)")],
@@ -76,7 +76,7 @@ pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figu
             ),
             x_label: "N, trajectories averaged (log scale)".into(),
             y_label: "RMSE of mean gradient (log scale)".into(),
-            log_x: true,
+            x_scale: Scale::Log,
             log_y: true,
             y_range: Some((0.0, f64::INFINITY)),
             series: vec![

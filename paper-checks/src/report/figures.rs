@@ -4,7 +4,7 @@
 use crate::config::Profile;
 use crate::error::Error;
 use crate::experiment::{Checkpoint, TaskKind};
-use crate::plots::{Figure, Series};
+use crate::plots::{Figure, Scale, Series};
 use crate::results::{ConfigResult, Results};
 use crate::stats::Summary;
 use std::path::Path;
@@ -78,17 +78,19 @@ fn reference_series(label: String, x: Vec<f64>, mean: Vec<f64>) -> Series {
 }
 
 /// Horizontal dashed lines at the mean of `f` over each baseline of `task` (reference policies,
-/// no training), across the x range of the figure's learner curves.
+/// no training), across the x range of the figure's learner curves: from their first positive x,
+/// or from x = 0 with `from_zero` (a log(1 + x) axis, whose origin is 0).
 fn baseline_lines(
     r: &Results,
     task: TaskKind,
     f: impl Fn(&Checkpoint) -> f64,
     over: &[Series],
+    from_zero: bool,
 ) -> Vec<Series> {
     let xs = || {
         over.iter()
             .flat_map(|s| s.x.iter().copied())
-            .filter(|x| *x > 0.0)
+            .filter(move |x| *x > 0.0 || (from_zero && *x == 0.0))
     };
     let (Some(x0), Some(x1)) = (xs().reduce(f64::min), xs().reduce(f64::max)) else {
         return vec![];
@@ -115,9 +117,13 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
     let it = |c: &Checkpoint| c.iteration as f64;
     let traj = |c: &Checkpoint| c.trajectories as f64;
     let gc = |c: &Checkpoint| c.gradient_evaluations as f64;
-    let by_iteration: (&str, &dyn Fn(&Checkpoint) -> f64) = ("iteration (parameter updates)", &it);
-    let by_trajectories: (&str, &dyn Fn(&Checkpoint) -> f64) = (
-        "expert-labelled trajectories rolled out (cumulative count)",
+    type XAxis<'a> = (&'a str, Scale, &'a dyn Fn(&Checkpoint) -> f64);
+    let by_iteration: XAxis<'_> = ("iteration (parameter updates)", Scale::Linear, &it);
+    // The episodic control and the oracle methods roll out thousands of trajectories, BC and
+    // DAgger a few dozen: a log(1 + x) axis shows both, and keeps the checkpoint at 0.
+    let by_trajectories: XAxis<'_> = (
+        "expert-labelled trajectories rolled out (cumulative, log scale of 1 + count)",
+        Scale::Log1p,
         &traj,
     );
     let obstacle_fig = |title: &str,
@@ -125,19 +131,25 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
                         log_y: bool,
                         f: &dyn Fn(&Checkpoint) -> Option<f64>,
                         skip_dataset: bool,
-                        (x_label, xf): (&str, &dyn Fn(&Checkpoint) -> f64)| {
+                        (x_label, x_scale, xf): XAxis<'_>| {
         let series: Vec<Series> = r
             .obstacle
             .iter()
             .filter(|c| !(skip_dataset && matches!(c.0.label.as_str(), "BC" | "DAgger")))
             .map(|c| band(&c.0, xf, f))
             .collect();
-        let lines = baseline_lines(r, TaskKind::Obstacle, |c| f(c).unwrap_or(f64::NAN), &series);
+        let lines = baseline_lines(
+            r,
+            TaskKind::Obstacle,
+            |c| f(c).unwrap_or(f64::NAN),
+            &series,
+            x_scale == Scale::Log1p,
+        );
         Figure {
             title: title.into(),
             x_label: x_label.into(),
             y_label: y.into(),
-            log_x: false,
+            x_scale,
             log_y,
             y_range: None,
             series: series.into_iter().chain(lines).collect(),
@@ -149,27 +161,30 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         "fig4-3-success",
         "Fig. 4.3",
         obstacle_fig(
-            "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policies)",
+            "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policies; one panel per algorithm)",
             "success rate (fraction of episodes)",
             false,
             &|c| Some(c.score),
             false,
             by_trajectories,
         )
-        .clamped((0.0, 1.0)),
+        .clamped((0.0, 1.0))
+        // A dozen methods overlap at low success rates: one panel each.
+        .in_panels(3),
     ));
     figs.push((
         "fig4-4-crashes",
         "Fig. 4.4",
         obstacle_fig(
-            &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% CI band; dashed: reference policies)"),
+            &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% CI band; dashed: reference policies; one panel per algorithm)"),
             &format!("crashes (episodes out of {n_obs})"),
             false,
             &|c| Some(f64::from(c.crashes)),
             false,
             by_trajectories,
         )
-        .clamped((0.0, n_obs)),
+        .clamped((0.0, n_obs))
+        .in_panels(3),
     ));
     // Figs. 4.5 (gradient-estimate rows, oracle methods only) and 4.6 (loss rows), against
     // iterations on a log y axis.
@@ -233,12 +248,18 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             .iter()
             .map(|c| band(&c.0, |k| gc(k) / 1e6, f))
             .collect();
-        let lines = baseline_lines(r, TaskKind::Cartpole, |c| f(c).unwrap_or(f64::NAN), &series);
+        let lines = baseline_lines(
+            r,
+            TaskKind::Cartpole,
+            |c| f(c).unwrap_or(f64::NAN),
+            &series,
+            false,
+        );
         Figure {
             title: title.into(),
             x_label: "gradient calls (millions, cumulative)".into(),
             y_label: y.into(),
-            log_x: false,
+            x_scale: Scale::Linear,
             log_y,
             y_range: None,
             series: series.into_iter().chain(lines).collect(),
