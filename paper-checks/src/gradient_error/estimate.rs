@@ -4,7 +4,7 @@
 use super::{RmsePoint, SlopeCi, ToyRoute};
 use crate::error::Error;
 use crate::stats::{Summary, derive_seed};
-use ilopt::problem::KitRng;
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use ilopt::scalar::{BigRational, Scalar, parse_exact_list};
 use ilopt::toy::{ToyMdp, ToyProblem};
 use nalgebra::DVector;
@@ -194,4 +194,23 @@ pub fn squared_error_sd(
         m4 += q.prob * sq.clone() * sq;
     }
     Ok((m4 - sigma2.clone() * sigma2).to_f64().max(0.0).sqrt())
+}
+
+/// One eq. 3.15 estimate (causal form) on any problem at θ, from a fresh roll-out; `what` names
+/// the route in an error.
+///
+/// # Errors
+/// If the oracle fails.
+pub fn draw<P: IlProblem<f64>>(
+    p: &P,
+    theta: &DVector<f64>,
+    rng: &mut KitRng,
+    what: &str,
+) -> Result<DVector<f64>, Error> {
+    let mut cost = Cost::default();
+    let t = p
+        .rollout(&Behaviour::Learner(theta), rng, &mut cost)
+        .map_err(|e| Error::experiment(what, e))?;
+    p.estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+        .map_err(|e| Error::experiment(what, e))
 }

@@ -1,13 +1,13 @@
 //! Route (b): the obstacle task (fixed horizon, absorbing ends) against an independent reference
 //! of M trajectories, with its own variance.
 
-use super::{GradientError, ObstacleRoute, RouteResult, repetition_errors, summarise};
+use super::{GradientError, ObstacleRoute, RouteResult, draw, repetition_errors, summarise};
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::env::obstacle::ObstacleConfig;
 use ilopt::expert::vo_policy::VoExpertParams;
 use ilopt::policy::{LinearGaussian, SpeedLimitedGaussian};
-use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
+use ilopt::problem::KitRng;
 use ilopt::task::obstacle::{ObstacleFeatures, ObstacleTask};
 use ilopt::task::{AfterEnd, TaskProblem};
 use nalgebra::DVector;
@@ -34,23 +34,6 @@ pub fn obstacle_problem(route: &ObstacleRoute) -> Result<ObstacleFixed, Error> {
         .map_err(|x| e(&x))?;
     let policy = SpeedLimitedGaussian::new(inner, env.agent_max_speed).map_err(|x| e(&x))?;
     TaskProblem::fixed(task, policy, route.horizon, AfterEnd::Absorb).map_err(|x| e(&x))
-}
-
-/// One eq. 3.15 estimate (causal form) on any problem at θ.
-///
-/// # Errors
-/// If the oracle fails.
-pub fn draw<P: IlProblem<f64>>(
-    p: &P,
-    theta: &DVector<f64>,
-    rng: &mut KitRng,
-) -> Result<DVector<f64>, Error> {
-    let mut cost = Cost::default();
-    let t = p
-        .rollout(&Behaviour::Learner(theta), rng, &mut cost)
-        .map_err(|e| Error::experiment("Fig. 4.2", e))?;
-    p.estimate(theta, &t, EstimatorForm::Causal, &mut cost)
-        .map_err(|e| Error::experiment("Fig. 4.2", e))
 }
 
 /// Mean and per-component sum of squared deviations of `m` draws (Chan et al.'s merge of
@@ -151,7 +134,7 @@ pub fn obstacle_route(g: &GradientError) -> Result<RouteResult, Error> {
         d,
         1024,
         &format!("{key}|reference"),
-        |rng| draw(&p, &theta, rng),
+        |rng| draw(&p, &theta, rng, "Fig. 4.2"),
     )?;
     let reference: Vec<f64> = mom.mean.iter().copied().collect();
     let sigma2 = mom.variance(0..d);
@@ -163,7 +146,7 @@ pub fn obstacle_route(g: &GradientError) -> Result<RouteResult, Error> {
         &key,
         &[(0, h), (h, h)],
         &reference,
-        |rng| draw(&p, &theta, rng),
+        |rng| draw(&p, &theta, rng, "Fig. 4.2"),
     )?;
     let (rmse, slope) = summarise(&o.ns, &sq, sigma2, reference_variance, g.bootstrap, &key);
     let block_slopes = [("x-row", 0..h), ("y-row", h..d)]

@@ -1,11 +1,13 @@
 //! Route (a): a toy MDP against its exact ∇F (rationals) and exact σ².
 
-use super::{GradientError, RouteResult, ToyRoute, repetition_errors, squared_error_sd, summarise};
+use super::{
+    GradientError, RouteResult, ToyRoute, draw, repetition_errors, squared_error_sd, summarise,
+};
 use crate::error::Error;
 use crate::stats::fnv1a;
 use ilopt::exact::enumerate::moments;
 use ilopt::exact::forward::forward;
-use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
+use ilopt::problem::KitRng;
 use ilopt::scalar::{BigRational, Scalar, parse_exact_list};
 use ilopt::toy::{ToyMdp, ToyProblem};
 use nalgebra::DVector;
@@ -92,10 +94,5 @@ pub fn toy_draw(
     theta: &DVector<f64>,
     rng: &mut KitRng,
 ) -> Result<DVector<f64>, Error> {
-    let mut cost = Cost::default();
-    let t = p
-        .rollout(&Behaviour::Learner(theta), rng, &mut cost)
-        .map_err(|e| Error::experiment("Fig. 4.2 (toy)", e))?;
-    p.estimate(theta, &t, EstimatorForm::Causal, &mut cost)
-        .map_err(|e| Error::experiment("Fig. 4.2 (toy)", e))
+    draw(p, theta, rng, "Fig. 4.2 (toy)")
 }
