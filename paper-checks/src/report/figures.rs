@@ -118,9 +118,14 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
     let traj = |c: &Checkpoint| c.trajectories as f64;
     let gc = |c: &Checkpoint| c.gradient_evaluations as f64;
     type XAxis<'a> = (&'a str, Scale, &'a dyn Fn(&Checkpoint) -> f64);
-    let by_iteration: XAxis<'_> = ("iteration (parameter updates)", Scale::Linear, &it);
-    // The episodic control and the oracle methods roll out thousands of trajectories, BC and
-    // DAgger a few dozen: a log(1 + x) axis shows both, and keeps the checkpoint at 0.
+    // The episodic control runs thousands of iterations and the oracle methods thousands of
+    // trajectories, while BC, DAgger and the rows of 16 trajectories per gradient take a few dozen
+    // to a few hundred: a log(1 + x) axis shows both, and keeps the checkpoint at 0.
+    let by_iteration: XAxis<'_> = (
+        "iteration (parameter updates, log scale of 1 + count)",
+        Scale::Log1p,
+        &it,
+    );
     let by_trajectories: XAxis<'_> = (
         "expert-labelled trajectories rolled out (cumulative, log scale of 1 + count)",
         Scale::Log1p,
