@@ -1,8 +1,40 @@
 //! `f64` and `f32`: the fast scalars of the experiments.
 
-use super::{BigRational, Real, Scalar, Sqrt};
+use super::{BigRational, DOT_LANES, Real, Scalar, Sqrt};
 use num_traits::ToPrimitive;
 use std::cmp::Ordering;
+
+/// The floats' [`Scalar::dot_slices`] from [`super::DOT_LANES_FROM`] terms on: [`DOT_LANES`]
+/// partial sums over the chunks, added pairwise ((0+1) + (2+3), …), then the tail added left to
+/// right. Out of line so that the short products, the common case in the roll-outs, stay inlined
+/// at their call sites.
+#[inline(never)]
+fn dot_in_lanes<T>(x: &[T], y: &[T]) -> T
+where
+    T: Copy + Default + std::ops::Add<Output = T> + std::ops::Mul<Output = T> + std::ops::AddAssign,
+{
+    let n = x.len().min(y.len());
+    let (x, y) = (&x[..n], &y[..n]);
+    let mut acc = [T::default(); DOT_LANES];
+    for (cx, cy) in x.chunks_exact(DOT_LANES).zip(y.chunks_exact(DOT_LANES)) {
+        for l in 0..DOT_LANES {
+            acc[l] += cx[l] * cy[l];
+        }
+    }
+    let full = n - n % DOT_LANES;
+    let tail = x[full..]
+        .iter()
+        .zip(&y[full..])
+        .fold(T::default(), |acc, (&a, &b)| acc + a * b);
+    let mut width = DOT_LANES;
+    while width > 1 {
+        width /= 2;
+        for l in 0..width {
+            acc[l] += acc[l + width];
+        }
+    }
+    acc[0] + tail
+}
 
 macro_rules! impl_float {
     ($t:ty) => {
@@ -49,32 +81,13 @@ macro_rules! impl_float {
             }
             #[inline]
             fn dot_slices(x: &[Self], y: &[Self]) -> Self {
-                use super::{DOT_LANES, DOT_LANES_FROM};
+                use super::DOT_LANES_FROM;
                 let n = x.len().min(y.len());
                 let (x, y) = (&x[..n], &y[..n]);
                 if n < DOT_LANES_FROM {
                     return x.iter().zip(y).fold(0.0, |acc, (a, b)| acc + a * b);
                 }
-                let mut acc = [0.0 as $t; DOT_LANES];
-                for (cx, cy) in x.chunks_exact(DOT_LANES).zip(y.chunks_exact(DOT_LANES)) {
-                    for l in 0..DOT_LANES {
-                        acc[l] += cx[l] * cy[l];
-                    }
-                }
-                let full = n - n % DOT_LANES;
-                let tail = x[full..]
-                    .iter()
-                    .zip(&y[full..])
-                    .fold(0.0, |acc, (a, b)| acc + a * b);
-                // Pairwise: (0+1) + (2+3), …, then the tail.
-                let mut width = DOT_LANES;
-                while width > 1 {
-                    width /= 2;
-                    for l in 0..width {
-                        acc[l] += acc[l + width];
-                    }
-                }
-                acc[0] + tail
+                dot_in_lanes(x, y)
             }
         }
 
