@@ -11,7 +11,7 @@
 use super::first_order::{FirstOrder, UpdateRule};
 use super::{AlgoError, ConfigNumber, in_range, positive, require_roots, sqrt};
 use crate::problem::EstimatorForm;
-use crate::scalar::Scalar;
+use crate::scalar::{Scalar, powi};
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
@@ -43,17 +43,21 @@ impl AdamConfig {
     }
 }
 
-/// The Adam update as an [`UpdateRule`].
+/// The Adam update as an [`UpdateRule`], also usable on plain slices with a per-step step size
+/// ([`AdamRule::update`]; the PPO expert's trainer anneals it).
+///
+/// In floating point the order of operations is fixed: `v ← β₂v + ((1 − β₂)·g)·g`, the bias
+/// corrections `1 − βᵗ` with `βᵗ` by [`powi`] (binary powering, `f64::powi`'s order), and
+/// `θ ← θ − (α·m̂)/(√v̂ + ε)`.
 #[derive(Debug, Clone)]
 pub struct AdamRule<S> {
     alpha: S,
     beta1: S,
     beta2: S,
     epsilon: S,
-    beta1_t: S,
-    beta2_t: S,
-    m: Option<DVector<S>>,
-    v: Option<DVector<S>>,
+    steps: u32,
+    m: Vec<S>,
+    v: Vec<S>,
 }
 
 impl<S: Scalar> AdamRule<S> {
@@ -68,50 +72,70 @@ impl<S: Scalar> AdamRule<S> {
             beta1: S::from_rational(&in_range(&c.beta1, "beta1", (0, false), (1, true))?),
             beta2: S::from_rational(&in_range(&c.beta2, "beta2", (0, false), (1, true))?),
             epsilon: S::from_rational(&positive(&c.epsilon, "epsilon", false)?),
-            beta1_t: S::one(),
-            beta2_t: S::one(),
-            m: None,
-            v: None,
+            steps: 0,
+            m: Vec::new(),
+            v: Vec::new(),
         };
         require_roots::<S>(ADAM, "square roots")?;
         Ok(rule)
+    }
+
+    /// The moments `(m, v)` after the last update (empty before the first).
+    pub fn moments(&self) -> (&[S], &[S]) {
+        (&self.m, &self.v)
+    }
+
+    /// One Adam step of `theta` along `g` with step size `alpha` in place of the configured α
+    /// (the module's update, t counting the updates since the last reset).
+    ///
+    /// # Errors
+    /// [`AlgoError::Dimension`] if `g` and `theta` (or the moments of earlier steps)
+    /// differ in length; [`AlgoError::NonFinite`] for a zero denominator √v̂ + ε;
+    /// [`AlgoError::NeedsRoots`] if a square root is not available.
+    pub fn update(&mut self, theta: &mut [S], g: &[S], alpha: &S) -> Result<(), AlgoError> {
+        if self.steps == 0 {
+            self.m = vec![S::zero(); g.len()];
+            self.v = vec![S::zero(); g.len()];
+        }
+        if theta.len() != g.len() || self.m.len() != g.len() {
+            return Err(AlgoError::Dimension {
+                expected: self.m.len(),
+                got: if theta.len() != self.m.len() {
+                    theta.len()
+                } else {
+                    g.len()
+                },
+            });
+        }
+        self.steps = self.steps.saturating_add(1);
+        let one = S::one();
+        let (d1, d2) = (one.clone() - &self.beta1, one.clone() - &self.beta2);
+        let c1 = one.clone() - powi(&self.beta1, self.steps);
+        let c2 = one - powi(&self.beta2, self.steps);
+        for (((t, gi), m), v) in theta.iter_mut().zip(g).zip(&mut self.m).zip(&mut self.v) {
+            *m = self.beta1.clone() * &*m + d1.clone() * gi;
+            *v = self.beta2.clone() * &*v + d2.clone() * gi * gi;
+            let mhat = m.clone() / &c1;
+            let vhat = v.clone() / &c2;
+            let den = sqrt(&vhat, ADAM)? + &self.epsilon;
+            if !den.is_certainly_positive() {
+                return Err(AlgoError::NonFinite("Adam's denominator √v̂ + ε (zero)"));
+            }
+            *t -= alpha.clone() * mhat / den;
+        }
+        Ok(())
     }
 }
 
 impl<S: Scalar> UpdateRule<S> for AdamRule<S> {
     fn reset(&mut self) {
-        self.beta1_t = S::one();
-        self.beta2_t = S::one();
-        self.m = None;
-        self.v = None;
+        self.steps = 0;
+        self.m.clear();
+        self.v.clear();
     }
     fn apply(&mut self, theta: &mut DVector<S>, g: &DVector<S>) -> Result<(), AlgoError> {
-        let zeros = || DVector::from_element(g.len(), S::zero());
-        let m = self.m.take().unwrap_or_else(zeros);
-        let v = self.v.take().unwrap_or_else(zeros);
-        let one = S::one();
-        let m = m.zip_map(g, |mi, gi| {
-            self.beta1.clone() * mi + (one.clone() - &self.beta1) * gi
-        });
-        let v = v.zip_map(g, |vi, gi| {
-            self.beta2.clone() * vi + (one.clone() - &self.beta2) * gi.square()
-        });
-        self.beta1_t *= &self.beta1;
-        self.beta2_t *= &self.beta2;
-        let c1 = one.clone() - &self.beta1_t;
-        let c2 = one - &self.beta2_t;
-        for i in 0..theta.len() {
-            let mhat = m[i].clone() / &c1;
-            let vhat = v[i].clone() / &c2;
-            let den = sqrt(&vhat, ADAM)? + &self.epsilon;
-            if !den.is_certainly_positive() {
-                return Err(AlgoError::NonFinite("Adam's denominator √v̂ + ε (zero)"));
-            }
-            theta[i] -= self.alpha.clone() * mhat / den;
-        }
-        self.m = Some(m);
-        self.v = Some(v);
-        Ok(())
+        let alpha = self.alpha.clone();
+        self.update(theta.as_mut_slice(), g.as_slice(), &alpha)
     }
 }
 

@@ -126,6 +126,37 @@ impl_float!(f32);
 mod tests {
     use super::*;
 
+    /// `scalar::powi` against the standard library's `f64::powi` (bit for bit, over exponents
+    /// from 0 to 10⁵ and bases of every magnitude), and in exact rationals against the product
+    /// of n factors.
+    #[test]
+    fn powi_is_f64_powi_bit_for_bit_and_exact_in_rationals() {
+        use crate::scalar::powi;
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..2000 {
+            let x: f64 = rng.random_range(-2.0..2.0) * 10f64.powi(rng.random_range(-3..4));
+            let n: u32 = if rng.random_bool(0.5) {
+                rng.random_range(0..64)
+            } else {
+                rng.random_range(0..100_000)
+            };
+            let std = x.powi(i32::try_from(n).unwrap());
+            assert_eq!(powi(&x, n).to_bits(), std.to_bits(), "{x}^{n}");
+        }
+        // Adam's β's at a run-time step count (a compile-time exponent may be folded by
+        // another route: `0.9f64.powi(7)` written with literals differs in the last bit).
+        for (b1, t) in [(0.9f64, 7u32), (0.999, 4000)] {
+            let t = std::hint::black_box(t);
+            assert_eq!(powi(&b1, t).to_bits(), f64::powi(b1, t as i32).to_bits());
+        }
+        let q = BigRational::new((-7).into(), 5.into());
+        for n in 0..40u32 {
+            let product = (0..n).fold(BigRational::from_integer(1.into()), |acc, _| acc * &q);
+            assert_eq!(powi(&q, n), product, "n = {n}");
+        }
+    }
+
     #[test]
     fn ratios_round_correctly() {
         assert_eq!(f64::from_ratio(1, 3), 1.0 / 3.0);

@@ -199,6 +199,24 @@ pub fn dot<S: Scalar>(x: &[S], y: &[S]) -> S {
     S::dot_slices(x, y)
 }
 
+/// `xⁿ` by binary powering: `r = 1`, then for each bit of `n` from the lowest, `r ← r·x` if the
+/// bit is set and `x ← x²` while bits remain. Exact in exact scalars, an enclosure in intervals;
+/// in floats the same operations in the same order as `f64::powi` (compiler-rt's `__powidf2`), so
+/// the two agree bit for bit.
+pub fn powi<S: Scalar>(x: &S, n: u32) -> S {
+    let (mut base, mut n, mut r) = (x.clone(), n, S::one());
+    loop {
+        if n & 1 == 1 {
+            r *= &base;
+        }
+        n >>= 1;
+        if n == 0 {
+            return r;
+        }
+        base = base.clone() * &base;
+    }
+}
+
 /// Squared Euclidean norm `Σ xᵢ²`.
 pub fn norm_sq<S: Scalar>(x: &[S]) -> S {
     x.iter().fold(S::zero(), |acc, a| acc + a.square())

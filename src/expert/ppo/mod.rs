@@ -25,11 +25,9 @@
 //! entropy:    c_H π_b (ln π_b + H)   (the gradient of −c_H H, H = −Σ_b π_b ln π_b)
 //! ```
 //!
-//! Each network has its own Adam optimiser (Kingma & Ba 2015) with optional global-norm gradient
-//! clipping: a minimal private one on the flat `f64` weights, with the bias corrections from
-//! `β^t` by `powi` and the learning rate annealed per step. The kit's [`crate::algo::adam`]
-//! keeps running products of `β` and rounds `(1 − β₂)g²` in another order, so it would not
-//! reproduce the stored expert's weights. [`PpoConfig::envs`] copies of CartPole are stepped one after the
+//! Each network has its own Adam optimiser (Kingma & Ba 2015), the kit's
+//! [`crate::algo::adam::AdamRule`] on the flat `f64` weights with the learning rate annealed per
+//! step, after optional global-norm gradient clipping. [`PpoConfig::envs`] copies of CartPole are stepped one after the
 //! other (as Gymnasium's synchronous vector environment with auto-reset), each for
 //! [`PpoConfig::steps_per_env`] steps per iteration; then [`PpoConfig::epochs`] passes over the
 //! shuffled batch in mini-batches. With [`PpoConfig::anneal`], the learning rates and ε decay
@@ -370,7 +368,8 @@ mod trainer;
 #[cfg(test)]
 mod tests;
 
-use adam::{Adam, clip_global_norm};
+use crate::algo::adam::AdamRule;
+use adam::{adam, adam_step, clip_global_norm};
 use batch::BatchMlp;
 pub use file::PpoExpertFile;
 pub use greedy::{FAST_TANH_ERROR, PpoGreedy, fast_tanh};

@@ -44,10 +44,10 @@ fn logit_gradients_match_finite_differences() {
 fn adam_steps_by_the_learning_rate_for_a_constant_gradient() {
     // With bias correction, the first step is lr · g/(|g| + ε) per coordinate.
     let config = PpoConfig::default();
-    let mut adam = Adam::new(2, &config);
+    let mut adam = adam(&config).unwrap();
     let g = [3.0, -0.5];
     let mut p = [1.0, -1.0];
-    adam.step(&mut p, &g, 0.1);
+    adam_step(&mut adam, &mut p, &g, 0.1, 1).unwrap();
     for i in 0..2 {
         let expected = [1.0, -1.0][i] - 0.1 * g[i] / (g[i].abs() + config.adam_epsilon);
         assert!(
@@ -57,13 +57,42 @@ fn adam_steps_by_the_learning_rate_for_a_constant_gradient() {
     }
     // A second step with the same gradient moves by the same amount (m̂ = g, v̂ = g²).
     let before = p;
-    adam.step(&mut p, &g, 0.1);
+    adam_step(&mut adam, &mut p, &g, 0.1, 2).unwrap();
     for i in 0..2 {
         let expected = before[i] - 0.1 * g[i] / (g[i].abs() + config.adam_epsilon);
         assert!(
             approx::abs_diff_eq!(p[i], expected, epsilon = 1e-14),
             "{p:?}"
         );
+    }
+}
+
+/// The stored expert was trained with this update, written out on `f64` slices: the kit's Adam
+/// must repeat it bit for bit (it does the same operations in the same order, `βᵗ` by `powi`).
+#[test]
+fn the_kits_adam_repeats_the_update_the_stored_expert_was_trained_with() {
+    use rand::{Rng, SeedableRng};
+    let config = PpoConfig::default();
+    let (b1, b2, eps) = (config.adam_beta1, config.adam_beta2, config.adam_epsilon);
+    let mut rng = KitRng::seed_from_u64(5);
+    let dim = 7;
+    let mut kit = adam(&config).unwrap();
+    let mut p_kit: Vec<f64> = (0..dim).map(|_| rng.random_range(-1.0..1.0)).collect();
+    let mut p_ref = p_kit.clone();
+    let (mut m, mut v) = (vec![0.0; dim], vec![0.0; dim]);
+    for t in 1..=2000 {
+        let g: Vec<f64> = (0..dim).map(|_| rng.random_range(-3.0..3.0)).collect();
+        let lr = 1e-3 * (1.0 - f64::from(t) / 4000.0);
+        let (bc1, bc2) = (1.0 - b1.powi(t), 1.0 - b2.powi(t));
+        for i in 0..dim {
+            m[i] = b1 * m[i] + (1.0 - b1) * g[i];
+            v[i] = b2 * v[i] + (1.0 - b2) * g[i] * g[i];
+            p_ref[i] -= lr * (m[i] / bc1) / ((v[i] / bc2).sqrt() + eps);
+        }
+        adam_step(&mut kit, &mut p_kit, &g, lr, 1).unwrap();
+        let bits = |w: &[f64]| w.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&p_kit), bits(&p_ref), "step {t}");
+        assert_eq!(bits(kit.moments().1), bits(&v), "step {t}");
     }
 }
 
@@ -227,16 +256,20 @@ fn reference_update(
     }
     clip_global_norm(&mut actor_grad, t.config.max_grad_norm);
     clip_global_norm(&mut critic_grad, t.config.max_grad_norm);
-    t.actor_adam.step(
+    adam_step(
+        &mut t.actor_adam,
         &mut t.actor,
         &actor_grad,
         t.config.actor_learning_rate * schedule,
-    );
-    t.critic_adam.step(
+        iteration,
+    )?;
+    adam_step(
+        &mut t.critic_adam,
         &mut t.critic,
         &critic_grad,
         t.config.critic_learning_rate * schedule,
-    );
+        iteration,
+    )?;
     if !t.actor.iter().all(|x| x.is_finite()) {
         return Err(non_finite("actor weights"));
     }
@@ -356,8 +389,14 @@ fn update_matches_the_reference_update_bit_for_bit() {
             let bits = |w: &[f64]| w.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&fast.actor), bits(&reference.actor));
             assert_eq!(bits(&fast.critic), bits(&reference.critic));
-            assert_eq!(bits(&fast.actor_adam.m), bits(&reference.actor_adam.m));
-            assert_eq!(bits(&fast.critic_adam.v), bits(&reference.critic_adam.v));
+            assert_eq!(
+                bits(fast.actor_adam.moments().0),
+                bits(reference.actor_adam.moments().0)
+            );
+            assert_eq!(
+                bits(fast.critic_adam.moments().1),
+                bits(reference.critic_adam.moments().1)
+            );
         }
     }
 }

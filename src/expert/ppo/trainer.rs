@@ -85,8 +85,8 @@ pub struct PpoTrainer {
     pub(super) critic_net: Mlp,
     pub(super) actor: Vec<f64>,
     pub(super) critic: Vec<f64>,
-    pub(super) actor_adam: Adam,
-    pub(super) critic_adam: Adam,
+    pub(super) actor_adam: AdamRule<f64>,
+    pub(super) critic_adam: AdamRule<f64>,
     pub(super) workers: Vec<Worker>,
     pub(super) rng: KitRng,
     /// The actor's and the critic's batch passes, and the mini-batch buffers.
@@ -126,8 +126,8 @@ impl PpoTrainer {
             })
             .collect();
         Ok(PpoTrainer {
-            actor_adam: Adam::new(actor.len(), config),
-            critic_adam: Adam::new(critic.len(), config),
+            actor_adam: adam(config)?,
+            critic_adam: adam(config)?,
             actor_pass: BatchMlp::new(config.hidden),
             critic_pass: BatchMlp::new(config.hidden),
             scratch: Scratch {
@@ -438,16 +438,20 @@ impl PpoTrainer {
         }
         clip_global_norm(actor_grad, self.config.max_grad_norm);
         clip_global_norm(critic_grad, self.config.max_grad_norm);
-        self.actor_adam.step(
+        adam_step(
+            &mut self.actor_adam,
             &mut self.actor,
             actor_grad,
             self.config.actor_learning_rate * schedule,
-        );
-        self.critic_adam.step(
+            iteration,
+        )?;
+        adam_step(
+            &mut self.critic_adam,
             &mut self.critic,
             critic_grad,
             self.config.critic_learning_rate * schedule,
-        );
+            iteration,
+        )?;
         if !self.actor.iter().all(|x| x.is_finite()) {
             return Err(non_finite("actor weights"));
         }
