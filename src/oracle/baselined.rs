@@ -10,8 +10,8 @@ use crate::scalar::Real;
 use std::borrow::Borrow;
 
 /// Adds the baselined causal estimate to `g` (zeros, [`crate::policy::Policy::param_dim`]
-/// entries), for a trajectory with `scored` decisions whose scores enter the estimate (n − 1;
-/// n when it absorbed) and a baseline that covers them.
+/// entries), for a baseline that covers the trajectory's scored decisions (n − 1; n when it
+/// absorbed).
 ///
 /// Without an absorbing tail, on a trajectory whose features are known valid, the baseline is
 /// folded into the plain estimator's loop as per-decision loss shifts `δ_t = b_t − b_{t−1}`
@@ -22,7 +22,6 @@ pub(crate) fn baselined_pass<S, P, L, A>(
     theta: &[S],
     t: &Decisions<'_, S, L, A>,
     baseline: Given<'_, S>,
-    scored: usize,
     g: &mut [S],
 ) -> Result<(), OracleError>
 where
@@ -30,7 +29,7 @@ where
     P: LikelihoodRatio<S, Action = A> + EstimatorKernel<S>,
     L: Borrow<P::Label>,
 {
-    let n = t.len();
+    let (n, scored) = (t.len(), t.scored());
     if t.absorbed.is_none() && features_valid(policy, t) {
         // δ_t = b_t − b_{t−1} with b_0 = 0 and b_t = 0 after the last scored decision: for
         // one constant only the first and the first unscored decision shift.

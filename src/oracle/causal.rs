@@ -38,7 +38,7 @@ where
     L: Borrow<P::Label>,
 {
     let d = policy.param_dim();
-    let n = t.len();
+    let scored = t.scored();
     let mut g = vec![S::zero(); d];
     let mut log_w = S::zero();
     // θ has been checked by the caller; with every φ checked here once, the per-decision calls can
@@ -75,7 +75,7 @@ where
             }
         }
         if let Some(theta_new) = ratio
-            && (step + 1 < n || tail.is_some())
+            && step < scored
         {
             log_w += policy
                 .log_likelihood_ratio(theta, theta_new, phi, a)

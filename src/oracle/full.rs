@@ -21,7 +21,6 @@ where
     L: Borrow<P::Label>,
 {
     let d = policy.param_dim();
-    let n = t.len();
     let mut scratch = Scratch::new(d);
     let (grad, score, _) = scratch.parts();
     let mut total = t.absorbed.cloned().unwrap_or_else(S::zero);
@@ -30,7 +29,7 @@ where
             .loss_score_into(theta, phi, y.borrow(), a, grad, score)
             .map_err(policy_error)?;
     }
-    let scored = if t.absorbed.is_some() { n } else { n - 1 };
+    let scored = t.scored();
     let mut g = vec![S::zero(); d];
     for (step, ((phi, a), y)) in t.feature_rows().zip(t.actions).zip(t.labels).enumerate() {
         policy

@@ -168,7 +168,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
 
 /// The default [`EstimatorKernel::causal_sum_recorded`]: per decision
 /// [`Policy::loss_score_into`] (with the policy's checks), `accumulate` with unit weight, then
-/// `l_t` and the row ψ_t appended to the records.
+/// the row ψ_t appended to the score records (through [`record_by_steps`]).
 #[allow(clippy::too_many_arguments)] // the method's arguments and the policy
 pub(crate) fn causal_sum_recording_rows<S, P, L>(
     policy: &P,
@@ -186,20 +186,56 @@ where
     L: Borrow<P::Label>,
 {
     let d = policy.param_dim();
+    let mut buf = vec![S::zero(); 3 * d];
+    let (grad, rest) = buf.split_at_mut(d);
+    let (score, score_sum) = rest.split_at_mut(d);
+    let x = policy.feature_dim();
+    record_by_steps(
+        features,
+        x,
+        labels,
+        actions,
+        losses,
+        scores,
+        d,
+        |phi, y, a, scores| {
+            let l = policy.loss_score_into(theta, phi, y.borrow(), a, grad, score)?;
+            accumulate(g, None, &l, grad, score, score_sum);
+            scores.extend_from_slice(score);
+            Ok(l)
+        },
+    )
+}
+
+/// The causal pass of eq. 3.15 decision by decision with every decision recorded, as
+/// [`EstimatorKernel::causal_sum_recorded`] records it: `losses` and `scores` are cleared (with
+/// room reserved once for `n` losses and `n · score_len` score entries), then for each row
+/// φ_t of `features` (`feature_dim` entries), its label and its action, `step(φ_t, y_t, a_t,
+/// scores)` adds the decision's terms to the estimate, appends its score record to `scores` and
+/// returns `l_t`, which is appended to `losses`.
+///
+/// # Errors
+/// The first error of `step`; the records are then unspecified.
+#[allow(clippy::too_many_arguments)] // the trajectory, the records and the step
+pub(crate) fn record_by_steps<S, Y, A>(
+    features: &[S],
+    feature_dim: usize,
+    labels: &[Y],
+    actions: &[A],
+    losses: &mut Vec<S>,
+    scores: &mut Vec<S>,
+    score_len: usize,
+    mut step: impl FnMut(&[S], &Y, &A, &mut Vec<S>) -> Result<S, PolicyError>,
+) -> Result<(), PolicyError> {
     let n = actions.len();
     losses.clear();
     losses.reserve(n);
     scores.clear();
-    scores.reserve(n * d);
-    let mut buf = vec![S::zero(); 3 * d];
-    let (grad, rest) = buf.split_at_mut(d);
-    let (score, score_sum) = rest.split_at_mut(d);
-    let rows = features.chunks_exact(policy.feature_dim().max(1));
+    scores.reserve(n * score_len);
+    let rows = features.chunks_exact(feature_dim.max(1));
     for ((phi, y), a) in rows.zip(labels).zip(actions) {
-        let l = policy.loss_score_into(theta, phi, y.borrow(), a, grad, score)?;
-        accumulate(g, None, &l, grad, score, score_sum);
+        let l = step(phi, y, a, scores)?;
         losses.push(l);
-        scores.extend_from_slice(score);
     }
     Ok(())
 }
@@ -213,10 +249,25 @@ pub(crate) fn subtract_score_rows<S: Scalar>(
     b: impl Iterator<Item = S>,
     g: &mut [S],
 ) {
-    let rows = scores.chunks_exact(d.max(1)).take(n);
-    for (row, bi) in rows.rev().zip(b) {
-        for (gj, pj) in g.iter_mut().zip(row) {
-            *gj -= bi.clone() * pj;
+    let rows = scores.chunks_exact(d.max(1)).take(n).map(|row| (row, ()));
+    subtract_scaled_rows(rows, b, |bi, ()| bi, g);
+}
+
+/// The baseline's part of `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) for scores recorded as
+/// a multiple of a row, `ψ_i = c_i r_i`: `g −= Σ_i scale(b_i, c_i) r_i` with `scale(b, c) = b c`
+/// (the coefficient `()` with `scale(b, ()) = b` when the rows are the scores). `rows` yields
+/// `(r_i, c_i)` for i = 0..n−1 and is taken from the last; `b` yields `b_{n−1}, …, b_0`, and
+/// decisions it has no item for are left out.
+pub(crate) fn subtract_scaled_rows<'a, S: Scalar + 'a, C>(
+    rows: impl DoubleEndedIterator<Item = (&'a [S], C)>,
+    b: impl Iterator<Item = S>,
+    scale: impl Fn(S, C) -> S,
+    g: &mut [S],
+) {
+    for ((row, c), bi) in rows.rev().zip(b) {
+        let coefficient = scale(bi, c);
+        for (gj, x) in g.iter_mut().zip(row) {
+            *gj -= coefficient.clone() * x;
         }
     }
 }

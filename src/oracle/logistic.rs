@@ -6,7 +6,7 @@
 //! `g_j += 4(p − y)p(1 − p)φ_j + l_t Σ_j` and `Σ_j += (a − p)φ_j`, the operations of the default
 //! kernel in the same order.
 
-use super::kernel::{EstimatorKernel, causal_sum_by_steps};
+use super::kernel::{EstimatorKernel, causal_sum_by_steps, record_by_steps, subtract_scaled_rows};
 use crate::policy::logistic::{brier, finite_logit, score_coefficient, sigmoid_of_finite};
 use crate::policy::softmax::check_action;
 use crate::policy::{Logistic, Policy, PolicyError, check_out, check_vec_scalar, logistic_sigmoid};
@@ -14,6 +14,7 @@ use crate::problem::KitRng;
 use crate::sampling::{dyadic_uniform, sample_binary};
 use crate::scalar::{Real, Scalar};
 use std::borrow::Borrow;
+use std::iter::repeat;
 
 /// `z = θ·φ` with θ trusted (checked by the caller) and φ checked: its length, and its entries'
 /// finiteness — where non-finite numbers propagate through sums and products
@@ -50,52 +51,60 @@ fn non_finite_logit<S: Scalar>(phi: &[S]) -> PolicyError {
     PolicyError::NonFinite { param }
 }
 
-/// One decision of [`causal_sum_fixed`] on the `[S; N]` accumulators: adds
-/// `∇_θ l_t + (l_t + δ_t) Σ_{i<t} ψ_i` to `acc` and `ψ_t` to `score_sum` (`delta = None`:
-/// `δ_t = 0`, and no addition). Returns whether a check failed (label or action not in {0, 1}, a
-/// non-finite logit) — a flag, not a branch.
-#[inline(always)]
-fn fixed_step<S: Real, const N: usize>(
-    theta: &[S; N],
-    phi: &[S; N],
-    label: usize,
-    action: usize,
-    delta: Option<&S>,
-    acc: &mut [S; N],
-    score_sum: &mut [S; N],
-) -> bool {
-    let z = crate::scalar::dot(theta, phi);
-    let failed = (label > 1) | (action > 1) | !finite_logit(&z);
-    let p = sigmoid_of_finite(&z);
-    let (l, dz) = brier(&p, label);
-    let l = match delta {
-        Some(delta) => l + delta,
-        None => l,
+/// Evaluates `$fixed` with the constant `$n` set to the feature count `$dim` when it is 1 to 8 (a
+/// compile-time dimension: the loops unroll and the accumulators live in registers), else `$other`.
+macro_rules! by_feature_count {
+    ($dim:expr, $n:ident => $fixed:expr, _ => $other:expr $(,)?) => {
+        by_feature_count!(@arms ($dim, $n, $fixed, $other) 1 2 3 4 5 6 7 8)
     };
-    let c = score_coefficient(p, action);
-    for ((gj, sj), x) in acc.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
+    (@arms ($dim:expr, $n:ident, $fixed:expr, $other:expr) $($k:literal)*) => {
+        match $dim {
+            $($k => {
+                const $n: usize = $k;
+                $fixed
+            })*
+            _ => $other,
+        }
+    };
+}
+
+/// One decision's terms of eq. 3.15 for the logistic policy, whose `∇_θ l_t = dz φ` and
+/// `ψ_t = c φ` are multiples of φ: `g_j += dz φ_j + l Σ_j`, then `Σ_j += c φ_j`, entry by entry
+/// (the order of the default kernel's `accumulate`).
+#[inline(always)]
+fn add_decision<S: Scalar>(g: &mut [S], score_sum: &mut [S], phi: &[S], dz: &S, l: &S, c: &S) {
+    for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
         *gj += dz.clone() * x + l.clone() * &*sj;
         *sj += c.clone() * x;
     }
-    failed
 }
 
-/// [`EstimatorKernel::causal_sum_trusted`] of [`Logistic`] with `N` features known at compile
-/// time: the operations of [`EstimatorKernel::causal_step_trusted`] in the same order, with `g`
-/// and `Σ_{i<t} ψ_i` in `[S; N]` locals (registers for `f64`) and fully unrolled loops.
+/// The causal pass of eq. 3.15 for [`Logistic`] with `N` features known at compile time:
+/// per decision `g += ∇_θ l_t + l'_t Σ_{i<t} ψ_i` and `Σ_{i<t} ψ_i += ψ_t`, the operations of
+/// [`EstimatorKernel::causal_step_trusted`] in the same order, with `g` and `Σ_{i<t} ψ_i` in
+/// `[S; N]` locals (registers for `f64`) and fully unrolled loops.
+///
+/// `per_decision(e_t, l_t, c_t)` gets each decision's item of `extra`, its loss `l_t` and its score
+/// coefficient `c_t = a_t − p_t` (ψ_t = c_t φ_t), and returns the `l'_t` that weighs
+/// `Σ_{i<t} ψ_i`: `l_t` (eq. 3.15), `l_t + δ_t` (a baseline's loss shift, see
+/// [`EstimatorKernel::causal_sum_trusted`]), or `l_t` after writing it and `c_t` into a record
+/// ([`EstimatorKernel::causal_sum_recorded`]). The pass stops at the shortest of the decisions
+/// and `extra`.
 ///
 /// The per-decision checks are not branches: their failures are collected in a flag, and
 /// `Ok(false)` (with `g` untouched) tells the caller that some decision failed, for the default
 /// pass to find and report the first failure.
 ///
-/// Inlined into [`causal_sum_plain`] and [`causal_sum_shifted`], where `shifts` is a constant.
-#[inline(always)]
-fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
+/// Not inlined: a function of its own per dimension and per `per_decision`, whose accumulators
+/// the register allocator sees alone.
+#[inline(never)]
+fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize, E>(
     theta: &[S],
     features: &[S],
     labels: &[L],
     actions: &[usize],
-    shifts: Option<&[S]>,
+    extra: impl Iterator<Item = E>,
+    mut per_decision: impl FnMut(E, S, &S) -> S,
     g: &mut [S],
 ) -> Result<bool, PolicyError> {
     let theta: &[S; N] = theta.try_into().map_err(|_| PolicyError::Shape {
@@ -107,53 +116,22 @@ fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
     let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
     let (rows, _) = features.as_chunks::<N>();
-    let decisions = rows.iter().zip(labels).zip(actions);
     let mut failed = false;
-    match shifts {
-        None => {
-            for ((phi, label), action) in decisions {
-                let (label, action) = (*label.borrow(), *action);
-                failed |= fixed_step(theta, phi, label, action, None, &mut acc, &mut score_sum);
-            }
-        }
-        Some(shifts) => {
-            for (((phi, label), action), delta) in decisions.zip(shifts) {
-                let (label, action, delta) = (*label.borrow(), *action, Some(delta));
-                failed |= fixed_step(theta, phi, label, action, delta, &mut acc, &mut score_sum);
-            }
-        }
+    for (((phi, label), action), e) in rows.iter().zip(labels).zip(actions).zip(extra) {
+        let (label, action) = (*label.borrow(), *action);
+        let z = crate::scalar::dot(theta, phi);
+        failed |= (label > 1) | (action > 1) | !finite_logit(&z);
+        let p = sigmoid_of_finite(&z);
+        let (l, dz) = brier(&p, label);
+        let c = score_coefficient(p, action);
+        let l = per_decision(e, l, &c);
+        add_decision(&mut acc, &mut score_sum, phi, &dz, &l, &c);
     }
     if failed {
         return Ok(false);
     }
     g.clone_from_slice(&acc);
     Ok(true)
-}
-
-/// [`causal_sum_fixed`] without shifts: a function of its own per dimension (not inlined), whose
-/// accumulators the register allocator sees alone.
-#[inline(never)]
-fn causal_sum_plain<S: Real, L: Borrow<usize>, const N: usize>(
-    theta: &[S],
-    features: &[S],
-    labels: &[L],
-    actions: &[usize],
-    g: &mut [S],
-) -> Result<bool, PolicyError> {
-    causal_sum_fixed::<S, L, N>(theta, features, labels, actions, None, g)
-}
-
-/// [`causal_sum_fixed`] with per-decision loss shifts (a baseline), a function of its own.
-#[inline(never)]
-fn causal_sum_shifted<S: Real, L: Borrow<usize>, const N: usize>(
-    theta: &[S],
-    features: &[S],
-    labels: &[L],
-    actions: &[usize],
-    shifts: &[S],
-    g: &mut [S],
-) -> Result<bool, PolicyError> {
-    causal_sum_fixed::<S, L, N>(theta, features, labels, actions, Some(shifts), g)
 }
 
 /// One decision of the causal pass on a validated θ and φ, with the checks of
@@ -177,63 +155,22 @@ fn causal_step_coefficient<S: Real>(
     let c = score_coefficient(p, action);
     check_out("g", g, features)?;
     check_out("score_sum", score_sum, features)?;
-    for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
-        *gj += dz.clone() * x + l.clone() * &*sj;
-        *sj += c.clone() * x;
-    }
+    add_decision(g, score_sum, phi, &dz, &l, &c);
     Ok((l, c))
 }
 
-/// [`EstimatorKernel::causal_sum_recorded`] of [`Logistic`] with `N` features known at compile
-/// time: the unshifted pass of [`causal_sum_fixed`] (the same operations, so the same `g`) that
-/// also writes each decision's `l_t` into `losses` and its score coefficient `c_t = a_t − p_t`
-/// into `coefficients` (ψ_t = c_t φ_t, so one number records the score). `Ok(false)` (with `g`
-/// untouched) when a decision failed a check, as in [`causal_sum_fixed`].
-#[inline(never)]
-fn causal_sum_recording_fixed<S: Real, L: Borrow<usize>, const N: usize>(
-    theta: &[S],
-    features: &[S],
-    labels: &[L],
-    actions: &[usize],
-    g: &mut [S],
-    losses: &mut Vec<S>,
-    coefficients: &mut Vec<S>,
-) -> Result<bool, PolicyError> {
-    let theta: &[S; N] = theta.try_into().map_err(|_| PolicyError::Shape {
-        param: "theta",
-        expected: N,
-        got: theta.len(),
-    })?;
-    check_out("g", g, N)?;
-    let n = actions.len();
+/// `losses` and `coefficients` cleared and refilled with `n` zeros, paired entry by entry for a
+/// pass to overwrite.
+fn fresh_records<'a, S: Scalar>(
+    losses: &'a mut Vec<S>,
+    coefficients: &'a mut Vec<S>,
+    n: usize,
+) -> impl Iterator<Item = (&'a mut S, &'a mut S)> {
     losses.clear();
     losses.resize(n, S::zero());
     coefficients.clear();
     coefficients.resize(n, S::zero());
-    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
-    let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
-    let (rows, _) = features.as_chunks::<N>();
-    let records = losses.iter_mut().zip(coefficients.iter_mut());
-    let mut failed = false;
-    for (((phi, label), action), (lo, co)) in rows.iter().zip(labels).zip(actions).zip(records) {
-        let (label, action) = (*label.borrow(), *action);
-        let z = crate::scalar::dot(theta, phi);
-        failed |= (label > 1) | (action > 1) | !finite_logit(&z);
-        let p = sigmoid_of_finite(&z);
-        let (l, dz) = brier(&p, label);
-        let c = score_coefficient(p, action);
-        for ((gj, sj), x) in acc.iter_mut().zip(score_sum.iter_mut()).zip(phi) {
-            *gj += dz.clone() * x + l.clone() * &*sj;
-            *sj += c.clone() * x;
-        }
-        *lo = l;
-        *co = c;
-    }
-    if failed {
-        return Ok(false);
-    }
-    g.clone_from_slice(&acc);
-    Ok(true)
+    losses.iter_mut().zip(coefficients.iter_mut())
 }
 
 /// `g −= Σ_{i<n} b_i c_i φ_i` with `N` features known at compile time, `b` yielding
@@ -323,20 +260,15 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         g: &mut [S],
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
-        macro_rules! fixed {
-            ($($n:literal)*) => {
-                match Policy::<S>::feature_dim(self) {
-                    $($n => match shifts {
-                        None => causal_sum_plain::<S, L, $n>(theta, features, labels, actions, g)?,
-                        Some(shifts) => {
-                            causal_sum_shifted::<S, L, $n>(theta, features, labels, actions, shifts, g)?
-                        }
-                    },)*
-                    _ => false,
-                }
-            };
-        }
-        if fixed!(1 2 3 4 5 6 7 8) {
+        let (x, y, a) = (features, labels, actions);
+        let done = by_feature_count!(Policy::<S>::feature_dim(self), N => match shifts {
+            None => causal_sum_fixed::<S, L, N, _>(theta, x, y, a, repeat(()), |(), l, _| l, g)?,
+            Some(shifts) => {
+                let shifted = |delta: &S, l: S, _: &S| l + delta;
+                causal_sum_fixed::<S, L, N, _>(theta, x, y, a, shifts.iter(), shifted, g)?
+            }
+        }, _ => false);
+        if done {
             return Ok(());
         }
         // More than 8 features, or a decision failed a check: the default pass reports the first.
@@ -344,9 +276,9 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     }
 
     /// Records the score ψ_t = c_t φ_t by its coefficient `c_t = a_t − p_t` alone (one entry per
-    /// decision); with a compile-time dimension for 1 to 8 features
-    /// (`causal_sum_recording_fixed`), else (and to report a failing decision) decision by
-    /// decision with the checks of [`EstimatorKernel::causal_step_trusted`].
+    /// decision); with a compile-time dimension for 1 to 8 features (`causal_sum_fixed`), else
+    /// (and to report a failing decision) decision by decision with the checks of
+    /// [`EstimatorKernel::causal_step_trusted`].
     fn causal_sum_recorded<L: Borrow<usize>>(
         &self,
         theta: &[S],
@@ -357,40 +289,37 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         losses: &mut Vec<S>,
         scores: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
-        let n = Policy::<S>::feature_dim(self);
-        macro_rules! fixed {
-            ($($n:literal)*) => {
-                match n {
-                    $($n => causal_sum_recording_fixed::<S, L, $n>(
-                        theta, features, labels, actions, g, losses, scores,
-                    )?,)*
-                    _ => false,
-                }
-            };
-        }
-        if fixed!(1 2 3 4 5 6 7 8) {
+        let dim = Policy::<S>::feature_dim(self);
+        let (x, y, a) = (features, labels, actions);
+        let record = |(lo, co): (&mut S, &mut S), l: S, c: &S| {
+            *lo = l.clone();
+            *co = c.clone();
+            l
+        };
+        let done = by_feature_count!(dim, N => {
+            let records = fresh_records(losses, scores, actions.len());
+            causal_sum_fixed::<S, L, N, _>(theta, x, y, a, records, record, g)?
+        }, _ => false);
+        if done {
             return Ok(());
         }
-        losses.clear();
-        losses.reserve(actions.len());
-        scores.clear();
-        scores.reserve(actions.len());
-        let mut score_sum = vec![S::zero(); n];
-        let rows = features.chunks_exact(n.max(1));
-        for ((phi, label), action) in rows.zip(labels).zip(actions) {
-            let (l, c) = causal_step_coefficient(
-                n,
-                theta,
-                phi,
-                *label.borrow(),
-                *action,
-                g,
-                &mut score_sum,
-            )?;
-            losses.push(l);
-            scores.push(c);
-        }
-        Ok(())
+        let mut score_sum = vec![S::zero(); dim];
+        record_by_steps(
+            x,
+            dim,
+            y,
+            a,
+            losses,
+            scores,
+            1,
+            |phi, label, action, scores| {
+                let (label, action) = (*label.borrow(), *action);
+                let (l, c) =
+                    causal_step_coefficient(dim, theta, phi, label, action, g, &mut score_sum)?;
+                scores.push(c);
+                Ok(l)
+            },
+        )
     }
 
     /// `g −= Σ_{i<n} b_i c_i φ_i` from the coefficients of
@@ -405,22 +334,10 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         g: &mut [S],
     ) {
         let dim = Policy::<S>::feature_dim(self);
-        macro_rules! fixed {
-            ($($n:literal)*) => {
-                match dim {
-                    $($n => return subtract_fixed::<S, $n>(features, scores, n, b, g),)*
-                    _ => {}
-                }
-            };
-        }
-        fixed!(1 2 3 4 5 6 7 8);
-        let rows = features.chunks_exact(dim.max(1)).zip(scores).take(n);
-        for ((phi, c), bi) in rows.rev().zip(b) {
-            let bc = bi * c;
-            for (gj, x) in g.iter_mut().zip(phi) {
-                *gj -= bc.clone() * x;
-            }
-        }
+        by_feature_count!(dim, N => subtract_fixed::<S, N>(features, scores, n, b, g), _ => {
+            let rows = features.chunks_exact(dim.max(1)).zip(scores).take(n);
+            subtract_scaled_rows(rows, b, |bi, c| bi * c, g);
+        });
     }
 }
 

@@ -62,6 +62,14 @@ impl<S, L, A> Decisions<'_, S, L, A> {
     pub(crate) fn len(&self) -> usize {
         self.actions.len()
     }
+    /// Number of decisions whose score ψ_i enters the estimate: n − 1, the last action scoring no
+    /// loss; n when the trajectory absorbed (its last action led to the absorbing losses).
+    pub(crate) fn scored(&self) -> usize {
+        match self.absorbed {
+            Some(_) => self.len(),
+            None => self.len() - 1,
+        }
+    }
     /// φ(s_t) (0-based `t`).
     fn feature(&self, t: usize) -> &[S] {
         assert!(t < self.rows, "feature row {t} of {}", self.rows);

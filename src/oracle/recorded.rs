@@ -4,9 +4,8 @@
 use super::{Decisions, policy_error};
 use crate::baseline::RecordedPass;
 use crate::oracle::EstimatorKernel;
-use crate::policy::LikelihoodRatio;
 use crate::problem::OracleError;
-use crate::scalar::Real;
+use crate::scalar::Scalar;
 use std::borrow::Borrow;
 
 /// Fills `out` on a trajectory whose θ and features are validated: the plain causal estimate
@@ -21,8 +20,8 @@ pub(crate) fn recorded_pass<S, P, L, A>(
     out: &mut RecordedPass<S>,
 ) -> Result<(), OracleError>
 where
-    S: Real,
-    P: LikelihoodRatio<S, Action = A> + EstimatorKernel<S>,
+    S: Scalar,
+    P: EstimatorKernel<S, Action = A>,
     L: Borrow<P::Label>,
 {
     let n = t.len();
@@ -40,7 +39,7 @@ where
             &mut out.scores,
         )
         .map_err(policy_error)?;
-    let scored = if let Some(tail) = t.absorbed {
+    if let Some(tail) = t.absorbed {
         policy.subtract_scores_trusted(
             t.feature_data,
             &out.scores,
@@ -49,10 +48,7 @@ where
             &mut out.estimate,
         );
         out.losses.push(tail.clone());
-        n
-    } else {
-        n - 1
-    };
-    out.decisions = scored;
+    }
+    out.decisions = t.scored();
     Ok(())
 }

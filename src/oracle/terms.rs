@@ -30,7 +30,7 @@ where
     let d = policy.param_dim();
     let n = t.len();
     let tail = t.absorbed;
-    let scored = if tail.is_some() { n } else { n - 1 };
+    let scored = t.scored();
     let per_decision = matches!(ratio, Some((_, Weighting::PerDecision)));
     out.begin(d, n);
     let mut scratch = Scratch::new(d);

@@ -248,22 +248,14 @@ where
     ) -> Result<DVector<S>, OracleError> {
         check_theta(theta, self.dim())?;
         check_trajectory(trajectory)?;
-        let t = trajectory;
-        let n = t.len();
-        let scored = if t.absorbed.is_some() { n } else { n - 1 };
+        let t = trajectory.decisions();
+        let scored = t.scored();
         if !baseline.covers(scored) {
             return Err(crate::problem::too_few_baselines(scored));
         }
         let mut g = vec![S::zero(); self.dim()];
-        baselined_pass(
-            &self.policy,
-            theta.as_slice(),
-            &t.decisions(),
-            baseline,
-            scored,
-            &mut g,
-        )?;
-        cost.gradient_evaluations += n as u64;
+        baselined_pass(&self.policy, theta.as_slice(), &t, baseline, &mut g)?;
+        cost.gradient_evaluations += t.len() as u64;
         if !g.iter().all(Scalar::is_finite) {
             return Err(OracleError::NonFinite("the baselined gradient estimate"));
         }
