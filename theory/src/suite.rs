@@ -6,7 +6,8 @@ use crate::certify::recheck::coverage_for;
 use crate::checks::constants::{global_row, toy_row};
 use crate::checks::montecarlo::McSettings;
 use crate::checks::{
-    baselined_sgd, o2nc_formula, schedule, second_toy, statistical, thm31, unbiased,
+    baselined_sgd, baselined_storm, o2nc_formula, schedule, second_toy, statistical, thm31,
+    unbiased,
 };
 use crate::protocol::{
     CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes,
@@ -79,6 +80,10 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
             runs: s.runs,
             alpha,
         };
+        let mc_storm = McSettings {
+            runs: s.storm_runs,
+            alpha,
+        };
         let g = receive
             .recv()
             .map_err(|_| "the global constants' thread ended without a result".to_string())??;
@@ -98,6 +103,9 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
                 mc,
                 coverage,
             )
+        }));
+        rows.extend(timed("rows 2.b", || {
+            baselined_storm::rows(&m1, &g, global_sizes(s), s.storm_k, mc_storm, coverage)
         }));
         rows.push(timed("global constants' re-check", || {
             global_row(&g, "M1 (P2', c = 1/2, θ₁ = 0)", coverage)
@@ -172,18 +180,18 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
 /// # Errors
 /// A message if an enclosure fails.
 pub fn global_constants(m1: &ToyMdp, s: Sizes) -> Result<GlobalConstants, String> {
-    GlobalConstants::compute(
-        m1,
-        &[q("0")],
-        Some(&q("7/8")),
-        GlobalSizes {
-            tol: s.bnb_tol,
-            max_boxes: 200_000,
-            l_tilde_tol: s.l_tilde_tol,
-            l_tilde_boxes: s.l_tilde_boxes,
-        },
-    )
-    .map_err(|e| e.to_string())
+    GlobalConstants::compute(m1, &[q("0")], Some(&q("7/8")), global_sizes(s))
+        .map_err(|e| e.to_string())
+}
+
+/// The branch-and-bound sizes of the global constants (and of the baselined ones of row 2.b).
+pub fn global_sizes(s: Sizes) -> GlobalSizes {
+    GlobalSizes {
+        tol: s.bnb_tol,
+        max_boxes: 200_000,
+        l_tilde_tol: s.l_tilde_tol,
+        l_tilde_boxes: s.l_tilde_boxes,
+    }
 }
 
 /// The whole table: [`exact_suite`] on the box holding every SGD iterate of check 1 (η = 0.05,
