@@ -40,7 +40,7 @@ pub fn m1_tied() -> ToyMdp {
 }
 
 /// The exact, rigorous and toy Monte-Carlo part of the suite (checks 1, 2a–2d, 3, 4, 5, 8, 8b,
-/// and the Monte-Carlo negative controls of [`statistical`]).
+/// the Monte-Carlo negative controls of [`statistical`], and the baselined rows 1.b and 2.b).
 ///
 /// The global constants and the STORM rows that need them run on a second thread while this one
 /// computes the rest; every part is seeded on its own, so the rows (in the same order) are the

@@ -210,6 +210,9 @@ fn try_rows(
             row.claim
         );
         row.details.push_str(&note);
+        row.assumptions.push(format!(
+            "for g_b, b = {b} fixed before any run: E g_b = ∇F and E_{{τ∼θ′}}[w g_b(θ, τ)] = ∇F(θ) (docs/math.md §9, checked exactly in ℚ by the crate's tests); (A3) with σ²_b, (A4) with L̃_b, both over ℝ (ℝ²)"
+        ));
         if !passed {
             row.verdict = Verdict::Inconclusive;
         }

@@ -18,7 +18,7 @@ use ilopt::toy::estimator::decision_terms;
 use ilopt_theory::certify::global_baselined::{
     BaselinedConstants, l_tilde_baselined, sigma2_baselined,
 };
-use ilopt_theory::certify::recheck::{Coverage, Quantity, pieces, recheck};
+use ilopt_theory::certify::recheck::{Coverage, Quantity, coverage_for, pieces, recheck};
 use ilopt_theory::certify::v_is::v_is_second_mean_value_baselined;
 use ilopt_theory::check::{Role, Verdict};
 use ilopt_theory::checks::baselined_storm::{self, Choice, choose};
@@ -87,7 +87,7 @@ fn the_control_is_detected_at_the_quick_size() {
             runs: s.storm_runs,
             alpha: table_alpha(),
         },
-        Coverage::Sample(200),
+        coverage_for(false),
     );
     let ids: Vec<&str> = rows.iter().map(|c| c.id.as_str()).collect();
     assert_eq!(ids, ["2.b", "2.b.ctl"]);
