@@ -74,7 +74,20 @@ pub fn rows(
     mc: McSettings,
     coverage: Coverage,
 ) -> Vec<Check> {
-    match try_rows(mdp, g, sizes, k, mc, coverage) {
+    rows_from(mdp, g, choose(mdp, sizes), k, mc, coverage)
+}
+
+/// As [`rows`], from the baseline and constants [`choose`] computed (they do not need `g`, so
+/// the suite computes them while the global constants are being computed).
+pub fn rows_from(
+    mdp: &ToyMdp,
+    g: &GlobalConstants,
+    choice: Result<Choice, String>,
+    k: u64,
+    mc: McSettings,
+    coverage: Coverage,
+) -> Vec<Check> {
+    match choice.and_then(|c| try_rows(mdp, g, &c, k, mc, coverage)) {
         Ok(r) => r,
         Err(e) => undecided(&e),
     }
@@ -131,12 +144,11 @@ pub fn choose(mdp: &ToyMdp, sizes: GlobalSizes) -> Result<Choice, String> {
 fn try_rows(
     mdp: &ToyMdp,
     g: &GlobalConstants,
-    sizes: GlobalSizes,
+    choice: &Choice,
     k: u64,
     mc: McSettings,
     coverage: Coverage,
 ) -> Result<Vec<Check>, String> {
-    let choice = choose(mdp, sizes)?;
     let c = &choice.constants;
     let b = c.b.clone();
     let (num, den) = ratio_of(&b)?;
