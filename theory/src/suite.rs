@@ -6,7 +6,8 @@ use crate::certify::recheck::coverage_for;
 use crate::checks::constants::{global_row, toy_row};
 use crate::checks::montecarlo::McSettings;
 use crate::checks::{
-    baselined_sgd, o2nc_formula, schedule, second_toy, statistical, thm31, unbiased,
+    baselined_sgd, baselined_storm, o2nc_formula, schedule, second_toy, statistical, thm31,
+    unbiased,
 };
 use crate::protocol::{
     CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes,
@@ -39,7 +40,7 @@ pub fn m1_tied() -> ToyMdp {
 }
 
 /// The exact, rigorous and toy Monte-Carlo part of the suite (checks 1, 2a–2d, 3, 4, 5, 8, 8b,
-/// and the Monte-Carlo negative controls of [`statistical`]).
+/// the Monte-Carlo negative controls of [`statistical`], and the baselined rows 1.b and 2.b).
 ///
 /// The global constants and the STORM rows that need them run on a second thread while this one
 /// computes the rest; every part is seeded on its own, so the rows (in the same order) are the
@@ -79,6 +80,14 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
             runs: s.runs,
             alpha,
         };
+        // Row 2.b's baseline and constants need not wait for the global constants.
+        let choice_2b = timed("rows 2.b (constants)", || {
+            baselined_storm::choose(&m1, global_sizes(s))
+        });
+        let mc_storm = McSettings {
+            runs: s.storm_runs,
+            alpha,
+        };
         let g = receive
             .recv()
             .map_err(|_| "the global constants' thread ended without a result".to_string())??;
@@ -98,6 +107,9 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
                 mc,
                 coverage,
             )
+        }));
+        rows.extend(timed("rows 2.b", || {
+            baselined_storm::rows_from(&m1, &g, choice_2b, s.storm_k, mc_storm, coverage)
         }));
         rows.push(timed("global constants' re-check", || {
             global_row(&g, "M1 (P2', c = 1/2, θ₁ = 0)", coverage)
@@ -172,18 +184,18 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
 /// # Errors
 /// A message if an enclosure fails.
 pub fn global_constants(m1: &ToyMdp, s: Sizes) -> Result<GlobalConstants, String> {
-    GlobalConstants::compute(
-        m1,
-        &[q("0")],
-        Some(&q("7/8")),
-        GlobalSizes {
-            tol: s.bnb_tol,
-            max_boxes: 200_000,
-            l_tilde_tol: s.l_tilde_tol,
-            l_tilde_boxes: s.l_tilde_boxes,
-        },
-    )
-    .map_err(|e| e.to_string())
+    GlobalConstants::compute(m1, &[q("0")], Some(&q("7/8")), global_sizes(s))
+        .map_err(|e| e.to_string())
+}
+
+/// The branch-and-bound sizes of the global constants (and of the baselined ones of row 2.b).
+pub fn global_sizes(s: Sizes) -> GlobalSizes {
+    GlobalSizes {
+        tol: s.bnb_tol,
+        max_boxes: 200_000,
+        l_tilde_tol: s.l_tilde_tol,
+        l_tilde_boxes: s.l_tilde_boxes,
+    }
 }
 
 /// The whole table: [`exact_suite`] on the box holding every SGD iterate of check 1 (η = 0.05,

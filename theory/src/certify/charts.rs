@@ -18,9 +18,10 @@ use crate::certify::bnb::{BnbError, sup_bound};
 use crate::certify::tiling::verify_certificate;
 use crate::record::certificate::{CORE_RADIUS, Chart, ChartBound};
 use crate::record::constant::Constant;
+use ilopt::baseline::DecisionTerms;
 use ilopt::exact::enumerate::for_each_prefix;
 use ilopt::scalar::{Dual, Interval, Scalar};
-use ilopt::toy::estimator::causal;
+use ilopt::toy::estimator::{causal, decision_terms};
 use ilopt::toy::policy::brier;
 use ilopt::toy::{PolicyKind, PolicyTable, ToyMdp, ToyProblem};
 
@@ -164,6 +165,47 @@ pub(crate) fn prefix_terms<S: Scalar>(
     })
     .map_err(|e| e.to_string())?;
     Ok(out)
+}
+
+/// Every prefix of `problem` under `table` with the **baselined** estimate
+/// `g_b = g − b Σ_i ψ_i` in place of g (one constant b for every scored decision; docs/math.md
+/// §9), assembled by the engine's own baselined code ([`decision_terms`] and
+/// [`DecisionTerms::estimate_into`]), as the oracle does.
+pub(crate) fn prefix_terms_baselined<S: Scalar>(
+    problem: &ToyProblem<S>,
+    table: &PolicyTable<S>,
+    b: &S,
+) -> Result<Vec<PrefixTerms<S>>, String> {
+    let mut out = vec![];
+    let mut terms = DecisionTerms::new();
+    let mut g = vec![S::zero(); table.dim];
+    for_each_prefix(problem, table, |states, actions, p| {
+        let loss = states.iter().fold(S::zero(), |a, &s| a + &table.loss[s]);
+        let scored = problem.scored_actions(states, actions);
+        decision_terms(table, states, scored, None, false, &mut terms);
+        terms.estimate_into(|_| Some(b.clone()), &mut g);
+        out.push(PrefixTerms {
+            states: states.to_vec(),
+            actions: actions.to_vec(),
+            prob: p.clone(),
+            loss,
+            estimate: g[0].clone(),
+        });
+    })
+    .map_err(|e| e.to_string())?;
+    Ok(out)
+}
+
+/// [`prefix_terms`], or [`prefix_terms_baselined`] when a baseline is given.
+pub(crate) fn prefix_terms_with<S: Scalar>(
+    problem: &ToyProblem<S>,
+    table: &PolicyTable<S>,
+    baseline: Option<&S>,
+) -> Result<Vec<PrefixTerms<S>>, String> {
+    match baseline {
+        None => prefix_terms(problem, table),
+        Some(b) => prefix_terms_baselined(problem, table, b),
+    }
 }
 
 /// A second-order jet in one variable over intervals: (f, f′, f″) enclosures.

@@ -3,11 +3,11 @@
 //! interval extension and the tighter mean-value form the L̃ certificates use.
 
 use crate::certify::charts::{
-    SecondOrder, lift2, parts, prefix_terms, table_at, theta_second, var2,
+    SecondOrder, lift2, parts, prefix_terms_with, table_at, theta_second, var2,
 };
 use crate::record::certificate::Chart;
 use ilopt::problem::Weighting;
-use ilopt::scalar::{Dual, Interval, Scalar};
+use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::estimator::per_decision;
 use ilopt::toy::{ToyMdp, ToyProblem};
 
@@ -24,7 +24,28 @@ pub fn v_is_second(
     charts: &[Chart],
     b: &[Interval],
 ) -> Result<Interval, String> {
-    let total = v_is_total(mdp, pd, weighting, charts, &lift2(&b[0]), &var2(b[1]))?;
+    v_is_second_with(mdp, pd, weighting, None, charts, b)
+}
+
+/// [`v_is_second`] for the estimator `g_b` with the constant `baseline` when one is given.
+fn v_is_second_with(
+    mdp: &ToyMdp,
+    pd: &ToyProblem<SecondOrder>,
+    weighting: Weighting,
+    baseline: Option<&BigRational>,
+    charts: &[Chart],
+    b: &[Interval],
+) -> Result<Interval, String> {
+    let base = baseline.map(SecondOrder::from_rational);
+    let total = v_is_total(
+        mdp,
+        pd,
+        weighting,
+        base.as_ref(),
+        charts,
+        &lift2(&b[0]),
+        &var2(b[1]),
+    )?;
     let (_, vx, vxx) = parts(&total);
     Ok(theta_second(charts[1], b[1], vx, vxx))
 }
@@ -32,20 +53,25 @@ pub fn v_is_second(
 /// `V(θ, θ′) = Σ_τ̄ p(τ̄; θ′) (g(θ′, τ̄) − g̃(θ → θ′, τ̄))²` with θ at `x_old` in `charts[0]` and θ′
 /// at `x_new` in `charts[1]`, in any scalar. The old-point term g̃ is `w g(θ, τ̄)` with the
 /// prefix weight w = p(τ̄; θ)/p(τ̄; θ′) (trajectory), or the engine's per-decision form
-/// ([`per_decision`]). The factored square keeps enclosures tight near θ′ = θ, where an expanded
-/// form would cancel.
+/// ([`per_decision`]). With a `baseline` b the estimator is `g_b = g − b Σ_i ψ_i` at both points
+/// and the trajectory weight multiplies `g_b(θ, τ̄)` (docs/math.md §9; trajectory weights only).
+/// The factored square keeps enclosures tight near θ′ = θ, where an expanded form would cancel.
 fn v_is_total<S: Scalar>(
     mdp: &ToyMdp,
     problem: &ToyProblem<S>,
     weighting: Weighting,
+    baseline: Option<&S>,
     charts: &[Chart],
     x_old: &S,
     x_new: &S,
 ) -> Result<S, String> {
     let t_old = table_at(mdp, problem, charts[0], x_old)?;
     let t_new = table_at(mdp, problem, charts[1], x_new)?;
-    let at = prefix_terms(problem, &t_old)?;
-    let prime = prefix_terms(problem, &t_new)?;
+    if baseline.is_some() && weighting != Weighting::Trajectory {
+        return Err("the baselined (A4) quantity is written for trajectory weights".into());
+    }
+    let at = prefix_terms_with(problem, &t_old, baseline)?;
+    let prime = prefix_terms_with(problem, &t_new, baseline)?;
     if at.len() != prime.len() {
         return Err("prefix sets differ".into());
     }
@@ -87,9 +113,21 @@ pub fn v_is_second_jet(
     charts: &[Chart],
     b: &[Interval],
 ) -> Result<[Interval; 3], String> {
+    v_is_second_jet_with(mdp, p3, weighting, None, charts, b)
+}
+
+fn v_is_second_jet_with(
+    mdp: &ToyMdp,
+    p3: &ToyProblem<ThirdOrder>,
+    weighting: Weighting,
+    baseline: Option<&BigRational>,
+    charts: &[Chart],
+    b: &[Interval],
+) -> Result<[Interval; 3], String> {
     let x1 = Dual::variable(lift2(&b[0]), 0, 2);
     let x2 = Dual::variable(var2(b[1]), 1, 2);
-    let total = v_is_total(mdp, p3, weighting, charts, &x1, &x2)?;
+    let base = baseline.map(ThirdOrder::from_rational);
+    let total = v_is_total(mdp, p3, weighting, base.as_ref(), charts, &x1, &x2)?;
     let (_, v2, v22) = parts(total.value());
     let grad = total.gradient_padded(2);
     let (_, v12, v122) = parts(&grad[0]);
@@ -127,13 +165,50 @@ pub fn v_is_second_mean_value(
     charts: &[Chart],
     b: &[Interval],
 ) -> Result<Interval, String> {
-    let [natural, d1, d2] = v_is_second_jet(mdp, p3, weighting, charts, b)?;
+    v_is_second_mean_value_with(mdp, pd, p3, weighting, None, charts, b)
+}
+
+/// [`v_is_second_mean_value`] for the baselined estimator `g_b = g − b Σ_i ψ_i` with one constant
+/// b for every decision and the trajectory weight on `g_b(θ, τ̄)` (docs/math.md §9): the curvature
+/// of `V_b(θ, θ′) = E_{τ∼θ′}(g_b(θ′, τ) − w g_b(θ, τ))²`, the (A4) quantity of IS-STORM run on g_b.
+///
+/// # Errors
+/// As [`v_is_second_mean_value`].
+pub fn v_is_second_mean_value_baselined(
+    mdp: &ToyMdp,
+    pd: &ToyProblem<SecondOrder>,
+    p3: &ToyProblem<ThirdOrder>,
+    baseline: &BigRational,
+    charts: &[Chart],
+    b: &[Interval],
+) -> Result<Interval, String> {
+    v_is_second_mean_value_with(
+        mdp,
+        pd,
+        p3,
+        Weighting::Trajectory,
+        Some(baseline),
+        charts,
+        b,
+    )
+}
+
+fn v_is_second_mean_value_with(
+    mdp: &ToyMdp,
+    pd: &ToyProblem<SecondOrder>,
+    p3: &ToyProblem<ThirdOrder>,
+    weighting: Weighting,
+    baseline: Option<&BigRational>,
+    charts: &[Chart],
+    b: &[Interval],
+) -> Result<Interval, String> {
+    let [natural, d1, d2] = v_is_second_jet_with(mdp, p3, weighting, baseline, charts, b)?;
     let point = |x: Interval| {
         let m = x.mid();
         Interval::try_from((m, m)).map_err(|e| format!("{e:?}"))
     };
     let m = [point(b[0])?, point(b[1])?];
-    let at_mid = v_is_second(mdp, pd, weighting, charts, &m)?;
+    let at_mid = v_is_second_with(mdp, pd, weighting, baseline, charts, &m)?;
     let mv = at_mid + d1 * (b[0] - m[0]) + d2 * (b[1] - m[1]);
     let both = natural.intersection(mv);
     Ok(if both.is_empty() { natural } else { both })

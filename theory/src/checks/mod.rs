@@ -1,6 +1,7 @@
 //! The checks of the theorem table, each a function returning [`crate::record::check::Check`] rows.
 
 pub mod baselined_sgd;
+pub mod baselined_storm;
 pub mod constants;
 pub mod estimated;
 pub mod montecarlo;

@@ -23,7 +23,7 @@ use ilopt::algo::as_printed::PrintedAlgorithm4Config;
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::storm::{Correction, StormConfig, StormSchedule};
 use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
-use ilopt::problem::{EstimatorForm, Weighting};
+use ilopt::problem::{EstimatorForm, IlProblem, Weighting};
 use ilopt::toy::{ToyMdp, ToyProblem};
 use std::cell::RefCell;
 
@@ -38,8 +38,10 @@ enum Statistic {
 
 /// Run `runs` seeded runs of `algorithm` for K iterates θ_1..θ_K and return (lower ends, midpoints)
 /// of the per-run statistic.
-fn simulate(
+#[allow(clippy::too_many_arguments)]
+fn simulate<P: IlProblem<f64>>(
     mdp: &ToyMdp,
+    pf: &P,
     algorithm: &AlgorithmConfig,
     theta1: f64,
     k: u64,
@@ -48,7 +50,6 @@ fn simulate(
     tracker: Option<&RefCell<StormTracker>>,
 ) -> Result<Runs, String> {
     let cells = RefCell::new(GradientCells::new(mdp));
-    let pf = ToyProblem::<f64>::new(mdp);
     let (mut lows, mut mids) = (Vec::with_capacity(runs), Vec::with_capacity(runs));
     for r in 0..runs {
         let cfg = RunConfig {
@@ -90,7 +91,7 @@ fn simulate(
             runner
                 .keep_history(false)
                 .with_observer(observer)
-                .run_config(&cfg, &pf)
+                .run_config(&cfg, pf)
         });
         let (lo, mid, wsum, count, err) = acc.into_inner();
         match rec {
@@ -267,6 +268,7 @@ pub fn fixed_schedule_samples(
     };
     let runs = simulate(
         mdp,
+        &ToyProblem::<f64>::new(mdp),
         &algorithm,
         theta1,
         iterations,
@@ -275,6 +277,38 @@ pub fn fixed_schedule_samples(
         Some(&tracker),
     )?;
     Ok((runs, tracker.into_inner().tracking))
+}
+
+/// As [`fixed_schedule_sample`] for IS-STORM with trajectory weights on any `oracle` for `mdp`
+/// (the baselined one of row 2.b), schedule (3.43) for the given L.
+///
+/// # Errors
+/// As [`fixed_schedule_sample`].
+pub fn fixed_schedule_sample_on<P: IlProblem<f64>>(
+    mdp: &ToyMdp,
+    oracle: &P,
+    l: f64,
+    theta1: f64,
+    iterations: u64,
+    runs: usize,
+) -> Result<Runs, String> {
+    let algorithm = AlgorithmConfig::Storm(StormConfig {
+        schedule: StormSchedule::Thesis {
+            l: ConfigNumber::Float(l),
+        },
+        correction: Correction::Trajectory,
+        form: EstimatorForm::Causal,
+    });
+    simulate(
+        mdp,
+        oracle,
+        &algorithm,
+        theta1,
+        iterations,
+        runs,
+        Statistic::EtaWeightedSquare { l },
+        None,
+    )
 }
 
 /// The tracking values of row 2e ([`crate::checks::tracking`]) for any STORM-type `algorithm`
@@ -302,6 +336,7 @@ pub fn tracking_sample(
     ));
     simulate(
         mdp,
+        &ToyProblem::<f64>::new(mdp),
         algorithm,
         theta1,
         iterations,
@@ -449,6 +484,7 @@ pub fn adaptive_schedule(
             });
             simulate(
                 mdp,
+                &ToyProblem::<f64>::new(mdp),
                 &algorithm,
                 theta1,
                 iterations,

@@ -1,5 +1,6 @@
 //! The theory crate's tests, one binary: each module is a family of checks of the table.
 
+mod baselined_storm;
 mod certificates;
 mod common;
 mod exact_checks;

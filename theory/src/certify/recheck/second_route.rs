@@ -250,6 +250,15 @@ pub enum Quantity {
     VisTrajectory,
     /// The same with per-decision weights.
     VisPerDecision,
+    /// |∂²V_b/∂θ′²| for the baselined estimator `g_b = g − b Σ_i ψ_i`, b =
+    /// `numerator/denominator` for every decision, with the trajectory weight on `g_b(θ, τ̄)`:
+    /// `V_b(θ, θ′) = E_{τ∼θ′}(g_b(θ′, τ) − w g_b(θ, τ))²` (docs/math.md §9).
+    VisTrajectoryBaselined {
+        /// b's numerator.
+        numerator: i64,
+        /// b's denominator (> 0).
+        denominator: i64,
+    },
 }
 
 impl Quantity {
@@ -261,11 +270,38 @@ impl Quantity {
         }
     }
     pub(super) fn is_abs(self, groups: usize) -> bool {
-        matches!(self, Quantity::VisTrajectory | Quantity::VisPerDecision)
-            || (self == Quantity::Hessian && groups == 1)
+        matches!(
+            self,
+            Quantity::VisTrajectory
+                | Quantity::VisPerDecision
+                | Quantity::VisTrajectoryBaselined { .. }
+        ) || (self == Quantity::Hessian && groups == 1)
     }
     pub(super) fn is_sqrt(self, groups: usize) -> bool {
         self == Quantity::Hessian && groups > 1
+    }
+}
+
+/// The constant b of a baselined quantity as a jet in `d` variables (`None` for the others).
+fn baseline_jet<S: Scalar>(q: Quantity, d: usize) -> Result<Option<Jet<S>>, String> {
+    match q {
+        Quantity::BaselinedVariance {
+            numerator,
+            denominator,
+        }
+        | Quantity::VisTrajectoryBaselined {
+            numerator,
+            denominator,
+        } => {
+            if denominator <= 0 {
+                return Err("a baseline's denominator must be positive".into());
+            }
+            Ok(Some(
+                Jet::constant(S::from_i64(numerator), d)
+                    .div(&Jet::constant(S::from_i64(denominator), d)),
+            ))
+        }
+        _ => Ok(None),
     }
 }
 
@@ -298,7 +334,9 @@ pub fn pieces<S: Scalar>(
     }
     let norm2 = |v: &[Jet<S>]| v.iter().fold(S::zero(), |a, x| a + x.v.clone() * &x.v);
     match q {
-        Quantity::VisTrajectory | Quantity::VisPerDecision => {
+        Quantity::VisTrajectory
+        | Quantity::VisPerDecision
+        | Quantity::VisTrajectoryBaselined { .. } => {
             if groups != 1 || x.len() != 2 {
                 return Err("V_IS is written for one parameter, x = (θ, θ′)".into());
             }
@@ -306,6 +344,18 @@ pub fn pieces<S: Scalar>(
             let new = PolicyJets::new(&derivs[1..], &[Some(0)], 1);
             let at_old = enumerate(&m, &old, 1);
             let at_new = enumerate(&m, &new, 1);
+            let baseline = baseline_jet::<S>(q, 1)?;
+            // Σ_i ψ(a_i|s_i) of a prefix under a policy, every action of the prefix a scored
+            // decision.
+            let score_sum = |pol: &PolicyJets<S>, pre: &Prefix<S>| {
+                pre.actions
+                    .iter()
+                    .enumerate()
+                    .fold(Jet::constant(S::zero(), 1), |acc, (t, &a)| {
+                        let o = m.groups[pre.states[t]];
+                        acc.add(&pol.dpi[o][a].div(&pol.pi[o][a]))
+                    })
+            };
             let mut v = Jet::constant(S::zero(), 1);
             for (a, b) in at_old.iter().zip(&at_new) {
                 if a.states != b.states || a.actions != b.actions {
@@ -322,9 +372,21 @@ pub fn pieces<S: Scalar>(
                     Quantity::VisTrajectory => {
                         estimate(&m, &old, 1, a, None, 1)[0].mul(&w[a.actions.len()])
                     }
+                    // w · g_b(θ, τ̄), g_b = g − b Σ_i ψ_i: the weight multiplies the baselined
+                    // estimate (docs/math.md §9).
+                    Quantity::VisTrajectoryBaselined { .. } => {
+                        let b_old = score_sum(&old, a).mul(baseline.as_ref().expect("a baseline"));
+                        estimate(&m, &old, 1, a, None, 1)[0]
+                            .sub(&b_old)
+                            .mul(&w[a.actions.len()])
+                    }
                     _ => estimate(&m, &old, 1, a, Some(&w), 1).swap_remove(0),
                 };
-                let e = estimate(&m, &new, 1, b, None, 1)[0].sub(&g_old);
+                let mut g_new = estimate(&m, &new, 1, b, None, 1).swap_remove(0);
+                if let Some(base) = &baseline {
+                    g_new = g_new.sub(&score_sum(&new, b).mul(base));
+                }
+                let e = g_new.sub(&g_old);
                 v = v.add(&b.prob.mul(&e).mul(&e));
             }
             Ok(vec![v.h[0].clone()])
@@ -358,19 +420,7 @@ pub fn pieces<S: Scalar>(
                 return Err("one coordinate per group".into());
             }
             let pol = PolicyJets::new(&derivs, &vec![None; groups], 0);
-            let baseline = match q {
-                Quantity::BaselinedVariance {
-                    numerator,
-                    denominator,
-                } if denominator > 0 => Some(
-                    Jet::constant(S::from_i64(numerator), 0)
-                        .div(&Jet::constant(S::from_i64(denominator), 0)),
-                ),
-                Quantity::BaselinedVariance { .. } => {
-                    return Err("a baseline's denominator must be positive".into());
-                }
-                _ => None,
-            };
+            let baseline = baseline_jet::<S>(q, 0)?;
             let mut eg = vec![S::zero(); groups];
             let (mut m2, mut each) = (S::zero(), vec![]);
             for pre in enumerate(&m, &pol, 0) {
