@@ -8,6 +8,18 @@ use ilopt_theory::report::markdown;
 use ilopt_theory::stats::bonferroni;
 use ilopt_theory::suite::{global_constants, m1_tied};
 
+/// This process's user CPU seconds so far (Linux: `/proc/self/stat`, clock ticks of 1/100 s).
+fn user_cpu() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let after = stat.rsplit_once(')').map_or("", |x| x.1);
+    let ticks: f64 = after
+        .split_whitespace()
+        .nth(11)
+        .and_then(|x| x.parse().ok())
+        .unwrap_or(f64::NAN);
+    ticks / 100.0
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let which = args.get(1).map(String::as_str).unwrap_or("second-sgd");
@@ -86,11 +98,11 @@ fn main() {
             let dom = second_toy::domain();
             let zero = BigRational::from_integer(0.into());
             let k = compute(&m2, &[zero.clone(), zero], None, &dom, s.tol, n).unwrap();
-            let t = std::time::Instant::now();
+            let u = user_cpu();
             for (name, r) in k.recheck(&dom, s.coverage) {
                 println!("{name}: {r:?}");
             }
-            eprintln!("recheck: {:.1} s", t.elapsed().as_secs_f64());
+            eprintln!("recheck user CPU: {:.2} s", user_cpu() - u);
             println!("{}", markdown(&[toy_row(&k, "x", &dom, s.coverage, "8c")]));
         }
         "second" => {
@@ -108,7 +120,9 @@ fn main() {
             let g = global_constants(&m1, Profile::Quick.sizes()).unwrap();
             s.storm_runs = n;
             let alpha = bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS);
+            let u = user_cpu();
             let rows = statistical::storm_rows(&m1, &g, s, alpha);
+            eprintln!("storm rows user CPU: {:.2} s", user_cpu() - u);
             println!("{}", markdown(&rows));
         }
         _ => panic!("unknown"),
