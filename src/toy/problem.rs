@@ -24,6 +24,8 @@ use crate::sampling::{dyadic_uniform, sample_categorical};
 use crate::scalar::Scalar;
 use nalgebra::DVector;
 use rand::Rng;
+use std::any::Any;
+use std::sync::{Arc, Mutex, PoisonError};
 
 /// A sampled trajectory τ = (s_1, a_1, …, a_{T−1}, s_T) with expert labels π*(s_t), t = 1..T−1.
 /// At an absorbing step (math.md §8) no decision is taken: the action recorded there is the
@@ -59,6 +61,33 @@ pub struct ToyProblem<S> {
     /// The reset law (empty unless the MDP resets).
     reset_law: Vec<S>,
     c: S,
+    /// The tables of the last few points in `f64` ([`ToyProblem::shared_table`]).
+    recent: TableMemo<S>,
+}
+
+/// How many of the most recent `f64` tables [`ToyProblem::shared_table`] keeps: a STORM step asks
+/// for the tables at θ_k and θ_{k−1} four times between them, an SGD step for θ_k twice.
+const RECENT_TABLES: usize = 4;
+
+/// A table with the bits of the θ it is at.
+type KeyedTable<S> = (Vec<u64>, Arc<PolicyTable<S>>);
+
+/// The most recent tables in `f64`, keyed by the bits of θ. A clone starts empty.
+#[derive(Debug)]
+struct TableMemo<S>(Mutex<Vec<KeyedTable<S>>>);
+
+impl<S> Clone for TableMemo<S> {
+    fn clone(&self) -> Self {
+        Self(Mutex::new(Vec::new()))
+    }
+}
+
+/// θ's bits when the scalar is `f64` (the key of [`TableMemo`]; bits, so that 0 and −0 differ).
+fn f64_bits<S: Scalar>(theta: &[S]) -> Option<Vec<u64>> {
+    theta
+        .iter()
+        .map(|x| (x as &dyn Any).downcast_ref::<f64>().map(|v| v.to_bits()))
+        .collect()
 }
 
 impl<S: Scalar> ToyProblem<S> {
@@ -83,6 +112,7 @@ impl<S: Scalar> ToyProblem<S> {
             },
             c: mdp.policy.c.as_ref().map_or_else(S::zero, S::from_rational),
             mdp: mdp.clone(),
+            recent: TableMemo(Mutex::new(Vec::new())),
         }
     }
     /// The exact MDP.
@@ -130,6 +160,30 @@ impl<S: Scalar> ToyProblem<S> {
     /// As [`PolicyTable::new`].
     pub fn table(&self, theta: &[S]) -> Result<PolicyTable<S>, OracleError> {
         PolicyTable::new(&self.mdp, &self.c, theta)
+    }
+    /// The table at θ as [`ToyProblem::table`], shared: in `f64` the tables of the last
+    /// [`RECENT_TABLES`] points are kept and one at the same θ (bit for bit) is reused, since an
+    /// algorithm's step asks for the table at the same iterate several times (roll-out, estimate,
+    /// importance weights). A table is a function of θ alone, so every value is the same.
+    ///
+    /// # Errors
+    /// As [`PolicyTable::new`] (an error is not kept).
+    pub fn shared_table(&self, theta: &[S]) -> Result<Arc<PolicyTable<S>>, OracleError> {
+        let Some(key) = f64_bits(theta) else {
+            return self.table(theta).map(Arc::new);
+        };
+        let lock = || self.recent.0.lock().unwrap_or_else(PoisonError::into_inner);
+        if let Some((_, t)) = lock().iter().find(|(k, _)| *k == key) {
+            return Ok(Arc::clone(t));
+        }
+        // Built without the lock held, so that threads sharing the problem do not wait on it.
+        let t = Arc::new(self.table(theta)?);
+        let mut recent = lock();
+        if recent.len() == RECENT_TABLES {
+            recent.remove(0);
+        }
+        recent.push((key, Arc::clone(&t)));
+        Ok(t)
     }
     /// The policy parameter c in `S` (zero for the direct parameterisation).
     pub fn c(&self) -> &S {
@@ -202,7 +256,7 @@ enum Actor<'a, S> {
 
 /// The policies of a [`Behaviour`], tabulated once per roll-out, and the rule that picks one per step.
 struct Actors<S> {
-    tables: Vec<PolicyTable<S>>,
+    tables: Vec<Arc<PolicyTable<S>>>,
     /// Mixture: probability of the expert, and of each learner table.
     expert_weight: f64,
     weights: Vec<f64>,
@@ -212,7 +266,7 @@ struct Actors<S> {
 
 impl<S: Scalar> Actors<S> {
     fn new(problem: &ToyProblem<S>, behaviour: &Behaviour<'_, S>) -> Result<Self, OracleError> {
-        let table = |th: &DVector<S>| problem.table(th.as_slice());
+        let table = |th: &DVector<S>| problem.shared_table(th.as_slice());
         Ok(match behaviour {
             Behaviour::Learner(theta) => Self {
                 tables: vec![table(theta)?],
@@ -381,7 +435,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
         self.check(trajectory)?;
-        let table = self.table(theta.as_slice())?;
+        let table = self.shared_table(theta.as_slice())?;
         let (states, actions) = self.prefix(trajectory);
         let g = match form {
             EstimatorForm::Causal => estimator::causal(&table, states, actions),
@@ -400,8 +454,8 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
         self.check(trajectory)?;
-        let old = self.table(theta_old.as_slice())?;
-        let new = self.table(theta_new.as_slice())?;
+        let old = self.shared_table(theta_old.as_slice())?;
+        let new = self.shared_table(theta_new.as_slice())?;
         let (states, actions) = self.prefix(trajectory);
         let ratios: Vec<S> = states
             .iter()
@@ -431,12 +485,12 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         cost: &mut Cost,
     ) -> Result<(), OracleError> {
         self.check(trajectory)?;
-        let table = self.table(theta.as_slice())?;
+        let table = self.shared_table(theta.as_slice())?;
         let (states, actions) = self.prefix(trajectory);
         match weights {
             None => estimator::decision_terms(&table, states, actions, None, false, out),
             Some((theta_new, weighting)) => {
-                let new = self.table(theta_new.as_slice())?;
+                let new = self.shared_table(theta_new.as_slice())?;
                 let ratios: Vec<S> = states
                     .iter()
                     .zip(actions)
@@ -463,7 +517,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         trajectory: &ToyTrajectory,
     ) -> Result<S, OracleError> {
         self.check(trajectory)?;
-        let table = self.table(theta.as_slice())?;
+        let table = self.shared_table(theta.as_slice())?;
         Ok(prefix_loss(&table, self.prefix(trajectory).0))
     }
 
@@ -491,7 +545,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
                 example.state, example.label
             )));
         }
-        let table = self.table(theta.as_slice())?;
+        let table = self.shared_table(theta.as_slice())?;
         let o = table.groups[example.state];
         let (l, local) = super::policy::brier(&table.probs[o], &table.jacobian[o], example.label);
         let mut g = vec![S::zero(); table.dim];

@@ -254,9 +254,20 @@ impl BoxProver<'_> {
     }
 
     /// Prove sup over the box ≤ `target`, bisecting at most `depth` more times. Returns the
-    /// largest bound proved and the number of pieces used, or the bound that failed.
-    fn prove(&mut self, b: &[[f64; 2]], target: f64, depth: u32) -> Result<(f64, usize), String> {
-        let (sup, _) = self.box_bound(b)?;
+    /// largest bound proved and the number of pieces used, or the bound that failed. `known` is
+    /// the box's own [`BoxProver::box_bound`] if the caller has already formed it (it is a
+    /// function of the box alone, so it is not formed twice).
+    fn prove(
+        &mut self,
+        b: &[[f64; 2]],
+        target: f64,
+        depth: u32,
+        known: Option<f64>,
+    ) -> Result<(f64, usize), String> {
+        let sup = match known {
+            Some(sup) => sup,
+            None => self.box_bound(b)?.0,
+        };
         if sup <= target {
             return Ok((sup, 1));
         }
@@ -275,7 +286,7 @@ impl BoxProver<'_> {
         for half in [[l, m], [m, h]] {
             let mut c = b.to_vec();
             c[dim] = half;
-            let (s, k) = self.prove(&c, target, depth - 1)?;
+            let (s, k) = self.prove(&c, target, depth - 1, None)?;
             best = best.max(s);
             count += k;
         }
@@ -376,7 +387,7 @@ pub fn recheck(
         let target = (hi + slack).min(certified);
         match prover.box_bound(&b.bounds) {
             Err(e) => out.fail(format!("box {:?}: {e}", b.bounds)),
-            Ok((_, exact)) => {
+            Ok((sup, exact)) => {
                 if let Some(v) = exact.iter().find(|v| !inside(v)) {
                     out.fail(format!(
                         "box {:?}: the value at a corner, in [{}, {}], is outside the recorded [{lo}, {hi}]",
@@ -386,7 +397,7 @@ pub fn recheck(
                     ));
                     continue;
                 }
-                match prover.prove(&b.bounds, target, MAX_DEPTH) {
+                match prover.prove(&b.bounds, target, MAX_DEPTH, Some(sup)) {
                     Ok((s, k)) => {
                         out.pieces += k;
                         out.max_upper = out.max_upper.max(s);

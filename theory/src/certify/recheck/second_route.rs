@@ -192,11 +192,35 @@ fn loss<S: Scalar>(m: &Model<S>, pol: &PolicyJets<S>, s: usize) -> (Jet<S>, Jet<
     )
 }
 
+/// The per-state and per-decision terms of the estimator under one policy: they depend on the
+/// state (or the group and action) only, so they are formed once per point and shared by every
+/// prefix (each is the same computation as at its first use, so the enclosures are unchanged).
+struct Terms<S> {
+    /// `loss[s]` = (l(s), ∂l(s)), as [`loss`].
+    loss: Vec<(Jet<S>, Jet<S>)>,
+    /// `psi[o][a]` = ψ_o(a|o) = ∂_oπ(a|o)/π(a|o).
+    psi: Vec<[Jet<S>; 2]>,
+}
+
+impl<S: Scalar> Terms<S> {
+    fn new(m: &Model<S>, pol: &PolicyJets<S>) -> Self {
+        Self {
+            loss: (0..m.trans.len()).map(|s| loss(m, pol, s)).collect(),
+            psi: pol
+                .pi
+                .iter()
+                .zip(&pol.dpi)
+                .map(|(pi, dpi)| [dpi[0].div(&pi[0]), dpi[1].div(&pi[1])])
+                .collect(),
+        }
+    }
+}
+
 /// `g_o = Σ_t w_t [∂_o l_t + l_t Σ_{i<t} ψ_o(a_i|s_i)]`, ψ_o = ∂_oπ/π, with weights `w_t`
 /// (all 1 for the estimator (3.15); the per-decision products otherwise).
 fn estimate<S: Scalar>(
     m: &Model<S>,
-    pol: &PolicyJets<S>,
+    terms: &Terms<S>,
     groups: usize,
     pre: &Prefix<S>,
     weights: Option<&[Jet<S>]>,
@@ -206,10 +230,10 @@ fn estimate<S: Scalar>(
     let mut g = vec![zero.clone(); groups];
     let mut psi = vec![zero; groups];
     for (t, &s) in pre.states.iter().enumerate() {
-        let (l, dl) = loss(m, pol, s);
+        let (l, dl) = &terms.loss[s];
         let o = m.groups[s];
-        let mut term: Vec<Jet<S>> = psi.iter().map(|x| x.mul(&l)).collect();
-        term[o] = term[o].add(&dl);
+        let mut term: Vec<Jet<S>> = psi.iter().map(|x| x.mul(l)).collect();
+        term[o] = term[o].add(dl);
         for (gi, ti) in g.iter_mut().zip(term) {
             *gi = gi.add(&match weights {
                 Some(w) => ti.mul(&w[t]),
@@ -218,7 +242,7 @@ fn estimate<S: Scalar>(
         }
         if t < pre.actions.len() {
             let a = pre.actions[t];
-            psi[o] = psi[o].add(&pol.dpi[o][a].div(&pol.pi[o][a]));
+            psi[o] = psi[o].add(&terms.psi[o][a]);
         }
     }
     g
@@ -356,6 +380,7 @@ pub fn pieces<S: Scalar>(
                         acc.add(&pol.dpi[o][a].div(&pol.pi[o][a]))
                     })
             };
+            let (old_terms, new_terms) = (Terms::new(&m, &old), Terms::new(&m, &new));
             let mut v = Jet::constant(S::zero(), 1);
             for (a, b) in at_old.iter().zip(&at_new) {
                 if a.states != b.states || a.actions != b.actions {
@@ -370,19 +395,19 @@ pub fn pieces<S: Scalar>(
                 }
                 let g_old = match q {
                     Quantity::VisTrajectory => {
-                        estimate(&m, &old, 1, a, None, 1)[0].mul(&w[a.actions.len()])
+                        estimate(&m, &old_terms, 1, a, None, 1)[0].mul(&w[a.actions.len()])
                     }
                     // w · g_b(θ, τ̄), g_b = g − b Σ_i ψ_i: the weight multiplies the baselined
                     // estimate (docs/math.md §9).
                     Quantity::VisTrajectoryBaselined { .. } => {
                         let b_old = score_sum(&old, a).mul(baseline.as_ref().expect("a baseline"));
-                        estimate(&m, &old, 1, a, None, 1)[0]
+                        estimate(&m, &old_terms, 1, a, None, 1)[0]
                             .sub(&b_old)
                             .mul(&w[a.actions.len()])
                     }
-                    _ => estimate(&m, &old, 1, a, Some(&w), 1).swap_remove(0),
+                    _ => estimate(&m, &old_terms, 1, a, Some(&w), 1).swap_remove(0),
                 };
-                let mut g_new = estimate(&m, &new, 1, b, None, 1).swap_remove(0);
+                let mut g_new = estimate(&m, &new_terms, 1, b, None, 1).swap_remove(0);
                 if let Some(base) = &baseline {
                     g_new = g_new.sub(&score_sum(&new, b).mul(base));
                 }
@@ -397,6 +422,7 @@ pub fn pieces<S: Scalar>(
             }
             let diff: Vec<Option<usize>> = (0..groups).map(Some).collect();
             let pol = PolicyJets::new(&derivs, &diff, groups);
+            let terms = Terms::new(&m, &pol);
             let f = enumerate(&m, &pol, groups).iter().fold(
                 Jet::constant(S::zero(), groups),
                 |acc, pre| {
@@ -404,7 +430,7 @@ pub fn pieces<S: Scalar>(
                         .states
                         .iter()
                         .fold(Jet::constant(S::zero(), groups), |a, &s| {
-                            a.add(&loss(&m, &pol, s).0)
+                            a.add(&terms.loss[s].0)
                         });
                     acc.add(&pre.prob.mul(&l))
                 },
@@ -423,14 +449,14 @@ pub fn pieces<S: Scalar>(
             let baseline = baseline_jet::<S>(q, 0)?;
             let mut eg = vec![S::zero(); groups];
             let (mut m2, mut each) = (S::zero(), vec![]);
+            let terms = Terms::new(&m, &pol);
             for pre in enumerate(&m, &pol, 0) {
-                let mut g = estimate(&m, &pol, groups, &pre, None, 0);
+                let mut g = estimate(&m, &terms, groups, &pre, None, 0);
                 if let Some(b) = &baseline {
                     // g_b = g − b Σ_i ψ(a_i|s_i), every action of the prefix a scored decision.
                     for (t, &a) in pre.actions.iter().enumerate() {
                         let o = m.groups[pre.states[t]];
-                        let psi = pol.dpi[o][a].div(&pol.pi[o][a]);
-                        g[o] = g[o].sub(&psi.mul(b));
+                        g[o] = g[o].sub(&terms.psi[o][a].mul(b));
                     }
                 }
                 let n2 = norm2(&g);
