@@ -530,7 +530,14 @@ fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly()
 #[test]
 fn a_time_limit_ends_the_run() {
     let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
-    let mut cfg = run_config(field_configs()[0].clone(), 1, 1);
+    // A step (10⁻⁹) so small that θ stays near 1/2, inside the open simplex, however many
+    // iterations fit in the time limit: the limit is then the only way the run can end (with
+    // a larger step the walk may leave the simplex first, on a fast machine).
+    let sgd = AlgorithmConfig::Sgd(SgdConfig {
+        step: SgdStep::constant(ConfigNumber::ratio(1, 1_000_000_000)),
+        form: causal(),
+    });
+    let mut cfg = run_config(sgd, 1, 1);
     cfg.stop = StoppingRule {
         time_limit_ms: Some(5),
         ..Default::default()
