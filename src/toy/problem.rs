@@ -162,7 +162,7 @@ impl<S: Scalar> ToyProblem<S> {
         PolicyTable::new(&self.mdp, &self.c, theta)
     }
     /// The table at θ as [`ToyProblem::table`], shared: in `f64` the tables of the last
-    /// [`RECENT_TABLES`] points are kept and one at the same θ (bit for bit) is reused, since an
+    /// four points are kept and one at the same θ (bit for bit) is reused, since an
     /// algorithm's step asks for the table at the same iterate several times (roll-out, estimate,
     /// importance weights). A table is a function of θ alone, so every value is the same.
     ///
