@@ -130,8 +130,9 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Batched<P> {
         &self,
         theta: &DVector<S>,
         example: &Self::Labelled,
+        grad: &mut [S],
         cost: &mut Cost,
-    ) -> Result<(S, DVector<S>), OracleError> {
-        self.inner.supervised(theta, example, cost)
+    ) -> Result<S, OracleError> {
+        self.inner.supervised(theta, example, grad, cost)
     }
 }

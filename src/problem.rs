@@ -298,17 +298,20 @@ pub trait IlProblem<S: Scalar> {
     /// The labelled states of a trajectory at which a loss is paid (t = 1..T−1), in order.
     fn labelled_states(&self, trajectory: &Self::Trajectory) -> Vec<Self::Labelled>;
 
-    /// The supervised loss `l(s, θ)` and its gradient `∇_θ l(s, θ)` at one labelled state (one
-    /// gradient evaluation).
+    /// The supervised loss `l(s, θ)` at one labelled state, with its gradient `∇_θ l(s, θ)`
+    /// written into `grad` (length [`IlProblem::dim`]; one gradient evaluation). The caller owns
+    /// `grad`, so a loop over a dataset allocates nothing per example.
     ///
     /// # Errors
-    /// As [`IlProblem::estimate`].
+    /// As [`IlProblem::estimate`], and [`OracleError::Dimension`] for a `grad` of the wrong
+    /// length.
     fn supervised(
         &self,
         theta: &DVector<S>,
         example: &Self::Labelled,
+        grad: &mut [S],
         cost: &mut Cost,
-    ) -> Result<(S, DVector<S>), OracleError>;
+    ) -> Result<S, OracleError>;
 }
 
 /// The error of a time-indexed baseline list shorter than a trajectory's scored decisions.

@@ -117,6 +117,7 @@ impl<S: Scalar> InnerOptimiser<S> {
         self.rule.reset();
         let mut theta = start.clone();
         let mut loss = S::zero();
+        let mut gi = vec![S::zero(); theta.len()];
         for _ in 0..self.iterations {
             let batch: Vec<&P::Labelled> = match self.batch_size {
                 None => data.iter().collect(),
@@ -128,9 +129,10 @@ impl<S: Scalar> InnerOptimiser<S> {
             let mut g = DVector::from_element(theta.len(), S::zero());
             let mut l = S::zero();
             for ex in batch {
-                let (li, gi) = problem.supervised(&theta, ex, ctx.cost)?;
-                l += li;
-                g += gi;
+                l += problem.supervised(&theta, ex, &mut gi, ctx.cost)?;
+                for (x, y) in g.iter_mut().zip(&gi) {
+                    *x += y;
+                }
             }
             let g = g.map(|x| x * &inv);
             loss = l * &inv;

@@ -466,8 +466,9 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
         &self,
         theta: &DVector<S>,
         example: &Self::Labelled,
+        grad: &mut [S],
         cost: &mut Cost,
-    ) -> Result<(S, DVector<S>), OracleError> {
-        self.batch.supervised(theta, example, cost)
+    ) -> Result<S, OracleError> {
+        self.batch.supervised(theta, example, grad, cost)
     }
 }

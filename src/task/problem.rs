@@ -371,14 +371,20 @@ where
         &self,
         theta: &DVector<S>,
         example: &Self::Labelled,
+        grad: &mut [S],
         cost: &mut Cost,
-    ) -> Result<(S, DVector<S>), OracleError> {
+    ) -> Result<S, OracleError> {
         check_theta(theta, self.dim())?;
-        let (l, g) = self
+        let l = self
             .policy
-            .loss(theta.as_slice(), &example.features, example.label.borrow())
+            .loss_into(
+                theta.as_slice(),
+                &example.features,
+                example.label.borrow(),
+                grad,
+            )
             .map_err(policy_error)?;
         cost.gradient_evaluations += 1;
-        Ok((l, DVector::from_vec(g)))
+        Ok(l)
     }
 }

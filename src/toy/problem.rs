@@ -537,8 +537,9 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         &self,
         theta: &DVector<S>,
         example: &ToyExample,
+        grad: &mut [S],
         cost: &mut Cost,
-    ) -> Result<(S, DVector<S>), OracleError> {
+    ) -> Result<S, OracleError> {
         if example.state >= self.mdp.states || example.label >= self.mdp.actions {
             return Err(OracleError::Trajectory(format!(
                 "example (state {}, label {}) outside the MDP",
@@ -548,9 +549,15 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         let table = self.shared_table(theta.as_slice())?;
         let o = table.groups[example.state];
         let (l, local) = super::policy::brier(&table.probs[o], &table.jacobian[o], example.label);
-        let mut g = vec![S::zero(); table.dim];
-        table.add_block_unscaled(&mut g, example.state, &local);
+        if grad.len() != table.dim {
+            return Err(OracleError::Dimension {
+                expected: table.dim,
+                got: grad.len(),
+            });
+        }
+        grad.fill(S::zero());
+        table.add_block_unscaled(grad, example.state, &local);
         cost.gradient_evaluations += 1;
-        Ok((l, DVector::from_vec(g)))
+        Ok(l)
     }
 }

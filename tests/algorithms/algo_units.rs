@@ -95,13 +95,15 @@ impl<S: Scalar> IlProblem<S> for Scripted {
         &self,
         theta: &DVector<S>,
         ex: &usize,
+        grad: &mut [S],
         cost: &mut Cost,
-    ) -> Result<(S, DVector<S>), OracleError> {
+    ) -> Result<S, OracleError> {
         // l(θ) = (θ − b)²/2 with b the script's second entry: ∇l = θ − b.
         let b = S::from_i64(self.script[*ex].1);
         let r = theta[0].clone() - b;
         cost.gradient_evaluations += 1;
-        Ok((r.square() / S::from_i64(2), DVector::from_element(1, r)))
+        grad[0] = r.clone();
+        Ok(r.square() / S::from_i64(2))
     }
 }
 
@@ -706,9 +708,10 @@ impl IlProblem<f64> for Recording {
         &self,
         th: &DVector<f64>,
         e: &usize,
+        g: &mut [f64],
         c: &mut Cost,
-    ) -> Result<(f64, DVector<f64>), OracleError> {
-        self.inner.supervised(th, e, c)
+    ) -> Result<f64, OracleError> {
+        self.inner.supervised(th, e, g, c)
     }
 }
 

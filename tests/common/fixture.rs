@@ -443,13 +443,16 @@ impl<S: Scalar> IlProblem<S> for AliasedTwoState {
         &self,
         theta: &DVector<S>,
         example: &u8,
+        grad: &mut [S],
         cost: &mut Cost,
-    ) -> Result<(S, DVector<S>), OracleError> {
-        if theta.len() != 1 {
-            return Err(OracleError::Dimension {
-                expected: 1,
-                got: theta.len(),
-            });
+    ) -> Result<S, OracleError> {
+        for len in [theta.len(), grad.len()] {
+            if len != 1 {
+                return Err(OracleError::Dimension {
+                    expected: 1,
+                    got: len,
+                });
+            }
         }
         // The supervised loss is a polynomial: it is defined for every real p, so training may
         // pass through p ∉ (0, 1) (only roll-outs need a probability).
@@ -458,6 +461,7 @@ impl<S: Scalar> IlProblem<S> for AliasedTwoState {
         }
         let (l, dl) = Self::loss(&theta[0], *example);
         cost.gradient_evaluations += 1;
-        Ok((l, DVector::from_element(1, dl)))
+        grad[0] = dl;
+        Ok(l)
     }
 }

@@ -104,7 +104,8 @@ fn cost_accounting() {
         .unwrap();
     assert_eq!(cost.gradient_evaluations, 6);
     for ex in p.labelled_states(&tau).iter().take(3) {
-        p.supervised(&t, ex, &mut cost).unwrap();
+        let mut g = vec![0.0; t.len()];
+        p.supervised(&t, ex, &mut g, &mut cost).unwrap();
     }
     assert_eq!(cost.gradient_evaluations, 9);
     assert_eq!(cost.trajectories, 1);

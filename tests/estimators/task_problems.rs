@@ -95,7 +95,11 @@ fn weighted_estimate_at_the_same_point_is_the_plain_estimate() {
     let total: f64 = p
         .labelled_states(&t)
         .iter()
-        .map(|ex| p.supervised(&theta, ex, &mut Cost::default()).unwrap().0)
+        .map(|ex| {
+            let mut g = vec![0.0; theta.len()];
+            p.supervised(&theta, ex, &mut g, &mut Cost::default())
+                .unwrap()
+        })
         .sum();
     assert_abs_diff_eq!(
         p.trajectory_loss(&theta, &t).unwrap(),

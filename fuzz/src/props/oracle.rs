@@ -112,7 +112,11 @@ pub fn run_oracle<S: Scalar>(
         .labelled_states(traj)
         .iter()
         .take(8)
-        .map(|ex| p.supervised(&th, ex, &mut cost))
+        .map(|ex| {
+            let mut g = vec![S::zero(); th.len()];
+            p.supervised(&th, ex, &mut g, &mut cost)
+                .map(|l| (l, DVector::from_vec(g)))
+        })
         .collect();
     let behaviours = [
         Behaviour::Learner(&th),
