@@ -68,17 +68,21 @@ pub fn fast_tanh(x: f64) -> f64 {
     let x = x.clamp(-CLAMP, CLAMP);
     let x2 = x * x;
     let p = A[6];
-    let p = p * x2 + A[5];
-    let p = p * x2 + A[4];
-    let p = p * x2 + A[3];
-    let p = p * x2 + A[2];
-    let p = p * x2 + A[1];
-    let p = (p * x2 + A[0]) * x;
+    let p = p.mul_add(x2, A[5]);
+    let p = p.mul_add(x2, A[4]);
+    let p = p.mul_add(x2, A[3]);
+    let p = p.mul_add(x2, A[2]);
+    let p = p.mul_add(x2, A[1]);
+    let p = p.mul_add(x2, A[0]) * x;
     let q = B[3];
-    let q = q * x2 + B[2];
-    let q = q * x2 + B[1];
-    let q = q * x2 + B[0];
-    p / q
+    let q = q.mul_add(x2, B[2]);
+    let q = q.mul_add(x2, B[1]);
+    let q = q.mul_add(x2, B[0]);
+    // 1/q in single precision (relative error ≤ 2⁻²³ with q's own rounding to f32: ≤ 1.2·10⁻⁷
+    // on |p/q| ≤ 1), eight lanes per division instead of four.
+    #[allow(clippy::cast_possible_truncation)] // q ∈ [4.9·10⁻³, 1] on the clamped range
+    let r = f64::from(1.0 / (q as f32));
+    p * r
 }
 
 impl<S: Real> PpoGreedy<S> {
