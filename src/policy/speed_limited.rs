@@ -92,6 +92,43 @@ impl<S: Sqrt, A: ActionVector<S>> SpeedLimitedGaussian<S, A> {
         Ok(loss)
     }
 
+    /// The clipped branch of [`Policy::loss_into`] (`‖m‖ > v`), the outputs `m_i` parked in the
+    /// first entry of each row of `grad` and `n2 = ‖m‖²`: `c = s·m` with `s = v/‖m‖`,
+    /// `r = c − π*`, `∂l/∂m = 2s(r − m (mᵀr)/‖m‖²)`, the gradient's rows written over `grad`
+    /// (row i after its `m_i` is read).
+    fn clipped_loss_into(
+        &self,
+        phi: &[S],
+        label: &[S],
+        n2: &S,
+        grad: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let n = phi.len();
+        let two = S::from_i64(2);
+        let s = self.v_max.clone() / n2.clone().sqrt();
+        let mut loss = S::zero();
+        let mut m_dot_r = S::zero();
+        for (i, y) in label.iter().enumerate() {
+            let m = &grad[i * n];
+            let r = s.clone() * m - y;
+            loss += r.square();
+            m_dot_r += r * m;
+        }
+        let q = m_dot_r / n2;
+        for (i, y) in label.iter().enumerate() {
+            let m = grad[i * n].clone();
+            let r = s.clone() * &m - y;
+            let d = two.clone() * &s * (r - m * &q);
+            for (g, x) in grad[i * n..(i + 1) * n].iter_mut().zip(phi) {
+                *g = d.clone() * x;
+            }
+        }
+        if !loss.is_finite() {
+            return Err(PolicyError::NonFinite { param: "loss" });
+        }
+        Ok(loss)
+    }
+
     /// The executed mean `c(Wφ)` (module docs).
     ///
     /// # Errors
@@ -159,34 +196,11 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
             n2 += m.square();
             grad[i * n] = m;
         }
-        if !certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
-            // Inside the limit the loss is P3's.
-            return self.inner.loss_into(theta, phi, label, grad);
+        if certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
+            self.clipped_loss_into(phi, label, &n2, grad)
+        } else {
+            Ok(inside_loss_into(phi, label, grad))
         }
-        // Clipped: c = s·m with s = v/‖m‖; ∂l/∂m = 2s(r − m (mᵀr)/‖m‖²).
-        let two = S::from_i64(2);
-        let s = self.v_max.clone() / n2.sqrt();
-        let mut loss = S::zero();
-        let mut m_dot_r = S::zero();
-        for (i, y) in label.iter().enumerate() {
-            let m = &grad[i * n];
-            let r = s.clone() * m - y;
-            loss += r.square();
-            m_dot_r += r * m;
-        }
-        let q = m_dot_r / &n2;
-        for (i, y) in label.iter().enumerate() {
-            let m = grad[i * n].clone();
-            let r = s.clone() * &m - y;
-            let d = two.clone() * &s * (r - m * &q);
-            for (g, x) in grad[i * n..(i + 1) * n].iter_mut().zip(phi) {
-                *g = d.clone() * x;
-            }
-        }
-        if !loss.is_finite() {
-            return Err(PolicyError::NonFinite { param: "loss" });
-        }
-        Ok(loss)
     }
 
     /// P3's score without allocating.
@@ -199,6 +213,67 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
     ) -> Result<(), PolicyError> {
         self.inner.score_into(theta, phi, action, score)
     }
+
+    /// Loss, gradient and score with each output `m_i = (Wφ)_i` computed once: the same numbers
+    /// as [`Policy::loss_into`] then [`Policy::score_into`], which compute it two or three
+    /// times. Every shape is checked first (as [`LinearGaussian`]'s does); the outputs are parked
+    /// in the first entry of each row of `grad` and of `score` until the rows are written.
+    fn loss_score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        action: &A,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let k = self.inner.actions();
+        let n = Policy::<S>::feature_dim(&self.inner);
+        let action: &[S] = action.borrow();
+        check_vec("label", label, k)?;
+        check_vec("theta", theta, k * n)?;
+        check_vec("phi", phi, n)?;
+        check_out("grad", grad, k * n)?;
+        check_vec("action", action, k)?;
+        check_out("score", score, k * n)?;
+        let mut n2 = S::zero();
+        for i in 0..k {
+            let m = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi);
+            n2 += m.square();
+            grad[i * n] = m.clone();
+            score[i * n] = m;
+        }
+        let loss = if certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
+            self.clipped_loss_into(phi, label, &n2, grad)?
+        } else {
+            inside_loss_into(phi, label, grad)
+        };
+        let sigma_sq = self.inner.sigma_sq();
+        for (i, a) in action.iter().enumerate() {
+            let s = (a.clone() - &score[i * n]) / sigma_sq;
+            for (sc, x) in score[i * n..(i + 1) * n].iter_mut().zip(phi) {
+                *sc = s.clone() * x;
+            }
+        }
+        Ok(loss)
+    }
+}
+
+/// The loss inside the limit (`‖m‖ ≤ v`), P3's: `l = ‖m − π*‖²`, `∇_W l = 2(m − π*)φᵀ`, the
+/// outputs `m_i` parked in the first entry of each row of `grad` and the gradient's rows written
+/// over them (the numbers of [`LinearGaussian`]'s `loss_into`, without recomputing `Wφ`).
+fn inside_loss_into<S: Scalar>(phi: &[S], label: &[S], grad: &mut [S]) -> S {
+    let n = phi.len();
+    let mut loss = S::zero();
+    for (i, y) in label.iter().enumerate() {
+        let r = grad[i * n].clone() - y;
+        loss += r.square();
+        let two_r = S::from_i64(2) * &r;
+        for (g, x) in grad[i * n..(i + 1) * n].iter_mut().zip(phi) {
+            *g = two_r.clone() * x;
+        }
+    }
+    loss
 }
 
 impl<S: Sqrt, A: ActionVector<S>> LikelihoodRatio<S> for SpeedLimitedGaussian<S, A> {
@@ -239,6 +314,43 @@ mod tests {
     /// θ inside the limit (‖Wφ‖ ≈ 0.05) and far outside (‖Wφ‖ ≈ 2.1).
     const INSIDE: [f64; 6] = [0.02, 0.01, 0.03, -0.01, 0.02, 0.0];
     const OUTSIDE: [f64; 6] = [1.0, -0.5, 0.4, 0.3, 0.9, -0.2];
+
+    /// The fused loss-and-score pass gives the numbers of the two separate calls, on both
+    /// branches, in every scalar with a square root (bit for bit in `f64` and in the duals, the same
+    /// enclosures for intervals); a bad action is still an error.
+    macro_rules! fused_equals_separate {
+        ($($name:ident: $s:ty),*) => {$(
+            #[test]
+            fn $name() {
+                let p = policy::<$s>();
+                let cast = |v: &[f64]| -> Vec<$s> {
+                    v.iter().map(|x| <$s>::from_binary64(*x).unwrap()).collect()
+                };
+                let (phi, label) = (cast(&PHI), cast(&LABEL));
+                let action = cast(&[0.05, -0.2]);
+                for theta in [cast(&INSIDE), cast(&OUTSIDE)] {
+                    let (mut g, mut sc) = (vec![<$s>::zero(); 6], vec![<$s>::zero(); 6]);
+                    let l = p
+                        .loss_score_into(&theta, &phi, &label, &action, &mut g, &mut sc)
+                        .unwrap();
+                    let (mut g2, mut sc2) = (vec![<$s>::zero(); 6], vec![<$s>::zero(); 6]);
+                    let l2 = p.loss_into(&theta, &phi, &label, &mut g2).unwrap();
+                    p.score_into(&theta, &phi, &action, &mut sc2).unwrap();
+                    assert_eq!(format!("{l:?} {g:?} {sc:?}"), format!("{l2:?} {g2:?} {sc2:?}"));
+                    let bad = cast(&[0.05]);
+                    assert!(
+                        p.loss_score_into(&theta, &phi, &label, &bad, &mut g, &mut sc)
+                            .is_err()
+                    );
+                }
+            }
+        )*};
+    }
+    fused_equals_separate!(
+        fused_equals_separate_f64: f64,
+        fused_equals_separate_dual: Dual<f64>,
+        fused_equals_separate_interval: Interval
+    );
 
     #[test]
     fn inside_the_limit_it_is_p3() {
