@@ -504,6 +504,70 @@ mod tests {
         }
     }
 
+    /// The recording pass (two loops for 1 to 8 features, the fallback for more) against the
+    /// default that records ψ_t as rows: the same `g` and losses bit for bit, ψ_t = c_t φ_t from
+    /// the recorded coefficients, and the same first error when a decision fails.
+    #[test]
+    fn recorded_pass_matches_the_default_bit_for_bit() {
+        use super::super::kernel::causal_sum_recording_rows;
+        use rand::{Rng, SeedableRng};
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut rng = KitRng::seed_from_u64(11);
+        for n in 1..=10 {
+            let pi = Logistic::new(n).unwrap();
+            for steps in [1, 2, 7, 60] {
+                let theta: Vec<f64> = (0..n).map(|_| 4.0 * rng.random::<f64>() - 2.0).collect();
+                let features: Vec<f64> = (0..n * steps)
+                    .map(|_| 2.0 * rng.random::<f64>() - 1.0)
+                    .collect();
+                let labels: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let mut actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let run = |actions: &[usize], fast: bool| {
+                    let (mut g, mut losses, mut scores) = (vec![0.5; n], vec![], vec![]);
+                    let r = if fast {
+                        pi.causal_sum_recorded(
+                            &theta,
+                            &features,
+                            &labels,
+                            actions,
+                            &mut g,
+                            &mut losses,
+                            &mut scores,
+                        )
+                    } else {
+                        causal_sum_recording_rows(
+                            &pi,
+                            &theta,
+                            &features,
+                            &labels,
+                            actions,
+                            &mut g,
+                            &mut losses,
+                            &mut scores,
+                        )
+                    };
+                    r.map(|()| (bits(&g), bits(&losses), scores))
+                };
+                let (g, losses, coefficients) = run(&actions, true).unwrap();
+                let (g_rows, losses_rows, rows) = run(&actions, false).unwrap();
+                assert_eq!(
+                    (&g, &losses),
+                    (&g_rows, &losses_rows),
+                    "n = {n}, {steps} steps"
+                );
+                for (t, row) in rows.chunks_exact(n).enumerate() {
+                    let phi = &features[t * n..(t + 1) * n];
+                    let psi: Vec<f64> = phi.iter().map(|x| coefficients[t] * x).collect();
+                    assert_eq!(bits(&psi), bits(row), "n = {n}, step {t}");
+                }
+                actions[steps / 2] = 2;
+                let err = run(&actions, true).map(|_| ());
+                assert_eq!(err, run(&actions, false).map(|_| ()));
+                assert!(matches!(err, Err(PolicyError::Action { action: 2, .. })));
+            }
+        }
+    }
+
     /// `sample_trusted` of `pi` against `sample` (φ checked entry by entry): the same result.
     fn assert_trusted_as_checked<S: Real>(pi: &Logistic, theta: &[S], phi: &[S]) {
         use rand::SeedableRng;
