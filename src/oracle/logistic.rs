@@ -68,6 +68,18 @@ macro_rules! by_feature_count {
     };
 }
 
+/// θ as an array of its `N` entries (the fixed-dimension passes' view).
+///
+/// # Errors
+/// [`PolicyError::Shape`] if θ does not have `N` entries.
+fn fixed_theta<S, const N: usize>(theta: &[S]) -> Result<&[S; N], PolicyError> {
+    theta.try_into().map_err(|_| PolicyError::Shape {
+        param: "theta",
+        expected: N,
+        got: theta.len(),
+    })
+}
+
 /// One decision's terms of eq. 3.15 for the logistic policy, whose `∇_θ l_t = dz φ` and
 /// `ψ_t = c φ` are multiples of φ: `g_j += dz φ_j + l Σ_j`, then `Σ_j += c φ_j`, entry by entry
 /// (the order of the default kernel's `accumulate`).
@@ -86,9 +98,8 @@ fn add_decision<S: Scalar>(g: &mut [S], score_sum: &mut [S], phi: &[S], dz: &S, 
 ///
 /// `per_decision(e_t, l_t, c_t)` gets each decision's item of `extra`, its loss `l_t` and its score
 /// coefficient `c_t = a_t − p_t` (ψ_t = c_t φ_t), and returns the `l'_t` that weighs
-/// `Σ_{i<t} ψ_i`: `l_t` (eq. 3.15), `l_t + δ_t` (a baseline's loss shift, see
-/// [`EstimatorKernel::causal_sum_trusted`]), or `l_t` after writing it and `c_t` into a record
-/// ([`EstimatorKernel::causal_sum_recorded`]). The pass stops at the shortest of the decisions
+/// `Σ_{i<t} ψ_i`: `l_t` (eq. 3.15) or `l_t + δ_t` (a baseline's loss shift, see
+/// [`EstimatorKernel::causal_sum_trusted`]). The pass stops at the shortest of the decisions
 /// and `extra`.
 ///
 /// The per-decision checks are not branches: their failures are collected in a flag, and
@@ -107,11 +118,7 @@ fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize, E>(
     mut per_decision: impl FnMut(E, S, &S) -> S,
     g: &mut [S],
 ) -> Result<bool, PolicyError> {
-    let theta: &[S; N] = theta.try_into().map_err(|_| PolicyError::Shape {
-        param: "theta",
-        expected: N,
-        got: theta.len(),
-    })?;
+    let theta = fixed_theta::<S, N>(theta)?;
     check_out("g", g, N)?;
     let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
     let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
@@ -159,18 +166,65 @@ fn causal_step_coefficient<S: Real>(
     Ok((l, c))
 }
 
-/// `losses` and `coefficients` cleared and refilled with `n` zeros, paired entry by entry for a
-/// pass to overwrite.
-fn fresh_records<'a, S: Scalar>(
-    losses: &'a mut Vec<S>,
-    coefficients: &'a mut Vec<S>,
-    n: usize,
-) -> impl Iterator<Item = (&'a mut S, &'a mut S)> {
-    losses.clear();
-    losses.resize(n, S::zero());
-    coefficients.clear();
-    coefficients.resize(n, S::zero());
-    losses.iter_mut().zip(coefficients.iter_mut())
+/// The first half of the causal pass of eq. 3.15 for [`Logistic`] with `N` features known at
+/// compile time, the decisions alone: per decision t its loss `l_t`, its score coefficient
+/// `c_t = a_t − p_t` (ψ_t = c_t φ_t) and its loss-gradient coefficient
+/// `dz_t = 4(p_t − y_t)p_t(1 − p_t)` (∇_θ l_t = dz_t φ_t), written into `losses`, `coefficients` and `gradients` (the pass stops
+/// at the shortest of the decisions and the three). `accumulate_fixed` then sums them as
+/// `causal_sum_fixed` does in one loop.
+///
+/// Two loops instead of one: no accumulator is live across the call to `exp`, which would
+/// otherwise keep them in memory around it; the second loop has no call.
+///
+/// As in `causal_sum_fixed`, the per-decision checks are collected in a flag: `false` tells the
+/// caller that some decision failed (the records are then unspecified).
+#[inline(never)]
+fn record_fixed<S: Real, L: Borrow<usize>, const N: usize>(
+    theta: &[S; N],
+    features: &[S],
+    labels: &[L],
+    actions: &[usize],
+    losses: &mut [S],
+    coefficients: &mut [S],
+    gradients: &mut [S],
+) -> bool {
+    let (rows, _) = features.as_chunks::<N>();
+    let records = losses.iter_mut().zip(coefficients).zip(gradients);
+    let mut failed = false;
+    for (((phi, label), action), ((lo, co), gr)) in
+        rows.iter().zip(labels).zip(actions).zip(records)
+    {
+        let (label, action) = (*label.borrow(), *action);
+        let z = crate::scalar::dot(theta, phi);
+        failed |= (label > 1) | (action > 1) | !finite_logit(&z);
+        let p = sigmoid_of_finite(&z);
+        let (l, dz) = brier(&p, label);
+        *co = score_coefficient(p, action);
+        *lo = l;
+        *gr = dz;
+    }
+    !failed
+}
+
+/// The second half of the causal pass of `record_fixed`: `g += Σ_t [dz_t φ_t + l_t Σ_{i<t} ψ_i]`
+/// with ψ_i = c_i φ_i, per decision the operations of `causal_sum_fixed` in the same order (so
+/// the same `g` bit for bit), with `g` and `Σ_{i<t} ψ_i` in `[S; N]` locals. `g` has `N` entries.
+#[inline(never)]
+fn accumulate_fixed<S: Scalar, const N: usize>(
+    features: &[S],
+    losses: &[S],
+    coefficients: &[S],
+    gradients: &[S],
+    g: &mut [S],
+) {
+    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
+    let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
+    let (rows, _) = features.as_chunks::<N>();
+    let records = losses.iter().zip(coefficients).zip(gradients);
+    for (phi, ((l, c), dz)) in rows.iter().zip(records) {
+        add_decision(&mut acc, &mut score_sum, phi, dz, l, c);
+    }
+    g.clone_from_slice(&acc);
 }
 
 /// `g −= Σ_{i<n} b_i c_i φ_i` with `N` features known at compile time, `b` yielding
@@ -275,9 +329,11 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         causal_sum_by_steps(self, theta, features, labels, actions, shifts, g, scratch)
     }
 
-    /// Records the score ψ_t = c_t φ_t by its coefficient `c_t = a_t − p_t` alone (one entry per
-    /// decision); with a compile-time dimension for 1 to 8 features (`causal_sum_fixed`), else
-    /// (and to report a failing decision) decision by decision with the checks of
+    /// Records the score ψ_t = c_t φ_t by its coefficient `c_t = a_t − p_t` alone (the first n
+    /// entries of `scores`, one per decision). With a compile-time dimension for 1 to 8 features,
+    /// in two loops (`record_fixed`, whose loss-gradient coefficients `dz_t` follow the `c_t` in
+    /// `scores`, then `accumulate_fixed`: the `g` of `causal_sum_fixed` bit for bit); else (and
+    /// to report a failing decision) decision by decision with the checks of
     /// [`EstimatorKernel::causal_step_trusted`].
     fn causal_sum_recorded<L: Borrow<usize>>(
         &self,
@@ -291,14 +347,19 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     ) -> Result<(), PolicyError> {
         let dim = Policy::<S>::feature_dim(self);
         let (x, y, a) = (features, labels, actions);
-        let record = |(lo, co): (&mut S, &mut S), l: S, c: &S| {
-            *lo = l.clone();
-            *co = c.clone();
-            l
-        };
         let done = by_feature_count!(dim, N => {
-            let records = fresh_records(losses, scores, actions.len());
-            causal_sum_fixed::<S, L, N, _>(theta, x, y, a, records, record, g)?
+            let n = actions.len();
+            losses.clear();
+            losses.resize(n, S::zero());
+            scores.clear();
+            scores.resize(2 * n, S::zero());
+            let (coefficients, gradients) = scores.split_at_mut(n);
+            let theta = fixed_theta::<S, N>(theta)?;
+            check_out("g", g, N)?;
+            record_fixed::<S, L, N>(theta, x, y, a, losses, coefficients, gradients) && {
+                accumulate_fixed::<S, N>(x, losses, coefficients, gradients, g);
+                true
+            }
         }, _ => false);
         if done {
             return Ok(());
@@ -439,6 +500,70 @@ mod tests {
                     }
                 };
                 assert_eq!(err, Err(first));
+            }
+        }
+    }
+
+    /// The recording pass (two loops for 1 to 8 features, the fallback for more) against the
+    /// default that records ψ_t as rows: the same `g` and losses bit for bit, ψ_t = c_t φ_t from
+    /// the recorded coefficients, and the same first error when a decision fails.
+    #[test]
+    fn recorded_pass_matches_the_default_bit_for_bit() {
+        use super::super::kernel::causal_sum_recording_rows;
+        use rand::{Rng, SeedableRng};
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let mut rng = KitRng::seed_from_u64(11);
+        for n in 1..=10 {
+            let pi = Logistic::new(n).unwrap();
+            for steps in [1, 2, 7, 60] {
+                let theta: Vec<f64> = (0..n).map(|_| 4.0 * rng.random::<f64>() - 2.0).collect();
+                let features: Vec<f64> = (0..n * steps)
+                    .map(|_| 2.0 * rng.random::<f64>() - 1.0)
+                    .collect();
+                let labels: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let mut actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let run = |actions: &[usize], fast: bool| {
+                    let (mut g, mut losses, mut scores) = (vec![0.5; n], vec![], vec![]);
+                    let r = if fast {
+                        pi.causal_sum_recorded(
+                            &theta,
+                            &features,
+                            &labels,
+                            actions,
+                            &mut g,
+                            &mut losses,
+                            &mut scores,
+                        )
+                    } else {
+                        causal_sum_recording_rows(
+                            &pi,
+                            &theta,
+                            &features,
+                            &labels,
+                            actions,
+                            &mut g,
+                            &mut losses,
+                            &mut scores,
+                        )
+                    };
+                    r.map(|()| (bits(&g), bits(&losses), scores))
+                };
+                let (g, losses, coefficients) = run(&actions, true).unwrap();
+                let (g_rows, losses_rows, rows) = run(&actions, false).unwrap();
+                assert_eq!(
+                    (&g, &losses),
+                    (&g_rows, &losses_rows),
+                    "n = {n}, {steps} steps"
+                );
+                for (t, row) in rows.chunks_exact(n).enumerate() {
+                    let phi = &features[t * n..(t + 1) * n];
+                    let psi: Vec<f64> = phi.iter().map(|x| coefficients[t] * x).collect();
+                    assert_eq!(bits(&psi), bits(row), "n = {n}, step {t}");
+                }
+                actions[steps / 2] = 2;
+                let err = run(&actions, true).map(|_| ());
+                assert_eq!(err, run(&actions, false).map(|_| ()));
+                assert!(matches!(err, Err(PolicyError::Action { action: 2, .. })));
             }
         }
     }
