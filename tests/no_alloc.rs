@@ -466,12 +466,13 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
             });
             weighted_counts.push(n);
         }
-        // The terms route allocates one scratch buffer per trajectory and the mean; the
-        // leave-one-out estimate only its result.
-        let fast = if kind == Baseline::LeaveOneOut {
-            1
-        } else {
-            m as u64 + 2
+        // Per call, never per step: the given baselines' pass allocates per trajectory its
+        // shifts, the logistic pass's records and its estimate, then the mean; the terms route
+        // one scratch buffer per trajectory and the mean; leave-one-out only its result.
+        let fast = match kind {
+            Baseline::LeaveOneOut => 1,
+            Baseline::Constant { .. } => 3 * m as u64 + 1,
+            _ => m as u64 + 2,
         };
         for (what, counts, max) in [
             ("baselined estimate", &estimate_counts, fast),

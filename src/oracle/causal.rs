@@ -49,7 +49,8 @@ where
     if trusted && ratio.is_none() && tail.is_none() {
         // The plain causal estimator: the whole pass in the policy (one loop it may specialise).
         let (rows, actions, labels) = (t.feature_data, t.actions, t.labels);
-        // Scratch only if the policy's pass asks for it (the logistic policy's does not).
+        // Scratch only if the policy's pass asks for it (the logistic policy's records its
+        // decisions there: one buffer per call).
         let mut scratch = Vec::new();
         policy
             .causal_sum_trusted(theta, rows, labels, actions, None, &mut g, &mut scratch)

@@ -14,7 +14,6 @@ use crate::problem::KitRng;
 use crate::sampling::{dyadic_uniform, sample_binary};
 use crate::scalar::{Real, Scalar};
 use std::borrow::Borrow;
-use std::iter::repeat;
 
 /// `z = θ·φ` with θ trusted (checked by the caller) and φ checked: its length, and its entries'
 /// finiteness — where non-finite numbers propagate through sums and products
@@ -91,56 +90,6 @@ fn add_decision<S: Scalar>(g: &mut [S], score_sum: &mut [S], phi: &[S], dz: &S, 
     }
 }
 
-/// The causal pass of eq. 3.15 for [`Logistic`] with `N` features known at compile time:
-/// per decision `g += ∇_θ l_t + l'_t Σ_{i<t} ψ_i` and `Σ_{i<t} ψ_i += ψ_t`, the operations of
-/// [`EstimatorKernel::causal_step_trusted`] in the same order, with `g` and `Σ_{i<t} ψ_i` in
-/// `[S; N]` locals (registers for `f64`) and fully unrolled loops.
-///
-/// `per_decision(e_t, l_t, c_t)` gets each decision's item of `extra`, its loss `l_t` and its score
-/// coefficient `c_t = a_t − p_t` (ψ_t = c_t φ_t), and returns the `l'_t` that weighs
-/// `Σ_{i<t} ψ_i`: `l_t` (eq. 3.15) or `l_t + δ_t` (a baseline's loss shift, see
-/// [`EstimatorKernel::causal_sum_trusted`]). The pass stops at the shortest of the decisions
-/// and `extra`.
-///
-/// The per-decision checks are not branches: their failures are collected in a flag, and
-/// `Ok(false)` (with `g` untouched) tells the caller that some decision failed, for the default
-/// pass to find and report the first failure.
-///
-/// Not inlined: a function of its own per dimension and per `per_decision`, whose accumulators
-/// the register allocator sees alone.
-#[inline(never)]
-fn causal_sum_fixed<S: Real, L: Borrow<usize>, const N: usize, E>(
-    theta: &[S],
-    features: &[S],
-    labels: &[L],
-    actions: &[usize],
-    extra: impl Iterator<Item = E>,
-    mut per_decision: impl FnMut(E, S, &S) -> S,
-    g: &mut [S],
-) -> Result<bool, PolicyError> {
-    let theta = fixed_theta::<S, N>(theta)?;
-    check_out("g", g, N)?;
-    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
-    let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
-    let (rows, _) = features.as_chunks::<N>();
-    let mut failed = false;
-    for (((phi, label), action), e) in rows.iter().zip(labels).zip(actions).zip(extra) {
-        let (label, action) = (*label.borrow(), *action);
-        let z = crate::scalar::dot(theta, phi);
-        failed |= (label > 1) | (action > 1) | !finite_logit(&z);
-        let p = sigmoid_of_finite(&z);
-        let (l, dz) = brier(&p, label);
-        let c = score_coefficient(p, action);
-        let l = per_decision(e, l, &c);
-        add_decision(&mut acc, &mut score_sum, phi, &dz, &l, &c);
-    }
-    if failed {
-        return Ok(false);
-    }
-    g.clone_from_slice(&acc);
-    Ok(true)
-}
-
 /// One decision of the causal pass on a validated θ and φ, with the checks of
 /// [`EstimatorKernel::causal_step_trusted`]: adds `∇_θ l_t + l_t Σ_{i<t} ψ_i` to `g` and ψ_t to
 /// `score_sum`, and returns `l_t` with the score's coefficient `c_t = a_t − p_t` (ψ_t = c_t φ_t).
@@ -169,15 +118,16 @@ fn causal_step_coefficient<S: Real>(
 /// The first half of the causal pass of eq. 3.15 for [`Logistic`] with `N` features known at
 /// compile time, the decisions alone: per decision t its loss `l_t`, its score coefficient
 /// `c_t = a_t − p_t` (ψ_t = c_t φ_t) and its loss-gradient coefficient
-/// `dz_t = 4(p_t − y_t)p_t(1 − p_t)` (∇_θ l_t = dz_t φ_t), written into `losses`, `coefficients` and `gradients` (the pass stops
-/// at the shortest of the decisions and the three). `accumulate_fixed` then sums them as
-/// `causal_sum_fixed` does in one loop.
+/// `dz_t = 4(p_t − y_t)p_t(1 − p_t)` (∇_θ l_t = dz_t φ_t), written into `losses`,
+/// `coefficients` and `gradients` (the pass stops at the shortest of the decisions and the
+/// three). `accumulate_fixed` then sums them.
 ///
 /// Two loops instead of one: no accumulator is live across the call to `exp`, which would
 /// otherwise keep them in memory around it; the second loop has no call.
 ///
-/// As in `causal_sum_fixed`, the per-decision checks are collected in a flag: `false` tells the
-/// caller that some decision failed (the records are then unspecified).
+/// The per-decision checks are not branches: their failures are collected in a flag, and `false`
+/// tells the caller that some decision failed (the records are then unspecified), for the
+/// default pass to find and report the first failure.
 #[inline(never)]
 fn record_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     theta: &[S; N],
@@ -207,8 +157,10 @@ fn record_fixed<S: Real, L: Borrow<usize>, const N: usize>(
 }
 
 /// The second half of the causal pass of `record_fixed`: `g += Σ_t [dz_t φ_t + l_t Σ_{i<t} ψ_i]`
-/// with ψ_i = c_i φ_i, per decision the operations of `causal_sum_fixed` in the same order (so
-/// the same `g` bit for bit), with `g` and `Σ_{i<t} ψ_i` in `[S; N]` locals. `g` has `N` entries.
+/// with ψ_i = c_i φ_i, per decision the operations of [`EstimatorKernel::causal_step_trusted`]
+/// in the same order (`add_decision`; so the same `g` bit for bit), with `g` and `Σ_{i<t} ψ_i`
+/// in `[S; N]` locals (registers for `f64`). `g` has `N` entries; `l_t` may carry a baseline's
+/// shift (it weighs `Σ_{i<t} ψ_i` only).
 #[inline(never)]
 fn accumulate_fixed<S: Scalar, const N: usize>(
     features: &[S],
@@ -300,8 +252,9 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         Ok(l)
     }
 
-    /// With a compile-time dimension for 1 to 8 features (`causal_sum_fixed`), else (and to
-    /// report a failing decision) the default loop over
+    /// With a compile-time dimension for 1 to 8 features in two loops (`record_fixed`, with the
+    /// records in `scratch`, then `accumulate_fixed`, each loss shifted first when `shifts` is
+    /// given), else (and to report a failing decision) the default loop over
     /// [`EstimatorKernel::causal_step_trusted`].
     #[inline]
     fn causal_sum_trusted<L: Borrow<usize>>(
@@ -314,12 +267,25 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         g: &mut [S],
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
-        let (x, y, a) = (features, labels, actions);
-        let done = by_feature_count!(Policy::<S>::feature_dim(self), N => match shifts {
-            None => causal_sum_fixed::<S, L, N, _>(theta, x, y, a, repeat(()), |(), l, _| l, g)?,
-            Some(shifts) => {
-                let shifted = |delta: &S, l: S, _: &S| l + delta;
-                causal_sum_fixed::<S, L, N, _>(theta, x, y, a, shifts.iter(), shifted, g)?
+        let (x, y) = (features, labels);
+        let done = by_feature_count!(Policy::<S>::feature_dim(self), N => {
+            // The shifted pass stops at the shorter of the decisions and the shifts.
+            let n = shifts.map_or(actions.len(), |d| d.len().min(actions.len()));
+            scratch.clear();
+            scratch.resize(3 * n, S::zero());
+            let (losses, rest) = scratch.split_at_mut(n);
+            let (coefficients, gradients) = rest.split_at_mut(n);
+            let theta = fixed_theta::<S, N>(theta)?;
+            check_out("g", g, N)?;
+            let a = &actions[..n];
+            record_fixed::<S, L, N>(theta, x, y, a, losses, coefficients, gradients) && {
+                if let Some(shifts) = shifts {
+                    for (l, delta) in losses.iter_mut().zip(shifts) {
+                        *l = l.clone() + delta;
+                    }
+                }
+                accumulate_fixed::<S, N>(x, losses, coefficients, gradients, g);
+                true
             }
         }, _ => false);
         if done {
@@ -332,7 +298,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     /// Records the score ψ_t = c_t φ_t by its coefficient `c_t = a_t − p_t` alone (the first n
     /// entries of `scores`, one per decision). With a compile-time dimension for 1 to 8 features,
     /// in two loops (`record_fixed`, whose loss-gradient coefficients `dz_t` follow the `c_t` in
-    /// `scores`, then `accumulate_fixed`: the `g` of `causal_sum_fixed` bit for bit); else (and
+    /// `scores`, then `accumulate_fixed`: the plain pass's `g` bit for bit); else (and
     /// to report a failing decision) decision by decision with the checks of
     /// [`EstimatorKernel::causal_step_trusted`].
     fn causal_sum_recorded<L: Borrow<usize>>(
