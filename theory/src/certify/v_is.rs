@@ -10,7 +10,7 @@ use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::estimator::per_decision;
 use ilopt::toy::{PolicyTable, ToyMdp, ToyProblem};
-use std::cell::RefCell;
+use std::cell::{Ref, RefCell};
 
 /// `∂²V_IS/∂θ′²` at (θ in `charts[0]` at `b[0]`, θ′ in `charts[1]` at `b[1]`), where
 /// `V_IS(θ, θ′) = Σ_τ̄ [p′ g′² − 2p g′ g + p²/p′ g²]` (p = p(τ̄; θ), g = g(θ, τ̄), primes at θ′)
@@ -30,57 +30,52 @@ pub fn v_is_second(
     Curvature::new(mdp, pd, &p3, weighting, None).natural(charts, b)
 }
 
-/// The terms at the old point θ that [`v_is_total`] needs: its policy table and its prefixes'
-/// terms (the same for every θ′).
-struct OldPoint<S> {
+/// The terms of one point (θ or θ′) that [`v_is_total`] needs: its policy table and its
+/// prefixes' terms.
+struct PointTerms<S> {
     table: PolicyTable<S>,
     terms: Vec<PrefixTerms<S>>,
 }
 
-impl<S: Scalar> OldPoint<S> {
-    /// The table and prefix terms at `x_old` in `chart`, with the estimator `g_b` when a
-    /// `baseline` is given.
+impl<S: Scalar> PointTerms<S> {
+    /// The table and prefix terms at `x` in `chart`, with the estimator `g_b` when a `baseline`
+    /// is given.
     fn new(
         mdp: &ToyMdp,
         problem: &ToyProblem<S>,
         baseline: Option<&S>,
         chart: Chart,
-        x_old: &S,
+        x: &S,
     ) -> Result<Self, String> {
-        let table = table_at(mdp, problem, chart, x_old)?;
+        let table = table_at(mdp, problem, chart, x)?;
         let terms = prefix_terms_with(problem, &table, baseline)?;
         Ok(Self { table, terms })
     }
 }
 
-/// `V(θ, θ′) = Σ_τ̄ p(τ̄; θ′) (g(θ′, τ̄) − g̃(θ → θ′, τ̄))²` with θ given by its terms `old` and
-/// θ′ at `x_new` in `chart_new`, in any scalar. The old-point term g̃ is `w g(θ, τ̄)` with the
+/// `V(θ, θ′) = Σ_τ̄ p(τ̄; θ′) (g(θ′, τ̄) − g̃(θ → θ′, τ̄))²` from the terms `old` at θ and `new`
+/// at θ′, in any scalar. The old-point term g̃ is `w g(θ, τ̄)` with the
 /// prefix weight w = p(τ̄; θ)/p(τ̄; θ′) (trajectory), or the engine's per-decision form
-/// ([`per_decision`]). With a `baseline` b the estimator is `g_b = g − b Σ_i ψ_i` at both points
-/// (`old` must have been built with the same b) and the trajectory weight multiplies
+/// ([`per_decision`]). If `baselined`, both points' terms are of the estimator
+/// `g_b = g − b Σ_i ψ_i` with the same constant b, and the trajectory weight multiplies
 /// `g_b(θ, τ̄)` (docs/math.md §9; trajectory weights only). The factored square keeps enclosures
 /// tight near θ′ = θ, where an expanded form would cancel.
 fn v_is_total<S: Scalar>(
-    mdp: &ToyMdp,
-    problem: &ToyProblem<S>,
     weighting: Weighting,
-    baseline: Option<&S>,
-    old: &OldPoint<S>,
-    chart_new: Chart,
-    x_new: &S,
+    baselined: bool,
+    old: &PointTerms<S>,
+    new: &PointTerms<S>,
 ) -> Result<S, String> {
-    let t_old = &old.table;
-    let t_new = table_at(mdp, problem, chart_new, x_new)?;
-    if baseline.is_some() && weighting != Weighting::Trajectory {
+    let (t_old, t_new) = (&old.table, &new.table);
+    if baselined && weighting != Weighting::Trajectory {
         return Err("the baselined (A4) quantity is written for trajectory weights".into());
     }
-    let at = &old.terms;
-    let prime = prefix_terms_with(problem, &t_new, baseline)?;
+    let (at, prime) = (&old.terms, &new.terms);
     if at.len() != prime.len() {
         return Err("prefix sets differ".into());
     }
     let mut total = S::zero();
-    for (a, q) in at.iter().zip(&prime) {
+    for (a, q) in at.iter().zip(prime) {
         if a.states != q.states || a.actions != q.actions {
             return Err("prefix order differs".into());
         }
@@ -110,15 +105,16 @@ fn bits(x: &Interval) -> [u64; 2] {
     [x.inf().to_bits(), x.sup().to_bits()]
 }
 
-/// The last old point's terms, kept under its chart and bits (see [`Curvature`]).
-type KeptOld<S> = RefCell<Option<((Chart, [u64; 2]), OldPoint<S>)>>;
+/// The last point's terms, kept under its chart and bits (see [`Curvature`]).
+type Kept<S> = RefCell<Option<((Chart, [u64; 2]), PointTerms<S>)>>;
 
 /// The enclosures of `∂²V_IS/∂θ′²` of one MDP, weighting and baseline, box after box.
 ///
-/// Consecutive boxes of a branch-and-bound often share their θ interval (a box split along θ′)
-/// and a box's midpoint is often the point at which its lower bound was just evaluated, so the
-/// last old point's terms (in each jet order) and the last point value are kept under the exact
-/// bits of their inputs and reused: every result is the one computed afresh, bit for bit.
+/// Consecutive boxes of a branch-and-bound often share their θ or their θ′ interval (the two
+/// halves of a split box) and a box's midpoint is often the point at which its lower bound was
+/// just evaluated, so the last terms at θ and at θ′ (in each jet order) and the last point value
+/// are kept under the exact bits of their inputs and reused: every result is the one computed
+/// afresh, bit for bit.
 pub(crate) struct Curvature<'a> {
     mdp: &'a ToyMdp,
     pd: &'a ToyProblem<SecondOrder>,
@@ -126,8 +122,10 @@ pub(crate) struct Curvature<'a> {
     weighting: Weighting,
     base2: Option<SecondOrder>,
     base3: Option<ThirdOrder>,
-    old2: KeptOld<SecondOrder>,
-    old3: KeptOld<ThirdOrder>,
+    old2: Kept<SecondOrder>,
+    new2: Kept<SecondOrder>,
+    old3: Kept<ThirdOrder>,
+    new3: Kept<ThirdOrder>,
     at_point: RefCell<Option<(([Chart; 2], [[u64; 2]; 2]), Interval)>>,
 }
 
@@ -149,47 +147,41 @@ impl<'a> Curvature<'a> {
             base2: baseline.map(SecondOrder::from_rational),
             base3: baseline.map(ThirdOrder::from_rational),
             old2: RefCell::new(None),
+            new2: RefCell::new(None),
             old3: RefCell::new(None),
+            new3: RefCell::new(None),
             at_point: RefCell::new(None),
         }
     }
 
-    /// `f(old point's terms)`, building them only if the kept ones are not for (`chart`, `x`).
-    fn with_old<S: Scalar, R>(
+    /// The terms at `x` in `chart` (the point `seed(x)`), built only if the kept ones are not
+    /// for (`chart`, `x`).
+    fn terms<'c, S: Scalar>(
         &self,
-        kept: &KeptOld<S>,
+        kept: &'c Kept<S>,
         problem: &ToyProblem<S>,
         baseline: Option<&S>,
         chart: Chart,
         x: &Interval,
         seed: impl FnOnce(&Interval) -> S,
-        f: impl FnOnce(&OldPoint<S>) -> Result<R, String>,
-    ) -> Result<R, String> {
+    ) -> Result<Ref<'c, PointTerms<S>>, String> {
         let key = (chart, bits(x));
-        let mut kept = kept.borrow_mut();
-        if kept.as_ref().is_none_or(|(k, _)| *k != key) {
-            *kept = None;
-            let old = OldPoint::new(self.mdp, problem, baseline, chart, &seed(x))?;
-            *kept = Some((key, old));
+        if kept.borrow().as_ref().is_none_or(|(k, _)| *k != key) {
+            let terms = PointTerms::new(self.mdp, problem, baseline, chart, &seed(x))?;
+            *kept.borrow_mut() = Some((key, terms));
         }
-        f(&kept.as_ref().expect("just kept").1)
+        Ok(Ref::map(kept.borrow(), |k| {
+            &k.as_ref().expect("just kept").1
+        }))
     }
 
     /// The natural interval extension of `∂²V_IS/∂θ′²` on the box `b` of the chart region
     /// `charts` (θ in `charts[0]` at `b[0]`, θ′ in `charts[1]` at `b[1]`).
     fn natural(&self, charts: &[Chart], b: &[Interval]) -> Result<Interval, String> {
         let base = self.base2.as_ref();
-        let total = self.with_old(&self.old2, self.pd, base, charts[0], &b[0], lift2, |old| {
-            v_is_total(
-                self.mdp,
-                self.pd,
-                self.weighting,
-                base,
-                old,
-                charts[1],
-                &var2(b[1]),
-            )
-        })?;
+        let old = self.terms(&self.old2, self.pd, base, charts[0], &b[0], lift2)?;
+        let new = self.terms(&self.new2, self.pd, base, charts[1], &b[1], |x| var2(*x))?;
+        let total = v_is_total(self.weighting, base.is_some(), &old, &new)?;
         let (_, vx, vxx) = parts(&total);
         Ok(theta_second(charts[1], b[1], vx, vxx))
     }
@@ -211,11 +203,11 @@ impl<'a> Curvature<'a> {
     /// the box `b` (see [`v_is_second_mean_value`]).
     fn jet(&self, charts: &[Chart], b: &[Interval]) -> Result<[Interval; 3], String> {
         let base = self.base3.as_ref();
-        let seed = |x: &Interval| Dual::variable(lift2(x), 0, 2);
-        let total = self.with_old(&self.old3, self.p3, base, charts[0], &b[0], seed, |old| {
-            let x2 = Dual::variable(var2(b[1]), 1, 2);
-            v_is_total(self.mdp, self.p3, self.weighting, base, old, charts[1], &x2)
-        })?;
+        let old_seed = |x: &Interval| Dual::variable(lift2(x), 0, 2);
+        let new_seed = |x: &Interval| Dual::variable(var2(*x), 1, 2);
+        let old = self.terms(&self.old3, self.p3, base, charts[0], &b[0], old_seed)?;
+        let new = self.terms(&self.new3, self.p3, base, charts[1], &b[1], new_seed)?;
+        let total = v_is_total(self.weighting, base.is_some(), &old, &new)?;
         let (_, v2, v22) = parts(total.value());
         let grad = total.gradient_padded(2);
         let (_, v12, v122) = parts(&grad[0]);
