@@ -108,6 +108,9 @@ fn bits(x: &Interval) -> [u64; 2] {
 /// The last point's terms, kept under its chart and bits (see [`Curvature`]).
 type Kept<S> = RefCell<Option<((Chart, [u64; 2]), PointTerms<S>)>>;
 
+/// A point of a chart region (charts and the bits of the two coordinates).
+type PointKey = ([Chart; 2], [[u64; 2]; 2]);
+
 /// The enclosures of `∂²V_IS/∂θ′²` of one MDP, weighting and baseline, box after box.
 ///
 /// Consecutive boxes of a branch-and-bound often share their θ or their θ′ interval (the two
@@ -126,7 +129,7 @@ pub(crate) struct Curvature<'a> {
     new2: Kept<SecondOrder>,
     old3: Kept<ThirdOrder>,
     new3: Kept<ThirdOrder>,
-    at_point: RefCell<Option<(([Chart; 2], [[u64; 2]; 2]), Interval)>>,
+    at_point: RefCell<Option<(PointKey, Interval)>>,
 }
 
 impl<'a> Curvature<'a> {
