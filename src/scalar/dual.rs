@@ -8,16 +8,24 @@
 //! The gradient may be stored shorter than `d`: missing trailing entries are zero. Constants
 //! (`Dual::constant`, `zero()`, `one()`) store an empty gradient, so they combine with duals of any
 //! dimension.
+//!
+//! Up to two gradient entries are stored inline (no allocation): the jets the rigorous constants
+//! nest three deep have at most two variables per level, and a heap allocation per value would
+//! dominate their arithmetic. Longer gradients spill to the heap; the arithmetic is the same.
 
 use super::{BigRational, Real, Scalar, Sqrt};
+use smallvec::SmallVec;
 use std::cmp::Ordering;
 use std::ops::{Add, AddAssign, Div, DivAssign, Mul, MulAssign, Neg, Sub, SubAssign};
+
+/// The gradient's storage: up to two entries inline, more on the heap (module docs).
+type Gradient<S> = SmallVec<[S; 2]>;
 
 /// A value with its gradient (forward-mode derivative with respect to `d` seeded variables).
 #[derive(Clone, Debug)]
 pub struct Dual<S> {
     v: S,
-    g: Vec<S>,
+    g: Gradient<S>,
 }
 
 impl<S: Scalar> Dual<S> {
@@ -25,14 +33,14 @@ impl<S: Scalar> Dual<S> {
     pub fn new(value: S, gradient: Vec<S>) -> Self {
         Self {
             v: value,
-            g: gradient,
+            g: Gradient::from_vec(gradient),
         }
     }
     /// A constant (zero gradient).
     pub fn constant(value: S) -> Self {
         Self {
             v: value,
-            g: Vec::new(),
+            g: Gradient::new(),
         }
     }
     /// The `i`-th of `n` independent variables, with value `value` (gradient `eᵢ`).
@@ -41,7 +49,7 @@ impl<S: Scalar> Dual<S> {
     /// If `i >= n`.
     pub fn variable(value: S, i: usize, n: usize) -> Self {
         assert!(i < n, "variable index {i} out of {n}");
-        let mut g = vec![S::zero(); n];
+        let mut g = Gradient::from_elem(S::zero(), n);
         g[i] = S::one();
         Self { v: value, g }
     }
@@ -64,7 +72,7 @@ impl<S: Scalar> Dual<S> {
     }
     /// The gradient padded with zeros to length `n`.
     pub fn gradient_padded(&self, n: usize) -> Vec<S> {
-        let mut g = self.g.clone();
+        let mut g = self.g.to_vec();
         g.resize(n.max(g.len()), S::zero());
         g
     }
@@ -83,7 +91,7 @@ impl<S: Scalar> Dual<S> {
     }
 }
 
-fn zip_with<S: Scalar>(a: &[S], b: &[S], f: impl Fn(Option<&S>, Option<&S>) -> S) -> Vec<S> {
+fn zip_with<S: Scalar>(a: &[S], b: &[S], f: impl Fn(Option<&S>, Option<&S>) -> S) -> Gradient<S> {
     (0..a.len().max(b.len()))
         .map(|i| f(a.get(i), b.get(i)))
         .collect()

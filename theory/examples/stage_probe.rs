@@ -1,12 +1,13 @@
 //! Run one stage of the theorem table alone, for profiling and before/after comparisons.
 use ilopt::scalar::BigRational;
 use ilopt_theory::certify::box_constants::compute;
+use ilopt_theory::checks::baselined_storm::choose;
 use ilopt_theory::checks::constants::toy_row;
 use ilopt_theory::checks::{second_toy, statistical};
 use ilopt_theory::protocol::{FAMILY_ALPHA, Profile, STATISTICAL_CLAIMS};
 use ilopt_theory::report::markdown;
 use ilopt_theory::stats::bonferroni;
-use ilopt_theory::suite::{global_constants, m1_tied};
+use ilopt_theory::suite::{global_constants, global_sizes, m1_tied};
 
 /// This process's user CPU seconds so far (Linux: `/proc/self/stat`, clock ticks of 1/100 s).
 fn user_cpu() -> f64 {
@@ -113,6 +114,23 @@ fn main() {
             let m1 = m1_tied();
             let g = global_constants(&m1, Profile::Full.sizes()).unwrap();
             println!("{g:?}");
+        }
+        "global-quick" => {
+            // The "global constants" stage of the quick profile.
+            let m1 = m1_tied();
+            let u = user_cpu();
+            let g = global_constants(&m1, Profile::Quick.sizes()).unwrap();
+            eprintln!("global constants user CPU: {:.2} s", user_cpu() - u);
+            println!("{g:?}");
+        }
+        "choose-2b" => {
+            // The "rows 2.b (constants)" stage of the quick profile.
+            let m1 = m1_tied();
+            let u = user_cpu();
+            let c = choose(&m1, global_sizes(Profile::Quick.sizes())).unwrap();
+            eprintln!("rows 2.b constants user CPU: {:.2} s", user_cpu() - u);
+            println!("{:?} {:?}", c.grid, c.b_star);
+            println!("{:?} {:?}", c.constants.sigma2, c.constants.l_tilde);
         }
         "storm" => {
             let m1 = m1_tied();

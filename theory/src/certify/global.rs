@@ -25,7 +25,7 @@ use crate::certify::charts::{
     theta_first, theta_second, var2, verify_charts,
 };
 use crate::certify::recheck::{Coverage, Quantity, Recheck, recheck};
-use crate::certify::v_is::{ThirdOrder, v_is_second_mean_value};
+use crate::certify::v_is::{Curvature, ThirdOrder};
 use crate::record::certificate::Chart;
 use crate::record::constant::{Constant, Provenance};
 use ilopt::problem::Weighting;
@@ -151,8 +151,9 @@ pub fn l_tilde(
     is_tied_1d(mdp)?;
     let pd = ToyProblem::<SecondOrder>::new(mdp);
     let p3 = ToyProblem::<ThirdOrder>::new(mdp);
+    let curvature = Curvature::new(mdp, &pd, &p3, weighting, None);
     let f = |charts: &[Chart], b: &[Interval]| -> Result<Interval, String> {
-        Ok(v_is_second_mean_value(mdp, &pd, &p3, weighting, charts, b)?.abs())
+        Ok(curvature.mean_value(charts, b)?.abs())
     };
     let regions = over_charts(2, &f, tol, max_boxes)?;
     let (name, what) = match weighting {
@@ -182,6 +183,7 @@ pub fn recheck_l_tilde(mdp: &ToyMdp, weighting: Weighting, c: &Constant) -> Resu
     verify_charts(&c.charts, 2).ok_or("the regions do not cover ℝ² or a partition is invalid")?;
     let pd = ToyProblem::<SecondOrder>::new(mdp);
     let p3 = ToyProblem::<ThirdOrder>::new(mdp);
+    let curvature = Curvature::new(mdp, &pd, &p3, weighting, None);
     let mut sup = f64::NEG_INFINITY;
     for r in &c.charts {
         for b in &r.bound.certificate {
@@ -190,7 +192,7 @@ pub fn recheck_l_tilde(mdp: &ToyMdp, weighting: Weighting, c: &Constant) -> Resu
                 .iter()
                 .map(|[l, h]| Interval::try_from((*l, *h)).map_err(|e| format!("{e:?}")))
                 .collect::<Result<_, _>>()?;
-            let e = v_is_second_mean_value(mdp, &pd, &p3, weighting, &r.charts, &iv)?.abs();
+            let e = curvature.mean_value(&r.charts, &iv)?.abs();
             if e.sup().is_nan() || e.sup() > b.enclosure[1] {
                 return Err(format!(
                     "box {:?} of {:?}: re-evaluated sup {} > recorded {}",

@@ -25,9 +25,10 @@ use crate::certify::charts::{
     table_at, verify_charts,
 };
 use crate::certify::recheck::{Coverage, Quantity, Recheck, recheck};
-use crate::certify::v_is::{ThirdOrder, v_is_second_mean_value_baselined};
+use crate::certify::v_is::{Curvature, ThirdOrder};
 use crate::record::certificate::Chart;
 use crate::record::constant::{Constant, Provenance};
+use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Interval, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
 
@@ -77,8 +78,9 @@ pub fn l_tilde_baselined(
     is_tied_1d(mdp)?;
     let pd = ToyProblem::<SecondOrder>::new(mdp);
     let p3 = ToyProblem::<ThirdOrder>::new(mdp);
+    let curvature = Curvature::new(mdp, &pd, &p3, Weighting::Trajectory, Some(b));
     let f = |charts: &[Chart], x: &[Interval]| -> Result<Interval, String> {
-        Ok(v_is_second_mean_value_baselined(mdp, &pd, &p3, b, charts, x)?.abs())
+        Ok(curvature.mean_value(charts, x)?.abs())
     };
     Ok(global_constant(
         "L̃_b",
