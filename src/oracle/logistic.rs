@@ -372,21 +372,32 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
 mod tests {
     use super::*;
 
+    /// A random θ ∈ [−2, 2)ⁿ, `steps` rows φ ∈ [−1, 1)ⁿ, and labels and actions in {0, 1}.
+    fn random_trajectory(
+        rng: &mut KitRng,
+        n: usize,
+        steps: usize,
+    ) -> (Vec<f64>, Vec<f64>, Vec<usize>, Vec<usize>) {
+        use rand::Rng;
+        let theta = (0..n).map(|_| 4.0 * rng.random::<f64>() - 2.0).collect();
+        let features = (0..n * steps)
+            .map(|_| 2.0 * rng.random::<f64>() - 1.0)
+            .collect();
+        let labels = (0..steps).map(|_| rng.random_range(0..2)).collect();
+        let actions = (0..steps).map(|_| rng.random_range(0..2)).collect();
+        (theta, features, labels, actions)
+    }
+
     /// The fixed-dimension causal pass (1 to 8 features) and the fallback (more features) against
     /// the default decision-by-decision pass: bit-for-bit, and the same first error.
     #[test]
     fn causal_sum_matches_the_default_bit_for_bit() {
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         let mut rng = KitRng::seed_from_u64(9);
         for n in 1..=10 {
             let pi = Logistic::new(n).unwrap();
             for steps in [1, 2, 7, 60] {
-                let theta: Vec<f64> = (0..n).map(|_| 4.0 * rng.random::<f64>() - 2.0).collect();
-                let features: Vec<f64> = (0..n * steps)
-                    .map(|_| 2.0 * rng.random::<f64>() - 1.0)
-                    .collect();
-                let labels: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
-                let actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let (theta, features, labels, actions) = random_trajectory(&mut rng, n, steps);
                 let run = |features: &[f64], labels: &[usize], actions: &[usize], fast: bool| {
                     let mut g = vec![0.0; n];
                     let mut scratch = Vec::new();
@@ -476,18 +487,13 @@ mod tests {
     #[test]
     fn recorded_pass_matches_the_default_bit_for_bit() {
         use super::super::kernel::causal_sum_recording_rows;
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let mut rng = KitRng::seed_from_u64(11);
         for n in 1..=10 {
             let pi = Logistic::new(n).unwrap();
             for steps in [1, 2, 7, 60] {
-                let theta: Vec<f64> = (0..n).map(|_| 4.0 * rng.random::<f64>() - 2.0).collect();
-                let features: Vec<f64> = (0..n * steps)
-                    .map(|_| 2.0 * rng.random::<f64>() - 1.0)
-                    .collect();
-                let labels: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
-                let mut actions: Vec<usize> = (0..steps).map(|_| rng.random_range(0..2)).collect();
+                let (theta, features, labels, mut actions) = random_trajectory(&mut rng, n, steps);
                 let run = |actions: &[usize], fast: bool| {
                     let (mut g, mut losses, mut scores) = (vec![0.5; n], vec![], vec![]);
                     let r = if fast {
