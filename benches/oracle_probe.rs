@@ -15,10 +15,14 @@
 //! the same roll-out and causal estimate with the two-action softmax policy (rows `(−θ/2, θ/2)`,
 //! the same `π(1|s)`), compared with `spec`. Mode `specfresh`: the specialised roll-out into
 //! freshly reserved storage, as the generic roll-out returns (it reuses one buffer otherwise).
+//! Modes `pairs` and `loo`: the causal estimate alone over a pair of the generic trajectories
+//! (seeds s and s + 1), the plain mean of the pair against the leave-one-out baseline
+//! (`Baselined`, m = 2), compared with each other.
 
 #[path = "support/specialised.rs"]
 mod specialised;
 
+use ilopt::baseline::{Baseline, Baselined};
 use ilopt::expert::lqr::LqrExpert;
 use ilopt::policy::{Logistic, Softmax};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
@@ -54,7 +58,7 @@ fn oracle_once<P: IlProblem<f64>>(
 }
 
 /// Every mode the probe knows.
-const MODES: [&str; 8] = [
+const MODES: [&str; 10] = [
     "generic",
     "spec",
     "rollout",
@@ -63,6 +67,8 @@ const MODES: [&str; 8] = [
     "specest",
     "softmax",
     "specfresh",
+    "pairs",
+    "loo",
 ];
 
 /// Report a bad argument and exit with status 2.
@@ -131,6 +137,17 @@ fn main() {
         })
         .collect();
 
+    let plain_pairs = Baselined::new(p.clone(), 2, &Baseline::None).expect("pairs");
+    let loo_pairs = Baselined::new(p.clone(), 2, &Baseline::LeaveOneOut).expect("pairs");
+    let pair_of = |seed: u64| {
+        let next = (seed + 1) % SEEDS;
+        vec![
+            generic_trajectories[seed as usize].clone(),
+            generic_trajectories[next as usize].clone(),
+        ]
+    };
+    let pairs: Vec<_> = (0..SEEDS).map(pair_of).collect();
+
     let mut t = Trajectory::default();
     let modes: Vec<&str> = modes.split(',').collect();
     // Per round, each mode's time: ratios within a round are immune to the machine's slow phases.
@@ -173,6 +190,19 @@ fn main() {
                                     .expect("estimate"),
                             )[0];
                             tr.len() as u64
+                        }
+                        "pairs" | "loo" => {
+                            let pair = &pairs[seed as usize];
+                            let o = if mode == "loo" {
+                                &loo_pairs
+                            } else {
+                                &plain_pairs
+                            };
+                            acc += black_box(
+                                o.estimate(th, pair, EstimatorForm::Causal, &mut cost)
+                                    .expect("estimate"),
+                            )[0];
+                            pair.iter().map(|tr| tr.len() as u64).sum()
                         }
                         "spec" => {
                             fast.rollout(black_box(&THETA), &mut rng, &mut t);
@@ -241,6 +271,7 @@ fn main() {
         ("rollout", "specroll"),
         ("estimate", "specest"),
         ("softmax", "spec"),
+        ("loo", "pairs"),
     ] {
         let mut ratios: Vec<f64> = per_round
             .iter()

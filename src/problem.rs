@@ -245,20 +245,20 @@ pub trait IlProblem<S: Scalar> {
         Ok(DVector::from_vec(g))
     }
 
-    /// The causal estimator of eq. 3.15 at θ on one trajectory with its scores recorded
-    /// ([`RecordedPass`]): the plain estimate g, every scored decision's loss-to-go `L_i`, and the
-    /// scores ψ_i in the problem's own form, so that [`IlProblem::subtract_recorded`] can form
-    /// `g_b = g − Σ_i b_i ψ_i` for baselines known only after the pass (leave-one-out in
-    /// [`crate::baseline::Baselined`]). Counts the same gradient evaluations as
-    /// [`IlProblem::estimate`].
+    /// The decisions of one trajectory at θ recorded for the causal estimator of eq. 3.15
+    /// ([`RecordedPass`]): every step's loss `l_t` (the absorbing tail as one more), the number
+    /// of scored decisions, and what [`IlProblem::estimate_recorded`] needs to sum the estimate
+    /// with per-step losses chosen afterwards — how a baseline known only after every
+    /// trajectory's pass enters (leave-one-out in [`crate::baseline::Baselined`]). Counts the
+    /// same gradient evaluations as [`IlProblem::estimate`].
     ///
-    /// The default fills `out` from [`IlProblem::decision_terms`] (ψ_i as rows of d entries); a
-    /// problem may override it with a faster pass, together with
-    /// [`IlProblem::subtract_recorded`].
+    /// The default fills `out` from [`IlProblem::decision_terms`] (the plain estimate and ψ_i as
+    /// rows of d entries); a problem may override it with a faster pass, together with
+    /// [`IlProblem::estimate_recorded`].
     ///
     /// # Errors
     /// As [`IlProblem::decision_terms`].
-    fn recorded_estimate(
+    fn record_decisions(
         &self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
@@ -270,19 +270,21 @@ pub trait IlProblem<S: Scalar> {
         Ok(())
     }
 
-    /// `g −= Σ_i b_i ψ_i` over the n scored decisions of `recorded`, which
-    /// [`IlProblem::recorded_estimate`] filled on `trajectory`: the baseline's part of
-    /// `g_b = g − Σ_i b_i ψ_i`. `b` yields the baselines from the last decision to the first,
-    /// `b_{n−1}, …, b_0` (0-based). The default reads ψ_i as rows of d entries.
-    fn subtract_recorded(
+    /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` on `trajectory` from what
+    /// [`IlProblem::record_decisions`] recorded there (s its scored decisions), with per-step
+    /// losses `l'` in place of the recorded ones: one per entry of [`RecordedPass::losses`]
+    /// (`losses` must have that length). With the recorded losses it is the causal estimate of
+    /// eq. 3.15; with `l'_t = l_t + b_{t−1} − b_t` it is the baselined `g − Σ_i b_i ψ_i`
+    /// ([`crate::baseline`], summation by parts). The default sums the rows of the default form.
+    fn estimate_recorded(
         &self,
         trajectory: &Self::Trajectory,
-        recorded: &RecordedPass<S>,
-        b: impl Iterator<Item = S>,
+        recorded: &mut RecordedPass<S>,
+        losses: &[S],
         g: &mut [S],
     ) {
         let _ = trajectory;
-        recorded.subtract_rows(b, g);
+        recorded.sum_rows(losses, g);
     }
 
     /// `Σ_{t=1}^{T−1} l(s_t, θ)` on a trajectory: an unbiased estimate of F(θ) when τ ∼ p(·; θ).

@@ -27,6 +27,7 @@ struct Buffers<S> {
     terms: Vec<DecisionTerms<S>>,
     records: Vec<RecordedPass<S>>,
     totals: Vec<S>,
+    losses: Vec<S>,
     g: Vec<S>,
 }
 
@@ -44,10 +45,10 @@ struct Buffers<S> {
 /// Leave-one-out: trajectory j's `b_i^{(j)} = (1/(m−1)) Σ_{k≠j} L_i^{(k)}` with `L_i^{(k)}` the
 /// loss-to-go of trajectory k at its decision i (0 where k took fewer decisions; in a weighted
 /// estimate the weighted loss-to-go). It is a function of the other trajectories only, which are
-/// independent of τ_j. The unweighted estimate takes each trajectory's plain pass with its scores
-/// recorded ([`IlProblem::recorded_estimate`]), then subtracts `Σ_i b_i^{(j)} ψ_i^{(j)}`
-/// ([`IlProblem::subtract_recorded`]); the weighted one assembles it from [`DecisionTerms`], as
-/// [`Baselined::estimate_by_terms`] does for every kind.
+/// independent of τ_j. The unweighted estimate records each trajectory's decisions
+/// ([`IlProblem::record_decisions`]), then sums each trajectory's estimate once with its per-step
+/// losses shifted by the baseline ([`IlProblem::estimate_recorded`]); the weighted one assembles
+/// it from [`DecisionTerms`], as [`Baselined::estimate_by_terms`] does for every kind.
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
 /// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines
@@ -125,6 +126,7 @@ impl<P, S: Scalar> Baselined<P, S> {
                 terms: Vec::new(),
                 records: Vec::new(),
                 totals: Vec::new(),
+                losses: Vec::new(),
                 g: Vec::new(),
             }),
         })
@@ -172,28 +174,23 @@ fn step_totals<'a, S: Scalar + 'a>(
     }
 }
 
-/// Trajectory j's `(m − 1) b_i^{(j)} = Σ_{k≠j} L_i^{(k)} = Σ_{t>i} (S_t − l_t^{(j)})` for its `n`
-/// scored decisions, from the step totals `S_t` and its own per-step losses `own`, yielded from
-/// the last decision to the first (the order of [`IlProblem::subtract_recorded`]) by a running
-/// sum from the last step.
-fn others_loss_to_go<'a, S: Scalar>(
-    totals: &'a [S],
-    own: &'a [S],
-    n: usize,
-) -> impl Iterator<Item = S> + 'a {
-    let other = move |t: usize| match own.get(t) {
-        Some(l) => totals[t].clone() - l,
-        None => totals[t].clone(),
-    };
-    // The steps after the last scored decision: Σ_{t≥n} (S_t − l_t^{(j)}).
-    let after = (n..totals.len()).rev().fold(S::zero(), |a, t| a + other(t));
-    // Yields decision i's sum, then adds step i's term, which decision i − 1's sum includes.
-    let (totals, own) = (&totals[..n], &own[..n]);
-    totals.iter().zip(own).rev().scan(after, |acc, (s, l)| {
-        let c = acc.clone();
-        *acc += s.clone() - l;
-        Some(c)
-    })
+/// Trajectory j's per-step losses with its leave-one-out baseline folded in, into `shifted`:
+/// `l'_t = l_t − (S_t − l_t)/(m − 1)` for each of its steps `own` (t < len), and on its last
+/// step also `− Σ_{t≥len} S_t/(m − 1)`, the other trajectories' steps after its end (its last
+/// step's score sum is the sum over all its scored decisions). Since
+/// `(m − 1) b_i^{(j)} = Σ_{t>i} (S_t − l_t^{(j)})`, the estimate with these losses is
+/// `g_j − Σ_i b_i^{(j)} ψ_i^{(j)}` ([`RecordedPass`]).
+fn leave_one_out_losses<S: Scalar>(totals: &[S], own: &[S], others: &S, shifted: &mut Vec<S>) {
+    shifted.clear();
+    shifted.extend(
+        own.iter()
+            .zip(totals)
+            .map(|(l, s)| l.clone() - (s.clone() - l) / others),
+    );
+    if let Some(last) = shifted.last_mut() {
+        let after = totals[own.len()..].iter().fold(S::zero(), |a, s| a + s);
+        *last -= after / others;
+    }
 }
 
 impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
@@ -218,11 +215,10 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
     }
 
     /// The mean leave-one-out estimate over `batch`, `(1/m) Σ_j [g_j − Σ_i b_i^{(j)} ψ_i^{(j)}]`
-    /// with `b_i^{(j)} = (1/(m − 1)) Σ_{k≠j} L_i^{(k)}`, computed as
-    /// `(1/m) [Σ_j g_j − (1/(m − 1)) Σ_j Σ_i (Σ_{k≠j} L_i^{(k)}) ψ_i^{(j)}]` from each
-    /// trajectory's [`RecordedPass`]: one
-    /// plain pass per trajectory that records its losses-to-go and scores, then the baseline's
-    /// part subtracted from the recorded scores. No allocation per step.
+    /// with `b_i^{(j)} = (1/(m − 1)) Σ_{k≠j} L_i^{(k)}`: every trajectory's decisions recorded
+    /// ([`IlProblem::record_decisions`]), the step totals `S_t = Σ_k l_t^{(k)}`, then each
+    /// trajectory's estimate summed once with the baseline folded into its per-step losses
+    /// (`leave_one_out_losses`, [`IlProblem::estimate_recorded`]). No allocation per step.
     fn leave_one_out(
         &self,
         theta: &DVector<S>,
@@ -241,7 +237,8 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         let Buffers {
             records,
             totals,
-            g: correction,
+            losses,
+            g,
             ..
         } = &mut *buffers;
         if records.len() < m {
@@ -249,30 +246,21 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         }
         let records = &mut records[..m];
         for (t, r) in batch.iter().zip(records.iter_mut()) {
-            inner.recorded_estimate(theta, t, r, cost)?;
+            inner.record_decisions(theta, t, r, cost)?;
         }
         step_totals(records.iter().map(RecordedPass::losses), totals);
-        // Σ_j Σ_i (m − 1) b_i^{(j)} ψ_i^{(j)} is gathered with a minus sign in `correction`, and
-        // divided by m − 1 once.
-        let d = inner.dim();
-        correction.clear();
-        correction.resize(d, S::zero());
-        let mut sum = DVector::from_element(d, S::zero());
-        for (t, r) in batch.iter().zip(records.iter()) {
-            for (s, x) in sum.iter_mut().zip(r.estimate()) {
-                *s += x;
-            }
-            let b = others_loss_to_go(totals, r.losses(), r.decisions());
-            inner.subtract_recorded(t, r, b, correction);
-        }
         let (others, m) = (S::from_i64(m as i64 - 1), S::from_i64(m as i64));
-        for (x, c) in sum.iter_mut().zip(correction.iter()) {
-            *x = (x.clone() + c.clone() / &others) / &m;
+        g.clear();
+        g.resize(inner.dim(), S::zero());
+        for (t, r) in batch.iter().zip(records.iter_mut()) {
+            leave_one_out_losses(totals, r.losses(), &others, losses);
+            inner.estimate_recorded(t, r, losses, g);
         }
-        if !sum.iter().all(Scalar::is_finite) {
+        let mean = DVector::from_iterator(g.len(), g.iter().map(|x| x.clone() / &m));
+        if !mean.iter().all(Scalar::is_finite) {
             return Err(OracleError::NonFinite("the baselined gradient estimate"));
         }
-        Ok(sum)
+        Ok(mean)
     }
 
     /// The mean baselined estimate over `batch`, each trajectory's terms from `fill`.

@@ -1,32 +1,37 @@
-//! [`RecordedPass`]: the plain causal estimate of one trajectory with what a baseline fixed only
-//! after the pass needs.
+//! [`RecordedPass`]: the decisions of one trajectory recorded for the causal estimator, to be
+//! summed with losses chosen after the pass.
 
 use super::DecisionTerms;
 use crate::scalar::Scalar;
 
-/// The causal estimator of eq. 3.15 on one trajectory, `g = Σ_t [∇l_t + l_t Σ_{i<t} ψ_i]`, with
-/// the per-step losses `l_t` (the absorbing tail as one more step), from which the loss-to-go of
-/// decision i is `L_i = Σ_{t>i} l_t`, the number of scored decisions, and a record of the scores
-/// ψ_i, so that `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) can be formed
-/// for baselines b_i known only after every trajectory's pass — leave-one-out, where
-/// `b_i^{(j)} = (Σ_{k≠j} L_i^{(k)})/(m − 1)`.
+/// One trajectory's decisions recorded for the causal estimator of eq. 3.15,
+/// `g = Σ_t [∇l_t + l_t Σ_{i<t} ψ_i]`: the per-step losses `l_t` (the absorbing tail as one
+/// more step), from which the loss-to-go of decision i is `L_i = Σ_{t>i} l_t`, the number of
+/// scored decisions, and a record of the decisions from which the estimate can be summed with
+/// *other* per-step losses `l'_t` — a baseline known only after every trajectory's pass enters
+/// that way ([`crate::baseline`]): leave-one-out's `b_i^{(j)} = (Σ_{k≠j} L_i^{(k)})/(m − 1)`
+/// is `l'_t = l_t − (S_t − l_t)/(m − 1)` with `S_t` the step's total over the m trajectories,
+/// since `Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`.
 ///
-/// Filled by [`crate::problem::IlProblem::recorded_estimate`]; the scores are read back by
-/// [`crate::problem::IlProblem::subtract_recorded`] of the same problem, in a form of its choosing
-/// (rows of d entries by default, one coefficient per decision for the logistic policy). The
-/// buffers are kept between uses: nothing is allocated per step once they have grown.
+/// Filled by [`crate::problem::IlProblem::record_decisions`] and summed by
+/// [`crate::problem::IlProblem::estimate_recorded`] of the same problem, in a form of its choosing
+/// (by default the plain estimate and the scores ψ_i as rows of d entries; the real tasks keep
+/// their policy's own records). The buffers are kept between uses: nothing is allocated per
+/// step once they have grown.
 #[derive(Debug, Clone)]
 pub struct RecordedPass<S> {
-    /// g, d entries.
+    /// The plain estimate g, d entries (the default form only).
     pub(crate) estimate: Vec<S>,
     /// l_t per step, then the absorbing tail's `L_abs` if any.
     pub(crate) losses: Vec<S>,
     /// The number of scored decisions.
     pub(crate) decisions: usize,
-    /// The scores ψ_i in the filling problem's form.
+    /// The decisions' records in the filling problem's form (ψ_i as rows in the default form).
     pub(crate) scores: Vec<S>,
-    /// Whether `scores` holds ψ_i as rows of d entries (the default form).
+    /// Whether this is the default form: `estimate` and ψ_i as rows of d entries in `scores`.
     pub(crate) score_rows: bool,
+    /// Working storage of the summing pass.
+    pub(crate) work: Vec<S>,
     /// Storage of the default route through [`DecisionTerms`].
     terms: DecisionTerms<S>,
 }
@@ -46,13 +51,9 @@ impl<S: Scalar> RecordedPass<S> {
             decisions: 0,
             scores: Vec::new(),
             score_rows: true,
+            work: Vec::new(),
             terms: DecisionTerms::new(),
         }
-    }
-
-    /// The plain causal estimate g (eq. 3.15).
-    pub fn estimate(&self) -> &[S] {
-        &self.estimate
     }
 
     /// The number n of scored decisions.
@@ -96,19 +97,35 @@ impl<S: Scalar> RecordedPass<S> {
         self.score_rows = true;
     }
 
-    /// `g −= Σ_{i<n} b_i ψ_i` over the n scored decisions, for scores stored as rows; `b` yields
-    /// `b_{n−1}, …, b_0`.
+    /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` (s scored decisions) for the default form,
+    /// with one loss `l'_t` per entry of [`RecordedPass::losses`]: the plain estimate minus
+    /// `Σ_{i<s} b_i ψ_i` with `b_i = −Σ_{t>i} (l'_t − l_t)` (summation by parts).
     ///
     /// # Panics
     /// If the scores are not stored as rows.
-    pub fn subtract_rows(&self, b: impl Iterator<Item = S>, g: &mut [S]) {
+    pub(crate) fn sum_rows(&self, losses: &[S], g: &mut [S]) {
         assert!(self.score_rows, "recorded pass: scores not stored as rows");
-        crate::oracle::kernel::subtract_score_rows(
-            &self.scores,
-            self.estimate.len(),
-            self.decisions(),
-            b,
-            g,
-        );
+        for (gj, x) in g.iter_mut().zip(&self.estimate) {
+            *gj += x;
+        }
+        // b_i for i = s − 1, …, 0: the shifts of the steps after i, summed from the last step.
+        let shifts = losses
+            .iter()
+            .zip(&self.losses)
+            .map(|(new, old)| new.clone() - old);
+        let shift: Vec<S> = shifts.collect();
+        let s = self.decisions;
+        let after: S = shift[(s + 1).min(shift.len())..]
+            .iter()
+            .fold(S::zero(), |a, x| a + x);
+        let b = shift[..(s + 1).min(shift.len())]
+            .iter()
+            .skip(1)
+            .rev()
+            .scan(after, |acc, x| {
+                *acc += x;
+                Some(-acc.clone())
+            });
+        crate::oracle::kernel::subtract_score_rows(&self.scores, self.estimate.len(), s, b, g);
     }
 }

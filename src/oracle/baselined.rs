@@ -58,6 +58,7 @@ where
                 t.labels,
                 t.actions,
                 Some(&shifts),
+                None,
                 g,
                 &mut scratch,
             )

@@ -22,7 +22,7 @@ use std::borrow::Borrow;
 ///
 /// Per decision: one [`Policy::loss_score_into`](crate::policy::Policy::loss_score_into) into
 /// preallocated buffers and O(d) field operations ([`accumulate`]), no allocation; on validated
-/// features without weights or tail, the whole pass is the policy's
+/// features without weights, the whole pass (the tail's term included) is the policy's
 /// [`EstimatorKernel::causal_sum_trusted`]. When the loss fails at one decision and the
 /// likelihood ratio at an earlier one, the ratio's error is reported.
 pub(crate) fn causal_pass<S, P, L, A>(
@@ -46,14 +46,24 @@ where
     // report the first failure.
     let trusted = !per_decision && features_valid(policy, t);
     let tail = t.absorbed;
-    if trusted && ratio.is_none() && tail.is_none() {
-        // The plain causal estimator: the whole pass in the policy (one loop it may specialise).
+    if trusted && ratio.is_none() {
+        // The plain causal estimator: the whole pass in the policy (one loop it may specialise),
+        // the absorbing tail's term after it.
         let (rows, actions, labels) = (t.feature_data, t.actions, t.labels);
         // Scratch only if the policy's pass asks for it (the logistic policy's records its
         // decisions there: one buffer per call).
         let mut scratch = Vec::new();
         policy
-            .causal_sum_trusted(theta, rows, labels, actions, None, &mut g, &mut scratch)
+            .causal_sum_trusted(
+                theta,
+                rows,
+                labels,
+                actions,
+                None,
+                tail,
+                &mut g,
+                &mut scratch,
+            )
             .map_err(policy_error)?;
         return Ok((g, log_w));
     }

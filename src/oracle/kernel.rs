@@ -87,9 +87,11 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     }
 
     /// The unit-weight causal estimator of eq. 3.15 over one trajectory,
-    /// `g += Σ_t [∇_θ l_t + (l_t + δ_t) Σ_{i<t} ψ_i]`, on validated inputs: `features` holds
-    /// φ(s_1), …, φ(s_n) row after row, `labels` and `actions` one entry per row, and `shifts`
-    /// either `None` (every `δ_t = 0`: eq. 3.15 itself) or one `δ_t` per row.
+    /// `g += Σ_t [∇_θ l_t + (l_t + δ_t) Σ_{i<t} ψ_i] + L Σ_{i≤n} ψ_i`, on validated inputs:
+    /// `features` holds φ(s_1), …, φ(s_n) row after row, `labels` and `actions` one entry per
+    /// row, `shifts` either `None` (every `δ_t = 0`: eq. 3.15 itself) or one `δ_t` per row, and
+    /// `end` the losses L after the last decision that weigh every score (an absorbing tail's
+    /// `L_abs`), or `None` (L = 0, no term).
     ///
     /// With `δ_t = b_t − b_{t−1}` (b_0 = 0, b_t = 0 after the last scored decision) this is the
     /// baselined estimator `g − Σ_i b_i ψ_i` of [`crate::baseline`], by summation by parts:
@@ -111,74 +113,78 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         labels: &[L],
         actions: &[Self::Action],
         shifts: Option<&[S]>,
+        end: Option<&S>,
         g: &mut [S],
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
-        causal_sum_by_steps(self, theta, features, labels, actions, shifts, g, scratch)
+        causal_sum_by_steps(
+            self, theta, features, labels, actions, shifts, end, g, scratch,
+        )
     }
 
-    /// The unit-weight causal estimator of eq. 3.15 over one trajectory, `g += Σ_t [∇_θ l_t +
-    /// l_t Σ_{i<t} ψ_i]` (the inputs of [`EstimatorKernel::causal_sum_trusted`], no shifts), that
-    /// also records every decision's loss `l_t` into `losses` (one entry per row) and its score
-    /// ψ_t into `scores`, in a form of the policy's choosing that
-    /// [`EstimatorKernel::subtract_scores_trusted`] reads back. It serves baselines known only
-    /// after the pass, such as leave-one-out, where b_i depends on every trajectory's losses:
-    /// `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]).
+    /// The decisions of one trajectory recorded for the causal estimator of eq. 3.15, without
+    /// summing it (the inputs of [`EstimatorKernel::causal_sum_trusted`], no shifts): every
+    /// decision's loss `l_t` into `losses` (one entry per row) and into `records` what
+    /// [`EstimatorKernel::accumulate_recorded`] needs to form `Σ_t [∇_θ l_t + l'_t Σ_{i<t} ψ_i]`
+    /// for losses `l'_t` chosen afterwards, in a form of the policy's choosing. It serves
+    /// baselines known only after every trajectory's pass, such as leave-one-out, where b_i
+    /// depends on every trajectory's losses and enters as shifted losses ([`crate::baseline`]).
     ///
-    /// `losses` and `scores` are cleared, then refilled with their capacity reserved once: kept
-    /// between calls, they allocate nothing per decision. The default records ψ_t as rows of
-    /// [`Policy::param_dim`] entries, with [`Policy::loss_score_into`] per decision
-    /// (`causal_sum_recording_rows`).
+    /// `losses` and `records` are cleared, then refilled: kept between calls, they allocate
+    /// nothing per decision once grown. The default records `∇_θ l_t` and ψ_t as rows of
+    /// [`Policy::param_dim`] entries each, with [`Policy::loss_score_into`] per decision
+    /// (`record_rows`).
     ///
     /// # Errors
-    /// As [`Policy::loss_score_into`] at the first failing decision; `g`, `losses` and `scores`
-    /// are then unspecified.
-    #[allow(clippy::too_many_arguments)] // the trajectory, the output and its records
-    fn causal_sum_recorded<L: Borrow<Self::Label>>(
+    /// As [`Policy::loss_score_into`] at the first failing decision; `losses` and `records` are
+    /// then unspecified.
+    fn record_trusted<L: Borrow<Self::Label>>(
         &self,
         theta: &[S],
         features: &[S],
         labels: &[L],
         actions: &[Self::Action],
-        g: &mut [S],
         losses: &mut Vec<S>,
-        scores: &mut Vec<S>,
+        records: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
-        causal_sum_recording_rows(self, theta, features, labels, actions, g, losses, scores)
+        record_rows(self, theta, features, labels, actions, losses, records)
     }
 
-    /// `g −= Σ_{i<n} b_i ψ_i` (0-based i), the baseline's part of `g_b = g − Σ_i b_i ψ_i`
-    /// ([`crate::baseline`]), with ψ_i read from the `scores` that
-    /// [`EstimatorKernel::causal_sum_recorded`] wrote for the same `features` (`n` at most the
-    /// number of decisions recorded). `b` yields the baselines from the last decision to the
-    /// first, `b_{n−1}, …, b_0` (so that a loss-to-go can be summed as it goes); decisions it has
-    /// no item for are left out. The default reads rows of [`Policy::param_dim`] entries.
-    fn subtract_scores_trusted(
+    /// `g += Σ_{t<n} [∇_θ l_t + l'_t Σ_{i<t} ψ_i] + l'_n Σ_{i<n} ψ_i` over the n decisions that
+    /// [`EstimatorKernel::record_trusted`] recorded in `records` for the same `features`, with
+    /// the losses `l'` given: n entries, or n + 1 when one more loss (an absorbing tail, a
+    /// baseline's weight after the last decision) weighs every score. With the recorded losses
+    /// and n entries it is the plain causal estimate of [`EstimatorKernel::causal_sum_trusted`],
+    /// bit for bit.
+    ///
+    /// `scratch` is working storage the implementation sizes as it needs (the default:
+    /// [`Policy::param_dim`] entries for `Σ_{i<t} ψ_i`; the logistic policy's fixed-dimension
+    /// loop needs none). The default reads the rows of `record_rows` and adds each decision
+    /// with `accumulate`.
+    fn accumulate_recorded(
         &self,
         features: &[S],
-        scores: &[S],
-        n: usize,
-        b: impl Iterator<Item = S>,
+        records: &[S],
+        losses: &[S],
         g: &mut [S],
+        scratch: &mut Vec<S>,
     ) {
         let _ = features;
-        subtract_score_rows(scores, self.param_dim(), n, b, g);
+        accumulate_rows(records, self.param_dim(), losses, g, scratch);
     }
 }
 
-/// The default [`EstimatorKernel::causal_sum_recorded`]: per decision
-/// [`Policy::loss_score_into`] (with the policy's checks), `accumulate` with unit weight, then
-/// the row ψ_t appended to the score records (through [`record_by_steps`]).
-#[allow(clippy::too_many_arguments)] // the method's arguments and the policy
-pub(crate) fn causal_sum_recording_rows<S, P, L>(
+/// The default [`EstimatorKernel::record_trusted`]: per decision [`Policy::loss_score_into`]
+/// (with the policy's checks), its loss appended to `losses` and the rows `∇_θ l_t` and ψ_t to
+/// `records` (through [`record_by_steps`]).
+pub(crate) fn record_rows<S, P, L>(
     policy: &P,
     theta: &[S],
     features: &[S],
     labels: &[L],
     actions: &[P::Action],
-    g: &mut [S],
     losses: &mut Vec<S>,
-    scores: &mut Vec<S>,
+    records: &mut Vec<S>,
 ) -> Result<(), PolicyError>
 where
     S: Scalar,
@@ -186,9 +192,8 @@ where
     L: Borrow<P::Label>,
 {
     let d = policy.param_dim();
-    let mut buf = vec![S::zero(); 3 * d];
-    let (grad, rest) = buf.split_at_mut(d);
-    let (score, score_sum) = rest.split_at_mut(d);
+    let mut buf = vec![S::zero(); 2 * d];
+    let (grad, score) = buf.split_at_mut(d);
     let x = policy.feature_dim();
     record_by_steps(
         features,
@@ -196,23 +201,48 @@ where
         labels,
         actions,
         losses,
-        scores,
-        d,
-        |phi, y, a, scores| {
+        records,
+        2 * d,
+        |phi, y, a, records| {
             let l = policy.loss_score_into(theta, phi, y.borrow(), a, grad, score)?;
-            accumulate(g, None, &l, grad, score, score_sum);
-            scores.extend_from_slice(score);
+            records.extend_from_slice(grad);
+            records.extend_from_slice(score);
             Ok(l)
         },
     )
 }
 
-/// The causal pass of eq. 3.15 decision by decision with every decision recorded, as
-/// [`EstimatorKernel::causal_sum_recorded`] records it: `losses` and `scores` are cleared (with
-/// room reserved once for `n` losses and `n · score_len` score entries), then for each row
-/// φ_t of `features` (`feature_dim` entries), its label and its action, `step(φ_t, y_t, a_t,
-/// scores)` adds the decision's terms to the estimate, appends its score record to `scores` and
-/// returns `l_t`, which is appended to `losses`.
+/// The default [`EstimatorKernel::accumulate_recorded`] for `records` holding, per decision,
+/// the rows `∇_θ l_t` and ψ_t of `d` entries each: per decision `accumulate` with unit weight
+/// (the operations of the default causal pass), then `l'_n Σ_{i<n} ψ_i` for an (n + 1)-th loss.
+pub(crate) fn accumulate_rows<S: Scalar>(
+    records: &[S],
+    d: usize,
+    losses: &[S],
+    g: &mut [S],
+    scratch: &mut Vec<S>,
+) {
+    scratch.clear();
+    scratch.resize(d, S::zero());
+    let score_sum = &mut scratch[..];
+    let rows = records.chunks_exact(2 * d.max(1));
+    let n = rows.len();
+    for (row, l) in rows.zip(losses) {
+        let (grad, score) = row.split_at(d);
+        accumulate(g, None, l, grad, score, score_sum);
+    }
+    if let Some(end) = losses.get(n) {
+        for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
+            *gj += end.clone() * sj;
+        }
+    }
+}
+
+/// Every decision of a trajectory recorded, as [`EstimatorKernel::record_trusted`] records
+/// them: `losses` and `scores` are cleared (with room reserved once for `n` losses and
+/// `n · score_len` record entries), then for each row φ_t of `features` (`feature_dim`
+/// entries), its label and its action, `step(φ_t, y_t, a_t, scores)` appends the decision's
+/// record to `scores` and returns `l_t`, which is appended to `losses`.
 ///
 /// # Errors
 /// The first error of `step`; the records are then unspecified.
@@ -241,7 +271,7 @@ pub(crate) fn record_by_steps<S, Y, A>(
 }
 
 /// `g −= Σ_{i<n} b_i ψ_i` for ψ_i stored as consecutive rows of `d` entries, `b` yielding
-/// `b_{n−1}, …, b_0`.
+/// `b_{n−1}, …, b_0` (decisions it has no item for are left out).
 pub(crate) fn subtract_score_rows<S: Scalar>(
     scores: &[S],
     d: usize,
@@ -249,32 +279,17 @@ pub(crate) fn subtract_score_rows<S: Scalar>(
     b: impl Iterator<Item = S>,
     g: &mut [S],
 ) {
-    let rows = scores.chunks_exact(d.max(1)).take(n).map(|row| (row, ()));
-    subtract_scaled_rows(rows, b, |bi, ()| bi, g);
-}
-
-/// The baseline's part of `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) for scores recorded as
-/// a multiple of a row, `ψ_i = c_i r_i`: `g −= Σ_i scale(b_i, c_i) r_i` with `scale(b, c) = b c`
-/// (the coefficient `()` with `scale(b, ()) = b` when the rows are the scores). `rows` yields
-/// `(r_i, c_i)` for i = 0..n−1 and is taken from the last; `b` yields `b_{n−1}, …, b_0`, and
-/// decisions it has no item for are left out.
-pub(crate) fn subtract_scaled_rows<'a, S: Scalar + 'a, C>(
-    rows: impl DoubleEndedIterator<Item = (&'a [S], C)>,
-    b: impl Iterator<Item = S>,
-    scale: impl Fn(S, C) -> S,
-    g: &mut [S],
-) {
-    for ((row, c), bi) in rows.rev().zip(b) {
-        let coefficient = scale(bi, c);
+    for (row, bi) in scores.chunks_exact(d.max(1)).take(n).rev().zip(b) {
         for (gj, x) in g.iter_mut().zip(row) {
-            *gj -= coefficient.clone() * x;
+            *gj -= bi.clone() * x;
         }
     }
 }
 
 /// The default [`EstimatorKernel::causal_sum_trusted`]: per decision, `g += δ_t Σ_{i<t} ψ_i`
 /// (with shifts) then [`EstimatorKernel::causal_step_trusted`], with `scratch` resized to
-/// `3 · param_dim` zeros and split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`.
+/// `3 · param_dim` zeros and split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`; then `g += L Σ_{i≤n} ψ_i`
+/// for an `end` L.
 #[allow(clippy::too_many_arguments)] // the method's arguments and the policy
 #[inline]
 pub(crate) fn causal_sum_by_steps<S, P, L>(
@@ -284,6 +299,7 @@ pub(crate) fn causal_sum_by_steps<S, P, L>(
     labels: &[L],
     actions: &[P::Action],
     shifts: Option<&[S]>,
+    end: Option<&S>,
     g: &mut [S],
     scratch: &mut Vec<S>,
 ) -> Result<(), PolicyError>
@@ -312,6 +328,11 @@ where
                 }
                 policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
             }
+        }
+    }
+    if let Some(end) = end {
+        for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
+            *gj += end.clone() * sj;
         }
     }
     Ok(())

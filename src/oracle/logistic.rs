@@ -6,7 +6,7 @@
 //! `g_j += 4(p − y)p(1 − p)φ_j + l_t Σ_j` and `Σ_j += (a − p)φ_j`, the operations of the default
 //! kernel in the same order.
 
-use super::kernel::{EstimatorKernel, causal_sum_by_steps, record_by_steps, subtract_scaled_rows};
+use super::kernel::{EstimatorKernel, causal_sum_by_steps};
 use crate::policy::logistic::{brier, finite_logit, score_coefficient, sigmoid_of_finite};
 use crate::policy::softmax::check_action;
 use crate::policy::{Logistic, Policy, PolicyError, check_out, check_vec_scalar, logistic_sigmoid};
@@ -92,10 +92,10 @@ fn add_decision<S: Scalar>(g: &mut [S], score_sum: &mut [S], phi: &[S], dz: &S, 
 
 /// One decision of the causal pass on a validated θ and φ, with the checks of
 /// [`EstimatorKernel::causal_step_trusted`]: adds `∇_θ l_t + l_t Σ_{i<t} ψ_i` to `g` and ψ_t to
-/// `score_sum`, and returns `l_t` with the score's coefficient `c_t = a_t − p_t` (ψ_t = c_t φ_t).
+/// `score_sum`, and returns `l_t`.
 #[allow(clippy::too_many_arguments)] // the decision and the estimator's state
 #[inline]
-fn causal_step_coefficient<S: Real>(
+fn causal_step<S: Real>(
     features: usize,
     theta: &[S],
     phi: &[S],
@@ -103,16 +103,29 @@ fn causal_step_coefficient<S: Real>(
     action: usize,
     g: &mut [S],
     score_sum: &mut [S],
-) -> Result<(S, S), PolicyError> {
+) -> Result<S, PolicyError> {
+    let (l, c, dz) = decision_coefficients(theta, phi, label, action)?;
+    check_out("g", g, features)?;
+    check_out("score_sum", score_sum, features)?;
+    add_decision(g, score_sum, phi, &dz, &l, &c);
+    Ok(l)
+}
+
+/// One decision's loss `l_t`, score coefficient `c_t = a_t − p_t` and loss-gradient
+/// coefficient `dz_t` on a validated θ and φ, with the checks of
+/// [`EstimatorKernel::causal_step_trusted`] in its order (label, logit, action).
+#[inline]
+fn decision_coefficients<S: Real>(
+    theta: &[S],
+    phi: &[S],
+    label: usize,
+    action: usize,
+) -> Result<(S, S, S), PolicyError> {
     check_action(label, 2)?;
     let p = logistic_sigmoid(&crate::scalar::dot(theta, phi))?;
     let (l, dz) = brier(&p, label);
     check_action(action, 2)?;
-    let c = score_coefficient(p, action);
-    check_out("g", g, features)?;
-    check_out("score_sum", score_sum, features)?;
-    add_decision(g, score_sum, phi, &dz, &l, &c);
-    Ok((l, c))
+    Ok((l, score_coefficient(p, action), dz))
 }
 
 /// The first half of the causal pass of eq. 3.15 for [`Logistic`] with `N` features known at
@@ -156,11 +169,12 @@ fn record_fixed<S: Real, L: Borrow<usize>, const N: usize>(
     !failed
 }
 
-/// The second half of the causal pass of `record_fixed`: `g += Σ_t [dz_t φ_t + l_t Σ_{i<t} ψ_i]`
-/// with ψ_i = c_i φ_i, per decision the operations of [`EstimatorKernel::causal_step_trusted`]
-/// in the same order (`add_decision`; so the same `g` bit for bit), with `g` and `Σ_{i<t} ψ_i`
-/// in `[S; N]` locals (registers for `f64`). `g` has `N` entries; `l_t` may carry a baseline's
-/// shift (it weighs `Σ_{i<t} ψ_i` only).
+/// The second half of the causal pass of `record_fixed`: `g += Σ_{t<n} [dz_t φ_t + l_t Σ_{i<t}
+/// ψ_i]` with ψ_i = c_i φ_i over the n recorded decisions, per decision the operations of
+/// [`EstimatorKernel::causal_step_trusted`] in the same order (`add_decision`; so the same `g`
+/// bit for bit), with `g` and `Σ_{i<t} ψ_i` in `[S; N]` locals (registers for `f64`); then, if
+/// `losses` has an (n + 1)-th entry `l_n`, `g += l_n Σ_{i<n} ψ_i`. `g` has `N` entries; `l_t`
+/// may carry a baseline's shift (it weighs `Σ_{i<t} ψ_i` only).
 #[inline(never)]
 fn accumulate_fixed<S: Scalar, const N: usize>(
     features: &[S],
@@ -172,50 +186,17 @@ fn accumulate_fixed<S: Scalar, const N: usize>(
     let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
     let mut score_sum: [S; N] = std::array::from_fn(|_| S::zero());
     let (rows, _) = features.as_chunks::<N>();
+    let n = rows.len().min(coefficients.len()).min(gradients.len());
     let records = losses.iter().zip(coefficients).zip(gradients);
     for (phi, ((l, c), dz)) in rows.iter().zip(records) {
         add_decision(&mut acc, &mut score_sum, phi, dz, l, c);
     }
+    if let Some(end) = losses.get(n) {
+        for (a, s) in acc.iter_mut().zip(&score_sum) {
+            *a += end.clone() * s;
+        }
+    }
     g.clone_from_slice(&acc);
-}
-
-/// `g −= Σ_{i<n} b_i c_i φ_i` with `N` features known at compile time, `b` yielding
-/// `b_{n−1}, …, b_0`: decisions taken in pairs into two `[S; N]` locals (two independent chains
-/// of additions), added to `g` at the end.
-#[inline(never)]
-fn subtract_fixed<S: Scalar, const N: usize>(
-    features: &[S],
-    coefficients: &[S],
-    n: usize,
-    mut b: impl Iterator<Item = S>,
-    g: &mut [S],
-) {
-    let mut second: [S; N] = std::array::from_fn(|_| S::zero());
-    let mut first: [S; N] = std::array::from_fn(|_| S::zero());
-    let (rows, _) = features.as_chunks::<N>();
-    let n = n.min(rows.len()).min(coefficients.len());
-    let (head, pairs) = rows[..n].as_rchunks::<2>();
-    let (c_head, c_pairs) = coefficients[..n].split_at(head.len());
-    for (pair, c) in pairs.iter().zip(c_pairs.as_chunks::<2>().0).rev() {
-        let (Some(b1), Some(b0)) = (b.next(), b.next()) else {
-            break;
-        };
-        let (b1, b0) = (b1 * &c[1], b0 * &c[0]);
-        let terms = first.iter_mut().zip(second.iter_mut());
-        for ((f, s), (x0, x1)) in terms.zip(pair[0].iter().zip(&pair[1])) {
-            *s += b1.clone() * x1;
-            *f += b0.clone() * x0;
-        }
-    }
-    if let (Some(phi), Some(c), Some(b0)) = (head.first(), c_head.first(), b.next()) {
-        let bc = b0 * c;
-        for (f, x) in first.iter_mut().zip(phi) {
-            *f += bc.clone() * x;
-        }
-    }
-    for ((gj, f), s) in g.iter_mut().zip(first).zip(second) {
-        *gj -= f + s;
-    }
 }
 
 impl<S: Real> EstimatorKernel<S> for Logistic {
@@ -248,14 +229,13 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         score_sum: &mut [S],
     ) -> Result<S, PolicyError> {
         let features = Policy::<S>::feature_dim(self);
-        let (l, _) = causal_step_coefficient(features, theta, phi, *label, *action, g, score_sum)?;
-        Ok(l)
+        causal_step(features, theta, phi, *label, *action, g, score_sum)
     }
 
     /// With a compile-time dimension for 1 to 8 features in two loops (`record_fixed`, with the
     /// records in `scratch`, then `accumulate_fixed`, each loss shifted first when `shifts` is
-    /// given), else (and to report a failing decision) the default loop over
-    /// [`EstimatorKernel::causal_step_trusted`].
+    /// given, the `end` loss after them), else (and to report a failing decision) the default
+    /// loop over [`EstimatorKernel::causal_step_trusted`].
     #[inline]
     fn causal_sum_trusted<L: Borrow<usize>>(
         &self,
@@ -264,6 +244,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         labels: &[L],
         actions: &[usize],
         shifts: Option<&[S]>,
+        end: Option<&S>,
         g: &mut [S],
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
@@ -271,18 +252,24 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         let done = by_feature_count!(Policy::<S>::feature_dim(self), N => {
             // The shifted pass stops at the shorter of the decisions and the shifts.
             let n = shifts.map_or(actions.len(), |d| d.len().min(actions.len()));
+            // Losses (with the end's after them), then the two coefficients per decision.
+            let with_end = n + usize::from(end.is_some());
             scratch.clear();
-            scratch.resize(3 * n, S::zero());
-            let (losses, rest) = scratch.split_at_mut(n);
+            scratch.resize(with_end + 2 * n, S::zero());
+            let (losses, rest) = scratch.split_at_mut(with_end);
             let (coefficients, gradients) = rest.split_at_mut(n);
             let theta = fixed_theta::<S, N>(theta)?;
             check_out("g", g, N)?;
             let a = &actions[..n];
-            record_fixed::<S, L, N>(theta, x, y, a, losses, coefficients, gradients) && {
+            let decisions = &mut losses[..n];
+            record_fixed::<S, L, N>(theta, x, y, a, decisions, coefficients, gradients) && {
                 if let Some(shifts) = shifts {
-                    for (l, delta) in losses.iter_mut().zip(shifts) {
+                    for (l, delta) in decisions.iter_mut().zip(shifts) {
                         *l = l.clone() + delta;
                     }
+                }
+                if let Some(end) = end {
+                    losses[n] = end.clone();
                 }
                 accumulate_fixed::<S, N>(x, losses, coefficients, gradients, g);
                 true
@@ -292,78 +279,77 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
             return Ok(());
         }
         // More than 8 features, or a decision failed a check: the default pass reports the first.
-        causal_sum_by_steps(self, theta, features, labels, actions, shifts, g, scratch)
+        causal_sum_by_steps(
+            self, theta, features, labels, actions, shifts, end, g, scratch,
+        )
     }
 
-    /// Records the score ψ_t = c_t φ_t by its coefficient `c_t = a_t − p_t` alone (the first n
-    /// entries of `scores`, one per decision). With a compile-time dimension for 1 to 8 features,
-    /// in two loops (`record_fixed`, whose loss-gradient coefficients `dz_t` follow the `c_t` in
-    /// `scores`, then `accumulate_fixed`: the plain pass's `g` bit for bit); else (and
-    /// to report a failing decision) decision by decision with the checks of
+    /// Records each decision by two coefficients: `c_t = a_t − p_t` (ψ_t = c_t φ_t) in the first
+    /// n entries of `records`, `dz_t` (∇_θ l_t = dz_t φ_t) in the next n. With a compile-time
+    /// dimension for 1 to 8 features in one loop (`record_fixed`); else (and to report a failing
+    /// decision) decision by decision with the checks of
     /// [`EstimatorKernel::causal_step_trusted`].
-    fn causal_sum_recorded<L: Borrow<usize>>(
+    fn record_trusted<L: Borrow<usize>>(
         &self,
         theta: &[S],
         features: &[S],
         labels: &[L],
         actions: &[usize],
-        g: &mut [S],
         losses: &mut Vec<S>,
-        scores: &mut Vec<S>,
+        records: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
         let dim = Policy::<S>::feature_dim(self);
+        let n = actions.len();
+        losses.clear();
+        losses.resize(n, S::zero());
+        records.clear();
+        records.resize(2 * n, S::zero());
+        let (coefficients, gradients) = records.split_at_mut(n);
         let (x, y, a) = (features, labels, actions);
         let done = by_feature_count!(dim, N => {
-            let n = actions.len();
-            losses.clear();
-            losses.resize(n, S::zero());
-            scores.clear();
-            scores.resize(2 * n, S::zero());
-            let (coefficients, gradients) = scores.split_at_mut(n);
             let theta = fixed_theta::<S, N>(theta)?;
-            check_out("g", g, N)?;
-            record_fixed::<S, L, N>(theta, x, y, a, losses, coefficients, gradients) && {
-                accumulate_fixed::<S, N>(x, losses, coefficients, gradients, g);
-                true
-            }
+            record_fixed::<S, L, N>(theta, x, y, a, losses, coefficients, gradients)
         }, _ => false);
         if done {
             return Ok(());
         }
-        let mut score_sum = vec![S::zero(); dim];
-        record_by_steps(
-            x,
-            dim,
-            y,
-            a,
-            losses,
-            scores,
-            1,
-            |phi, label, action, scores| {
-                let (label, action) = (*label.borrow(), *action);
-                let (l, c) =
-                    causal_step_coefficient(dim, theta, phi, label, action, g, &mut score_sum)?;
-                scores.push(c);
-                Ok(l)
-            },
-        )
+        let rows = features.chunks_exact(dim.max(1)).zip(labels).zip(actions);
+        let records = losses.iter_mut().zip(coefficients).zip(gradients);
+        for (((phi, label), action), ((lo, co), gr)) in rows.zip(records) {
+            (*lo, *co, *gr) = decision_coefficients(theta, phi, *label.borrow(), *action)?;
+        }
+        Ok(())
     }
 
-    /// `g −= Σ_{i<n} b_i c_i φ_i` from the coefficients of
-    /// [`EstimatorKernel::causal_sum_recorded`], `b` yielding `b_{n−1}, …, b_0`; in registers for
-    /// 1 to 8 features.
-    fn subtract_scores_trusted(
+    /// From the coefficients of [`EstimatorKernel::record_trusted`]: with a compile-time
+    /// dimension for 1 to 8 features in registers (`accumulate_fixed`), else with `Σ_{i<t} ψ_i`
+    /// in `scratch`, per decision the same operations.
+    fn accumulate_recorded(
         &self,
         features: &[S],
-        scores: &[S],
-        n: usize,
-        b: impl Iterator<Item = S>,
+        records: &[S],
+        losses: &[S],
         g: &mut [S],
+        scratch: &mut Vec<S>,
     ) {
         let dim = Policy::<S>::feature_dim(self);
-        by_feature_count!(dim, N => subtract_fixed::<S, N>(features, scores, n, b, g), _ => {
-            let rows = features.chunks_exact(dim.max(1)).zip(scores).take(n);
-            subtract_scaled_rows(rows, b, |bi, c| bi * c, g);
+        let (coefficients, gradients) = records.split_at(records.len() / 2);
+        by_feature_count!(dim, N => {
+            accumulate_fixed::<S, N>(features, losses, coefficients, gradients, g)
+        }, _ => {
+            scratch.clear();
+            scratch.resize(dim, S::zero());
+            let rows = features.chunks_exact(dim.max(1));
+            let n = rows.len().min(coefficients.len());
+            let records = losses.iter().zip(coefficients).zip(gradients);
+            for (phi, ((l, c), dz)) in rows.zip(records) {
+                add_decision(g, scratch, phi, dz, l, c);
+            }
+            if let Some(end) = losses.get(n) {
+                for (gj, sj) in g.iter_mut().zip(scratch.iter()) {
+                    *gj += end.clone() * sj;
+                }
+            }
         });
     }
 }
@@ -389,7 +375,8 @@ mod tests {
     }
 
     /// The fixed-dimension causal pass (1 to 8 features) and the fallback (more features) against
-    /// the default decision-by-decision pass: bit-for-bit, and the same first error.
+    /// the default decision-by-decision pass, without and with an end loss: bit-for-bit, and the
+    /// same first error.
     #[test]
     fn causal_sum_matches_the_default_bit_for_bit() {
         use rand::SeedableRng;
@@ -398,7 +385,12 @@ mod tests {
             let pi = Logistic::new(n).unwrap();
             for steps in [1, 2, 7, 60] {
                 let (theta, features, labels, actions) = random_trajectory(&mut rng, n, steps);
-                let run = |features: &[f64], labels: &[usize], actions: &[usize], fast: bool| {
+                // Without and with losses after the last decision (an absorbing tail).
+                let run = |features: &[f64],
+                           labels: &[usize],
+                           actions: &[usize],
+                           end: Option<&f64>,
+                           fast: bool| {
                     let mut g = vec![0.0; n];
                     let mut scratch = Vec::new();
                     let r = if fast {
@@ -408,6 +400,7 @@ mod tests {
                             labels,
                             actions,
                             None,
+                            end,
                             &mut g,
                             &mut scratch,
                         )
@@ -419,17 +412,24 @@ mod tests {
                             labels,
                             actions,
                             None,
+                            end,
                             &mut g,
                             &mut scratch,
                         )
                     };
-                    r.map(|()| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
+                    r.map(|()| g.iter().map(|x: &f64| x.to_bits()).collect::<Vec<_>>())
                 };
                 let both = |features: &[f64], labels: &[usize], actions: &[usize]| {
-                    let fast = run(features, labels, actions, true);
+                    let with_end = run(features, labels, actions, Some(&0.375), true);
+                    assert_eq!(
+                        with_end,
+                        run(features, labels, actions, Some(&0.375), false),
+                        "n = {n}, {steps} steps, with an end"
+                    );
+                    let fast = run(features, labels, actions, None, true);
                     assert_eq!(
                         fast,
-                        run(features, labels, actions, false),
+                        run(features, labels, actions, None, false),
                         "n = {n}, {steps} steps"
                     );
                     fast
@@ -481,60 +481,86 @@ mod tests {
         }
     }
 
-    /// The recording pass (two loops for 1 to 8 features, the fallback for more) against the
-    /// default that records ψ_t as rows: the same `g` and losses bit for bit, ψ_t = c_t φ_t from
-    /// the recorded coefficients, and the same first error when a decision fails.
+    /// The records (one loop for 1 to 8 features, the fallback for more) and their sum against
+    /// the default that records `∇l_t` and ψ_t as rows: the same losses, `g` bit for bit with the
+    /// recorded losses (also the plain pass's `g`), with shifted losses and with one more loss
+    /// weighing every score; ψ_t = c_t φ_t and ∇l_t = dz_t φ_t from the recorded coefficients;
+    /// the same first error when a decision fails.
     #[test]
     fn recorded_pass_matches_the_default_bit_for_bit() {
-        use super::super::kernel::causal_sum_recording_rows;
-        use rand::SeedableRng;
+        use super::super::kernel::{accumulate_rows, record_rows};
+        use rand::{Rng, SeedableRng};
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let mut rng = KitRng::seed_from_u64(11);
         for n in 1..=10 {
             let pi = Logistic::new(n).unwrap();
             for steps in [1, 2, 7, 60] {
                 let (theta, features, labels, mut actions) = random_trajectory(&mut rng, n, steps);
-                let run = |actions: &[usize], fast: bool| {
-                    let (mut g, mut losses, mut scores) = (vec![0.5; n], vec![], vec![]);
+                let record = |actions: &[usize], fast: bool| {
+                    let (mut losses, mut records) = (vec![], vec![]);
                     let r = if fast {
-                        pi.causal_sum_recorded(
+                        pi.record_trusted(
                             &theta,
                             &features,
                             &labels,
                             actions,
-                            &mut g,
                             &mut losses,
-                            &mut scores,
+                            &mut records,
                         )
                     } else {
-                        causal_sum_recording_rows(
+                        record_rows(
                             &pi,
                             &theta,
                             &features,
                             &labels,
                             actions,
-                            &mut g,
                             &mut losses,
-                            &mut scores,
+                            &mut records,
                         )
                     };
-                    r.map(|()| (bits(&g), bits(&losses), scores))
+                    r.map(|()| (losses, records))
                 };
-                let (g, losses, coefficients) = run(&actions, true).unwrap();
-                let (g_rows, losses_rows, rows) = run(&actions, false).unwrap();
-                assert_eq!(
-                    (&g, &losses),
-                    (&g_rows, &losses_rows),
-                    "n = {n}, {steps} steps"
-                );
-                for (t, row) in rows.chunks_exact(n).enumerate() {
+                let (losses, coefficients) = record(&actions, true).unwrap();
+                let (losses_rows, rows) = record(&actions, false).unwrap();
+                assert_eq!(bits(&losses), bits(&losses_rows), "n = {n}, {steps} steps");
+                for (t, row) in rows.chunks_exact(2 * n).enumerate() {
                     let phi = &features[t * n..(t + 1) * n];
-                    let psi: Vec<f64> = phi.iter().map(|x| coefficients[t] * x).collect();
-                    assert_eq!(bits(&psi), bits(row), "n = {n}, step {t}");
+                    let times = |c: f64| phi.iter().map(|x| c * x).collect::<Vec<_>>();
+                    let (grad, psi) = row.split_at(n);
+                    assert_eq!(
+                        bits(&times(coefficients[t])),
+                        bits(psi),
+                        "n = {n}, step {t}"
+                    );
+                    let dz = coefficients[steps + t];
+                    assert_eq!(bits(&times(dz)), bits(grad), "n = {n}, step {t}");
                 }
+                let shifted: Vec<f64> = losses.iter().map(|l| l - rng.random::<f64>()).collect();
+                let mut with_end = shifted.clone();
+                with_end.push(rng.random());
+                for l in [&losses, &shifted, &with_end] {
+                    let (mut g, mut g_rows) = (vec![0.5; n], vec![0.5; n]);
+                    pi.accumulate_recorded(&features, &coefficients, l, &mut g, &mut vec![]);
+                    accumulate_rows(&rows, n, l, &mut g_rows, &mut vec![]);
+                    assert_eq!(bits(&g), bits(&g_rows), "n = {n}, {steps} steps");
+                }
+                let (mut g, mut g_plain) = (vec![0.5; n], vec![0.5; n]);
+                pi.accumulate_recorded(&features, &coefficients, &losses, &mut g, &mut vec![]);
+                pi.causal_sum_trusted(
+                    &theta,
+                    &features,
+                    &labels,
+                    &actions,
+                    None,
+                    None,
+                    &mut g_plain,
+                    &mut vec![],
+                )
+                .unwrap();
+                assert_eq!(bits(&g), bits(&g_plain), "n = {n}, {steps} steps");
                 actions[steps / 2] = 2;
-                let err = run(&actions, true).map(|_| ());
-                assert_eq!(err, run(&actions, false).map(|_| ()));
+                let err = record(&actions, true).map(|_| ());
+                assert_eq!(err, record(&actions, false).map(|_| ()));
                 assert!(matches!(err, Err(PolicyError::Action { action: 2, .. })));
             }
         }

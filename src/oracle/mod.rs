@@ -28,7 +28,7 @@ pub use kernel::EstimatorKernel;
 pub(crate) use baselined::baselined_pass;
 pub(crate) use causal::causal_pass;
 pub(crate) use full::full_pass;
-pub(crate) use recorded::recorded_pass;
+pub(crate) use recorded::{record_pass, sum_recorded};
 pub(crate) use terms::terms_pass;
 
 use crate::policy::{Policy, PolicyError};

@@ -6,7 +6,7 @@ use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
 use crate::baseline::{DecisionTerms, Given, RecordedPass};
 use crate::oracle::{
     EstimatorKernel, baselined_pass, causal_pass, features_valid, full_pass, policy_error,
-    recorded_pass, terms_pass,
+    record_pass, sum_recorded, terms_pass,
 };
 use crate::policy::LikelihoodRatio;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -287,10 +287,10 @@ where
         Ok(())
     }
 
-    /// On validated features, the policy's fused pass that records the scores
-    /// ([`EstimatorKernel::causal_sum_recorded`]); otherwise the checked route of
+    /// On validated features, the policy's own records
+    /// ([`EstimatorKernel::record_trusted`]); otherwise the checked route of
     /// [`IlProblem::decision_terms`], which reports the first invalid input.
-    fn recorded_estimate(
+    fn record_decisions(
         &self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
@@ -305,30 +305,24 @@ where
             out.fill_from_terms();
             return Ok(());
         }
-        recorded_pass(&self.policy, theta.as_slice(), &t, out)?;
+        record_pass(&self.policy, theta.as_slice(), &t, out)?;
         cost.gradient_evaluations += trajectory.len() as u64;
         Ok(())
     }
 
-    /// Through [`EstimatorKernel::subtract_scores_trusted`] when the policy's pass recorded the
-    /// scores, else from rows.
-    fn subtract_recorded(
+    /// Through [`EstimatorKernel::accumulate_recorded`] when the policy recorded the decisions,
+    /// else from rows.
+    fn estimate_recorded(
         &self,
         trajectory: &Self::Trajectory,
-        recorded: &RecordedPass<S>,
-        b: impl Iterator<Item = S>,
+        recorded: &mut RecordedPass<S>,
+        losses: &[S],
         g: &mut [S],
     ) {
         if recorded.score_rows {
-            recorded.subtract_rows(b, g);
+            recorded.sum_rows(losses, g);
         } else {
-            self.policy.subtract_scores_trusted(
-                &trajectory.feature_data,
-                &recorded.scores,
-                recorded.decisions(),
-                b,
-                g,
-            );
+            sum_recorded(&self.policy, &trajectory.decisions(), recorded, losses, g);
         }
     }
 
