@@ -17,11 +17,15 @@
 //! freshly reserved storage, as the generic roll-out returns (it reuses one buffer otherwise).
 //! Modes `pairs` and `loo`: the causal estimate alone over a pair of the generic trajectories
 //! (seeds s and s + 1), the plain mean of the pair against the leave-one-out baseline
-//! (`Baselined`, m = 2), compared with each other.
+//! (`Baselined`, m = 2), compared with each other. Modes `single`, `constant` and `estimated`: the
+//! causal estimate alone of one trajectory through `Baselined` with m = 1, without a baseline, with
+//! the constant b = 50 and with the variance-minimising per-decision constants estimated from the
+//! earlier estimates (decay 0.99), the last two compared with the first.
 
 #[path = "support/specialised.rs"]
 mod specialised;
 
+use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined};
 use ilopt::expert::lqr::LqrExpert;
 use ilopt::policy::{Logistic, Softmax};
@@ -58,7 +62,7 @@ fn oracle_once<P: IlProblem<f64>>(
 }
 
 /// Every mode the probe knows.
-const MODES: [&str; 10] = [
+const MODES: [&str; 13] = [
     "generic",
     "spec",
     "rollout",
@@ -69,6 +73,9 @@ const MODES: [&str; 10] = [
     "specfresh",
     "pairs",
     "loo",
+    "single",
+    "constant",
+    "estimated",
 ];
 
 /// Report a bad argument and exit with status 2.
@@ -147,6 +154,28 @@ fn main() {
         ]
     };
     let pairs: Vec<_> = (0..SEEDS).map(pair_of).collect();
+    let singles: Vec<_> = generic_trajectories
+        .iter()
+        .map(|t| vec![t.clone()])
+        .collect();
+    let single = Baselined::new(p.clone(), 1, &Baseline::None).expect("single");
+    let constant = Baselined::new(
+        p.clone(),
+        1,
+        &Baseline::Constant {
+            value: ConfigNumber::ratio(50, 1),
+        },
+    )
+    .expect("constant");
+    let estimated = Baselined::new(
+        p.clone(),
+        1,
+        &Baseline::Estimated {
+            time_indexed: true,
+            decay: Some(ConfigNumber::ratio(99, 100)),
+        },
+    )
+    .expect("estimated");
 
     let mut t = Trajectory::default();
     let modes: Vec<&str> = modes.split(',').collect();
@@ -203,6 +232,19 @@ fn main() {
                                     .expect("estimate"),
                             )[0];
                             pair.iter().map(|tr| tr.len() as u64).sum()
+                        }
+                        "single" | "constant" | "estimated" => {
+                            let one = &singles[seed as usize];
+                            let o = match mode {
+                                "constant" => &constant,
+                                "estimated" => &estimated,
+                                _ => &single,
+                            };
+                            acc += black_box(
+                                o.estimate(th, one, EstimatorForm::Causal, &mut cost)
+                                    .expect("estimate"),
+                            )[0];
+                            one[0].len() as u64
                         }
                         "spec" => {
                             fast.rollout(black_box(&THETA), &mut rng, &mut t);
@@ -272,6 +314,8 @@ fn main() {
         ("estimate", "specest"),
         ("softmax", "spec"),
         ("loo", "pairs"),
+        ("constant", "single"),
+        ("estimated", "single"),
     ] {
         let mut ratios: Vec<f64> = per_round
             .iter()

@@ -274,7 +274,7 @@ pub trait IlProblem<S: Scalar> {
     /// [`IlProblem::record_decisions`] recorded there (s its scored decisions), with per-step
     /// losses `l'` in place of the recorded ones: one per entry of [`RecordedPass::losses`]
     /// (`losses` must have that length). With the recorded losses it is the causal estimate of
-    /// eq. 3.15; with `l'_t = l_t + b_{t−1} − b_t` it is the baselined `g − Σ_i b_i ψ_i`
+    /// eq. 3.15; with `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first unscored step on) it is the baselined `g − Σ_i b_i ψ_i`
     /// ([`crate::baseline`], summation by parts). The default sums the rows of the default form.
     fn estimate_recorded(
         &self,
@@ -285,6 +285,22 @@ pub trait IlProblem<S: Scalar> {
     ) {
         let _ = trajectory;
         recorded.sum_rows(losses, g);
+    }
+
+    /// `cross[i] += v·ψ_i` and `moment[i] += ‖ψ_i‖²` for the first `cross.len()` scored decisions
+    /// of `trajectory`, from what [`IlProblem::record_decisions`] recorded there: the statistics
+    /// of the variance-minimising baseline ([`crate::baseline::RunningOptimum`]). The default
+    /// reads the rows of the default form.
+    fn recorded_score_products(
+        &self,
+        trajectory: &Self::Trajectory,
+        recorded: &RecordedPass<S>,
+        v: &[S],
+        cross: &mut [S],
+        moment: &mut [S],
+    ) {
+        let _ = trajectory;
+        recorded.score_row_products(v, cross, moment);
     }
 
     /// `Σ_{t=1}^{T−1} l(s_t, θ)` on a trajectory: an unbiased estimate of F(θ) when τ ∼ p(·; θ).

@@ -467,10 +467,10 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
             weighted_counts.push(n);
         }
         // Per call, never per step: the given baselines' pass allocates per trajectory its
-        // shifts, the logistic pass's records and its estimate, then the mean; the terms route
-        // one scratch buffer per trajectory and the mean; leave-one-out only its result.
+        // shifts, the logistic pass's records and its estimate, then the mean; leave-one-out and
+        // the estimated baselines (decisions recorded into kept buffers) only their result.
         let fast = match kind {
-            Baseline::LeaveOneOut => 1,
+            Baseline::LeaveOneOut | Baseline::Estimated { .. } => 1,
             Baseline::Constant { .. } => 3 * m as u64 + 1,
             _ => m as u64 + 2,
         };

@@ -263,6 +263,88 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         Ok(mean)
     }
 
+    /// The mean estimate over `batch` with the committed variance-minimising baselines of
+    /// [`RunningOptimum`], which then observes the batch: every trajectory's decisions recorded
+    /// ([`IlProblem::record_decisions`]), its estimate summed once with the baselines folded into
+    /// its per-step losses, `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first unscored step on;
+    /// [`IlProblem::estimate_recorded`]), then once with its own losses (the plain g) for the
+    /// statistics `g·ψ_i` and `‖ψ_i‖²` ([`IlProblem::recorded_score_products`]). No allocation
+    /// per step.
+    fn estimated(
+        &self,
+        theta: &DVector<S>,
+        batch: &[P::Trajectory],
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let Kind::Estimated {
+            time_indexed,
+            running,
+        } = &self.kind
+        else {
+            unreachable!("the estimated kind")
+        };
+        let m = batch.len();
+        if m == 0 {
+            return Err(OracleError::Trajectory("an empty minibatch".into()));
+        }
+        let inner = self.inner();
+        let mut running = running.borrow_mut();
+        let mut buffers = self.buffers.borrow_mut();
+        let Buffers {
+            records,
+            totals: plain,
+            losses,
+            g,
+            ..
+        } = &mut *buffers;
+        if records.len() < m {
+            records.resize_with(m, RecordedPass::new);
+        }
+        let records = &mut records[..m];
+        for (t, r) in batch.iter().zip(records.iter_mut()) {
+            inner.record_decisions(theta, t, r, cost)?;
+        }
+        let d = inner.dim();
+        g.clear();
+        g.resize(d, S::zero());
+        let constant = running.constant();
+        let b = |i: usize| {
+            if *time_indexed {
+                running.time_indexed(i)
+            } else {
+                constant.clone()
+            }
+            .unwrap_or_else(S::zero)
+        };
+        for (t, r) in batch.iter().zip(records.iter_mut()) {
+            let scored = r.decisions();
+            losses.clear();
+            let mut previous = S::zero();
+            for (step, l) in r.losses().iter().enumerate() {
+                let current = if step < scored { b(step) } else { S::zero() };
+                losses.push(l.clone() + (current.clone() - &previous));
+                previous = current;
+            }
+            inner.estimate_recorded(t, r, losses, g);
+        }
+        running.clear_pending();
+        for (t, r) in batch.iter().zip(records.iter_mut()) {
+            losses.clear();
+            losses.extend_from_slice(r.losses());
+            plain.clear();
+            plain.resize(d, S::zero());
+            inner.estimate_recorded(t, r, losses, plain);
+            let (cross, moment) = running.pending_mut(r.decisions());
+            inner.recorded_score_products(t, r, plain, cross, moment);
+        }
+        let m = S::from_i64(m as i64);
+        let mean = DVector::from_iterator(d, g.iter().map(|x| x.clone() / &m));
+        if !mean.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(mean)
+    }
+
     /// The mean baselined estimate over `batch`, each trajectory's terms from `fill`.
     fn baselined(
         &self,
@@ -393,6 +475,9 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
         let inner = self.inner();
         if matches!(self.kind, Kind::LeaveOneOut) {
             return self.leave_one_out(theta, trajectory, cost);
+        }
+        if matches!(self.kind, Kind::Estimated { .. }) {
+            return self.estimated(theta, trajectory, cost);
         }
         let given = match &self.kind {
             Kind::Constant(b) => Some(Given::Constant(b)),

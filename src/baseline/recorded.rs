@@ -97,6 +97,17 @@ impl<S: Scalar> RecordedPass<S> {
         self.score_rows = true;
     }
 
+    /// `cross[i] += v·ψ_i`, `moment[i] += ‖ψ_i‖²` for the first `cross.len()` decisions, for the
+    /// default form.
+    ///
+    /// # Panics
+    /// If the scores are not stored as rows.
+    pub(crate) fn score_row_products(&self, v: &[S], cross: &mut [S], moment: &mut [S]) {
+        assert!(self.score_rows, "recorded pass: scores not stored as rows");
+        let d = self.estimate.len().max(1);
+        crate::oracle::kernel::add_score_products(self.scores.chunks_exact(d), v, cross, moment);
+    }
+
     /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` (s scored decisions) for the default form,
     /// with one loss `l'_t` per entry of [`RecordedPass::losses`]: the plain estimate minus
     /// `Σ_{i<s} b_i ψ_i` with `b_i = −Σ_{t>i} (l'_t − l_t)` (summation by parts).

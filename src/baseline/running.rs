@@ -81,6 +81,16 @@ impl<S: Scalar> RunningOptimum<S> {
         }
     }
 
+    /// The pending sums `Σ g·ψ_i` and `Σ ‖ψ_i‖²` of decisions 0..n (grown to n entries), for a
+    /// trajectory's statistics added in place, as [`RunningOptimum::observe`] adds them.
+    pub(crate) fn pending_mut(&mut self, n: usize) -> (&mut [S], &mut [S]) {
+        if self.pending_cross.len() < n {
+            self.pending_cross.resize(n, S::zero());
+            self.pending_moment.resize(n, S::zero());
+        }
+        (&mut self.pending_cross[..n], &mut self.pending_moment[..n])
+    }
+
     /// Move the pending statistics into the estimates (see the type docs for when).
     pub fn commit(&mut self) {
         if let Some(decay) = &self.decay {

@@ -172,6 +172,39 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         let _ = features;
         accumulate_rows(records, self.param_dim(), losses, g, scratch);
     }
+
+    /// `cross[i] += v·ψ_i` and `moment[i] += ‖ψ_i‖²` for the first `cross.len()` decisions that
+    /// [`EstimatorKernel::record_trusted`] recorded in `records` for the same `features` (the
+    /// statistics of the variance-minimising baseline, [`crate::baseline::RunningOptimum`]).
+    /// The default reads the rows of `record_rows` ([`crate::scalar::dot`],
+    /// [`crate::scalar::norm_sq`]).
+    fn score_products(
+        &self,
+        features: &[S],
+        records: &[S],
+        v: &[S],
+        cross: &mut [S],
+        moment: &mut [S],
+    ) {
+        let _ = features;
+        let d = self.param_dim();
+        let scores = records.chunks_exact(2 * d.max(1)).map(|row| &row[d..]);
+        add_score_products(scores, v, cross, moment);
+    }
+}
+
+/// `cross[i] += v·ψ_i`, `moment[i] += ‖ψ_i‖²` for the scores ψ_i that `scores` yields, as far as
+/// both lists go.
+pub(crate) fn add_score_products<'a, S: Scalar + 'a>(
+    scores: impl Iterator<Item = &'a [S]>,
+    v: &[S],
+    cross: &mut [S],
+    moment: &mut [S],
+) {
+    for ((psi, c), m) in scores.zip(cross.iter_mut()).zip(moment.iter_mut()) {
+        *c += crate::scalar::dot(v, psi);
+        *m += crate::scalar::norm_sq(psi);
+    }
 }
 
 /// The default [`EstimatorKernel::record_trusted`]: per decision [`Policy::loss_score_into`]

@@ -6,7 +6,7 @@
 //! `g_j += 4(p − y)p(1 − p)φ_j + l_t Σ_j` and `Σ_j += (a − p)φ_j`, the operations of the default
 //! kernel in the same order.
 
-use super::kernel::{EstimatorKernel, causal_sum_by_steps};
+use super::kernel::{EstimatorKernel, add_score_products, causal_sum_by_steps};
 use crate::policy::logistic::{brier, finite_logit, score_coefficient, sigmoid_of_finite};
 use crate::policy::softmax::check_action;
 use crate::policy::{Logistic, Policy, PolicyError, check_out, check_vec_scalar, logistic_sigmoid};
@@ -350,6 +350,36 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
                     *gj += end.clone() * sj;
                 }
             }
+        });
+    }
+
+    /// ψ_i = c_i φ_i formed from the recorded coefficient, in a `[S; N]` local for 1 to 8
+    /// features (else in `Vec`s), then its products as the default forms them.
+    fn score_products(
+        &self,
+        features: &[S],
+        records: &[S],
+        v: &[S],
+        cross: &mut [S],
+        moment: &mut [S],
+    ) {
+        let dim = Policy::<S>::feature_dim(self);
+        let coefficients = &records[..records.len() / 2];
+        let rows = features.chunks_exact(dim.max(1)).zip(coefficients);
+        by_feature_count!(dim, N => {
+            let scores = rows.map(|(phi, c)| -> [S; N] {
+                std::array::from_fn(|j| c.clone() * &phi[j])
+            });
+            for ((psi, cr), mo) in scores.zip(cross.iter_mut()).zip(moment.iter_mut()) {
+                *cr += crate::scalar::dot(v, &psi);
+                *mo += crate::scalar::norm_sq(&psi);
+            }
+        }, _ => {
+            let scores: Vec<Vec<S>> = rows
+                .take(cross.len())
+                .map(|(phi, c)| phi.iter().map(|x| c.clone() * x).collect())
+                .collect();
+            add_score_products(scores.iter().map(Vec::as_slice), v, cross, moment);
         });
     }
 }

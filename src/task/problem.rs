@@ -326,6 +326,24 @@ where
         }
     }
 
+    /// Through [`EstimatorKernel::score_products`] when the policy recorded the decisions, else
+    /// from rows.
+    fn recorded_score_products(
+        &self,
+        trajectory: &Self::Trajectory,
+        recorded: &RecordedPass<S>,
+        v: &[S],
+        cross: &mut [S],
+        moment: &mut [S],
+    ) {
+        if recorded.score_rows {
+            recorded.score_row_products(v, cross, moment);
+        } else {
+            let features = &trajectory.feature_data;
+            (self.policy).score_products(features, &recorded.scores, v, cross, moment);
+        }
+    }
+
     fn trajectory_loss(
         &self,
         theta: &DVector<S>,

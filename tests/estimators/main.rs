@@ -8,6 +8,7 @@ mod common;
 
 mod baselines;
 mod batched;
+mod estimated_baseline;
 mod fixed_horizon;
 mod leave_one_out;
 mod oracle_monte_carlo;
