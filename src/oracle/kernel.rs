@@ -131,9 +131,9 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// depends on every trajectory's losses and enters as shifted losses ([`crate::baseline`]).
     ///
     /// `losses` and `records` are cleared, then refilled: kept between calls, they allocate
-    /// nothing per decision once grown. The default records `∇_θ l_t` and ψ_t as rows of
-    /// [`Policy::param_dim`] entries each, with [`Policy::loss_score_into`] per decision
-    /// (`record_rows`).
+    /// nothing per decision once grown. The default records ψ_t as rows of
+    /// [`Policy::param_dim`] entries and `Σ_t ∇_θ l_t` after them, with
+    /// [`Policy::loss_score_into`] per decision (`record_rows`).
     ///
     /// # Errors
     /// As [`Policy::loss_score_into`] at the first failing decision; `losses` and `records` are
@@ -155,12 +155,12 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// the losses `l'` given: n entries, or n + 1 when one more loss (an absorbing tail, a
     /// baseline's weight after the last decision) weighs every score. With the recorded losses
     /// and n entries it is the plain causal estimate of [`EstimatorKernel::causal_sum_trusted`],
-    /// bit for bit.
+    /// bit for bit for the logistic policy (the default adds `Σ_t ∇_θ l_t` first, so its sums
+    /// differ from the plain pass's in the last bits).
     ///
     /// `scratch` is working storage the implementation sizes as it needs (the default:
     /// [`Policy::param_dim`] entries for `Σ_{i<t} ψ_i`; the logistic policy's fixed-dimension
-    /// loop needs none). The default reads the rows of `record_rows` and adds each decision
-    /// with `accumulate`.
+    /// loop needs none). The default reads the rows of `record_rows` (`accumulate_rows`).
     fn accumulate_recorded(
         &self,
         features: &[S],
@@ -188,8 +188,8 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     ) {
         let _ = features;
         let d = self.param_dim();
-        let scores = records.chunks_exact(2 * d.max(1)).map(|row| &row[d..]);
-        add_score_products(scores, v, cross, moment);
+        let (scores, _) = split_score_rows(records, d);
+        add_score_products(scores.chunks_exact(d.max(1)), v, cross, moment);
     }
 }
 
@@ -208,8 +208,9 @@ pub(crate) fn add_score_products<'a, S: Scalar + 'a>(
 }
 
 /// The default [`EstimatorKernel::record_trusted`]: per decision [`Policy::loss_score_into`]
-/// (with the policy's checks), its loss appended to `losses` and the rows `∇_θ l_t` and ψ_t to
-/// `records` (through [`record_by_steps`]).
+/// (with the policy's checks), its loss appended to `losses` and the row ψ_t to `records`
+/// (through [`record_by_steps`]), then the sum `Σ_t ∇_θ l_t` as one more row (the losses do
+/// not weigh it, so it is kept summed: one row of d per decision).
 pub(crate) fn record_rows<S, P, L>(
     policy: &P,
     theta: &[S],
@@ -225,8 +226,9 @@ where
     L: Borrow<P::Label>,
 {
     let d = policy.param_dim();
-    let mut buf = vec![S::zero(); 2 * d];
-    let (grad, score) = buf.split_at_mut(d);
+    let mut buf = vec![S::zero(); 3 * d];
+    let (grad, rest) = buf.split_at_mut(d);
+    let (score, total) = rest.split_at_mut(d);
     let x = policy.feature_dim();
     record_by_steps(
         features,
@@ -235,19 +237,24 @@ where
         actions,
         losses,
         records,
-        2 * d,
+        d,
         |phi, y, a, records| {
             let l = policy.loss_score_into(theta, phi, y.borrow(), a, grad, score)?;
-            records.extend_from_slice(grad);
+            for (t, g) in total.iter_mut().zip(grad.iter()) {
+                *t += g;
+            }
             records.extend_from_slice(score);
             Ok(l)
         },
-    )
+    )?;
+    records.extend_from_slice(total);
+    Ok(())
 }
 
-/// The default [`EstimatorKernel::accumulate_recorded`] for `records` holding, per decision,
-/// the rows `∇_θ l_t` and ψ_t of `d` entries each: per decision `accumulate` with unit weight
-/// (the operations of the default causal pass), then `l'_n Σ_{i<n} ψ_i` for an (n + 1)-th loss.
+/// The default [`EstimatorKernel::accumulate_recorded`] for the `records` of `record_rows` (n
+/// rows ψ_t of `d` entries, then `Σ_t ∇_θ l_t`): `g += Σ_t ∇_θ l_t`, then per decision
+/// `g += l'_t Σ_{i<t} ψ_i` and `Σ_{i<t} ψ_i += ψ_t`, then `l'_n Σ_{i<n} ψ_i` for an (n + 1)-th
+/// loss.
 pub(crate) fn accumulate_rows<S: Scalar>(
     records: &[S],
     d: usize,
@@ -255,20 +262,32 @@ pub(crate) fn accumulate_rows<S: Scalar>(
     g: &mut [S],
     scratch: &mut Vec<S>,
 ) {
+    let (scores, total) = split_score_rows(records, d);
+    for (gj, t) in g.iter_mut().zip(total) {
+        *gj += t;
+    }
     scratch.clear();
     scratch.resize(d, S::zero());
     let score_sum = &mut scratch[..];
-    let rows = records.chunks_exact(2 * d.max(1));
+    let rows = scores.chunks_exact(d.max(1));
     let n = rows.len();
     for (row, l) in rows.zip(losses) {
-        let (grad, score) = row.split_at(d);
-        accumulate(g, None, l, grad, score, score_sum);
+        for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(row) {
+            *gj += l.clone() * &*sj;
+            *sj += x;
+        }
     }
     if let Some(end) = losses.get(n) {
         for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
             *gj += end.clone() * sj;
         }
     }
+}
+
+/// The records of `record_rows` split into the score rows and the summed loss gradients (the
+/// last `d` entries).
+fn split_score_rows<S>(records: &[S], d: usize) -> (&[S], &[S]) {
+    records.split_at(records.len().saturating_sub(d))
 }
 
 /// Every decision of a trajectory recorded, as [`EstimatorKernel::record_trusted`] records

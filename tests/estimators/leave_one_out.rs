@@ -145,8 +145,9 @@ fn rollouts<P: IlProblem<f64>>(
 
 /// The real tasks: the logistic policy's own recording pass (one score coefficient per decision)
 /// and the default one (rows of ψ_t: softmax, linear-Gaussian), episodic, with resets and with
-/// absorbing tails. The recorded decisions summed with their own losses are the plain estimate
-/// bit for bit.
+/// absorbing tails. The recorded decisions summed with their own losses are the plain estimate:
+/// bit for bit for the logistic policy, up to rounding for the default records (which add
+/// `Σ_t ∇l_t` first).
 #[test]
 fn task_leave_one_out_fast_route_agrees_with_terms() {
     use ilopt::policy::{Logistic, Softmax};
@@ -171,11 +172,15 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
             let plain = p
                 .estimate(theta, t, EstimatorForm::Causal, &mut Cost::default())
                 .unwrap();
-            assert_eq!(
-                g.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
-                plain.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
-                "{what}: the recorded decisions summed with their own losses are the plain estimate"
-            );
+            if what.starts_with("logistic") {
+                assert_eq!(
+                    g.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                    plain.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                    "{what}: the recorded decisions summed with their own losses"
+                );
+            } else {
+                assert!(close(&g, plain.as_slice()), "{what}: {g:?} vs {plain:?}");
+            }
         }
     }
     let lqr = || CartPoleTask::<f64>::with_lqr().unwrap();
