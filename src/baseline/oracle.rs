@@ -193,6 +193,26 @@ fn leave_one_out_losses<S: Scalar>(totals: &[S], own: &[S], others: &S, shifted:
     }
 }
 
+/// Every trajectory of `batch` recorded ([`IlProblem::record_decisions`]) into the first m
+/// entries of `records`, grown to m if need be.
+fn record_batch<'r, S: Scalar, P: IlProblem<S>>(
+    inner: &P,
+    theta: &DVector<S>,
+    batch: &[P::Trajectory],
+    records: &'r mut Vec<RecordedPass<S>>,
+    cost: &mut Cost,
+) -> Result<&'r mut [RecordedPass<S>], OracleError> {
+    let m = batch.len();
+    if records.len() < m {
+        records.resize_with(m, RecordedPass::new);
+    }
+    let records = &mut records[..m];
+    for (t, r) in batch.iter().zip(records.iter_mut()) {
+        inner.record_decisions(theta, t, r, cost)?;
+    }
+    Ok(records)
+}
+
 impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
     /// The mean causal estimate over `batch` assembled from every trajectory's [`DecisionTerms`]
     /// ([`IlProblem::decision_terms`]) for every kind of baseline: the reference route, with the
@@ -241,13 +261,7 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
             g,
             ..
         } = &mut *buffers;
-        if records.len() < m {
-            records.resize_with(m, RecordedPass::new);
-        }
-        let records = &mut records[..m];
-        for (t, r) in batch.iter().zip(records.iter_mut()) {
-            inner.record_decisions(theta, t, r, cost)?;
-        }
+        let records = record_batch(inner, theta, batch, records, cost)?;
         step_totals(records.iter().map(RecordedPass::losses), totals);
         let (others, m) = (S::from_i64(m as i64 - 1), S::from_i64(m as i64));
         g.clear();
@@ -297,13 +311,7 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
             g,
             ..
         } = &mut *buffers;
-        if records.len() < m {
-            records.resize_with(m, RecordedPass::new);
-        }
-        let records = &mut records[..m];
-        for (t, r) in batch.iter().zip(records.iter_mut()) {
-            inner.record_decisions(theta, t, r, cost)?;
-        }
+        let records = record_batch(inner, theta, batch, records, cost)?;
         let d = inner.dim();
         g.clear();
         g.resize(d, S::zero());
