@@ -1,7 +1,7 @@
 //! [`RunningOptimum`]: the variance-minimising baselines estimated from earlier iterations only.
 
 use super::DecisionTerms;
-use crate::scalar::{Scalar, dot, norm_sq};
+use crate::scalar::Scalar;
 
 /// Running estimates of `b*_i = E[g·ψ_i] / E‖ψ_i‖²` (time-indexed) and of
 /// `b*_const = Σ_i E[g·ψ_i] / Σ_i E‖ψ_i‖²` (one constant) from the plain estimates g of
@@ -70,15 +70,11 @@ impl<S: Scalar> RunningOptimum<S> {
         self.g.clear();
         self.g.resize(terms.dim(), S::zero());
         terms.estimate_into(|_| None, &mut self.g);
-        if self.pending_cross.len() < n {
-            self.pending_cross.resize(n, S::zero());
-            self.pending_moment.resize(n, S::zero());
-        }
-        for i in 0..n {
-            let psi = terms.score(i);
-            self.pending_cross[i] += dot(&self.g, psi);
-            self.pending_moment[i] += norm_sq(psi);
-        }
+        let g = std::mem::take(&mut self.g);
+        let (cross, moment) = self.pending_mut(n);
+        let scores = (0..n).map(|i| terms.score(i));
+        crate::oracle::kernel::add_score_products(scores, &g, cross, moment);
+        self.g = g;
     }
 
     /// The pending sums `Σ g·ψ_i` and `Σ ‖ψ_i‖²` of decisions 0..n (grown to n entries), for a
