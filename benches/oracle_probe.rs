@@ -20,7 +20,14 @@
 //! (`Baselined`, m = 2), compared with each other. Modes `single`, `constant` and `estimated`: the
 //! causal estimate alone of one trajectory through `Baselined` with m = 1, without a baseline, with
 //! the constant b = 50 and with the variance-minimising per-decision constants estimated from the
-//! earlier estimates (decay 0.99), the last two compared with the first.
+//! earlier estimates (decay 0.99), the last two compared with the first. Modes `oracle` and
+//! `oracle-estimated`: a whole oracle call through `Baselined` with m = 1 (roll-out of the
+//! learner, then its causal estimate), without a baseline and with the estimated per-decision
+//! constants (their statistics committed at each roll-out, as in training), compared. Modes
+//! `weighted`, `weighted-estimated`, `weighted-pairs` and `weighted-loo`: the per-decision
+//! importance-weighted old-point estimate of math.md §4 (IS-STORM's, θ_old = θ + 0.01 per entry)
+//! on one trajectory without a baseline and with the estimated constants, and on the pairs
+//! without a baseline and with leave-one-out, each baselined one compared with its plain one.
 
 #[path = "support/specialised.rs"]
 mod specialised;
@@ -29,7 +36,7 @@ use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined};
 use ilopt::expert::lqr::LqrExpert;
 use ilopt::policy::{Logistic, Softmax};
-use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::task::TaskProblem;
 use ilopt::task::cartpole::{self, CartPoleTask};
 use nalgebra::DVector;
@@ -62,7 +69,7 @@ fn oracle_once<P: IlProblem<f64>>(
 }
 
 /// Every mode the probe knows.
-const MODES: [&str; 13] = [
+const MODES: [&str; 19] = [
     "generic",
     "spec",
     "rollout",
@@ -76,6 +83,12 @@ const MODES: [&str; 13] = [
     "single",
     "constant",
     "estimated",
+    "oracle",
+    "oracle-estimated",
+    "weighted",
+    "weighted-estimated",
+    "weighted-pairs",
+    "weighted-loo",
 ];
 
 /// Report a bad argument and exit with status 2.
@@ -112,6 +125,7 @@ fn main() {
         horizon: ilopt::task::Horizon::Episodic,
     };
     let theta = DVector::from_column_slice(&THETA);
+    let theta_old = theta.map(|x| x + 0.01);
     let soft = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().expect("LQR design"),
         policy: Softmax::new(2, cartpole::FEATURES).expect("policy"),
@@ -176,6 +190,7 @@ fn main() {
         },
     )
     .expect("estimated");
+    let oracle_estimated = estimated.clone();
 
     let mut t = Trajectory::default();
     let modes: Vec<&str> = modes.split(',').collect();
@@ -232,6 +247,31 @@ fn main() {
                                     .expect("estimate"),
                             )[0];
                             pair.iter().map(|tr| tr.len() as u64).sum()
+                        }
+                        "oracle" => {
+                            let (n, x) = oracle_once(&single, th, &mut rng, &mut cost);
+                            acc += x;
+                            n
+                        }
+                        "oracle-estimated" => {
+                            let (n, x) = oracle_once(&oracle_estimated, th, &mut rng, &mut cost);
+                            acc += x;
+                            n
+                        }
+                        "weighted" | "weighted-estimated" | "weighted-pairs" | "weighted-loo" => {
+                            let (o, batch) = match mode {
+                                "weighted" => (&single, &singles[seed as usize]),
+                                "weighted-estimated" => (&estimated, &singles[seed as usize]),
+                                "weighted-pairs" => (&plain_pairs, &pairs[seed as usize]),
+                                _ => (&loo_pairs, &pairs[seed as usize]),
+                            };
+                            let old = black_box(&theta_old);
+                            let w = Weighting::PerDecision;
+                            acc += black_box(
+                                o.weighted_estimate(old, th, batch, w, &mut cost)
+                                    .expect("weighted estimate"),
+                            )[0];
+                            batch.iter().map(|tr| tr.len() as u64).sum()
                         }
                         "single" | "constant" | "estimated" => {
                             let one = &singles[seed as usize];
@@ -304,7 +344,7 @@ fn main() {
     }
     for (mode, ns) in &best {
         println!(
-            "{mode:>9}: {ns:6.1} ns/step = {:5.2} M trajectory-steps/s",
+            "{mode:>16}: {ns:6.1} ns/step = {:5.2} M trajectory-steps/s",
             1e3 / ns
         );
     }
@@ -316,6 +356,9 @@ fn main() {
         ("loo", "pairs"),
         ("constant", "single"),
         ("estimated", "single"),
+        ("oracle-estimated", "oracle"),
+        ("weighted-estimated", "weighted"),
+        ("weighted-loo", "weighted-pairs"),
     ] {
         let mut ratios: Vec<f64> = per_round
             .iter()
@@ -327,7 +370,7 @@ fn main() {
         ratios.sort_by(f64::total_cmp);
         let q = |f: f64| ratios[((ratios.len() - 1) as f64 * f).round() as usize];
         println!(
-            "{a:>9} / {b}: fastest episodes {:.3}; median of per-round ratios {:.3} (quartiles \
+            "{a:>16} / {b}: fastest episodes {:.3}; median of per-round ratios {:.3} (quartiles \
              {:.3}–{:.3})",
             best[a] / best[b],
             q(0.5),

@@ -15,6 +15,7 @@
 //! across algorithms.
 
 use crate::baseline::{DecisionTerms, Given, RecordedPass};
+use crate::oracle::ScoreProducts;
 use crate::scalar::{Scalar, Undecidable};
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -287,20 +288,18 @@ pub trait IlProblem<S: Scalar> {
         recorded.sum_rows(losses, g);
     }
 
-    /// `cross[i] += v·ψ_i` and `moment[i] += ‖ψ_i‖²` for the first `cross.len()` scored decisions
-    /// of `trajectory`, from what [`IlProblem::record_decisions`] recorded there: the statistics
-    /// of the variance-minimising baseline ([`crate::baseline::RunningOptimum`]). The default
-    /// reads the rows of the default form.
+    /// [`ScoreProducts`] for the scored decisions of `trajectory`, from what
+    /// [`IlProblem::record_decisions`] recorded there: the statistics of the variance-minimising
+    /// baseline ([`crate::baseline::RunningOptimum`]) and its correction `g −= Σ_i b_i ψ_i`. The
+    /// default reads the rows of the default form.
     fn recorded_score_products(
         &self,
         trajectory: &Self::Trajectory,
         recorded: &RecordedPass<S>,
-        v: &[S],
-        cross: &mut [S],
-        moment: &mut [S],
+        out: ScoreProducts<'_, S>,
     ) {
         let _ = trajectory;
-        recorded.score_row_products(v, cross, moment);
+        recorded.score_row_products(out);
     }
 
     /// `Σ_{t=1}^{T−1} l(s_t, θ)` on a trajectory: an unbiased estimate of F(θ) when τ ∼ p(·; θ).

@@ -2,6 +2,7 @@
 
 use super::{Baseline, DecisionTerms, Given, RecordedPass, RunningOptimum};
 use crate::batched::Batched;
+use crate::oracle::ScoreProducts;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::Scalar;
 use nalgebra::DVector;
@@ -21,13 +22,15 @@ enum Kind<S> {
 }
 
 /// Reused storage of one oracle call: per trajectory its [`DecisionTerms`] or its
-/// [`RecordedPass`], the leave-one-out sums `Σ_k L_i^{(k)}`, one estimate.
+/// [`RecordedPass`], the leave-one-out step totals or the estimated baselines, per-step losses,
+/// one trajectory's plain estimate, the estimate.
 #[derive(Debug, Clone)]
 struct Buffers<S> {
     terms: Vec<DecisionTerms<S>>,
     records: Vec<RecordedPass<S>>,
     totals: Vec<S>,
     losses: Vec<S>,
+    plain: Vec<S>,
     g: Vec<S>,
 }
 
@@ -127,6 +130,7 @@ impl<P, S: Scalar> Baselined<P, S> {
                 records: Vec::new(),
                 totals: Vec::new(),
                 losses: Vec::new(),
+                plain: Vec::new(),
                 g: Vec::new(),
             }),
         })
@@ -279,11 +283,10 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
 
     /// The mean estimate over `batch` with the committed variance-minimising baselines of
     /// [`RunningOptimum`], which then observes the batch: every trajectory's decisions recorded
-    /// ([`IlProblem::record_decisions`]), its estimate summed once with the baselines folded into
-    /// its per-step losses, `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first unscored step on;
-    /// [`IlProblem::estimate_recorded`]), then once with its own losses (the plain g) for the
-    /// statistics `g·ψ_i` and `‖ψ_i‖²` ([`IlProblem::recorded_score_products`]). No allocation
-    /// per step.
+    /// ([`IlProblem::record_decisions`]), its plain estimate g summed once
+    /// ([`IlProblem::estimate_recorded`] with its own losses), then one more read of its scores
+    /// for both the statistics `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
+    /// ([`IlProblem::recorded_score_products`]). No allocation per step.
     fn estimated(
         &self,
         theta: &DVector<S>,
@@ -306,8 +309,9 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         let mut buffers = self.buffers.borrow_mut();
         let Buffers {
             records,
-            totals: plain,
+            totals: baseline,
             losses,
+            plain,
             g,
             ..
         } = &mut *buffers;
@@ -315,25 +319,17 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
         let d = inner.dim();
         g.clear();
         g.resize(d, S::zero());
-        let constant = running.constant();
-        let b = |i: usize| {
-            if *time_indexed {
-                running.time_indexed(i)
-            } else {
-                constant.clone()
-            }
-            .unwrap_or_else(S::zero)
-        };
-        for (t, r) in batch.iter().zip(records.iter_mut()) {
-            let scored = r.decisions();
-            losses.clear();
-            let mut previous = S::zero();
-            for (step, l) in r.losses().iter().enumerate() {
-                let current = if step < scored { b(step) } else { S::zero() };
-                losses.push(l.clone() + (current.clone() - &previous));
-                previous = current;
-            }
-            inner.estimate_recorded(t, r, losses, g);
+        // The committed b_i of every decision the batch scored, before the batch's statistics.
+        let n = records
+            .iter()
+            .map(RecordedPass::decisions)
+            .max()
+            .unwrap_or(0);
+        baseline.clear();
+        if *time_indexed {
+            baseline.extend((0..n).map(|i| running.time_indexed(i).unwrap_or_else(S::zero)));
+        } else {
+            baseline.resize(n, running.constant().unwrap_or_else(S::zero));
         }
         running.clear_pending();
         for (t, r) in batch.iter().zip(records.iter_mut()) {
@@ -342,8 +338,19 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
             plain.clear();
             plain.resize(d, S::zero());
             inner.estimate_recorded(t, r, losses, plain);
-            let (cross, moment) = running.pending_mut(r.decisions());
-            inner.recorded_score_products(t, r, plain, cross, moment);
+            for (gj, x) in g.iter_mut().zip(plain.iter()) {
+                *gj += x;
+            }
+            let n = r.decisions();
+            let (cross, moment) = running.pending_mut(n);
+            let out = ScoreProducts {
+                v: plain,
+                baseline: &baseline[..n],
+                cross,
+                moment,
+                g,
+            };
+            inner.recorded_score_products(t, r, out);
         }
         let m = S::from_i64(m as i64);
         let mean = DVector::from_iterator(d, g.iter().map(|x| x.clone() / &m));

@@ -2,6 +2,7 @@
 //! summed with losses chosen after the pass.
 
 use super::DecisionTerms;
+use crate::oracle::ScoreProducts;
 use crate::scalar::Scalar;
 
 /// One trajectory's decisions recorded for the causal estimator of eq. 3.15,
@@ -97,15 +98,14 @@ impl<S: Scalar> RecordedPass<S> {
         self.score_rows = true;
     }
 
-    /// `cross[i] += v·ψ_i`, `moment[i] += ‖ψ_i‖²` for the first `cross.len()` decisions, for the
-    /// default form.
+    /// [`ScoreProducts`] of the default form's rows.
     ///
     /// # Panics
     /// If the scores are not stored as rows.
-    pub(crate) fn score_row_products(&self, v: &[S], cross: &mut [S], moment: &mut [S]) {
+    pub(crate) fn score_row_products(&self, out: ScoreProducts<'_, S>) {
         assert!(self.score_rows, "recorded pass: scores not stored as rows");
         let d = self.estimate.len().max(1);
-        crate::oracle::kernel::add_score_products(self.scores.chunks_exact(d), v, cross, moment);
+        out.add_rows(self.scores.chunks_exact(d));
     }
 
     /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` (s scored decisions) for the default form,

@@ -1,6 +1,7 @@
 //! [`RunningOptimum`]: the variance-minimising baselines estimated from earlier iterations only.
 
 use super::DecisionTerms;
+use crate::oracle::ScoreProducts;
 use crate::scalar::Scalar;
 
 /// Running estimates of `b*_i = E[g·ψ_i] / E‖ψ_i‖²` (time-indexed) and of
@@ -25,6 +26,8 @@ pub struct RunningOptimum<S> {
     /// Their values from the trajectories observed since the last commit.
     pending_cross: Vec<S>,
     pending_moment: Vec<S>,
+    /// `Σ_i` of `cross` and of `moment`.
+    totals: (S, S),
     /// The committed baselines: b_i, and the one constant.
     per_decision: Vec<Option<S>>,
     constant: Option<S>,
@@ -40,6 +43,7 @@ impl<S: Scalar> RunningOptimum<S> {
             moment: Vec::new(),
             pending_cross: Vec::new(),
             pending_moment: Vec::new(),
+            totals: (S::zero(), S::zero()),
             per_decision: Vec::new(),
             constant: None,
             g: Vec::new(),
@@ -72,8 +76,14 @@ impl<S: Scalar> RunningOptimum<S> {
         terms.estimate_into(|_| None, &mut self.g);
         let g = std::mem::take(&mut self.g);
         let (cross, moment) = self.pending_mut(n);
-        let scores = (0..n).map(|i| terms.score(i));
-        crate::oracle::kernel::add_score_products(scores, &g, cross, moment);
+        let statistics = ScoreProducts {
+            v: &g,
+            baseline: &[],
+            cross,
+            moment,
+            g: &mut [],
+        };
+        statistics.add_rows((0..n).map(|i| terms.score(i)));
         self.g = g;
     }
 
@@ -87,31 +97,123 @@ impl<S: Scalar> RunningOptimum<S> {
         (&mut self.pending_cross[..n], &mut self.pending_moment[..n])
     }
 
-    /// Move the pending statistics into the estimates (see the type docs for when).
+    /// Move the pending statistics into the estimates (see the type docs for when): every sum
+    /// times the decay, plus the pending one.
+    ///
+    /// The decay scales `Σ g·ψ_i` and `Σ ‖ψ_i‖²` alike, so a baseline `b_i` with nothing pending is
+    /// unchanged by it and keeps its value; only the pending decisions' `b_i` are formed again
+    /// (all of them when the decay is 0, which empties the sums). The constant's sums over i are
+    /// kept beside them in the same way. A commit thus costs one division per pending decision.
     pub fn commit(&mut self) {
-        if let Some(decay) = &self.decay {
-            for x in self.cross.iter_mut().chain(self.moment.iter_mut()) {
-                *x *= decay;
-            }
-        }
+        let ratio = |num: &S, den: &S| (!den.is_certainly_zero()).then(|| num.clone() / den);
         let n = self.pending_cross.len();
         if self.cross.len() < n {
             self.cross.resize(n, S::zero());
             self.moment.resize(n, S::zero());
+            self.per_decision.resize(n, None);
+        }
+        let mut reformed = 0..n;
+        if let Some(decay) = self.decay.clone() {
+            // A local decay (not a field the loop could write) lets the loops run in lanes.
+            for x in &mut self.cross {
+                *x *= &decay;
+            }
+            for x in &mut self.moment {
+                *x *= &decay;
+            }
+            self.totals.0 *= &decay;
+            self.totals.1 *= &decay;
+            if decay.is_certainly_zero() {
+                reformed = 0..self.cross.len();
+            }
         }
         for i in 0..n {
             self.cross[i] += &self.pending_cross[i];
             self.moment[i] += &self.pending_moment[i];
+            self.totals.0 += &self.pending_cross[i];
+            self.totals.1 += &self.pending_moment[i];
+        }
+        for i in reformed {
+            self.per_decision[i] = ratio(&self.cross[i], &self.moment[i]);
         }
         self.clear_pending();
-        let ratio = |num: &S, den: &S| (!den.is_certainly_zero()).then(|| num.clone() / den);
-        self.per_decision = self
-            .cross
-            .iter()
-            .zip(&self.moment)
-            .map(|(c, m)| ratio(c, m))
-            .collect();
-        let total = |xs: &[S]| xs.iter().fold(S::zero(), |acc, x| acc + x);
-        self.constant = ratio(&total(&self.cross), &total(&self.moment));
+        self.constant = ratio(&self.totals.0, &self.totals.1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::BigRational;
+    use rand::{Rng, SeedableRng};
+
+    fn q(n: i64, d: i64) -> BigRational {
+        BigRational::new(n.into(), d.into())
+    }
+
+    /// The baselines from every commit's sums recomputed from scratch, as the definition reads:
+    /// `C_i ← decay·C_i + pending_i` for every i, then `b_i = C_i / M_i` and
+    /// `b = Σ C_i / Σ M_i` (None where the denominator is 0).
+    struct Eager {
+        decay: BigRational,
+        cross: Vec<BigRational>,
+        moment: Vec<BigRational>,
+    }
+
+    impl Eager {
+        fn commit(&mut self, cross: &[BigRational], moment: &[BigRational]) {
+            let n = cross.len().max(self.cross.len());
+            self.cross.resize(n, q(0, 1));
+            self.moment.resize(n, q(0, 1));
+            for i in 0..n {
+                self.cross[i] = &self.decay * &self.cross[i] + cross.get(i).unwrap_or(&q(0, 1));
+                self.moment[i] = &self.decay * &self.moment[i] + moment.get(i).unwrap_or(&q(0, 1));
+            }
+        }
+
+        fn ratio(c: &BigRational, m: &BigRational) -> Option<BigRational> {
+            (*m != q(0, 1)).then(|| c / m)
+        }
+
+        fn time_indexed(&self, i: usize) -> Option<BigRational> {
+            Self::ratio(self.cross.get(i)?, &self.moment[i])
+        }
+
+        fn constant(&self) -> Option<BigRational> {
+            let total = |xs: &[BigRational]| xs.iter().fold(q(0, 1), |a, x| a + x);
+            Self::ratio(&total(&self.cross), &total(&self.moment))
+        }
+    }
+
+    /// Commits of pending statistics of random lengths (zero scores included), with the decays
+    /// 1, 9/10 and 0: the kept baselines of the decisions with nothing pending equal the
+    /// recomputed ones exactly.
+    #[test]
+    fn commit_equals_the_recomputed_baselines() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for decay in [q(1, 1), q(9, 10), q(0, 1)] {
+            let mut running = RunningOptimum::new(Some(decay.clone()));
+            let mut eager = Eager {
+                decay,
+                cross: Vec::new(),
+                moment: Vec::new(),
+            };
+            for _ in 0..40 {
+                let n = rng.random_range(0..12);
+                let cross: Vec<_> = (0..n).map(|_| q(rng.random_range(-20..20), 7)).collect();
+                let moment: Vec<_> = (0..n)
+                    .map(|_| q(rng.random_range(0..3) * rng.random_range(1..20), 5))
+                    .collect();
+                let (c, m) = running.pending_mut(n);
+                c.clone_from_slice(&cross);
+                m.clone_from_slice(&moment);
+                running.commit();
+                eager.commit(&cross, &moment);
+                for i in 0..14 {
+                    assert_eq!(running.time_indexed(i), eager.time_indexed(i), "b_{i}");
+                }
+                assert_eq!(running.constant(), eager.constant());
+            }
+        }
     }
 }

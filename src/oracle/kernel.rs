@@ -8,6 +8,7 @@
 //! linear-Gaussian policies override the loss without its gradient. Every override returns the
 //! default's values bit for bit and the default's first error.
 
+use super::products::ScoreProducts;
 use crate::policy::{
     ActionVector, LinearGaussian, MlpGaussian, MlpSoftmax, Policy, PolicyError, Softmax,
     SpeedLimitedGaussian,
@@ -173,37 +174,15 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         accumulate_rows(records, self.param_dim(), losses, g, scratch);
     }
 
-    /// `cross[i] += v·ψ_i` and `moment[i] += ‖ψ_i‖²` for the first `cross.len()` decisions that
-    /// [`EstimatorKernel::record_trusted`] recorded in `records` for the same `features` (the
-    /// statistics of the variance-minimising baseline, [`crate::baseline::RunningOptimum`]).
-    /// The default reads the rows of `record_rows` ([`crate::scalar::dot`],
-    /// [`crate::scalar::norm_sq`]).
-    fn score_products(
-        &self,
-        features: &[S],
-        records: &[S],
-        v: &[S],
-        cross: &mut [S],
-        moment: &mut [S],
-    ) {
+    /// [`ScoreProducts`] for the decisions that [`EstimatorKernel::record_trusted`] recorded in
+    /// `records` for the same `features`: the statistics of the variance-minimising baseline
+    /// ([`crate::baseline::RunningOptimum`]) and the baseline's correction of the estimate.
+    /// The default reads the rows of `record_rows` ([`ScoreProducts::add_rows`]).
+    fn score_products(&self, features: &[S], records: &[S], out: ScoreProducts<'_, S>) {
         let _ = features;
         let d = self.param_dim();
         let (scores, _) = split_score_rows(records, d);
-        add_score_products(scores.chunks_exact(d.max(1)), v, cross, moment);
-    }
-}
-
-/// `cross[i] += v·ψ_i`, `moment[i] += ‖ψ_i‖²` for the scores ψ_i that `scores` yields, as far as
-/// both lists go.
-pub(crate) fn add_score_products<'a, S: Scalar + 'a>(
-    scores: impl Iterator<Item = &'a [S]>,
-    v: &[S],
-    cross: &mut [S],
-    moment: &mut [S],
-) {
-    for ((psi, c), m) in scores.zip(cross.iter_mut()).zip(moment.iter_mut()) {
-        *c += crate::scalar::dot(v, psi);
-        *m += crate::scalar::norm_sq(psi);
+        out.add_rows(scores.chunks_exact(d.max(1)));
     }
 }
 

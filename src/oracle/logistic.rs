@@ -6,7 +6,8 @@
 //! `g_j += 4(p − y)p(1 − p)φ_j + l_t Σ_j` and `Σ_j += (a − p)φ_j`, the operations of the default
 //! kernel in the same order.
 
-use super::kernel::{EstimatorKernel, add_score_products, causal_sum_by_steps};
+use super::kernel::{EstimatorKernel, causal_sum_by_steps};
+use super::products::ScoreProducts;
 use crate::policy::logistic::{brier, finite_logit, score_coefficient, sigmoid_of_finite};
 use crate::policy::softmax::check_action;
 use crate::policy::{Logistic, Policy, PolicyError, check_out, check_vec_scalar, logistic_sigmoid};
@@ -353,33 +354,45 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         });
     }
 
-    /// ψ_i = c_i φ_i formed from the recorded coefficient, in a `[S; N]` local for 1 to 8
-    /// features (else in `Vec`s), then its products as the default forms them.
-    fn score_products(
-        &self,
-        features: &[S],
-        records: &[S],
-        v: &[S],
-        cross: &mut [S],
-        moment: &mut [S],
-    ) {
+    /// With ψ_i = c_i φ_i from the recorded coefficient: `cross[i] += c_i (v·φ_i)`,
+    /// `moment[i] += c_i² ‖φ_i‖²` and `g −= (b_i c_i) φ_i`, for 1 to 8 features with the rows,
+    /// v and g in `[S; N]` locals (registers for `f64`); else ψ_i formed in `Vec`s and
+    /// [`ScoreProducts::add_rows`]. The same products up to rounding.
+    fn score_products(&self, features: &[S], records: &[S], out: ScoreProducts<'_, S>) {
         let dim = Policy::<S>::feature_dim(self);
         let coefficients = &records[..records.len() / 2];
-        let rows = features.chunks_exact(dim.max(1)).zip(coefficients);
         by_feature_count!(dim, N => {
-            let scores = rows.map(|(phi, c)| -> [S; N] {
-                std::array::from_fn(|j| c.clone() * &phi[j])
-            });
-            for ((psi, cr), mo) in scores.zip(cross.iter_mut()).zip(moment.iter_mut()) {
-                *cr += crate::scalar::dot(v, &psi);
-                *mo += crate::scalar::norm_sq(&psi);
+            let ScoreProducts { v, baseline, cross, moment, g } = out;
+            let v: [S; N] = std::array::from_fn(|j| v[j].clone());
+            let (rows, _) = features.as_chunks::<N>();
+            let products = cross.iter_mut().zip(moment.iter_mut());
+            let mut decisions = rows.iter().zip(coefficients).zip(products);
+            let statistics = |phi: &[S; N], c: &S, cr: &mut S, mo: &mut S| {
+                *cr += c.clone() * crate::scalar::dot(&v, phi);
+                *mo += c.square() * crate::scalar::norm_sq(phi);
+            };
+            // g has N entries (d = N for this policy) whenever there is a correction to make.
+            if !baseline.is_empty() {
+                let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
+                for (((phi, c), (cr, mo)), b) in decisions.by_ref().zip(baseline) {
+                    statistics(phi, c, cr, mo);
+                    let bc = b.clone() * c;
+                    for (a, x) in acc.iter_mut().zip(phi) {
+                        *a -= bc.clone() * x;
+                    }
+                }
+                g.clone_from_slice(&acc);
+            }
+            for ((phi, c), (cr, mo)) in decisions {
+                statistics(phi, c, cr, mo);
             }
         }, _ => {
+            let rows = features.chunks_exact(dim.max(1)).zip(coefficients);
             let scores: Vec<Vec<S>> = rows
-                .take(cross.len())
+                .take(out.cross.len())
                 .map(|(phi, c)| phi.iter().map(|x| c.clone() * x).collect())
                 .collect();
-            add_score_products(scores.iter().map(Vec::as_slice), v, cross, moment);
+            out.add_rows(scores.iter().map(Vec::as_slice));
         });
     }
 }

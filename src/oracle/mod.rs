@@ -20,10 +20,12 @@ mod causal;
 mod full;
 pub mod kernel;
 mod logistic;
+mod products;
 mod recorded;
 mod terms;
 
 pub use kernel::EstimatorKernel;
+pub use products::ScoreProducts;
 
 pub(crate) use baselined::baselined_pass;
 pub(crate) use causal::causal_pass;

@@ -5,8 +5,8 @@ use super::rollout::sample_learner;
 use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
 use crate::baseline::{DecisionTerms, Given, RecordedPass};
 use crate::oracle::{
-    EstimatorKernel, baselined_pass, causal_pass, features_valid, full_pass, policy_error,
-    record_pass, sum_recorded, terms_pass,
+    EstimatorKernel, ScoreProducts, baselined_pass, causal_pass, features_valid, full_pass,
+    policy_error, record_pass, sum_recorded, terms_pass,
 };
 use crate::policy::LikelihoodRatio;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -332,15 +332,13 @@ where
         &self,
         trajectory: &Self::Trajectory,
         recorded: &RecordedPass<S>,
-        v: &[S],
-        cross: &mut [S],
-        moment: &mut [S],
+        out: ScoreProducts<'_, S>,
     ) {
         if recorded.score_rows {
-            recorded.score_row_products(v, cross, moment);
+            recorded.score_row_products(out);
         } else {
             let features = &trajectory.feature_data;
-            (self.policy).score_products(features, &recorded.scores, v, cross, moment);
+            (self.policy).score_products(features, &recorded.scores, out);
         }
     }
 
