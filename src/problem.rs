@@ -14,8 +14,6 @@
 //! Every call adds what it cost to a [`Cost`], so "gradient calls" (Tables 4.1, 4.3) mean one thing
 //! across algorithms.
 
-use crate::baseline::{DecisionTerms, Given, RecordedPass};
-use crate::oracle::ScoreProducts;
 use crate::scalar::{Scalar, Undecidable};
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
@@ -132,7 +130,7 @@ pub enum OracleError {
     #[error("environment: {0}")]
     Environment(String),
     /// A baseline that cannot be used here (see [`crate::baseline`]): an invalid configuration,
-    /// or a problem that does not expose its [`DecisionTerms`].
+    /// or a time-indexed list shorter than a trajectory's scored decisions.
     #[error("baseline: {0}")]
     Baseline(String),
 }
@@ -189,119 +187,6 @@ pub trait IlProblem<S: Scalar> {
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError>;
 
-    /// The causal estimator of eq. 3.15 at θ on one trajectory, decision by decision, into `out`
-    /// ([`DecisionTerms`]: the direct part `Σ_t w_{1:t−1} ∇l_t`, every scored decision's score ψ_i
-    /// and loss-to-go, the weights), from which [`crate::baseline::Baselined`] assembles the
-    /// baselined estimate `g_b = g − Σ_i b_i ψ_i`. With `weights = Some((θ_new, weighting))` the
-    /// terms are those of the importance-weighted old-point estimate of
-    /// [`IlProblem::weighted_estimate`] (θ = θ_old, τ sampled at θ_new); the baseline term of
-    /// decision i then carries the prefix weight `w_{1:i}` (per-decision) or the trajectory's
-    /// weight (whole trajectory), which keeps it mean-zero (module docs of [`crate::baseline`]).
-    /// The caller calls [`DecisionTerms::finish`] (idempotent) before reading `out`. Counts the same gradient evaluations as
-    /// [`IlProblem::estimate`].
-    ///
-    /// # Errors
-    /// As [`IlProblem::weighted_estimate`]; the default returns [`OracleError::Baseline`] (a
-    /// problem that does not support baselines).
-    fn decision_terms(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        weights: Option<(&DVector<S>, Weighting)>,
-        out: &mut DecisionTerms<S>,
-        cost: &mut Cost,
-    ) -> Result<(), OracleError> {
-        let _ = (theta, trajectory, weights, out, cost);
-        Err(OracleError::Baseline(
-            "this problem does not expose the per-decision terms of eq. 3.15".into(),
-        ))
-    }
-
-    /// The baselined causal estimator `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) at θ on one
-    /// trajectory, for baselines fixed before the pass (unbiased for ∇F(θ) when τ ∼ p(·; θ),
-    /// since b_i does not depend on τ).
-    ///
-    /// The default assembles it from [`IlProblem::decision_terms`] (one pass, storing each
-    /// decision's score); a problem may override it with a faster pass (the real tasks fold the
-    /// baseline into the plain estimator's loop, see [`crate::oracle::EstimatorKernel::causal_sum_trusted`]).
-    ///
-    /// # Errors
-    /// As [`IlProblem::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list is
-    /// shorter than the trajectory's scored decisions.
-    fn baselined_estimate(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        baseline: Given<'_, S>,
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        let mut terms = DecisionTerms::new();
-        self.decision_terms(theta, trajectory, None, &mut terms, cost)?;
-        terms.finish();
-        if !baseline.covers(terms.decisions()) {
-            return Err(too_few_baselines(terms.decisions()));
-        }
-        let mut g = vec![S::zero(); theta.len()];
-        terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
-        Ok(DVector::from_vec(g))
-    }
-
-    /// The decisions of one trajectory at θ recorded for the causal estimator of eq. 3.15
-    /// ([`RecordedPass`]): every step's loss `l_t` (the absorbing tail as one more), the number
-    /// of scored decisions, and what [`IlProblem::estimate_recorded`] needs to sum the estimate
-    /// with per-step losses chosen afterwards — how a baseline known only after every
-    /// trajectory's pass enters (leave-one-out in [`crate::baseline::Baselined`]). Counts the
-    /// same gradient evaluations as [`IlProblem::estimate`].
-    ///
-    /// The default fills `out` from [`IlProblem::decision_terms`] (the plain estimate and ψ_i as
-    /// rows of d entries); a problem may override it with a faster pass, together with
-    /// [`IlProblem::estimate_recorded`].
-    ///
-    /// # Errors
-    /// As [`IlProblem::decision_terms`].
-    fn record_decisions(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        out: &mut RecordedPass<S>,
-        cost: &mut Cost,
-    ) -> Result<(), OracleError> {
-        self.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
-        out.fill_from_terms();
-        Ok(())
-    }
-
-    /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` on `trajectory` from what
-    /// [`IlProblem::record_decisions`] recorded there (s its scored decisions), with per-step
-    /// losses `l'` in place of the recorded ones: one per entry of [`RecordedPass::losses`]
-    /// (`losses` must have that length). With the recorded losses it is the causal estimate of
-    /// eq. 3.15; with `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first unscored step on) it is the baselined `g − Σ_i b_i ψ_i`
-    /// ([`crate::baseline`], summation by parts). The default sums the rows of the default form.
-    fn estimate_recorded(
-        &self,
-        trajectory: &Self::Trajectory,
-        recorded: &mut RecordedPass<S>,
-        losses: &[S],
-        g: &mut [S],
-    ) {
-        let _ = trajectory;
-        recorded.sum_rows(losses, g);
-    }
-
-    /// [`ScoreProducts`] for the scored decisions of `trajectory`, from what
-    /// [`IlProblem::record_decisions`] recorded there: the statistics of the variance-minimising
-    /// baseline ([`crate::baseline::RunningOptimum`]) and its correction `g −= Σ_i b_i ψ_i`. The
-    /// default reads the rows of the default form.
-    fn recorded_score_products(
-        &self,
-        trajectory: &Self::Trajectory,
-        recorded: &RecordedPass<S>,
-        out: ScoreProducts<'_, S>,
-    ) {
-        let _ = trajectory;
-        recorded.score_row_products(out);
-    }
-
     /// `Σ_{t=1}^{T−1} l(s_t, θ)` on a trajectory: an unbiased estimate of F(θ) when τ ∼ p(·; θ).
     ///
     /// # Errors
@@ -329,11 +214,4 @@ pub trait IlProblem<S: Scalar> {
         grad: &mut [S],
         cost: &mut Cost,
     ) -> Result<S, OracleError>;
-}
-
-/// The error of a time-indexed baseline list shorter than a trajectory's scored decisions.
-pub(crate) fn too_few_baselines(decisions: usize) -> OracleError {
-    OracleError::Baseline(format!(
-        "too few time-indexed baselines: a trajectory has {decisions} scored decisions"
-    ))
 }

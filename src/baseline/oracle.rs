@@ -1,6 +1,6 @@
 //! [`Baselined`]: m trajectories per oracle call, each estimate with a baseline.
 
-use super::{Baseline, DecisionTerms, Given, RecordedPass, RunningOptimum};
+use super::{Baseline, DecisionTerms, Given, PerDecisionTerms, RecordedPass, RunningOptimum};
 use crate::batched::Batched;
 use crate::oracle::ScoreProducts;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -43,14 +43,14 @@ struct Buffers<S> {
 ///
 /// With [`Baseline::None`] every call is [`Batched`]'s, bit for bit. With a baseline, the
 /// [`EstimatorForm::Full`] form is refused (baselines apply to the causal form), and `inner`
-/// must implement [`IlProblem::decision_terms`].
+/// must implement [`PerDecisionTerms::decision_terms`].
 ///
 /// Leave-one-out: trajectory j's `b_i^{(j)} = (1/(m−1)) Σ_{k≠j} L_i^{(k)}` with `L_i^{(k)}` the
 /// loss-to-go of trajectory k at its decision i (0 where k took fewer decisions; in a weighted
 /// estimate the weighted loss-to-go). It is a function of the other trajectories only, which are
 /// independent of τ_j. The unweighted estimate records each trajectory's decisions
-/// ([`IlProblem::record_decisions`]), then sums each trajectory's estimate once with its per-step
-/// losses shifted by the baseline ([`IlProblem::estimate_recorded`]); the weighted one assembles
+/// ([`PerDecisionTerms::record_decisions`]), then sums each trajectory's estimate once with its per-step
+/// losses shifted by the baseline ([`PerDecisionTerms::estimate_recorded`]); the weighted one assembles
 /// it from [`DecisionTerms`], as [`Baselined::estimate_by_terms`] does for every kind.
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
@@ -197,9 +197,9 @@ fn leave_one_out_losses<S: Scalar>(totals: &[S], own: &[S], others: &S, shifted:
     }
 }
 
-/// Every trajectory of `batch` recorded ([`IlProblem::record_decisions`]) into the first m
+/// Every trajectory of `batch` recorded ([`PerDecisionTerms::record_decisions`]) into the first m
 /// entries of `records`, grown to m if need be.
-fn record_batch<'r, S: Scalar, P: IlProblem<S>>(
+fn record_batch<'r, S: Scalar, P: PerDecisionTerms<S>>(
     inner: &P,
     theta: &DVector<S>,
     batch: &[P::Trajectory],
@@ -217,9 +217,9 @@ fn record_batch<'r, S: Scalar, P: IlProblem<S>>(
     Ok(records)
 }
 
-impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
+impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
     /// The mean causal estimate over `batch` assembled from every trajectory's [`DecisionTerms`]
-    /// ([`IlProblem::decision_terms`]) for every kind of baseline: the reference route, with the
+    /// ([`PerDecisionTerms::decision_terms`]) for every kind of baseline: the reference route, with the
     /// results of [`IlProblem::estimate`] (the same mathematics; in floating point up to the
     /// order of the sums where `estimate` takes a fused pass). An estimated baseline observes
     /// the trajectories as `estimate` does.
@@ -240,9 +240,9 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
 
     /// The mean leave-one-out estimate over `batch`, `(1/m) Σ_j [g_j − Σ_i b_i^{(j)} ψ_i^{(j)}]`
     /// with `b_i^{(j)} = (1/(m − 1)) Σ_{k≠j} L_i^{(k)}`: every trajectory's decisions recorded
-    /// ([`IlProblem::record_decisions`]), the step totals `S_t = Σ_k l_t^{(k)}`, then each
+    /// ([`PerDecisionTerms::record_decisions`]), the step totals `S_t = Σ_k l_t^{(k)}`, then each
     /// trajectory's estimate summed once with the baseline folded into its per-step losses
-    /// (`leave_one_out_losses`, [`IlProblem::estimate_recorded`]). No allocation per step.
+    /// (`leave_one_out_losses`, [`PerDecisionTerms::estimate_recorded`]). No allocation per step.
     fn leave_one_out(
         &self,
         theta: &DVector<S>,
@@ -283,10 +283,10 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
 
     /// The mean estimate over `batch` with the committed variance-minimising baselines of
     /// [`RunningOptimum`], which then observes the batch: every trajectory's decisions recorded
-    /// ([`IlProblem::record_decisions`]), its plain estimate g summed once
-    /// ([`IlProblem::estimate_recorded`] with its own losses), then one more read of its scores
+    /// ([`PerDecisionTerms::record_decisions`]), its plain estimate g summed once
+    /// ([`PerDecisionTerms::estimate_recorded`] with its own losses), then one more read of its scores
     /// for both the statistics `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
-    /// ([`IlProblem::recorded_score_products`]). No allocation per step.
+    /// ([`PerDecisionTerms::recorded_score_products`]). No allocation per step.
     fn estimated(
         &self,
         theta: &DVector<S>,
@@ -415,7 +415,7 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
                 Kind::Constant(b) => t.estimate_into(|_| Some(b.clone()), g),
                 Kind::TimeIndexed(bs) => {
                     if t.decisions() > bs.len() {
-                        return Err(crate::problem::too_few_baselines(t.decisions()));
+                        return Err(super::decisions::too_few_baselines(t.decisions()));
                     }
                     t.estimate_into(|i| Some(bs[i].clone()), g);
                 }
@@ -452,7 +452,7 @@ impl<S: Scalar, P: IlProblem<S>> Baselined<P, S> {
     }
 }
 
-impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Baselined<P, S> {
+impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
     type Trajectory = Vec<P::Trajectory>;
     type Labelled = P::Labelled;
 

@@ -3,7 +3,7 @@
 
 use super::rollout::sample_learner;
 use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
-use crate::baseline::{DecisionTerms, Given, RecordedPass};
+use crate::baseline::{DecisionTerms, Given, PerDecisionTerms, RecordedPass};
 use crate::oracle::{
     EstimatorKernel, ScoreProducts, baselined_pass, causal_pass, features_valid, full_pass,
     policy_error, record_pass, sum_recorded, terms_pass,
@@ -237,111 +237,6 @@ where
         Ok(DVector::from_vec(g))
     }
 
-    /// The pass of [`crate::oracle`]'s `baselined_pass`: the baseline folded into the causal
-    /// kernel as loss shifts where the trajectory allows it, otherwise from the [`DecisionTerms`].
-    fn baselined_estimate(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        baseline: Given<'_, S>,
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        check_theta(theta, self.dim())?;
-        check_trajectory(trajectory)?;
-        let t = trajectory.decisions();
-        let scored = t.scored();
-        if !baseline.covers(scored) {
-            return Err(crate::problem::too_few_baselines(scored));
-        }
-        let mut g = vec![S::zero(); self.dim()];
-        baselined_pass(&self.policy, theta.as_slice(), &t, baseline, &mut g)?;
-        cost.gradient_evaluations += t.len() as u64;
-        if !g.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the baselined gradient estimate"));
-        }
-        Ok(DVector::from_vec(g))
-    }
-
-    fn decision_terms(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        weights: Option<(&DVector<S>, Weighting)>,
-        out: &mut DecisionTerms<S>,
-        cost: &mut Cost,
-    ) -> Result<(), OracleError> {
-        check_theta(theta, self.dim())?;
-        if let Some((theta_new, _)) = weights {
-            check_theta(theta_new, self.dim())?;
-        }
-        check_trajectory(trajectory)?;
-        let ratio = weights.map(|(new, w)| (new.as_slice(), w));
-        terms_pass(
-            &self.policy,
-            theta.as_slice(),
-            ratio,
-            &trajectory.decisions(),
-            out,
-        )?;
-        cost.gradient_evaluations += trajectory.len() as u64;
-        Ok(())
-    }
-
-    /// On validated features, the policy's own records
-    /// ([`EstimatorKernel::record_trusted`]); otherwise the checked route of
-    /// [`IlProblem::decision_terms`], which reports the first invalid input.
-    fn record_decisions(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        out: &mut RecordedPass<S>,
-        cost: &mut Cost,
-    ) -> Result<(), OracleError> {
-        check_theta(theta, self.dim())?;
-        check_trajectory(trajectory)?;
-        let t = trajectory.decisions();
-        if !features_valid(&self.policy, &t) {
-            self.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
-            out.fill_from_terms();
-            return Ok(());
-        }
-        record_pass(&self.policy, theta.as_slice(), &t, out)?;
-        cost.gradient_evaluations += trajectory.len() as u64;
-        Ok(())
-    }
-
-    /// Through [`EstimatorKernel::accumulate_recorded`] when the policy recorded the decisions,
-    /// else from rows.
-    fn estimate_recorded(
-        &self,
-        trajectory: &Self::Trajectory,
-        recorded: &mut RecordedPass<S>,
-        losses: &[S],
-        g: &mut [S],
-    ) {
-        if recorded.score_rows {
-            recorded.sum_rows(losses, g);
-        } else {
-            sum_recorded(&self.policy, &trajectory.decisions(), recorded, losses, g);
-        }
-    }
-
-    /// Through [`EstimatorKernel::score_products`] when the policy recorded the decisions, else
-    /// from rows.
-    fn recorded_score_products(
-        &self,
-        trajectory: &Self::Trajectory,
-        recorded: &RecordedPass<S>,
-        out: ScoreProducts<'_, S>,
-    ) {
-        if recorded.score_rows {
-            recorded.score_row_products(out);
-        } else {
-            let features = &trajectory.feature_data;
-            (self.policy).score_products(features, &recorded.scores, out);
-        }
-    }
-
     fn trajectory_loss(
         &self,
         theta: &DVector<S>,
@@ -396,5 +291,118 @@ where
             .map_err(policy_error)?;
         cost.gradient_evaluations += 1;
         Ok(l)
+    }
+}
+
+impl<S, T, P> PerDecisionTerms<S> for TaskProblem<T, P>
+where
+    S: Real,
+    T: Task<S>,
+    P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S>,
+    T::Label: Borrow<P::Label>,
+{
+    /// The pass of [`crate::oracle`]'s `baselined_pass`: the baseline folded into the causal
+    /// kernel as loss shifts where the trajectory allows it, otherwise from the [`DecisionTerms`].
+    fn baselined_estimate(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        baseline: Given<'_, S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let t = trajectory.decisions();
+        let scored = t.scored();
+        if !baseline.covers(scored) {
+            return Err(crate::baseline::too_few_baselines(scored));
+        }
+        let mut g = vec![S::zero(); self.dim()];
+        baselined_pass(&self.policy, theta.as_slice(), &t, baseline, &mut g)?;
+        cost.gradient_evaluations += t.len() as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(DVector::from_vec(g))
+    }
+
+    fn decision_terms(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
+        out: &mut DecisionTerms<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        check_theta(theta, self.dim())?;
+        if let Some((theta_new, _)) = weights {
+            check_theta(theta_new, self.dim())?;
+        }
+        check_trajectory(trajectory)?;
+        let ratio = weights.map(|(new, w)| (new.as_slice(), w));
+        terms_pass(
+            &self.policy,
+            theta.as_slice(),
+            ratio,
+            &trajectory.decisions(),
+            out,
+        )?;
+        cost.gradient_evaluations += trajectory.len() as u64;
+        Ok(())
+    }
+
+    /// On validated features, the policy's own records
+    /// ([`EstimatorKernel::record_trusted`]); otherwise the checked route of
+    /// [`PerDecisionTerms::decision_terms`], which reports the first invalid input.
+    fn record_decisions(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        out: &mut RecordedPass<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let t = trajectory.decisions();
+        if !features_valid(&self.policy, &t) {
+            self.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
+            out.fill_from_terms();
+            return Ok(());
+        }
+        record_pass(&self.policy, theta.as_slice(), &t, out)?;
+        cost.gradient_evaluations += trajectory.len() as u64;
+        Ok(())
+    }
+
+    /// Through [`EstimatorKernel::accumulate_recorded`] when the policy recorded the decisions,
+    /// else from rows.
+    fn estimate_recorded(
+        &self,
+        trajectory: &Self::Trajectory,
+        recorded: &mut RecordedPass<S>,
+        losses: &[S],
+        g: &mut [S],
+    ) {
+        if recorded.score_rows {
+            recorded.sum_rows(losses, g);
+        } else {
+            sum_recorded(&self.policy, &trajectory.decisions(), recorded, losses, g);
+        }
+    }
+
+    /// Through [`EstimatorKernel::score_products`] when the policy recorded the decisions, else
+    /// from rows.
+    fn recorded_score_products(
+        &self,
+        trajectory: &Self::Trajectory,
+        recorded: &RecordedPass<S>,
+        out: ScoreProducts<'_, S>,
+    ) {
+        if recorded.score_rows {
+            recorded.score_row_products(out);
+        } else {
+            let features = &trajectory.feature_data;
+            (self.policy).score_products(features, &recorded.scores, out);
+        }
     }
 }

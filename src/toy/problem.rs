@@ -18,7 +18,7 @@
 use super::estimator;
 use super::table::PolicyTable;
 use super::{Termination, ToyMdp, estimator::prefix_loss};
-use crate::baseline::DecisionTerms;
+use crate::baseline::{DecisionTerms, PerDecisionTerms};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::sampling::{dyadic_uniform, sample_categorical};
 use crate::scalar::Scalar;
@@ -476,41 +476,6 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         Ok(DVector::from_vec(g))
     }
 
-    fn decision_terms(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &ToyTrajectory,
-        weights: Option<(&DVector<S>, Weighting)>,
-        out: &mut DecisionTerms<S>,
-        cost: &mut Cost,
-    ) -> Result<(), OracleError> {
-        self.check(trajectory)?;
-        let table = self.shared_table(theta.as_slice())?;
-        let (states, actions) = self.prefix(trajectory);
-        match weights {
-            None => estimator::decision_terms(&table, states, actions, None, false, out),
-            Some((theta_new, weighting)) => {
-                let new = self.shared_table(theta_new.as_slice())?;
-                let ratios: Vec<S> = states
-                    .iter()
-                    .zip(actions)
-                    .map(|(&s, &a)| table.prob(s, a).clone() / new.prob(s, a))
-                    .collect();
-                let per_decision = weighting == Weighting::PerDecision;
-                estimator::decision_terms(
-                    &table,
-                    states,
-                    actions,
-                    Some(&ratios),
-                    per_decision,
-                    out,
-                );
-            }
-        }
-        cost.gradient_evaluations += self.decision_count(states) as u64;
-        Ok(())
-    }
-
     fn trajectory_loss(
         &self,
         theta: &DVector<S>,
@@ -559,5 +524,42 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         table.add_block_unscaled(grad, example.state, &local);
         cost.gradient_evaluations += 1;
         Ok(l)
+    }
+}
+
+impl<S: Scalar> PerDecisionTerms<S> for ToyProblem<S> {
+    fn decision_terms(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &ToyTrajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
+        out: &mut DecisionTerms<S>,
+        cost: &mut Cost,
+    ) -> Result<(), OracleError> {
+        self.check(trajectory)?;
+        let table = self.shared_table(theta.as_slice())?;
+        let (states, actions) = self.prefix(trajectory);
+        match weights {
+            None => estimator::decision_terms(&table, states, actions, None, false, out),
+            Some((theta_new, weighting)) => {
+                let new = self.shared_table(theta_new.as_slice())?;
+                let ratios: Vec<S> = states
+                    .iter()
+                    .zip(actions)
+                    .map(|(&s, &a)| table.prob(s, a).clone() / new.prob(s, a))
+                    .collect();
+                let per_decision = weighting == Weighting::PerDecision;
+                estimator::decision_terms(
+                    &table,
+                    states,
+                    actions,
+                    Some(&ratios),
+                    per_decision,
+                    out,
+                );
+            }
+        }
+        cost.gradient_evaluations += self.decision_count(states) as u64;
+        Ok(())
     }
 }

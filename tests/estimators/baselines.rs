@@ -6,7 +6,7 @@
 
 use crate::common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
 use ilopt::algo::ConfigNumber;
-use ilopt::baseline::{Baseline, Baselined, DecisionTerms};
+use ilopt::baseline::{Baseline, Baselined, DecisionTerms, PerDecisionTerms};
 use ilopt::exact::baseline::{baselined_moments, optimal_baselines, prefix_trajectory};
 use ilopt::exact::enumerate::{for_each_prefix, moments};
 use ilopt::exact::forward::forward;
@@ -668,7 +668,12 @@ fn task_decision_terms_reproduce_the_task_estimators() {
     use ilopt::task::{AfterEnd, TaskProblem};
     use ilopt::tolerance::derivative_f64_agrees;
 
-    fn check<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>, theta_new: &DVector<f64>, what: &str) {
+    fn check<P: PerDecisionTerms<f64>>(
+        p: &P,
+        theta: &DVector<f64>,
+        theta_new: &DVector<f64>,
+        what: &str,
+    ) {
         let mut rng = KitRng::seed_from_u64(4);
         let mut cost = Cost::default();
         let mut terms = DecisionTerms::new();

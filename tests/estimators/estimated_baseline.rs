@@ -9,7 +9,7 @@
 use crate::common::example;
 use approx::abs_diff_eq;
 use ilopt::algo::ConfigNumber;
-use ilopt::baseline::{Baseline, Baselined};
+use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use ilopt::scalar::{BigRational, Scalar, parse_exact_list};
 use ilopt::toy::ToyProblem;
@@ -21,7 +21,7 @@ use rand::SeedableRng;
 fn lockstep<S, P>(p: &P, theta: &DVector<S>, same: impl Fn(&[S], &[S]) -> bool, what: &str)
 where
     S: Scalar,
-    P: IlProblem<S> + Clone,
+    P: PerDecisionTerms<S> + Clone,
 {
     for time_indexed in [true, false] {
         for m in [1, 3] {

@@ -9,7 +9,7 @@
 
 use crate::common::example;
 use approx::abs_diff_eq;
-use ilopt::baseline::{Baseline, Baselined, RecordedPass};
+use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms, RecordedPass};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
 use ilopt::scalar::{BigRational, Scalar, parse_exact_list};
 use ilopt::toy::{ToyProblem, ToyTrajectory};
@@ -46,7 +46,7 @@ fn compare_routes<S, P>(
     what: &str,
 ) where
     S: Scalar,
-    P: IlProblem<S> + Clone,
+    P: PerDecisionTerms<S> + Clone,
 {
     for m in [2, 3, 4] {
         let o = Baselined::<_, S>::new(p.clone(), m, &Baseline::LeaveOneOut).unwrap();
@@ -156,8 +156,10 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
 
     fn check<T, P>(p: &TaskProblem<T, P>, theta: &DVector<f64>, what: &str)
     where
-        TaskProblem<T, P>: IlProblem<f64, Trajectory = ilopt::task::TaskTrajectory<f64, T::Label, T::Action>>
-            + Clone,
+        TaskProblem<T, P>: PerDecisionTerms<
+                f64,
+                Trajectory = ilopt::task::TaskTrajectory<f64, T::Label, T::Action>,
+            > + Clone,
         T: ilopt::task::Task<f64>,
     {
         let batch = rollouts(p, theta, 12, 8);

@@ -8,7 +8,7 @@ use crate::config::{AlgorithmEntry, TaskSection, Theta1};
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::algo::{AlgorithmConfig, StepContext};
-use ilopt::baseline::{Baseline as OracleBaseline, Baselined};
+use ilopt::baseline::{Baseline as OracleBaseline, Baselined, PerDecisionTerms};
 use ilopt::batched::Batched;
 use ilopt::problem::{Cost, IlProblem, KitRng};
 use ilopt::task::Horizon;
@@ -150,7 +150,7 @@ pub fn run_spec(bench: &Bench, spec: &RunSpec<'_>) -> Result<(SeedRun, SeedTimin
 
 /// [`drive`] on `problem` as the spec wants it: with its baseline ([`Baselined`], m
 /// trajectories per gradient), m trajectories per gradient ([`Batched`]), or as it is.
-fn drive_with<P: IlProblem<f64> + Clone>(
+fn drive_with<P: PerDecisionTerms<f64> + Clone>(
     bench: &Bench,
     problem: &P,
     spec: &RunSpec<'_>,
