@@ -332,13 +332,60 @@ pub fn gymnasium_observation<S: Scalar>(state: &[S; 4]) -> [f32; 4] {
     std::array::from_fn(|i| state[i].to_f64() as f32)
 }
 
+/// One CartPole episode's mechanics, shared by the Gymnasium environment [`CartPole`] and the
+/// imitation-learning task (`task::cartpole`): the state, the steps taken, and one step of the
+/// dynamics under a time limit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CartPoleEpisode<S> {
+    /// [x, ẋ, θ, θ̇].
+    pub state: [S; 4],
+    /// Steps taken so far.
+    pub steps: usize,
+}
+
+/// How a CartPole step ended the episode, in Gymnasium's two flags.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepEnd {
+    /// The next state is terminal (the pole fell or the cart left the track).
+    pub terminated: bool,
+    /// The step reached the time limit.
+    pub truncated: bool,
+}
+
+impl<S: Real> CartPoleEpisode<S> {
+    /// An episode at `state`, no step taken.
+    pub fn at(state: [S; 4]) -> Self {
+        Self { state, steps: 0 }
+    }
+
+    /// One step under `action` ([`CartPoleDynamics::step_in_place`]) with the time limit
+    /// `max_steps`: the step that brings the episode to `max_steps` steps is truncated
+    /// (Gymnasium's `TimeLimit`).
+    ///
+    /// # Errors
+    /// As [`CartPoleDynamics::step`]; the episode is then unchanged.
+    #[inline(always)]
+    pub fn advance(
+        &mut self,
+        dynamics: &CartPoleDynamics<S>,
+        action: usize,
+        max_steps: usize,
+    ) -> Result<StepEnd, EnvError> {
+        let terminated = dynamics.step_in_place(&mut self.state, action)?;
+        self.steps += 1;
+        Ok(StepEnd {
+            terminated,
+            truncated: self.steps >= max_steps,
+        })
+    }
+}
+
 /// The CartPole-v1 environment: [`CartPoleDynamics`] with a reset distribution, a reward of 1 per
 /// step (the terminating step included) and a time limit ([`MAX_EPISODE_STEPS`] by default).
 #[derive(Debug, Clone)]
 pub struct CartPole<S> {
     dynamics: CartPoleDynamics<S>,
-    state: Option<[S; 4]>,
-    elapsed_steps: usize,
+    episode: Option<CartPoleEpisode<S>>,
     over: bool,
     max_episode_steps: usize,
 }
@@ -360,8 +407,7 @@ impl<S: Real> CartPole<S> {
     pub fn with_max_episode_steps(max_episode_steps: usize) -> Self {
         CartPole {
             dynamics: CartPoleDynamics::new(),
-            state: None,
-            elapsed_steps: 0,
+            episode: None,
             over: false,
             max_episode_steps,
         }
@@ -369,12 +415,12 @@ impl<S: Real> CartPole<S> {
 
     /// The current state (Gymnasium's `env.unwrapped.state`), `None` before the first reset.
     pub fn state(&self) -> Option<&[S; 4]> {
-        self.state.as_ref()
+        self.episode.as_ref().map(|e| &e.state)
     }
 
     /// Steps taken in the current episode.
     pub fn elapsed_steps(&self) -> usize {
-        self.elapsed_steps
+        self.episode.as_ref().map_or(0, |e| e.steps)
     }
 
     /// The dynamics.
@@ -385,8 +431,7 @@ impl<S: Real> CartPole<S> {
     /// Starts a new episode from a given state (as assigning `env.unwrapped.state` right after a
     /// reset) and returns its observation.
     pub fn reset_to(&mut self, state: [S; 4]) -> [S; 4] {
-        self.state = Some(state.clone());
-        self.elapsed_steps = 0;
+        self.episode = Some(CartPoleEpisode::at(state.clone()));
         self.over = false;
         state
     }
@@ -406,7 +451,7 @@ impl<S: Real> Env<S> for CartPole<S> {
     }
 
     fn step(&mut self, action: usize) -> Result<Step<S, [S; 4]>, EnvError> {
-        let state = self.state.as_ref().ok_or(EnvError::NotReset)?;
+        let episode = self.episode.as_mut().ok_or(EnvError::NotReset)?;
         if self.over {
             return Err(EnvError::EpisodeOver);
         }
@@ -414,18 +459,19 @@ impl<S: Real> Env<S> for CartPole<S> {
             // Invalid input does not end the episode.
             return Err(invalid_action(action));
         }
-        let result = self.dynamics.step(state, action);
-        let (next, terminated) = match result {
-            Ok(r) => r,
+        let end = match episode.advance(&self.dynamics, action, self.max_episode_steps) {
+            Ok(end) => end,
             Err(e) => {
                 self.over = true;
                 return Err(e);
             }
         };
-        self.elapsed_steps += 1;
-        let truncated = self.elapsed_steps >= self.max_episode_steps;
+        let StepEnd {
+            terminated,
+            truncated,
+        } = end;
         self.over = terminated || truncated;
-        self.state = Some(next.clone());
+        let next = episode.state.clone();
         Ok(Step {
             observation: next,
             reward: S::one(),

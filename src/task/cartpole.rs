@@ -1,8 +1,11 @@
 //! CartPole-v1 as an imitation-learning task (thesis §4.2): an expert (the LQR controller, or the
 //! kit's PPO-trained policy as in the thesis) labels every visited state with its action; the
-//! learner sees φ(s) = (x, ẋ, θ, θ̇, 1).
+//! learner sees φ(s) = (x, ẋ, θ, θ̇, 1). An episode is the Gymnasium environment's
+//! ([`CartPoleEpisode`] of [`crate::env::cartpole`]: the same step under the same time limit),
+//! started from the same reset law converted to `S` exactly.
 
 use super::Task;
+pub use crate::env::cartpole::CartPoleEpisode;
 use crate::env::cartpole::{CartPoleDynamics, MAX_EPISODE_STEPS, sample_reset_state};
 use crate::expert::lqr::{LqrExpert, LqrGain};
 use crate::expert::ppo::{PpoExpert, PpoGreedy};
@@ -36,15 +39,6 @@ pub struct CartPoleTask<S> {
 enum Labeller<S> {
     Lqr(LqrGain<S>),
     Ppo(PpoGreedy<S>),
-}
-
-/// One episode: the state and the number of steps taken.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CartPoleEpisode<S> {
-    /// [x, ẋ, θ, θ̇].
-    pub state: [S; 4],
-    /// Steps taken so far.
-    pub steps: usize,
 }
 
 impl<S: Real> CartPoleTask<S> {
@@ -121,10 +115,12 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
             from_f64_exact::<S>(x, "reset state")
                 .map_err(|e| OracleError::Environment(e.to_string()))
         };
-        Ok(CartPoleEpisode {
-            state: [conv(s[0])?, conv(s[1])?, conv(s[2])?, conv(s[3])?],
-            steps: 0,
-        })
+        Ok(CartPoleEpisode::at([
+            conv(s[0])?,
+            conv(s[1])?,
+            conv(s[2])?,
+            conv(s[3])?,
+        ]))
     }
 
     fn features(&self, ep: &Self::Episode) -> Vec<S> {
@@ -181,11 +177,9 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
 
     #[inline(always)]
     fn advance(&self, ep: &mut Self::Episode, action: &usize) -> Result<bool, OracleError> {
-        let terminated = self
-            .dynamics
-            .step_in_place(&mut ep.state, *action)
+        let end = ep
+            .advance(&self.dynamics, *action, self.max_steps)
             .map_err(env_error)?;
-        ep.steps += 1;
-        Ok(terminated || ep.steps >= self.max_steps)
+        Ok(end.terminated || end.truncated)
     }
 }
