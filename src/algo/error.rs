@@ -53,6 +53,13 @@ pub enum AlgoError {
     EmptyDataset,
 }
 
+impl From<crate::scalar::NonFiniteNumber> for AlgoError {
+    /// [`AlgoError::InvalidParameter`]: the parameter "is not finite".
+    fn from(e: crate::scalar::NonFiniteNumber) -> AlgoError {
+        invalid(e.name, "is not finite")
+    }
+}
+
 /// Shorthand for [`AlgoError::InvalidParameter`].
 pub(crate) fn invalid(name: &'static str, reason: impl Into<String>) -> AlgoError {
     AlgoError::InvalidParameter {

@@ -56,7 +56,6 @@ mod algorithm;
 pub mod as_printed;
 pub mod bc;
 pub mod config;
-mod config_number;
 pub mod dagger;
 pub mod dataset;
 mod error;
@@ -64,6 +63,7 @@ pub mod first_order;
 pub mod forward_training;
 pub mod learner;
 pub mod o2nc;
+mod parameter_range;
 pub mod rmsprop;
 mod roots;
 pub mod rrm;
@@ -74,9 +74,9 @@ pub mod storm;
 pub mod storm_plus;
 mod vector;
 
+pub use crate::scalar::ConfigNumber;
 pub use algorithm::{Algorithm, StepContext, StepReport};
 pub use config::{AlgorithmConfig, RunConfig};
-pub use config_number::ConfigNumber;
 pub use error::AlgoError;
 pub use first_order::{FirstOrder, UpdateRule};
 pub use learner::{DataSchedule, DatasetLearner};
@@ -85,7 +85,7 @@ pub use runner::{
 };
 
 pub(crate) use algorithm::oracle_draw;
-pub(crate) use config_number::{in_range, positive};
 pub(crate) use error::{check_dim, check_finite, invalid, min_one};
+pub(crate) use parameter_range::{in_range, positive};
 pub(crate) use roots::{cbrt, require_roots, sqrt};
 pub(crate) use vector::{axpy, norm_sq, scale};

@@ -87,17 +87,16 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         out: &mut RecordedPass<S>,
         cost: &mut Cost,
     ) -> Result<(), OracleError> {
-        self.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
-        out.fill_from_terms();
-        Ok(())
+        record_by_terms(self, theta, trajectory, out, cost)
     }
 
     /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` on `trajectory` from what
     /// [`PerDecisionTerms::record_decisions`] recorded there (s its scored decisions), with per-step
     /// losses `l'` in place of the recorded ones: one per entry of [`RecordedPass::losses`]
     /// (`losses` must have that length). With the recorded losses it is the causal estimate of
-    /// eq. 3.15; with `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first unscored step on) it is the baselined `g − Σ_i b_i ψ_i`
-    /// ([`crate::baseline`], summation by parts). The default sums the rows of the default form.
+    /// eq. 3.15; with `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first unscored step on) it
+    /// is the baselined `g − Σ_i b_i ψ_i` ([`crate::baseline`], summation by parts). The default
+    /// sums the rows of the default form.
     fn estimate_recorded(
         &self,
         trajectory: &Self::Trajectory,
@@ -129,4 +128,22 @@ pub(crate) fn too_few_baselines(decisions: usize) -> OracleError {
     OracleError::Baseline(format!(
         "too few time-indexed baselines: a trajectory has {decisions} scored decisions"
     ))
+}
+
+/// [`PerDecisionTerms::record_decisions`]'s default: `out` filled from
+/// [`PerDecisionTerms::decision_terms`] (the plain estimate and ψ_i as rows of d entries), also
+/// the checked route of a problem whose own records need validated inputs.
+///
+/// # Errors
+/// As [`PerDecisionTerms::decision_terms`].
+pub(crate) fn record_by_terms<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
+    problem: &P,
+    theta: &DVector<S>,
+    trajectory: &P::Trajectory,
+    out: &mut RecordedPass<S>,
+    cost: &mut Cost,
+) -> Result<(), OracleError> {
+    problem.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
+    out.fill_from_terms();
+    Ok(())
 }

@@ -44,14 +44,14 @@ mod running;
 mod terms;
 
 pub use decisions::PerDecisionTerms;
-pub(crate) use decisions::too_few_baselines;
+pub(crate) use decisions::{record_by_terms, too_few_baselines};
 pub use given::Given;
 pub use oracle::Baselined;
 pub use recorded::RecordedPass;
 pub use running::RunningOptimum;
 pub use terms::DecisionTerms;
 
-use crate::algo::ConfigNumber;
+use crate::scalar::ConfigNumber;
 use serde::{Deserialize, Serialize};
 
 /// Which baseline the oracle subtracts (JSON: `{"kind": "constant", "value": "1/2"}`).

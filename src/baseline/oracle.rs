@@ -78,7 +78,7 @@ impl<P, S: Scalar> Baselined<P, S> {
     /// take its baseline from).
     pub fn new(inner: P, m: usize, baseline: &Baseline) -> Result<Self, OracleError> {
         let batch = Batched::new(inner, m)?;
-        let num = |x: &crate::algo::ConfigNumber, what: &'static str| {
+        let num = |x: &crate::scalar::ConfigNumber, what: &'static str| {
             x.to::<S>(what).map_err(|e| invalid(e.to_string()))
         };
         let kind = match baseline {

@@ -18,6 +18,7 @@
 //! ordered, and generic code that branches on such a comparison returns [`Undecidable`] instead of
 //! guessing (conventions.md 3).
 
+mod config_number;
 mod dual;
 mod float;
 mod interval;
@@ -25,6 +26,7 @@ mod rational;
 mod report;
 mod roots;
 
+pub use config_number::{ConfigNumber, NonFiniteNumber};
 pub use dual::Dual;
 pub use inari::Interval;
 pub use interval::{enclose_rational, interval_contains_rational};

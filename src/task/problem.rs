@@ -365,9 +365,7 @@ where
         check_trajectory(trajectory)?;
         let t = trajectory.decisions();
         if !features_valid(&self.policy, &t) {
-            self.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
-            out.fill_from_terms();
-            return Ok(());
+            return crate::baseline::record_by_terms(self, theta, trajectory, out, cost);
         }
         record_pass(&self.policy, theta.as_slice(), &t, out)?;
         cost.gradient_evaluations += trajectory.len() as u64;

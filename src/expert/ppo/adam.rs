@@ -3,8 +3,8 @@
 //! clipping.
 
 use super::*;
-use crate::algo::ConfigNumber;
 use crate::algo::adam::{AdamConfig, AdamRule};
+use crate::scalar::ConfigNumber;
 
 /// Adam with `config`'s β₁, β₂ and ε (its α is unused: each step passes its learning rate).
 pub(super) fn adam(config: &PpoConfig) -> Result<AdamRule<f64>, PpoError> {

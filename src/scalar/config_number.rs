@@ -1,9 +1,16 @@
-//! [`ConfigNumber`]: the numbers of a run configuration, exact or float, converted exactly into
-//! the run's scalar; and the range checks of hyper-parameters.
+//! [`ConfigNumber`]: the numbers of a configuration (a run's hyper-parameters, a baseline's
+//! constants), exact or float, converted exactly into any scalar.
 
-use super::error::{AlgoError, invalid};
-use crate::scalar::{BigRational, Scalar, parse_exact};
+use super::{BigRational, Scalar, parse_exact};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+/// A configuration number that is NaN or infinite, with the parameter's name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{name}` is not finite")]
+pub struct NonFiniteNumber {
+    /// The parameter, as named in the docs and in the configuration.
+    pub name: &'static str,
+}
 
 /// A number of a run configuration (hyper-parameter, θ₀ entry, target loss), independent of the
 /// scalar the run uses: either a float or an exact rational. Both are converted *exactly* ([`ConfigNumber::exact`]) and then to the run's scalar with
@@ -35,13 +42,11 @@ impl ConfigNumber {
     /// The exact value, or an error naming the parameter if it is NaN or infinite.
     ///
     /// # Errors
-    /// [`AlgoError::InvalidParameter`] for a non-finite float.
-    pub fn exact(&self, name: &'static str) -> Result<BigRational, AlgoError> {
+    /// [`NonFiniteNumber`] for a non-finite float.
+    pub fn exact(&self, name: &'static str) -> Result<BigRational, NonFiniteNumber> {
         match self {
             ConfigNumber::Exact(q) => Ok(q.clone()),
-            ConfigNumber::Float(x) => {
-                BigRational::from_float(*x).ok_or_else(|| invalid(name, "is not finite"))
-            }
+            ConfigNumber::Float(x) => BigRational::from_float(*x).ok_or(NonFiniteNumber { name }),
         }
     }
 
@@ -49,7 +54,7 @@ impl ConfigNumber {
     ///
     /// # Errors
     /// As [`ConfigNumber::exact`].
-    pub fn to<S: Scalar>(&self, name: &'static str) -> Result<S, AlgoError> {
+    pub fn to<S: Scalar>(&self, name: &'static str) -> Result<S, NonFiniteNumber> {
         Ok(S::from_rational(&self.exact(name)?))
     }
 }
@@ -110,46 +115,4 @@ impl<'de> Deserialize<'de> for ConfigNumber {
             },
         }
     }
-}
-
-/// Validate a hyper-parameter: exact value, `> 0` (`strict`) or `≥ 0`.
-pub(crate) fn positive(
-    n: &ConfigNumber,
-    name: &'static str,
-    strict: bool,
-) -> Result<BigRational, AlgoError> {
-    let q = n.exact(name)?;
-    let zero = BigRational::from_integer(0.into());
-    if q < zero || (strict && q == zero) {
-        return Err(invalid(
-            name,
-            format!("must be {} 0, got {q}", if strict { ">" } else { "≥" }),
-        ));
-    }
-    Ok(q)
-}
-
-/// Validate a hyper-parameter in `[lo, hi]` (`open_lo`/`open_hi` exclude the endpoints).
-pub(crate) fn in_range(
-    n: &ConfigNumber,
-    name: &'static str,
-    (lo, open_lo): (i64, bool),
-    (hi, open_hi): (i64, bool),
-) -> Result<BigRational, AlgoError> {
-    let q = n.exact(name)?;
-    let l = BigRational::from_integer(lo.into());
-    let h = BigRational::from_integer(hi.into());
-    let bad_lo = if open_lo { q <= l } else { q < l };
-    let bad_hi = if open_hi { q >= h } else { q > h };
-    if bad_lo || bad_hi {
-        return Err(invalid(
-            name,
-            format!(
-                "must lie in {}{lo}, {hi}{}, got {q}",
-                if open_lo { "(" } else { "[" },
-                if open_hi { ")" } else { "]" }
-            ),
-        ));
-    }
-    Ok(q)
 }
