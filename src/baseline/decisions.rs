@@ -24,8 +24,8 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     /// [`IlProblem::weighted_estimate`] (θ = θ_old, τ sampled at θ_new); the baseline term of
     /// decision i then carries the prefix weight `w_{1:i}` (per-decision) or the trajectory's
     /// weight (whole trajectory), which keeps it mean-zero (module docs of [`crate::baseline`]).
-    /// The caller calls [`DecisionTerms::finish`] (idempotent) before reading `out`. Counts the same gradient evaluations as
-    /// [`IlProblem::estimate`].
+    /// The caller calls [`DecisionTerms::finish`] (idempotent) before reading `out`. Counts the
+    /// same gradient evaluations as [`IlProblem::estimate`].
     ///
     /// # Errors
     /// As [`IlProblem::weighted_estimate`].
@@ -39,16 +39,17 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     ) -> Result<(), OracleError>;
 
     /// The baselined causal estimator `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) at θ on one
-    /// trajectory, for baselines fixed before the pass (unbiased for ∇F(θ) when τ ∼ p(·; θ),
-    /// since b_i does not depend on τ).
+    /// trajectory, for baselines fixed before the pass (unbiased for ∇F(θ) when τ ∼ p(·; θ), since
+    /// b_i does not depend on τ).
     ///
     /// The default assembles it from [`PerDecisionTerms::decision_terms`] (one pass, storing each
     /// decision's score); a problem may override it with a faster pass (the real tasks fold the
-    /// baseline into the plain estimator's loop, see [`crate::oracle::EstimatorKernel::causal_sum_trusted`]).
+    /// baseline into the plain estimator's loop, see
+    /// [`crate::oracle::EstimatorKernel::causal_sum_trusted`]).
     ///
     /// # Errors
-    /// As [`PerDecisionTerms::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list is
-    /// shorter than the trajectory's scored decisions.
+    /// As [`PerDecisionTerms::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list
+    /// is shorter than the trajectory's scored decisions.
     fn baselined_estimate(
         &self,
         theta: &DVector<S>,
@@ -68,14 +69,14 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     }
 
     /// The decisions of one trajectory at θ recorded for the causal estimator of eq. 3.15
-    /// ([`RecordedPass`]): every step's loss `l_t` (the absorbing tail as one more), the number
-    /// of scored decisions, and what [`PerDecisionTerms::estimate_recorded`] needs to sum the estimate
-    /// with per-step losses chosen afterwards — how a baseline known only after every
-    /// trajectory's pass enters (leave-one-out in [`crate::baseline::Baselined`]). Counts the
-    /// same gradient evaluations as [`IlProblem::estimate`].
+    /// ([`RecordedPass`]): every step's loss `l_t` (the absorbing tail as one more), the number of
+    /// scored decisions, and what [`PerDecisionTerms::estimate_recorded`] needs to sum the estimate
+    /// with per-step losses chosen afterwards — how a baseline known only after every trajectory's
+    /// pass enters (leave-one-out in [`crate::baseline::Baselined`]). Counts the same gradient
+    /// evaluations as [`IlProblem::estimate`].
     ///
-    /// The default fills `out` from [`PerDecisionTerms::decision_terms`] (the plain estimate and ψ_i as
-    /// rows of d entries); a problem may override it with a faster pass, together with
+    /// The default fills `out` from [`PerDecisionTerms::decision_terms`] (the plain estimate and
+    /// ψ_i as rows of d entries); a problem may override it with a faster pass, together with
     /// [`PerDecisionTerms::estimate_recorded`].
     ///
     /// # Errors
@@ -91,12 +92,12 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     }
 
     /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` on `trajectory` from what
-    /// [`PerDecisionTerms::record_decisions`] recorded there (s its scored decisions), with per-step
-    /// losses `l'` in place of the recorded ones: one per entry of [`RecordedPass::losses`]
-    /// (`losses` must have that length). With the recorded losses it is the causal estimate of
-    /// eq. 3.15; with `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first unscored step on) it
-    /// is the baselined `g − Σ_i b_i ψ_i` ([`crate::baseline`], summation by parts). The default
-    /// sums the rows of the default form.
+    /// [`PerDecisionTerms::record_decisions`] recorded there (s its scored decisions), with
+    /// per-step losses `l'` in place of the recorded ones: one per entry of
+    /// [`RecordedPass::losses`] (`losses` must have that length). With the recorded losses it is
+    /// the causal estimate of eq. 3.15; with `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first
+    /// unscored step on) it is the baselined `g − Σ_i b_i ψ_i` ([`crate::baseline`], summation by
+    /// parts). The default sums the rows of the default form.
     fn estimate_recorded(
         &self,
         trajectory: &Self::Trajectory,
@@ -109,9 +110,9 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     }
 
     /// [`ScoreProducts`] for the scored decisions of `trajectory`, from what
-    /// [`PerDecisionTerms::record_decisions`] recorded there: the statistics of the variance-minimising
-    /// baseline ([`crate::baseline::RunningOptimum`]) and its correction `g −= Σ_i b_i ψ_i`. The
-    /// default reads the rows of the default form.
+    /// [`PerDecisionTerms::record_decisions`] recorded there: the statistics of the
+    /// variance-minimising baseline ([`crate::baseline::RunningOptimum`]) and its correction
+    /// `g −= Σ_i b_i ψ_i`. The default reads the rows of the default form.
     fn recorded_score_products(
         &self,
         trajectory: &Self::Trajectory,

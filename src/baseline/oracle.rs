@@ -35,28 +35,29 @@ struct Buffers<S> {
 }
 
 /// The problem `inner` with m trajectories per oracle call (as [`Batched`]) and the causal
-/// estimator of eq. 3.15 replaced by its baselined form
-/// `g_b = g − Σ_i b_i ψ_i` (module docs of [`crate::baseline`]):
-/// `g_m(θ) = (1/m) Σ_j g_b(θ, τ_j)` with trajectory j's own baselines `b^{(j)}`, unbiased for ∇F(θ)
-/// by the argument there. The importance-weighted old-point estimate is the baselined one with the
-/// weight on it (trajectory weight) or the prefix weight `w_{1:i}` on `b_i ψ_i` (per-decision).
+/// estimator of eq. 3.15 replaced by its baselined form `g_b = g − Σ_i b_i ψ_i` (module docs of
+/// [`crate::baseline`]): `g_m(θ) = (1/m) Σ_j g_b(θ, τ_j)` with trajectory j's own baselines
+/// `b^{(j)}`, unbiased for ∇F(θ) by the argument there. The importance-weighted old-point estimate
+/// is the baselined one with the weight on it (trajectory weight) or the prefix weight `w_{1:i}` on
+/// `b_i ψ_i` (per-decision).
 ///
 /// With [`Baseline::None`] every call is [`Batched`]'s, bit for bit. With a baseline, the
-/// [`EstimatorForm::Full`] form is refused (baselines apply to the causal form), and `inner`
-/// must implement [`PerDecisionTerms::decision_terms`].
+/// [`EstimatorForm::Full`] form is refused (baselines apply to the causal form), and `inner` must
+/// implement [`PerDecisionTerms::decision_terms`].
 ///
 /// Leave-one-out: trajectory j's `b_i^{(j)} = (1/(m−1)) Σ_{k≠j} L_i^{(k)}` with `L_i^{(k)}` the
 /// loss-to-go of trajectory k at its decision i (0 where k took fewer decisions; in a weighted
 /// estimate the weighted loss-to-go). It is a function of the other trajectories only, which are
 /// independent of τ_j. The unweighted estimate records each trajectory's decisions
-/// ([`PerDecisionTerms::record_decisions`]), then sums each trajectory's estimate once with its per-step
-/// losses shifted by the baseline ([`PerDecisionTerms::estimate_recorded`]); the weighted one assembles
-/// it from [`DecisionTerms`], as [`Baselined::estimate_by_terms`] does for every kind.
+/// ([`PerDecisionTerms::record_decisions`]), then sums each trajectory's estimate once with its
+/// per-step losses shifted by the baseline ([`PerDecisionTerms::estimate_recorded`]); the weighted
+/// one assembles it from [`DecisionTerms`], as [`Baselined::estimate_by_terms`] does for every
+/// kind.
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
-/// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines
-/// from earlier roll-outs only. This assumes, as every algorithm of the kit does, that a
-/// trajectory is estimated before the next one is rolled out.
+/// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines from
+/// earlier roll-outs only. This assumes, as every algorithm of the kit does, that a trajectory is
+/// estimated before the next one is rolled out.
 #[derive(Debug, Clone)]
 pub struct Baselined<P, S> {
     batch: Batched<P>,
@@ -219,10 +220,10 @@ fn record_batch<'r, S: Scalar, P: PerDecisionTerms<S>>(
 
 impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
     /// The mean causal estimate over `batch` assembled from every trajectory's [`DecisionTerms`]
-    /// ([`PerDecisionTerms::decision_terms`]) for every kind of baseline: the reference route, with the
-    /// results of [`IlProblem::estimate`] (the same mathematics; in floating point up to the
-    /// order of the sums where `estimate` takes a fused pass). An estimated baseline observes
-    /// the trajectories as `estimate` does.
+    /// ([`PerDecisionTerms::decision_terms`]) for every kind of baseline: the reference route, with
+    /// the results of [`IlProblem::estimate`] (the same mathematics; in floating point up to the
+    /// order of the sums where `estimate` takes a fused pass). An estimated baseline observes the
+    /// trajectories as `estimate` does.
     ///
     /// # Errors
     /// As [`IlProblem::estimate`].
@@ -284,8 +285,8 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
     /// The mean estimate over `batch` with the committed variance-minimising baselines of
     /// [`RunningOptimum`], which then observes the batch: every trajectory's decisions recorded
     /// ([`PerDecisionTerms::record_decisions`]), its plain estimate g summed once
-    /// ([`PerDecisionTerms::estimate_recorded`] with its own losses), then one more read of its scores
-    /// for both the statistics `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
+    /// ([`PerDecisionTerms::estimate_recorded`] with its own losses), then one more read of its
+    /// scores for both the statistics `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
     /// ([`PerDecisionTerms::recorded_score_products`]). No allocation per step.
     fn estimated(
         &self,
