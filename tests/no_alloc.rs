@@ -493,6 +493,37 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
                 "{kind:?}: roll-out allocations {rollout_counts:?}"
             );
         }
+        if let Baseline::Estimated { .. } = kind {
+            // Each roll-out commits the statistics of the estimate before it: once the sums have
+            // seen the longest trajectory, a commit allocates nothing, whatever the lengths — the
+            // roll-out allocates what the same roll-out without a baseline does.
+            let plain = Baselined::<_, f64>::new(cartpole(), m, &Baseline::None).unwrap();
+            p.estimate(theta, &warm, EstimatorForm::Causal, &mut cost)
+                .unwrap();
+            p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                .unwrap();
+            let mut commit_counts = vec![];
+            for (theta, b) in &batches {
+                p.estimate(theta, b, EstimatorForm::Causal, &mut cost)
+                    .unwrap();
+                let mut same = rng.clone();
+                let (with_commit, _) = count(|| {
+                    p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                        .unwrap()
+                });
+                let (without, _) = count(|| {
+                    plain
+                        .rollout(&Behaviour::Learner(theta), &mut same, &mut cost)
+                        .unwrap()
+                });
+                commit_counts.push((with_commit, without));
+            }
+            assert!(
+                commit_counts.iter().all(|&(a, b)| a == b),
+                "{kind:?}: roll-out allocations with the estimated baselines, without: \
+                 {commit_counts:?}"
+            );
+        }
     }
 }
 

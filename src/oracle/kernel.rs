@@ -6,7 +6,8 @@
 //! opts in by implementing [`EstimatorKernel`] (an empty `impl` takes the defaults). The logistic
 //! policy overrides the causal passes with fixed-dimension loops (module `logistic`), the
 //! linear-Gaussian policies override the loss without its gradient. Every override returns the
-//! default's values bit for bit and the default's first error.
+//! default's values bit for bit and the default's first error, except the logistic policy's
+//! `score_products`, which forms the same products in another order (equal up to rounding).
 
 use super::products::ScoreProducts;
 use crate::policy::{
