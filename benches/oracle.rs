@@ -293,7 +293,7 @@ fn vo_expert(c: &mut Criterion) {
         loop {
             states.push(obs);
             let s = env.step(expert.act(&obs).unwrap()).unwrap();
-            obs = s.obs;
+            obs = s.observation;
             if s.terminated || s.truncated {
                 break;
             }

@@ -59,9 +59,9 @@ pub struct Results {
     /// Fig. 4.2.
     pub gradient_error: GradientErrorResult,
     /// Obstacle configurations in table order.
-    pub obstacle: Vec<(ConfigResult, Option<ConfigTiming>)>,
+    pub obstacle: Vec<ConfigWithTiming>,
     /// CartPole configurations in table order.
-    pub cartpole: Vec<(ConfigResult, Option<ConfigTiming>)>,
+    pub cartpole: Vec<ConfigWithTiming>,
     /// The baselines of both tasks (obstacle first, table order).
     pub baselines: Vec<BaselineResult>,
     /// The tuning of every row (both tasks, table order; rows without a grid have one point and

@@ -7,8 +7,7 @@
 //! causal pass). The algorithms see only [`IlProblem`]; [`crate::baseline::Baselined`] needs this
 //! trait of the problem it wraps.
 
-use super::{DecisionTerms, Given, RecordedPass};
-use crate::oracle::ScoreProducts;
+use crate::oracle::{DecisionTerms, Given, RecordedPass, ScoreProducts};
 use crate::problem::{Cost, IlProblem, OracleError, Weighting};
 use crate::scalar::Scalar;
 use nalgebra::DVector;

@@ -31,25 +31,19 @@
 //! ([`RunningOptimum`]), and leave-one-out across the m trajectories of one gradient (trajectory
 //! j's b_i is the mean loss-to-go at decision i of the other m − 1, independent of trajectory j;
 //! exact for m ≥ 2). [`Baselined`] is the oracle that applies them, to any problem that exposes
-//! its [`DecisionTerms`] ([`PerDecisionTerms::decision_terms`]); every oracle method
+//! its [`DecisionTerms`](crate::oracle::DecisionTerms) ([`PerDecisionTerms::decision_terms`]); every oracle method
 //! (SGD, STORM, IS-STORM, Adam, RMSProp, O2NC) run on it uses the baseline. Leave-one-out
 //! estimates take each trajectory's plain pass with its losses and scores recorded
-//! ([`RecordedPass`]) and subtract `Σ_i b_i ψ_i` once every trajectory's losses are known.
+//! ([`RecordedPass`](crate::oracle::RecordedPass)) and subtract `Σ_i b_i ψ_i` once every trajectory's losses are known.
 
 mod decisions;
-mod given;
 mod oracle;
-mod recorded;
 mod running;
-mod terms;
 
 pub use decisions::PerDecisionTerms;
 pub(crate) use decisions::{record_by_terms, too_few_baselines};
-pub use given::Given;
 pub use oracle::Baselined;
-pub use recorded::RecordedPass;
 pub use running::RunningOptimum;
-pub use terms::DecisionTerms;
 
 use crate::scalar::ConfigNumber;
 use serde::{Deserialize, Serialize};

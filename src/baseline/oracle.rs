@@ -1,8 +1,8 @@
 //! [`Baselined`]: m trajectories per oracle call, each estimate with a baseline.
 
-use super::{Baseline, DecisionTerms, Given, PerDecisionTerms, RecordedPass, RunningOptimum};
+use super::{Baseline, PerDecisionTerms, RunningOptimum};
 use crate::batched::Batched;
-use crate::oracle::ScoreProducts;
+use crate::oracle::{DecisionTerms, Given, RecordedPass, ScoreProducts};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::Scalar;
 use nalgebra::DVector;

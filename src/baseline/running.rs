@@ -1,6 +1,6 @@
 //! [`RunningOptimum`]: the variance-minimising baselines estimated from earlier iterations only.
 
-use super::DecisionTerms;
+use crate::oracle::DecisionTerms;
 use crate::oracle::ScoreProducts;
 use crate::scalar::Scalar;
 

@@ -358,6 +358,15 @@ impl<S: Real> CartPoleEpisode<S> {
         Self { state, steps: 0 }
     }
 
+    /// A new episode from Gymnasium's reset law ([`sample_reset_state`]), its `f64` draws
+    /// converted exactly into `S` (a float, a rational, or a point interval).
+    pub fn reset(rng: &mut KitRng) -> Self {
+        let s = sample_reset_state(rng);
+        Self::at(std::array::from_fn(|i| {
+            S::from_binary64(s[i]).expect("the reset law draws finite values")
+        }))
+    }
+
     /// One step under `action` ([`CartPoleDynamics::step_in_place`]) with the time limit
     /// `max_steps`: the step that brings the episode to `max_steps` steps is truncated
     /// (Gymnasium's `TimeLimit`).
@@ -441,13 +450,9 @@ impl<S: Real> Env<S> for CartPole<S> {
     type Obs = [S; 4];
     type Action = usize;
 
-    /// Draws the initial state with [`sample_reset_state`] (converted to `S` exactly: a float, or a
-    /// point interval).
+    /// The initial state of [`CartPoleEpisode::reset`].
     fn reset(&mut self, rng: &mut KitRng) -> [S; 4] {
-        let s = sample_reset_state(rng);
-        self.reset_to(std::array::from_fn(|i| {
-            S::from_rational(&BigRational::from_float(s[i]).expect("reset values are finite"))
-        }))
+        self.reset_to(CartPoleEpisode::reset(rng).state)
     }
 
     fn step(&mut self, action: usize) -> Result<Step<S, [S; 4]>, EnvError> {

@@ -278,7 +278,7 @@ pub enum Outcome {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ObstacleStep {
     /// The observation after the step.
-    pub obs: ObstacleObs,
+    pub observation: ObstacleObs,
     /// Progress towards the goal plus the success/crash reward (module docs).
     pub reward: f64,
     /// Success or crash.
@@ -395,7 +395,7 @@ impl ObstacleEnv {
             Outcome::Running
         };
         Ok(ObstacleStep {
-            obs: *o,
+            observation: *o,
             reward,
             terminated: matches!(state.outcome, Outcome::Success | Outcome::Crash),
             truncated: state.outcome == Outcome::TimeOut,
@@ -428,7 +428,7 @@ impl super::Env<f64> for ObstacleEnv {
             },
         })?;
         Ok(super::Step {
-            observation: s.obs,
+            observation: s.observation,
             reward: s.reward,
             terminated: s.terminated,
             truncated: s.truncated,
@@ -553,13 +553,13 @@ mod tests {
         assert_eq!(env.steps(), 0);
         // (3, 4) is clipped to speed 0.1 along the same direction: (0.06, 0.08).
         let s = env.step([3.0, 4.0]).unwrap();
-        approx::assert_abs_diff_eq!(s.obs.agent_vel[0], 0.06, epsilon = 1e-15);
-        approx::assert_abs_diff_eq!(s.obs.agent_vel[1], 0.08, epsilon = 1e-15);
-        approx::assert_abs_diff_eq!(s.obs.agent_pos[0], -2.44, epsilon = 1e-15);
+        approx::assert_abs_diff_eq!(s.observation.agent_vel[0], 0.06, epsilon = 1e-15);
+        approx::assert_abs_diff_eq!(s.observation.agent_vel[1], 0.08, epsilon = 1e-15);
+        approx::assert_abs_diff_eq!(s.observation.agent_pos[0], -2.44, epsilon = 1e-15);
         assert_eq!(s.outcome, Outcome::Running);
         // The obstacle moved by its step.
         assert_eq!(
-            s.obs.obstacle_pos,
+            s.observation.obstacle_pos,
             [
                 obs0.obstacle_pos[0] + obs0.obstacle_vel[0],
                 obs0.obstacle_pos[1] + obs0.obstacle_vel[1]

@@ -11,7 +11,7 @@
 
 use super::ExactError;
 use super::enumerate::for_each_prefix;
-use crate::baseline::DecisionTerms;
+use crate::oracle::DecisionTerms;
 use crate::scalar::{Scalar, dot, norm_sq};
 use crate::toy::estimator::decision_terms;
 use crate::toy::{ToyProblem, ToyTrajectory};

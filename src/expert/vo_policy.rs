@@ -151,7 +151,7 @@ mod tests {
         let mut outcome = Outcome::Running;
         while outcome == Outcome::Running {
             let s = env.step(expert.act(&obs).unwrap()).unwrap();
-            obs = s.obs;
+            obs = s.observation;
             outcome = s.outcome;
         }
         assert_eq!(outcome, Outcome::Success);

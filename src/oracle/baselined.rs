@@ -1,8 +1,8 @@
 //! The causal estimator with a baseline subtracted, `g − Σ_i b_i ψ_i` ([`crate::baseline`]): the
 //! baseline `b_i` may depend on anything before decision i, so the estimate stays unbiased.
 
+use super::{DecisionTerms, Given};
 use super::{Decisions, features_valid, policy_error, terms_pass};
-use crate::baseline::{DecisionTerms, Given};
 use crate::oracle::EstimatorKernel;
 use crate::policy::LikelihoodRatio;
 use crate::problem::OracleError;

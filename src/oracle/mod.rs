@@ -12,20 +12,32 @@
 //! * the per-decision terms from which a baseline `b_i` is subtracted, `g − Σ_i b_i ψ_i`
 //!   ([`crate::baseline`]), also folded into the causal pass as loss shifts.
 //!
-//! Every pass accumulates one decision with the same update, [`kernel`]'s `accumulate`:
-//! `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then `Σ_{i<t} ψ_i += ψ_t`.
+//! One decision's update is `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then `Σ_{i<t} ψ_i += ψ_t`: in the
+//! generic passes [`kernel`]'s `accumulate`; the passes over recorded decisions apply its score
+//! part to the stored rows (`accumulate_rows`), and the logistic policy's fixed-dimension loops
+//! (its [`EstimatorKernel`] overrides) the same arithmetic on `[f64; N]` rows, tested against the
+//! generic route. The data the baselines need are here too: a trajectory's [`DecisionTerms`],
+//! baselines known before a pass ([`Given`]), decisions recorded to be summed with losses chosen
+//! later ([`RecordedPass`]), and [`ScoreProducts`]. The toy MDPs' estimators
+//! ([`crate::toy::estimator`]) are an independent route: the loss-to-go summed backwards.
 
 mod baselined;
 mod causal;
+mod decision_terms;
 mod full;
+mod given;
 pub mod kernel;
 mod logistic;
 mod products;
 mod recorded;
+mod recorded_pass;
 mod terms;
 
+pub use decision_terms::DecisionTerms;
+pub use given::Given;
 pub use kernel::EstimatorKernel;
 pub use products::ScoreProducts;
+pub use recorded_pass::RecordedPass;
 
 pub(crate) use baselined::baselined_pass;
 pub(crate) use causal::causal_pass;

@@ -1,8 +1,8 @@
 //! The causal estimator's decisions recorded, summed later with losses chosen after every
 //! trajectory's pass ([`RecordedPass`], leave-one-out).
 
+use super::RecordedPass;
 use super::{Decisions, policy_error};
-use crate::baseline::RecordedPass;
 use crate::oracle::EstimatorKernel;
 use crate::problem::OracleError;
 use crate::scalar::Scalar;

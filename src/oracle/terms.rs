@@ -1,8 +1,8 @@
 //! The per-decision terms of the causal estimator, from which a baseline is subtracted
 //! ([`crate::baseline`], math.md §s on baselines).
 
+use super::DecisionTerms;
 use super::{Decisions, Scratch, policy_error};
-use crate::baseline::DecisionTerms;
 use crate::policy::LikelihoodRatio;
 use crate::problem::{OracleError, Weighting};
 use crate::scalar::Real;

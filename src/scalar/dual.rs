@@ -89,6 +89,13 @@ impl<S: Scalar> Dual<S> {
             g: self.g.iter().map(|gi| derivative.clone() * gi).collect(),
         }
     }
+
+    /// The square root given `root = √v`: derivative `g / (2√v)` (both [`Sqrt`] and
+    /// [`super::Roots`] take it from here).
+    pub(super) fn sqrt_from(&self, root: S) -> Self {
+        let d = S::one() / (S::from_i64(2) * &root);
+        self.chain(root, d)
+    }
 }
 
 fn zip_with<S: Scalar>(a: &[S], b: &[S], f: impl Fn(Option<&S>, Option<&S>) -> S) -> Gradient<S> {
@@ -268,9 +275,7 @@ impl<S: Scalar> num_traits::One for Dual<S> {
 impl<S: Sqrt> Sqrt for Dual<S> {
     /// `√v`, with derivative `g / (2√v)`.
     fn sqrt(&self) -> Self {
-        let r = self.v.sqrt();
-        let d = S::one() / (S::from_i64(2) * &r);
-        self.chain(r, d)
+        self.sqrt_from(self.v.sqrt())
     }
 }
 

@@ -105,9 +105,7 @@ impl<S: Scalar> Roots for Dual<S> {
     const HAS_ROOTS: bool = S::HAS_ROOTS;
     /// `√v` with derivative `g / (2√v)`.
     fn try_sqrt(&self) -> Option<Self> {
-        let r = self.value().try_sqrt()?;
-        let d = S::one() / (S::from_i64(2) * &r);
-        Some(self.chain(r, d))
+        Some(self.sqrt_from(self.value().try_sqrt()?))
     }
     /// `∛v` with derivative `g / (3 ∛v²)`.
     fn try_cbrt(&self) -> Option<Self> {

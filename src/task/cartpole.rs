@@ -6,10 +6,9 @@
 
 use super::Task;
 pub use crate::env::cartpole::CartPoleEpisode;
-use crate::env::cartpole::{CartPoleDynamics, MAX_EPISODE_STEPS, sample_reset_state};
+use crate::env::cartpole::{CartPoleDynamics, MAX_EPISODE_STEPS};
 use crate::expert::lqr::{LqrExpert, LqrGain};
 use crate::expert::ppo::{PpoExpert, PpoGreedy};
-use crate::policy::from_f64_exact;
 use crate::problem::{KitRng, OracleError};
 use crate::scalar::Real;
 
@@ -110,17 +109,7 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
     type Action = usize;
 
     fn start(&self, rng: &mut KitRng) -> Result<Self::Episode, OracleError> {
-        let s = sample_reset_state(rng);
-        let conv = |x: f64| {
-            from_f64_exact::<S>(x, "reset state")
-                .map_err(|e| OracleError::Environment(e.to_string()))
-        };
-        Ok(CartPoleEpisode::at([
-            conv(s[0])?,
-            conv(s[1])?,
-            conv(s[2])?,
-            conv(s[3])?,
-        ]))
+        Ok(CartPoleEpisode::reset(rng))
     }
 
     fn features(&self, ep: &Self::Episode) -> Vec<S> {

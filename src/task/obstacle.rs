@@ -324,7 +324,7 @@ impl<A: ActionVector<f64>> Task<f64> for ObstacleTask<A> {
             .env
             .step([action[0], action[1]])
             .map_err(|e| OracleError::Environment(e.to_string()))?;
-        ep.obs = s.obs;
+        ep.obs = s.observation;
         ep.outcome = s.outcome;
         Ok(s.terminated || s.truncated)
     }

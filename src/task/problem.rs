@@ -3,10 +3,10 @@
 
 use super::rollout::sample_learner;
 use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
-use crate::baseline::{DecisionTerms, Given, PerDecisionTerms, RecordedPass};
+use crate::baseline::PerDecisionTerms;
 use crate::oracle::{
-    EstimatorKernel, ScoreProducts, baselined_pass, causal_pass, features_valid, full_pass,
-    policy_error, record_pass, sum_recorded, terms_pass,
+    DecisionTerms, EstimatorKernel, Given, RecordedPass, ScoreProducts, baselined_pass,
+    causal_pass, features_valid, full_pass, policy_error, record_pass, sum_recorded, terms_pass,
 };
 use crate::policy::LikelihoodRatio;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -16,6 +16,33 @@ use rand::Rng;
 use std::borrow::Borrow;
 
 /// A task with a learner policy: an [`IlProblem`].
+///
+/// Adam on CartPole under the thesis's fixed-horizon objective (500 decisions, the environment
+/// reset after every crash), four trajectories per gradient, each estimate with the leave-one-out
+/// baseline of the other three ([`crate::baseline`]):
+///
+/// ```
+/// use ilopt::algo::{Runner, config::RunConfig};
+/// use ilopt::baseline::{Baseline, Baselined};
+/// use ilopt::policy::Logistic;
+/// use ilopt::task::cartpole::{self, CartPoleTask};
+/// use ilopt::task::{AfterEnd, TaskProblem};
+///
+/// let task = CartPoleTask::with_lqr()?; // the LQR expert labels every visited state
+/// let policy = Logistic::new(cartpole::FEATURES)?;
+/// let problem = TaskProblem::fixed(task, policy, 500, AfterEnd::Reset)?;
+/// let oracle = Baselined::<_, f64>::new(problem, 4, &Baseline::LeaveOneOut)?;
+/// let config: RunConfig = serde_json::from_str(
+///     r#"{"theta0": [0, 0, 0, 0, 0], "seed": 1, "stop": {"max_iterations": 10},
+///         "algorithm": {"algorithm": "adam", "form": "causal", "alpha": 0.005,
+///                       "beta1": 0.9, "beta2": 0.999, "epsilon": 1e-8}}"#,
+/// )?;
+/// let run = Runner::new(config.stop.clone())?.run_config(&config, &oracle)?;
+/// // Every iteration estimated the gradient on 4 trajectories of exactly 500 decisions.
+/// assert_eq!(run.cost.gradient_evaluations, 10 * 4 * 500);
+/// assert!(run.theta.iter().all(|x| x.is_finite()));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct TaskProblem<T, P> {
     /// The environment with its expert.

@@ -14,7 +14,7 @@
 //! function of s_i alone, so E[ψ_i Σ_{t>i} l_t] = E[E[ψ_i | s_i] Σ_{t>i} l_t] = 0.
 
 use super::table::PolicyTable;
-use crate::baseline::DecisionTerms;
+use crate::oracle::DecisionTerms;
 use crate::scalar::Scalar;
 
 /// Causal form (eq. 3.15): `g = Σ_t ∇l_t + Σ_{i=1}^{n} ψ_i Σ_{t=i+1}^{T−1} l_t` with n = `actions.len()`

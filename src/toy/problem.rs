@@ -12,13 +12,14 @@
 //! under absorption, a terminal state repeats for the remaining steps, with no decision, no draw
 //! and no expert query there (the recorded action is the placeholder 0). The estimators take the
 //! scores of the decisions only (see [`estimator`]); the absorbing losses enter the loss-to-go of
-//! every earlier decision, and absorbing steps cost no gradient evaluation. Without termination
-//! every draw is as before, so results are unchanged.
+//! every earlier decision, and absorbing steps cost no gradient evaluation. An MDP without
+//! terminal states makes one draw per transition and none from a reset law.
 
 use super::estimator;
 use super::table::PolicyTable;
 use super::{Termination, ToyMdp, estimator::prefix_loss};
-use crate::baseline::{DecisionTerms, PerDecisionTerms};
+use crate::baseline::PerDecisionTerms;
+use crate::oracle::DecisionTerms;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::sampling::{dyadic_uniform, sample_categorical};
 use crate::scalar::Scalar;

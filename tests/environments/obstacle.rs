@@ -32,7 +32,7 @@ fn run(config: &ObstacleConfig, params: VoExpertParams, episodes: u64, seed0: u6
                 matches!(s.outcome, Outcome::Success | Outcome::Crash)
             );
             assert_eq!(s.truncated, s.outcome == Outcome::TimeOut);
-            obs = s.obs;
+            obs = s.observation;
             match s.outcome {
                 Outcome::Running => continue,
                 Outcome::Success => {
@@ -178,7 +178,7 @@ fn without_margin_only_clipping_breaks_the_constraint() {
                 );
             }
             let s = env.step(a).unwrap();
-            obs = s.obs;
+            obs = s.observation;
             let sep = (obs.agent_pos[0] - obs.obstacle_pos[0])
                 .hypot(obs.agent_pos[1] - obs.obstacle_pos[1]);
             if sep < radius - 1e-9 {

@@ -6,10 +6,11 @@
 
 use crate::common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
 use ilopt::algo::ConfigNumber;
-use ilopt::baseline::{Baseline, Baselined, DecisionTerms, PerDecisionTerms};
+use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms};
 use ilopt::exact::baseline::{baselined_moments, optimal_baselines, prefix_trajectory};
 use ilopt::exact::enumerate::{for_each_prefix, moments};
 use ilopt::exact::forward::forward;
+use ilopt::oracle::DecisionTerms;
 use ilopt::oracle::EstimatorKernel;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::scalar::{BigRational, Interval, Scalar, dot, norm_sq};
@@ -589,7 +590,7 @@ fn the_configuration_round_trips_through_json() {
 /// estimate bit for bit.
 #[test]
 fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
-    use ilopt::baseline::Given;
+    use ilopt::oracle::Given;
     use ilopt::policy::{Logistic, Softmax};
     use ilopt::task::cartpole::{self, CartPoleTask};
     use ilopt::task::{AfterEnd, TaskProblem};

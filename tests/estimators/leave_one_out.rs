@@ -9,7 +9,8 @@
 
 use crate::common::example;
 use approx::abs_diff_eq;
-use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms, RecordedPass};
+use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms};
+use ilopt::oracle::RecordedPass;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
 use ilopt::scalar::{BigRational, Scalar, parse_exact_list};
 use ilopt::toy::{ToyProblem, ToyTrajectory};

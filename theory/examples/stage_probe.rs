@@ -4,10 +4,11 @@ use ilopt_theory::certify::box_constants::compute;
 use ilopt_theory::checks::baselined_storm::choose;
 use ilopt_theory::checks::constants::toy_row;
 use ilopt_theory::checks::{second_toy, statistical};
+use ilopt_theory::protocol::m1_tied;
 use ilopt_theory::protocol::{FAMILY_ALPHA, Profile, STATISTICAL_CLAIMS};
 use ilopt_theory::report::markdown;
 use ilopt_theory::stats::bonferroni;
-use ilopt_theory::suite::{global_constants, global_sizes, m1_tied};
+use ilopt_theory::suite::{global_constants, global_sizes};
 
 /// This process's user CPU seconds so far (Linux: `/proc/self/stat`, clock ticks of 1/100 s).
 fn user_cpu() -> f64 {

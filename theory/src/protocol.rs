@@ -1,5 +1,9 @@
 //! The protocol of the theorem table: the two profiles and their sizes, the family-wise
-//! false-alarm probability and its Bonferroni split, and the real-environment settings.
+//! false-alarm probability and its Bonferroni split, the toy MDP M1 the thesis's rows run on, and
+//! the real-environment settings.
+
+use ilopt::scalar::parse_exact;
+use ilopt::toy::{PolicyKind, ToyMdp};
 
 /// How large the suite runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -34,6 +38,20 @@ pub struct Sizes {
     pub l_tilde_tol: f64,
     /// Branch-and-bound box budget per chart region for L̃.
     pub l_tilde_boxes: usize,
+}
+
+/// The toy MDP M1 (P2', c = 1/2), as in `examples/toy/m1-tied.json`.
+pub fn m1_tied() -> ToyMdp {
+    let q = |s: &str| parse_exact(s).expect("constant");
+    ToyMdp::m_family(
+        q("1/2"),
+        q("1/2"),
+        q("1"),
+        3,
+        PolicyKind::TiedSoftmax,
+        Some(q("1/2")),
+    )
+    .expect("valid")
 }
 
 /// Family-wise false-alarm probability of the statistical checks (Bonferroni-split).

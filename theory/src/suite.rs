@@ -11,7 +11,7 @@ use crate::checks::{
 };
 use crate::protocol::{
     CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes,
-    STATISTICAL_CLAIMS, Sizes, real_sizes,
+    STATISTICAL_CLAIMS, Sizes, m1_tied, real_sizes,
 };
 use crate::record::check::Check;
 use crate::stage::timed;
@@ -24,19 +24,6 @@ pub use crate::protocol::Profile;
 
 fn q(s: &str) -> BigRational {
     parse_exact(s).expect("constant")
-}
-
-/// The toy MDP M1 (P2', c = 1/2), as in `examples/toy/m1-tied.json`.
-pub fn m1_tied() -> ToyMdp {
-    ToyMdp::m_family(
-        q("1/2"),
-        q("1/2"),
-        q("1"),
-        3,
-        ilopt::toy::PolicyKind::TiedSoftmax,
-        Some(q("1/2")),
-    )
-    .expect("valid")
 }
 
 /// The exact, rigorous and toy Monte-Carlo part of the suite (checks 1, 2a–2d, 3, 4, 5, 8, 8b,
@@ -369,5 +356,5 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
 
 /// The note on the obstacle rows explaining the growth of the worst z with N seen at small sizes:
 /// the finite-difference reference's noise and O(h²) bias, not a bias of the oracle (the test
-/// `explore_old_obstacle` reproduces it).
-pub const OBSTACLE_Z_TREND: &str = "; the former row's z-trend (worst z 1.21 → 2.44 → 3.08 at N = 18, 75, 300; episodic, σ = 0.05, h = 0.005, N′ = 200) was not a bias: re-run with this statistic it recurs at that size (1.79 → 2.15 → 3.20, nested subsamples against one fixed, noisy reference), and vanishes at 16× the size (N = 4800, N′ = 3200: 2.85 → 2.50 → 2.26) and at h/5 (2.61 → 2.49 → 2.18); the reference's own bias shows only at h = 0.02 (2.64 → 2.59 → 4.84), an O(h²)-and-beyond finite-difference bias, not of the oracle. The same signature, larger, on the episodic control row (6e, --full) at h = 0.05 (worst z 5.1 → 12.0 → 22.9 at N = 2000, 8000, 32000, Richardson's O(h²) term 346 of its s.e.): the reference is biased where the episodic F is not smooth at the scale h; at h = 0.01 and 0.002 (N = N′ = 8000) worst z 2.05 and 2.71, no trend. On the fixed-horizon row, h = 0.01 (N = N′ = 8000) gives worst z 1.81 (1.45 → 1.34 → 1.81), agreeing with h = 0.05";
+/// `explore_episodic_obstacle` reproduces it).
+pub const OBSTACLE_Z_TREND: &str = "; a worst z that grows with N at small sizes is the finite-difference reference's, not the oracle's: on the episodic objective with σ = 0.05, h = 0.005 and N′ = 200, nested subsamples against one fixed, noisy reference give worst z 1.79 → 2.15 → 3.20 at N = 18, 75, 300; the trend vanishes at 16× the size (N = 4800, N′ = 3200: 2.85 → 2.50 → 2.26) and at h/5 (2.61 → 2.49 → 2.18), and the reference's own bias shows at h = 0.02 (2.64 → 2.59 → 4.84), a finite-difference bias of order h² and beyond. The same signature, larger, on the episodic control row (6e, --full) at h = 0.05 (worst z 5.1 → 12.0 → 22.9 at N = 2000, 8000, 32000, Richardson's O(h²) term 346 of its s.e.): the reference is biased where the episodic F is not smooth at the scale h; at h = 0.01 and 0.002 (N = N′ = 8000) worst z 2.05 and 2.71, no trend. On the fixed-horizon row, h = 0.01 (N = N′ = 8000) gives worst z 1.81 (1.45 → 1.34 → 1.81), agreeing with h = 0.05";

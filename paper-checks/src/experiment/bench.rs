@@ -317,7 +317,7 @@ impl Bench {
                 };
                 let s = e.step(a).map_err(|x| err(&x))?;
                 ev.reward += s.reward;
-                obs = s.obs;
+                obs = s.observation;
                 match s.outcome {
                     Outcome::Running => {}
                     Outcome::Success => {

@@ -9,7 +9,7 @@
 use super::aggregate::{ConvergenceRow, ci, num, percent};
 use super::claims::calls;
 use super::doc::{Block, Table};
-use crate::results::{ConfigResult, ConfigTiming, Results};
+use crate::results::{ConfigResult, ConfigWithTiming, Results};
 use crate::verdict::Tally;
 
 /// The label suffix of a baselined row.
@@ -17,8 +17,6 @@ pub const SUFFIX: &str = " + baseline";
 
 /// The rows every baselined method is compared with, when present.
 const REFERENCE_ROWS: [&str; 3] = ["Adam", "RMSProp", "DAgger"];
-
-type Row = (ConfigResult, Option<ConfigTiming>);
 
 /// The plain row a baselined row is compared with.
 fn twin_label(label: &str) -> Option<String> {
@@ -33,7 +31,7 @@ fn twin_label(label: &str) -> Option<String> {
 /// One task's rows of the comparison, in order: each plain method then its baselined row, then
 /// the reference rows.
 fn ordered<'a>(
-    configs: &'a [Row],
+    configs: &'a [ConfigWithTiming],
     rows: &'a [ConvergenceRow],
 ) -> Vec<(&'a ConfigResult, &'a ConvergenceRow)> {
     let find = |label: &str| {

@@ -8,7 +8,7 @@
 use super::aggregate::num;
 use crate::experiment::{Checkpoint, RunStatus, SeedRun};
 use crate::gradient_error::SlopeCi;
-use crate::results::{ConfigResult, ConfigTiming, Results};
+use crate::results::{ConfigResult, ConfigTiming, ConfigWithTiming, Results};
 use crate::stats::Summary;
 use crate::verdict::{
     MedianCi, Outcome, Tally, Verdict, cap_for_failures, extreme, least, less, most, within,
@@ -36,8 +36,6 @@ pub struct Claim {
 /// Confidence level of every interval of a claim.
 const LEVEL: f64 = 0.95;
 
-type Row = (ConfigResult, Option<ConfigTiming>);
-
 /// A run's outcome for the verdict rules.
 pub(crate) fn outcome(r: &SeedRun) -> Outcome {
     match &r.status {
@@ -51,14 +49,14 @@ pub(crate) fn outcome(r: &SeedRun) -> Outcome {
 }
 
 /// A thesis row of a task by label.
-fn thesis<'a>(rows: &'a [Row], label: &str) -> Option<&'a ConfigResult> {
+fn thesis<'a>(rows: &'a [ConfigWithTiming], label: &str) -> Option<&'a ConfigResult> {
     rows.iter()
         .map(|r| &r.0)
         .find(|c| c.label == label && c.entry.role == crate::config::Role::Thesis)
 }
 
 /// The thesis rows of `labels`, in that order (missing ones skipped).
-fn in_order<'a>(rows: &'a [Row], labels: &[&str]) -> Vec<&'a ConfigResult> {
+fn in_order<'a>(rows: &'a [ConfigWithTiming], labels: &[&str]) -> Vec<&'a ConfigResult> {
     labels.iter().filter_map(|l| thesis(rows, l)).collect()
 }
 
@@ -214,7 +212,7 @@ fn gradient_error_claim(r: &Results) -> Claim {
 }
 
 /// O2–O5: the obstacle task's final success rates (Fig. 4.3).
-fn obstacle_success_claims(o: &[Row]) -> Vec<Claim> {
+fn obstacle_success_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
     let mut out = Vec::new();
     let success = |c: &ConfigResult| last_value(c, |k| Some(k.score), Some(0.0));
     // A thesis row's final success rate lies in [lo, hi].
@@ -297,7 +295,7 @@ fn obstacle_success_claims(o: &[Row]) -> Vec<Claim> {
 
 /// O6–O8: the obstacle task's extremes: BC's crashes, STORM's gradient norm, DAgger's loss
 /// (Figs. 4.4–4.6).
-fn obstacle_extreme_claims(o: &[Row]) -> Vec<Claim> {
+fn obstacle_extreme_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
     let mut out = Vec::new();
     let optimisers = |labels: &[&str]| -> Vec<&ConfigResult> {
         labels.iter().filter_map(|l| thesis(o, l)).collect()
@@ -410,7 +408,7 @@ fn dagger_most_calls(id: &str, source: &str, set: &[&ConfigResult]) -> Claim {
 }
 
 /// O9–O10: STORM needs the fewest gradient calls, DAgger the most (Table 4.1).
-fn obstacle_calls_claims(o: &[Row]) -> Vec<Claim> {
+fn obstacle_calls_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
     let mut out = Vec::new();
     let t41 = in_order(o, &["STORM", "SGD", "RMSProp", "DAgger", "Adam"]);
     if let Some(storm) = t41.iter().find(|c| c.label == "STORM") {
@@ -439,7 +437,7 @@ fn obstacle_calls_claims(o: &[Row]) -> Vec<Claim> {
 
 /// C1–C4: CartPole's gradient calls (Table 4.3), rewards (Fig. 4.10) and the variance of the
 /// crashes (Fig. 4.9).
-fn cartpole_claims(c: &[Row], reset_cap: u32) -> Vec<Claim> {
+fn cartpole_claims(c: &[ConfigWithTiming], reset_cap: u32) -> Vec<Claim> {
     let mut out = Vec::new();
     let t43 = in_order(c, &["STORM", "RMSProp", "DAgger", "Adam"]);
     out.push(dagger_most_calls("C1", "Table 4.3", &t43));

@@ -11,7 +11,7 @@ use super::{speedup, theory, tuning};
 use crate::config::Profile;
 use crate::error::Error;
 use crate::experiment::{Checkpoint, SeedRun, TaskKind};
-use crate::results::{ConfigResult, ConfigTiming, Results};
+use crate::results::{ConfigResult, ConfigWithTiming, Results};
 use crate::stats::Summary;
 use crate::storage::write_atomic;
 use std::path::Path;
@@ -72,10 +72,7 @@ fn calls_table(rows: &[ConvergenceRow], thesis: &[(&str, f64, f64)]) -> Vec<[Str
     out
 }
 
-fn runtime_table(
-    set: &[(ConfigResult, Option<ConfigTiming>)],
-    thesis: &[(&str, f64)],
-) -> Vec<[String; 4]> {
+fn runtime_table(set: &[ConfigWithTiming], thesis: &[(&str, f64)]) -> Vec<[String; 4]> {
     set.iter()
         .filter(|c| c.0.label != "BC")
         .map(|(c, t)| {
@@ -115,7 +112,7 @@ fn final_rows(rows: &[ConvergenceRow], obstacle: bool) -> Vec<Vec<String>> {
 fn cost_tables(
     (calls_no, runtime_no): (&str, &str),
     rows: &[ConvergenceRow],
-    configs: &[(ConfigResult, Option<ConfigTiming>)],
+    configs: &[ConfigWithTiming],
     thesis_calls: &[(&str, f64, f64)],
     thesis_runtime: &[(&str, f64)],
 ) -> [Block; 2] {

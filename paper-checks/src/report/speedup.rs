@@ -6,7 +6,7 @@
 
 use super::aggregate::{ci, num};
 use crate::provenance::Machine;
-use crate::results::{ConfigResult, ConfigTiming};
+use crate::results::{ConfigTiming, ConfigWithTiming};
 use crate::stats::Summary;
 
 /// What a kit wall time measures.
@@ -104,10 +104,7 @@ pub fn speedup_row(
 }
 
 /// The rows of one task (every algorithm except BC, which the thesis's tables omit).
-pub fn speedup_rows(
-    set: &[(ConfigResult, Option<ConfigTiming>)],
-    thesis: &[(&str, f64)],
-) -> Vec<SpeedupRow> {
+pub fn speedup_rows(set: &[ConfigWithTiming], thesis: &[(&str, f64)]) -> Vec<SpeedupRow> {
     set.iter()
         .filter(|c| c.0.label != "BC")
         .map(|(c, t)| speedup_row(&c.label, t.as_ref(), thesis))

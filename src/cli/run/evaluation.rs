@@ -165,7 +165,7 @@ fn obstacle(bench: &Bench, theta: &[f64], episodes: u32, seed: u64) -> Result<Ev
             };
             let s = e.step(a).map_err(|e| e.to_string())?;
             reward += s.reward;
-            obs = s.obs;
+            obs = s.observation;
             match s.outcome {
                 Outcome::Running => {}
                 Outcome::Success => {

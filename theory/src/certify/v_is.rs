@@ -319,7 +319,7 @@ pub fn v_is_second_mean_value_baselined(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::suite::m1_tied;
+    use crate::protocol::m1_tied;
 
     /// On a point box the shortcut of [`Curvature::mean_value`] gives the interval the
     /// full mean-value form gives there, in every chart pair, for both weightings and with a

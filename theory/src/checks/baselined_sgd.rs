@@ -165,8 +165,8 @@ fn try_rows(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::protocol::m1_tied;
     use crate::report::status;
-    use crate::suite::m1_tied;
 
     /// A suite that cannot compute row 1.b (here: an MDP of horizon 4, outside the box argument)
     /// still emits its control, undetected, so the table's status fails instead of passing with

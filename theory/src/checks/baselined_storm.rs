@@ -235,8 +235,8 @@ fn try_rows(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::protocol::m1_tied;
     use crate::report::status;
-    use crate::suite::m1_tied;
 
     /// A suite that cannot compute row 2.b (here: a policy the charts are not written for) still
     /// emits its control, undetected, so the table's status fails instead of passing with the

@@ -8,10 +8,10 @@
 //!   baseline, and biased with one that looks at the scored action.
 
 use crate::common::{q, quick_global_constants, table_alpha};
-use ilopt::baseline::DecisionTerms;
 use ilopt::exact::baseline::baselined_moments;
 use ilopt::exact::enumerate::{for_each_prefix, prefixes};
 use ilopt::exact::forward::forward;
+use ilopt::oracle::DecisionTerms;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::ToyProblem;
 use ilopt::toy::estimator::decision_terms;
@@ -23,8 +23,9 @@ use ilopt_theory::certify::v_is::v_is_second_mean_value_baselined;
 use ilopt_theory::check::{Role, Verdict};
 use ilopt_theory::checks::baselined_storm::{self, Choice, choose};
 use ilopt_theory::checks::montecarlo::McSettings;
+use ilopt_theory::protocol::m1_tied;
 use ilopt_theory::record::certificate::Chart;
-use ilopt_theory::suite::{Profile, global_sizes, m1_tied};
+use ilopt_theory::suite::{Profile, global_sizes};
 use std::sync::OnceLock;
 
 type Q = BigRational;

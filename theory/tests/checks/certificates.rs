@@ -17,8 +17,8 @@ use ilopt_theory::certify::recheck::{Coverage, Quantity, pieces};
 use ilopt_theory::check::Verdict;
 use ilopt_theory::checks::constants::{global_row, toy_row};
 use ilopt_theory::checks::second_toy::m2_two_groups;
+use ilopt_theory::protocol::m1_tied;
 use ilopt_theory::record::certificate::Chart;
-use ilopt_theory::suite::m1_tied;
 use std::sync::OnceLock;
 
 type Q = BigRational;

@@ -4,9 +4,9 @@ use ilopt::exact::enumerate::prefixes;
 use ilopt::scalar::{BigRational, Scalar, parse_exact};
 use ilopt::toy::ToyProblem;
 use ilopt_theory::certify::global::{GlobalConstants, GlobalSizes};
+use ilopt_theory::protocol::m1_tied;
 use ilopt_theory::protocol::{FAMILY_ALPHA, Profile, STATISTICAL_CLAIMS};
 use ilopt_theory::stats::bonferroni;
-use ilopt_theory::suite::m1_tied;
 use std::sync::OnceLock;
 
 /// The exact rational written `s` ("7/8", "-2").

@@ -5,7 +5,7 @@ use crate::common::v_is_trajectory;
 use ilopt::scalar::{BigRational, Scalar};
 use ilopt::toy::ToyProblem;
 use ilopt_theory::certify::box_constants::l_tilde;
-use ilopt_theory::suite::m1_tied;
+use ilopt_theory::protocol::m1_tied;
 
 type Q = BigRational;
 

@@ -8,7 +8,7 @@ use ilopt_theory::certify::recheck::Coverage;
 use ilopt_theory::check::{Role, Verdict};
 use ilopt_theory::checks::constants::toy_row;
 use ilopt_theory::checks::montecarlo::{self, McSettings};
-use ilopt_theory::suite::m1_tied;
+use ilopt_theory::protocol::m1_tied;
 use std::sync::OnceLock;
 
 const DOMAIN: [[f64; 2]; 1] = [[-200.0, 200.0]];

@@ -1,8 +1,8 @@
 //! Exploration (ignored, and a no-op unless `ILOPT_EXPLORE` is set, so that CI's `--ignored` run
 //! skips it): print the real-environment rows at sizes from the environment (N, NFD, H, ETA,
-//! TASK = cp | ob | obe, SIGMA, PROFILE = full). `explore_old_obstacle` reproduces the growth of
+//! TASK = cp | ob | obe, SIGMA, PROFILE = full). `explore_episodic_obstacle` reproduces the growth of
 //! the obstacle task's worst z with N at small sizes that `suite::OBSTACLE_Z_TREND` explains, e.g.
-//! `ILOPT_EXPLORE=1 N=300 NFD=200 H=0.005 cargo test --release -p ilopt-theory --test checks -- --ignored --nocapture real_env_explore::explore_old`.
+//! `ILOPT_EXPLORE=1 N=300 NFD=200 H=0.005 cargo test --release -p ilopt-theory --test checks -- --ignored --nocapture real_env_explore::explore_episodic`.
 use ilopt::task::{AfterEnd, Horizon};
 use ilopt_theory::checks::real_env::*;
 use ilopt_theory::protocol::RealSizes;
@@ -81,10 +81,11 @@ fn explore() {
     eprintln!("time {:?}", t0.elapsed());
 }
 
-/// The configuration of the old row 6 (episodic, plain linear-Gaussian σ = 0.05, pull 0.02).
+/// The obstacle task on the episodic objective with a plain linear-Gaussian learner (σ = 0.05,
+/// a pull of 0.02 towards the goal): the configuration `suite::OBSTACLE_Z_TREND` measures.
 #[test]
 #[ignore = "exploration"]
-fn explore_old_obstacle() {
+fn explore_episodic_obstacle() {
     if std::env::var_os("ILOPT_EXPLORE").is_none() {
         return;
     }

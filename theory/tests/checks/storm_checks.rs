@@ -20,7 +20,7 @@ use ilopt_theory::certify::global::{GlobalConstants, GlobalSizes, recheck_l_tild
 use ilopt_theory::check::{Role, Verdict};
 use ilopt_theory::checks::montecarlo::McSettings;
 use ilopt_theory::checks::storm;
-use ilopt_theory::suite::m1_tied;
+use ilopt_theory::protocol::m1_tied;
 
 type Q = BigRational;
 

@@ -4,8 +4,8 @@
 use crate::common::{quick_global_constants, table_alpha};
 use ilopt_theory::check::Verdict;
 use ilopt_theory::checks::tracking::{self, StormRange};
+use ilopt_theory::protocol::m1_tied;
 use ilopt_theory::stats::ZeroMeanTest;
-use ilopt_theory::suite::m1_tied;
 
 /// The two-sided rule on a planted stream: mean 0 holds, a bias of a few times the minimum
 /// detectable one is flagged either way, and values of zero width everywhere give a point interval.

@@ -147,7 +147,7 @@ mod tests {
 
     #[test]
     fn cell_enclosures_contain_the_exact_gradient_and_are_narrow() {
-        let mdp = crate::suite::m1_tied();
+        let mdp = crate::protocol::m1_tied();
         let mut cells = GradientCells::new(&mdp);
         // Points spread over many cells, cell ends and centres included, and repeats.
         let mut xs: Vec<f64> = (0..400).map(|i| -3.0 + 0.0153 * i as f64).collect();
@@ -177,7 +177,7 @@ mod tests {
     fn a_wrong_hessian_would_be_caught_by_the_exact_comparison() {
         // The same comparison with the second-order term dropped misses F′ at points away from
         // the centre: the test above can fail.
-        let mdp = crate::suite::m1_tied();
+        let mdp = crate::protocol::m1_tied();
         let cells = GradientCells::new(&mdp);
         let x = 0.3 + 0.4 * CELL_WIDTH;
         let k = (x / CELL_WIDTH).floor() as i64;

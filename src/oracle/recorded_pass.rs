@@ -1,8 +1,7 @@
 //! [`RecordedPass`]: the decisions of one trajectory recorded for the causal estimator, to be
 //! summed with losses chosen after the pass.
 
-use super::DecisionTerms;
-use crate::oracle::ScoreProducts;
+use super::{DecisionTerms, ScoreProducts};
 use crate::scalar::Scalar;
 
 /// One trajectory's decisions recorded for the causal estimator of eq. 3.15,
@@ -14,10 +13,10 @@ use crate::scalar::Scalar;
 /// is `l'_t = l_t − (S_t − l_t)/(m − 1)` with `S_t` the step's total over the m trajectories,
 /// since `Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`.
 ///
-/// Filled by [`super::PerDecisionTerms::record_decisions`] and summed by
-/// [`super::PerDecisionTerms::estimate_recorded`] of the same problem, in a form of its choosing
-/// (by default the plain estimate and the scores ψ_i as rows of d entries; the real tasks keep
-/// their policy's own records). The buffers are kept between uses: nothing is allocated per
+/// Filled by [`crate::baseline::PerDecisionTerms::record_decisions`] and summed by
+/// [`crate::baseline::PerDecisionTerms::estimate_recorded`] of the same problem, in a form of its
+/// choosing (by default the plain estimate and the scores ψ_i as rows of d entries; the real
+/// tasks keep their policy's own records). The buffers are kept between uses: nothing is allocated per
 /// step once they have grown.
 #[derive(Debug, Clone)]
 pub struct RecordedPass<S> {

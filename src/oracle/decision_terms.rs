@@ -18,9 +18,9 @@ use crate::scalar::Scalar;
 /// * with the whole-trajectory weight: `w = 1` inside and `c = Π_i π_old(a_i|s_i)/π_new(a_i|s_i)`
 ///   multiplies the baselined estimate.
 ///
-/// Why each stays unbiased is in the [module docs](super). Decision i is taken at step i (the
-/// same 0-based index), so `L_i` sums the losses of the steps after it; steps after the last
-/// decision (absorbing steps, the absorbing tail) carry losses only.
+/// Why each stays unbiased is in the module docs of [`crate::baseline`]. Decision i is taken at
+/// step i (the same 0-based index), so `L_i` sums the losses of the steps after it; steps after
+/// the last decision (absorbing steps, the absorbing tail) carry losses only.
 ///
 /// The buffers are kept between uses: refilled with [`DecisionTerms::begin`] and the `push_*`
 /// calls, a trajectory of n steps allocates at most once per buffer (reserved in `begin`), and
