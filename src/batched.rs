@@ -43,7 +43,10 @@ impl<P> Batched<P> {
 }
 
 /// The mean of `f(τ_j)` over the batch.
-fn mean<S: Scalar, T>(
+///
+/// # Errors
+/// For an empty batch, and the first error of `f`.
+pub(crate) fn mean<S: Scalar, T>(
     batch: &[T],
     mut f: impl FnMut(&T) -> Result<DVector<S>, OracleError>,
 ) -> Result<DVector<S>, OracleError> {

@@ -474,13 +474,16 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
             Baseline::Constant { .. } => 3 * m as u64 + 1,
             _ => m as u64 + 2,
         };
+        // The weighted estimate: with baselines known before the pass, per trajectory its
+        // estimate and its pass's scratch, then the mean; leave-one-out's terms go into kept
+        // buffers, then per trajectory its estimate, then the mean.
+        let weighted = match kind {
+            Baseline::LeaveOneOut => m as u64 + 2,
+            _ => 2 * m as u64 + 1,
+        };
         for (what, counts, max) in [
             ("baselined estimate", &estimate_counts, fast),
-            (
-                "baselined weighted estimate",
-                &weighted_counts,
-                m as u64 + 2,
-            ),
+            ("baselined weighted estimate", &weighted_counts, weighted),
         ] {
             assert!(
                 counts.iter().all(|&n| n == counts[0] && n <= max),

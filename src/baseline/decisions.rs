@@ -67,6 +67,40 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         Ok(DVector::from_vec(g))
     }
 
+    /// The baselined importance-weighted old-point estimate at θ_old on a trajectory sampled at
+    /// θ_new ([`IlProblem::weighted_estimate`] with the baseline of [`crate::baseline`]), for
+    /// baselines fixed before the pass: `g_b = c · (D + Σ_i ψ_i (L_i − w_{1:i} b_i))`
+    /// ([`DecisionTerms`]; per-decision weights: the prefix weight `w_{1:i}` on decision i's
+    /// baseline term, `c = 1`; trajectory weight: every `w = 1` inside and `c` the trajectory's
+    /// weight). Unbiased for ∇F(θ_old) by the argument of the module docs of [`crate::baseline`].
+    ///
+    /// The default assembles it from [`PerDecisionTerms::decision_terms`]; a problem may override
+    /// it with one pass that subtracts each decision's term as it is met (the real tasks).
+    ///
+    /// # Errors
+    /// As [`PerDecisionTerms::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list
+    /// is shorter than the trajectory's scored decisions.
+    fn weighted_baselined_estimate(
+        &self,
+        theta_old: &DVector<S>,
+        theta_new: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weighting: Weighting,
+        baseline: Given<'_, S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let mut terms = DecisionTerms::new();
+        let weights = Some((theta_new, weighting));
+        self.decision_terms(theta_old, trajectory, weights, &mut terms, cost)?;
+        terms.finish();
+        if !baseline.covers(terms.decisions()) {
+            return Err(too_few_baselines(terms.decisions()));
+        }
+        let mut g = vec![S::zero(); theta_old.len()];
+        terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
+        Ok(DVector::from_vec(g))
+    }
+
     /// The decisions of one trajectory at θ recorded for the causal estimator of eq. 3.15
     /// ([`RecordedPass`]): every step's loss `l_t` (the absorbing tail as one more), the number of
     /// scored decisions, and what [`PerDecisionTerms::estimate_recorded`] needs to sum the estimate

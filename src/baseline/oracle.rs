@@ -52,7 +52,9 @@ struct Buffers<S> {
 /// ([`PerDecisionTerms::record_decisions`]), then sums each trajectory's estimate once with its
 /// per-step losses shifted by the baseline ([`PerDecisionTerms::estimate_recorded`]); the weighted
 /// one assembles it from [`DecisionTerms`], as [`Baselined::estimate_by_terms`] does for every
-/// kind.
+/// kind. Baselines known before the pass (a constant, per-decision constants, the committed
+/// estimated ones) enter the weighted estimate through the problem's own weighted pass
+/// ([`PerDecisionTerms::weighted_baselined_estimate`]).
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
 /// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines from
@@ -196,6 +198,22 @@ fn leave_one_out_losses<S: Scalar>(totals: &[S], own: &[S], others: &S, shifted:
         let after = totals[own.len()..].iter().fold(S::zero(), |a, s| a + s);
         *last -= after / others;
     }
+}
+
+/// The mean of one baselined estimate per trajectory of `batch` ([`crate::batched`]'s mean),
+/// checked finite.
+///
+/// # Errors
+/// For an empty batch, the first error of `estimate`, and a non-finite mean.
+fn mean_of<S: Scalar, T>(
+    batch: &[T],
+    estimate: impl FnMut(&T) -> Result<DVector<S>, OracleError>,
+) -> Result<DVector<S>, OracleError> {
+    let g = crate::batched::mean(batch, estimate)?;
+    if !g.iter().all(Scalar::is_finite) {
+        return Err(OracleError::NonFinite("the baselined gradient estimate"));
+    }
+    Ok(g)
 }
 
 /// Every trajectory of `batch` recorded ([`PerDecisionTerms::record_decisions`]) into the first m
@@ -502,20 +520,9 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         };
         if let Some(given) = given {
             // Baselines known before the pass: the problem's own (possibly fused) pass.
-            let mut parts = trajectory.iter();
-            let first = parts
-                .next()
-                .ok_or_else(|| OracleError::Trajectory("an empty minibatch".into()))?;
-            let mut sum = inner.baselined_estimate(theta, first, given, cost)?;
-            for t in parts {
-                sum += inner.baselined_estimate(theta, t, given, cost)?;
-            }
-            let m = S::from_i64(trajectory.len() as i64);
-            let g = sum.map(|x| x / &m);
-            if !g.iter().all(Scalar::is_finite) {
-                return Err(OracleError::NonFinite("the baselined gradient estimate"));
-            }
-            return Ok(g);
+            return mean_of(trajectory, |t| {
+                inner.baselined_estimate(theta, t, given, cost)
+            });
         }
         self.estimate_by_terms(theta, trajectory, cost)
     }
@@ -534,9 +541,33 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
                 .weighted_estimate(theta_old, theta_new, trajectory, weighting, cost);
         }
         let inner = self.inner();
-        self.baselined(trajectory, false, |t, out| {
-            inner.decision_terms(theta_old, t, Some((theta_new, weighting)), out, cost)
-        })
+        let weighted = |t: &P::Trajectory, given: Given<'_, S>, cost: &mut Cost| {
+            inner.weighted_baselined_estimate(theta_old, theta_new, t, weighting, given, cost)
+        };
+        match &self.kind {
+            Kind::Constant(b) => mean_of(trajectory, |t| weighted(t, Given::Constant(b), cost)),
+            Kind::TimeIndexed(bs) => {
+                mean_of(trajectory, |t| weighted(t, Given::TimeIndexed(bs), cost))
+            }
+            Kind::Estimated {
+                time_indexed,
+                running,
+            } => {
+                // The committed baselines, in a buffer lent for the call.
+                let mut committed = std::mem::take(&mut self.buffers.borrow_mut().totals);
+                running.borrow().committed(*time_indexed, &mut committed);
+                let given = match (*time_indexed, committed.first()) {
+                    (false, Some(b)) => Given::Constant(b),
+                    _ => Given::Leading(&committed),
+                };
+                let g = mean_of(trajectory, |t| weighted(t, given, cost));
+                self.buffers.borrow_mut().totals = committed;
+                g
+            }
+            Kind::None | Kind::LeaveOneOut => self.baselined(trajectory, false, |t, out| {
+                inner.decision_terms(theta_old, t, Some((theta_new, weighting)), out, cost)
+            }),
+        }
     }
 
     fn trajectory_loss(

@@ -56,6 +56,22 @@ impl<S: Scalar> RunningOptimum<S> {
         self.per_decision.get(i).cloned().flatten()
     }
 
+    /// The committed baselines into `out` (cleared first): time-indexed, `b_i` for every index
+    /// with statistics (0 where [`RunningOptimum::time_indexed`] is `None`); otherwise the one
+    /// constant, or nothing before any nonzero score was seen.
+    pub fn committed(&self, time_indexed: bool, out: &mut Vec<S>) {
+        out.clear();
+        if time_indexed {
+            out.extend(
+                self.per_decision
+                    .iter()
+                    .map(|b| b.clone().unwrap_or_else(S::zero)),
+            );
+        } else {
+            out.extend(self.constant.clone());
+        }
+    }
+
     /// The committed constant baseline; `None` (0) before any nonzero score was seen.
     pub fn constant(&self) -> Option<S> {
         self.constant.clone()

@@ -41,13 +41,15 @@ where
                     shifts[scored] = -b.clone();
                 }
             }
-            Given::TimeIndexed(bs) => {
+            Given::TimeIndexed(bs) | Given::Leading(bs) => {
+                // A leading list stops early: b_t = 0 from its end on.
+                let k = scored.min(bs.len());
                 let mut previous = S::zero();
-                for (shift, b) in shifts.iter_mut().zip(&bs[..scored]) {
+                for (shift, b) in shifts.iter_mut().zip(&bs[..k]) {
                     *shift = b.clone() - &previous;
                     previous = b.clone();
                 }
-                shifts[scored] = -previous;
+                shifts[k] = -previous;
             }
         }
         let mut scratch = Vec::new();

@@ -1,7 +1,7 @@
 //! The causal estimator of eq. 3.15 (math.md §1.1), optionally importance-weighted (math.md §4),
 //! in one pass over a trajectory.
 
-use super::{Decisions, Scratch, features_valid, policy_error};
+use super::{Decisions, Given, Scratch, features_valid, policy_error};
 use crate::oracle::EstimatorKernel;
 use crate::oracle::kernel::accumulate;
 use crate::policy::LikelihoodRatio;
@@ -20,6 +20,11 @@ use std::borrow::Borrow;
 /// every decision: `+ w_{1:n} L_abs Σ_{i≤n} ψ_i` (they carry no `∇l`: they do not depend on θ
 /// but through the law of the end state).
 ///
+/// With `baseline`, baselines fixed before the pass are subtracted at every scored decision i:
+/// `− w_{1:i} b_i ψ_i` with per-decision weights, `− b_i ψ_i` otherwise (the trajectory's weight
+/// then multiplies the whole baselined estimate) — the baselined estimator of
+/// [`crate::baseline`], `c · (D + Σ_i ψ_i (L_i − w_{1:i} b_i))` ([`super::DecisionTerms`]).
+///
 /// Per decision: one [`Policy::loss_score_into`](crate::policy::Policy::loss_score_into) into
 /// preallocated buffers and O(d) field operations ([`accumulate`]), no allocation; on validated
 /// features without weights, the whole pass (the tail's term included) is the policy's
@@ -31,6 +36,7 @@ pub(crate) fn causal_pass<S, P, L, A>(
     ratio: Option<&[S]>,
     per_decision: bool,
     t: &Decisions<'_, S, L, A>,
+    baseline: Option<Given<'_, S>>,
 ) -> Result<(Vec<S>, S), OracleError>
 where
     S: Real,
@@ -44,7 +50,8 @@ where
     // θ has been checked by the caller; with every φ checked here once, the per-decision calls can
     // skip the policy's own checks (`causal_step_trusted`). Otherwise the checked calls below
     // report the first failure.
-    let trusted = !per_decision && features_valid(policy, t);
+    // A baseline needs each decision's score, which the trusted step does not write out.
+    let trusted = !per_decision && baseline.is_none() && features_valid(policy, t);
     let tail = t.absorbed;
     if trusted && ratio.is_none() {
         // The plain causal estimator: the whole pass in the policy (one loop it may specialise),
@@ -69,6 +76,8 @@ where
     }
     let mut scratch = Scratch::new(d);
     let (grad, score, score_sum) = scratch.parts();
+    // `w_{1:t−1}` of the current step t (per-decision weights): `exp` of the log-ratios so far.
+    let mut w = log_w.exp();
     for (step, ((phi, a), y)) in t.feature_rows().zip(t.actions).zip(t.labels).enumerate() {
         if trusted {
             policy
@@ -79,18 +88,31 @@ where
                 .loss_score_into(theta, phi, y.borrow(), a, grad, score)
                 .map_err(policy_error)?;
             if per_decision {
-                let w = log_w.exp();
                 accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
             } else {
                 accumulate(&mut g, None, &l, grad, score, score_sum);
             }
         }
-        if let Some(theta_new) = ratio
-            && step < scored
-        {
-            log_w += policy
-                .log_likelihood_ratio(theta, theta_new, phi, a)
-                .map_err(policy_error)?;
+        if step < scored {
+            if let Some(theta_new) = ratio {
+                log_w += policy
+                    .log_likelihood_ratio(theta, theta_new, phi, a)
+                    .map_err(policy_error)?;
+                if per_decision {
+                    w = log_w.exp();
+                }
+            }
+            if let Some(b) = baseline.and_then(|b| b.at(step)) {
+                // `w` is now w_{1:i} for this decision i.
+                let c = if per_decision {
+                    w.clone() * b
+                } else {
+                    b.clone()
+                };
+                for (gj, sj) in g.iter_mut().zip(score.iter()) {
+                    *gj -= c.clone() * sj;
+                }
+            }
         }
     }
     if let Some(tail) = tail {

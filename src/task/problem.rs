@@ -221,7 +221,7 @@ where
         let th = theta.as_slice();
         let g = match form {
             EstimatorForm::Causal => {
-                causal_pass(&self.policy, th, None, false, &trajectory.decisions())?.0
+                causal_pass(&self.policy, th, None, false, &trajectory.decisions(), None)?.0
             }
             EstimatorForm::Full => full_pass(&self.policy, th, &trajectory.decisions())?,
         };
@@ -248,11 +248,25 @@ where
         let (old, new) = (theta_old.as_slice(), theta_new.as_slice());
         let g = match weighting {
             Weighting::PerDecision => {
-                causal_pass(&self.policy, old, Some(new), true, &trajectory.decisions())?.0
+                causal_pass(
+                    &self.policy,
+                    old,
+                    Some(new),
+                    true,
+                    &trajectory.decisions(),
+                    None,
+                )?
+                .0
             }
             Weighting::Trajectory => {
-                let (g, log_w) =
-                    causal_pass(&self.policy, old, Some(new), false, &trajectory.decisions())?;
+                let (g, log_w) = causal_pass(
+                    &self.policy,
+                    old,
+                    Some(new),
+                    false,
+                    &trajectory.decisions(),
+                    None,
+                )?;
                 let w = log_w.exp();
                 g.into_iter().map(|x| x * &w).collect()
             }
@@ -346,6 +360,48 @@ where
         }
         let mut g = vec![S::zero(); self.dim()];
         baselined_pass(&self.policy, theta.as_slice(), &t, baseline, &mut g)?;
+        cost.gradient_evaluations += t.len() as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(DVector::from_vec(g))
+    }
+
+    /// The weighted causal pass of [`crate::oracle`] with the baseline subtracted at each scored
+    /// decision as it is met (no per-decision terms stored).
+    fn weighted_baselined_estimate(
+        &self,
+        theta_old: &DVector<S>,
+        theta_new: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        weighting: Weighting,
+        baseline: Given<'_, S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        check_theta(theta_old, self.dim())?;
+        check_theta(theta_new, self.dim())?;
+        check_trajectory(trajectory)?;
+        let t = trajectory.decisions();
+        let scored = t.scored();
+        if !baseline.covers(scored) {
+            return Err(crate::baseline::too_few_baselines(scored));
+        }
+        let (old, new) = (theta_old.as_slice(), theta_new.as_slice());
+        let per_decision = weighting == Weighting::PerDecision;
+        let (mut g, log_w) = causal_pass(
+            &self.policy,
+            old,
+            Some(new),
+            per_decision,
+            &t,
+            Some(baseline),
+        )?;
+        if !per_decision {
+            let w = log_w.exp();
+            for x in &mut g {
+                *x *= &w;
+            }
+        }
         cost.gradient_evaluations += t.len() as u64;
         if !g.iter().all(Scalar::is_finite) {
             return Err(OracleError::NonFinite("the baselined gradient estimate"));

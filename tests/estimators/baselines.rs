@@ -661,9 +661,12 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
 /// The real tasks' per-decision terms with no baseline reproduce the task's own estimators (an
 /// independent pass): the plain causal estimate and both importance-weighted old-point estimates,
 /// on CartPole (fixed horizon with resets) and on the obstacle task (fixed horizon with an
-/// absorbing tail), to the kit's f64 derivative tolerance.
+/// absorbing tail), to the kit's f64 derivative tolerance; and with baselines fixed before the
+/// pass (one constant, one per decision, a list shorter than the trajectory), the fused weighted
+/// pass agrees with the terms.
 #[test]
 fn task_decision_terms_reproduce_the_task_estimators() {
+    use ilopt::oracle::Given;
     use ilopt::policy::Logistic;
     use ilopt::task::cartpole::{self, CartPoleTask};
     use ilopt::task::{AfterEnd, TaskProblem};
@@ -706,6 +709,24 @@ fn task_decision_terms_reproduce_the_task_estimators() {
                     derivative_f64_agrees(&g, direct.as_slice()),
                     "{what}, {w:?}: {g:?} vs {direct:?}"
                 );
+                // Baselines fixed before the pass: the fused weighted pass against the terms.
+                let n = terms.decisions();
+                let per_index: Vec<f64> = (0..n).map(|i| 2.0 - 0.03 * i as f64).collect();
+                let (constant, leading) = (1.5, &per_index[..n / 2]);
+                for given in [
+                    Given::Constant(&constant),
+                    Given::TimeIndexed(&per_index),
+                    Given::Leading(leading),
+                ] {
+                    terms.estimate_into(|i| given.at(i).cloned(), &mut g);
+                    let fused = p
+                        .weighted_baselined_estimate(theta, theta_new, &t, w, given, &mut cost)
+                        .unwrap();
+                    assert!(
+                        derivative_f64_agrees(&g, fused.as_slice()),
+                        "{what}, {w:?}, {given:?}: {g:?} vs {fused:?}"
+                    );
+                }
             }
         }
     }
