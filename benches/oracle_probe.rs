@@ -26,7 +26,8 @@
 //! constants (their statistics committed at each roll-out, as in training), compared. Modes
 //! `weighted`, `weighted-estimated`, `weighted-pairs` and `weighted-loo`: the per-decision
 //! importance-weighted old-point estimate of math.md §4 (IS-STORM's, θ_old = θ + 0.01 per entry)
-//! on one trajectory without a baseline and with the estimated constants, and on the pairs
+//! on one trajectory without a baseline and with the estimated constants (committed from every
+//! probe trajectory's statistics before the timing), and on the pairs
 //! without a baseline and with leave-one-out, each baselined one compared with its plain one.
 
 #[path = "support/specialised.rs"]
@@ -191,6 +192,19 @@ fn main() {
     )
     .expect("estimated");
     let oracle_estimated = estimated.clone();
+    // The weighted estimates use the committed baselines: statistics from every probe trajectory,
+    // committed by one roll-out, as in training.
+    let weighted_estimated = estimated.clone();
+    let mut warm = Cost::default();
+    for one in &singles {
+        weighted_estimated
+            .estimate(&theta, one, EstimatorForm::Causal, &mut warm)
+            .expect("estimate");
+    }
+    let mut rng = KitRng::seed_from_u64(SEEDS);
+    weighted_estimated
+        .rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
+        .expect("roll-out");
 
     let mut t = Trajectory::default();
     let modes: Vec<&str> = modes.split(',').collect();
@@ -261,7 +275,9 @@ fn main() {
                         "weighted" | "weighted-estimated" | "weighted-pairs" | "weighted-loo" => {
                             let (o, batch) = match mode {
                                 "weighted" => (&single, &singles[seed as usize]),
-                                "weighted-estimated" => (&estimated, &singles[seed as usize]),
+                                "weighted-estimated" => {
+                                    (&weighted_estimated, &singles[seed as usize])
+                                }
                                 "weighted-pairs" => (&plain_pairs, &pairs[seed as usize]),
                                 _ => (&loo_pairs, &pairs[seed as usize]),
                             };
