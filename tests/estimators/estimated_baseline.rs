@@ -4,13 +4,16 @@
 //! from `DecisionTerms` (`Baselined::estimate_by_terms`), call after call with the statistics
 //! committed between them: equal in exact arithmetic on toy MDPs (with and without terminal
 //! states), close in `f64` on the real tasks (the logistic policy's own records, the softmax and
-//! linear-Gaussian policies' default rows; episodic, reset and absorbing horizons).
+//! linear-Gaussian policies' default rows; episodic, reset and absorbing horizons). After each
+//! call, the importance-weighted old-point estimate with the committed baselines (both
+//! weightings) against the same terms assembled in the test.
 
 use crate::common::example;
 use approx::abs_diff_eq;
 use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms};
-use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
+use ilopt::oracle::DecisionTerms;
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::scalar::{BigRational, Scalar, parse_exact_list};
 use ilopt::toy::ToyProblem;
 use nalgebra::DVector;
@@ -49,6 +52,40 @@ where
                     "{what}, time-indexed {time_indexed}, m = {m}, call {call}: {g1:?} vs {g2:?}"
                 );
                 assert_eq!(c1, c2, "{what}, call {call}: the cost");
+                // The importance-weighted old-point estimate with the committed baselines (the
+                // route a problem's weighted pass takes) against the same terms assembled here.
+                let committed = reference.running().unwrap();
+                let baseline = |i: usize| {
+                    if time_indexed {
+                        committed.time_indexed(i)
+                    } else {
+                        committed.constant()
+                    }
+                };
+                let old = theta.map(|x| x + S::from_ratio(1, 50));
+                for w in [Weighting::PerDecision, Weighting::Trajectory] {
+                    let g1 = fast
+                        .weighted_estimate(&old, theta, &b1, w, &mut c1)
+                        .unwrap();
+                    let mut g2 = vec![S::zero(); theta.len()];
+                    for t in &b2 {
+                        let mut terms = DecisionTerms::new();
+                        p.decision_terms(&old, t, Some((theta, w)), &mut terms, &mut c2)
+                            .unwrap();
+                        terms.finish();
+                        let mut one = vec![S::zero(); theta.len()];
+                        terms.estimate_into(baseline, &mut one);
+                        for (x, y) in g2.iter_mut().zip(one) {
+                            *x += y;
+                        }
+                    }
+                    let count = S::from_i64(m as i64);
+                    let g2: Vec<S> = g2.into_iter().map(|x| x / &count).collect();
+                    assert!(
+                        same(g1.as_slice(), &g2),
+                        "{what}, weighted {w:?}, time-indexed {time_indexed}, m = {m}, call {call}: {g1:?} vs {g2:?}"
+                    );
+                }
             }
         }
     }
