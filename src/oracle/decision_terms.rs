@@ -31,6 +31,8 @@ pub struct DecisionTerms<S> {
     direct: Vec<S>,
     /// ψ_1, …, ψ_n, `d` entries each.
     scores: Vec<S>,
+    /// n, the number of scores.
+    decisions: usize,
     /// Per step its (weighted) loss.
     losses: Vec<S>,
     /// After [`DecisionTerms::finish`], the suffix sums `Σ_{u≥t} l_u`.
@@ -54,6 +56,7 @@ impl<S: Scalar> DecisionTerms<S> {
             d: 0,
             direct: Vec::new(),
             scores: Vec::new(),
+            decisions: 0,
             losses: Vec::new(),
             suffix: Vec::new(),
             prefix_weights: Vec::new(),
@@ -69,6 +72,7 @@ impl<S: Scalar> DecisionTerms<S> {
         self.direct.resize(d, S::zero());
         self.scores.clear();
         self.scores.reserve(steps * d);
+        self.decisions = 0;
         self.losses.clear();
         self.losses.reserve(steps + 1);
         self.prefix_weights.clear();
@@ -82,6 +86,7 @@ impl<S: Scalar> DecisionTerms<S> {
     }
 
     /// The next step's (weighted) loss `w_{1:t−1} l_t`.
+    #[inline]
     pub fn push_loss(&mut self, loss: S) {
         debug_assert!(!self.finished);
         self.losses.push(loss);
@@ -92,8 +97,31 @@ impl<S: Scalar> DecisionTerms<S> {
     ///
     /// # Panics
     /// If some decisions carry a prefix weight and others do not.
+    #[inline]
     pub fn push_score(&mut self, prefix_weight: Option<S>) -> &mut [S] {
         let i = self.decisions();
+        self.push_prefix_weight(i, prefix_weight);
+        self.scores.resize((i + 1) * self.d, S::zero());
+        &mut self.scores[i * self.d..]
+    }
+
+    /// The next decision's score ψ_i, copied from `score` (d entries), with its prefix weight as
+    /// in [`DecisionTerms::push_score`].
+    ///
+    /// # Panics
+    /// As [`DecisionTerms::push_score`], and if `score` does not have d entries.
+    #[inline]
+    pub fn push_score_from(&mut self, prefix_weight: Option<S>, score: &[S]) {
+        assert_eq!(score.len(), self.d, "push_score_from: a score of d entries");
+        let i = self.decisions();
+        self.push_prefix_weight(i, prefix_weight);
+        self.scores.extend_from_slice(score);
+    }
+
+    /// Decision i's prefix weight, with the check that every decision has one or none does.
+    #[inline]
+    fn push_prefix_weight(&mut self, i: usize, prefix_weight: Option<S>) {
+        self.decisions += 1;
         match prefix_weight {
             Some(w) => {
                 assert_eq!(
@@ -108,8 +136,6 @@ impl<S: Scalar> DecisionTerms<S> {
                 "prefix weights on every decision"
             ),
         }
-        self.scores.resize((i + 1) * self.d, S::zero());
-        &mut self.scores[i * self.d..]
     }
 
     /// The whole-trajectory weight `c` that multiplies the estimate.
@@ -147,7 +173,7 @@ impl<S: Scalar> DecisionTerms<S> {
 
     /// The number n of scored decisions.
     pub fn decisions(&self) -> usize {
-        self.scores.len().checked_div(self.d).unwrap_or(0)
+        self.decisions
     }
 
     /// ψ_i (0-based `i`).

@@ -36,16 +36,17 @@ where
     let mut scratch = Scratch::new(d);
     let (grad, score, _) = scratch.parts();
     let mut log_w = S::zero();
+    // `w_{1:t−1}` of the current step t (per-decision weights), formed once per decision.
+    let mut w = log_w.exp();
     for (step, ((phi, a), y)) in t.feature_rows().zip(t.actions).zip(t.labels).enumerate() {
         let l = policy
             .loss_score_into(theta, phi, y.borrow(), a, grad, score)
             .map_err(policy_error)?;
         if per_decision {
-            let w = log_w.exp();
             for (o, g) in out.direct_mut().iter_mut().zip(grad.iter()) {
                 *o += w.clone() * g;
             }
-            out.push_loss(w * l);
+            out.push_loss(w.clone() * l);
         } else {
             for (o, g) in out.direct_mut().iter_mut().zip(grad.iter()) {
                 *o += g;
@@ -58,16 +59,14 @@ where
                     .log_likelihood_ratio(theta, theta_new, phi, a)
                     .map_err(policy_error)?;
             }
-            let row = out.push_score(per_decision.then(|| log_w.exp()));
-            row.clone_from_slice(score);
+            if per_decision {
+                w = log_w.exp();
+            }
+            out.push_score_from(per_decision.then(|| w.clone()), score);
         }
     }
     if let Some(tail) = tail {
-        out.push_loss(if per_decision {
-            log_w.exp() * tail
-        } else {
-            tail.clone()
-        });
+        out.push_loss(if per_decision { w * tail } else { tail.clone() });
     }
     if matches!(ratio, Some((_, Weighting::Trajectory))) {
         out.set_scale(log_w.exp());
