@@ -92,6 +92,26 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Batched<P> {
         mean(trajectory, |t| self.inner.estimate(theta, t, form, cost))
     }
 
+    /// Each trajectory's estimate and loss from the inner problem's
+    /// [`IlProblem::estimate_with_loss`], then the two means as [`IlProblem::estimate`] and
+    /// [`IlProblem::trajectory_loss`] form them (the same values).
+    fn estimate_with_loss(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        form: EstimatorForm,
+        cost: &mut Cost,
+    ) -> Result<(DVector<S>, S), OracleError> {
+        let mut losses = Vec::with_capacity(trajectory.len());
+        let g = mean(trajectory, |t| {
+            let (g, loss) = self.inner.estimate_with_loss(theta, t, form, cost)?;
+            losses.push(loss);
+            Ok(g)
+        })?;
+        let loss = mean(&losses, |l| Ok(DVector::from_element(1, l.clone())))?;
+        Ok((g, loss[0].clone()))
+    }
+
     fn weighted_estimate(
         &self,
         theta_old: &DVector<S>,

@@ -172,6 +172,25 @@ pub trait IlProblem<S: Scalar> {
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError>;
 
+    /// [`IlProblem::estimate`] and [`IlProblem::trajectory_loss`] at the same θ on the same
+    /// trajectory, in that order: the oracle's gradient and its loss estimate. The default calls
+    /// the two; a problem whose estimator pass computes every `l(s_t, θ)` anyway returns the loss
+    /// from that pass (the same value, without a second pass).
+    ///
+    /// # Errors
+    /// As [`IlProblem::estimate`], then [`IlProblem::trajectory_loss`].
+    fn estimate_with_loss(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        form: EstimatorForm,
+        cost: &mut Cost,
+    ) -> Result<(DVector<S>, S), OracleError> {
+        let g = self.estimate(theta, trajectory, form, cost)?;
+        let loss = self.trajectory_loss(theta, trajectory)?;
+        Ok((g, loss))
+    }
+
     /// The importance-weighted old-point estimate of math.md §4: `w · g(θ_old, τ)` where τ was
     /// sampled at `theta_new` and `w` is the likelihood ratio p(τ; θ_old)/p(τ; θ_new)
     /// (whole-trajectory or per-decision). Unbiased for ∇F(θ_old) (identity I3).

@@ -95,8 +95,7 @@ pub(crate) fn oracle_draw<S: Scalar, P: IlProblem<S> + ?Sized>(
     ctx: &mut StepContext<'_>,
 ) -> Result<(P::Trajectory, DVector<S>, S), AlgoError> {
     let tau = problem.rollout(&Behaviour::Learner(theta), ctx.rng, ctx.cost)?;
-    let g = problem.estimate(theta, &tau, form, ctx.cost)?;
+    let (g, loss) = problem.estimate_with_loss(theta, &tau, form, ctx.cost)?;
     check_finite(&g, "the gradient estimate")?;
-    let loss = problem.trajectory_loss(theta, &tau)?;
     Ok((tau, g, loss))
 }

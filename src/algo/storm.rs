@@ -346,7 +346,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Storm<S> {
         let new = axpy(&-eta.clone(), &d, &self.theta);
         check_finite(&new, "θ")?;
         let tau = problem.rollout(&Behaviour::Learner(&new), ctx.rng, ctx.cost)?;
-        let g_new = problem.estimate(&new, &tau, self.form, ctx.cost)?;
+        let (g_new, loss) = problem.estimate_with_loss(&new, &tau, self.form, ctx.cost)?;
         let g_old = match (self.update, self.correction.weighting()) {
             (Update::Corrected, Some(w)) => {
                 problem.weighted_estimate(&self.theta, &new, &tau, w, ctx.cost)?
@@ -360,7 +360,6 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for Storm<S> {
         };
         check_finite(&d_next, "the STORM direction d")?;
         self.schedule.observe(&norm_sq(&g_new));
-        let loss = problem.trajectory_loss(&new, &tau)?;
         self.theta = new;
         self.d = Some(d_next.clone());
         self.last = Some((eta, a));

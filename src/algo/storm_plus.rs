@@ -182,7 +182,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
         let new = axpy(&-eta, &d, &self.theta);
         check_finite(&new, "θ")?;
         let tau = problem.rollout(&Behaviour::Learner(&new), ctx.rng, ctx.cost)?;
-        let g_new = problem.estimate(&new, &tau, self.form, ctx.cost)?;
+        let (g_new, loss) = problem.estimate_with_loss(&new, &tau, self.form, ctx.cost)?;
         let weighting: Option<Weighting> = match self.correction {
             Correction::Unweighted => None,
             Correction::Trajectory => Some(Weighting::Trajectory),
@@ -195,7 +195,6 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
         let d_next = axpy(&(S::one() - a), &(d - g_old), &g_new);
         check_finite(&d_next, "the STORM+ direction d")?;
         self.accumulate(&g_new, &d_next)?;
-        let loss = problem.trajectory_loss(&new, &tau)?;
         self.theta = new;
         self.d = Some(d_next.clone());
         Ok(StepReport::new(Some(d_next), Some(loss)))

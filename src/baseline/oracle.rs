@@ -527,6 +527,22 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         self.estimate_by_terms(theta, trajectory, cost)
     }
 
+    /// Without a baseline, the minibatch's own (one pass per trajectory); with one, the estimate
+    /// then the trajectory loss.
+    fn estimate_with_loss(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        form: EstimatorForm,
+        cost: &mut Cost,
+    ) -> Result<(DVector<S>, S), OracleError> {
+        if matches!(self.kind, Kind::None) {
+            return self.batch.estimate_with_loss(theta, trajectory, form, cost);
+        }
+        let g = self.estimate(theta, trajectory, form, cost)?;
+        Ok((g, self.trajectory_loss(theta, trajectory)?))
+    }
+
     fn weighted_estimate(
         &self,
         theta_old: &DVector<S>,

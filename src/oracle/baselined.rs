@@ -62,6 +62,7 @@ where
                 Some(&shifts),
                 None,
                 g,
+                None,
                 &mut scratch,
             )
             .map_err(policy_error)?;

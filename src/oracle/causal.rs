@@ -25,6 +25,10 @@ use std::borrow::Borrow;
 /// then multiplies the whole baselined estimate) — the baselined estimator of
 /// [`crate::baseline`], `c · (D + Σ_i ψ_i (L_i − w_{1:i} b_i))` ([`super::DecisionTerms`]).
 ///
+/// With `loss`, every step's `l_t` (at θ) is added to it in order, as
+/// [`crate::problem::IlProblem::trajectory_loss`] sums them (start it at the absorbing tail's
+/// value): the trajectory loss from the same pass.
+///
 /// Per decision: one [`Policy::loss_score_into`](crate::policy::Policy::loss_score_into) into
 /// preallocated buffers and O(d) field operations ([`accumulate`]), no allocation; on validated
 /// features without weights, the whole pass (the tail's term included) is the policy's
@@ -37,6 +41,7 @@ pub(crate) fn causal_pass<S, P, L, A>(
     per_decision: bool,
     t: &Decisions<'_, S, L, A>,
     baseline: Option<Given<'_, S>>,
+    mut loss: Option<&mut S>,
 ) -> Result<(Vec<S>, S), OracleError>
 where
     S: Real,
@@ -69,6 +74,7 @@ where
                 None,
                 tail,
                 &mut g,
+                loss,
                 &mut scratch,
             )
             .map_err(policy_error)?;
@@ -80,9 +86,12 @@ where
     let mut w = log_w.exp();
     for (step, ((phi, a), y)) in t.feature_rows().zip(t.actions).zip(t.labels).enumerate() {
         if trusted {
-            policy
+            let l = policy
                 .causal_step_trusted(theta, phi, y.borrow(), a, grad, score, &mut g, score_sum)
                 .map_err(policy_error)?;
+            if let Some(total) = loss.as_deref_mut() {
+                *total += l;
+            }
         } else {
             let l = policy
                 .loss_score_into(theta, phi, y.borrow(), a, grad, score)
@@ -91,6 +100,9 @@ where
                 accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
             } else {
                 accumulate(&mut g, None, &l, grad, score, score_sum);
+            }
+            if let Some(total) = loss.as_deref_mut() {
+                *total += l;
             }
         }
         if step < scored {

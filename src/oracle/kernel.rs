@@ -99,6 +99,10 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// baselined estimator `g − Σ_i b_i ψ_i` of [`crate::baseline`], by summation by parts:
     /// `Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`.
     ///
+    /// With `loss`, every decision's `l_t` is added to it in the order of the rows (the
+    /// unshifted losses: the trajectory loss of [`crate::problem::IlProblem::trajectory_loss`],
+    /// summed in its order when `loss` starts at the absorbing tail's value, or 0).
+    ///
     /// `scratch` is working storage the implementation sizes as it needs (the default:
     /// `3 ·` [`Policy::param_dim`] entries; the logistic policy's fixed-dimension loop needs
     /// none). The default runs [`EstimatorKernel::causal_step_trusted`] decision after decision
@@ -117,10 +121,11 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         shifts: Option<&[S]>,
         end: Option<&S>,
         g: &mut [S],
+        loss: Option<&mut S>,
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
         causal_sum_by_steps(
-            self, theta, features, labels, actions, shifts, end, g, scratch,
+            self, theta, features, labels, actions, shifts, end, g, loss, scratch,
         )
     }
 
@@ -321,7 +326,7 @@ pub(crate) fn subtract_score_rows<S: Scalar>(
 /// The default [`EstimatorKernel::causal_sum_trusted`]: per decision, `g += δ_t Σ_{i<t} ψ_i`
 /// (with shifts) then [`EstimatorKernel::causal_step_trusted`], with `scratch` resized to
 /// `3 · param_dim` zeros and split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`; then `g += L Σ_{i≤n} ψ_i`
-/// for an `end` L.
+/// for an `end` L; with `loss`, each `l_t` added to it in order.
 #[allow(clippy::too_many_arguments)] // the method's arguments and the policy
 #[inline]
 pub(crate) fn causal_sum_by_steps<S, P, L>(
@@ -333,6 +338,7 @@ pub(crate) fn causal_sum_by_steps<S, P, L>(
     shifts: Option<&[S]>,
     end: Option<&S>,
     g: &mut [S],
+    mut loss: Option<&mut S>,
     scratch: &mut Vec<S>,
 ) -> Result<(), PolicyError>
 where
@@ -350,7 +356,19 @@ where
     match shifts {
         None => {
             for ((phi, y), a) in decisions {
-                policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+                let l = policy.causal_step_trusted(
+                    theta,
+                    phi,
+                    y.borrow(),
+                    a,
+                    grad,
+                    score,
+                    g,
+                    score_sum,
+                )?;
+                if let Some(total) = loss.as_deref_mut() {
+                    *total += l;
+                }
             }
         }
         Some(shifts) => {
@@ -358,7 +376,19 @@ where
                 for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
                     *gj += delta.clone() * sj;
                 }
-                policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+                let l = policy.causal_step_trusted(
+                    theta,
+                    phi,
+                    y.borrow(),
+                    a,
+                    grad,
+                    score,
+                    g,
+                    score_sum,
+                )?;
+                if let Some(total) = loss.as_deref_mut() {
+                    *total += l;
+                }
             }
         }
     }

@@ -247,6 +247,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         shifts: Option<&[S]>,
         end: Option<&S>,
         g: &mut [S],
+        mut loss: Option<&mut S>,
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
         let (x, y) = (features, labels);
@@ -264,6 +265,11 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
             let a = &actions[..n];
             let decisions = &mut losses[..n];
             record_fixed::<S, L, N>(theta, x, y, a, decisions, coefficients, gradients) && {
+                if let Some(total) = loss.as_deref_mut() {
+                    for l in decisions.iter() {
+                        *total += l;
+                    }
+                }
                 if let Some(shifts) = shifts {
                     for (l, delta) in decisions.iter_mut().zip(shifts) {
                         *l = l.clone() + delta;
@@ -281,7 +287,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         }
         // More than 8 features, or a decision failed a check: the default pass reports the first.
         causal_sum_by_steps(
-            self, theta, features, labels, actions, shifts, end, g, scratch,
+            self, theta, features, labels, actions, shifts, end, g, loss, scratch,
         )
     }
 
@@ -445,6 +451,7 @@ mod tests {
                             None,
                             end,
                             &mut g,
+                            None,
                             &mut scratch,
                         )
                     } else {
@@ -457,6 +464,7 @@ mod tests {
                             None,
                             end,
                             &mut g,
+                            None,
                             &mut scratch,
                         )
                     };
@@ -604,6 +612,7 @@ mod tests {
                     None,
                     None,
                     &mut g_plain,
+                    None,
                     &mut vec![],
                 )
                 .unwrap();

@@ -221,7 +221,8 @@ where
         let th = theta.as_slice();
         let g = match form {
             EstimatorForm::Causal => {
-                causal_pass(&self.policy, th, None, false, &trajectory.decisions(), None)?.0
+                let t = trajectory.decisions();
+                causal_pass(&self.policy, th, None, false, &t, None, None)?.0
             }
             EstimatorForm::Full => full_pass(&self.policy, th, &trajectory.decisions())?,
         };
@@ -230,6 +231,32 @@ where
             return Err(OracleError::NonFinite("the gradient estimate"));
         }
         Ok(DVector::from_vec(g))
+    }
+
+    /// The causal form: the trajectory loss summed in the estimate's own pass (the same per-step
+    /// losses, added in [`IlProblem::trajectory_loss`]'s order, so the same value).
+    fn estimate_with_loss(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &Self::Trajectory,
+        form: EstimatorForm,
+        cost: &mut Cost,
+    ) -> Result<(DVector<S>, S), OracleError> {
+        if form != EstimatorForm::Causal {
+            let g = self.estimate(theta, trajectory, form, cost)?;
+            return Ok((g, self.trajectory_loss(theta, trajectory)?));
+        }
+        check_theta(theta, self.dim())?;
+        check_trajectory(trajectory)?;
+        let mut loss = trajectory.absorbed.clone().unwrap_or_else(S::zero);
+        let t = trajectory.decisions();
+        let th = theta.as_slice();
+        let (g, _) = causal_pass(&self.policy, th, None, false, &t, None, Some(&mut loss))?;
+        cost.gradient_evaluations += trajectory.len() as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the gradient estimate"));
+        }
+        Ok((DVector::from_vec(g), loss))
     }
 
     fn weighted_estimate(
@@ -255,6 +282,7 @@ where
                     true,
                     &trajectory.decisions(),
                     None,
+                    None,
                 )?
                 .0
             }
@@ -265,6 +293,7 @@ where
                     Some(new),
                     false,
                     &trajectory.decisions(),
+                    None,
                     None,
                 )?;
                 let w = log_w.exp();
@@ -395,6 +424,7 @@ where
             per_decision,
             &t,
             Some(baseline),
+            None,
         )?;
         if !per_decision {
             let w = log_w.exp();

@@ -1,9 +1,12 @@
 //! The trajectory loss computes each decision's loss alone (`EstimatorKernel::loss_trusted`): bit for bit
 //! the sum of `Policy::loss_into`'s values, inside and beyond the speed limit, with and without an
-//! absorbing end.
+//! absorbing end; and the loss summed in the estimate's own pass is the same.
 
-use ilopt::policy::{LinearGaussian, Policy, SpeedLimitedGaussian};
-use ilopt::problem::{Behaviour, Cost, IlProblem, KitRng};
+use ilopt::baseline::{Baseline, Baselined};
+use ilopt::batched::Batched;
+use ilopt::policy::{LinearGaussian, Logistic, Policy, Softmax, SpeedLimitedGaussian};
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
+use ilopt::task::cartpole::{self, CartPoleTask};
 use ilopt::task::obstacle::{ObstacleFeatures, ObstacleTask};
 use ilopt::task::{AfterEnd, Horizon, TaskProblem};
 use nalgebra::DVector;
@@ -60,4 +63,104 @@ fn trajectory_loss_is_the_sum_of_the_per_decision_losses() {
         }
     }
     assert!(clipped > 100, "{clipped} clipped decisions");
+}
+
+/// `estimate_with_loss` returns the estimate and the trajectory loss of `estimate` then
+/// `trajectory_loss`, bit for bit, on `p`'s learner roll-outs at each θ of `thetas`.
+fn assert_estimate_with_loss<P: IlProblem<f64>>(p: &P, thetas: &[DVector<f64>], what: &str) {
+    let mut rng = KitRng::seed_from_u64(11);
+    for (k, theta) in thetas.iter().enumerate() {
+        for _ in 0..3 {
+            let mut c = Cost::default();
+            let t = p
+                .rollout(&Behaviour::Learner(theta), &mut rng, &mut c)
+                .unwrap();
+            let (mut c1, mut c2) = (c, c);
+            let (g, loss) = p
+                .estimate_with_loss(theta, &t, EstimatorForm::Causal, &mut c1)
+                .unwrap();
+            let want_g = p
+                .estimate(theta, &t, EstimatorForm::Causal, &mut c2)
+                .unwrap();
+            let want_loss = p.trajectory_loss(theta, &t).unwrap();
+            let bits = |v: &DVector<f64>| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&g), bits(&want_g), "{what}, θ #{k}: the estimate");
+            assert_eq!(
+                loss.to_bits(),
+                want_loss.to_bits(),
+                "{what}, θ #{k}: the loss {loss} vs {want_loss}"
+            );
+            assert_eq!(c1, c2, "{what}: the cost");
+        }
+    }
+}
+
+/// The loss summed in the estimate's own pass (`IlProblem::estimate_with_loss`) is the trajectory
+/// loss bit for bit: the obstacle task (inside and beyond the speed limit, episodic and with an
+/// absorbing tail, which the loss must start from), CartPole with the softmax and the logistic
+/// policies (episodic and reset streams; the logistic policy's fixed-dimension loop), one
+/// trajectory and minibatches, with and without the baselines' wrapper.
+#[test]
+fn the_estimate_pass_gives_the_trajectory_loss_bit_for_bit() {
+    let obstacle = ObstacleTask::thesis()
+        .unwrap()
+        .with_features(ObstacleFeatures::rbf_default())
+        .unwrap()
+        .with_actions::<[f64; 2]>();
+    let n = obstacle.feature_dim();
+    let inner = LinearGaussian::new(2, n, 0.1)
+        .unwrap()
+        .with_actions::<[f64; 2]>()
+        .unwrap();
+    let policy = SpeedLimitedGaussian::new(inner, 0.1).unwrap();
+    let mut rng = KitRng::seed_from_u64(5);
+    let thetas: Vec<DVector<f64>> = [0.0, 0.05, 20.0]
+        .iter()
+        .map(|s| DVector::from_fn(2 * n, |_, _| s * (2.0 * rng.random::<f64>() - 1.0)))
+        .collect();
+    let mut absorbed = 0;
+    for horizon in [Horizon::Episodic, Horizon::fixed(200, AfterEnd::Absorb)] {
+        let p = TaskProblem {
+            task: obstacle.clone(),
+            policy: policy.clone(),
+            horizon,
+        };
+        for th in &thetas {
+            let t = p
+                .rollout(&Behaviour::Learner(th), &mut rng, &mut Cost::default())
+                .unwrap();
+            absorbed += usize::from(t.absorbed.is_some_and(|l| l > 0.0));
+        }
+        assert_estimate_with_loss(&p, &thetas, &format!("obstacle, {horizon:?}"));
+        let batched = Batched::new(p.clone(), 3).unwrap();
+        assert_estimate_with_loss(&batched, &thetas, "obstacle, m = 3");
+        let wrapped = Baselined::new(p, 3, &Baseline::None).unwrap();
+        assert_estimate_with_loss(&wrapped, &thetas, "obstacle, m = 3, no baseline");
+    }
+    assert!(absorbed > 0, "no roll-out ended in a costly absorbing tail");
+
+    let cartpole_thetas = |d: usize, rng: &mut KitRng| -> Vec<DVector<f64>> {
+        [0.0, 0.5, 3.0]
+            .iter()
+            .map(|s| DVector::from_fn(d, |_, _| s * (2.0 * rng.random::<f64>() - 1.0)))
+            .collect()
+    };
+    for horizon in [Horizon::Episodic, Horizon::fixed(500, AfterEnd::Reset)] {
+        let softmax = TaskProblem {
+            task: CartPoleTask::with_lqr().unwrap(),
+            policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
+            horizon,
+        };
+        let th = cartpole_thetas(2 * cartpole::FEATURES, &mut rng);
+        assert_estimate_with_loss(&softmax, &th, &format!("CartPole softmax, {horizon:?}"));
+        let batched = Batched::new(softmax, 3).unwrap();
+        assert_estimate_with_loss(&batched, &th, "CartPole softmax, m = 3");
+        let logistic = TaskProblem {
+            task: CartPoleTask::with_lqr().unwrap(),
+            policy: Logistic::new(cartpole::FEATURES).unwrap(),
+            horizon,
+        };
+        let th = cartpole_thetas(cartpole::FEATURES, &mut rng);
+        assert_estimate_with_loss(&logistic, &th, &format!("CartPole logistic, {horizon:?}"));
+    }
 }
