@@ -40,7 +40,7 @@ mod trajectory;
 pub use env_task::{EnvEpisode, EnvTask};
 pub use horizon::{AfterEnd, Horizon};
 pub use problem::TaskProblem;
-pub use trajectory::{TaskExample, TaskTrajectory};
+pub use trajectory::{INLINE_FEATURES, TaskExample, TaskTrajectory};
 
 use crate::problem::{KitRng, OracleError};
 use crate::scalar::Scalar;

@@ -13,6 +13,7 @@ use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleEr
 use crate::scalar::{Real, Scalar};
 use nalgebra::DVector;
 use rand::Rng;
+use smallvec::SmallVec;
 use std::borrow::Borrow;
 
 /// A task with a learner policy: an [`IlProblem`].
@@ -336,7 +337,7 @@ where
             .feature_rows()
             .zip(&trajectory.labels)
             .map(|(f, l)| TaskExample {
-                features: f.to_vec(),
+                features: SmallVec::from(f),
                 label: l.clone(),
             })
             .collect()

@@ -3,6 +3,10 @@
 
 use crate::oracle::Decisions;
 use crate::problem::OracleError;
+use smallvec::SmallVec;
+
+/// Features a [`TaskExample`] keeps inside itself (more go to the heap).
+pub const INLINE_FEATURES: usize = 8;
 
 /// A trajectory on a task: per decision, the features, the action taken and the expert's label.
 ///
@@ -116,10 +120,14 @@ impl<S: Clone, L, A> TaskTrajectory<S, L, A> {
 }
 
 /// A labelled state: features and the expert's label.
+///
+/// Up to [`INLINE_FEATURES`] features are kept inside the example: a dataset learner that draws
+/// minibatches from a large aggregated dataset then reads one place in memory per example, not
+/// two (the example, then its features on the heap).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TaskExample<S, L> {
     /// φ(s).
-    pub features: Vec<S>,
+    pub features: SmallVec<[S; INLINE_FEATURES]>,
     /// π*(s).
     pub label: L,
 }
