@@ -135,6 +135,24 @@ pub enum OracleError {
     Baseline(String),
 }
 
+/// [`IlProblem::estimate_with_loss`]'s default: [`IlProblem::estimate`], then
+/// [`IlProblem::trajectory_loss`] (also the route of a problem whose own pass does not cover a
+/// form or a kind of baseline).
+///
+/// # Errors
+/// As [`IlProblem::estimate`], then [`IlProblem::trajectory_loss`].
+pub(crate) fn estimate_then_loss<S: Scalar, P: IlProblem<S> + ?Sized>(
+    problem: &P,
+    theta: &DVector<S>,
+    trajectory: &P::Trajectory,
+    form: EstimatorForm,
+    cost: &mut Cost,
+) -> Result<(DVector<S>, S), OracleError> {
+    let g = problem.estimate(theta, trajectory, form, cost)?;
+    let loss = problem.trajectory_loss(theta, trajectory)?;
+    Ok((g, loss))
+}
+
 /// An imitation-learning problem: environment + expert + learner policy class + loss.
 ///
 /// Generic over the scalar `S` of θ and of the returned gradients. Sampling uses an RNG owned by
@@ -186,9 +204,7 @@ pub trait IlProblem<S: Scalar> {
         form: EstimatorForm,
         cost: &mut Cost,
     ) -> Result<(DVector<S>, S), OracleError> {
-        let g = self.estimate(theta, trajectory, form, cost)?;
-        let loss = self.trajectory_loss(theta, trajectory)?;
-        Ok((g, loss))
+        estimate_then_loss(self, theta, trajectory, form, cost)
     }
 
     /// The importance-weighted old-point estimate of math.md §4: `w · g(θ_old, τ)` where τ was

@@ -539,8 +539,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         if matches!(self.kind, Kind::None) {
             return self.batch.estimate_with_loss(theta, trajectory, form, cost);
         }
-        let g = self.estimate(theta, trajectory, form, cost)?;
-        Ok((g, self.trajectory_loss(theta, trajectory)?))
+        crate::problem::estimate_then_loss(self, theta, trajectory, form, cost)
     }
 
     fn weighted_estimate(

@@ -352,44 +352,17 @@ where
     let (grad, rest) = scratch.split_at_mut(d);
     let (score, score_sum) = rest.split_at_mut(d);
     let rows = features.chunks_exact(policy.feature_dim().max(1));
-    let decisions = rows.zip(labels).zip(actions);
-    match shifts {
-        None => {
-            for ((phi, y), a) in decisions {
-                let l = policy.causal_step_trusted(
-                    theta,
-                    phi,
-                    y.borrow(),
-                    a,
-                    grad,
-                    score,
-                    g,
-                    score_sum,
-                )?;
-                if let Some(total) = loss.as_deref_mut() {
-                    *total += l;
-                }
+    // With shifts, the pass stops at the shorter of the decisions and the shifts.
+    let n = shifts.map_or(usize::MAX, <[S]>::len);
+    for (t, ((phi, y), a)) in rows.zip(labels).zip(actions).take(n).enumerate() {
+        if let Some(shifts) = shifts {
+            for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
+                *gj += shifts[t].clone() * sj;
             }
         }
-        Some(shifts) => {
-            for (((phi, y), a), delta) in decisions.zip(shifts) {
-                for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
-                    *gj += delta.clone() * sj;
-                }
-                let l = policy.causal_step_trusted(
-                    theta,
-                    phi,
-                    y.borrow(),
-                    a,
-                    grad,
-                    score,
-                    g,
-                    score_sum,
-                )?;
-                if let Some(total) = loss.as_deref_mut() {
-                    *total += l;
-                }
-            }
+        let l = policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+        if let Some(total) = loss.as_deref_mut() {
+            *total += l;
         }
     }
     if let Some(end) = end {

@@ -112,6 +112,39 @@ fn check_trajectory<S, L, A>(t: &TaskTrajectory<S, L, A>) -> Result<(), OracleEr
     Ok(())
 }
 
+impl<T, P> TaskProblem<T, P> {
+    /// [`IlProblem::estimate`] of `form`; with `loss` (causal form only), each `l_t` of the
+    /// causal pass is added to it as [`IlProblem::trajectory_loss`] sums them.
+    fn estimate_summing<S>(
+        &self,
+        theta: &DVector<S>,
+        trajectory: &TaskTrajectory<S, T::Label, T::Action>,
+        form: EstimatorForm,
+        loss: Option<&mut S>,
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError>
+    where
+        S: Real,
+        T: Task<S>,
+        P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S>,
+        T::Label: Borrow<P::Label>,
+    {
+        check_theta(theta, self.policy.param_dim())?;
+        check_trajectory(trajectory)?;
+        let th = theta.as_slice();
+        let t = trajectory.decisions();
+        let g = match form {
+            EstimatorForm::Causal => causal_pass(&self.policy, th, None, false, &t, None, loss)?.0,
+            EstimatorForm::Full => full_pass(&self.policy, th, &t)?,
+        };
+        cost.gradient_evaluations += trajectory.len() as u64;
+        if !g.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the gradient estimate"));
+        }
+        Ok(DVector::from_vec(g))
+    }
+}
+
 impl<S, T, P> IlProblem<S> for TaskProblem<T, P>
 where
     S: Real,
@@ -217,21 +250,7 @@ where
         form: EstimatorForm,
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
-        check_theta(theta, self.dim())?;
-        check_trajectory(trajectory)?;
-        let th = theta.as_slice();
-        let g = match form {
-            EstimatorForm::Causal => {
-                let t = trajectory.decisions();
-                causal_pass(&self.policy, th, None, false, &t, None, None)?.0
-            }
-            EstimatorForm::Full => full_pass(&self.policy, th, &trajectory.decisions())?,
-        };
-        cost.gradient_evaluations += trajectory.len() as u64;
-        if !g.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the gradient estimate"));
-        }
-        Ok(DVector::from_vec(g))
+        self.estimate_summing(theta, trajectory, form, None, cost)
     }
 
     /// The causal form: the trajectory loss summed in the estimate's own pass (the same per-step
@@ -244,20 +263,11 @@ where
         cost: &mut Cost,
     ) -> Result<(DVector<S>, S), OracleError> {
         if form != EstimatorForm::Causal {
-            let g = self.estimate(theta, trajectory, form, cost)?;
-            return Ok((g, self.trajectory_loss(theta, trajectory)?));
+            return crate::problem::estimate_then_loss(self, theta, trajectory, form, cost);
         }
-        check_theta(theta, self.dim())?;
-        check_trajectory(trajectory)?;
         let mut loss = trajectory.absorbed.clone().unwrap_or_else(S::zero);
-        let t = trajectory.decisions();
-        let th = theta.as_slice();
-        let (g, _) = causal_pass(&self.policy, th, None, false, &t, None, Some(&mut loss))?;
-        cost.gradient_evaluations += trajectory.len() as u64;
-        if !g.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the gradient estimate"));
-        }
-        Ok((DVector::from_vec(g), loss))
+        let g = self.estimate_summing(theta, trajectory, form, Some(&mut loss), cost)?;
+        Ok((g, loss))
     }
 
     fn weighted_estimate(
