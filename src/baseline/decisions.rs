@@ -127,15 +127,16 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` on `trajectory` from what
     /// [`PerDecisionTerms::record_decisions`] recorded there (s its scored decisions), with
     /// per-step losses `l'` in place of the recorded ones: one per entry of
-    /// [`RecordedPass::losses`] (`losses` must have that length). With the recorded losses it is
-    /// the causal estimate of eq. 3.15; with `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first
+    /// [`RecordedPass::losses`] (`losses` must have that length), or `None` for the recorded
+    /// losses themselves (read in place, not copied). With the recorded losses it is the causal
+    /// estimate of eq. 3.15; with `l'_t = l_t + b_t − b_{t−1}` (b_t = 0 from the first
     /// unscored step on) it is the baselined `g − Σ_i b_i ψ_i` ([`crate::baseline`], summation by
     /// parts). The default sums the rows of the default form.
     fn estimate_recorded(
         &self,
         trajectory: &Self::Trajectory,
         recorded: &mut RecordedPass<S>,
-        losses: &[S],
+        losses: Option<&[S]>,
         g: &mut [S],
     ) {
         let _ = trajectory;

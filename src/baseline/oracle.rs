@@ -291,7 +291,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         g.resize(inner.dim(), S::zero());
         for (t, r) in batch.iter().zip(records.iter_mut()) {
             leave_one_out_losses(totals, r.losses(), &others, losses);
-            inner.estimate_recorded(t, r, losses, g);
+            inner.estimate_recorded(t, r, Some(losses), g);
         }
         let mean = DVector::from_iterator(g.len(), g.iter().map(|x| x.clone() / &m));
         if !mean.iter().all(Scalar::is_finite) {
@@ -303,7 +303,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
     /// The mean estimate over `batch` with the committed variance-minimising baselines of
     /// [`RunningOptimum`], which then observes the batch: every trajectory's decisions recorded
     /// ([`PerDecisionTerms::record_decisions`]), its plain estimate g summed once
-    /// ([`PerDecisionTerms::estimate_recorded`] with its own losses), then one more read of its
+    /// ([`PerDecisionTerms::estimate_recorded`] with its own losses, read in place), then one more read of its
     /// scores for both the statistics `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
     /// ([`PerDecisionTerms::recorded_score_products`]). No allocation per step.
     fn estimated(
@@ -329,7 +329,6 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         let Buffers {
             records,
             totals: baseline,
-            losses,
             plain,
             g,
             ..
@@ -352,11 +351,9 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         }
         running.clear_pending();
         for (t, r) in batch.iter().zip(records.iter_mut()) {
-            losses.clear();
-            losses.extend_from_slice(r.losses());
             plain.clear();
             plain.resize(d, S::zero());
-            inner.estimate_recorded(t, r, losses, plain);
+            inner.estimate_recorded(t, r, None, plain);
             for (gj, x) in g.iter_mut().zip(plain.iter()) {
                 *gj += x;
             }

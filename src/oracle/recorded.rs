@@ -43,19 +43,26 @@ where
 
 /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` from the records of [`record_pass`] on the same
 /// trajectory, s its scored decisions, with the losses `l'` given (one per entry of
-/// [`RecordedPass::losses`]; the absorbing tail's entry weighs every score). With the recorded
-/// losses it is the causal estimate of eq. 3.15 (the plain pass's, bit for bit, without a tail).
+/// [`RecordedPass::losses`]; the absorbing tail's entry weighs every score), or `None` for the
+/// recorded losses, read in place. With the recorded losses it is the causal estimate of eq. 3.15
+/// (the plain pass's, bit for bit, without a tail).
 pub(crate) fn sum_recorded<S, P, L, A>(
     policy: &P,
     t: &Decisions<'_, S, L, A>,
     recorded: &mut RecordedPass<S>,
-    losses: &[S],
+    losses: Option<&[S]>,
     g: &mut [S],
 ) where
     S: Scalar,
     P: EstimatorKernel<S, Action = A>,
     L: Borrow<P::Label>,
 {
-    let RecordedPass { scores, work, .. } = recorded;
+    let RecordedPass {
+        scores,
+        work,
+        losses: own,
+        ..
+    } = recorded;
+    let losses = losses.map_or(own.as_slice(), |l| l);
     policy.accumulate_recorded(t.feature_data, scores, losses, g, work);
 }

@@ -108,13 +108,15 @@ impl<S: Scalar> RecordedPass<S> {
     }
 
     /// `g += Σ_t [∇l_t + l'_t Σ_{i<min(t, s)} ψ_i]` (s scored decisions) for the default form,
-    /// with one loss `l'_t` per entry of [`RecordedPass::losses`]: the plain estimate minus
-    /// `Σ_{i<s} b_i ψ_i` with `b_i = −Σ_{t>i} (l'_t − l_t)` (summation by parts).
+    /// with one loss `l'_t` per entry of [`RecordedPass::losses`] (`None`: the recorded `l_t`): the
+    /// plain estimate minus `Σ_{i<s} b_i ψ_i` with `b_i = −Σ_{t>i} (l'_t − l_t)` (summation by
+    /// parts).
     ///
     /// # Panics
     /// If the scores are not stored as rows.
-    pub(crate) fn sum_rows(&self, losses: &[S], g: &mut [S]) {
+    pub(crate) fn sum_rows(&self, losses: Option<&[S]>, g: &mut [S]) {
         assert!(self.score_rows, "recorded pass: scores not stored as rows");
+        let losses = losses.unwrap_or(&self.losses);
         for (gj, x) in g.iter_mut().zip(&self.estimate) {
             *gj += x;
         }

@@ -502,7 +502,7 @@ where
         &self,
         trajectory: &Self::Trajectory,
         recorded: &mut RecordedPass<S>,
-        losses: &[S],
+        losses: Option<&[S]>,
         g: &mut [S],
     ) {
         if recorded.score_rows {

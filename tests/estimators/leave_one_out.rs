@@ -171,7 +171,7 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
                 .unwrap();
             let mut g = vec![0.0; p.dim()];
             let losses = recorded.losses().to_vec();
-            p.estimate_recorded(t, &mut recorded, &losses, &mut g);
+            p.estimate_recorded(t, &mut recorded, Some(&losses), &mut g);
             let plain = p
                 .estimate(theta, t, EstimatorForm::Causal, &mut Cost::default())
                 .unwrap();
