@@ -372,7 +372,7 @@ use crate::algo::adam::AdamRule;
 use adam::{adam, adam_step, clip_global_norm};
 use batch::BatchMlp;
 pub use file::PpoExpertFile;
-pub use greedy::{FAST_TANH_ERROR, PpoGreedy, fast_tanh};
+pub use greedy::{FAST_TANH_F32_ERROR, PpoGreedy, fast_tanh_f32};
 pub use network::{Evaluation, PpoExpert, evaluate_cartpole};
 use trainer::networks;
 pub use trainer::{IterationStats, PpoTrainer, TrainingSummary, train};
