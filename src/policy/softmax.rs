@@ -40,6 +40,15 @@ fn shift<S: Scalar>(logits: &[S]) -> Result<S, PolicyError> {
     from_f64_exact(max, "logits")
 }
 
+/// `exp(x)`, with `exp(0) = 1` exactly, without calling `exp` when x is exactly zero (in every
+/// component: a dual number with a non-zero derivative part is not zero). The shifted largest
+/// logit `z_max − c` is zero whenever the logit is a point, so one `exp` of every softmax is
+/// skipped; the value is the same, bit for bit in `f64` (`exp(±0) = 1`).
+#[inline]
+fn shifted_exp<S: Real>(x: &S) -> S {
+    if *x == S::zero() { S::one() } else { x.exp() }
+}
+
 /// `π = softmax(z)`, computed as `exp(z_a − c)/Σ_b exp(z_b − c)` with the exact shift described in
 /// the module docs.
 ///
@@ -50,7 +59,10 @@ pub fn softmax_probs<S: Real>(logits: &[S]) -> Result<Vec<S>, PolicyError> {
         return Err(PolicyError::NonFinite { param: "logits" });
     }
     let c = shift(logits)?;
-    let e: Vec<S> = logits.iter().map(|z| (z.clone() - &c).exp()).collect();
+    let e: Vec<S> = logits
+        .iter()
+        .map(|z| shifted_exp(&(z.clone() - &c)))
+        .collect();
     let total = crate::scalar::sum(&e);
     let p: Vec<S> = e.into_iter().map(|x| x / &total).collect();
     if !p.iter().all(Scalar::is_finite) {
@@ -73,7 +85,7 @@ pub fn log_softmax<S: Real>(logits: &[S], a: usize) -> Result<S, PolicyError> {
     let c = shift(logits)?;
     let total = logits
         .iter()
-        .fold(S::zero(), |acc, z| acc + (z.clone() - &c).exp());
+        .fold(S::zero(), |acc, z| acc + shifted_exp(&(z.clone() - &c)));
     Ok(logits[a].clone() - &c - total.ln())
 }
 
@@ -150,7 +162,7 @@ fn softmax_in_place<S: Real>(z: &mut [S]) -> Result<(), PolicyError> {
     }
     let c = shift(z)?;
     for x in z.iter_mut() {
-        *x = (x.clone() - &c).exp();
+        *x = shifted_exp(&(x.clone() - &c));
     }
     let total = crate::scalar::sum(&*z);
     for x in z.iter_mut() {
@@ -504,5 +516,19 @@ mod tests {
             .unwrap();
         assert_eq!((l, g), (li, gi));
         assert_eq!(pi.score(&th, &ph, &0).unwrap(), si);
+    }
+
+    /// The skipped `exp` gives `exp`'s value: ±0 and other numbers in `f64` (bit for bit), and a
+    /// dual number at 0 with a non-zero derivative (not skipped: its derivative is exp's).
+    #[test]
+    fn shifted_exp_is_exp() {
+        for x in [0.0f64, -0.0, 1e-300, -2.5, 3.0] {
+            assert_eq!(shifted_exp(&x).to_bits(), x.exp().to_bits());
+        }
+        let d = Dual::variable(0.0, 0, 1);
+        assert_eq!(shifted_exp(&d), d.exp());
+        assert_ne!(shifted_exp(&d), Dual::<f64>::constant(1.0));
+        let zero = <Dual<f64> as Scalar>::zero();
+        assert_eq!(shifted_exp(&zero), zero.exp());
     }
 }
