@@ -318,6 +318,13 @@ mod greedy_tests {
         }
     }
 
+    /// The committed CartPole expert (`experts/cartpole-ppo.json`).
+    fn committed_expert() -> PpoExpert {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json");
+        PpoExpert::load(&path).unwrap()
+    }
+
     /// States on either side of the exact pass's decision boundary, within 2⁻⁶⁰ of it along random
     /// segments (bisection), and how many of them `f` decides against the exact pass.
     fn boundary_errors(e: &PpoExpert, f: &MarginFilter) -> (usize, usize) {
@@ -353,9 +360,7 @@ mod greedy_tests {
     /// some of those states wrongly.
     #[test]
     pub(super) fn the_filter_never_decides_against_the_exact_pass_near_the_boundary() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json");
-        let e = PpoExpert::load(&path).unwrap();
+        let e = committed_expert();
         let g = e.greedy_in::<f64>().unwrap();
         let f = g.filter.as_ref().expect("the f64 filter");
         let (near, wrong) = boundary_errors(&e, f);
@@ -377,9 +382,7 @@ mod greedy_tests {
     /// The greedy labeller gives `action_in`'s action (and the filter decides most states).
     #[test]
     pub(super) fn greedy_matches_the_exact_forward_pass() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json");
-        let e = PpoExpert::load(&path).unwrap();
+        let e = committed_expert();
         let g = e.greedy_in::<f64>().unwrap();
         let f = g.filter.as_ref().expect("the f64 filter");
         let mut rng = KitRng::seed_from_u64(7);
