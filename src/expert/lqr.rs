@@ -43,7 +43,6 @@
 use crate::env::cartpole::CartPoleParams;
 use crate::scalar::{Scalar, Undecidable};
 use nalgebra::{Matrix4, RowVector4, Vector4};
-use std::cmp::Ordering;
 
 /// Default stopping tolerance of the doubling algorithm (relative change of `Hₖ`, Frobenius).
 pub const DARE_TOLERANCE: f64 = 1e-12;
@@ -314,9 +313,8 @@ impl<S: Scalar> LqrGain<S> {
             .iter()
             .zip(state)
             .fold(S::zero(), |acc, (k, s)| acc - k.clone() * s);
-        match u.certain_cmp(&S::zero()) {
-            Some(Ordering::Greater) => Ok(1),
-            Some(_) => Ok(0),
+        match u.positive_when_certain() {
+            Some(positive) => Ok(usize::from(positive)),
             None => Err(Undecidable {
                 what: "LQR expert: sign of -K s",
             }),

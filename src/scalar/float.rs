@@ -76,6 +76,14 @@ macro_rules! impl_float {
                 self.partial_cmp(other)
             }
             #[inline]
+            fn positive_when_certain(&self) -> Option<bool> {
+                if self.is_nan() {
+                    None
+                } else {
+                    Some(*self > 0.0)
+                }
+            }
+            #[inline]
             fn is_finite(&self) -> bool {
                 <$t>::is_finite(*self)
             }
@@ -125,6 +133,36 @@ impl_float!(f32);
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The floats' `positive_when_certain` against `partial_cmp` with 0 on the special values
+    /// (NaN, ±∞, ±0, the smallest subnormals and normals) in both widths.
+    #[test]
+    fn positive_when_certain_is_partial_cmp_with_zero() {
+        fn check<T: Scalar + PartialOrd + Copy + std::fmt::Debug>(values: &[T]) {
+            for x in values {
+                let expected = x.partial_cmp(&T::zero()).map(|o| o == Ordering::Greater);
+                assert_eq!(x.positive_when_certain(), expected, "at {x:?}");
+            }
+        }
+        let f64s = [
+            f64::NAN,
+            -f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            f64::MIN_POSITIVE,
+            -f64::MIN_POSITIVE,
+            5e-324,
+            -5e-324,
+            f64::MAX,
+            f64::MIN,
+        ];
+        check(&f64s);
+        check(&f64s.map(|x| x as f32));
+    }
 
     /// `scalar::powi` against the standard library's `f64::powi` (bit for bit, over exponents
     /// from 0 to 10⁵ and bases of every magnitude), and in exact rationals against the product

@@ -115,6 +115,14 @@ pub trait Scalar:
     fn is_certainly_positive(&self) -> bool {
         self.certain_cmp(&Self::zero()) == Some(Ordering::Greater)
     }
+    /// Whether `self > 0`, where that is certain: `Some(true)` where [`Scalar::certain_cmp`]
+    /// with 0 gives `Greater`, `Some(false)` where it gives `Less` or `Equal`, `None` where it
+    /// gives no answer. Floats override it with one comparison and a NaN test (the same answers
+    /// as `partial_cmp` and a match, in fewer instructions on a roll-out's hot path).
+    fn positive_when_certain(&self) -> Option<bool> {
+        self.certain_cmp(&Self::zero())
+            .map(|o| o == Ordering::Greater)
+    }
     /// Certainly `self ≥ 0`.
     fn is_certainly_nonnegative(&self) -> bool {
         matches!(

@@ -576,6 +576,15 @@ fn certain_cmp_prop<W: LawScalar>(a: W, b: W) -> TestResult {
     }
 }
 
+/// `positive_when_certain` is `certain_cmp` with 0, read as "greater or not" (floats override it).
+fn positive_when_certain_prop<W: LawScalar>(a: W) -> bool {
+    let x = a.get();
+    let expected = x
+        .certain_cmp(&<W::S as Scalar>::zero())
+        .map(|o| o == Ordering::Greater);
+    x.positive_when_certain() == expected
+}
+
 /// num-traits' identities agree with the kit's, and generic num-traits code (`num_traits::pow`,
 /// nalgebra's matrix products, which need `Zero + One`) runs on the scalar.
 fn num_traits_prop<W: LawScalar>(a: W, b: W) -> bool
@@ -627,6 +636,11 @@ macro_rules! scalar_laws {
             #[test]
             fn comparisons_are_certain() {
                 run(certain_cmp_prop::<$w> as fn($w, $w) -> TestResult).unwrap();
+            }
+
+            #[test]
+            fn positive_when_certain_is_the_comparison_with_zero() {
+                run(positive_when_certain_prop::<$w> as fn($w) -> bool).unwrap();
             }
         }
     )+};
