@@ -8,8 +8,11 @@
 //! 3. the VO expert alone (solves per second);
 //! 4. the baselined causal estimate (`ilopt::baseline`) on the CartPole trajectories of (1): one
 //!    constant baseline (m = 1) and leave-one-out over pairs (m = 2), beside the plain estimate of
-//!    the same trajectories; and roll-out + estimate with the constant baseline, and with
-//!    leave-one-out over pairs beside the plain mean of pairs.
+//!    the same trajectories, and the variance-minimising per-decision constants estimated from
+//!    earlier trajectories (m = 1, decay 0.99, statistics of every trajectory committed first);
+//!    and roll-out + estimate with the constant baseline, with the estimated baselines (their
+//!    statistics committed at each roll-out, as in training), and with leave-one-out over pairs
+//!    beside the plain mean of pairs.
 //! 5. the fixed-horizon objective (streams of T decisions, reset or absorbing) through the same
 //!    roll-out and estimator: CartPole (LQR labels) with resets and absorbing ends, CartPole with
 //!    the experiments' PPO labels and softmax learner, the obstacle task with absorbing ends.
@@ -142,6 +145,31 @@ fn cartpole(c: &mut Criterion) {
         },
     )
     .unwrap();
+    // The variance-minimising per-decision constants estimated from earlier trajectories (decay
+    // 0.99), with statistics from every trajectory of the set committed first, so that the
+    // estimate subtracts real baselines.
+    let estimated = Baselined::new(
+        generic.clone(),
+        1,
+        &Baseline::Estimated {
+            time_indexed: true,
+            decay: Some(ConfigNumber::ratio(99, 100)),
+        },
+    )
+    .unwrap();
+    let mut warm = Cost::default();
+    for one in &singles {
+        estimated
+            .estimate(&theta, one, EstimatorForm::Causal, &mut warm)
+            .unwrap();
+    }
+    estimated
+        .rollout(
+            &Behaviour::Learner(&theta),
+            &mut KitRng::seed_from_u64(SEEDS),
+            &mut warm,
+        )
+        .unwrap();
     let loo = Baselined::new(generic.clone(), 2, &Baseline::LeaveOneOut).unwrap();
     let plain_pairs = Baselined::new(generic.clone(), 2, &Baseline::None).unwrap();
     let estimate_all = |p: &Baselined<_, f64>, batches: &[Vec<_>]| {
@@ -158,6 +186,10 @@ fn cartpole(c: &mut Criterion) {
         |b| b.iter(|| estimate_all(&constant, &singles)),
     );
     g.bench_function(
+        "causal estimate only, estimated per-decision baselines, generic (f64)",
+        |b| b.iter(|| estimate_all(&estimated, &singles)),
+    );
+    g.bench_function(
         "causal estimate only, pairs, no baseline, generic (f64)",
         |b| b.iter(|| estimate_all(&plain_pairs, &pairs)),
     );
@@ -168,6 +200,10 @@ fn cartpole(c: &mut Criterion) {
     g.bench_function(
         "roll-out + causal estimate, constant baseline, generic (f64)",
         |b| b.iter(|| oracle_pass(&constant, black_box(&theta))),
+    );
+    g.bench_function(
+        "roll-out + causal estimate, estimated per-decision baselines, generic (f64)",
+        |b| b.iter(|| oracle_pass(&estimated, black_box(&theta))),
     );
     // Pairs rolled out per seed: the whole oracle call with leave-one-out against the plain mean.
     g.throughput(Throughput::Elements(steps_of(&loo, &theta)));

@@ -345,7 +345,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             .unwrap_or(0);
         baseline.clear();
         if *time_indexed {
-            baseline.extend((0..n).map(|i| running.time_indexed(i).unwrap_or_else(S::zero)));
+            running.time_indexed_into(n, baseline);
         } else {
             baseline.resize(n, running.constant().unwrap_or_else(S::zero));
         }

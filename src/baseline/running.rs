@@ -28,8 +28,10 @@ pub struct RunningOptimum<S> {
     pending_moment: Vec<S>,
     /// `Σ_i` of `cross` and of `moment`.
     totals: (S, S),
-    /// The committed baselines: b_i, and the one constant.
-    per_decision: Vec<Option<S>>,
+    /// The committed baselines: b_i (0 where not formed), whether b_i is formed (its `Σ ‖ψ_i‖²`
+    /// was not zero when it was last formed), and the one constant.
+    per_decision: Vec<S>,
+    formed: Vec<bool>,
     constant: Option<S>,
     g: Vec<S>,
 }
@@ -45,6 +47,7 @@ impl<S: Scalar> RunningOptimum<S> {
             pending_moment: Vec::new(),
             totals: (S::zero(), S::zero()),
             per_decision: Vec::new(),
+            formed: Vec::new(),
             constant: None,
             g: Vec::new(),
         }
@@ -53,7 +56,19 @@ impl<S: Scalar> RunningOptimum<S> {
     /// The committed time-indexed baseline `b_i` (0-based i); `None` (b_i = 0) where no earlier
     /// trajectory had a decision i with a nonzero score.
     pub fn time_indexed(&self, i: usize) -> Option<S> {
-        self.per_decision.get(i).cloned().flatten()
+        self.formed
+            .get(i)
+            .is_some_and(|&f| f)
+            .then(|| self.per_decision[i].clone())
+    }
+
+    /// The committed time-indexed baselines of decisions `0..n` into `out` (cleared first):
+    /// [`RunningOptimum::time_indexed`] with 0 for `None`, copied from the stored values.
+    pub fn time_indexed_into(&self, n: usize, out: &mut Vec<S>) {
+        out.clear();
+        let known = n.min(self.per_decision.len());
+        out.extend_from_slice(&self.per_decision[..known]);
+        out.resize(n, S::zero());
     }
 
     /// The committed baselines into `out` (cleared first): time-indexed, `b_i` for every index
@@ -62,11 +77,7 @@ impl<S: Scalar> RunningOptimum<S> {
     pub fn committed(&self, time_indexed: bool, out: &mut Vec<S>) {
         out.clear();
         if time_indexed {
-            out.extend(
-                self.per_decision
-                    .iter()
-                    .map(|b| b.clone().unwrap_or_else(S::zero)),
-            );
+            out.extend_from_slice(&self.per_decision);
         } else {
             out.extend(self.constant.clone());
         }
@@ -119,16 +130,19 @@ impl<S: Scalar> RunningOptimum<S> {
     /// The decay scales `Σ g·ψ_i` and `Σ ‖ψ_i‖²` alike, so a baseline `b_i` with nothing pending is
     /// unchanged by it and keeps its value; only the pending decisions' `b_i` are formed again
     /// (all of them when the decay is 0, which empties the sums). The constant's sums over i are
-    /// kept beside them in the same way. A commit thus costs one division per pending decision.
+    /// kept beside them, the pending values added in four partial sums (for floats a
+    /// rounding other than left to right, with the same error bound; exact types get the exact
+    /// sum). Each loop runs over whole slices with no carried dependence, so for floats it runs
+    /// in vector lanes; a commit costs one division per pending decision.
     pub fn commit(&mut self) {
-        let ratio = |num: &S, den: &S| (!den.is_certainly_zero()).then(|| num.clone() / den);
         let n = self.pending_cross.len();
         if self.cross.len() < n {
             self.cross.resize(n, S::zero());
             self.moment.resize(n, S::zero());
-            self.per_decision.resize(n, None);
+            self.per_decision.resize(n, S::zero());
+            self.formed.resize(n, false);
         }
-        let mut reformed = 0..n;
+        let mut reformed = n;
         if let Some(decay) = self.decay.clone() {
             // A local decay (not a field the loop could write) lets the loops run in lanes.
             for x in &mut self.cross {
@@ -140,21 +154,52 @@ impl<S: Scalar> RunningOptimum<S> {
             self.totals.0 *= &decay;
             self.totals.1 *= &decay;
             if decay.is_certainly_zero() {
-                reformed = 0..self.cross.len();
+                reformed = self.cross.len();
             }
         }
-        for i in 0..n {
-            self.cross[i] += &self.pending_cross[i];
-            self.moment[i] += &self.pending_moment[i];
-            self.totals.0 += &self.pending_cross[i];
-            self.totals.1 += &self.pending_moment[i];
+        for (x, p) in self.cross.iter_mut().zip(&self.pending_cross) {
+            *x += p;
         }
-        for i in reformed {
-            self.per_decision[i] = ratio(&self.cross[i], &self.moment[i]);
+        for (x, p) in self.moment.iter_mut().zip(&self.pending_moment) {
+            *x += p;
+        }
+        self.totals.0 += &lane_sum(&self.pending_cross);
+        self.totals.1 += &lane_sum(&self.pending_moment);
+        let (cross, moment) = (&self.cross[..reformed], &self.moment[..reformed]);
+        for (((b, f), c), m) in self.per_decision[..reformed]
+            .iter_mut()
+            .zip(&mut self.formed[..reformed])
+            .zip(cross)
+            .zip(moment)
+        {
+            *f = !m.is_certainly_zero();
+            *b = if *f { c.clone() / m } else { S::zero() };
         }
         self.clear_pending();
-        self.constant = ratio(&self.totals.0, &self.totals.1);
+        let (num, den) = &self.totals;
+        self.constant = (!den.is_certainly_zero()).then(|| num.clone() / den);
     }
+}
+
+/// Partial sums in [`lane_sum`].
+const LANES: usize = 4;
+
+/// `Σ xᵢ` as [`LANES`] partial sums over `i mod LANES`, added at the end: the exact sum for
+/// exact types, an enclosure for intervals, for floats a rounding whose error is bounded like
+/// the left-to-right sum's (`γ_n Σ|xᵢ|`) and whose loop runs in lanes.
+fn lane_sum<S: Scalar>(xs: &[S]) -> S {
+    let mut lanes: [S; LANES] = std::array::from_fn(|_| S::zero());
+    let mut chunks = xs.chunks_exact(LANES);
+    for c in &mut chunks {
+        for (l, x) in lanes.iter_mut().zip(c) {
+            *l += x;
+        }
+    }
+    for (l, x) in lanes.iter_mut().zip(chunks.remainder()) {
+        *l += x;
+    }
+    let [a, b, c, d] = lanes;
+    (a + b) + (c + d)
 }
 
 #[cfg(test)]
@@ -227,6 +272,18 @@ mod tests {
                 eager.commit(&cross, &moment);
                 for i in 0..14 {
                     assert_eq!(running.time_indexed(i), eager.time_indexed(i), "b_{i}");
+                }
+                // The copies the estimates read: 0 where no baseline is formed.
+                let mut copied = Vec::new();
+                running.time_indexed_into(14, &mut copied);
+                let mut all = Vec::new();
+                running.committed(true, &mut all);
+                for i in 0..14 {
+                    let b = eager.time_indexed(i).unwrap_or_else(|| q(0, 1));
+                    assert_eq!(copied[i], b, "copied b_{i}");
+                    if i < all.len() {
+                        assert_eq!(all[i], b, "committed b_{i}");
+                    }
                 }
                 assert_eq!(running.constant(), eager.constant());
             }
