@@ -98,57 +98,64 @@ impl<S: Scalar> Dual<S> {
     }
 }
 
-fn zip_with<S: Scalar>(a: &[S], b: &[S], f: impl Fn(Option<&S>, Option<&S>) -> S) -> Gradient<S> {
-    (0..a.len().max(b.len()))
-        .map(|i| f(a.get(i), b.get(i)))
-        .collect()
-}
+// The arithmetic works in place on the left operand's storage: a nested dual
+// (`Dual<Dual<Dual<Interval>>>`, hundreds of bytes) would otherwise be copied through an iterator
+// for every entry of every result. Each entry is computed by the same operations, in the same
+// order, as the chain rules in the module docs, so the results are the same bits.
 
-fn add_ref<S: Scalar>(a: &Dual<S>, b: &Dual<S>) -> Dual<S> {
-    Dual {
-        v: a.v.clone() + &b.v,
-        g: zip_with(&a.g, &b.g, |x, y| match (x, y) {
-            (Some(x), Some(y)) => x.clone() + y,
-            (Some(x), None) | (None, Some(x)) => x.clone(),
-            (None, None) => unreachable!(),
-        }),
+/// `a += b`: values and gradients entrywise (missing entries are zero).
+fn add_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
+    a.v += &b.v;
+    for (x, y) in a.g.iter_mut().zip(&b.g) {
+        *x += y;
+    }
+    if b.g.len() > a.g.len() {
+        let n = a.g.len();
+        a.g.extend(b.g[n..].iter().cloned());
     }
 }
 
-fn sub_ref<S: Scalar>(a: &Dual<S>, b: &Dual<S>) -> Dual<S> {
-    Dual {
-        v: a.v.clone() - &b.v,
-        g: zip_with(&a.g, &b.g, |x, y| match (x, y) {
-            (Some(x), Some(y)) => x.clone() - y,
-            (Some(x), None) => x.clone(),
-            (None, Some(y)) => -y.clone(),
-            (None, None) => unreachable!(),
-        }),
+/// `a −= b`: values and gradients entrywise (missing entries are zero).
+fn sub_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
+    a.v -= &b.v;
+    for (x, y) in a.g.iter_mut().zip(&b.g) {
+        *x -= y;
+    }
+    if b.g.len() > a.g.len() {
+        let n = a.g.len();
+        a.g.extend(b.g[n..].iter().map(|y| -y.clone()));
     }
 }
 
-fn mul_ref<S: Scalar>(a: &Dual<S>, b: &Dual<S>) -> Dual<S> {
-    Dual {
-        v: a.v.clone() * &b.v,
-        g: zip_with(&a.g, &b.g, |x, y| match (x, y) {
-            (Some(x), Some(y)) => b.v.clone() * x + a.v.clone() * y,
-            (Some(x), None) => b.v.clone() * x,
-            (None, Some(y)) => a.v.clone() * y,
-            (None, None) => unreachable!(),
-        }),
+/// `a ·= b`: value `a·b`, gradient `b·a′ + a·b′`.
+fn mul_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
+    let Dual { v, g } = a;
+    for (i, x) in g.iter_mut().enumerate() {
+        *x *= &b.v;
+        if let Some(y) = b.g.get(i) {
+            *x += v.clone() * y;
+        }
     }
+    if b.g.len() > g.len() {
+        let n = g.len();
+        g.extend(b.g[n..].iter().map(|y| v.clone() * y));
+    }
+    *v *= &b.v;
 }
 
-fn div_ref<S: Scalar>(a: &Dual<S>, b: &Dual<S>) -> Dual<S> {
-    let q = a.v.clone() / &b.v;
-    Dual {
-        g: zip_with(&a.g, &b.g, |x, y| match (x, y) {
-            (Some(x), Some(y)) => (x.clone() - q.clone() * y) / &b.v,
-            (Some(x), None) => x.clone() / &b.v,
-            (None, Some(y)) => -(q.clone() * y) / &b.v,
-            (None, None) => unreachable!(),
-        }),
-        v: q,
+/// `a /= b`: value `q = a/b`, gradient `(a′ − q·b′)/b`.
+fn div_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
+    a.v /= &b.v;
+    let Dual { v: q, g } = a;
+    for (i, x) in g.iter_mut().enumerate() {
+        if let Some(y) = b.g.get(i) {
+            *x -= q.clone() * y;
+        }
+        *x /= &b.v;
+    }
+    if b.g.len() > g.len() {
+        let n = g.len();
+        g.extend(b.g[n..].iter().map(|y| -(q.clone() * y) / &b.v));
     }
 }
 
@@ -156,45 +163,51 @@ macro_rules! dual_binop {
     ($Op:ident, $op:ident, $OpAssign:ident, $op_assign:ident, $f:ident) => {
         impl<S: Scalar> $Op for Dual<S> {
             type Output = Dual<S>;
-            fn $op(self, rhs: Dual<S>) -> Dual<S> {
-                $f(&self, &rhs)
+            fn $op(mut self, rhs: Dual<S>) -> Dual<S> {
+                $f(&mut self, &rhs);
+                self
             }
         }
         impl<'a, S: Scalar> $Op<&'a Dual<S>> for Dual<S> {
             type Output = Dual<S>;
-            fn $op(self, rhs: &'a Dual<S>) -> Dual<S> {
-                $f(&self, rhs)
+            fn $op(mut self, rhs: &'a Dual<S>) -> Dual<S> {
+                $f(&mut self, rhs);
+                self
             }
         }
         impl<'a, S: Scalar> $Op<Dual<S>> for &'a Dual<S> {
             type Output = Dual<S>;
             fn $op(self, rhs: Dual<S>) -> Dual<S> {
-                $f(self, &rhs)
+                let mut out = self.clone();
+                $f(&mut out, &rhs);
+                out
             }
         }
         impl<'a, 'b, S: Scalar> $Op<&'b Dual<S>> for &'a Dual<S> {
             type Output = Dual<S>;
             fn $op(self, rhs: &'b Dual<S>) -> Dual<S> {
-                $f(self, rhs)
+                let mut out = self.clone();
+                $f(&mut out, rhs);
+                out
             }
         }
         impl<S: Scalar> $OpAssign for Dual<S> {
             fn $op_assign(&mut self, rhs: Dual<S>) {
-                *self = $f(self, &rhs);
+                $f(self, &rhs);
             }
         }
         impl<'a, S: Scalar> $OpAssign<&'a Dual<S>> for Dual<S> {
             fn $op_assign(&mut self, rhs: &'a Dual<S>) {
-                *self = $f(self, rhs);
+                $f(self, rhs);
             }
         }
     };
 }
 
-dual_binop!(Add, add, AddAssign, add_assign, add_ref);
-dual_binop!(Sub, sub, SubAssign, sub_assign, sub_ref);
-dual_binop!(Mul, mul, MulAssign, mul_assign, mul_ref);
-dual_binop!(Div, div, DivAssign, div_assign, div_ref);
+dual_binop!(Add, add, AddAssign, add_assign, add_assign_ref);
+dual_binop!(Sub, sub, SubAssign, sub_assign, sub_assign_ref);
+dual_binop!(Mul, mul, MulAssign, mul_assign, mul_assign_ref);
+dual_binop!(Div, div, DivAssign, div_assign, div_assign_ref);
 
 impl<S: Scalar> Neg for Dual<S> {
     type Output = Dual<S>;
@@ -350,6 +363,62 @@ mod tests {
             Dual::constant(q(1, 1)),
             Dual::new(q(1, 1), vec![q(0, 1); 4])
         );
+    }
+
+    /// Every operation, with either operand's gradient stored shorter than the other's and
+    /// through every operator form (owned, borrowed, assigning), against the chain rules written
+    /// out entrywise in ℚ on the zero-padded gradients.
+    #[test]
+    fn short_gradients_follow_the_chain_rules() {
+        let short = Dual::new(q(3, 2), vec![q(1, 3)]);
+        let long = Dual::new(q(-5, 7), vec![q(2, 1), q(-1, 4), q(7, 9)]);
+        for (a, b) in [(&short, &long), (&long, &short)] {
+            let (av, bv) = (a.value().clone(), b.value().clone());
+            let (ag, bg) = (a.gradient_padded(3), b.gradient_padded(3));
+            let quotient = av.clone() / &bv;
+            let entry = |op: usize, x: &Q, y: &Q| match op {
+                0 => x.clone() + y,
+                1 => x.clone() - y,
+                2 => bv.clone() * x + av.clone() * y,
+                _ => (x.clone() - quotient.clone() * y) / &bv,
+            };
+            for op in 0..4 {
+                let value = [
+                    av.clone() + &bv,
+                    av.clone() - &bv,
+                    av.clone() * &bv,
+                    quotient.clone(),
+                ][op]
+                    .clone();
+                let grad: Vec<Q> = (0..3).map(|i| entry(op, &ag[i], &bg[i])).collect();
+                let forms = match op {
+                    0 => [a + b, a.clone() + b, a + b.clone(), {
+                        let mut c = a.clone();
+                        c += b;
+                        c
+                    }],
+                    1 => [a - b, a.clone() - b, a - b.clone(), {
+                        let mut c = a.clone();
+                        c -= b;
+                        c
+                    }],
+                    2 => [a * b, a.clone() * b, a * b.clone(), {
+                        let mut c = a.clone();
+                        c *= b;
+                        c
+                    }],
+                    _ => [a / b, a.clone() / b, a / b.clone(), {
+                        let mut c = a.clone();
+                        c /= b;
+                        c
+                    }],
+                };
+                for got in forms {
+                    assert_eq!(got.value(), &value, "op {op}");
+                    assert_eq!(got.gradient(), grad.as_slice(), "op {op}");
+                }
+            }
+        }
     }
 
     #[test]
