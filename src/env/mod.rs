@@ -17,6 +17,8 @@ use crate::scalar::{Scalar, Undecidable};
 
 pub mod cartpole;
 
+pub mod hypot;
+
 pub mod obstacle;
 
 /// What one environment step returns (Gymnasium's `(observation, reward, terminated, truncated,

@@ -37,6 +37,7 @@
 //! The velocity-obstacle expert that labels this task's states is
 //! [`crate::expert::vo_policy::VoExpertPolicy`].
 
+use super::hypot::hypot;
 use crate::problem::KitRng;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
@@ -169,12 +170,12 @@ impl ObstacleConfig {
         let dx = gap(self.agent_start[0], self.obstacle_start_x);
         let dy = gap(self.agent_start[1], self.obstacle_start_y);
         let radius = self.agent_radius + self.obstacle_radius;
-        if dx.hypot(dy) <= radius {
+        if hypot(dx, dy) <= radius {
             return Err(invalid(
                 "agent_start",
                 format!(
                     "an obstacle may start overlapping the agent: distance to the start box {} ≤ R_A + R_B = {radius}",
-                    dx.hypot(dy)
+                    hypot(dx, dy)
                 ),
             ));
         }
@@ -195,11 +196,11 @@ impl ObstacleConfig {
 }
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
-    (a[0] - b[0]).hypot(a[1] - b[1])
+    hypot(a[0] - b[0], a[1] - b[1])
 }
 
 pub(crate) fn clip(a: [f64; 2], max: f64) -> [f64; 2] {
-    let n = a[0].hypot(a[1]);
+    let n = hypot(a[0], a[1]);
     if n > max {
         let s = max / n;
         [a[0] * s, a[1] * s]

@@ -6,6 +6,7 @@
 //! eq. 4.1 globally with [`vo_expert_cone`] with `R = R_A + R_B + safety_margin`, and returns the
 //! new velocity `v_r + u*` clipped to `v_max` like any action.
 
+use crate::env::hypot::hypot;
 use crate::env::obstacle::{ObstacleConfig, ObstacleError, ObstacleObs, clip, invalid};
 use crate::expert::vo::{Cone, VoError, vo_expert_cone};
 use serde::{Deserialize, Serialize};
@@ -92,7 +93,7 @@ impl VoExpertPolicy {
         let p = obs.agent_pos;
         let r = [obs.obstacle_pos[0] - p[0], obs.obstacle_pos[1] - p[1]];
         let g = [self.goal[0] - p[0], self.goal[1] - p[1]];
-        let gn = g[0].hypot(g[1]);
+        let gn = hypot(g[0], g[1]);
         let v_des = if gn > 0.0 {
             [g[0] / gn * self.v_max, g[1] / gn * self.v_max]
         } else {
@@ -110,7 +111,7 @@ impl VoExpertPolicy {
         ) {
             Ok(s) => Ok(clip([v_r[0] + s.u[0], v_r[1] + s.u[1]], self.v_max)),
             Err(VoError::InsideObstacle { .. }) => {
-                let n = r[0].hypot(r[1]);
+                let n = hypot(r[0], r[1]);
                 Ok(if n > 0.0 {
                     [-r[0] / n * self.v_max, -r[1] / n * self.v_max]
                 } else {

@@ -13,6 +13,7 @@
 //! inline, so that a roll-out allocates nothing per step. Both give the same numbers.
 
 use super::Task;
+use crate::env::hypot::hypot;
 use crate::env::obstacle::{ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome};
 use crate::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
 use crate::policy::ActionVector;
@@ -109,7 +110,7 @@ impl ObstacleFeatures {
         } = *self
         {
             let (dx, dy) = (basic[0], basic[1]);
-            let n = dx.hypot(dy);
+            let n = hypot(dx, dy);
             if n > 0.0 {
                 out.extend_from_slice(&[dx / n, dy / n]);
             } else {
