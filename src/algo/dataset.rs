@@ -122,7 +122,11 @@ impl<S: Scalar> InnerOptimiser<S> {
             let batch: Vec<&P::Labelled> = match self.batch_size {
                 None => data.iter().collect(),
                 Some(b) => (0..b)
-                    .map(|_| &data[ctx.rng.random_range(0..data.len())])
+                    .map(|_| {
+                        let example = &data[ctx.rng.random_range(0..data.len())];
+                        super::prefetch::prefetch(example);
+                        example
+                    })
                     .collect(),
             };
             let inv = S::one() / S::from_i64(batch.len() as i64);

@@ -70,7 +70,7 @@ pub(crate) fn invalid(name: &'static str, reason: impl Into<String>) -> AlgoErro
 
 /// Error if any entry is not finite.
 pub(crate) fn check_finite<S: Scalar>(x: &DVector<S>, what: &'static str) -> Result<(), AlgoError> {
-    if x.iter().all(Scalar::is_finite) {
+    if crate::scalar::all_finite(x.as_slice()) {
         Ok(())
     } else {
         Err(AlgoError::NonFinite(what))

@@ -64,6 +64,7 @@ pub mod forward_training;
 pub mod learner;
 pub mod o2nc;
 mod parameter_range;
+mod prefetch;
 pub mod rmsprop;
 mod roots;
 pub mod rrm;

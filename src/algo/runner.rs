@@ -415,7 +415,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
                 &start,
                 &report,
             );
-            if !algorithm.theta().iter().all(Scalar::is_finite) {
+            if !crate::scalar::all_finite(algorithm.theta().as_slice()) {
                 break Termination::Failed(AlgoError::NonFinite("θ"));
             }
             if report.finished {

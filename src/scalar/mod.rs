@@ -194,6 +194,14 @@ pub fn certainly_less<S: Scalar>(a: &S, b: &S, what: &'static str) -> Result<boo
     }
 }
 
+/// Whether every entry is finite ([`Scalar::is_finite`]), without an early exit: one branch-free
+/// pass that runs in vector lanes for floats, for the checks of whole parameter vectors that
+/// every oracle call and every inner-optimiser step makes.
+#[inline]
+pub fn all_finite<S: Scalar>(xs: &[S]) -> bool {
+    xs.iter().fold(true, |ok, x| ok & x.is_finite())
+}
+
 /// Sum of a sequence of scalars (zero when empty).
 pub fn sum<'a, S: Scalar>(xs: impl IntoIterator<Item = &'a S>) -> S {
     xs.into_iter().fold(S::zero(), |acc, x| acc + x)

@@ -94,7 +94,7 @@ fn check_theta<S: Scalar>(theta: &DVector<S>, dim: usize) -> Result<(), OracleEr
             got: theta.len(),
         });
     }
-    if !theta.iter().all(Scalar::is_finite) {
+    if !crate::scalar::all_finite(theta.as_slice()) {
         return Err(OracleError::NonFinite("θ"));
     }
     Ok(())
