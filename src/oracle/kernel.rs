@@ -405,7 +405,18 @@ pub(crate) fn accumulate<S: Scalar>(
     }
 }
 
-impl<S: Real> EstimatorKernel<S> for Softmax {}
+/// The loss without the gradient.
+impl<S: Real> EstimatorKernel<S> for Softmax {
+    fn loss_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        _scratch: &mut [S],
+    ) -> Result<S, PolicyError> {
+        self.loss_only(theta, phi, *label)
+    }
+}
 
 impl<S: Real> EstimatorKernel<S> for MlpSoftmax {}
 

@@ -174,6 +174,22 @@ fn softmax_in_place<S: Real>(z: &mut [S]) -> Result<(), PolicyError> {
     Ok(())
 }
 
+/// The Brier loss `Σ_a (π_a − 1[a = a*])²` alone: the loss of [`brier_into`] (the same operations
+/// in the same order).
+#[inline]
+fn brier_loss<S: Scalar>(probs: &[S], expert: usize) -> S {
+    let mut loss = S::zero();
+    for (a, p) in probs.iter().enumerate() {
+        let r = if a == expert {
+            p.clone() - S::one()
+        } else {
+            p.clone()
+        };
+        loss += r.square();
+    }
+    loss
+}
+
 /// [`brier_logit_gradient`] followed by the outer product with φ, written into `grad` (row-major
 /// `A × n`) without intermediate vectors; returns the loss. The same operations in the same order.
 #[inline]
@@ -185,11 +201,8 @@ fn brier_into<S: Scalar>(probs: &[S], expert: usize, phi: &[S], grad: &mut [S]) 
             p.clone()
         }
     };
-    let mut loss = S::zero();
+    let loss = brier_loss(probs, expert);
     let mut mean_r = S::zero();
-    for (a, p) in probs.iter().enumerate() {
-        loss += r(a, p).square();
-    }
     for (a, p) in probs.iter().enumerate() {
         mean_r += r(a, p) * p;
     }
@@ -300,6 +313,25 @@ impl Softmax {
     fn probs_into<S: Real>(&self, theta: &[S], phi: &[S], p: &mut [S]) -> Result<(), PolicyError> {
         self.logits_into(theta, phi, p)?;
         softmax_in_place(p)
+    }
+
+    /// The loss of [`Policy::loss_into`] without its gradient: the same value and the same errors
+    /// (but for the gradient buffer's length, which it does not take).
+    ///
+    /// # Errors
+    /// As [`Policy::loss_into`].
+    #[inline]
+    pub(crate) fn loss_only<S: Real>(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: usize,
+    ) -> Result<S, PolicyError> {
+        check_action(label, self.actions)?;
+        with_scratch(self.actions, |p| {
+            self.probs_into(theta, phi, p)?;
+            Ok(brier_loss(p, label))
+        })
     }
 }
 
@@ -442,6 +474,10 @@ mod tests {
                 let mut score = vec![f64::NAN; d];
                 let l2 = pi.loss_into(&theta, &phi, &label, &mut grad).unwrap();
                 assert_eq!((l.to_bits(), bits(&g)), (l2.to_bits(), bits(&grad)));
+                assert_eq!(
+                    l.to_bits(),
+                    pi.loss_only(&theta, &phi, label).unwrap().to_bits()
+                );
                 pi.score_into(&theta, &phi, &action, &mut score).unwrap();
                 assert_eq!(bits(&s), bits(&score));
                 grad.fill(f64::NAN);
@@ -479,6 +515,7 @@ mod tests {
         for phi in [[f64::NAN, 1.0], [1.0, f64::INFINITY], [1e308, 1e308]] {
             let old = pi.loss(&theta, &phi, &0).unwrap_err();
             assert_eq!(pi.loss_into(&theta, &phi, &0, &mut grad), Err(old.clone()));
+            assert_eq!(pi.loss_only(&theta, &phi, 0), Err(old.clone()));
             assert_eq!(
                 pi.loss_score_into(&theta, &phi, &0, &1, &mut grad, &mut score),
                 Err(old.clone())
@@ -493,6 +530,10 @@ mod tests {
         let phi = [0.5, -0.5];
         assert_eq!(
             pi.loss_into(&theta, &phi, &3, &mut grad),
+            pi.loss(&theta, &phi, &3).map(|(l, _)| l)
+        );
+        assert_eq!(
+            pi.loss_only(&theta, &phi, 3),
             pi.loss(&theta, &phi, &3).map(|(l, _)| l)
         );
         assert!(matches!(
@@ -514,6 +555,7 @@ mod tests {
         let li = pi
             .loss_score_into(&th, &ph, &2, &0, &mut gi, &mut si)
             .unwrap();
+        assert_eq!(pi.loss_only(&th, &ph, 2).unwrap(), l);
         assert_eq!((l, g), (li, gi));
         assert_eq!(pi.score(&th, &ph, &0).unwrap(), si);
     }
