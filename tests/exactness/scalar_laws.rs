@@ -585,6 +585,24 @@ fn positive_when_certain_prop<W: LawScalar>(a: W) -> bool {
     x.positive_when_certain() == expected
 }
 
+/// `all_finite` is the conjunction of `is_finite` over the entries, with and without a non-finite
+/// entry (10³⁰ squared four times: an overflow in the floating types, a large number in ℚ), in
+/// either order.
+fn all_finite_prop<W: LawScalar>(a: W, b: W) -> bool {
+    let (x, y) = (a.get(), b.get());
+    let mut huge = <W::S as Scalar>::from_binary64(1e30).expect("1e30 is representable");
+    for _ in 0..4 {
+        huge = huge.clone() * huge;
+    }
+    let entries = [x, y, huge];
+    (0..=entries.len()).all(|k| {
+        let xs = &entries[..k];
+        let rotated: Vec<W::S> = xs.iter().rev().cloned().collect();
+        let expected = xs.iter().all(Scalar::is_finite);
+        ilopt::scalar::all_finite(xs) == expected && ilopt::scalar::all_finite(&rotated) == expected
+    })
+}
+
 /// num-traits' identities agree with the kit's, and generic num-traits code (`num_traits::pow`,
 /// nalgebra's matrix products, which need `Zero + One`) runs on the scalar.
 fn num_traits_prop<W: LawScalar>(a: W, b: W) -> bool
@@ -636,6 +654,11 @@ macro_rules! scalar_laws {
             #[test]
             fn comparisons_are_certain() {
                 run(certain_cmp_prop::<$w> as fn($w, $w) -> TestResult).unwrap();
+            }
+
+            #[test]
+            fn all_finite_is_every_entry_finite() {
+                run(all_finite_prop::<$w> as fn($w, $w) -> bool).unwrap();
             }
 
             #[test]
