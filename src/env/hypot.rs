@@ -114,10 +114,11 @@ mod tests {
         );
     }
 
-    /// Diagnostic: how often the result equals the platform's `f64::hypot` (run with
-    /// `--ignored --nocapture`).
+    /// The same bits as the platform's `f64::hypot` on 10⁶ operands where that is glibc on x86-64
+    /// (glibc ≥ 2.35 computes this method there; the obstacle task's recorded numbers rest on it);
+    /// on other platforms it prints how often the two agree. Slow in debug builds, hence ignored.
     #[test]
-    #[ignore = "diagnostic: prints agreement with the platform's hypot"]
+    #[ignore = "10^6 operands: run with --release --ignored (CI does)"]
     fn agreement_with_the_platform() {
         let pairs = operands(1_000_000, 2);
         let same = pairs
@@ -125,6 +126,13 @@ mod tests {
             .filter(|&&(x, y)| hypot(x, y).to_bits() == x.hypot(y).to_bits())
             .count();
         println!("{same} of {} equal to the platform's hypot", pairs.len());
+        if cfg!(all(
+            target_arch = "x86_64",
+            target_os = "linux",
+            target_env = "gnu"
+        )) {
+            assert_eq!(same, pairs.len(), "glibc's hypot differs");
+        }
     }
 
     #[test]
