@@ -76,6 +76,8 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 #![warn(missing_docs)]
+// One exception, allowed where it stands: a cache hint in `algo::prefetch`.
+#![deny(unsafe_code)]
 // Index loops over states and actions mirror the equations they implement (math.md §1.4).
 #![allow(clippy::needless_range_loop)]
 

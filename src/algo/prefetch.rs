@@ -4,7 +4,8 @@
 //! within a few DAgger rounds; each example read in the supervised pass would then be a cache
 //! miss on that pass's dependency chain. Asking for every drawn example's cache lines when the
 //! batch is formed lets the loads overlap. A prefetch reads nothing the program sees, so results
-//! are unchanged; on targets other than x86-64 it does nothing.
+//! are unchanged; on targets other than x86-64 it does nothing. This is the crate's only `unsafe`
+//! block (the crate denies `unsafe_code` elsewhere).
 
 /// Hint that `x`'s first and last bytes will be read soon (no effect on any value).
 #[inline(always)]
@@ -14,6 +15,7 @@ pub(crate) fn prefetch<T>(x: &T) {
         use core::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
         let first = (x as *const T).cast::<i8>();
         let last = first.wrapping_add(size_of::<T>().saturating_sub(1));
+        #[allow(unsafe_code)]
         // SAFETY: a prefetch never faults and has no architectural effect; both addresses lie
         // within `x`, a live reference.
         unsafe {
