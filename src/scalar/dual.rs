@@ -101,7 +101,8 @@ impl<S: Scalar> Dual<S> {
 // The arithmetic works in place on the left operand's storage: a nested dual
 // (`Dual<Dual<Dual<Interval>>>`, hundreds of bytes) would otherwise be copied through an iterator
 // for every entry of every result. Each entry is computed by the same operations, in the same
-// order, as the chain rules in the module docs, so the results are the same bits.
+// order, as the chain rules in the module docs (up to the order of a product's or a sum's two
+// operands, which IEEE arithmetic, intervals and ℚ do not see), so the results are the same bits.
 
 /// `a += b`: values and gradients entrywise (missing entries are zero).
 fn add_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
@@ -367,16 +368,19 @@ mod tests {
 
     /// Every operation, with either operand's gradient stored shorter than the other's and
     /// through every operator form (owned, borrowed, assigning), against the chain rules written
-    /// out entrywise in ℚ on the zero-padded gradients.
-    #[test]
-    fn short_gradients_follow_the_chain_rules() {
-        let short = Dual::new(q(3, 2), vec![q(1, 3)]);
-        let long = Dual::new(q(-5, 7), vec![q(2, 1), q(-1, 4), q(7, 9)]);
+    /// out entrywise on the zero-padded gradients (`(a·b)′ = b·a′ + a·b′`, `(a/b)′ = (a′ − q·b′)/b`).
+    /// In ℚ this is the mathematics; in `f64`, intervals and nested duals it is also the claim that
+    /// the in-place arithmetic rounds as the chain rules do (the same operations, their operands
+    /// in another order, which none of these arithmetics sees).
+    fn short_gradients_follow_the_chain_rules<S: Scalar>() {
+        let r = |n, d| S::from_ratio(n, d);
+        let short = Dual::new(r(3, 2), vec![r(1, 3)]);
+        let long = Dual::new(r(-5, 7), vec![r(2, 1), r(-1, 4), r(7, 9)]);
         for (a, b) in [(&short, &long), (&long, &short)] {
             let (av, bv) = (a.value().clone(), b.value().clone());
             let (ag, bg) = (a.gradient_padded(3), b.gradient_padded(3));
             let quotient = av.clone() / &bv;
-            let entry = |op: usize, x: &Q, y: &Q| match op {
+            let entry = |op: usize, x: &S, y: &S| match op {
                 0 => x.clone() + y,
                 1 => x.clone() - y,
                 2 => bv.clone() * x + av.clone() * y,
@@ -390,7 +394,7 @@ mod tests {
                     quotient.clone(),
                 ][op]
                     .clone();
-                let grad: Vec<Q> = (0..3).map(|i| entry(op, &ag[i], &bg[i])).collect();
+                let grad: Vec<S> = (0..3).map(|i| entry(op, &ag[i], &bg[i])).collect();
                 let forms = match op {
                     0 => [a + b, a.clone() + b, a + b.clone(), {
                         let mut c = a.clone();
@@ -420,6 +424,22 @@ mod tests {
             }
         }
     }
+
+    macro_rules! chain_rule_tests {
+        ($($name:ident => $s:ty),+ $(,)?) => {$(
+            #[test]
+            fn $name() {
+                short_gradients_follow_the_chain_rules::<$s>();
+            }
+        )+};
+    }
+
+    chain_rule_tests!(
+        short_gradients_rational => Q,
+        short_gradients_f64 => f64,
+        short_gradients_interval => super::super::Interval,
+        short_gradients_nested_f64 => Dual<f64>,
+    );
 
     #[test]
     fn float_chain_rules() {
