@@ -111,6 +111,13 @@ fn main() {
             let rows = second_toy::rows(second_toy::sizes(true)).unwrap();
             println!("{}", markdown(&rows));
         }
+        "schedule" => {
+            // Rows 2a and 2b (schedule 3.43, erratum E7) up to k = n.
+            let u = user_cpu();
+            let rows = ilopt_theory::checks::schedule::rows(n as u64);
+            eprintln!("schedule rows user CPU: {:.2} s", user_cpu() - u);
+            println!("{}", markdown(&rows));
+        }
         "global" => {
             let m1 = m1_tied();
             let g = global_constants(&m1, Profile::Full.sizes()).unwrap();

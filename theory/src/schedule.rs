@@ -14,19 +14,34 @@ use num_rational::BigRational;
 use num_traits::{One, Zero};
 use serde::{Deserialize, Serialize};
 
-/// Rational bounds `lo ≤ q^{1/3} ≤ hi` for q ≥ 0, of width ≤ 2^{−bits}·max(1, q).
+/// Rational bounds `lo ≤ q^{1/3} ≤ hi` for q ≥ 0, of width ≤ 2^{−bits}·max(1, q): `bits` steps
+/// of bisection of `[0, max(1, q)]`, keeping `lo³ ≤ q < hi³` after the first step.
+///
+/// Every midpoint is `H·j/2^b` with `H = max(1, q) = n_H/d_H` and an integer j, so with
+/// `q = n/d` the test `mid³ ≤ q` is the integer comparison `n_H³ j³ d ≤ n d_H³ 2^{3b}`: the same
+/// bisection as in rationals, without a gcd per step.
 pub fn cbrt_enclosure(q: &BigRational, bits: u32) -> (BigRational, BigRational) {
-    let (mut lo, mut hi) = (BigRational::zero(), q.clone().max(BigRational::one()));
-    let two = BigRational::from_integer(BigInt::from(2));
-    for _ in 0..bits {
-        let mid = (lo.clone() + &hi) / &two;
-        if mid.clone() * &mid * &mid <= *q {
+    let h = q.clone().max(BigRational::one());
+    let (n, d) = (q.numer(), q.denom());
+    let (nh, dh) = (h.numer(), h.denom());
+    // mid³ ≤ q ⟺ j³ · (n_H³ d) ≤ (n d_H³) · 2^{3b} at depth b.
+    let left = nh * nh * nh * d;
+    let right = n * dh * dh * dh;
+    let (mut lo, mut hi) = (BigInt::zero(), BigInt::one());
+    for b in 1..=bits {
+        // The interval [lo, hi]/2^{b−1} halved: [2lo, 2hi]/2^b, midpoint lo + hi.
+        let mid = lo.clone() + &hi;
+        lo <<= 1;
+        hi <<= 1;
+        if mid.pow(3) * &left <= right.clone() << (3 * b as usize) {
             lo = mid;
         } else {
             hi = mid;
         }
     }
-    (lo, hi)
+    let scale = BigInt::one() << bits as usize;
+    let at = |j: BigInt| BigRational::new(j, scale.clone()) * &h;
+    (at(lo), at(hi))
 }
 
 /// A decided inequality `lhs ≤ rhs`, or undecided at the precision tried.
@@ -148,6 +163,46 @@ pub fn check_schedule(k_max: u64) -> ScheduleReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The bisection in rationals, step by step: the reference the integer route must equal.
+    fn cbrt_by_rational_bisection(q: &BigRational, bits: u32) -> (BigRational, BigRational) {
+        let (mut lo, mut hi) = (BigRational::zero(), q.clone().max(BigRational::one()));
+        let two = ratio(2, 1);
+        for _ in 0..bits {
+            let mid = (lo.clone() + &hi) / &two;
+            if mid.clone() * &mid * &mid <= *q {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The integer route returns exactly the rational bisection's bounds, for q below, at and
+    /// above 1 (where the bisection starts from [0, q]), perfect cubes included.
+    #[test]
+    fn integer_bisection_equals_rational_bisection() {
+        let mut qs: Vec<BigRational> = (1..=60).map(|k| ratio(7, k + 7)).collect();
+        qs.extend((1..=60).map(|k| ratio(k + 6, k + 7)));
+        qs.extend([
+            ratio(0, 1),
+            ratio(1, 1),
+            ratio(27, 8),
+            ratio(8, 27),
+            ratio(1000, 3),
+        ]);
+        qs.extend([ratio(64, 1), ratio(1, 64), ratio(123_456_789, 1_000)]);
+        for q in &qs {
+            for bits in [1u32, 2, 7, 24, 48, 96] {
+                assert_eq!(
+                    cbrt_enclosure(q, bits),
+                    cbrt_by_rational_bisection(q, bits),
+                    "q = {q}, bits = {bits}"
+                );
+            }
+        }
+    }
 
     #[test]
     fn cube_roots_are_enclosed() {
