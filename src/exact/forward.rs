@@ -52,14 +52,19 @@ pub fn forward<S: Scalar>(problem: &ToyProblem<S>, theta: &[S]) -> Result<Forwar
     let m = problem.mdp();
     let dim = table.dim;
     let mut d = problem.initial().to_vec();
-    let mut jac = vec![vec![S::zero(); dim]; m.states];
+    // J_t(s) as the rows of a states × dim matrix; the next step's d and J are built in buffers
+    // allocated once and swapped in (every entry is reset to zero before it is summed).
+    let mut jac = vec![S::zero(); m.states * dim];
+    let mut d2 = vec![S::zero(); m.states];
+    let mut j2 = vec![S::zero(); m.states * dim];
+    let mut dj = vec![S::zero(); dim];
     let mut objective = S::zero();
     let mut gradient = vec![S::zero(); dim];
     let mut visits = Vec::with_capacity(m.horizon - 1);
     for t in 1..m.horizon {
         for s in 0..m.states {
             objective += d[s].clone() * &table.loss[s];
-            for (g, j) in gradient.iter_mut().zip(&jac[s]) {
+            for (g, j) in gradient.iter_mut().zip(&jac[s * dim..(s + 1) * dim]) {
                 *g += j.clone() * &table.loss[s];
             }
             table.add_block(&mut gradient, s, &table.loss_grad[s], &d[s]);
@@ -68,28 +73,30 @@ pub fn forward<S: Scalar>(problem: &ToyProblem<S>, theta: &[S]) -> Result<Forwar
         if t == m.horizon - 1 {
             break;
         }
-        let mut d2 = vec![S::zero(); m.states];
-        let mut j2 = vec![vec![S::zero(); dim]; m.states];
+        d2.fill(S::zero());
+        j2.fill(S::zero());
         for s in 0..m.states {
             for a in 0..m.actions {
                 let pi = table.prob(s, a);
                 let w = d[s].clone() * pi;
                 // J_t(s) π(a|s) + d_t(s) ∇π(a|s), scattered into the full vector.
-                let mut dj: Vec<S> = jac[s].iter().map(|x| x.clone() * pi).collect();
+                for (x, j) in dj.iter_mut().zip(&jac[s * dim..(s + 1) * dim]) {
+                    *x = j.clone() * pi;
+                }
                 table.add_block(&mut dj, s, table.prob_grad(s, a), &d[s]);
                 for (s2, p) in problem.transition(s, a).iter().enumerate() {
                     if p.is_certainly_zero() {
                         continue;
                     }
                     d2[s2] += w.clone() * p;
-                    for (x, y) in j2[s2].iter_mut().zip(&dj) {
+                    for (x, y) in j2[s2 * dim..(s2 + 1) * dim].iter_mut().zip(&dj) {
                         *x += p.clone() * y;
                     }
                 }
             }
         }
-        d = d2;
-        jac = j2;
+        std::mem::swap(&mut d, &mut d2);
+        std::mem::swap(&mut jac, &mut j2);
     }
     Ok(Forward {
         objective,
