@@ -85,10 +85,17 @@ impl<S> Clone for TableMemo<S> {
 
 /// θ's bits when the scalar is `f64` (the key of [`TableMemo`]; bits, so that 0 and −0 differ).
 fn f64_bits<S: Scalar>(theta: &[S]) -> Option<Vec<u64>> {
-    theta
-        .iter()
-        .map(|x| (x as &dyn Any).downcast_ref::<f64>().map(|v| v.to_bits()))
-        .collect()
+    theta.iter().map(bits_of).collect()
+}
+
+/// One entry's bits when the scalar is `f64`.
+fn bits_of<S: Scalar>(x: &S) -> Option<u64> {
+    (x as &dyn Any).downcast_ref::<f64>().map(|v| v.to_bits())
+}
+
+/// Whether `key` holds θ's bits (compared in place: a look-up allocates no key).
+fn same_bits<S: Scalar>(key: &[u64], theta: &[S]) -> bool {
+    key.len() == theta.len() && key.iter().zip(theta).all(|(k, x)| bits_of(x) == Some(*k))
 }
 
 impl<S: Scalar> ToyProblem<S> {
@@ -170,13 +177,16 @@ impl<S: Scalar> ToyProblem<S> {
     /// # Errors
     /// As [`PolicyTable::new`] (an error is not kept).
     pub fn shared_table(&self, theta: &[S]) -> Result<Arc<PolicyTable<S>>, OracleError> {
+        if theta.first().is_some_and(|x| bits_of(x).is_none()) {
+            return self.table(theta).map(Arc::new);
+        }
+        let lock = || self.recent.0.lock().unwrap_or_else(PoisonError::into_inner);
+        if let Some((_, t)) = lock().iter().find(|(k, _)| same_bits(k, theta)) {
+            return Ok(Arc::clone(t));
+        }
         let Some(key) = f64_bits(theta) else {
             return self.table(theta).map(Arc::new);
         };
-        let lock = || self.recent.0.lock().unwrap_or_else(PoisonError::into_inner);
-        if let Some((_, t)) = lock().iter().find(|(k, _)| *k == key) {
-            return Ok(Arc::clone(t));
-        }
         // Built without the lock held, so that threads sharing the problem do not wait on it.
         let t = Arc::new(self.table(theta)?);
         let mut recent = lock();
@@ -562,5 +572,39 @@ impl<S: Scalar> PerDecisionTerms<S> for ToyProblem<S> {
         }
         cost.gradient_evaluations += self.decision_count(states) as u64;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::BigRational;
+
+    fn m2() -> ToyMdp {
+        ToyMdp::from_json_str(include_str!("../../examples/toy/m2-tied-two-groups.json"))
+            .expect("valid toy file")
+    }
+
+    /// In `f64` a table at the same θ, bit for bit, is the one kept; 0 and −0 are different keys;
+    /// a table pushed out of the last four is rebuilt; other scalars build a table every time.
+    #[test]
+    fn shared_tables_are_reused_by_the_bits_of_theta() {
+        let p = ToyProblem::<f64>::new(&m2());
+        let a = p.shared_table(&[0.5, 0.0]).unwrap();
+        assert!(Arc::ptr_eq(&a, &p.shared_table(&[0.5, 0.0]).unwrap()));
+        let b = p.shared_table(&[0.5, -0.0]).unwrap();
+        assert!(!Arc::ptr_eq(&a, &b));
+        assert!(Arc::ptr_eq(&b, &p.shared_table(&[0.5, -0.0]).unwrap()));
+        for k in 1..=RECENT_TABLES {
+            p.shared_table(&[k as f64, 1.0]).unwrap();
+        }
+        let again = p.shared_table(&[0.5, 0.0]).unwrap();
+        assert!(!Arc::ptr_eq(&a, &again));
+        assert_eq!(a.probs, again.probs);
+        let q = ToyProblem::<BigRational>::new(&m2());
+        let half = BigRational::new(1.into(), 2.into());
+        let theta = [half, BigRational::from_integer(0.into())];
+        let x = q.shared_table(&theta).unwrap();
+        assert!(!Arc::ptr_eq(&x, &q.shared_table(&theta).unwrap()));
     }
 }
