@@ -15,7 +15,7 @@ use num_traits::{One, Zero};
 use serde::{Deserialize, Serialize};
 
 /// Rational bounds `lo ≤ q^{1/3} ≤ hi` for q ≥ 0, of width ≤ 2^{−bits}·max(1, q): `bits` steps
-/// of bisection of `[0, max(1, q)]`, keeping `lo³ ≤ q < hi³` after the first step.
+/// of bisection of `[0, max(1, q)]`, keeping `lo³ ≤ q ≤ hi³`.
 ///
 /// Every midpoint is `H·j/2^b` with `H = max(1, q) = n_H/d_H` and an integer j, so with
 /// `q = n/d` the test `mid³ ≤ q` is the integer comparison `n_H³ j³ d ≤ n d_H³ 2^{3b}`: the same
