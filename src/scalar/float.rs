@@ -68,6 +68,10 @@ macro_rules! impl_float {
                 f64::from(*self)
             }
             #[inline]
+            fn bit_key(&self) -> Option<u64> {
+                Some(f64::from(*self).to_bits())
+            }
+            #[inline]
             fn from_binary64(x: f64) -> Option<Self> {
                 x.is_finite().then_some(x as $t)
             }

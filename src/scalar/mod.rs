@@ -103,6 +103,12 @@ pub trait Scalar:
     fn from_binary64(x: f64) -> Option<Self> {
         BigRational::from_float(x).map(|q| Self::from_rational(&q))
     }
+    /// A key that identifies the value bit for bit, for types whose values a few bits name (the
+    /// floats: their bits widened to `f64`, so that 0 and −0 differ): `None` for every other type
+    /// (the default). Caches keyed by θ use it (the toy problem's recent policy tables).
+    fn bit_key(&self) -> Option<u64> {
+        None
+    }
     /// An integer, exactly where the type can hold it.
     fn from_i64(n: i64) -> Self {
         Self::from_ratio(n, 1)

@@ -25,7 +25,6 @@ use crate::sampling::{dyadic_uniform, sample_categorical};
 use crate::scalar::Scalar;
 use nalgebra::DVector;
 use rand::Rng;
-use std::any::Any;
 use std::sync::{Arc, Mutex, PoisonError};
 
 /// A sampled trajectory τ = (s_1, a_1, …, a_{T−1}, s_T) with expert labels π*(s_t), t = 1..T−1.
@@ -73,7 +72,8 @@ const RECENT_TABLES: usize = 4;
 /// A table with the bits of the θ it is at.
 type KeyedTable<S> = (Vec<u64>, Arc<PolicyTable<S>>);
 
-/// The most recent tables in `f64`, keyed by the bits of θ. A clone starts empty.
+/// The most recent tables in a float type, keyed by the bits of θ ([`Scalar::bit_key`]). A clone
+/// starts empty.
 #[derive(Debug)]
 struct TableMemo<S>(Mutex<Vec<KeyedTable<S>>>);
 
@@ -83,19 +83,14 @@ impl<S> Clone for TableMemo<S> {
     }
 }
 
-/// θ's bits when the scalar is `f64` (the key of [`TableMemo`]; bits, so that 0 and −0 differ).
-fn f64_bits<S: Scalar>(theta: &[S]) -> Option<Vec<u64>> {
-    theta.iter().map(bits_of).collect()
+/// θ's bit keys ([`Scalar::bit_key`]; the key of [`TableMemo`]), when the scalar has them.
+fn bit_keys<S: Scalar>(theta: &[S]) -> Option<Vec<u64>> {
+    theta.iter().map(Scalar::bit_key).collect()
 }
 
-/// One entry's bits when the scalar is `f64`.
-fn bits_of<S: Scalar>(x: &S) -> Option<u64> {
-    (x as &dyn Any).downcast_ref::<f64>().map(|v| v.to_bits())
-}
-
-/// Whether `key` holds θ's bits (compared in place: a look-up allocates no key).
+/// Whether `key` holds θ's bit keys (compared in place: a look-up allocates no key).
 fn same_bits<S: Scalar>(key: &[u64], theta: &[S]) -> bool {
-    key.len() == theta.len() && key.iter().zip(theta).all(|(k, x)| bits_of(x) == Some(*k))
+    key.len() == theta.len() && key.iter().zip(theta).all(|(k, x)| x.bit_key() == Some(*k))
 }
 
 impl<S: Scalar> ToyProblem<S> {
@@ -169,7 +164,7 @@ impl<S: Scalar> ToyProblem<S> {
     pub fn table(&self, theta: &[S]) -> Result<PolicyTable<S>, OracleError> {
         PolicyTable::new(&self.mdp, &self.c, theta)
     }
-    /// The table at θ as [`ToyProblem::table`], shared: in `f64` the tables of the last
+    /// The table at θ as [`ToyProblem::table`], shared: in `f64` and `f32` the tables of the last
     /// four points are kept and one at the same θ (bit for bit) is reused, since an
     /// algorithm's step asks for the table at the same iterate several times (roll-out, estimate,
     /// importance weights). A table is a function of θ alone, so every value is the same.
@@ -177,14 +172,14 @@ impl<S: Scalar> ToyProblem<S> {
     /// # Errors
     /// As [`PolicyTable::new`] (an error is not kept).
     pub fn shared_table(&self, theta: &[S]) -> Result<Arc<PolicyTable<S>>, OracleError> {
-        if theta.first().is_some_and(|x| bits_of(x).is_none()) {
+        if theta.first().is_some_and(|x| x.bit_key().is_none()) {
             return self.table(theta).map(Arc::new);
         }
         let lock = || self.recent.0.lock().unwrap_or_else(PoisonError::into_inner);
         if let Some((_, t)) = lock().iter().find(|(k, _)| same_bits(k, theta)) {
             return Ok(Arc::clone(t));
         }
-        let Some(key) = f64_bits(theta) else {
+        let Some(key) = bit_keys(theta) else {
             return self.table(theta).map(Arc::new);
         };
         // Built without the lock held, so that threads sharing the problem do not wait on it.
@@ -585,26 +580,41 @@ mod tests {
             .expect("valid toy file")
     }
 
-    /// In `f64` a table at the same θ, bit for bit, is the one kept; 0 and −0 are different keys;
-    /// a table pushed out of the last four is rebuilt; other scalars build a table every time.
-    #[test]
-    fn shared_tables_are_reused_by_the_bits_of_theta() {
-        let p = ToyProblem::<f64>::new(&m2());
-        let a = p.shared_table(&[0.5, 0.0]).unwrap();
-        assert!(Arc::ptr_eq(&a, &p.shared_table(&[0.5, 0.0]).unwrap()));
-        let b = p.shared_table(&[0.5, -0.0]).unwrap();
+    /// In a float type a table at the same θ, bit for bit, is the one kept; 0 and −0 are
+    /// different keys; a table pushed out of the last four is rebuilt.
+    fn floats_reuse_tables_by_the_bits_of_theta<S: Scalar>() {
+        let p = ToyProblem::<S>::new(&m2());
+        let x = |v: f64| S::from_binary64(v).expect("finite");
+        let a = p.shared_table(&[x(0.5), x(0.0)]).unwrap();
+        assert!(Arc::ptr_eq(&a, &p.shared_table(&[x(0.5), x(0.0)]).unwrap()));
+        let b = p.shared_table(&[x(0.5), x(-0.0)]).unwrap();
         assert!(!Arc::ptr_eq(&a, &b));
-        assert!(Arc::ptr_eq(&b, &p.shared_table(&[0.5, -0.0]).unwrap()));
+        assert!(Arc::ptr_eq(
+            &b,
+            &p.shared_table(&[x(0.5), x(-0.0)]).unwrap()
+        ));
         for k in 1..=RECENT_TABLES {
-            p.shared_table(&[k as f64, 1.0]).unwrap();
+            p.shared_table(&[x(k as f64), x(1.0)]).unwrap();
         }
-        let again = p.shared_table(&[0.5, 0.0]).unwrap();
+        let again = p.shared_table(&[x(0.5), x(0.0)]).unwrap();
         assert!(!Arc::ptr_eq(&a, &again));
         assert_eq!(a.probs, again.probs);
-        let q = ToyProblem::<BigRational>::new(&m2());
-        let half = BigRational::new(1.into(), 2.into());
-        let theta = [half, BigRational::from_integer(0.into())];
-        let x = q.shared_table(&theta).unwrap();
-        assert!(!Arc::ptr_eq(&x, &q.shared_table(&theta).unwrap()));
+    }
+
+    /// Types without bit keys build a table at every call.
+    fn other_scalars_build_a_table_every_time<S: Scalar>() {
+        let p = ToyProblem::<S>::new(&m2());
+        let theta = [S::from_ratio(1, 2), S::zero()];
+        let t = p.shared_table(&theta).unwrap();
+        assert!(!Arc::ptr_eq(&t, &p.shared_table(&theta).unwrap()));
+    }
+
+    #[test]
+    fn shared_tables_are_kept_for_floats_only() {
+        floats_reuse_tables_by_the_bits_of_theta::<f64>();
+        floats_reuse_tables_by_the_bits_of_theta::<f32>();
+        other_scalars_build_a_table_every_time::<BigRational>();
+        other_scalars_build_a_table_every_time::<crate::scalar::Interval>();
+        other_scalars_build_a_table_every_time::<crate::scalar::Dual<f64>>();
     }
 }
