@@ -206,24 +206,32 @@ impl<S: Real> CartPoleDynamics<S> {
         if action > 1 {
             return Err(invalid_action(action));
         }
-        let force = if action == 1 {
-            p.force_mag.clone()
-        } else {
-            -p.force_mag.clone()
-        };
         let [x, x_dot, theta, theta_dot] = &*state;
         let costheta = theta.cos();
         let sintheta = theta.sin();
-        // temp = (force + polemass_length * np.square(theta_dot) * sintheta) / total_mass
-        let temp =
-            (force + p.polemass_length.clone() * theta_dot.square() * &sintheta) / &p.total_mass;
-        // thetaacc = (gravity * sintheta - costheta * temp)
-        //            / (length * (4.0 / 3.0 - masspole * np.square(costheta) / total_mass))
-        let thetaacc = (p.gravity.clone() * &sintheta - costheta.clone() * &temp)
-            / (p.length.clone()
-                * (p.four_thirds.clone() - p.masspole.clone() * costheta.square() / &p.total_mass));
-        // xacc = temp - polemass_length * thetaacc * costheta / total_mass
-        let xacc = temp - p.polemass_length.clone() * &thetaacc * &costheta / &p.total_mass;
+        let push = p.polemass_length.clone() * theta_dot.square() * &sintheta;
+        let denominator = p.length.clone()
+            * (p.four_thirds.clone() - p.masspole.clone() * costheta.square() / &p.total_mass);
+        // The accelerations under both pushes, then the action's: the action picks between
+        // finished values instead of entering the arithmetic as the force, so that the step's
+        // floating-point chain does not wait for the sampler that chose it (the compiler makes the
+        // choice a branch, which the core predicts; a force picked first becomes a table load on
+        // the step-to-step dependency chain). The kept values are the same numbers as from the
+        // chosen force alone.
+        let accelerations = |force: S| {
+            // temp = (force + polemass_length * np.square(theta_dot) * sintheta) / total_mass
+            let temp = (force + &push) / &p.total_mass;
+            // thetaacc = (gravity * sintheta - costheta * temp)
+            //            / (length * (4.0 / 3.0 - masspole * np.square(costheta) / total_mass))
+            let thetaacc =
+                (p.gravity.clone() * &sintheta - costheta.clone() * &temp) / &denominator;
+            // xacc = temp - polemass_length * thetaacc * costheta / total_mass
+            let xacc = temp - p.polemass_length.clone() * &thetaacc * &costheta / &p.total_mass;
+            (xacc, thetaacc)
+        };
+        let right = accelerations(p.force_mag.clone());
+        let left = accelerations(-p.force_mag.clone());
+        let (xacc, thetaacc) = if action == 1 { right } else { left };
         // euler
         let next = [
             x.clone() + p.tau.clone() * x_dot,
