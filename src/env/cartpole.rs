@@ -217,8 +217,8 @@ impl<S: Real> CartPoleDynamics<S> {
         // floating-point chain does not wait for the sampler that chose it (the compiler makes the
         // choice a branch, which the core predicts; a force picked first becomes a table load on
         // the step-to-step dependency chain). The kept values are the same numbers as from the
-        // chosen force alone; the other pair costs a few operations, wasted in every scalar type
-        // (in `f64` they run beside the chain).
+        // chosen force alone. In `f64` only the kept pair is computed (the branch precedes the
+        // division that differs); other scalar types may compute both, a few operations wasted.
         let accelerations = |force: S| {
             // temp = (force + polemass_length * np.square(theta_dot) * sintheta) / total_mass
             let temp = (force + &push) / &p.total_mass;
