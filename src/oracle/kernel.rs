@@ -210,6 +210,40 @@ where
     P: Policy<S> + ?Sized,
     L: Borrow<P::Label>,
 {
+    record_rows_with(
+        policy,
+        features,
+        labels,
+        actions,
+        losses,
+        records,
+        |phi, y, a, grad, score| policy.loss_score_into(theta, phi, y, a, grad, score),
+    )
+}
+
+/// `record_rows` with the per-decision [`Policy::loss_score_into`] replaced by
+/// `loss_score(φ_t, y_t, a_t, ∇l_t, ψ_t)`, which writes the same gradient and score and returns
+/// the same loss (a policy's version without checks the oracle has made).
+pub(crate) fn record_rows_with<S, P, L>(
+    policy: &P,
+    features: &[S],
+    labels: &[L],
+    actions: &[P::Action],
+    losses: &mut Vec<S>,
+    records: &mut Vec<S>,
+    mut loss_score: impl FnMut(
+        &[S],
+        &P::Label,
+        &P::Action,
+        &mut [S],
+        &mut [S],
+    ) -> Result<S, PolicyError>,
+) -> Result<(), PolicyError>
+where
+    S: Scalar,
+    P: Policy<S> + ?Sized,
+    L: Borrow<P::Label>,
+{
     let d = policy.param_dim();
     let mut buf = vec![S::zero(); 3 * d];
     let (grad, rest) = buf.split_at_mut(d);
@@ -224,7 +258,7 @@ where
         records,
         d,
         |phi, y, a, records| {
-            let l = policy.loss_score_into(theta, phi, y.borrow(), a, grad, score)?;
+            let l = loss_score(phi, y.borrow(), a, grad, score)?;
             for (t, g) in total.iter_mut().zip(grad.iter()) {
                 *t += g;
             }
@@ -405,7 +439,9 @@ pub(crate) fn accumulate<S: Scalar>(
     }
 }
 
-/// The loss without the gradient.
+/// The per-decision methods without the checks of θ and φ that the oracle has made once (the
+/// same operations after them, so the defaults' values and errors), and the loss without the
+/// gradient.
 impl<S: Real> EstimatorKernel<S> for Softmax {
     fn loss_trusted(
         &self,
@@ -414,7 +450,56 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
         label: &usize,
         _scratch: &mut [S],
     ) -> Result<S, PolicyError> {
-        self.loss_only(theta, phi, *label)
+        self.loss_only_checked_inputs(theta, phi, *label)
+    }
+
+    #[inline]
+    fn sample_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<usize, PolicyError> {
+        self.sample_checked_theta(theta, phi, rng)
+    }
+
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        action: &usize,
+        grad: &mut [S],
+        score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let l = self.loss_score_checked_inputs(theta, phi, *label, *action, grad, score)?;
+        accumulate(g, None, &l, grad, score, score_sum);
+        Ok(l)
+    }
+
+    fn record_trusted<L: Borrow<usize>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[usize],
+        losses: &mut Vec<S>,
+        records: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        record_rows_with(
+            self,
+            features,
+            labels,
+            actions,
+            losses,
+            records,
+            |phi, y, a, grad, score| {
+                self.loss_score_checked_inputs(theta, phi, *y, *a, grad, score)
+            },
+        )
     }
 }
 
@@ -445,5 +530,158 @@ impl<S: Sqrt, A: ActionVector<S>> EstimatorKernel<S> for SpeedLimitedGaussian<S,
         scratch: &mut [S],
     ) -> Result<S, PolicyError> {
         self.loss_unchecked(theta, phi, label, scratch)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scalar::Dual;
+    use rand::{Rng, SeedableRng};
+
+    /// Equal, and for floats the same bits.
+    fn same<S: Scalar>(a: &S, b: &S) -> bool {
+        a == b && a.bit_key() == b.bit_key()
+    }
+
+    fn same_all<S: Scalar>(a: &[S], b: &[S]) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| same(x, y))
+    }
+
+    fn same_result<S: Scalar>(a: &Result<S, PolicyError>, b: &Result<S, PolicyError>) -> bool {
+        match (a, b) {
+            (Ok(x), Ok(y)) => same(x, y),
+            (Err(x), Err(y)) => x == y,
+            _ => false,
+        }
+    }
+
+    /// The softmax policy's kernel against the defaults built on its checked methods, for inputs
+    /// the oracle has validated (finite θ and φ of the right lengths) and any labels and actions:
+    /// the same values bit for bit (floats) and the same errors, logits that overflow included.
+    /// `big` scales θ so that logits can overflow in `S` while θ stays finite.
+    fn softmax_kernel_matches_the_defaults<S: Real>(big: f64, from: impl Fn(f64) -> S) {
+        let mut rng = KitRng::seed_from_u64(11);
+        let mut outcomes = [0usize; 2];
+        for &(actions, features) in &[(2, 5), (3, 4), (17, 2)] {
+            let pi = Softmax::new(actions, features).unwrap();
+            let d = actions * features;
+            for trial in 0..40 {
+                let scale = [0.1, 1.0, 30.0, big][trial % 4];
+                let theta: Vec<S> = (0..d)
+                    .map(|_| from(scale * (rng.random::<f64>() - 0.5)))
+                    .collect();
+                let n = 4;
+                assert!(theta.iter().all(Scalar::is_finite), "validated θ");
+                let features_rows: Vec<S> = (0..n * features)
+                    .map(|_| from(rng.random::<f64>() * 2.0 - 1.0))
+                    .collect();
+                // Now and then a label or an action out of range.
+                let pick = |rng: &mut KitRng| {
+                    if rng.random::<f64>() < 0.1 {
+                        actions
+                    } else {
+                        rng.random_range(0..actions)
+                    }
+                };
+                let labels: Vec<usize> = (0..n).map(|_| pick(&mut rng)).collect();
+                let acts: Vec<usize> = (0..n).map(|_| pick(&mut rng)).collect();
+                let phi = &features_rows[..features];
+                let seed = rng.random::<u64>();
+                let (mut r1, mut r2) = (KitRng::seed_from_u64(seed), KitRng::seed_from_u64(seed));
+                let a1 = pi.sample_trusted(&theta, phi, &mut r1);
+                let a2 = Policy::sample(&pi, &theta, phi, &mut r2);
+                assert_eq!((a1, &r1), (a2, &r2));
+                // φ is still checked when sampling.
+                let mut bad_phi = phi.to_vec();
+                bad_phi[trial % features] = from(f64::NAN);
+                let mut r = KitRng::seed_from_u64(seed);
+                assert_eq!(
+                    pi.sample_trusted(&theta, &bad_phi, &mut r),
+                    Err(PolicyError::NonFinite { param: "phi" })
+                );
+                let mut scratch = vec![S::zero(); d];
+                let mut grad = vec![S::zero(); d];
+                assert!(same_result(
+                    &pi.loss_trusted(&theta, phi, &labels[0], &mut scratch),
+                    &pi.loss_into(&theta, phi, &labels[0], &mut grad),
+                ));
+                // One causal step from the same non-zero running sums.
+                let start: Vec<S> = (0..d).map(|j| from(0.25 * j as f64 - 1.0)).collect();
+                let run = |trusted: bool| {
+                    let (mut g, mut ss) = (start.clone(), start.clone());
+                    let (mut gr, mut sc) = (vec![S::zero(); d], vec![S::zero(); d]);
+                    let l = if trusted {
+                        pi.causal_step_trusted(
+                            &theta, phi, &labels[0], &acts[0], &mut gr, &mut sc, &mut g, &mut ss,
+                        )
+                    } else {
+                        pi.loss_score_into(&theta, phi, &labels[0], &acts[0], &mut gr, &mut sc)
+                            .inspect(|l| accumulate(&mut g, None, l, &gr, &sc, &mut ss))
+                    };
+                    (l, g, ss)
+                };
+                let ((l1, g1, s1), (l2, g2, s2)) = (run(true), run(false));
+                assert!(same_result(&l1, &l2), "{l1:?} {l2:?}");
+                assert!(same_all(&g1, &g2) && same_all(&s1, &s2));
+                outcomes[usize::from(l1.is_ok())] += 1;
+                let record = |trusted: bool| {
+                    let (mut losses, mut records) = (vec![], vec![]);
+                    let r = if trusted {
+                        pi.record_trusted(
+                            &theta,
+                            &features_rows,
+                            &labels,
+                            &acts,
+                            &mut losses,
+                            &mut records,
+                        )
+                    } else {
+                        record_rows(
+                            &pi,
+                            &theta,
+                            &features_rows,
+                            &labels,
+                            &acts,
+                            &mut losses,
+                            &mut records,
+                        )
+                    };
+                    (r, losses, records)
+                };
+                let ((r1, l1, c1), (r2, l2, c2)) = (record(true), record(false));
+                assert_eq!(r1, r2);
+                if r1.is_ok() {
+                    assert!(same_all(&l1, &l2) && same_all(&c1, &c2));
+                }
+            }
+        }
+        // Both outcomes occur: values, and errors (overflowing logits, labels out of range).
+        assert!(outcomes[0] > 0 && outcomes[1] > 0, "{outcomes:?}");
+    }
+
+    macro_rules! softmax_kernel_tests {
+        ($($name:ident: $s:ty = $big:expr, $from:expr;)*) => {$(
+            #[test]
+            fn $name() {
+                softmax_kernel_matches_the_defaults::<$s>($big, $from);
+            }
+        )*};
+    }
+
+    softmax_kernel_tests! {
+        softmax_kernel_f64: f64 = 1e306, |x| x;
+        softmax_kernel_f32: f32 = 3e38, |x| x as f32;
+        softmax_kernel_dual: Dual<f64> = 1e306, |x| Dual::variable(x, 0, 1);
+    }
+
+    /// Intervals are real scalars with the `mpfr` feature (their `exp`).
+    #[cfg(feature = "mpfr")]
+    #[test]
+    fn softmax_kernel_interval() {
+        use crate::scalar::Interval;
+        softmax_kernel_matches_the_defaults::<Interval>(1e306, |x| {
+            Interval::try_from((x, x)).unwrap()
+        });
     }
 }

@@ -153,6 +153,23 @@ fn with_scratch<S: Scalar, R>(len: usize, f: impl FnOnce(&mut [S]) -> R) -> R {
     }
 }
 
+/// `with_scratch(len, |p| body)`, with the body compiled a second time for two actions
+/// (CartPole's) on scratch of exactly two entries: knowing the length, the compiler unrolls the
+/// body's loops over the actions. The same operations in the same order either way. The body's
+/// `?` returns from the closure or from the enclosing function, with the same error.
+macro_rules! on_scratch {
+    ($s:ty, $len:expr, |$p:ident| $body:expr) => {{
+        let len = $len;
+        if len == 2 {
+            let mut buf = [<$s as Scalar>::zero(), <$s as Scalar>::zero()];
+            let $p: &mut [$s] = &mut buf;
+            $body
+        } else {
+            with_scratch::<$s, _>(len, |$p| $body)
+        }
+    }};
+}
+
 /// [`softmax_probs`] in place: the logits in `z` become the probabilities (the same operations in
 /// the same order, so the same values and errors).
 #[inline]
@@ -286,7 +303,7 @@ impl Softmax {
     /// # Errors
     /// As [`Softmax::logits`] and [`log_softmax`].
     pub fn log_prob<S: Real>(&self, theta: &[S], phi: &[S], a: usize) -> Result<S, PolicyError> {
-        with_scratch(self.actions, |z| {
+        on_scratch!(S, self.actions, |z| {
             self.logits_into(theta, phi, z)?;
             log_softmax(z, a)
         })
@@ -302,10 +319,16 @@ impl Softmax {
     ) -> Result<(), PolicyError> {
         check_vec("theta", theta, self.actions * self.features)?;
         check_vec("phi", phi, self.features)?;
+        self.logits_unchecked_into(theta, phi, z);
+        Ok(())
+    }
+
+    /// [`Softmax::logits_into`] without its checks of θ and φ (callers have checked them).
+    #[inline]
+    fn logits_unchecked_into<S: Scalar>(&self, theta: &[S], phi: &[S], z: &mut [S]) {
         for (zi, row) in z.iter_mut().zip(theta.chunks_exact(self.features)) {
             *zi = crate::scalar::dot(row, phi);
         }
-        Ok(())
     }
 
     /// [`Softmax::probs`] into `p` (length A).
@@ -315,21 +338,81 @@ impl Softmax {
         softmax_in_place(p)
     }
 
-    /// The loss of [`Policy::loss_into`] without its gradient: the same value and the same errors
-    /// (but for the gradient buffer's length, which it does not take).
+    /// [`Softmax::probs_into`] without its checks of θ and φ (callers have checked them): the
+    /// same operations, so the same probabilities and the same softmax error.
+    #[inline]
+    fn probs_unchecked_into<S: Real>(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        p: &mut [S],
+    ) -> Result<(), PolicyError> {
+        self.logits_unchecked_into(theta, phi, p);
+        softmax_in_place(p)
+    }
+
+    /// [`Policy::sample`] for a θ the caller has checked (length and finiteness); φ is checked
+    /// as [`Policy::sample`] checks it. For such a θ the same action and the same errors.
+    ///
+    /// # Errors
+    /// As [`Policy::sample`].
+    #[inline]
+    pub(crate) fn sample_checked_theta<S: Real>(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<usize, PolicyError> {
+        check_vec("phi", phi, self.features)?;
+        on_scratch!(S, self.actions, |p| {
+            self.probs_unchecked_into(theta, phi, p)?;
+            sample_probs(p, rng)
+        })
+    }
+
+    /// [`Policy::loss_score_into`] for a θ and φ the caller has checked (lengths and
+    /// finiteness): the same operations after those checks, so the same values and, for such
+    /// inputs, the same errors in the same order.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_score_into`].
+    #[inline]
+    pub(crate) fn loss_score_checked_inputs<S: Real>(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: usize,
+        action: usize,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(label, self.actions)?;
+        on_scratch!(S, self.actions, |p| {
+            self.probs_unchecked_into(theta, phi, p)?;
+            check_out("grad", grad, self.actions * self.features)?;
+            let l = brier_into(p, label, phi, grad);
+            check_action(action, self.actions)?;
+            check_out("score", score, self.actions * self.features)?;
+            score_into_rows(p, action, phi, score);
+            Ok(l)
+        })
+    }
+
+    /// The loss of [`Policy::loss_into`] without its gradient, for a θ and φ the caller has
+    /// checked (lengths and finiteness): the same value and, for such inputs, the same errors.
     ///
     /// # Errors
     /// As [`Policy::loss_into`].
     #[inline]
-    pub(crate) fn loss_only<S: Real>(
+    pub(crate) fn loss_only_checked_inputs<S: Real>(
         &self,
         theta: &[S],
         phi: &[S],
         label: usize,
     ) -> Result<S, PolicyError> {
         check_action(label, self.actions)?;
-        with_scratch(self.actions, |p| {
-            self.probs_into(theta, phi, p)?;
+        on_scratch!(S, self.actions, |p| {
+            self.probs_unchecked_into(theta, phi, p)?;
             Ok(brier_loss(p, label))
         })
     }
@@ -365,10 +448,8 @@ impl<S: Real> Policy<S> for Softmax {
     /// Allocates nothing for up to 16 actions (the probabilities in stack scratch).
     #[inline]
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
-        with_scratch(self.actions, |p| {
-            self.probs_into(theta, phi, p)?;
-            sample_probs(p, rng)
-        })
+        check_vec("theta", theta, self.actions * self.features)?;
+        self.sample_checked_theta(theta, phi, rng)
     }
 
     /// As [`Policy::loss`], writing `∇_Θ l` into `grad`; allocates nothing for up to 16 actions.
@@ -381,7 +462,7 @@ impl<S: Real> Policy<S> for Softmax {
         grad: &mut [S],
     ) -> Result<S, PolicyError> {
         check_action(*label, self.actions)?;
-        with_scratch(self.actions, |p| {
+        on_scratch!(S, self.actions, |p| {
             self.probs_into(theta, phi, p)?;
             check_out("grad", grad, self.actions * self.features)?;
             Ok(brier_into(p, *label, phi, grad))
@@ -399,7 +480,7 @@ impl<S: Real> Policy<S> for Softmax {
         score: &mut [S],
     ) -> Result<(), PolicyError> {
         check_action(*action, self.actions)?;
-        with_scratch(self.actions, |p| {
+        on_scratch!(S, self.actions, |p| {
             self.probs_into(theta, phi, p)?;
             check_out("score", score, self.actions * self.features)?;
             score_into_rows(p, *action, phi, score);
@@ -420,15 +501,9 @@ impl<S: Real> Policy<S> for Softmax {
         score: &mut [S],
     ) -> Result<S, PolicyError> {
         check_action(*label, self.actions)?;
-        with_scratch(self.actions, |p| {
-            self.probs_into(theta, phi, p)?;
-            check_out("grad", grad, self.actions * self.features)?;
-            let l = brier_into(p, *label, phi, grad);
-            check_action(*action, self.actions)?;
-            check_out("score", score, self.actions * self.features)?;
-            score_into_rows(p, *action, phi, score);
-            Ok(l)
-        })
+        check_vec("theta", theta, self.actions * self.features)?;
+        check_vec("phi", phi, self.features)?;
+        self.loss_score_checked_inputs(theta, phi, *label, *action, grad, score)
     }
 }
 
@@ -476,7 +551,9 @@ mod tests {
                 assert_eq!((l.to_bits(), bits(&g)), (l2.to_bits(), bits(&grad)));
                 assert_eq!(
                     l.to_bits(),
-                    pi.loss_only(&theta, &phi, label).unwrap().to_bits()
+                    pi.loss_only_checked_inputs(&theta, &phi, label)
+                        .unwrap()
+                        .to_bits()
                 );
                 pi.score_into(&theta, &phi, &action, &mut score).unwrap();
                 assert_eq!(bits(&s), bits(&score));
@@ -515,7 +592,6 @@ mod tests {
         for phi in [[f64::NAN, 1.0], [1.0, f64::INFINITY], [1e308, 1e308]] {
             let old = pi.loss(&theta, &phi, &0).unwrap_err();
             assert_eq!(pi.loss_into(&theta, &phi, &0, &mut grad), Err(old.clone()));
-            assert_eq!(pi.loss_only(&theta, &phi, 0), Err(old.clone()));
             assert_eq!(
                 pi.loss_score_into(&theta, &phi, &0, &1, &mut grad, &mut score),
                 Err(old.clone())
@@ -533,7 +609,7 @@ mod tests {
             pi.loss(&theta, &phi, &3).map(|(l, _)| l)
         );
         assert_eq!(
-            pi.loss_only(&theta, &phi, 3),
+            pi.loss_only_checked_inputs(&theta, &phi, 3),
             pi.loss(&theta, &phi, &3).map(|(l, _)| l)
         );
         assert!(matches!(
@@ -555,7 +631,7 @@ mod tests {
         let li = pi
             .loss_score_into(&th, &ph, &2, &0, &mut gi, &mut si)
             .unwrap();
-        assert_eq!(pi.loss_only(&th, &ph, 2).unwrap(), l);
+        assert_eq!(pi.loss_only_checked_inputs(&th, &ph, 2).unwrap(), l);
         assert_eq!((l, g), (li, gi));
         assert_eq!(pi.score(&th, &ph, &0).unwrap(), si);
     }
