@@ -681,7 +681,7 @@ mod tests {
     fn softmax_kernel_interval() {
         use crate::scalar::Interval;
         softmax_kernel_matches_the_defaults::<Interval>(1e306, |x| {
-            Interval::try_from((x, x)).unwrap()
+            Interval::try_from((x, x)).unwrap_or(Interval::ENTIRE)
         });
     }
 }
