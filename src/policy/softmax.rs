@@ -20,8 +20,8 @@
 //! **Layout of θ**: Θ ∈ S^{A×n} row-major, `θ[a·n + j] = Θ_aj`.
 
 use super::{
-    LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec, from_f64_exact,
-    mat_vec, outer,
+    LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec, check_vec_scalar,
+    from_f64_exact, mat_vec, outer,
 };
 use crate::problem::KitRng;
 use crate::sampling::{dyadic_uniform, sample_categorical};
@@ -363,7 +363,8 @@ impl Softmax {
         phi: &[S],
         rng: &mut KitRng,
     ) -> Result<usize, PolicyError> {
-        check_vec("phi", phi, self.features)?;
+        // Entry by entry: φ was just written by the roll-out (see `check_vec_scalar`).
+        check_vec_scalar("phi", phi, self.features)?;
         on_scratch!(S, self.actions, |p| {
             self.probs_unchecked_into(theta, phi, p)?;
             sample_probs(p, rng)
