@@ -507,7 +507,8 @@ impl<S: Real> EstimatorKernel<S> for MlpSoftmax {}
 
 impl<S: Real> EstimatorKernel<S> for MlpGaussian<S> {}
 
-/// The loss without the gradient and the θ, φ checks.
+/// The loss without the gradient, and every per-decision method without the θ, φ checks the
+/// oracle has made once (the same operations after them, so the defaults' values and errors).
 impl<S: Scalar, A: ActionVector<S>> EstimatorKernel<S> for LinearGaussian<S, A> {
     fn loss_trusted(
         &self,
@@ -518,9 +519,52 @@ impl<S: Scalar, A: ActionVector<S>> EstimatorKernel<S> for LinearGaussian<S, A> 
     ) -> Result<S, PolicyError> {
         self.loss_unchecked(theta, phi, label)
     }
+
+    #[inline]
+    fn sample_trusted(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
+        self.sample_checked_theta(theta, phi, rng)
+    }
+
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        action: &A,
+        grad: &mut [S],
+        score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let l = self.loss_score_checked_inputs(theta, phi, label, action, grad, score)?;
+        accumulate(g, None, &l, grad, score, score_sum);
+        Ok(l)
+    }
+
+    fn record_trusted<L: Borrow<[S]>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[A],
+        losses: &mut Vec<S>,
+        records: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        record_rows_with(
+            self,
+            features,
+            labels,
+            actions,
+            losses,
+            records,
+            |phi, y, a, grad, score| self.loss_score_checked_inputs(theta, phi, y, a, grad, score),
+        )
+    }
 }
 
-/// The loss without the gradient and the θ, φ checks.
+/// The loss without the gradient, and every per-decision method without the θ, φ checks the
+/// oracle has made once (sampling is the linear-Gaussian policy's).
 impl<S: Sqrt, A: ActionVector<S>> EstimatorKernel<S> for SpeedLimitedGaussian<S, A> {
     fn loss_trusted(
         &self,
@@ -531,13 +575,57 @@ impl<S: Sqrt, A: ActionVector<S>> EstimatorKernel<S> for SpeedLimitedGaussian<S,
     ) -> Result<S, PolicyError> {
         self.loss_unchecked(theta, phi, label, scratch)
     }
+
+    #[inline]
+    fn sample_trusted(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
+        self.inner().sample_checked_theta(theta, phi, rng)
+    }
+
+    #[inline]
+    fn causal_step_trusted(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        action: &A,
+        grad: &mut [S],
+        score: &mut [S],
+        g: &mut [S],
+        score_sum: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let l = self.loss_score_checked_inputs(theta, phi, label, action, grad, score)?;
+        accumulate(g, None, &l, grad, score, score_sum);
+        Ok(l)
+    }
+
+    fn record_trusted<L: Borrow<[S]>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        labels: &[L],
+        actions: &[A],
+        losses: &mut Vec<S>,
+        records: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        record_rows_with(
+            self,
+            features,
+            labels,
+            actions,
+            losses,
+            records,
+            |phi, y, a, grad, score| self.loss_score_checked_inputs(theta, phi, y, a, grad, score),
+        )
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::policy::LinearGaussian;
     use crate::scalar::Dual;
     use rand::{Rng, SeedableRng};
+    use std::fmt::Debug;
 
     /// Equal, and for floats the same bits.
     fn same<S: Scalar>(a: &S, b: &S) -> bool {
@@ -556,27 +644,111 @@ mod tests {
         }
     }
 
-    /// The softmax policy's kernel against the defaults built on its checked methods, for inputs
-    /// the oracle has validated (finite θ and φ of the right lengths) and any labels and actions:
-    /// the same values bit for bit (floats) and the same errors, logits that overflow included.
-    /// `big` scales θ so that logits can overflow in `S` while θ stays finite.
+    /// A policy's kernel against the defaults built on its checked methods, for a θ and
+    /// features the oracle has validated (finite, the right lengths) and any labels and
+    /// actions: the same values bit for bit (floats) and the same errors; sampling still
+    /// rejects `bad_phi` (a non-finite feature) as φ's error. Returns whether the first
+    /// decision's causal step succeeded.
+    #[allow(clippy::too_many_arguments)] // a trajectory and its variations
+    fn assert_kernel_as_defaults<S, P, L>(
+        pi: &P,
+        theta: &[S],
+        rows: &[S],
+        labels: &[L],
+        actions: &[P::Action],
+        bad_phi: &[S],
+        seed: u64,
+    ) -> bool
+    where
+        S: Scalar,
+        P: EstimatorKernel<S>,
+        P::Action: PartialEq + Debug,
+        L: Borrow<P::Label>,
+    {
+        assert!(theta.iter().chain(rows).all(Scalar::is_finite), "validated");
+        let d = pi.param_dim();
+        let phi = &rows[..pi.feature_dim()];
+        let (mut r1, mut r2) = (KitRng::seed_from_u64(seed), KitRng::seed_from_u64(seed));
+        let a1 = pi.sample_trusted(theta, phi, &mut r1);
+        let a2 = pi.sample(theta, phi, &mut r2);
+        assert_eq!((a1, &r1), (a2, &r2));
+        let mut r = KitRng::seed_from_u64(seed);
+        assert_eq!(
+            pi.sample_trusted(theta, bad_phi, &mut r).err(),
+            Some(PolicyError::NonFinite { param: "phi" })
+        );
+        let (y, a) = (labels[0].borrow(), &actions[0]);
+        let mut scratch = vec![S::zero(); d];
+        let mut grad = vec![S::zero(); d];
+        assert!(same_result(
+            &pi.loss_trusted(theta, phi, y, &mut scratch),
+            &pi.loss_into(theta, phi, y, &mut grad),
+        ));
+        // One causal step from the same non-zero running sums.
+        let start: Vec<S> = (0..d).map(|j| S::from_i64(j as i64 - 2)).collect();
+        let run = |trusted: bool| {
+            let (mut g, mut ss) = (start.clone(), start.clone());
+            let (mut gr, mut sc) = (vec![S::zero(); d], vec![S::zero(); d]);
+            let l = if trusted {
+                pi.causal_step_trusted(theta, phi, y, a, &mut gr, &mut sc, &mut g, &mut ss)
+            } else {
+                pi.loss_score_into(theta, phi, y, a, &mut gr, &mut sc)
+                    .inspect(|l| accumulate(&mut g, None, l, &gr, &sc, &mut ss))
+            };
+            (l, g, ss)
+        };
+        let ((step, g1, s1), (l2, g2, s2)) = (run(true), run(false));
+        assert!(same_result(&step, &l2), "{step:?} {l2:?}");
+        assert!(same_all(&g1, &g2) && same_all(&s1, &s2));
+        let record = |trusted: bool| {
+            let (mut losses, mut records) = (vec![], vec![]);
+            let r = if trusted {
+                pi.record_trusted(theta, rows, labels, actions, &mut losses, &mut records)
+            } else {
+                record_rows(pi, theta, rows, labels, actions, &mut losses, &mut records)
+            };
+            (r, losses, records)
+        };
+        let ((r1, l1, c1), (r2, l2, c2)) = (record(true), record(false));
+        assert_eq!(r1, r2);
+        if r1.is_ok() {
+            assert!(same_all(&l1, &l2) && same_all(&c1, &c2));
+        }
+        step.is_ok()
+    }
+
+    /// Random inputs for `actions × features` parameters and `n` decisions: θ scaled by one of
+    /// `scales`, features in [−1, 1], and `nan` as the bad feature.
+    fn inputs<S: Scalar>(
+        rng: &mut KitRng,
+        from: &impl Fn(f64) -> S,
+        d: usize,
+        features: usize,
+        n: usize,
+        scale: f64,
+    ) -> (Vec<S>, Vec<S>, Vec<S>) {
+        let theta = (0..d)
+            .map(|_| from(scale * (rng.random::<f64>() - 0.5)))
+            .collect();
+        let rows: Vec<S> = (0..n * features)
+            .map(|_| from(rng.random::<f64>() * 2.0 - 1.0))
+            .collect();
+        let mut bad = rows[..features].to_vec();
+        bad[rng.random_range(0..features)] = from(f64::NAN);
+        (theta, rows, bad)
+    }
+
+    /// The softmax policy's kernel: labels and actions now and then out of range, and θ scaled
+    /// by `big` so that logits overflow in `S` while θ stays finite.
     fn softmax_kernel_matches_the_defaults<S: Real>(big: f64, from: impl Fn(f64) -> S) {
         let mut rng = KitRng::seed_from_u64(11);
         let mut outcomes = [0usize; 2];
         for &(actions, features) in &[(2, 5), (3, 4), (17, 2)] {
             let pi = Softmax::new(actions, features).unwrap();
-            let d = actions * features;
             for trial in 0..40 {
                 let scale = [0.1, 1.0, 30.0, big][trial % 4];
-                let theta: Vec<S> = (0..d)
-                    .map(|_| from(scale * (rng.random::<f64>() - 0.5)))
-                    .collect();
-                let n = 4;
-                assert!(theta.iter().all(Scalar::is_finite), "validated θ");
-                let features_rows: Vec<S> = (0..n * features)
-                    .map(|_| from(rng.random::<f64>() * 2.0 - 1.0))
-                    .collect();
-                // Now and then a label or an action out of range.
+                let d = actions * features;
+                let (theta, rows, bad) = inputs(&mut rng, &from, d, features, 4, scale);
                 let pick = |rng: &mut KitRng| {
                     if rng.random::<f64>() < 0.1 {
                         actions
@@ -584,103 +756,93 @@ mod tests {
                         rng.random_range(0..actions)
                     }
                 };
-                let labels: Vec<usize> = (0..n).map(|_| pick(&mut rng)).collect();
-                let acts: Vec<usize> = (0..n).map(|_| pick(&mut rng)).collect();
-                let phi = &features_rows[..features];
-                let seed = rng.random::<u64>();
-                let (mut r1, mut r2) = (KitRng::seed_from_u64(seed), KitRng::seed_from_u64(seed));
-                let a1 = pi.sample_trusted(&theta, phi, &mut r1);
-                let a2 = Policy::sample(&pi, &theta, phi, &mut r2);
-                assert_eq!((a1, &r1), (a2, &r2));
-                // φ is still checked when sampling.
-                let mut bad_phi = phi.to_vec();
-                bad_phi[trial % features] = from(f64::NAN);
-                let mut r = KitRng::seed_from_u64(seed);
-                assert_eq!(
-                    pi.sample_trusted(&theta, &bad_phi, &mut r),
-                    Err(PolicyError::NonFinite { param: "phi" })
-                );
-                let mut scratch = vec![S::zero(); d];
-                let mut grad = vec![S::zero(); d];
-                assert!(same_result(
-                    &pi.loss_trusted(&theta, phi, &labels[0], &mut scratch),
-                    &pi.loss_into(&theta, phi, &labels[0], &mut grad),
-                ));
-                // One causal step from the same non-zero running sums.
-                let start: Vec<S> = (0..d).map(|j| from(0.25 * j as f64 - 1.0)).collect();
-                let run = |trusted: bool| {
-                    let (mut g, mut ss) = (start.clone(), start.clone());
-                    let (mut gr, mut sc) = (vec![S::zero(); d], vec![S::zero(); d]);
-                    let l = if trusted {
-                        pi.causal_step_trusted(
-                            &theta, phi, &labels[0], &acts[0], &mut gr, &mut sc, &mut g, &mut ss,
-                        )
-                    } else {
-                        pi.loss_score_into(&theta, phi, &labels[0], &acts[0], &mut gr, &mut sc)
-                            .inspect(|l| accumulate(&mut g, None, l, &gr, &sc, &mut ss))
-                    };
-                    (l, g, ss)
-                };
-                let ((l1, g1, s1), (l2, g2, s2)) = (run(true), run(false));
-                assert!(same_result(&l1, &l2), "{l1:?} {l2:?}");
-                assert!(same_all(&g1, &g2) && same_all(&s1, &s2));
-                outcomes[usize::from(l1.is_ok())] += 1;
-                let record = |trusted: bool| {
-                    let (mut losses, mut records) = (vec![], vec![]);
-                    let r = if trusted {
-                        pi.record_trusted(
-                            &theta,
-                            &features_rows,
-                            &labels,
-                            &acts,
-                            &mut losses,
-                            &mut records,
-                        )
-                    } else {
-                        record_rows(
-                            &pi,
-                            &theta,
-                            &features_rows,
-                            &labels,
-                            &acts,
-                            &mut losses,
-                            &mut records,
-                        )
-                    };
-                    (r, losses, records)
-                };
-                let ((r1, l1, c1), (r2, l2, c2)) = (record(true), record(false));
-                assert_eq!(r1, r2);
-                if r1.is_ok() {
-                    assert!(same_all(&l1, &l2) && same_all(&c1, &c2));
-                }
+                let labels: Vec<usize> = (0..4).map(|_| pick(&mut rng)).collect();
+                let acts: Vec<usize> = (0..4).map(|_| pick(&mut rng)).collect();
+                let seed = rng.random();
+                let ok = assert_kernel_as_defaults(&pi, &theta, &rows, &labels, &acts, &bad, seed);
+                outcomes[usize::from(ok)] += 1;
             }
         }
         // Both outcomes occur: values, and errors (overflowing logits, labels out of range).
         assert!(outcomes[0] > 0 && outcomes[1] > 0, "{outcomes:?}");
     }
 
-    macro_rules! softmax_kernel_tests {
-        ($($name:ident: $s:ty = $big:expr, $from:expr;)*) => {$(
+    /// The linear-Gaussian policies' kernels (P3 and P3 with the speed limit, both branches of
+    /// the limit): labels now and then non-finite, and θ scaled by `big` so that the loss
+    /// overflows in `S`.
+    fn gaussian_kernels_match_the_defaults<S: Sqrt>(big: f64, from: impl Fn(f64) -> S) {
+        let mut rng = KitRng::seed_from_u64(12);
+        let mut outcomes = [0usize; 2];
+        let features = 6;
+        let sigma = from(0.1);
+        let lg = LinearGaussian::new(2, features, sigma)
+            .unwrap()
+            .with_actions::<[S; 2]>()
+            .unwrap();
+        let slg = SpeedLimitedGaussian::new(lg.clone(), from(0.5)).unwrap();
+        for trial in 0..80 {
+            let scale = [0.1, 1.0, 30.0, big][trial % 4];
+            let (theta, rows, bad) = inputs(&mut rng, &from, 2 * features, features, 4, scale);
+            let coordinate = |rng: &mut KitRng| {
+                if rng.random::<f64>() < 0.05 {
+                    from(f64::INFINITY)
+                } else {
+                    from(rng.random::<f64>() - 0.5)
+                }
+            };
+            let labels: Vec<Vec<S>> = (0..4)
+                .map(|_| vec![coordinate(&mut rng), coordinate(&mut rng)])
+                .collect();
+            let acts: Vec<[S; 2]> = (0..4)
+                .map(|_| [coordinate(&mut rng), coordinate(&mut rng)])
+                .collect();
+            let seed = rng.random();
+            let labels: Vec<&[S]> = labels.iter().map(Vec::as_slice).collect();
+            let ok = if trial % 2 == 0 {
+                assert_kernel_as_defaults(&lg, &theta, &rows, &labels, &acts, &bad, seed)
+            } else {
+                assert_kernel_as_defaults(&slg, &theta, &rows, &labels, &acts, &bad, seed)
+            };
+            outcomes[usize::from(ok)] += 1;
+        }
+        assert!(outcomes[0] > 0 && outcomes[1] > 0, "{outcomes:?}");
+    }
+
+    macro_rules! kernel_tests {
+        ($($softmax:ident, $gaussian:ident: $s:ty = $big:expr, $from:expr;)*) => {$(
             #[test]
-            fn $name() {
+            fn $softmax() {
                 softmax_kernel_matches_the_defaults::<$s>($big, $from);
+            }
+
+            #[test]
+            fn $gaussian() {
+                gaussian_kernels_match_the_defaults::<$s>($big, $from);
             }
         )*};
     }
 
-    softmax_kernel_tests! {
-        softmax_kernel_f64: f64 = 1e306, |x| x;
-        softmax_kernel_f32: f32 = 3e38, |x| x as f32;
-        softmax_kernel_dual: Dual<f64> = 1e306, |x| Dual::variable(x, 0, 1);
+    kernel_tests! {
+        softmax_kernel_f64, gaussian_kernels_f64: f64 = 1e306, |x| x;
+        softmax_kernel_f32, gaussian_kernels_f32: f32 = 3e38, |x| x as f32;
+        softmax_kernel_dual, gaussian_kernels_dual: Dual<f64> = 1e306, |x| Dual::variable(x, 0, 1);
     }
 
-    /// Intervals are real scalars with the `mpfr` feature (their `exp`).
+    /// Intervals: the softmax policy with the `mpfr` feature (its `exp`). A non-finite interval
+    /// feature is the whole line (no interval is NaN).
     #[cfg(feature = "mpfr")]
     #[test]
     fn softmax_kernel_interval() {
         use crate::scalar::Interval;
         softmax_kernel_matches_the_defaults::<Interval>(1e306, |x| {
+            Interval::try_from((x, x)).unwrap_or(Interval::ENTIRE)
+        });
+    }
+
+    #[test]
+    fn gaussian_kernels_interval() {
+        use crate::scalar::Interval;
+        gaussian_kernels_match_the_defaults::<Interval>(1e306, |x| {
             Interval::try_from((x, x)).unwrap_or(Interval::ENTIRE)
         });
     }

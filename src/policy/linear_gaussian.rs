@@ -317,9 +317,38 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
         grad: &mut [S],
         score: &mut [S],
     ) -> Result<S, PolicyError> {
-        let action: &[S] = action.borrow();
         check_vec("label", label, self.actions)?;
         self.check(theta, phi)?;
+        self.loss_score_checked_inputs(theta, phi, label, action, grad, score)
+    }
+
+    /// `a = Wφ + σ_π ε` with ε drawn as `m` f64 standard normals (coordinate by coordinate),
+    /// converted exactly.
+    fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
+        check_vec("theta", theta, self.actions * self.features)?;
+        self.sample_checked_theta(theta, phi, rng)
+    }
+}
+
+impl<S: Scalar, A: ActionVector<S>> LinearGaussian<S, A> {
+    /// [`Policy::loss_score_into`] for a θ and φ the caller has checked (lengths and
+    /// finiteness): the same operations after those checks, so the same values and, for such
+    /// inputs, the same errors in the same order.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_score_into`].
+    #[inline]
+    pub(crate) fn loss_score_checked_inputs(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        action: &A,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let action: &[S] = action.borrow();
+        check_vec("label", label, self.actions)?;
         check_out("grad", grad, self.actions * self.features)?;
         check_vec("action", action, self.actions)?;
         check_out("score", score, self.actions * self.features)?;
@@ -342,10 +371,20 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
         Ok(loss)
     }
 
-    /// `a = Wφ + σ_π ε` with ε drawn as `m` f64 standard normals (coordinate by coordinate),
-    /// converted exactly.
-    fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
-        self.check(theta, phi)?;
+    /// [`Policy::sample`] for a θ the caller has checked (length and finiteness); φ is checked
+    /// as [`Policy::sample`] checks it. For such a θ the same action, the same draws and the
+    /// same errors.
+    ///
+    /// # Errors
+    /// As [`Policy::sample`].
+    #[inline]
+    pub(crate) fn sample_checked_theta(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+    ) -> Result<A, PolicyError> {
+        check_vec("phi", phi, self.features)?;
         let n = self.features;
         Ok(A::build(self.actions, |i| {
             crate::scalar::dot(&theta[i * n..(i + 1) * n], phi)

@@ -145,6 +145,51 @@ impl<S: Sqrt, A: ActionVector<S>> SpeedLimitedGaussian<S, A> {
         }
         Ok(m)
     }
+
+    /// [`Policy::loss_score_into`] for a θ and φ the caller has checked (lengths and
+    /// finiteness): the same operations after those checks, so the same values and, for such
+    /// inputs, the same errors in the same order.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_score_into`].
+    #[inline]
+    pub(crate) fn loss_score_checked_inputs(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        action: &A,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        let k = self.inner.actions();
+        let n = Policy::<S>::feature_dim(&self.inner);
+        let action: &[S] = action.borrow();
+        check_vec("label", label, k)?;
+        check_out("grad", grad, k * n)?;
+        check_vec("action", action, k)?;
+        check_out("score", score, k * n)?;
+        let mut n2 = S::zero();
+        for i in 0..k {
+            let m = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi);
+            n2 += m.square();
+            grad[i * n] = m.clone();
+            score[i * n] = m;
+        }
+        let loss = if certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
+            self.clipped_loss_into(phi, label, &n2, grad)?
+        } else {
+            inside_loss_into(phi, label, grad)
+        };
+        let sigma_sq = self.inner.sigma_sq();
+        for (i, a) in action.iter().enumerate() {
+            let s = (a.clone() - &score[i * n]) / sigma_sq;
+            for (sc, x) in score[i * n..(i + 1) * n].iter_mut().zip(phi) {
+                *sc = s.clone() * x;
+            }
+        }
+        Ok(loss)
+    }
 }
 
 impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
@@ -229,33 +274,10 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
     ) -> Result<S, PolicyError> {
         let k = self.inner.actions();
         let n = Policy::<S>::feature_dim(&self.inner);
-        let action: &[S] = action.borrow();
         check_vec("label", label, k)?;
         check_vec("theta", theta, k * n)?;
         check_vec("phi", phi, n)?;
-        check_out("grad", grad, k * n)?;
-        check_vec("action", action, k)?;
-        check_out("score", score, k * n)?;
-        let mut n2 = S::zero();
-        for i in 0..k {
-            let m = crate::scalar::dot(&theta[i * n..(i + 1) * n], phi);
-            n2 += m.square();
-            grad[i * n] = m.clone();
-            score[i * n] = m;
-        }
-        let loss = if certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
-            self.clipped_loss_into(phi, label, &n2, grad)?
-        } else {
-            inside_loss_into(phi, label, grad)
-        };
-        let sigma_sq = self.inner.sigma_sq();
-        for (i, a) in action.iter().enumerate() {
-            let s = (a.clone() - &score[i * n]) / sigma_sq;
-            for (sc, x) in score[i * n..(i + 1) * n].iter_mut().zip(phi) {
-                *sc = s.clone() * x;
-            }
-        }
-        Ok(loss)
+        self.loss_score_checked_inputs(theta, phi, label, action, grad, score)
     }
 }
 
