@@ -134,7 +134,8 @@ impl<S: Scalar> InnerOptimiser<S> {
             let mut l = S::zero();
             for ex in batch {
                 l += problem.supervised(&theta, ex, &mut gi, ctx.cost)?;
-                for (x, y) in g.iter_mut().zip(&gi) {
+                // On slices, not nalgebra's strided iterator: the loop then runs in vector lanes.
+                for (x, y) in g.as_mut_slice().iter_mut().zip(&gi) {
                     *x += y;
                 }
             }
