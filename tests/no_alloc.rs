@@ -28,6 +28,10 @@ thread_local! {
     static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
 }
 
+/// A roll-out's buffers, each allocated once per call: features, actions, labels, and for a
+/// policy that notes per decision ([`EstimatorKernel::sample_noting`]) the notes and their θ.
+const ROLLOUT_BUFFERS: u64 = 5;
+
 fn bump() {
     // `try_with`: the allocator may run while the thread-local is being torn down.
     let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
@@ -212,7 +216,9 @@ where
         "episode lengths should vary widely: {lengths:?}"
     );
     for (what, counts, max) in [
-        ("roll-out", &rollout_counts, 3),
+        // Features, actions and labels; with a policy that notes per decision (the softmax),
+        // its notes and their θ.
+        ("roll-out", &rollout_counts, ROLLOUT_BUFFERS),
         ("causal estimate", &estimate_counts, 2),
         ("full estimate", &full_counts, 2),
         ("per-decision weighted estimate", &weighted_counts, 2),
@@ -347,7 +353,9 @@ where
     }
     assert!(lengths.len() >= 5, "episode lengths {lengths:?}");
     assert!(
-        rollouts.iter().all(|&n| n == rollouts[0] && n <= 3),
+        rollouts
+            .iter()
+            .all(|&n| n == rollouts[0] && n <= ROLLOUT_BUFFERS),
         "{rollouts:?}"
     );
     assert!(
@@ -569,7 +577,9 @@ where
         }
     }
     assert!(
-        rollouts.iter().all(|&n| n == rollouts[0] && n <= 3),
+        rollouts
+            .iter()
+            .all(|&n| n == rollouts[0] && n <= ROLLOUT_BUFFERS),
         "roll-outs: {rollouts:?}"
     );
     for &(group, n) in &estimates {

@@ -65,8 +65,19 @@ where
         // Scratch only if the policy's pass asks for it (the logistic policy's records its
         // decisions there: one buffer per call).
         let mut scratch = Vec::new();
-        policy
-            .causal_sum_trusted(
+        match usable_notes(policy, theta, t) {
+            Some(notes) => policy.causal_sum_noted(
+                theta,
+                rows,
+                notes,
+                labels,
+                actions,
+                tail,
+                &mut g,
+                loss,
+                &mut scratch,
+            ),
+            None => policy.causal_sum_trusted(
                 theta,
                 rows,
                 labels,
@@ -76,8 +87,9 @@ where
                 &mut g,
                 loss,
                 &mut scratch,
-            )
-            .map_err(policy_error)?;
+            ),
+        }
+        .map_err(policy_error)?;
         return Ok((g, log_w));
     }
     let mut scratch = Scratch::new(d);
@@ -139,4 +151,26 @@ where
         }
     }
     Ok((g, log_w))
+}
+
+/// The trajectory's notes ([`EstimatorKernel::sample_noting`]) when the estimate may read them:
+/// they were taken at this very θ (entry by entry equal, and for floats the same bits, so that
+/// `−0` and `0` differ) and hold [`EstimatorKernel::note_len`] entries for every feature row.
+fn usable_notes<'a, S, P, L, A>(
+    policy: &P,
+    theta: &[S],
+    t: &Decisions<'a, S, L, A>,
+) -> Option<&'a [S]>
+where
+    S: Real,
+    P: EstimatorKernel<S>,
+{
+    let (values, noted_at) = t.notes?;
+    let k = policy.note_len();
+    let same_theta = noted_at.len() == theta.len()
+        && noted_at
+            .iter()
+            .zip(theta)
+            .all(|(a, b)| a == b && a.bit_key() == b.bit_key());
+    (k > 0 && same_theta && values.len() == k * t.rows).then_some(values)
 }

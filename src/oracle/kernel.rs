@@ -4,10 +4,13 @@
 //!
 //! Every method has a default built on [`Policy`]'s checked, allocation-free methods; a policy
 //! opts in by implementing [`EstimatorKernel`] (an empty `impl` takes the defaults). The logistic
-//! policy overrides the causal passes with fixed-dimension loops (module `logistic`), the
-//! linear-Gaussian policies override the loss without its gradient. Every override returns the
-//! default's values bit for bit and the default's first error, except the logistic policy's
-//! `score_products`, which forms the same products in another order (equal up to rounding).
+//! policy overrides the causal passes with fixed-dimension loops (module `logistic`); the softmax
+//! and linear-Gaussian policies override the per-decision methods with their checked methods'
+//! work after the θ and φ checks the oracle has made, and the loss without its gradient; the
+//! softmax policy notes the probabilities it samples from, and the estimate at the same θ reads
+//! them ([`EstimatorKernel::sample_noting`]). Every override returns the default's values bit
+//! for bit and the default's first error, except the logistic policy's `score_products`, which
+//! forms the same products in another order (equal up to rounding).
 
 use super::products::ScoreProducts;
 use crate::policy::{
@@ -126,6 +129,59 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     ) -> Result<(), PolicyError> {
         causal_sum_by_steps(
             self, theta, features, labels, actions, shifts, end, g, loss, scratch,
+        )
+    }
+
+    /// Entries per decision that [`EstimatorKernel::sample_noting`] notes for the estimate at the
+    /// same θ; 0 (the default): it notes nothing, and the estimate recomputes what it needs.
+    fn note_len(&self) -> usize {
+        0
+    }
+
+    /// [`EstimatorKernel::sample_trusted`] (the same action, draws and errors), appending to
+    /// `notes` the [`EstimatorKernel::note_len`] entries of this decision that
+    /// [`EstimatorKernel::causal_sum_noted`] reads instead of recomputing them (the softmax
+    /// policy's probabilities). The default notes nothing.
+    ///
+    /// # Errors
+    /// As [`EstimatorKernel::sample_trusted`]; `notes` then holds at most this decision's
+    /// entries more.
+    #[inline]
+    fn sample_noting(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+        notes: &mut Vec<S>,
+    ) -> Result<Self::Action, PolicyError> {
+        let _ = notes;
+        self.sample_trusted(theta, phi, rng)
+    }
+
+    /// [`EstimatorKernel::causal_sum_trusted`] without shifts (the same values and errors) for
+    /// a trajectory sampled at this θ by [`EstimatorKernel::sample_noting`], whose notes
+    /// ([`EstimatorKernel::note_len`] entries per row of `features`) it reads instead of
+    /// recomputing them. The caller guarantees that θ, the features and the notes are those of
+    /// the roll-out. The default ignores the notes.
+    ///
+    /// # Errors
+    /// As [`EstimatorKernel::causal_sum_trusted`].
+    #[allow(clippy::too_many_arguments)] // the trajectory, its notes and the output
+    fn causal_sum_noted<L: Borrow<Self::Label>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        notes: &[S],
+        labels: &[L],
+        actions: &[Self::Action],
+        end: Option<&S>,
+        g: &mut [S],
+        loss: Option<&mut S>,
+        scratch: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        let _ = notes;
+        self.causal_sum_trusted(
+            theta, features, labels, actions, None, end, g, loss, scratch,
         )
     }
 
@@ -372,8 +428,55 @@ pub(crate) fn causal_sum_by_steps<S, P, L>(
     shifts: Option<&[S]>,
     end: Option<&S>,
     g: &mut [S],
+    loss: Option<&mut S>,
+    scratch: &mut Vec<S>,
+) -> Result<(), PolicyError>
+where
+    S: Scalar,
+    P: EstimatorKernel<S> + ?Sized,
+    L: Borrow<P::Label>,
+{
+    causal_sum_with_steps(
+        policy,
+        features,
+        labels,
+        actions,
+        shifts,
+        end,
+        g,
+        loss,
+        scratch,
+        |_, phi, y, a, grad, score, g, score_sum| {
+            policy.causal_step_trusted(theta, phi, y, a, grad, score, g, score_sum)
+        },
+    )
+}
+
+/// `causal_sum_by_steps` with the per-decision step given: `step(t, φ_t, y_t, a_t, ∇l_t, ψ_t,
+/// g, Σ_{i<t} ψ_i)` does what [`EstimatorKernel::causal_step_trusted`] does for decision t
+/// (0-based) and returns `l_t`.
+#[allow(clippy::too_many_arguments)] // the trajectory, the shifts, the output and the step
+#[inline]
+pub(crate) fn causal_sum_with_steps<S, P, L>(
+    policy: &P,
+    features: &[S],
+    labels: &[L],
+    actions: &[P::Action],
+    shifts: Option<&[S]>,
+    end: Option<&S>,
+    g: &mut [S],
     mut loss: Option<&mut S>,
     scratch: &mut Vec<S>,
+    mut step: impl FnMut(
+        usize,
+        &[S],
+        &P::Label,
+        &P::Action,
+        &mut [S],
+        &mut [S],
+        &mut [S],
+        &mut [S],
+    ) -> Result<S, PolicyError>,
 ) -> Result<(), PolicyError>
 where
     S: Scalar,
@@ -394,7 +497,7 @@ where
                 *gj += shifts[t].clone() * sj;
             }
         }
-        let l = policy.causal_step_trusted(theta, phi, y.borrow(), a, grad, score, g, score_sum)?;
+        let l = step(t, phi, y.borrow(), a, grad, score, g, score_sum)?;
         if let Some(total) = loss.as_deref_mut() {
             *total += l;
         }
@@ -498,6 +601,61 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
             records,
             |phi, y, a, grad, score| {
                 self.loss_score_checked_inputs(theta, phi, *y, *a, grad, score)
+            },
+        )
+    }
+
+    /// The probabilities π_θ(·|s_t): A entries per decision.
+    fn note_len(&self) -> usize {
+        self.actions()
+    }
+
+    #[inline]
+    fn sample_noting(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+        notes: &mut Vec<S>,
+    ) -> Result<usize, PolicyError> {
+        self.sample_noting_probs(theta, phi, rng, notes)
+    }
+
+    /// Each decision's step from its noted probabilities, not from θ (two actions' copied into a
+    /// two-entry array, so that the loops over the actions unroll).
+    fn causal_sum_noted<L: Borrow<usize>>(
+        &self,
+        _theta: &[S],
+        features: &[S],
+        notes: &[S],
+        labels: &[L],
+        actions: &[usize],
+        end: Option<&S>,
+        g: &mut [S],
+        loss: Option<&mut S>,
+        scratch: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        let k = self.actions();
+        causal_sum_with_steps(
+            self,
+            features,
+            labels,
+            actions,
+            None,
+            end,
+            g,
+            loss,
+            scratch,
+            |t, phi, y, a, grad, score, g, score_sum| {
+                let probs = &notes[t * k..(t + 1) * k];
+                let l = if let [p0, p1] = probs {
+                    let two = [p0.clone(), p1.clone()];
+                    self.loss_score_from_probs(&two, phi, *y, *a, grad, score)?
+                } else {
+                    self.loss_score_from_probs(probs, phi, *y, *a, grad, score)?
+                };
+                accumulate(g, None, &l, grad, score, score_sum);
+                Ok(l)
             },
         )
     }
@@ -761,10 +919,75 @@ mod tests {
                 let seed = rng.random();
                 let ok = assert_kernel_as_defaults(&pi, &theta, &rows, &labels, &acts, &bad, seed);
                 outcomes[usize::from(ok)] += 1;
+                noted_sum_as_trusted(&pi, &theta, &rows, &labels, &acts, from(0.75), seed);
             }
         }
         // Both outcomes occur: values, and errors (overflowing logits, labels out of range).
         assert!(outcomes[0] > 0 && outcomes[1] > 0, "{outcomes:?}");
+    }
+
+    /// Sampling every row with notes draws as `sample_trusted` does and notes `note_len`
+    /// entries per row; the causal sum from those notes is the trusted sum's, bit for bit
+    /// (floats), with its errors, with an absorbing tail's losses `end` and the summed loss.
+    #[allow(clippy::too_many_arguments)] // a trajectory
+    fn noted_sum_as_trusted<S: Real>(
+        pi: &Softmax,
+        theta: &[S],
+        rows: &[S],
+        labels: &[usize],
+        actions: &[usize],
+        end: S,
+        seed: u64,
+    ) {
+        let (mut ra, mut rb) = (KitRng::seed_from_u64(seed), KitRng::seed_from_u64(seed));
+        let mut notes = vec![];
+        let mut sampled = true;
+        let n = Policy::<S>::feature_dim(pi);
+        let k = EstimatorKernel::<S>::note_len(pi);
+        for row in rows.chunks_exact(n) {
+            let a = pi.sample_noting(theta, row, &mut ra, &mut notes);
+            assert_eq!((&a, &ra), (&pi.sample_trusted(theta, row, &mut rb), &rb));
+            sampled &= a.is_ok();
+        }
+        if !sampled {
+            return;
+        }
+        assert_eq!(notes.len(), k * rows.len() / n);
+        let d = Policy::<S>::param_dim(pi);
+        let run = |noted: bool| {
+            let (mut g, mut loss, mut scratch) = (vec![S::zero(); d], S::zero(), vec![]);
+            let r = if noted {
+                pi.causal_sum_noted(
+                    theta,
+                    rows,
+                    &notes,
+                    labels,
+                    actions,
+                    Some(&end),
+                    &mut g,
+                    Some(&mut loss),
+                    &mut scratch,
+                )
+            } else {
+                pi.causal_sum_trusted(
+                    theta,
+                    rows,
+                    labels,
+                    actions,
+                    None,
+                    Some(&end),
+                    &mut g,
+                    Some(&mut loss),
+                    &mut scratch,
+                )
+            };
+            (r, g, loss)
+        };
+        let ((r1, g1, l1), (r2, g2, l2)) = (run(true), run(false));
+        assert_eq!(r1, r2);
+        if r1.is_ok() {
+            assert!(same_all(&g1, &g2) && same(&l1, &l2));
+        }
     }
 
     /// The linear-Gaussian policies' kernels (P3 and P3 with the speed limit, both branches of

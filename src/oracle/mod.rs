@@ -69,6 +69,9 @@ pub(crate) struct Decisions<'a, S, L, A> {
     pub(crate) labels: &'a [L],
     /// `Σ_{t>n} l_t` of an absorbing fixed-horizon stream; `None`: no absorbing tail.
     pub(crate) absorbed: Option<&'a S>,
+    /// The policy's notes of a learner's roll-out and the θ it sampled at
+    /// ([`EstimatorKernel::sample_noting`]); `None`: no notes.
+    pub(crate) notes: Option<(&'a [S], &'a [S])>,
 }
 
 impl<S, L, A> Decisions<'_, S, L, A> {

@@ -390,12 +390,53 @@ impl Softmax {
         check_action(label, self.actions)?;
         on_scratch!(S, self.actions, |p| {
             self.probs_unchecked_into(theta, phi, p)?;
-            check_out("grad", grad, self.actions * self.features)?;
-            let l = brier_into(p, label, phi, grad);
-            check_action(action, self.actions)?;
-            check_out("score", score, self.actions * self.features)?;
-            score_into_rows(p, action, phi, score);
-            Ok(l)
+            self.loss_score_from_probs(p, phi, label, action, grad, score)
+        })
+    }
+
+    /// [`Softmax::loss_score_checked_inputs`] after the probabilities: from π = `probs` (those
+    /// of θ at φ, e.g. noted when the action was sampled), the same operations, values and
+    /// errors.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_score_into`] for a bad label, action or buffer length.
+    #[inline]
+    pub(crate) fn loss_score_from_probs<S: Scalar>(
+        &self,
+        probs: &[S],
+        phi: &[S],
+        label: usize,
+        action: usize,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        check_action(label, self.actions)?;
+        check_out("grad", grad, self.actions * self.features)?;
+        let l = brier_into(probs, label, phi, grad);
+        check_action(action, self.actions)?;
+        check_out("score", score, self.actions * self.features)?;
+        score_into_rows(probs, action, phi, score);
+        Ok(l)
+    }
+
+    /// [`Softmax::sample_checked_theta`], appending the probabilities π it sampled from to
+    /// `notes` (A entries; nothing on an error).
+    ///
+    /// # Errors
+    /// As [`Policy::sample`].
+    #[inline]
+    pub(crate) fn sample_noting_probs<S: Real>(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        rng: &mut KitRng,
+        notes: &mut Vec<S>,
+    ) -> Result<usize, PolicyError> {
+        check_vec_scalar("phi", phi, self.features)?;
+        on_scratch!(S, self.actions, |p| {
+            self.probs_unchecked_into(theta, phi, p)?;
+            notes.extend_from_slice(p);
+            sample_probs(p, rng)
         })
     }
 

@@ -200,16 +200,8 @@ where
             None => Ok(expert),
         };
         let t = match behaviour {
-            Behaviour::Learner(th) => {
-                // θ's slice taken once: the loop then holds its address and length in registers.
-                let th = th.as_slice();
-                let mut t = self.rollout_with(rng, |_, phi, _, rng| {
-                    sample_learner(&self.policy, th, phi, rng)
-                })?;
-                // Every φ was checked by `sample_trusted`.
-                t.features_finite = true;
-                t
-            }
+            // θ's slice taken once: the loop then holds its address and length in registers.
+            Behaviour::Learner(th) => self.learner_rollout(th.as_slice(), rng)?,
             Behaviour::Expert => self.rollout_with(rng, |_, _, expert, _| Ok(expert))?,
             Behaviour::Mixture {
                 expert_weight,

@@ -54,10 +54,7 @@ impl<T, P> TaskProblem<T, P> {
         P: EstimatorKernel<S>,
         F: FnMut(usize, &[S], T::Action, &mut KitRng) -> Result<T::Action, OracleError>,
     {
-        let steps = match self.horizon {
-            Horizon::Episodic => self.task.max_episode_steps().unwrap_or(0),
-            Horizon::Fixed { steps, .. } => steps,
-        };
+        let steps = self.decision_capacity();
         let mut t = TaskTrajectory {
             feature_data: Vec::with_capacity(steps * self.policy.feature_dim()),
             feature_dim: 0,
@@ -67,9 +64,56 @@ impl<T, P> TaskProblem<T, P> {
             labels: Vec::with_capacity(steps),
             absorbed: None,
             resets: 0,
+            notes: Default::default(),
         };
         self.rollout_into(rng, &mut t, choose)?;
         Ok(t)
+    }
+
+    /// The learner θ's roll-out ([`TaskProblem::rollout_with`] sampling with
+    /// [`EstimatorKernel::sample_trusted`]), keeping what the policy notes per decision
+    /// ([`EstimatorKernel::sample_noting`]) and θ with it, for the estimate at the same θ. θ is
+    /// checked by the caller; every φ is checked by the sampler, so the features are marked finite.
+    pub(super) fn learner_rollout<S>(
+        &self,
+        theta: &[S],
+        rng: &mut KitRng,
+    ) -> Result<TaskTrajectory<S, T::Label, T::Action>, OracleError>
+    where
+        S: Scalar,
+        T: Task<S>,
+        P: EstimatorKernel<S, Action = T::Action>,
+    {
+        let note_len = self.policy.note_len();
+        let mut t = if note_len == 0 {
+            self.rollout_with(rng, |_, phi, _, rng| {
+                sample_learner(&self.policy, theta, phi, rng)
+            })?
+        } else {
+            let mut notes = Vec::with_capacity(self.decision_capacity() * note_len);
+            let mut t = self.rollout_with(rng, |_, phi, _, rng| {
+                self.policy
+                    .sample_noting(theta, phi, rng, &mut notes)
+                    .map_err(policy_error)
+            })?;
+            t.notes.values = notes;
+            t.notes.theta = theta.to_vec();
+            t
+        };
+        t.features_finite = true;
+        Ok(t)
+    }
+
+    /// Decisions a roll-out can hold: the fixed horizon, or the task's time limit (0 if none).
+    fn decision_capacity<S>(&self) -> usize
+    where
+        S: Scalar,
+        T: Task<S>,
+    {
+        match self.horizon {
+            Horizon::Episodic => self.task.max_episode_steps().unwrap_or(0),
+            Horizon::Fixed { steps, .. } => steps,
+        }
     }
 
     /// The loop of [`TaskProblem::rollout_with`], into the empty trajectory `t`: one episode, or

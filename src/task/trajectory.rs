@@ -37,10 +37,33 @@ pub struct TaskTrajectory<S, L, A> {
     /// Episodes that ended inside the stream and were followed by a reset
     /// ([`AfterEnd::Reset`](super::AfterEnd::Reset); 0 otherwise).
     pub resets: usize,
+    /// What the learner's policy noted per decision when it sampled
+    /// ([`EstimatorKernel::sample_noting`](crate::oracle::EstimatorKernel::sample_noting)), with
+    /// the θ it sampled at: the causal estimate at that same θ reads them instead of
+    /// recomputing them. Empty for other roll-outs and policies that note nothing.
+    pub(super) notes: Notes<S>,
 }
 
-/// Equal data (features, actions, labels); how the features came to be known finite is not part
-/// of it.
+/// The notes of a learner's roll-out and the θ they were taken at (both empty: none).
+#[derive(Debug, Clone)]
+pub(super) struct Notes<S> {
+    /// `note_len` entries per decision.
+    pub(super) values: Vec<S>,
+    /// The θ of the roll-out.
+    pub(super) theta: Vec<S>,
+}
+
+impl<S> Default for Notes<S> {
+    fn default() -> Self {
+        Self {
+            values: Vec::new(),
+            theta: Vec::new(),
+        }
+    }
+}
+
+/// Equal data (features, actions, labels); how the features came to be known finite and the
+/// policy's notes are not part of it.
 impl<S: PartialEq, L: PartialEq, A: PartialEq> PartialEq for TaskTrajectory<S, L, A> {
     fn eq(&self, other: &Self) -> bool {
         self.feature_data == other.feature_data
@@ -110,6 +133,7 @@ impl<S: Clone, L, A> TaskTrajectory<S, L, A> {
             labels,
             absorbed: None,
             resets: 0,
+            notes: Notes::default(),
         })
     }
 
@@ -143,6 +167,8 @@ impl<S, L, A> TaskTrajectory<S, L, A> {
             actions: &self.actions,
             labels: &self.labels,
             absorbed: self.absorbed.as_ref(),
+            notes: (!self.notes.theta.is_empty())
+                .then_some((self.notes.values.as_slice(), self.notes.theta.as_slice())),
         }
     }
 }

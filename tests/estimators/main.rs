@@ -11,6 +11,7 @@ mod batched;
 mod estimated_baseline;
 mod fixed_horizon;
 mod leave_one_out;
+mod noted_probabilities;
 mod oracle_monte_carlo;
 mod oracle_reference;
 mod oracle_sampling;
