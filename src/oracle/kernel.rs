@@ -542,6 +542,52 @@ pub(crate) fn accumulate<S: Scalar>(
     }
 }
 
+/// `causal_step_trusted` and `record_trusted` of a policy with a `loss_score_checked_inputs`:
+/// [`Policy::loss_score_into`]'s work after the θ and φ checks (the same values and, for
+/// validated θ and φ, the same errors), then the default's accumulation or records.
+macro_rules! steps_by_checked_inputs {
+    ($label:ty, $action:ty) => {
+        #[inline]
+        fn causal_step_trusted(
+            &self,
+            theta: &[S],
+            phi: &[S],
+            label: &$label,
+            action: &$action,
+            grad: &mut [S],
+            score: &mut [S],
+            g: &mut [S],
+            score_sum: &mut [S],
+        ) -> Result<S, PolicyError> {
+            let l = self.loss_score_checked_inputs(theta, phi, label, action, grad, score)?;
+            accumulate(g, None, &l, grad, score, score_sum);
+            Ok(l)
+        }
+
+        fn record_trusted<L: Borrow<$label>>(
+            &self,
+            theta: &[S],
+            features: &[S],
+            labels: &[L],
+            actions: &[$action],
+            losses: &mut Vec<S>,
+            records: &mut Vec<S>,
+        ) -> Result<(), PolicyError> {
+            record_rows_with(
+                self,
+                features,
+                labels,
+                actions,
+                losses,
+                records,
+                |phi, y, a, grad, score| {
+                    self.loss_score_checked_inputs(theta, phi, y, a, grad, score)
+                },
+            )
+        }
+    };
+}
+
 /// The per-decision methods without the checks of θ and φ that the oracle has made once (the
 /// same operations after them, so the defaults' values and errors), and the loss without the
 /// gradient.
@@ -566,44 +612,7 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
         self.sample_checked_theta(theta, phi, rng)
     }
 
-    #[inline]
-    fn causal_step_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        label: &usize,
-        action: &usize,
-        grad: &mut [S],
-        score: &mut [S],
-        g: &mut [S],
-        score_sum: &mut [S],
-    ) -> Result<S, PolicyError> {
-        let l = self.loss_score_checked_inputs(theta, phi, *label, *action, grad, score)?;
-        accumulate(g, None, &l, grad, score, score_sum);
-        Ok(l)
-    }
-
-    fn record_trusted<L: Borrow<usize>>(
-        &self,
-        theta: &[S],
-        features: &[S],
-        labels: &[L],
-        actions: &[usize],
-        losses: &mut Vec<S>,
-        records: &mut Vec<S>,
-    ) -> Result<(), PolicyError> {
-        record_rows_with(
-            self,
-            features,
-            labels,
-            actions,
-            losses,
-            records,
-            |phi, y, a, grad, score| {
-                self.loss_score_checked_inputs(theta, phi, *y, *a, grad, score)
-            },
-        )
-    }
+    steps_by_checked_inputs!(usize, usize);
 
     /// The probabilities π_θ(·|s_t): A entries per decision.
     fn note_len(&self) -> usize {
@@ -683,42 +692,7 @@ impl<S: Scalar, A: ActionVector<S>> EstimatorKernel<S> for LinearGaussian<S, A> 
         self.sample_checked_theta(theta, phi, rng)
     }
 
-    #[inline]
-    fn causal_step_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        label: &[S],
-        action: &A,
-        grad: &mut [S],
-        score: &mut [S],
-        g: &mut [S],
-        score_sum: &mut [S],
-    ) -> Result<S, PolicyError> {
-        let l = self.loss_score_checked_inputs(theta, phi, label, action, grad, score)?;
-        accumulate(g, None, &l, grad, score, score_sum);
-        Ok(l)
-    }
-
-    fn record_trusted<L: Borrow<[S]>>(
-        &self,
-        theta: &[S],
-        features: &[S],
-        labels: &[L],
-        actions: &[A],
-        losses: &mut Vec<S>,
-        records: &mut Vec<S>,
-    ) -> Result<(), PolicyError> {
-        record_rows_with(
-            self,
-            features,
-            labels,
-            actions,
-            losses,
-            records,
-            |phi, y, a, grad, score| self.loss_score_checked_inputs(theta, phi, y, a, grad, score),
-        )
-    }
+    steps_by_checked_inputs!([S], A);
 }
 
 /// The loss without the gradient, and every per-decision method without the θ, φ checks the
@@ -739,42 +713,7 @@ impl<S: Sqrt, A: ActionVector<S>> EstimatorKernel<S> for SpeedLimitedGaussian<S,
         self.inner().sample_checked_theta(theta, phi, rng)
     }
 
-    #[inline]
-    fn causal_step_trusted(
-        &self,
-        theta: &[S],
-        phi: &[S],
-        label: &[S],
-        action: &A,
-        grad: &mut [S],
-        score: &mut [S],
-        g: &mut [S],
-        score_sum: &mut [S],
-    ) -> Result<S, PolicyError> {
-        let l = self.loss_score_checked_inputs(theta, phi, label, action, grad, score)?;
-        accumulate(g, None, &l, grad, score, score_sum);
-        Ok(l)
-    }
-
-    fn record_trusted<L: Borrow<[S]>>(
-        &self,
-        theta: &[S],
-        features: &[S],
-        labels: &[L],
-        actions: &[A],
-        losses: &mut Vec<S>,
-        records: &mut Vec<S>,
-    ) -> Result<(), PolicyError> {
-        record_rows_with(
-            self,
-            features,
-            labels,
-            actions,
-            losses,
-            records,
-            |phi, y, a, grad, score| self.loss_score_checked_inputs(theta, phi, y, a, grad, score),
-        )
-    }
+    steps_by_checked_inputs!([S], A);
 }
 
 #[cfg(test)]

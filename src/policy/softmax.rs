@@ -382,15 +382,15 @@ impl Softmax {
         &self,
         theta: &[S],
         phi: &[S],
-        label: usize,
-        action: usize,
+        label: &usize,
+        action: &usize,
         grad: &mut [S],
         score: &mut [S],
     ) -> Result<S, PolicyError> {
-        check_action(label, self.actions)?;
+        check_action(*label, self.actions)?;
         on_scratch!(S, self.actions, |p| {
             self.probs_unchecked_into(theta, phi, p)?;
-            self.loss_score_from_probs(p, phi, label, action, grad, score)
+            self.loss_score_from_probs(p, phi, *label, *action, grad, score)
         })
     }
 
@@ -545,7 +545,7 @@ impl<S: Real> Policy<S> for Softmax {
         check_action(*label, self.actions)?;
         check_vec("theta", theta, self.actions * self.features)?;
         check_vec("phi", phi, self.features)?;
-        self.loss_score_checked_inputs(theta, phi, *label, *action, grad, score)
+        self.loss_score_checked_inputs(theta, phi, label, action, grad, score)
     }
 }
 
