@@ -6,7 +6,8 @@
 //!   the stated box `[−R, R]²`, by 2-D interval branch-and-bound, each certificate re-checked box by
 //!   box by the second route ([`crate::certify::recheck`]) and tiled exactly.
 //! * Row 1b: the SGD bound (3.27) on it, by Monte Carlo over seeded runs of the kit's SGD with the
-//!   exact ∇F at every iterate (forward DP in intervals, the lower end of each run's statistic) and
+//!   exact ∇F at every iterate (enclosed in intervals by the mean-value form on cells,
+//!   [`GradientCells`]; the lower end of each run's statistic) and
 //!   the decision rule of [`crate::stats`]. The constants hold on the box only, so every iterate of
 //!   every run is checked to lie in it; if one leaves, the row says so and is inconclusive.
 
@@ -14,14 +15,14 @@ use crate::bounds::{sgd_constant, sgd_step_admissible, upper};
 use crate::certify::box_constants::{ToyConstants, compute};
 use crate::certify::recheck::Coverage;
 use crate::checks::constants::toy_row;
+use crate::checks::montecarlo::GradientCells;
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::{Sample, assess};
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdStep};
 use ilopt::algo::{ConfigNumber, IterationMetrics, Runner, StoppingRule, Termination};
-use ilopt::exact::forward::forward;
 use ilopt::problem::EstimatorForm;
-use ilopt::scalar::{BigRational, Interval};
+use ilopt::scalar::BigRational;
 use ilopt::toy::{ToyMdp, ToyProblem};
 use std::cell::RefCell;
 
@@ -81,7 +82,7 @@ pub fn sgd_sample(
     theta1: &[f64],
     s: SgdSizes,
 ) -> Result<SgdSample, String> {
-    let pi = ToyProblem::<Interval>::new(mdp);
+    let cells = RefCell::new(GradientCells::new(mdp));
     let pf = ToyProblem::<f64>::new(mdp);
     let cfg = |seed: u64| RunConfig {
         algorithm: AlgorithmConfig::Sgd(SgdConfig {
@@ -111,16 +112,12 @@ pub fn sgd_sample(
             if !inside(th) {
                 a.3 = true;
             }
-            let iv: Vec<Interval> = th
-                .iter()
-                .map(|x| Interval::try_from((*x, *x)).unwrap_or(Interval::ENTIRE))
-                .collect();
-            match forward(&pi, &iv) {
-                Ok(f) => {
-                    a.0 += f.gradient.iter().map(|g| g.mig() * g.mig()).sum::<f64>();
-                    a.1 += f.gradient.iter().map(|g| g.mid() * g.mid()).sum::<f64>();
+            match cells.borrow_mut().enclose(th) {
+                Ok(g) => {
+                    a.0 += g.iter().map(|g| g.mig() * g.mig()).sum::<f64>();
+                    a.1 += g.iter().map(|g| g.mid() * g.mid()).sum::<f64>();
                 }
-                Err(e) => a.4 = Some(e.to_string()),
+                Err(e) => a.4 = Some(e),
             }
         };
         let rec = Runner::new(cfg(r as u64).stop.clone()).and_then(|runner| {

@@ -11,7 +11,7 @@ mod cells;
 mod o2nc;
 mod sgd;
 
-pub use cells::{CELL_WIDTH, GradientCells};
+pub use cells::{CELL_WIDTH, CELL_WIDTH_2D, GradientCells, MAX_CELL_DIM};
 
 pub use o2nc::{
     O2ncSample, O2ncVariant, o2nc, o2nc_rows, o2nc_sample, o2nc_sample_tracked, o2nc_variant,
