@@ -13,7 +13,8 @@
 //! `cargo bench --bench oracle_probe -- generic,spec,rollout,specroll,estimate,specest 1 300`
 //! (modes, repetitions of the 16 seeds per round, rounds; these are the defaults). Mode `softmax`:
 //! the same roll-out and causal estimate with the two-action softmax policy (rows `(−θ/2, θ/2)`,
-//! the same `π(1|s)`), compared with `spec`. Mode `specfresh`: the specialised roll-out into
+//! the same `π(1|s)`), compared with `spec`; mode `ppo`: the same with the committed PPO expert
+//! as the labeller (the chapter-4 experiments' CartPole set-up), compared with `softmax`. Mode `specfresh`: the specialised roll-out into
 //! freshly reserved storage, as the generic roll-out returns (it reuses one buffer otherwise).
 //! Modes `pairs` and `loo`: the causal estimate alone over a pair of the generic trajectories
 //! (seeds s and s + 1), the plain mean of the pair against the leave-one-out baseline
@@ -70,7 +71,7 @@ fn oracle_once<P: IlProblem<f64>>(
 }
 
 /// Every mode the probe knows.
-const MODES: [&str; 19] = [
+const MODES: [&str; 20] = [
     "generic",
     "spec",
     "rollout",
@@ -78,6 +79,7 @@ const MODES: [&str; 19] = [
     "estimate",
     "specest",
     "softmax",
+    "ppo",
     "specfresh",
     "pairs",
     "loo",
@@ -129,6 +131,15 @@ fn main() {
     let theta_old = theta.map(|x| x + 0.01);
     let soft = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().expect("LQR design"),
+        policy: Softmax::new(2, cartpole::FEATURES).expect("policy"),
+        horizon: ilopt::task::Horizon::Episodic,
+    };
+    // The chapter-4 experiments' CartPole labeller: the committed PPO expert's greedy action.
+    let soft_ppo = TaskProblem {
+        task: CartPoleTask::<f64>::with_ppo(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json"),
+        )
+        .expect("the committed PPO expert"),
         policy: Softmax::new(2, cartpole::FEATURES).expect("policy"),
         horizon: ilopt::task::Horizon::Episodic,
     };
@@ -234,6 +245,12 @@ fn main() {
                         "softmax" => {
                             let th = black_box(&soft_theta);
                             let (n, x) = oracle_once(&soft, th, &mut rng, &mut cost);
+                            acc += x;
+                            n
+                        }
+                        "ppo" => {
+                            let th = black_box(&soft_theta);
+                            let (n, x) = oracle_once(&soft_ppo, th, &mut rng, &mut cost);
                             acc += x;
                             n
                         }
@@ -369,6 +386,7 @@ fn main() {
         ("rollout", "specroll"),
         ("estimate", "specest"),
         ("softmax", "spec"),
+        ("ppo", "softmax"),
         ("loo", "pairs"),
         ("constant", "single"),
         ("estimated", "single"),
