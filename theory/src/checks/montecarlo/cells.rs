@@ -278,7 +278,10 @@ mod tests {
             let point = cells.at_point(x).expect("point");
             for (i, e) in exact_gradient_2d(&mdp, *x).iter().enumerate() {
                 assert!(contains(&g[i], e), "θ = {x:?}: {:?} misses ∂F/∂θ_{i}", g[i]);
-                assert!((g[i].mid() - point[i].mid()).abs() < 1e-3);
+                // Both enclose the same number and are narrower than 2·10⁻⁴ (checked below for
+                // the cells; the point enclosures are far narrower), so their midpoints differ by
+                // less than that.
+                assert!((g[i].mid() - point[i].mid()).abs() < 2e-4);
                 widest = widest.max(g[i].wid());
             }
         }
