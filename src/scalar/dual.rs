@@ -132,16 +132,16 @@ fn sub_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
 fn mul_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
     let Dual { v, g } = a;
     for (i, x) in g.iter_mut().enumerate() {
-        *x *= &b.v;
+        x.product_assign(&b.v);
         if let Some(y) = b.g.get(i) {
-            *x += v.clone() * y;
+            *x += v.product(y);
         }
     }
     if b.g.len() > g.len() {
         let n = g.len();
-        g.extend(b.g[n..].iter().map(|y| v.clone() * y));
+        g.extend(b.g[n..].iter().map(|y| v.product(y)));
     }
-    *v *= &b.v;
+    v.product_assign(&b.v);
 }
 
 /// `a /= b`: value `q = a/b`, gradient `(a′ − q·b′)/b`.
@@ -150,13 +150,13 @@ fn div_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
     let Dual { v: q, g } = a;
     for (i, x) in g.iter_mut().enumerate() {
         if let Some(y) = b.g.get(i) {
-            *x -= q.clone() * y;
+            *x -= q.product(y);
         }
         *x /= &b.v;
     }
     if b.g.len() > g.len() {
         let n = g.len();
-        g.extend(b.g[n..].iter().map(|y| -(q.clone() * y) / &b.v));
+        g.extend(b.g[n..].iter().map(|y| -q.product(y) / &b.v));
     }
 }
 

@@ -77,6 +77,16 @@ impl Scalar for Interval {
     fn to_f64(&self) -> f64 {
         self.mid()
     }
+    /// inari's product, bit for bit, without the rounding-mode switches where the endpoints allow
+    /// (see `interval_product`).
+    #[inline]
+    fn product(&self, other: &Self) -> Self {
+        super::interval_product::mul(*self, *other)
+    }
+    #[inline]
+    fn product_assign(&mut self, other: &Self) {
+        *self = super::interval_product::mul(*self, *other);
+    }
     fn from_binary64(x: f64) -> Option<Self> {
         if x.is_finite() {
             Interval::try_from((x, x)).ok()

@@ -22,6 +22,7 @@ mod config_number;
 mod dual;
 mod float;
 mod interval;
+mod interval_product;
 mod rational;
 mod report;
 mod roots;
@@ -116,6 +117,19 @@ pub trait Scalar:
     /// `self * self`.
     fn square(&self) -> Self {
         self.clone() * self
+    }
+    /// `self * other`: the same value as the operator; a type may compute it by a faster route
+    /// (an [`Interval`] without switching the rounding mode). Hot generic kernels (the dual
+    /// numbers' products, the exact forward pass, the toy policies' tables) multiply with it.
+    #[inline]
+    fn product(&self, other: &Self) -> Self {
+        self.clone() * other
+    }
+    /// `self *= other` by the route of [`Scalar::product`] (in place, for the types whose
+    /// operator works in place).
+    #[inline]
+    fn product_assign(&mut self, other: &Self) {
+        *self *= other;
     }
     /// Certainly `self > 0`.
     fn is_certainly_positive(&self) -> bool {
