@@ -32,9 +32,9 @@ pub fn visitation<S: Scalar>(problem: &ToyProblem<S>, table: &PolicyTable<S>) ->
                 continue;
             }
             for a in 0..m.actions {
-                let w = ds.clone() * table.prob(s, a);
+                let w = ds.product(table.prob(s, a));
                 for (n, p) in next.iter_mut().zip(problem.transition(s, a)) {
-                    *n += w.clone() * p;
+                    *n += w.product(p);
                 }
             }
         }
@@ -63,9 +63,9 @@ pub fn forward<S: Scalar>(problem: &ToyProblem<S>, theta: &[S]) -> Result<Forwar
     let mut visits = Vec::with_capacity(m.horizon - 1);
     for t in 1..m.horizon {
         for s in 0..m.states {
-            objective += d[s].clone() * &table.loss[s];
+            objective += d[s].product(&table.loss[s]);
             for (g, j) in gradient.iter_mut().zip(&jac[s * dim..(s + 1) * dim]) {
-                *g += j.clone() * &table.loss[s];
+                *g += j.product(&table.loss[s]);
             }
             table.add_block(&mut gradient, s, &table.loss_grad[s], &d[s]);
         }
@@ -78,19 +78,19 @@ pub fn forward<S: Scalar>(problem: &ToyProblem<S>, theta: &[S]) -> Result<Forwar
         for s in 0..m.states {
             for a in 0..m.actions {
                 let pi = table.prob(s, a);
-                let w = d[s].clone() * pi;
+                let w = d[s].product(pi);
                 // J_t(s) π(a|s) + d_t(s) ∇π(a|s), scattered into the full vector.
                 for (x, j) in dj.iter_mut().zip(&jac[s * dim..(s + 1) * dim]) {
-                    *x = j.clone() * pi;
+                    *x = j.product(pi);
                 }
                 table.add_block(&mut dj, s, table.prob_grad(s, a), &d[s]);
                 for (s2, p) in problem.transition(s, a).iter().enumerate() {
                     if p.is_certainly_zero() {
                         continue;
                     }
-                    d2[s2] += w.clone() * p;
+                    d2[s2] += w.product(p);
                     for (x, y) in j2[s2 * dim..(s2 + 1) * dim].iter_mut().zip(&dj) {
-                        *x += p.clone() * y;
+                        *x += p.product(y);
                     }
                 }
             }

@@ -155,7 +155,7 @@ fn softmax_jacobian<S: Scalar>(theta: &[S], c: &S, probs: &[S]) -> Vec<Vec<S>> {
             (0..theta.len())
                 .map(|b| {
                     let delta = if a == b { S::one() } else { S::zero() };
-                    two_over_s.clone() * &theta[b] * (delta - &probs[a])
+                    two_over_s.product(&theta[b]).product(&(delta - &probs[a]))
                 })
                 .collect()
         })
@@ -177,7 +177,7 @@ pub fn brier<S: Scalar>(probs: &[S], jacobian: &[Vec<S>], expert: usize) -> (S, 
         loss += r.square();
         let two_r = S::from_i64(2) * &r;
         for (g, j) in grad.iter_mut().zip(&jacobian[a]) {
-            *g += two_r.clone() * j;
+            *g += two_r.product(j);
         }
     }
     (loss, grad)

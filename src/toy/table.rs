@@ -112,7 +112,7 @@ impl<S: Scalar> PolicyTable<S> {
     pub fn add_block(&self, full: &mut [S], s: usize, local: &[S], scale: &S) {
         let off = self.groups[s] * self.block;
         for (f, x) in full[off..off + self.block].iter_mut().zip(local) {
-            *f += scale.clone() * x;
+            *f += scale.product(x);
         }
     }
     /// `full[o(s) block] += local`.

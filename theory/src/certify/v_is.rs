@@ -92,7 +92,7 @@ fn v_is_total<S: Scalar>(
             }
         };
         let e = q.estimate.clone() - old;
-        total += q.prob.clone() * &e * &e;
+        total += q.prob.product(&e) * &e;
     }
     Ok(total)
 }

@@ -31,7 +31,7 @@
 
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::stats::ZeroMeanTest;
-use ilopt::scalar::Interval;
+use ilopt::scalar::{Interval, Scalar};
 
 /// The largest probability ratio of the tied rational softmax P2' on M1 (rounded up): every
 /// probability lies in [(3 − √3)/6, (3 + √3)/6], so a one-factor prefix weight (T = 3) is at most
@@ -59,7 +59,7 @@ impl Tracking {
             self.highs.push(0.0);
             return;
         }
-        let z = x * Interval::try_from((h, h)).unwrap_or(Interval::ENTIRE)
+        let z = x.product(&Interval::try_from((h, h)).unwrap_or(Interval::ENTIRE))
             / Interval::try_from((c, c)).unwrap_or(Interval::ENTIRE);
         self.lows.push(z.inf().clamp(-1.0, 1.0));
         self.highs.push(z.sup().clamp(-1.0, 1.0));
@@ -175,7 +175,10 @@ impl StormTracker {
             && j + 1 == k
         {
             let oma = self.momentum.one_minus_a(j);
-            let u = eps - Interval::try_from((oma, oma)).unwrap_or(Interval::ENTIRE) * eps_prev;
+            let u = eps
+                - Interval::try_from((oma, oma))
+                    .unwrap_or(Interval::ENTIRE)
+                    .product(&eps_prev);
             let c = self.range.bound_with(oma, self.g_inf, self.g_f);
             self.tracking.push(sign(d_prev), u, c);
         }

@@ -48,15 +48,15 @@ impl<S: Scalar> Jet<S> {
     /// (fg)′ = f′g + fg′, (fg)″ = f″g + f′g′ᵀ + g′f′ᵀ + fg″.
     pub(super) fn mul(&self, o: &Self) -> Self {
         let d = self.d();
-        let mut r = Self::constant(self.v.clone() * &o.v, d);
+        let mut r = Self::constant(self.v.product(&o.v), d);
         for i in 0..d {
-            r.g[i] = self.g[i].clone() * &o.v + self.v.clone() * &o.g[i];
+            r.g[i] = self.g[i].product(&o.v) + self.v.product(&o.g[i]);
             for j in 0..d {
                 let k = i * d + j;
-                r.h[k] = self.h[k].clone() * &o.v
-                    + self.g[i].clone() * &o.g[j]
-                    + self.g[j].clone() * &o.g[i]
-                    + self.v.clone() * &o.h[k];
+                r.h[k] = self.h[k].product(&o.v)
+                    + self.g[i].product(&o.g[j])
+                    + self.g[j].product(&o.g[i])
+                    + self.v.product(&o.h[k]);
             }
         }
         r
@@ -65,14 +65,14 @@ impl<S: Scalar> Jet<S> {
     pub(super) fn recip(&self) -> Self {
         let d = self.d();
         let r = S::one() / &self.v;
-        let r2 = r.clone() * &r;
-        let r3 = r2.clone() * &r;
+        let r2 = r.product(&r);
+        let r3 = r2.product(&r);
         let mut out = Self::constant(r, d);
         for i in 0..d {
-            out.g[i] = -(self.g[i].clone() * &r2);
+            out.g[i] = -(self.g[i].product(&r2));
             for j in 0..d {
                 let k = i * d + j;
-                out.h[k] = S::from_i64(2) * &self.g[i] * &self.g[j] * &r3 - self.h[k].clone() * &r2;
+                out.h[k] = S::from_i64(2) * &self.g[i] * &self.g[j] * &r3 - self.h[k].product(&r2);
             }
         }
         out
@@ -82,9 +82,9 @@ impl<S: Scalar> Jet<S> {
     }
     pub(super) fn scale(&self, k: &S) -> Self {
         Self {
-            v: self.v.clone() * k,
-            g: self.g.iter().map(|x| x.clone() * k).collect(),
-            h: self.h.iter().map(|x| x.clone() * k).collect(),
+            v: self.v.product(k),
+            g: self.g.iter().map(|x| x.product(k)).collect(),
+            h: self.h.iter().map(|x| x.product(k)).collect(),
         }
     }
 }
@@ -93,7 +93,7 @@ impl<S: Scalar> Jet<S> {
 pub(super) type Series<S> = [S; 4];
 
 pub(super) fn s_mul<S: Scalar>(a: &Series<S>, b: &Series<S>) -> Series<S> {
-    std::array::from_fn(|k| (0..=k).fold(S::zero(), |acc, i| acc + a[i].clone() * &b[k - i]))
+    std::array::from_fn(|k| (0..=k).fold(S::zero(), |acc, i| acc + a[i].product(&b[k - i])))
 }
 
 /// a/b by the recurrence c_k = (a_k − Σ_{i<k} c_i b_{k−i}) / b_0.
@@ -102,7 +102,7 @@ pub(super) fn s_div<S: Scalar>(a: &Series<S>, b: &Series<S>) -> Series<S> {
     for k in 0..4 {
         let mut t = a[k].clone();
         for i in 0..k {
-            t -= c[i].clone() * &b[k - i];
+            t -= c[i].product(&b[k - i]);
         }
         c[k] = t / &b[0];
     }

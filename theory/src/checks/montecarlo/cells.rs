@@ -22,7 +22,7 @@
 //! Problems with more than [`MAX_CELL_DIM`] parameters take the point enclosure (no cells).
 
 use ilopt::exact::forward::forward;
-use ilopt::scalar::{Dual, Interval};
+use ilopt::scalar::{Dual, Interval, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
 use std::collections::HashMap;
 
@@ -125,7 +125,7 @@ impl GradientCells {
             .map(|i| {
                 let mut mean_value = cell.grad_centre[i];
                 for j in 0..d {
-                    mean_value += cell.hessian[i][j] * offset[j];
+                    mean_value += cell.hessian[i][j].product(&offset[j]);
                 }
                 let g = mean_value.intersection(cell.grad_cell[i]);
                 if g.is_empty() {
