@@ -75,17 +75,19 @@ pub fn fast_tanh_f32(x: f32) -> f32 {
     const B: [f32; 4] = [4.893_525e-3, 2.268_434_6e-3, 1.185_347e-4, 1.198_258_4e-6];
     let x = x.clamp(-CLAMP, CLAMP);
     let x2 = x * x;
-    let p = A[6];
-    let p = p.mul_add(x2, A[5]);
-    let p = p.mul_add(x2, A[4]);
-    let p = p.mul_add(x2, A[3]);
-    let p = p.mul_add(x2, A[2]);
-    let p = p.mul_add(x2, A[1]);
-    let p = p.mul_add(x2, A[0]) * x;
-    let q = B[3];
-    let q = q.mul_add(x2, B[2]);
-    let q = q.mul_add(x2, B[1]);
-    let q = q.mul_add(x2, B[0]);
+    // Estrin's scheme: pairs of coefficients first, then powers x⁴ and x⁸, so that the chain of
+    // dependent operations is four deep instead of Horner's seven.
+    let x4 = x2 * x2;
+    let x8 = x4 * x4;
+    let p01 = A[1].mul_add(x2, A[0]);
+    let p23 = A[3].mul_add(x2, A[2]);
+    let p45 = A[5].mul_add(x2, A[4]);
+    let p03 = p23.mul_add(x4, p01);
+    let p46 = A[6].mul_add(x4, p45);
+    let p = p46.mul_add(x8, p03) * x;
+    let q01 = B[1].mul_add(x2, B[0]);
+    let q23 = B[3].mul_add(x2, B[2]);
+    let q = q23.mul_add(x4, q01);
     p / q
 }
 
@@ -241,14 +243,17 @@ impl MarginFilter {
         );
         #[allow(clippy::cast_possible_truncation)] // bounded by the margin; ±∞ fails `finite`
         let s32 = s.map(|x| x as f32);
-        // One hidden unit: its pre-activation and its term of the logit difference.
+        // One hidden unit's term of the logit difference. `a − a` is 0 for a finite
+        // pre-activation and NaN otherwise (where the clamped tanh alone would stay finite), so
+        // a non-finite one makes D̃ NaN, which decides nothing. (The margin at such a state,
+        // beyond 10³⁰, would not let D̃ decide either: this is a second guard, at one subtraction
+        // per unit instead of a lane-wise flag.)
         #[inline(always)]
-        fn unit(c: [f32; 4], b: f32, dw: f32, s: &[f32; OBSERVATION_DIM]) -> (bool, f32) {
+        fn unit(c: [f32; 4], b: f32, dw: f32, s: &[f32; OBSERVATION_DIM]) -> f32 {
             let a = b + c[0] * s[0] + c[1] * s[1] + c[2] * s[2] + c[3] * s[3];
-            (a.is_finite(), dw * fast_tanh_f32(a))
+            dw * fast_tanh_f32(a) + (a - a)
         }
         let mut acc = [0.0f32; LANES];
-        let mut finite = [true; LANES];
         let chunks = c0
             .chunks_exact(LANES)
             .zip(c1.chunks_exact(LANES))
@@ -258,20 +263,15 @@ impl MarginFilter {
             .zip(dw.chunks_exact(LANES));
         for (((((k0, k1), k2), k3), kb), kd) in chunks {
             for l in 0..LANES {
-                let (f, t) = unit([k0[l], k1[l], k2[l], k3[l]], kb[l], kd[l], &s32);
-                finite[l] &= f;
-                acc[l] += t;
+                acc[l] += unit([k0[l], k1[l], k2[l], k3[l]], kb[l], kd[l], &s32);
             }
         }
         let full = n - n % LANES;
-        let mut tail_finite = true;
         let mut tail = 0.0f64;
         for i in full..n {
-            let (f, t) = unit([c0[i], c1[i], c2[i], c3[i]], b1[i], dw[i], &s32);
-            tail_finite &= f;
-            tail += f64::from(t);
+            tail += f64::from(unit([c0[i], c1[i], c2[i], c3[i]], b1[i], dw[i], &s32));
         }
-        let finite = finite.iter().all(|&f| f) & tail_finite & s.iter().all(|x| x.is_finite());
+        let finite = s.iter().all(|x| x.is_finite());
         let d = acc.iter().map(|&x| f64::from(x)).sum::<f64>() + tail + self.db;
         (finite && d.abs() > self.margin_at(s)).then_some(usize::from(d > 0.0))
     }
@@ -402,6 +402,17 @@ mod greedy_tests {
             }
         }
         assert!(decided > n / 2, "the filter decided only {decided} of {n}");
+        // Finite states whose single-precision pre-activations overflow (or whose entries do):
+        // the filter decides nothing, the exact pass gives the action.
+        for s in [
+            [1e39, 0.0, 0.0, 0.0],
+            [0.0, -1e39, 0.0, 0.0],
+            [0.0, 0.0, 3e38, -3e38],
+            [1e30, 1e30, -1e30, 1e30],
+        ] {
+            assert!(f.decide(&s).is_none(), "state {s:?}");
+            assert_eq!(g.action(&s).unwrap(), e.action_in(&s).unwrap());
+        }
         let bad = [f64::NAN, 0.0, 0.0, 0.0];
         assert_eq!(
             g.action(&bad).unwrap_err().to_string(),
