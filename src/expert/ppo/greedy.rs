@@ -251,7 +251,9 @@ impl MarginFilter {
         #[inline(always)]
         fn unit(c: [f32; 4], b: f32, dw: f32, s: &[f32; OBSERVATION_DIM]) -> f32 {
             let a = b + c[0] * s[0] + c[1] * s[1] + c[2] * s[2] + c[3] * s[3];
-            dw * fast_tanh_f32(a) + (a - a)
+            #[allow(clippy::eq_op)] // a − a is the finiteness test, on purpose
+            let nan_unless_finite = a - a;
+            dw * fast_tanh_f32(a) + nan_unless_finite
         }
         let mut acc = [0.0f32; LANES];
         let chunks = c0
