@@ -27,6 +27,12 @@ pub(crate) const TINY: f64 = f64::from_bits((1023 - 968) << 52);
 #[inline]
 #[must_use]
 pub fn mul(x: Interval, y: Interval) -> Interval {
+    vector_route(x, y).unwrap_or_else(|| x * y)
+}
+
+/// The product by the vector route, or `None` where it does not apply (module docs).
+#[inline]
+fn vector_route(x: Interval, y: Interval) -> Option<Interval> {
     #[cfg(all(
         target_arch = "x86_64",
         target_feature = "avx2",
@@ -36,12 +42,19 @@ pub fn mul(x: Interval, y: Interval) -> Interval {
         #[allow(unsafe_code)]
         // SAFETY: the `cfg` above admits this only where the build enables AVX2 and FMA, the
         // target features `vector::mul` needs.
-        let z = unsafe { vector::mul(x.inf(), x.sup(), y.inf(), y.sup()) };
-        if let Some(z) = z {
-            return z;
+        unsafe {
+            vector::mul(x.inf(), x.sup(), y.inf(), y.sup())
         }
     }
-    x * y
+    #[cfg(not(all(
+        target_arch = "x86_64",
+        target_feature = "avx2",
+        target_feature = "fma"
+    )))]
+    {
+        let _ = (x, y);
+        None
+    }
 }
 
 #[cfg(all(
@@ -176,17 +189,7 @@ mod tests {
                 let z = mul(*x, *y);
                 assert!(same(z, *x * *y), "{x:?} · {y:?}: {z:?} vs {:?}", *x * *y);
                 checked += 1;
-                #[cfg(all(
-                    target_arch = "x86_64",
-                    target_feature = "avx2",
-                    target_feature = "fma"
-                ))]
-                {
-                    #[allow(unsafe_code)]
-                    // SAFETY: as in `mul`.
-                    let z = unsafe { vector::mul(x.inf(), x.sup(), y.inf(), y.sup()) };
-                    vector += usize::from(z.is_some());
-                }
+                vector += usize::from(vector_route(*x, *y).is_some());
             }
         }
         assert!(checked > 1_000_000, "{checked}");
