@@ -5,8 +5,9 @@
 //! vector multiplication: two writes of the control register per product, which the core cannot
 //! overlap with the floating-point work around them. The directed roundings also follow from the
 //! product rounded to nearest and its exact residual. For floats x, y with p = fl(x·y) and
-//! r = fma(x, y, −p), r equals x·y − p exactly whenever |x·y| ≥ 2⁻⁹⁶⁹ (no underflow; Boldo and
-//! Muller, *Exact and approximated error of the FMA*, 2011). Then x·y rounded upward is p when
+//! r = fma(x, y, −p), r equals x·y − p exactly whenever |x·y| ≥ 2⁻⁹⁶⁹ (the error of a product is a
+//! float when the exponents satisfy e_x + e_y ≥ e_min + 52; Muller et al., *Handbook of
+//! Floating-Point Arithmetic*, 2nd ed., 2018, §4.2). Then x·y rounded upward is p when
 //! r ≤ 0 and the float after p when r > 0; rounded downward, p when r ≥ 0 and the float before p
 //! when r < 0 (past `f64::MAX` the next float is ∞, as upward rounding gives).
 //!
