@@ -106,9 +106,9 @@ impl<S: Scalar> Dual<S> {
 
 /// `a += b`: values and gradients entrywise (missing entries are zero).
 fn add_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
-    a.v.sum_assign(&b.v);
+    a.v += &b.v;
     for (x, y) in a.g.iter_mut().zip(&b.g) {
-        x.sum_assign(y);
+        *x += y;
     }
     if b.g.len() > a.g.len() {
         let n = a.g.len();
@@ -118,9 +118,9 @@ fn add_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
 
 /// `a −= b`: values and gradients entrywise (missing entries are zero).
 fn sub_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
-    a.v.difference_assign(&b.v);
+    a.v -= &b.v;
     for (x, y) in a.g.iter_mut().zip(&b.g) {
-        x.difference_assign(y);
+        *x -= y;
     }
     if b.g.len() > a.g.len() {
         let n = a.g.len();
@@ -134,7 +134,7 @@ fn mul_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
     for (i, x) in g.iter_mut().enumerate() {
         x.product_assign(&b.v);
         if let Some(y) = b.g.get(i) {
-            x.sum_assign(&v.product(y));
+            *x += v.product(y);
         }
     }
     if b.g.len() > g.len() {
@@ -150,7 +150,7 @@ fn div_assign_ref<S: Scalar>(a: &mut Dual<S>, b: &Dual<S>) {
     let Dual { v: q, g } = a;
     for (i, x) in g.iter_mut().enumerate() {
         if let Some(y) = b.g.get(i) {
-            x.difference_assign(&q.product(y));
+            *x -= q.product(y);
         }
         *x /= &b.v;
     }

@@ -87,17 +87,6 @@ impl Scalar for Interval {
     fn product_assign(&mut self, other: &Self) {
         *self = super::interval_product::mul(*self, *other);
     }
-    /// inari's sum, bit for bit, without the rounding-mode switches where the endpoints allow
-    /// (see `interval_sum`).
-    #[inline]
-    fn sum_assign(&mut self, other: &Self) {
-        *self = super::interval_sum::add(*self, *other);
-    }
-    /// inari's difference, bit for bit, as [`Scalar::sum_assign`].
-    #[inline]
-    fn difference_assign(&mut self, other: &Self) {
-        *self = super::interval_sum::sub(*self, *other);
-    }
     fn from_binary64(x: f64) -> Option<Self> {
         if x.is_finite() {
             Interval::try_from((x, x)).ok()

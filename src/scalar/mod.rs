@@ -23,7 +23,6 @@ mod dual;
 mod float;
 mod interval;
 mod interval_product;
-mod interval_sum;
 mod rational;
 mod report;
 mod roots;
@@ -131,17 +130,6 @@ pub trait Scalar:
     #[inline]
     fn product_assign(&mut self, other: &Self) {
         *self *= other;
-    }
-    /// `self += other`: the same value as the operator; a type may compute it by a faster route
-    /// (an [`Interval`] without switching the rounding mode).
-    #[inline]
-    fn sum_assign(&mut self, other: &Self) {
-        *self += other;
-    }
-    /// `self -= other`, as [`Scalar::sum_assign`].
-    #[inline]
-    fn difference_assign(&mut self, other: &Self) {
-        *self -= other;
     }
     /// Certainly `self > 0`.
     fn is_certainly_positive(&self) -> bool {
