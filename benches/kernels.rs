@@ -1,6 +1,7 @@
 //! Throughput of the kit's hot kernels: CartPole steps, the velocity-obstacle expert,
 //! the toy oracle (roll-out + eq. 3.15 estimate), the exact engine (prefixes per second, rational
-//! and `f64`), and the CartPole oracle with the softmax policy.
+//! and `f64`), the CartPole oracle with the softmax policy, and the interval product (inari's
+//! operator against `Scalar::product`, which gives the same intervals).
 //! Run with `cargo bench --bench kernels`. The oracle hot paths (CartPole + logistic,
 //! generic against hand-specialised; the obstacle task) are in `benches/oracle.rs`, whole runs
 //! through the runner in `benches/end_to_end.rs`; `benches/README.md` records the figures.
@@ -10,7 +11,7 @@ use ilopt::exact::enumerate::moments;
 use ilopt::expert::vo::vo_expert;
 use ilopt::policy::Softmax;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
-use ilopt::scalar::{BigRational, parse_exact};
+use ilopt::scalar::{BigRational, Interval, Scalar, parse_exact};
 use ilopt::task::TaskProblem;
 use ilopt::task::cartpole::{self, CartPoleTask};
 use ilopt::toy::{ToyMdp, ToyProblem};
@@ -137,12 +138,65 @@ fn cartpole_oracle(c: &mut Criterion) {
     g.finish();
 }
 
+/// 4096 products of intervals from a fixed list (narrow boxes of mixed signs, as the
+/// branch-and-bound gives, and positive ones), by inari's `*` and by [`Scalar::product`].
+fn interval_product(c: &mut Criterion) {
+    use rand::Rng;
+    let mut rng = KitRng::seed_from_u64(1);
+    let mut boxes = |lo: f64, hi: f64| -> Vec<Interval> {
+        (0..4096)
+            .map(|_| {
+                let m: f64 = rng.random_range(lo..hi);
+                let w = 2f64.powi(rng.random_range(-40..-1));
+                Interval::try_from((m, m + w)).unwrap()
+            })
+            .collect()
+    };
+    let sets = [
+        ("mixed signs", boxes(-3.0, 3.0)),
+        ("positive", boxes(1.0, 3.0)),
+    ];
+    let mut g = c.benchmark_group("interval product");
+    g.throughput(Throughput::Elements(4096));
+    for (name, xs) in &sets {
+        let pairs: Vec<(Interval, Interval)> = xs
+            .iter()
+            .zip(xs.iter().rev().cycle().skip(7))
+            .map(|(x, y)| (*x, *y))
+            .collect();
+        g.bench_with_input(BenchmarkId::new("inari", name), &pairs, |b, pairs| {
+            b.iter(|| {
+                let mut s = 0.0;
+                for (x, y) in pairs {
+                    s += (black_box(*x) * black_box(*y)).sup();
+                }
+                s
+            });
+        });
+        g.bench_with_input(
+            BenchmarkId::new("Scalar::product", name),
+            &pairs,
+            |b, pairs| {
+                b.iter(|| {
+                    let mut s = 0.0;
+                    for (x, y) in pairs {
+                        s += black_box(*x).product(&black_box(*y)).sup();
+                    }
+                    s
+                });
+            },
+        );
+    }
+    g.finish();
+}
+
 criterion_group!(
     benches,
     cartpole_env,
     vo,
     toy_oracle,
     exact_engine,
-    cartpole_oracle
+    cartpole_oracle,
+    interval_product
 );
 criterion_main!(benches);

@@ -4,8 +4,8 @@
 //! within a few DAgger rounds; each example read in the supervised pass would then be a cache
 //! miss on that pass's dependency chain. Asking for every drawn example's cache lines when the
 //! batch is formed lets the loads overlap. A prefetch reads nothing the program sees, so results
-//! are unchanged; on targets other than x86-64 it does nothing. This is the crate's only `unsafe`
-//! block (the crate denies `unsafe_code` elsewhere).
+//! are unchanged; on targets other than x86-64 it does nothing. The crate denies `unsafe_code`
+//! except here and in the interval product's call of its AVX2 route (`scalar::interval_product`).
 
 /// Hint that `x`'s first and last bytes will be read soon (no effect on any value).
 #[inline(always)]

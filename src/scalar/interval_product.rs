@@ -1,10 +1,11 @@
 //! The product of two intervals without switching the rounding mode: inari's result, bit for
 //! bit, at a fraction of its cost on x86-64.
 //!
-//! inari rounds an interval product's endpoints by setting the rounding mode to upward around the
-//! vector multiplication: two writes of the control register per product, which the core cannot
-//! overlap with the floating-point work around them. The directed roundings also follow from the
-//! product rounded to nearest and its exact residual. For floats x, y with p = fl(x·y) and
+//! inari classifies both operands by the signs of their endpoints (a nine-way case table, whose
+//! branch intervals of mixed signs mispredict) and rounds the chosen endpoint products by setting
+//! the rounding mode to upward around the vector multiplication. The directed roundings also
+//! follow, without a branch on the signs, from the products rounded to nearest and their exact
+//! residuals. For floats x, y with p = fl(x·y) and
 //! r = fma(x, y, −p), r equals x·y − p exactly whenever |x·y| ≥ 2⁻⁹⁶⁹ (the error of a product is a
 //! float when the exponents satisfy e_x + e_y ≥ e_min + 52; Muller et al., *Handbook of
 //! Floating-Point Arithmetic*, 2nd ed., 2018, §4.2). Then x·y rounded upward is p when
