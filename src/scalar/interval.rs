@@ -77,8 +77,8 @@ impl Scalar for Interval {
     fn to_f64(&self) -> f64 {
         self.mid()
     }
-    /// inari's product, bit for bit, without the rounding-mode switches where the endpoints allow
-    /// (see `interval_product`).
+    /// inari's product, bit for bit, from the endpoint products' FMA residuals where the
+    /// endpoints allow (see `interval_product`).
     #[inline]
     fn product(&self, other: &Self) -> Self {
         super::interval_product::mul(*self, *other)

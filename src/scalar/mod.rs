@@ -119,7 +119,8 @@ pub trait Scalar:
         self.clone() * self
     }
     /// `self * other`: the same value as the operator; a type may compute it by a faster route
-    /// (an [`Interval`] without switching the rounding mode). Hot generic kernels (the dual
+    /// (an [`Interval`] from its endpoint products' FMA residuals, without inari's case table on
+    /// the operands' signs and its rounding-mode switches). Hot generic kernels (the dual
     /// numbers' products, the exact forward pass, the toy policies' tables) multiply with it.
     #[inline]
     fn product(&self, other: &Self) -> Self {
