@@ -156,6 +156,19 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         let _ = trajectory;
         recorded.score_row_products(out);
     }
+
+    /// The trajectory's loss `Σ_t l_t` ([`IlProblem::trajectory_loss`] at the θ of the record)
+    /// read off what [`PerDecisionTerms::record_decisions`] recorded on it, when the problem's
+    /// records give the same value ([`IlProblem::trajectory_loss`]'s, bit for bit in floating
+    /// point); `None` otherwise, and then the caller computes it. The default: `None`.
+    fn recorded_trajectory_loss(
+        &self,
+        trajectory: &Self::Trajectory,
+        recorded: &RecordedPass<S>,
+    ) -> Option<S> {
+        let _ = (trajectory, recorded);
+        None
+    }
 }
 
 /// The error of a time-indexed baseline list shorter than a trajectory's scored decisions.

@@ -524,8 +524,10 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         self.estimate_by_terms(theta, trajectory, cost)
     }
 
-    /// Without a baseline, the minibatch's own (one pass per trajectory); with one, the estimate
-    /// then the trajectory loss.
+    /// Without a baseline, the minibatch's own (one pass per trajectory). With a baseline the
+    /// estimate, then the trajectory loss: for the kinds that record every trajectory's decisions
+    /// (estimated, leave-one-out) read off the records where the problem can
+    /// ([`PerDecisionTerms::recorded_trajectory_loss`]; the same value), else computed again.
     fn estimate_with_loss(
         &self,
         theta: &DVector<S>,
@@ -536,7 +538,25 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         if matches!(self.kind, Kind::None) {
             return self.batch.estimate_with_loss(theta, trajectory, form, cost);
         }
-        crate::problem::estimate_then_loss(self, theta, trajectory, form, cost)
+        if !matches!(self.kind, Kind::Estimated { .. } | Kind::LeaveOneOut) {
+            return crate::problem::estimate_then_loss(self, theta, trajectory, form, cost);
+        }
+        let g = self.estimate(theta, trajectory, form, cost)?;
+        let inner = self.inner();
+        let buffers = self.buffers.borrow();
+        let mut records = buffers.records.iter();
+        // `Batched::trajectory_loss`'s mean, over the same per-trajectory losses.
+        let loss = crate::batched::mean(trajectory, |t| {
+            let recorded = records
+                .next()
+                .and_then(|r| inner.recorded_trajectory_loss(t, r));
+            let l = match recorded {
+                Some(l) => l,
+                None => inner.trajectory_loss(theta, t)?,
+            };
+            Ok(DVector::from_element(1, l))
+        })?;
+        Ok((g, loss[0].clone()))
     }
 
     fn weighted_estimate(

@@ -2,6 +2,7 @@
 //! the sum of `Policy::loss_into`'s values, inside and beyond the speed limit, with and without an
 //! absorbing end; and the loss summed in the estimate's own pass is the same.
 
+use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined};
 use ilopt::batched::Batched;
 use ilopt::policy::{LinearGaussian, Logistic, Policy, Softmax, SpeedLimitedGaussian};
@@ -95,11 +96,22 @@ fn assert_estimate_with_loss<P: IlProblem<f64>>(p: &P, thetas: &[DVector<f64>], 
     }
 }
 
+/// The baselines whose estimates record every trajectory's decisions, from which the loss is
+/// read: the estimated optimum (time-indexed and one constant) and leave-one-out.
+fn recorded_baselines() -> Vec<Baseline> {
+    let estimated = |time_indexed| Baseline::Estimated {
+        time_indexed,
+        decay: Some(ConfigNumber::ratio(9, 10)),
+    };
+    vec![estimated(true), estimated(false), Baseline::LeaveOneOut]
+}
+
 /// The loss summed in the estimate's own pass (`IlProblem::estimate_with_loss`) is the trajectory
 /// loss bit for bit: the obstacle task (inside and beyond the speed limit, episodic and with an
 /// absorbing tail, which the loss must start from), CartPole with the softmax and the logistic
 /// policies (episodic and reset streams; the logistic policy's fixed-dimension loop), one
-/// trajectory and minibatches, with and without the baselines' wrapper.
+/// trajectory and minibatches, with and without the baselines' wrapper (with the baselines whose
+/// records the loss is read from).
 #[test]
 fn the_estimate_pass_gives_the_trajectory_loss_bit_for_bit() {
     let obstacle = ObstacleTask::thesis()
@@ -134,6 +146,10 @@ fn the_estimate_pass_gives_the_trajectory_loss_bit_for_bit() {
         assert_estimate_with_loss(&p, &thetas, &format!("obstacle, {horizon:?}"));
         let batched = Batched::new(p.clone(), 3).unwrap();
         assert_estimate_with_loss(&batched, &thetas, "obstacle, m = 3");
+        for b in recorded_baselines() {
+            let wrapped = Baselined::new(p.clone(), 3, &b).unwrap();
+            assert_estimate_with_loss(&wrapped, &thetas, &format!("obstacle, m = 3, {b:?}"));
+        }
         let wrapped = Baselined::new(p, 3, &Baseline::None).unwrap();
         assert_estimate_with_loss(&wrapped, &thetas, "obstacle, m = 3, no baseline");
     }
@@ -153,6 +169,10 @@ fn the_estimate_pass_gives_the_trajectory_loss_bit_for_bit() {
         };
         let th = cartpole_thetas(2 * cartpole::FEATURES, &mut rng);
         assert_estimate_with_loss(&softmax, &th, &format!("CartPole softmax, {horizon:?}"));
+        for b in recorded_baselines() {
+            let wrapped = Baselined::new(softmax.clone(), 3, &b).unwrap();
+            assert_estimate_with_loss(&wrapped, &th, &format!("CartPole softmax, m = 3, {b:?}"));
+        }
         let batched = Batched::new(softmax, 3).unwrap();
         assert_estimate_with_loss(&batched, &th, "CartPole softmax, m = 3");
         let logistic = TaskProblem {
