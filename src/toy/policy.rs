@@ -83,23 +83,39 @@ impl PolicySpec {
     /// [`OracleError::Domain`] when a direct-parameterisation probability is not certainly positive
     /// (θ off the open simplex), [`OracleError::ZeroProbability`] if a softmax denominator vanishes.
     pub fn group_probs<T: Scalar>(&self, block: &[T], c: &T) -> Result<Vec<T>, OracleError> {
+        let mut p = Vec::with_capacity(self.actions);
+        self.group_probs_into(block, c, &mut p)?;
+        Ok(p)
+    }
+
+    /// [`PolicySpec::group_probs`] into `out` (cleared first; its storage reused).
+    ///
+    /// # Errors
+    /// As [`PolicySpec::group_probs`].
+    pub fn group_probs_into<T: Scalar>(
+        &self,
+        block: &[T],
+        c: &T,
+        out: &mut Vec<T>,
+    ) -> Result<(), OracleError> {
         match self.kind {
             PolicyKind::Direct => {
-                let mut p: Vec<T> = block.to_vec();
+                out.clear();
+                out.extend_from_slice(block);
                 let rest = block.iter().fold(T::one(), |acc, x| acc - x);
-                p.push(rest);
-                if let Some(a) = p.iter().position(|x| !x.is_certainly_positive()) {
+                out.push(rest);
+                if let Some(a) = out.iter().position(|x| !x.is_certainly_positive()) {
                     return Err(OracleError::Domain(format!(
                         "direct parameterisation: π(a={a}) = {:?} is not certainly > 0 (θ must lie in the open simplex)",
-                        p[a].to_f64()
+                        out[a].to_f64()
                     )));
                 }
-                Ok(p)
+                Ok(())
             }
-            PolicyKind::RationalSoftmax => softmax(block, c),
+            PolicyKind::RationalSoftmax => softmax_into(block, c, out),
             PolicyKind::TiedSoftmax => {
                 let t = &block[0];
-                softmax(&[T::one() - t, t.clone()], c)
+                softmax_into(&[T::one() - t, t.clone()], c, out)
             }
         }
     }
@@ -107,67 +123,119 @@ impl PolicySpec {
     /// The analytic Jacobian `∂π_a/∂θ_j` (rows a, columns the group's block), given the
     /// probabilities from [`PolicySpec::group_probs`].
     pub fn group_jacobian<S: Scalar>(&self, block: &[S], c: &S, probs: &[S]) -> Vec<Vec<S>> {
+        let mut j = Vec::with_capacity(self.actions);
+        self.group_jacobian_into(block, c, probs, &mut j);
+        j
+    }
+
+    /// [`PolicySpec::group_jacobian`] into `out` (one row per action; the rows' storage reused).
+    pub fn group_jacobian_into<S: Scalar>(
+        &self,
+        block: &[S],
+        c: &S,
+        probs: &[S],
+        out: &mut Vec<Vec<S>>,
+    ) {
         let n = self.actions;
         match self.kind {
-            PolicyKind::Direct => (0..n)
-                .map(|a| {
-                    (0..n - 1)
-                        .map(|b| {
-                            if a == n - 1 {
-                                -S::one()
-                            } else if a == b {
-                                S::one()
-                            } else {
-                                S::zero()
-                            }
-                        })
-                        .collect()
-                })
-                .collect(),
-            PolicyKind::RationalSoftmax => softmax_jacobian(block, c, probs),
+            PolicyKind::Direct => {
+                out.resize_with(n, Vec::new);
+                for (a, row) in out.iter_mut().enumerate() {
+                    row.clear();
+                    row.extend((0..n - 1).map(|b| {
+                        if a == n - 1 {
+                            -S::one()
+                        } else if a == b {
+                            S::one()
+                        } else {
+                            S::zero()
+                        }
+                    }));
+                }
+            }
+            PolicyKind::RationalSoftmax => softmax_jacobian_into(block, c, probs, out),
             PolicyKind::TiedSoftmax => {
-                // θ_0 = 1 − θ, θ_1 = θ: dπ_a/dθ = ∂π_a/∂θ_1 − ∂π_a/∂θ_0.
+                // θ_0 = 1 − θ, θ_1 = θ: dπ_a/dθ = ∂π_a/∂θ_1 − ∂π_a/∂θ_0, each entry as
+                // `softmax_jacobian` forms it.
                 let t = &block[0];
-                let j = softmax_jacobian(&[S::one() - t, t.clone()], c, probs);
-                j.into_iter()
-                    .map(|row| vec![row[1].clone() - &row[0]])
-                    .collect()
+                let theta = [S::one() - t, t.clone()];
+                let two_over_s = softmax_two_over_s(&theta, c);
+                out.resize_with(probs.len(), Vec::new);
+                for (a, row) in out.iter_mut().enumerate() {
+                    let entry = |b: usize| softmax_jacobian_entry(&two_over_s, &theta, probs, a, b);
+                    let d = entry(1) - &entry(0);
+                    row.clear();
+                    row.push(d);
+                }
             }
         }
     }
 }
 
-fn softmax<T: Scalar>(theta: &[T], c: &T) -> Result<Vec<T>, OracleError> {
-    let u: Vec<T> = theta.iter().map(|t| t.square() + c).collect();
-    let s = u.iter().fold(T::zero(), |acc, x| acc + x);
+/// The rational softmax `u_a / Σ u`, `u_a = θ_a² + c`, into `out` (cleared first).
+fn softmax_into<T: Scalar>(theta: &[T], c: &T, out: &mut Vec<T>) -> Result<(), OracleError> {
+    out.clear();
+    out.extend(theta.iter().map(|t| t.square() + c));
+    let s = out.iter().fold(T::zero(), |acc, x| acc + x);
     if !s.is_certainly_positive() {
         return Err(OracleError::ZeroProbability("rational softmax denominator"));
     }
-    Ok(u.into_iter().map(|x| x / &s).collect())
+    for x in out.iter_mut() {
+        let u = std::mem::replace(x, T::zero());
+        *x = u / &s;
+    }
+    Ok(())
 }
 
-/// ∂π_a/∂θ_b = 2θ_b/S (δ_ab − π_a), S = Σ_b(θ_b² + c).
-fn softmax_jacobian<S: Scalar>(theta: &[S], c: &S, probs: &[S]) -> Vec<Vec<S>> {
+/// `2/S`, S = Σ_b(θ_b² + c), of [`softmax_jacobian_into`].
+fn softmax_two_over_s<S: Scalar>(theta: &[S], c: &S) -> S {
     let s = theta.iter().fold(S::zero(), |acc, t| acc + t.square() + c);
-    let two_over_s = S::from_i64(2) / &s;
-    (0..theta.len())
-        .map(|a| {
-            (0..theta.len())
-                .map(|b| {
-                    let delta = if a == b { S::one() } else { S::zero() };
-                    two_over_s.product(&theta[b]).product(&(delta - &probs[a]))
-                })
-                .collect()
-        })
-        .collect()
+    S::from_i64(2) / &s
+}
+
+/// ∂π_a/∂θ_b = 2θ_b/S (δ_ab − π_a).
+fn softmax_jacobian_entry<S: Scalar>(
+    two_over_s: &S,
+    theta: &[S],
+    probs: &[S],
+    a: usize,
+    b: usize,
+) -> S {
+    let delta = if a == b { S::one() } else { S::zero() };
+    two_over_s.product(&theta[b]).product(&(delta - &probs[a]))
+}
+
+/// ∂π_a/∂θ_b = 2θ_b/S (δ_ab − π_a), S = Σ_b(θ_b² + c), into `out` (rows a; storage reused).
+fn softmax_jacobian_into<S: Scalar>(theta: &[S], c: &S, probs: &[S], out: &mut Vec<Vec<S>>) {
+    let two_over_s = softmax_two_over_s(theta, c);
+    out.resize_with(theta.len(), Vec::new);
+    for (a, row) in out.iter_mut().enumerate() {
+        row.clear();
+        row.extend(
+            (0..theta.len()).map(|b| softmax_jacobian_entry(&two_over_s, theta, probs, a, b)),
+        );
+    }
 }
 
 /// The Brier loss of math.md §1.2 (L-Brier): `l = Σ_a (π_a − 1[a = a*])²`, and its gradient
 /// `∇l = 2 Σ_a (π_a − 1[a = a*]) ∇π_a` in the group's block.
 pub fn brier<S: Scalar>(probs: &[S], jacobian: &[Vec<S>], expert: usize) -> (S, Vec<S>) {
+    let mut grad = Vec::with_capacity(jacobian.first().map_or(0, Vec::len));
+    let loss = brier_into(probs, jacobian, expert, &mut grad);
+    (loss, grad)
+}
+
+/// [`brier`] with the gradient into `grad` (its storage reused); returns the loss.
+pub fn brier_into<S: Scalar>(
+    probs: &[S],
+    jacobian: &[Vec<S>],
+    expert: usize,
+    grad: &mut Vec<S>,
+) -> S {
     let block = jacobian.first().map_or(0, Vec::len);
     let mut loss = S::zero();
-    let mut grad = vec![S::zero(); block];
+    grad.clear();
+    grad.resize(block, S::zero());
     for (a, p) in probs.iter().enumerate() {
         let r = if a == expert {
             p.clone() - S::one()
@@ -180,7 +248,7 @@ pub fn brier<S: Scalar>(probs: &[S], jacobian: &[Vec<S>], expert: usize) -> (S, 
             *g += two_r.product(j);
         }
     }
-    (loss, grad)
+    loss
 }
 
 /// The Brier loss alone, in any scalar (for the dual-number checks).

@@ -83,9 +83,9 @@ impl<S> Clone for TableMemo<S> {
     }
 }
 
-/// θ's bit keys ([`Scalar::bit_key`]; the key of [`TableMemo`]), when the scalar has them.
-fn bit_keys<S: Scalar>(theta: &[S]) -> Option<Vec<u64>> {
-    theta.iter().map(Scalar::bit_key).collect()
+/// Whether every entry of θ has a bit key ([`Scalar::bit_key`]; the key of [`TableMemo`]).
+fn has_bit_keys<S: Scalar>(theta: &[S]) -> bool {
+    theta.iter().all(|x| x.bit_key().is_some())
 }
 
 /// Whether `key` holds θ's bit keys (compared in place: a look-up allocates no key).
@@ -167,7 +167,10 @@ impl<S: Scalar> ToyProblem<S> {
     /// The table at θ as [`ToyProblem::table`], shared: in `f64` and `f32` the tables of the last
     /// four points are kept and one at the same θ (bit for bit) is reused, since an
     /// algorithm's step asks for the table at the same iterate several times (roll-out, estimate,
-    /// importance weights). A table is a function of θ alone, so every value is the same.
+    /// importance weights). A table is a function of θ alone, so every value is the same. The
+    /// table pushed out for a new θ is rebuilt in place ([`PolicyTable::rebuild`]) when nothing
+    /// else holds it, so that an algorithm stepping through new iterates does not allocate a
+    /// table's storage at each.
     ///
     /// # Errors
     /// As [`PolicyTable::new`] (an error is not kept).
@@ -179,13 +182,30 @@ impl<S: Scalar> ToyProblem<S> {
         if let Some((_, t)) = lock().iter().find(|(k, _)| same_bits(k, theta)) {
             return Ok(Arc::clone(t));
         }
-        let Some(key) = bit_keys(theta) else {
+        if !has_bit_keys(theta) {
             return self.table(theta).map(Arc::new);
+        }
+        // The oldest table makes room, and its storage is reused when nothing else holds it.
+        let oldest = {
+            let mut recent = lock();
+            (recent.len() >= RECENT_TABLES).then(|| recent.remove(0))
         };
+        let (mut key, table) = match oldest {
+            Some((key, t)) => (key, Arc::try_unwrap(t).ok()),
+            None => (Vec::with_capacity(theta.len()), None),
+        };
+        key.clear();
+        key.extend(theta.iter().filter_map(Scalar::bit_key));
         // Built without the lock held, so that threads sharing the problem do not wait on it.
-        let t = Arc::new(self.table(theta)?);
+        let t = Arc::new(match table {
+            Some(mut t) => {
+                t.rebuild(&self.mdp, &self.c, theta)?;
+                t
+            }
+            None => self.table(theta)?,
+        });
         let mut recent = lock();
-        if recent.len() == RECENT_TABLES {
+        if recent.len() >= RECENT_TABLES {
             recent.remove(0);
         }
         recent.push((key, Arc::clone(&t)));
@@ -599,6 +619,20 @@ mod tests {
         let again = p.shared_table(&[x(0.5), x(0.0)]).unwrap();
         assert!(!Arc::ptr_eq(&a, &again));
         assert_eq!(a.probs, again.probs);
+        // Tables pushed out while nothing else holds them are rebuilt in place, with a fresh
+        // table's values.
+        drop((a, b, again));
+        let show = |t: &PolicyTable<S>| {
+            format!(
+                "{:?} {:?} {:?} {:?} {:?}",
+                t.probs, t.jacobian, t.score, t.loss, t.loss_grad
+            )
+        };
+        for k in 0..3 * RECENT_TABLES {
+            let theta = [x(k as f64 / 8.0), x(-1.0)];
+            let t = p.shared_table(&theta).unwrap();
+            assert_eq!(show(&t), show(&p.table(&theta).unwrap()), "θ #{k}");
+        }
     }
 
     /// Types without bit keys build a table at every call.
