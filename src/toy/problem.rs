@@ -191,19 +191,22 @@ impl<S: Scalar> ToyProblem<S> {
             (recent.len() >= RECENT_TABLES).then(|| recent.remove(0))
         };
         let (mut key, table) = match oldest {
-            Some((key, t)) => (key, Arc::try_unwrap(t).ok()),
+            Some((key, t)) => (key, Some(t)),
             None => (Vec::with_capacity(theta.len()), None),
         };
         key.clear();
         key.extend(theta.iter().filter_map(Scalar::bit_key));
         // Built without the lock held, so that threads sharing the problem do not wait on it.
-        let t = Arc::new(match table {
-            Some(mut t) => {
-                t.rebuild(&self.mdp, &self.c, theta)?;
-                t
-            }
-            None => self.table(theta)?,
-        });
+        let t = match table {
+            Some(mut t) => match Arc::get_mut(&mut t) {
+                Some(unique) => {
+                    unique.rebuild(&self.mdp, &self.c, theta)?;
+                    t
+                }
+                None => Arc::new(self.table(theta)?),
+            },
+            None => Arc::new(self.table(theta)?),
+        };
         let mut recent = lock();
         if recent.len() >= RECENT_TABLES {
             recent.remove(0);
