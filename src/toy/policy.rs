@@ -156,7 +156,7 @@ impl PolicySpec {
             PolicyKind::RationalSoftmax => softmax_jacobian_into(block, c, probs, out),
             PolicyKind::TiedSoftmax => {
                 // θ_0 = 1 − θ, θ_1 = θ: dπ_a/dθ = ∂π_a/∂θ_1 − ∂π_a/∂θ_0, each entry as
-                // `softmax_jacobian` forms it.
+                // [`softmax_jacobian_entry`] forms it.
                 let t = &block[0];
                 let theta = [S::one() - t, t.clone()];
                 let two_over_s = softmax_two_over_s(&theta, c);
