@@ -107,7 +107,7 @@ impl<S: Real> PpoGreedy<S> {
             .map_err(PpoError::Act)?;
         let hidden = e.hidden();
         // The filter is sound only when the exact pass runs in `f64` itself.
-        let filter = (std::any::type_name::<S>() == std::any::type_name::<f64>())
+        let filter = (std::any::TypeId::of::<S>() == std::any::TypeId::of::<f64>())
             .then(|| Box::new(MarginFilter::new(&e.actor, hidden)));
         Ok(Self {
             weights,
