@@ -40,6 +40,7 @@ macro_rules! impl_float {
     ($t:ty) => {
         impl Scalar for $t {
             const NON_FINITE_PROPAGATES: bool = true;
+            const IS_BINARY64: bool = <$t>::MANTISSA_DIGITS == f64::MANTISSA_DIGITS;
             #[inline]
             fn zero() -> Self {
                 0.0

@@ -76,6 +76,10 @@ pub trait Scalar:
     /// products, `∞ − ∞` and `0·∞` are NaN) and, vacuously, for rationals (always finite); false
     /// for intervals (`[0, 0]·[1, +∞] = [0, 0]`) and, conservatively, the default.
     const NON_FINITE_PROPAGATES: bool = false;
+    /// Whether the type is IEEE binary64 itself: its operations are `f64`'s, bit for bit, so that
+    /// a computation in `f64` (a faster pre-test of a decision) decides as the same computation in
+    /// this type does. True for `f64` only; false by default.
+    const IS_BINARY64: bool = false;
     /// The additive identity.
     fn zero() -> Self;
     /// The multiplicative identity.

@@ -83,11 +83,6 @@ impl<S> Clone for TableMemo<S> {
     }
 }
 
-/// Whether every entry of θ has a bit key ([`Scalar::bit_key`]; the key of [`TableMemo`]).
-fn has_bit_keys<S: Scalar>(theta: &[S]) -> bool {
-    theta.iter().all(|x| x.bit_key().is_some())
-}
-
 /// Whether `key` holds θ's bit keys (compared in place: a look-up allocates no key).
 fn same_bits<S: Scalar>(key: &[u64], theta: &[S]) -> bool {
     key.len() == theta.len() && key.iter().zip(theta).all(|(k, x)| x.bit_key() == Some(*k))
@@ -182,9 +177,6 @@ impl<S: Scalar> ToyProblem<S> {
         if let Some((_, t)) = lock().iter().find(|(k, _)| same_bits(k, theta)) {
             return Ok(Arc::clone(t));
         }
-        if !has_bit_keys(theta) {
-            return self.table(theta).map(Arc::new);
-        }
         // The oldest table makes room, and its storage is reused when nothing else holds it.
         let oldest = {
             let mut recent = lock();
@@ -194,6 +186,7 @@ impl<S: Scalar> ToyProblem<S> {
             Some((key, t)) => (key, Some(t)),
             None => (Vec::with_capacity(theta.len()), None),
         };
+        // A type has bit keys for every value or for none (checked on θ's first entry above).
         key.clear();
         key.extend(theta.iter().filter_map(Scalar::bit_key));
         // Built without the lock held, so that threads sharing the problem do not wait on it.
@@ -631,10 +624,22 @@ mod tests {
                 t.probs, t.jacobian, t.score, t.loss, t.loss_grad
             )
         };
+        let mut kept = Vec::new();
         for k in 0..3 * RECENT_TABLES {
             let theta = [x(k as f64 / 8.0), x(-1.0)];
             let t = p.shared_table(&theta).unwrap();
             assert_eq!(show(&t), show(&p.table(&theta).unwrap()), "θ #{k}");
+            // From the fifth on, the table pushed out is the one of four iterates before, held
+            // by nothing else: its `Arc` comes back (a fresh table would be allocated while the
+            // pushed-out one still lives, at another address).
+            if k >= RECENT_TABLES {
+                assert_eq!(
+                    Arc::as_ptr(&t),
+                    kept[k - RECENT_TABLES],
+                    "θ #{k} not in place"
+                );
+            }
+            kept.push(Arc::as_ptr(&t));
         }
     }
 

@@ -107,8 +107,7 @@ impl<S: Real> PpoGreedy<S> {
             .map_err(PpoError::Act)?;
         let hidden = e.hidden();
         // The filter is sound only when the exact pass runs in `f64` itself.
-        let filter = (std::any::TypeId::of::<S>() == std::any::TypeId::of::<f64>())
-            .then(|| Box::new(MarginFilter::new(&e.actor, hidden)));
+        let filter = S::IS_BINARY64.then(|| Box::new(MarginFilter::new(&e.actor, hidden)));
         Ok(Self {
             weights,
             hidden,
@@ -420,9 +419,11 @@ mod greedy_tests {
             g.action(&bad).unwrap_err().to_string(),
             e.action_in(&bad).unwrap_err().to_string()
         );
-        // Another scalar: no filter, the exact pass.
+        // Another scalar: no filter, the exact pass (`f32` too: the filter's bound is for a
+        // binary64 exact pass).
         let dual = e.greedy_in::<crate::scalar::Dual<f64>>().unwrap();
         assert!(dual.filter.is_none());
+        assert!(e.greedy_in::<f32>().unwrap().filter.is_none());
         for k in 0..100 {
             let s: [f64; 4] = std::array::from_fn(|j| 0.01 * (k as f64 - 50.0) * (j as f64 + 1.0));
             let sd = s.map(|x| crate::scalar::Dual::<f64>::from_binary64(x).unwrap());
