@@ -157,6 +157,30 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         recorded.score_row_products(out);
     }
 
+    /// The state features φ_b(s_i) of the first `decisions` scored decisions of `trajectory`, for
+    /// the state-dependent baseline `b_i = w·φ_b(s_i)` ([`crate::baseline::Baseline::StateDependent`]):
+    /// k entries per decision, decision by decision, into `out` (cleared first); k is returned.
+    /// `leading` keeps only the first that many features. The features must be a function of
+    /// s_i alone (nothing from a_i on), which keeps the baseline unbiased.
+    ///
+    /// The default offers none.
+    ///
+    /// # Errors
+    /// [`OracleError::Baseline`] when the problem offers no state features, or fewer than
+    /// `leading`.
+    fn state_features(
+        &self,
+        trajectory: &Self::Trajectory,
+        decisions: usize,
+        leading: Option<usize>,
+        out: &mut Vec<S>,
+    ) -> Result<usize, OracleError> {
+        let _ = (trajectory, decisions, leading, out);
+        Err(OracleError::Baseline(
+            "this problem offers no state features for a state-dependent baseline".into(),
+        ))
+    }
+
     /// The trajectory's loss `Σ_t l_t` ([`IlProblem::trajectory_loss`] at the θ of the record)
     /// read off what [`PerDecisionTerms::record_decisions`] recorded on it, when the problem's
     /// records give the same value ([`IlProblem::trajectory_loss`]'s, bit for bit in floating
@@ -168,6 +192,26 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     ) -> Option<S> {
         let _ = (trajectory, recorded);
         None
+    }
+}
+
+/// The number of leading state features to use out of `available`: all for `None`.
+///
+/// # Errors
+/// [`OracleError::Baseline`] when more are asked for than there are, or none.
+pub(crate) fn leading_features(
+    available: usize,
+    leading: Option<usize>,
+) -> Result<usize, OracleError> {
+    match leading {
+        None => Ok(available),
+        Some(0) => Err(OracleError::Baseline(
+            "a state-dependent baseline needs at least 1 state feature, got features = 0".into(),
+        )),
+        Some(k) if k > available => Err(OracleError::Baseline(format!(
+            "a state-dependent baseline asks for {k} state features; the problem has {available}"
+        ))),
+        Some(k) => Ok(k),
     }
 }
 

@@ -28,9 +28,11 @@
 //!
 //! **Kinds** ([`Baseline`]): none (the plain estimator, bit for bit), one constant, constants per
 //! decision index, the variance-minimising constant(s) estimated from earlier iterations only
-//! ([`RunningOptimum`]), and leave-one-out across the m trajectories of one gradient (trajectory
+//! ([`RunningOptimum`]), leave-one-out across the m trajectories of one gradient (trajectory
 //! j's b_i is the mean loss-to-go at decision i of the other m − 1, independent of trajectory j;
-//! exact for m ≥ 2). [`Baselined`] is the oracle that applies them, to any problem that exposes
+//! exact for m ≥ 2), and a linear function of the decision's state, `b_i = w·φ_b(s_i)`, with
+//! the variance-minimising weights estimated from earlier iterations ([`RunningRegression`]; a
+//! function of s_i, which is part of the history h_i, so the argument above applies). [`Baselined`] is the oracle that applies them, to any problem that exposes
 //! its [`DecisionTerms`](crate::oracle::DecisionTerms) ([`PerDecisionTerms::decision_terms`]); every oracle method
 //! (SGD, STORM, IS-STORM, Adam, RMSProp, O2NC) run on it uses the baseline. Leave-one-out
 //! estimates take each trajectory's plain pass with its losses and scores recorded
@@ -38,11 +40,13 @@
 
 mod decisions;
 mod oracle;
+mod regression;
 mod running;
 
 pub use decisions::PerDecisionTerms;
-pub(crate) use decisions::{record_by_terms, too_few_baselines};
+pub(crate) use decisions::{leading_features, record_by_terms, too_few_baselines};
 pub use oracle::Baselined;
+pub use regression::{RunningRegression, solve_symmetric};
 pub use running::RunningOptimum;
 
 use crate::scalar::ConfigNumber;
@@ -80,4 +84,19 @@ pub enum Baseline {
     },
     /// Leave-one-out across the m ≥ 2 trajectories of one gradient.
     LeaveOneOut,
+    /// A function of the decision's state, `b_i = w·φ_b(s_i)`: φ_b the problem's state
+    /// features ([`PerDecisionTerms::state_features`]: a task's learner features, a toy MDP's
+    /// one-hot state), w the variance-minimising weights `A⁻¹c` estimated from earlier
+    /// iterations' trajectories only ([`RunningRegression`]).
+    StateDependent {
+        /// Use only the first this many state features (absent: all of them).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        features: Option<usize>,
+        /// Factor in [0, 1] applied to the past statistics at every iteration (absent: 1).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        decay: Option<ConfigNumber>,
+        /// λ ≥ 0 added to the diagonal of A before the solve (absent: 0).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        ridge: Option<ConfigNumber>,
+    },
 }

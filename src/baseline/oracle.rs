@@ -1,6 +1,6 @@
 //! [`Baselined`]: m trajectories per oracle call, each estimate with a baseline.
 
-use super::{Baseline, PerDecisionTerms, RunningOptimum};
+use super::{Baseline, PerDecisionTerms, RunningOptimum, RunningRegression};
 use crate::batched::Batched;
 use crate::oracle::{DecisionTerms, Given, RecordedPass, ScoreProducts};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -19,14 +19,20 @@ enum Kind<S> {
         running: RefCell<RunningOptimum<S>>,
     },
     LeaveOneOut,
+    StateDependent {
+        leading: Option<usize>,
+        running: RefCell<RunningRegression<S>>,
+    },
 }
 
 /// Reused storage of one oracle call: per trajectory its [`DecisionTerms`] or its
 /// [`RecordedPass`], the leave-one-out step totals or the estimated baselines, per-step losses,
-/// one trajectory's plain estimate, the estimate.
+/// one trajectory's plain estimate, the estimate; per trajectory its state features (k per
+/// decision) and the number k.
 #[derive(Debug, Clone)]
 struct Buffers<S> {
     terms: Vec<DecisionTerms<S>>,
+    features: Vec<(Vec<S>, usize)>,
     records: Vec<RecordedPass<S>>,
     totals: Vec<S>,
     losses: Vec<S>,
@@ -72,6 +78,24 @@ fn invalid(msg: impl Into<String>) -> OracleError {
     OracleError::Baseline(msg.into())
 }
 
+/// A decay factor in `S`, checked to lie in [0, 1] (`None`: no decay).
+fn decay_of<S: Scalar>(
+    decay: Option<&crate::scalar::ConfigNumber>,
+) -> Result<Option<S>, OracleError> {
+    let Some(x) = decay else {
+        return Ok(None);
+    };
+    let q = x
+        .exact("baseline decay")
+        .map_err(|e| invalid(e.to_string()))?;
+    let zero = crate::scalar::BigRational::from_integer(0.into());
+    let one = crate::scalar::BigRational::from_integer(1.into());
+    if q < zero || q > one {
+        return Err(invalid(format!("decay {q} is not in [0, 1]")));
+    }
+    Ok(Some(S::from_rational(&q)))
+}
+
 impl<P, S: Scalar> Baselined<P, S> {
     /// `m` trajectories per oracle call with `baseline`.
     ///
@@ -96,24 +120,35 @@ impl<P, S: Scalar> Baselined<P, S> {
             Baseline::Estimated {
                 time_indexed,
                 decay,
+            } => Kind::Estimated {
+                time_indexed: *time_indexed,
+                running: RefCell::new(RunningOptimum::new(decay_of(decay.as_ref())?)),
+            },
+            Baseline::StateDependent {
+                features,
+                decay,
+                ridge,
             } => {
-                let decay = match decay {
-                    None => None,
+                if *features == Some(0) {
+                    return Err(invalid(
+                        "a state-dependent baseline needs at least 1 state feature, got features = 0",
+                    ));
+                }
+                let ridge = match ridge {
+                    None => S::zero(),
                     Some(x) => {
                         let q = x
-                            .exact("baseline decay")
+                            .exact("baseline ridge")
                             .map_err(|e| invalid(e.to_string()))?;
-                        let zero = crate::scalar::BigRational::from_integer(0.into());
-                        let one = crate::scalar::BigRational::from_integer(1.into());
-                        if q < zero || q > one {
-                            return Err(invalid(format!("decay {q} is not in [0, 1]")));
+                        if q < crate::scalar::BigRational::from_integer(0.into()) {
+                            return Err(invalid(format!("ridge {q} is negative")));
                         }
-                        Some(S::from_rational(&q))
+                        S::from_rational(&q)
                     }
                 };
-                Kind::Estimated {
-                    time_indexed: *time_indexed,
-                    running: RefCell::new(RunningOptimum::new(decay)),
+                Kind::StateDependent {
+                    leading: *features,
+                    running: RefCell::new(RunningRegression::new(decay_of(decay.as_ref())?, ridge)),
                 }
             }
             Baseline::LeaveOneOut => {
@@ -130,6 +165,7 @@ impl<P, S: Scalar> Baselined<P, S> {
             kind,
             buffers: RefCell::new(Buffers {
                 terms: Vec::new(),
+                features: Vec::new(),
                 records: Vec::new(),
                 totals: Vec::new(),
                 losses: Vec::new(),
@@ -147,6 +183,15 @@ impl<P, S: Scalar> Baselined<P, S> {
     /// Trajectories per oracle call.
     pub fn size(&self) -> usize {
         self.batch.size()
+    }
+
+    /// The committed weights of a [`Baseline::StateDependent`] baseline (a copy; empty before
+    /// any statistics were committed).
+    pub fn state_weights(&self) -> Option<Vec<S>> {
+        match &self.kind {
+            Kind::StateDependent { running, .. } => Some(running.borrow().weights().to_vec()),
+            _ => None,
+        }
     }
 
     /// The committed running estimates of an [`Baseline::Estimated`] baseline (a copy).
@@ -392,7 +437,11 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         }
         let mut buffers = self.buffers.borrow_mut();
         let Buffers {
-            terms, totals, g, ..
+            terms,
+            features,
+            totals,
+            g,
+            ..
         } = &mut *buffers;
         if terms.len() < m {
             terms.resize_with(m, DecisionTerms::new);
@@ -400,6 +449,16 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         for (t, out) in batch.iter().zip(terms.iter_mut()) {
             fill(t, out)?;
             out.finish();
+        }
+        if let Kind::StateDependent { leading, .. } = &self.kind {
+            if features.len() < m {
+                features.resize_with(m, || (Vec::new(), 0));
+            }
+            for ((t, out), (phi, k)) in batch.iter().zip(terms.iter()).zip(features.iter_mut()) {
+                *k = self
+                    .inner()
+                    .state_features(t, out.decisions(), *leading, phi)?;
+            }
         }
         let d = self.inner().dim();
         g.clear();
@@ -409,7 +468,16 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             Kind::Estimated { running, .. } => Some(running.borrow_mut()),
             _ => None,
         };
+        let mut regression = match &self.kind {
+            Kind::StateDependent { running, .. } => Some(running.borrow_mut()),
+            _ => None,
+        };
         if let Some(r) = running.as_mut()
+            && observe
+        {
+            r.clear_pending();
+        }
+        if let Some(r) = regression.as_mut()
             && observe
         {
             r.clear_pending();
@@ -425,7 +493,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             }
         }
         let others = S::from_i64(m as i64 - 1);
-        for t in &terms[..m] {
+        for (j, t) in terms[..m].iter().enumerate() {
             match &self.kind {
                 Kind::None => t.estimate_into(|_| None, g),
                 Kind::Constant(b) => t.estimate_into(|_| Some(b.clone()), g),
@@ -447,6 +515,12 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
                 Kind::LeaveOneOut => {
                     t.estimate_into(|i| Some((totals[i].clone() - t.loss_to_go(i)) / &others), g)
                 }
+                Kind::StateDependent { .. } => {
+                    let r = regression.as_ref().expect("state-dependent kind");
+                    let (phi, k) = &features[j];
+                    let row = |i: usize| &phi[i * k..(i + 1) * k];
+                    t.estimate_into(|i| r.baseline(row(i)), g);
+                }
             }
             for (s, x) in sum.iter_mut().zip(g.iter()) {
                 *s += x;
@@ -457,6 +531,13 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         {
             for t in &terms[..m] {
                 r.observe(t);
+            }
+        }
+        if let Some(r) = regression.as_mut()
+            && observe
+        {
+            for (t, (phi, k)) in terms[..m].iter().zip(features.iter()) {
+                r.observe(t, phi, *k);
             }
         }
         let m = S::from_i64(m as i64);
@@ -484,8 +565,10 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         rng: &mut KitRng,
         cost: &mut Cost,
     ) -> Result<Self::Trajectory, OracleError> {
-        if let Kind::Estimated { running, .. } = &self.kind {
-            running.borrow_mut().commit();
+        match &self.kind {
+            Kind::Estimated { running, .. } => running.borrow_mut().commit(),
+            Kind::StateDependent { running, .. } => running.borrow_mut().commit(),
+            _ => {}
         }
         self.batch.rollout(behaviour, rng, cost)
     }
@@ -596,9 +679,11 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
                 self.buffers.borrow_mut().totals = committed;
                 g
             }
-            Kind::None | Kind::LeaveOneOut => self.baselined(trajectory, false, |t, out| {
-                inner.decision_terms(theta_old, t, Some((theta_new, weighting)), out, cost)
-            }),
+            Kind::None | Kind::LeaveOneOut | Kind::StateDependent { .. } => {
+                self.baselined(trajectory, false, |t, out| {
+                    inner.decision_terms(theta_old, t, Some((theta_new, weighting)), out, cost)
+                })
+            }
         }
     }
 

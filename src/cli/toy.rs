@@ -7,12 +7,14 @@
 //! are those of the baselined estimator `g_b = g − Σ_i b_i ψ_i` (math.md §9; [`crate::baseline`]),
 //! and `baseline` echoes the values. `--optimal-baseline` adds `optimal_baseline`: E[g·ψ_i],
 //! E‖ψ_i‖², the variance-minimising b*_i and b*_const, the second moments they reach, and the
-//! reduction factors E‖g‖²/E‖g_{b*}‖² ([`crate::exact::baseline`]).
+//! reduction factors E‖g‖²/E‖g_{b*}‖² ([`crate::exact::baseline`]); its `state` object gives the
+//! same for the variance-minimising baseline per state, `b_i = w*_{s_i}` (`cross` c_s, `score_moment`
+//! A_ss, `weights` w*_s = c_s/A_ss, `second_moment`, `reduction`).
 //! `exact` prints fraction strings (`"-13/24"`), `f64` prints numbers, `interval` prints `[lo, hi]`
 //! pairs that enclose the exact values.
 
 use crate::exact::ExactError;
-use crate::exact::baseline::{baselined_moments, optimal_baselines};
+use crate::exact::baseline::{baselined_moments, optimal_baselines, optimal_state_baseline};
 use crate::exact::enumerate::moments;
 use crate::exact::forward::forward;
 use crate::scalar::{BigRational, Interval, JsonScalar, Scalar, parse_exact_list};
@@ -232,6 +234,14 @@ pub fn evaluate_with<S: JsonScalar>(
             "second_moment_constant": one(Some(o.second_moment_constant.clone())),
             "reduction_time_indexed": one(o.reduction_time_indexed()),
             "reduction_constant": one(o.reduction_constant()),
+        });
+        let st = optimal_state_baseline(&p, &th)?;
+        out["optimal_baseline"]["state"] = json!({
+            "cross": list(&st.cross),
+            "score_moment": list(&st.score_moment),
+            "weights": Value::Array(st.weights.iter().cloned().map(Some).map(one).collect()),
+            "second_moment": one(Some(st.second_moment_optimal.clone())),
+            "reduction": one(st.reduction()),
         });
     }
     Ok(out)

@@ -6,7 +6,9 @@
 //! [`crate::baseline`]) and, because `E[ψ_i·ψ_j] = 0` for i ≠ j,
 //! `E‖g_b‖² = E‖g‖² − 2 Σ_i b_i E[g·ψ_i] + Σ_i b_i² E‖ψ_i‖²`, minimised by
 //! `b*_i = E[g·ψ_i]/E‖ψ_i‖²` per decision index and by `b*_const = Σ_i E[g·ψ_i] / Σ_i E‖ψ_i‖²`
-//! for one constant. Every expectation is a sum over prefixes; each prefix's estimate comes
+//! for one constant. With one baseline per state, `b_i = w_{s_i}`, the same argument gives
+//! `E‖g_b‖² = E‖g‖² − 2 Σ_s w_s c_s + Σ_s w_s² A_ss` (`c_s`, `A_ss` the sums of `g·ψ_i`,
+//! `‖ψ_i‖²` over the decisions taken in s), minimised by `w*_s = c_s/A_ss`. Every expectation is a sum over prefixes; each prefix's estimate comes
 //! from the oracle's own code ([`crate::toy::estimator::decision_terms`]).
 
 use super::ExactError;
@@ -106,6 +108,21 @@ pub fn baselined_moments<S: Scalar>(
             baseline.len()
         )));
     }
+    baselined_moments_by(problem, theta, |_, i| pick(baseline, i))
+}
+
+/// (X1) `E[g_b]` and `E‖g_b‖²` at θ with the baseline of decision i (0-based) given by
+/// `baseline(states, i)` from the prefix's states s_1..s_{T−1} (`None`: b_i = 0). A function of
+/// `states[..=i]` keeps the estimator unbiased; one that reads a later state (which depends on
+/// a_i) need not.
+///
+/// # Errors
+/// As [`crate::exact::enumerate::moments`].
+pub fn baselined_moments_by<S: Scalar>(
+    problem: &ToyProblem<S>,
+    theta: &[S],
+    mut baseline: impl FnMut(&[usize], usize) -> Option<S>,
+) -> Result<BaselineMoments<S>, ExactError> {
     let table = problem.table(theta)?;
     let d = table.dim;
     let mut terms = DecisionTerms::new();
@@ -115,7 +132,7 @@ pub fn baselined_moments<S: Scalar>(
     for_each_prefix(problem, &table, |states, actions, p| {
         let actions = problem.scored_actions(states, actions);
         decision_terms(&table, states, actions, None, false, &mut terms);
-        terms.estimate_into(|i| pick(baseline, i), &mut g);
+        terms.estimate_into(|i| baseline(states, i), &mut g);
         m2 += p.clone() * norm_sq(&g);
         for (e, x) in eg.iter_mut().zip(&g) {
             *e += p.clone() * x;
@@ -124,6 +141,82 @@ pub fn baselined_moments<S: Scalar>(
     Ok(BaselineMoments {
         expected_estimate: eg,
         second_moment: m2,
+    })
+}
+
+/// The exact variance-minimising state-dependent baseline at θ, one value per state
+/// (`b_i = w_{s_i}`: the one-hot state features of [`crate::baseline::Baseline::StateDependent`]
+/// on a toy MDP, where `A = E[Σ_i ‖ψ_i‖² φ_i φ_iᵀ]` is diagonal).
+#[derive(Debug, Clone, PartialEq)]
+pub struct OptimalStateBaseline<S> {
+    /// `c_s = E[Σ_{i: s_i = s} g·ψ_i]` per state s.
+    pub cross: Vec<S>,
+    /// `A_ss = E[Σ_{i: s_i = s} ‖ψ_i‖²]` per state s.
+    pub score_moment: Vec<S>,
+    /// `w*_s = c_s / A_ss`, 0 where `A_ss = 0` (no scored decision in s: w_s does not matter).
+    pub weights: Vec<S>,
+    /// E‖g‖².
+    pub second_moment: S,
+    /// `E‖g_{b*}‖²` by enumeration with `b_i = w*_{s_i}`.
+    pub second_moment_optimal: S,
+    /// `E‖g‖² − Σ_s c_s² / A_ss`, the closed form of the same (math.md §9's identity with the
+    /// state's statistics).
+    pub second_moment_closed_form: S,
+}
+
+impl<S: Scalar> OptimalStateBaseline<S> {
+    /// The reduction factor `E‖g‖² / E‖g_{b*}‖²` (`None` when the baselined moment is 0).
+    pub fn reduction(&self) -> Option<S> {
+        ratio(&self.second_moment, &self.second_moment_optimal)
+    }
+}
+
+/// (X1) The statistics `c_s`, `A_ss` of every state at θ, the optimal per-state baseline
+/// `w*_s = c_s/A_ss` and its second moment by enumeration and in closed form
+/// ([`OptimalStateBaseline`]).
+///
+/// # Errors
+/// As [`crate::exact::enumerate::moments`].
+pub fn optimal_state_baseline<S: Scalar>(
+    problem: &ToyProblem<S>,
+    theta: &[S],
+) -> Result<OptimalStateBaseline<S>, ExactError> {
+    let n = problem.mdp().states;
+    let table = problem.table(theta)?;
+    let mut terms = DecisionTerms::new();
+    let mut g = vec![S::zero(); table.dim];
+    let mut cross = vec![S::zero(); n];
+    let mut score_moment = vec![S::zero(); n];
+    let mut m2 = S::zero();
+    for_each_prefix(problem, &table, |states, actions, p| {
+        let actions = problem.scored_actions(states, actions);
+        decision_terms(&table, states, actions, None, false, &mut terms);
+        terms.estimate_into(|_| None, &mut g);
+        m2 += p.clone() * norm_sq(&g);
+        for i in 0..terms.decisions() {
+            let s = states[i];
+            cross[s] += p.clone() * dot(&g, terms.score(i));
+            score_moment[s] += p.clone() * norm_sq(terms.score(i));
+        }
+    })?;
+    let weights: Vec<S> = cross
+        .iter()
+        .zip(&score_moment)
+        .map(|(c, m)| ratio(c, m).unwrap_or_else(S::zero))
+        .collect();
+    let closed_form = cross
+        .iter()
+        .zip(&weights)
+        .fold(m2.clone(), |acc, (c, w)| acc - c.clone() * w);
+    let optimal =
+        baselined_moments_by(problem, theta, |states, i| Some(weights[states[i]].clone()))?;
+    Ok(OptimalStateBaseline {
+        cross,
+        score_moment,
+        weights,
+        second_moment: m2,
+        second_moment_optimal: optimal.second_moment,
+        second_moment_closed_form: closed_form,
     })
 }
 

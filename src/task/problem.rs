@@ -520,6 +520,29 @@ where
         }
     }
 
+    /// The learner's features φ(s_i) of each scored decision (their first `leading` entries),
+    /// as the roll-out stored them.
+    fn state_features(
+        &self,
+        trajectory: &Self::Trajectory,
+        decisions: usize,
+        leading: Option<usize>,
+        out: &mut Vec<S>,
+    ) -> Result<usize, OracleError> {
+        let k = crate::baseline::leading_features(trajectory.feature_dim(), leading)?;
+        if trajectory.rows < decisions {
+            return Err(OracleError::Trajectory(format!(
+                "{decisions} scored decisions but {} feature rows",
+                trajectory.rows
+            )));
+        }
+        out.clear();
+        for phi in trajectory.feature_rows().take(decisions) {
+            out.extend_from_slice(&phi[..k]);
+        }
+        Ok(k)
+    }
+
     /// From the policy's own records: the absorbing tail (recorded last), then the per-step
     /// losses in order, as [`IlProblem::trajectory_loss`] adds them; `None` for records made
     /// from rows.

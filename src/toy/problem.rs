@@ -584,6 +584,25 @@ impl<S: Scalar> PerDecisionTerms<S> for ToyProblem<S> {
         cost.gradient_evaluations += self.decision_count(states) as u64;
         Ok(())
     }
+
+    /// The one-hot vector of decision i's state s_i (|S| entries, or the first `leading`), so that
+    /// `b_i = w_{s_i}`: one baseline per state.
+    fn state_features(
+        &self,
+        trajectory: &ToyTrajectory,
+        decisions: usize,
+        leading: Option<usize>,
+        out: &mut Vec<S>,
+    ) -> Result<usize, OracleError> {
+        self.check(trajectory)?;
+        let k = crate::baseline::leading_features(self.mdp.states, leading)?;
+        let (states, _) = self.prefix(trajectory);
+        out.clear();
+        for &s in states.iter().take(decisions) {
+            out.extend((0..k).map(|j| if j == s { S::one() } else { S::zero() }));
+        }
+        Ok(k)
+    }
 }
 
 #[cfg(test)]

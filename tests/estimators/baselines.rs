@@ -7,7 +7,10 @@
 use crate::common::{example, mdp_and_two_thetas, q, qs, terminating_mdp_and_two_thetas};
 use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms};
-use ilopt::exact::baseline::{baselined_moments, optimal_baselines, prefix_trajectory};
+use ilopt::exact::baseline::{
+    baselined_moments, baselined_moments_by, optimal_baselines, optimal_state_baseline,
+    prefix_trajectory,
+};
 use ilopt::exact::enumerate::{for_each_prefix, moments};
 use ilopt::exact::forward::forward;
 use ilopt::oracle::DecisionTerms;
@@ -111,6 +114,7 @@ fn check(mdp: &ToyMdp, theta: &[Q], theta_prime: &[Q], seed: &[(i64, i64)]) -> R
     {
         return Err("the optima are ordered E‖g_{b*}‖² ≤ E‖g_{b*const}‖² ≤ E‖g‖²".into());
     }
+    check_state_dependent(&p, theta, theta_prime, seed, &grad)?;
     // The oracle itself, with the constant / time-indexed baseline, plain and importance-weighted.
     let all_at = trajectories(&p, theta);
     let all_at_prime = trajectories(&p, theta_prime);
@@ -144,6 +148,131 @@ fn check(mdp: &ToyMdp, theta: &[Q], theta_prime: &[Q], seed: &[(i64, i64)]) -> R
                     "E_θ′[w g_b(θ)] ({kind:?}, {w:?}) = {mean:?} ≠ ∇F(θ) = {grad:?}"
                 ));
             }
+        }
+    }
+    Ok(())
+}
+
+/// The state-dependent baseline `b_i = w_{s_i}` (one-hot state features): `E[g_b] = ∇F` for a
+/// given w and for the optimum; `E‖g_b‖² = E‖g‖² − 2 Σ_s w_s c_s + Σ_s w_s² A_ss` against the
+/// enumeration; the optimum's closed form against its enumeration, and no w beats it; then the
+/// oracle: after one earlier trajectory is observed and committed, its weights are that
+/// trajectory's `c_s/A_ss` and its estimates (plain, and importance-weighted both ways) have mean
+/// ∇F exactly.
+fn check_state_dependent(
+    p: &ToyProblem<Q>,
+    theta: &[Q],
+    theta_prime: &[Q],
+    seed: &[(i64, i64)],
+    grad: &[Q],
+) -> Result<(), String> {
+    let mdp = p.mdp().clone();
+    let r = |(n, d): (i64, i64)| BigRational::new(n.into(), d.into());
+    let w: Vec<Q> = (0..mdp.states).map(|s| r(seed[s % seed.len()])).collect();
+    let opt = optimal_state_baseline(p, theta).map_err(|e| e.to_string())?;
+    let given = baselined_moments_by(p, theta, |states, i| Some(w[states[i]].clone()))
+        .map_err(|e| e.to_string())?;
+    if given.expected_estimate != grad {
+        return Err(format!("state baseline w = {w:?}: E[g_b] ≠ ∇F"));
+    }
+    let mut identity = opt.second_moment.clone();
+    for ((ws, c), a) in w.iter().zip(&opt.cross).zip(&opt.score_moment) {
+        identity -= Q::from_i64(2) * ws * c;
+        identity += ws.square() * a;
+    }
+    if identity != given.second_moment {
+        return Err(format!(
+            "state second-moment identity: {identity} ≠ {}",
+            given.second_moment
+        ));
+    }
+    if opt.second_moment_optimal != opt.second_moment_closed_form {
+        return Err(format!(
+            "the state optimum: enumeration {} ≠ closed form {}",
+            opt.second_moment_optimal, opt.second_moment_closed_form
+        ));
+    }
+    if given.second_moment < opt.second_moment_optimal
+        || opt.second_moment_optimal > opt.second_moment
+    {
+        return Err("the state optimum is beaten".into());
+    }
+    // The oracle, with the weights of one earlier trajectory (the last prefix at θ).
+    let all_at = trajectories(p, theta);
+    let all_at_prime = trajectories(p, theta_prime);
+    let th = DVector::from_column_slice(theta);
+    let th_prime = DVector::from_column_slice(theta_prime);
+    let kind = Baseline::StateDependent {
+        features: None,
+        decay: None,
+        ridge: None,
+    };
+    let oracle = Baselined::<_, Q>::new(p.clone(), 1, &kind).map_err(|e| e.to_string())?;
+    let mut cost = Cost::default();
+    let (earlier, _) = all_at.last().ok_or("no prefix")?;
+    let first = oracle
+        .estimate(
+            &th,
+            &vec![earlier.clone()],
+            EstimatorForm::Causal,
+            &mut cost,
+        )
+        .map_err(|e| e.to_string())?;
+    let plain = p
+        .estimate(&th, earlier, EstimatorForm::Causal, &mut cost)
+        .map_err(|e| e.to_string())?;
+    if first != plain {
+        return Err("no earlier trajectory: the state baseline must be 0".into());
+    }
+    let mut rng = KitRng::seed_from_u64(1);
+    oracle
+        .rollout(&Behaviour::Learner(&th), &mut rng, &mut cost)
+        .map_err(|e| e.to_string())?;
+    // That trajectory's c_s / A_ss, by the toy's independent per-decision terms.
+    let table = p.table(theta).map_err(|e| e.to_string())?;
+    let h = mdp.horizon;
+    let states = &earlier.states[..h - 1];
+    let scored = p.scored_actions(states, &earlier.actions[..h - 2]);
+    let mut terms = DecisionTerms::new();
+    decision_terms(&table, states, scored, None, false, &mut terms);
+    let (mut c, mut a) = (vec![Q::zero(); mdp.states], vec![Q::zero(); mdp.states]);
+    for i in 0..terms.decisions() {
+        c[states[i]] += dot(plain.as_slice(), terms.score(i));
+        a[states[i]] += norm_sq(terms.score(i));
+    }
+    let want: Vec<Q> = c
+        .iter()
+        .zip(&a)
+        .map(|(c, a)| {
+            if a.is_certainly_zero() {
+                Q::zero()
+            } else {
+                c / a
+            }
+        })
+        .collect();
+    if oracle.state_weights() != Some(want.clone()) {
+        return Err(format!(
+            "committed weights {:?} ≠ {want:?}",
+            oracle.state_weights()
+        ));
+    }
+    let mean = expectation(&all_at, |t| {
+        let g = oracle.estimate(&th, &vec![t.clone()], EstimatorForm::Causal, &mut cost);
+        g.unwrap().as_slice().to_vec()
+    });
+    if mean != grad {
+        return Err(format!("oracle E[g_b] (state) = {mean:?} ≠ ∇F = {grad:?}"));
+    }
+    for wt in [Weighting::Trajectory, Weighting::PerDecision] {
+        let mean = expectation(&all_at_prime, |t| {
+            let g = oracle.weighted_estimate(&th, &th_prime, &vec![t.clone()], wt, &mut cost);
+            g.unwrap().as_slice().to_vec()
+        });
+        if mean != grad {
+            return Err(format!(
+                "E_θ′[w g_b(θ)] (state, {wt:?}) = {mean:?} ≠ ∇F(θ) = {grad:?}"
+            ));
         }
     }
     Ok(())
@@ -306,6 +435,137 @@ fn a_baseline_that_peeks_at_the_action_is_biased() {
             "{name}: the mutation must be caught"
         );
     }
+}
+
+/// A "state" baseline that reads the *next* state, `b_i = w_{s_{i+1}}` (s_{i+1} depends on
+/// a_i), is caught as biased on every example MDP whose transitions depend on the action, while
+/// the same w on the decision's own state is exact.
+#[test]
+fn a_state_baseline_that_reads_the_next_state_is_biased() {
+    let mut caught = 0;
+    for (name, theta) in [
+        ("m1-tied.json", "0"),
+        ("three-state.json", "-1/2,3,1/4,-7/2,1/3,1"),
+        ("terminal-absorb.json", "1/3"),
+        ("terminal-reset.json", "1/3"),
+    ] {
+        let mdp = example(name);
+        let theta = ilopt::scalar::parse_exact_list(theta).unwrap();
+        if theta.len() != mdp.policy.dim() {
+            continue;
+        }
+        let p = ToyProblem::<Q>::new(&mdp);
+        let grad = forward(&p, &theta).unwrap().gradient;
+        let w: Vec<Q> = (0..mdp.states)
+            .map(|s| Q::from_i64(2 * s as i64 + 1))
+            .collect();
+        let own = baselined_moments_by(&p, &theta, |states, i| Some(w[states[i]].clone())).unwrap();
+        assert_eq!(
+            own.expected_estimate, grad,
+            "{name}: the own state is exact"
+        );
+        let next =
+            baselined_moments_by(&p, &theta, |states, i| Some(w[states[i + 1]].clone())).unwrap();
+        if next.expected_estimate != grad {
+            caught += 1;
+        }
+    }
+    assert!(
+        caught >= 2,
+        "the next-state mutation was caught on {caught} MDPs"
+    );
+}
+
+/// The state-dependent oracle in `f64` against the exact one on the same trajectories, estimate
+/// after estimate with a roll-out (commit) between them: inside the interval run of the same
+/// code; from the second trajectory on the baseline changes the estimate.
+#[test]
+fn f64_state_dependent_oracle_agrees_with_the_exact_one() {
+    let mdp = example("three-state.json");
+    let theta_q = ilopt::scalar::parse_exact_list("-1/2,3,1/4,-7/2,1/3,1").unwrap();
+    let theta_f: DVector<f64> = DVector::from_iterator(6, theta_q.iter().map(Scalar::to_f64));
+    let theta_x: DVector<Q> = DVector::from_vec(theta_q.clone());
+    let theta_i: DVector<Interval> =
+        DVector::from_iterator(6, theta_q.iter().map(<Interval as Scalar>::from_rational));
+    let kind = Baseline::StateDependent {
+        features: None,
+        decay: Some(ConfigNumber::ratio(9, 10)),
+        ridge: Some(ConfigNumber::ratio(1, 100)),
+    };
+    let pf = ToyProblem::<f64>::new(&mdp);
+    let px = ToyProblem::<Q>::new(&mdp);
+    let of = Baselined::<_, f64>::new(pf.clone(), 1, &kind).unwrap();
+    let ox = Baselined::<_, Q>::new(px.clone(), 1, &kind).unwrap();
+    let oi = Baselined::<_, Interval>::new(ToyProblem::<Interval>::new(&mdp), 1, &kind).unwrap();
+    let mut rng = KitRng::seed_from_u64(3);
+    let mut cost = Cost::default();
+    let mut changed = 0;
+    for _ in 0..8 {
+        let batch = of
+            .rollout(&Behaviour::Learner(&theta_f), &mut rng, &mut cost)
+            .unwrap();
+        let mut r2 = KitRng::seed_from_u64(0);
+        ox.rollout(&Behaviour::Learner(&theta_x), &mut r2, &mut cost)
+            .unwrap();
+        oi.rollout(&Behaviour::Learner(&theta_i), &mut r2, &mut cost)
+            .unwrap();
+        let f = of
+            .estimate(&theta_f, &batch, EstimatorForm::Causal, &mut cost)
+            .unwrap();
+        let x = ox
+            .estimate(&theta_x, &batch, EstimatorForm::Causal, &mut cost)
+            .unwrap();
+        let i = oi
+            .estimate(&theta_i, &batch, EstimatorForm::Causal, &mut cost)
+            .unwrap();
+        assert!(
+            all_agree(f.as_slice(), x.as_slice(), i.as_slice()),
+            "{f:?} vs {x:?}"
+        );
+        let plain = px
+            .estimate(&theta_x, &batch[0], EstimatorForm::Causal, &mut cost)
+            .unwrap();
+        changed += usize::from(plain != x);
+    }
+    assert!(
+        changed >= 6,
+        "the baseline changed only {changed} of 8 estimates"
+    );
+}
+
+/// Bad settings of the state-dependent baseline are clear errors naming the setting.
+#[test]
+fn invalid_state_baselines_are_clear_errors() {
+    let p = ToyProblem::<f64>::new(&example("m1-tied.json"));
+    let make = |features, decay, ridge| {
+        Baselined::<_, f64>::new(
+            p.clone(),
+            1,
+            &Baseline::StateDependent {
+                features,
+                decay,
+                ridge,
+            },
+        )
+    };
+    let e = make(Some(0), None, None).unwrap_err();
+    assert!(e.to_string().contains("features = 0"), "{e}");
+    let e = make(None, Some(ConfigNumber::ratio(-1, 2)), None).unwrap_err();
+    assert!(e.to_string().contains("decay"), "{e}");
+    let e = make(None, None, Some(ConfigNumber::ratio(-1, 2))).unwrap_err();
+    assert!(e.to_string().contains("ridge"), "{e}");
+    // More features than the problem has: refused at the first estimate.
+    let o = make(Some(7), None, None).unwrap();
+    let theta = DVector::from_vec(vec![0.0]);
+    let mut rng = KitRng::seed_from_u64(1);
+    let mut cost = Cost::default();
+    let t = o
+        .rollout(&Behaviour::Learner(&theta), &mut rng, &mut cost)
+        .unwrap();
+    let e = o
+        .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
+        .unwrap_err();
+    assert!(e.to_string().contains("7 state features"), "{e}");
 }
 
 #[test]
@@ -574,6 +834,16 @@ fn the_configuration_round_trips_through_json() {
             decay: Some(ConfigNumber::ratio(9, 10)),
         },
         Baseline::LeaveOneOut,
+        Baseline::StateDependent {
+            features: Some(4),
+            decay: Some(ConfigNumber::ratio(99, 100)),
+            ridge: None,
+        },
+        Baseline::StateDependent {
+            features: None,
+            decay: None,
+            ridge: Some(ConfigNumber::from(0.5)),
+        },
     ] {
         let text = serde_json::to_string(&b).unwrap();
         let back: Baseline = serde_json::from_str(&text).unwrap();
@@ -581,6 +851,15 @@ fn the_configuration_round_trips_through_json() {
     }
     let b: Baseline = serde_json::from_str(r#"{"kind": "leave-one-out"}"#).unwrap();
     assert_eq!(b, Baseline::LeaveOneOut);
+    let b: Baseline = serde_json::from_str(r#"{"kind": "state-dependent"}"#).unwrap();
+    assert_eq!(
+        b,
+        Baseline::StateDependent {
+            features: None,
+            decay: None,
+            ridge: None
+        }
+    );
 }
 
 /// The real tasks fold a given baseline into the plain estimator's loop (loss shifts

@@ -1,0 +1,379 @@
+//! [`RunningRegression`]: the variance-minimising state-dependent baseline `b(s) = w·φ_b(s)`,
+//! its weights estimated from earlier iterations only.
+
+use crate::oracle::DecisionTerms;
+use crate::scalar::{Scalar, dot, norm_sq};
+
+/// Running estimates of the weights of the variance-minimising linear state-dependent baseline
+/// `b_i = w·φ_i` (φ_i = φ_b(s_i), k state features of decision i's state; [`crate::baseline`]):
+///
+/// `E‖g_b‖² = E‖g‖² − 2 wᵀc + wᵀA w` with `c = E[Σ_i (g·ψ_i) φ_i]` and
+/// `A = E[Σ_i ‖ψ_i‖² φ_i φ_iᵀ]` (the cross terms `E[b_i ψ_i · b_j ψ_j]`, i ≠ j, vanish as for
+/// constants: condition on the later decision's history, of which the earlier term and the later
+/// state are functions), minimised by the solutions of `A w = c`: a weighted least-squares fit of
+/// `(g·ψ_i)/‖ψ_i‖²` on φ_i with weights `‖ψ_i‖²`. One constant feature gives the constant
+/// `b*_const`; one-hot decision indices give the time-indexed `b*_i`.
+///
+/// As [`crate::baseline::RunningOptimum`], a trajectory's statistics are held back
+/// ([`RunningRegression::observe`]) and enter the weights at [`RunningRegression::commit`],
+/// which the oracle calls when it rolls out the next trajectory: every baseline is a function of
+/// the decision's state and of strictly earlier trajectories, so the estimate stays unbiased
+/// whatever the weights are. `decay` multiplies the committed sums at each commit; `ridge` λ ≥ 0
+/// is added to A's diagonal before the solve ([`solve_symmetric`]).
+#[derive(Debug, Clone)]
+pub struct RunningRegression<S> {
+    decay: Option<S>,
+    ridge: S,
+    /// Features per decision (0 before the first observation).
+    k: usize,
+    /// Σ ‖ψ_i‖² φ_i φ_iᵀ (k × k, row-major) and Σ (g·ψ_i) φ_i over committed trajectories.
+    a: Vec<S>,
+    c: Vec<S>,
+    /// Their values from the trajectories observed since the last commit.
+    pending_a: Vec<S>,
+    pending_c: Vec<S>,
+    pending: bool,
+    /// The committed weights w (empty before any statistics).
+    w: Vec<S>,
+    /// Working storage: one trajectory's plain estimate, the solve's augmented matrix.
+    g: Vec<S>,
+    work: Vec<S>,
+}
+
+impl<S: Scalar> RunningRegression<S> {
+    /// No data yet (every baseline 0); `decay` as for [`crate::baseline::RunningOptimum`]
+    /// (`None`: 1), `ridge` λ ≥ 0 on A's diagonal.
+    pub fn new(decay: Option<S>, ridge: S) -> Self {
+        Self {
+            decay,
+            ridge,
+            k: 0,
+            a: Vec::new(),
+            c: Vec::new(),
+            pending_a: Vec::new(),
+            pending_c: Vec::new(),
+            pending: false,
+            w: Vec::new(),
+            g: Vec::new(),
+            work: Vec::new(),
+        }
+    }
+
+    /// The committed weights w; empty before any trajectory's statistics were committed.
+    pub fn weights(&self) -> &[S] {
+        &self.w
+    }
+
+    /// The committed baseline `w·φ` of a state with features `phi`; `None` (b = 0) before any
+    /// statistics were committed.
+    pub fn baseline(&self, phi: &[S]) -> Option<S> {
+        (!self.w.is_empty()).then(|| dot(&self.w, phi))
+    }
+
+    /// Forget the pending statistics (a new estimate on the current trajectories replaces them).
+    pub fn clear_pending(&mut self) {
+        self.pending = false;
+        for x in self.pending_a.iter_mut().chain(&mut self.pending_c) {
+            *x = S::zero();
+        }
+    }
+
+    /// Add one trajectory's `Σ_i (g·ψ_i) φ_i` and `Σ_i ‖ψ_i‖² φ_i φ_iᵀ` (g the plain estimate of
+    /// `terms`, φ_i the k entries of `features` from `k·i` on) to the pending statistics.
+    ///
+    /// # Panics
+    /// If `features` has fewer than k entries per scored decision, or k differs from earlier
+    /// observations' (the problem fixes it).
+    pub fn observe(&mut self, terms: &DecisionTerms<S>, features: &[S], k: usize) {
+        if self.k == 0 {
+            self.k = k;
+            for v in [&mut self.a, &mut self.pending_a] {
+                v.resize(k * k, S::zero());
+            }
+            for v in [&mut self.c, &mut self.pending_c] {
+                v.resize(k, S::zero());
+            }
+        }
+        assert_eq!(k, self.k, "state features per decision changed");
+        let n = terms.decisions();
+        assert!(features.len() >= n * k, "state features of {n} decisions");
+        self.g.clear();
+        self.g.resize(terms.dim(), S::zero());
+        terms.estimate_into(|_| None, &mut self.g);
+        for (i, phi) in features.chunks_exact(k.max(1)).take(n).enumerate() {
+            let psi = terms.score(i);
+            let y = dot(&self.g, psi);
+            let m = norm_sq(psi);
+            for (c, x) in self.pending_c.iter_mut().zip(phi) {
+                *c += y.clone() * x;
+            }
+            for (row, x) in self.pending_a.chunks_exact_mut(k).zip(phi) {
+                let mx = m.clone() * x;
+                for (a, z) in row.iter_mut().zip(phi) {
+                    *a += mx.clone() * z;
+                }
+            }
+        }
+        self.pending = true;
+    }
+
+    /// Move the pending statistics into the sums (every sum times the decay, plus the pending
+    /// one) and solve `(A + λI) w = c` for the weights ([`solve_symmetric`]). Nothing changes
+    /// before the first observation.
+    pub fn commit(&mut self) {
+        if self.k == 0 {
+            return;
+        }
+        if let Some(decay) = &self.decay {
+            for x in self.a.iter_mut().chain(&mut self.c) {
+                *x *= decay;
+            }
+        }
+        if self.pending {
+            for (x, p) in self.a.iter_mut().zip(&self.pending_a) {
+                *x += p;
+            }
+            for (x, p) in self.c.iter_mut().zip(&self.pending_c) {
+                *x += p;
+            }
+        }
+        self.clear_pending();
+        let k = self.k;
+        self.work.clear();
+        for (row, c) in self.a.chunks_exact(k).zip(&self.c) {
+            self.work.extend_from_slice(row);
+            self.work.push(c.clone());
+        }
+        for j in 0..k {
+            self.work[j * (k + 1) + j] += &self.ridge;
+        }
+        self.w.resize(k, S::zero());
+        solve_symmetric(&mut self.work, k, &mut self.w);
+    }
+}
+
+/// A pivot counts only above this fraction of its diagonal entry ([`solve_symmetric`]).
+const PIVOT_FRACTION: (i64, i64) = (1, 10_000_000_000);
+
+/// Solve `M w = c` for a symmetric positive semi-definite k × k matrix M, given as the
+/// augmented k × (k + 1) matrix `[M | c]` (row-major, overwritten), into `w`: Gaussian
+/// elimination in the natural order (no row exchanges, which a positive semi-definite matrix
+/// does not need). A pivot that is not certainly above 10⁻¹⁰ of its original diagonal entry
+/// (a direction with no data, or one the earlier features already span) is skipped: its weight
+/// is 0 and its column takes no part. When c lies in M's range (as the baseline's statistics do:
+/// every `(g·ψ_i) φ_i` with ψ_i ≠ 0 is in the span of `‖ψ_i‖² φ_i φ_iᵀ`) and only exactly null
+/// directions are skipped, w solves the system exactly; otherwise it is the solution with the
+/// skipped weights fixed at 0. Any w leaves the baseline unbiased.
+pub fn solve_symmetric<S: Scalar>(m: &mut [S], k: usize, w: &mut [S]) {
+    let cols = k + 1;
+    assert_eq!(m.len(), k * cols, "an augmented k × (k + 1) matrix");
+    assert_eq!(w.len(), k, "k weights");
+    let fraction = S::from_ratio(PIVOT_FRACTION.0, PIVOT_FRACTION.1);
+    let original: Vec<S> = (0..k).map(|j| m[j * cols + j].clone()).collect();
+    let mut used = vec![false; k];
+    for j in 0..k {
+        let pivot = m[j * cols + j].clone();
+        let threshold = fraction.clone() * &original[j];
+        used[j] = pivot.is_certainly_positive()
+            && pivot.certain_cmp(&threshold) == Some(std::cmp::Ordering::Greater);
+        if !used[j] {
+            continue;
+        }
+        for r in j + 1..k {
+            let f = m[r * cols + j].clone() / &pivot;
+            if f.is_certainly_zero() {
+                continue;
+            }
+            for l in j..cols {
+                let x = f.clone() * &m[j * cols + l];
+                m[r * cols + l] -= x;
+            }
+        }
+    }
+    for j in (0..k).rev() {
+        if !used[j] {
+            w[j] = S::zero();
+            continue;
+        }
+        let mut rhs = m[j * cols + k].clone();
+        for l in j + 1..k {
+            rhs -= m[j * cols + l].clone() * &w[l];
+        }
+        w[j] = rhs / &m[j * cols + j];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::baseline::{PerDecisionTerms, RunningOptimum};
+    use crate::problem::{Behaviour, Cost, IlProblem, KitRng};
+    use crate::scalar::{BigRational, Dual, Interval};
+    use crate::tolerance::Agreement;
+    use crate::toy::{ToyMdp, ToyProblem};
+    use nalgebra::DVector;
+    use rand::{Rng, SeedableRng};
+
+    /// `A = B Bᵀ` (k × k, rank ≤ r) from small random integers, and `c = A x`: `[A | c]` in
+    /// rationals, with x.
+    fn system(rng: &mut KitRng, k: usize, r: usize) -> (Vec<BigRational>, Vec<BigRational>) {
+        let int = |rng: &mut KitRng| BigRational::from_integer(rng.random_range(-4i64..=4).into());
+        let b: Vec<Vec<BigRational>> = (0..k).map(|_| (0..r).map(|_| int(rng)).collect()).collect();
+        let x: Vec<BigRational> = (0..k).map(|_| int(rng)).collect();
+        let a = |i: usize, j: usize| crate::scalar::dot(&b[i], &b[j]);
+        let mut m = Vec::new();
+        for i in 0..k {
+            let row: Vec<BigRational> = (0..k).map(|j| a(i, j)).collect();
+            let c = crate::scalar::dot(&row, &x);
+            m.extend(row);
+            m.push(c);
+        }
+        (m, x)
+    }
+
+    /// `A w − c` for the augmented `[A | c]`.
+    fn residual(m: &[BigRational], k: usize, w: &[BigRational]) -> Vec<BigRational> {
+        m.chunks_exact(k + 1)
+            .map(|row| crate::scalar::dot(&row[..k], w) - &row[k])
+            .collect()
+    }
+
+    /// Full rank: every scalar's solution agrees with the exact one (equal in ℚ, enclosed in
+    /// intervals, inside the same code's interval run in `f64`); rank-deficient systems are solved
+    /// exactly in ℚ with the dependent directions' weights 0.
+    fn solves<S: Agreement>() {
+        let mut rng = KitRng::seed_from_u64(5);
+        let mut full = 0;
+        for case in 0..300usize {
+            let k = 1 + case % 6;
+            let r = if case % 3 == 0 {
+                k.saturating_sub(1).max(1)
+            } else {
+                k + 2
+            };
+            let (m, _) = system(&mut rng, k, r);
+            let mut exact = m.clone();
+            let mut w = vec![BigRational::from_integer(0.into()); k];
+            solve_symmetric(&mut exact, k, &mut w);
+            assert!(
+                residual(&m, k, &w).iter().all(|x| x.is_certainly_zero()),
+                "case {case}: A w ≠ c in ℚ"
+            );
+            // Nonsingular: the solution is unique; compare every scalar with it.
+            let mut check = m.clone();
+            let mut skipped = vec![BigRational::from_integer(0.into()); k];
+            solve_symmetric(&mut check, k, &mut skipped);
+            let singular = (0..k).any(|j| check[j * (k + 1) + j].is_certainly_zero());
+            if singular {
+                continue;
+            }
+            full += 1;
+            let mut ms: Vec<S> = m.iter().map(S::from_rational).collect();
+            let mut ws = vec![S::zero(); k];
+            solve_symmetric(&mut ms, k, &mut ws);
+            let mut mi: Vec<Interval> = m.iter().map(Interval::from_rational).collect();
+            let mut wi = vec![Interval::zero(); k];
+            solve_symmetric(&mut mi, k, &mut wi);
+            for j in 0..k {
+                assert!(
+                    ws[j].agrees(&w[j], &wi[j]),
+                    "case {case}, w_{j}: {:?} vs {} in {:?} ({})",
+                    ws[j].to_f64(),
+                    w[j],
+                    wi[j],
+                    std::any::type_name::<S>()
+                );
+            }
+        }
+        assert!(full > 100, "only {full} nonsingular systems");
+    }
+
+    #[test]
+    fn the_solver_agrees_with_the_exact_solution_in_every_scalar() {
+        solves::<BigRational>();
+        solves::<Interval>();
+        solves::<f64>();
+        // Not f32: its rule (a fixed relative error) presumes no amplification, and a solve
+        // amplifies rounding by the system's condition number.
+        solves::<Dual<f64>>();
+    }
+
+    /// A skipped direction: a duplicated feature leaves the second copy's weight 0 and the
+    /// system solved exactly; a ridge makes every pivot count.
+    #[test]
+    fn a_duplicated_feature_is_skipped_and_a_ridge_is_not() {
+        let q = |n: i64| BigRational::from_integer(n.into());
+        // A = [[2, 2], [2, 2]], c = [6, 6]: w = (3, 0).
+        let mut m = vec![q(2), q(2), q(6), q(2), q(2), q(6)];
+        let mut w = vec![q(0); 2];
+        solve_symmetric(&mut m, 2, &mut w);
+        assert_eq!(w, vec![q(3), q(0)]);
+        // With λ = 1: [[3, 2], [2, 3]] w = (6, 6): w = (6/5, 6/5).
+        let mut m = vec![q(3), q(2), q(6), q(2), q(3), q(6)];
+        solve_symmetric(&mut m, 2, &mut w);
+        assert_eq!(w, vec![BigRational::new(6.into(), 5.into()); 2]);
+    }
+
+    /// Two routes to the same baselines: a constant feature φ = 1 gives
+    /// [`RunningOptimum`]'s constant `Σ_i g·ψ_i / Σ_i ‖ψ_i‖²`, one-hot decision indices give its
+    /// time-indexed `b*_i`, after commits of the same trajectories (decay 9/10), exactly.
+    #[test]
+    fn one_constant_feature_is_the_estimated_constant() {
+        let mdp = ToyMdp::from_json_str(include_str!("../../examples/toy/three-state.json"))
+            .expect("valid toy file");
+        let p = ToyProblem::<BigRational>::new(&mdp);
+        let theta =
+            DVector::from_vec(crate::scalar::parse_exact_list("-1/2,3,1/4,-7/2,1/3,1").expect("θ"));
+        let decay = Some(BigRational::new(9.into(), 10.into()));
+        let mut optimum = RunningOptimum::new(decay.clone());
+        let mut constant =
+            RunningRegression::new(decay.clone(), BigRational::from_integer(0.into()));
+        let mut indexed = RunningRegression::new(decay, BigRational::from_integer(0.into()));
+        let mut rng = KitRng::seed_from_u64(9);
+        let mut cost = Cost::default();
+        let mut terms = DecisionTerms::new();
+        let n = mdp.horizon - 2;
+        let mut checked = 0;
+        for _ in 0..12 {
+            let t = p
+                .rollout(&Behaviour::Learner(&theta), &mut rng, &mut cost)
+                .expect("roll-out");
+            p.decision_terms(&theta, &t, None, &mut terms, &mut cost)
+                .expect("terms");
+            terms.finish();
+            let d = terms.decisions();
+            let ones = vec![BigRational::from_integer(1.into()); d];
+            let onehot: Vec<BigRational> = (0..d)
+                .flat_map(|i| {
+                    (0..n).map(move |j| BigRational::from_integer(i64::from(i == j).into()))
+                })
+                .collect();
+            optimum.observe(&terms);
+            constant.observe(&terms, &ones, 1);
+            indexed.observe(&terms, &onehot, n);
+            optimum.commit();
+            constant.commit();
+            indexed.commit();
+            let one = [BigRational::from_integer(1.into())];
+            assert_eq!(
+                constant
+                    .baseline(&one)
+                    .filter(|_| optimum.constant().is_some()),
+                optimum.constant()
+            );
+            for i in 0..n {
+                let e: Vec<BigRational> = (0..n)
+                    .map(|j| BigRational::from_integer(i64::from(i == j).into()))
+                    .collect();
+                if let Some(b) = optimum.time_indexed(i) {
+                    assert_eq!(indexed.baseline(&e), Some(b), "b_{i}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(
+            checked > 10,
+            "only {checked} time-indexed baselines compared"
+        );
+    }
+}
