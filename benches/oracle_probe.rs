@@ -21,7 +21,9 @@
 //! (`Baselined`, m = 2), compared with each other. Modes `single`, `constant` and `estimated`: the
 //! causal estimate alone of one trajectory through `Baselined` with m = 1, without a baseline, with
 //! the constant b = 50 and with the variance-minimising per-decision constants estimated from the
-//! earlier estimates (decay 0.99), the last two compared with the first. Modes `oracle` and
+//! earlier estimates (decay 0.99), the last two compared with the first; mode `state`: the same
+//! with the state-dependent baseline (the features, the decision index and 1; weights fitted on
+//! every probe trajectory before the timing), compared with `single`. Modes `oracle` and
 //! `oracle-estimated`: a whole oracle call through `Baselined` with m = 1 (roll-out of the
 //! learner, then its causal estimate), without a baseline and with the estimated per-decision
 //! constants (their statistics committed at each roll-out, as in training), compared. Modes
@@ -71,7 +73,7 @@ fn oracle_once<P: IlProblem<f64>>(
 }
 
 /// Every mode the probe knows.
-const MODES: [&str; 20] = [
+const MODES: [&str; 21] = [
     "generic",
     "spec",
     "rollout",
@@ -86,6 +88,7 @@ const MODES: [&str; 20] = [
     "single",
     "constant",
     "estimated",
+    "state",
     "oracle",
     "oracle-estimated",
     "weighted",
@@ -202,6 +205,19 @@ fn main() {
         },
     )
     .expect("estimated");
+    // The state-dependent baseline with the decision index, its weights fitted on every probe
+    // trajectory (committed by one roll-out) before the timing.
+    let state = Baselined::new(
+        p.clone(),
+        1,
+        &Baseline::StateDependent {
+            features: None,
+            time: true,
+            decay: None,
+            ridge: None,
+        },
+    )
+    .expect("state");
     let oracle_estimated = estimated.clone();
     // The weighted estimates use the committed baselines: statistics from every probe trajectory,
     // committed by one roll-out, as in training.
@@ -214,6 +230,14 @@ fn main() {
     }
     let mut rng = KitRng::seed_from_u64(SEEDS);
     weighted_estimated
+        .rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
+        .expect("roll-out");
+    for one in &singles {
+        state
+            .estimate(&theta, one, EstimatorForm::Causal, &mut warm)
+            .expect("estimate");
+    }
+    state
         .rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
         .expect("roll-out");
 
@@ -306,11 +330,12 @@ fn main() {
                             )[0];
                             batch.iter().map(|tr| tr.len() as u64).sum()
                         }
-                        "single" | "constant" | "estimated" => {
+                        "single" | "constant" | "estimated" | "state" => {
                             let one = &singles[seed as usize];
                             let o = match mode {
                                 "constant" => &constant,
                                 "estimated" => &estimated,
+                                "state" => &state,
                                 _ => &single,
                             };
                             acc += black_box(
@@ -390,6 +415,7 @@ fn main() {
         ("loo", "pairs"),
         ("constant", "single"),
         ("estimated", "single"),
+        ("state", "single"),
         ("oracle-estimated", "oracle"),
         ("weighted-estimated", "weighted"),
         ("weighted-loo", "weighted-pairs"),

@@ -426,6 +426,15 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
         ),
         (2, Baseline::LeaveOneOut),
         (3, Baseline::LeaveOneOut),
+        (
+            2,
+            Baseline::StateDependent {
+                features: None,
+                time: true,
+                decay: Some(ConfigNumber::ratio(99, 100)),
+                ridge: None,
+            },
+        ),
     ] {
         let p = Baselined::<_, f64>::new(cartpole(), m, &kind).unwrap();
         let mut rng = KitRng::seed_from_u64(5);
@@ -476,9 +485,12 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
         }
         // Per call, never per step: the given baselines' pass allocates per trajectory its
         // shifts, the logistic pass's records and its estimate, then the mean; leave-one-out and
-        // the estimated baselines (decisions recorded into kept buffers) only their result.
+        // the estimated and the state-dependent baselines (decisions recorded into kept buffers)
+        // only their result.
         let fast = match kind {
-            Baseline::LeaveOneOut | Baseline::Estimated { .. } => 1,
+            Baseline::LeaveOneOut
+            | Baseline::Estimated { .. }
+            | Baseline::StateDependent { .. } => 1,
             Baseline::Constant { .. } => 3 * m as u64 + 1,
             _ => m as u64 + 2,
         };

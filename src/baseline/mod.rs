@@ -92,6 +92,11 @@ pub enum Baseline {
         /// Use only the first this many state features (absent: all of them).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         features: Option<usize>,
+        /// Append the decision's index i and a constant 1 to the state features, so that the
+        /// baseline can follow the loss-to-go's decline along the horizon (i is part of the
+        /// history, so the baseline stays unbiased).
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        time: bool,
         /// Factor in [0, 1] applied to the past statistics at every iteration (absent: 1).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         decay: Option<ConfigNumber>,

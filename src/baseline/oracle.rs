@@ -21,6 +21,7 @@ enum Kind<S> {
     LeaveOneOut,
     StateDependent {
         leading: Option<usize>,
+        time: bool,
         running: RefCell<RunningRegression<S>>,
     },
 }
@@ -33,6 +34,7 @@ enum Kind<S> {
 struct Buffers<S> {
     terms: Vec<DecisionTerms<S>>,
     features: Vec<(Vec<S>, usize)>,
+    products: (Vec<S>, Vec<S>),
     records: Vec<RecordedPass<S>>,
     totals: Vec<S>,
     losses: Vec<S>,
@@ -126,6 +128,7 @@ impl<P, S: Scalar> Baselined<P, S> {
             },
             Baseline::StateDependent {
                 features,
+                time,
                 decay,
                 ridge,
             } => {
@@ -148,6 +151,7 @@ impl<P, S: Scalar> Baselined<P, S> {
                 };
                 Kind::StateDependent {
                     leading: *features,
+                    time: *time,
                     running: RefCell::new(RunningRegression::new(decay_of(decay.as_ref())?, ridge)),
                 }
             }
@@ -166,6 +170,7 @@ impl<P, S: Scalar> Baselined<P, S> {
             buffers: RefCell::new(Buffers {
                 terms: Vec::new(),
                 features: Vec::new(),
+                products: (Vec::new(), Vec::new()),
                 records: Vec::new(),
                 totals: Vec::new(),
                 losses: Vec::new(),
@@ -201,6 +206,41 @@ impl<P, S: Scalar> Baselined<P, S> {
             _ => None,
         }
     }
+}
+
+/// Each row of k state features (n rows) extended by the decision's index i and a constant 1,
+/// in place.
+fn with_time<S: Scalar>(phi: &mut Vec<S>, k: usize, n: usize) {
+    phi.resize(n * (k + 2), S::zero());
+    // i as a sum of ones (exact for every index a trajectory can have), counted down.
+    let mut index = S::from_i64(n as i64);
+    for i in (0..n).rev() {
+        index -= S::one();
+        for j in (0..k).rev() {
+            phi[i * (k + 2) + j] = phi[i * k + j].clone();
+        }
+        phi[i * (k + 2) + k] = index.clone();
+        phi[i * (k + 2) + k + 1] = S::one();
+    }
+}
+
+/// The state features of the first `n` scored decisions of `t` into `phi` (k per decision, k
+/// returned): the problem's ([`PerDecisionTerms::state_features`]), with the decision index and 1
+/// appended when `time`.
+fn state_rows<S: Scalar, P: PerDecisionTerms<S>>(
+    inner: &P,
+    t: &P::Trajectory,
+    n: usize,
+    leading: Option<usize>,
+    time: bool,
+    phi: &mut Vec<S>,
+) -> Result<usize, OracleError> {
+    let k = inner.state_features(t, n, leading, phi)?;
+    if time {
+        with_time(phi, k, n);
+        return Ok(k + 2);
+    }
+    Ok(k)
 }
 
 /// The error of a leave-one-out minibatch with fewer than two trajectories.
@@ -421,6 +461,92 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         Ok(mean)
     }
 
+    /// The mean estimate over `batch` with the committed state-dependent baseline of
+    /// [`RunningRegression`], which then observes the batch, on the estimated kind's route:
+    /// every trajectory's decisions recorded ([`PerDecisionTerms::record_decisions`]), its
+    /// baselines `b_i = w·φ_i` from its state features, its plain estimate g summed once
+    /// ([`PerDecisionTerms::estimate_recorded`]), then one more read of its scores for the
+    /// products `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
+    /// ([`PerDecisionTerms::recorded_score_products`]), from which the statistics are summed
+    /// ([`RunningRegression::observe_products`]). No allocation per step.
+    fn state_dependent(
+        &self,
+        theta: &DVector<S>,
+        batch: &[P::Trajectory],
+        cost: &mut Cost,
+    ) -> Result<DVector<S>, OracleError> {
+        let Kind::StateDependent {
+            leading,
+            time,
+            running,
+        } = &self.kind
+        else {
+            unreachable!("the state-dependent kind")
+        };
+        let m = batch.len();
+        if m == 0 {
+            return Err(OracleError::Trajectory("an empty minibatch".into()));
+        }
+        let inner = self.inner();
+        let mut running = running.borrow_mut();
+        let mut buffers = self.buffers.borrow_mut();
+        let Buffers {
+            records,
+            features,
+            products: (cross, moment),
+            totals: baseline,
+            plain,
+            g,
+            ..
+        } = &mut *buffers;
+        let records = record_batch(inner, theta, batch, records, cost)?;
+        if features.is_empty() {
+            features.push((Vec::new(), 0));
+        }
+        let (phi, _) = &mut features[0];
+        let d = inner.dim();
+        g.clear();
+        g.resize(d, S::zero());
+        running.clear_pending();
+        for (t, r) in batch.iter().zip(records.iter_mut()) {
+            let n = r.decisions();
+            let k = state_rows(inner, t, n, *leading, *time, phi)?;
+            baseline.clear();
+            if !running.weights().is_empty() {
+                baseline.extend(
+                    phi.chunks_exact(k.max(1))
+                        .take(n)
+                        .map(|row| running.baseline(row).unwrap_or_else(S::zero)),
+                );
+            }
+            plain.clear();
+            plain.resize(d, S::zero());
+            inner.estimate_recorded(t, r, None, plain);
+            for (gj, x) in g.iter_mut().zip(plain.iter()) {
+                *gj += x;
+            }
+            for v in [&mut *cross, &mut *moment] {
+                v.clear();
+                v.resize(n, S::zero());
+            }
+            let out = ScoreProducts {
+                v: plain,
+                baseline,
+                cross,
+                moment,
+                g,
+            };
+            inner.recorded_score_products(t, r, out);
+            running.observe_products(phi, k, cross, moment);
+        }
+        let m = S::from_i64(m as i64);
+        let mean = DVector::from_iterator(d, g.iter().map(|x| x.clone() / &m));
+        if !mean.iter().all(Scalar::is_finite) {
+            return Err(OracleError::NonFinite("the baselined gradient estimate"));
+        }
+        Ok(mean)
+    }
+
     /// The mean baselined estimate over `batch`, each trajectory's terms from `fill`.
     fn baselined(
         &self,
@@ -450,14 +576,12 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             fill(t, out)?;
             out.finish();
         }
-        if let Kind::StateDependent { leading, .. } = &self.kind {
+        if let Kind::StateDependent { leading, time, .. } = &self.kind {
             if features.len() < m {
                 features.resize_with(m, || (Vec::new(), 0));
             }
             for ((t, out), (phi, k)) in batch.iter().zip(terms.iter()).zip(features.iter_mut()) {
-                *k = self
-                    .inner()
-                    .state_features(t, out.decisions(), *leading, phi)?;
+                *k = state_rows(self.inner(), t, out.decisions(), *leading, *time, phi)?;
             }
         }
         let d = self.inner().dim();
@@ -593,6 +717,9 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         if matches!(self.kind, Kind::Estimated { .. }) {
             return self.estimated(theta, trajectory, cost);
         }
+        if matches!(self.kind, Kind::StateDependent { .. }) {
+            return self.state_dependent(theta, trajectory, cost);
+        }
         let given = match &self.kind {
             Kind::Constant(b) => Some(Given::Constant(b)),
             Kind::TimeIndexed(bs) => Some(Given::TimeIndexed(bs)),
@@ -609,7 +736,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
 
     /// Without a baseline, the minibatch's own (one pass per trajectory). With a baseline the
     /// estimate, then the trajectory loss: for the kinds that record every trajectory's decisions
-    /// (estimated, leave-one-out) read off the records where the problem can
+    /// (estimated, leave-one-out, state-dependent) read off the records where the problem can
     /// ([`PerDecisionTerms::recorded_trajectory_loss`]; the same value), else computed again.
     fn estimate_with_loss(
         &self,
@@ -621,7 +748,10 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         if matches!(self.kind, Kind::None) {
             return self.batch.estimate_with_loss(theta, trajectory, form, cost);
         }
-        if !matches!(self.kind, Kind::Estimated { .. } | Kind::LeaveOneOut) {
+        if !matches!(
+            self.kind,
+            Kind::Estimated { .. } | Kind::LeaveOneOut | Kind::StateDependent { .. }
+        ) {
             return crate::problem::estimate_then_loss(self, theta, trajectory, form, cost);
         }
         let g = self.estimate(theta, trajectory, form, cost)?;

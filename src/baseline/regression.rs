@@ -26,7 +26,8 @@ pub struct RunningRegression<S> {
     ridge: S,
     /// Features per decision (0 before the first observation).
     k: usize,
-    /// Σ ‖ψ_i‖² φ_i φ_iᵀ (k × k, row-major) and Σ (g·ψ_i) φ_i over committed trajectories.
+    /// Σ ‖ψ_i‖² φ_i φ_iᵀ (k × k, row-major, the upper triangle only) and Σ (g·ψ_i) φ_i over
+    /// committed trajectories.
     a: Vec<S>,
     c: Vec<S>,
     /// Their values from the trajectories observed since the last commit.
@@ -35,8 +36,10 @@ pub struct RunningRegression<S> {
     pending: bool,
     /// The committed weights w (empty before any statistics).
     w: Vec<S>,
-    /// Working storage: one trajectory's plain estimate, the solve's augmented matrix.
+    /// Working storage: one trajectory's plain estimate, its products `g·ψ_i` and `‖ψ_i‖²`, the
+    /// solve's augmented matrix.
     g: Vec<S>,
+    products: (Vec<S>, Vec<S>),
     work: Vec<S>,
 }
 
@@ -55,6 +58,7 @@ impl<S: Scalar> RunningRegression<S> {
             pending: false,
             w: Vec::new(),
             g: Vec::new(),
+            products: (Vec::new(), Vec::new()),
             work: Vec::new(),
         }
     }
@@ -85,6 +89,28 @@ impl<S: Scalar> RunningRegression<S> {
     /// If `features` has fewer than k entries per scored decision, or k differs from earlier
     /// observations' (the problem fixes it).
     pub fn observe(&mut self, terms: &DecisionTerms<S>, features: &[S], k: usize) {
+        let n = terms.decisions();
+        self.g.clear();
+        self.g.resize(terms.dim(), S::zero());
+        terms.estimate_into(|_| None, &mut self.g);
+        let (mut cross, mut moment) = std::mem::take(&mut self.products);
+        cross.clear();
+        cross.extend((0..n).map(|i| dot(&self.g, terms.score(i))));
+        moment.clear();
+        moment.extend((0..n).map(|i| norm_sq(terms.score(i))));
+        self.observe_products(features, k, &cross, &moment);
+        self.products = (cross, moment);
+    }
+
+    /// Add one trajectory's statistics from its products: `Σ_i cross_i φ_i` and
+    /// `Σ_i moment_i φ_i φ_iᵀ` with `cross_i = g·ψ_i`, `moment_i = ‖ψ_i‖²` (as
+    /// [`crate::oracle::ScoreProducts`] computes them), φ_i the k entries of `features` from
+    /// `k·i` on, for the decisions `cross` covers. A is symmetric: only its upper triangle is
+    /// summed (the solve reads it mirrored).
+    ///
+    /// # Panics
+    /// As [`RunningRegression::observe`], or if `moment` is shorter than `cross`.
+    pub fn observe_products(&mut self, features: &[S], k: usize, cross: &[S], moment: &[S]) {
         if self.k == 0 {
             self.k = k;
             for v in [&mut self.a, &mut self.pending_a] {
@@ -95,21 +121,17 @@ impl<S: Scalar> RunningRegression<S> {
             }
         }
         assert_eq!(k, self.k, "state features per decision changed");
-        let n = terms.decisions();
+        let n = cross.len();
+        assert!(moment.len() >= n, "a moment per decision");
         assert!(features.len() >= n * k, "state features of {n} decisions");
-        self.g.clear();
-        self.g.resize(terms.dim(), S::zero());
-        terms.estimate_into(|_| None, &mut self.g);
-        for (i, phi) in features.chunks_exact(k.max(1)).take(n).enumerate() {
-            let psi = terms.score(i);
-            let y = dot(&self.g, psi);
-            let m = norm_sq(psi);
+        for ((phi, y), m) in features.chunks_exact(k.max(1)).zip(cross).zip(moment) {
             for (c, x) in self.pending_c.iter_mut().zip(phi) {
                 *c += y.clone() * x;
             }
-            for (row, x) in self.pending_a.chunks_exact_mut(k).zip(phi) {
+            for (j, x) in phi.iter().enumerate() {
                 let mx = m.clone() * x;
-                for (a, z) in row.iter_mut().zip(phi) {
+                let row = &mut self.pending_a[j * k + j..(j + 1) * k];
+                for (a, z) in row.iter_mut().zip(&phi[j..]) {
                     *a += mx.clone() * z;
                 }
             }
@@ -140,9 +162,11 @@ impl<S: Scalar> RunningRegression<S> {
         self.clear_pending();
         let k = self.k;
         self.work.clear();
-        for (row, c) in self.a.chunks_exact(k).zip(&self.c) {
-            self.work.extend_from_slice(row);
-            self.work.push(c.clone());
+        for r in 0..k {
+            // The upper triangle, mirrored.
+            self.work
+                .extend((0..k).map(|l| self.a[r.min(l) * k + r.max(l)].clone()));
+            self.work.push(self.c[r].clone());
         }
         for j in 0..k {
             self.work[j * (k + 1) + j] += &self.ridge;

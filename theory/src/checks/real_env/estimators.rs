@@ -212,6 +212,46 @@ pub enum Estimator {
     /// The library's baselined estimate (`ilopt::baseline::Baselined`): each sample the mean
     /// of m baselined eq. 3.15 estimates at θ, trajectories from θ.
     Baselined(ilopt::baseline::Baseline, usize),
+    /// The library's baselined estimate on one trajectory at θ with a baseline fitted from
+    /// data first: one oracle observes this many trajectories of its own seeds at θ and commits
+    /// their statistics; every sample then estimates with a copy of it (the same baseline,
+    /// independent of the sample's trajectory).
+    Fitted(ilopt::baseline::Baseline, usize),
+}
+
+/// The oracle of [`Estimator::Fitted`]: `fit` roll-outs at θ from seeds `k·10⁷ + 9·10⁶ + j`
+/// (disjoint from the samples' for N < 9·10⁶), each estimated, then one more roll-out, which
+/// commits the last one's statistics.
+///
+/// # Errors
+/// A roll-out's or an estimate's error.
+fn fitted_oracle<T, P>(
+    p: &TaskProblem<T, P>,
+    theta: &DVector<f64>,
+    b: &ilopt::baseline::Baseline,
+    fit: usize,
+    k: u64,
+) -> Result<ilopt::baseline::Baselined<TaskProblem<T, P>, f64>, String>
+where
+    TaskProblem<T, P>: Clone,
+    T: Task<f64>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
+    T::Label: Borrow<P::Label>,
+{
+    let q =
+        ilopt::baseline::Baselined::<_, f64>::new(p.clone(), 1, b).map_err(|e| e.to_string())?;
+    let mut c = Cost::default();
+    for j in 0..=fit {
+        let mut rng = KitRng::seed_from_u64(k * 10_000_000 + 9_000_000 + j as u64);
+        let t = q
+            .rollout(&Behaviour::Learner(theta), &mut rng, &mut c)
+            .map_err(|e| e.to_string())?;
+        if j < fit {
+            q.estimate(theta, &t, EstimatorForm::Causal, &mut c)
+                .map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(q)
 }
 
 /// Seeds of estimator `k`'s N trajectories: `k·10⁷ + i`.
@@ -231,7 +271,7 @@ pub fn samples<T, P>(
     k: u64,
 ) -> Result<Vec<DVector<f64>>, String>
 where
-    TaskProblem<T, P>: Sync + Clone,
+    TaskProblem<T, P>: Sync + Send + Clone,
     T: Task<f64>,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
@@ -240,8 +280,25 @@ where
         Estimator::OldPoint(x) | Estimator::Weighted(x, _) => x,
         _ => theta,
     };
+    let fitted = match e {
+        // Behind a lock only to be copied from (the oracle keeps its buffers in cells).
+        Estimator::Fitted(b, fit) => {
+            Some(std::sync::Mutex::new(fitted_oracle(p, theta, b, *fit, k)?))
+        }
+        _ => None,
+    };
     par_map(n, |i| {
         let mut rng = KitRng::seed_from_u64(estimator_seed(k, i));
+        if let Some(q) = &fitted {
+            let q = q.lock().map_err(|e| e.to_string())?.clone();
+            let mut c = Cost::default();
+            let t = q
+                .rollout(&Behaviour::Learner(theta), &mut rng, &mut c)
+                .map_err(|e| e.to_string())?;
+            return q
+                .estimate(theta, &t, EstimatorForm::Causal, &mut c)
+                .map_err(|e| e.to_string());
+        }
         if let Estimator::Baselined(b, m) = e {
             // A fresh oracle per sample: an estimated baseline then learns only from earlier
             // trajectories of the same sample, and samples stay independent.
@@ -270,7 +327,7 @@ where
             Estimator::Weighted(x, w) => p
                 .weighted_estimate(theta, x, &t, *w, &mut c)
                 .map_err(|e| e.to_string()),
-            Estimator::Mutated(_) | Estimator::Baselined(..) => {
+            Estimator::Mutated(_) | Estimator::Baselined(..) | Estimator::Fitted(..) => {
                 unreachable!("returned above")
             }
         }

@@ -233,7 +233,7 @@ pub fn task_rows<T, P>(
     z: RealSizes,
 ) -> Result<Vec<Check>, String>
 where
-    TaskProblem<T, P>: Sync + Clone,
+    TaskProblem<T, P>: Sync + Send + Clone,
     T: Task<f64>,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,

@@ -1,5 +1,5 @@
-//! The variance the leave-one-out baseline removes on the real tasks (beyond the thesis), per
-//! coordinate, at θ = 0 and at a DAgger solution.
+//! The variance the leave-one-out and the state-dependent baselines remove on the real tasks
+//! (beyond the thesis), per coordinate, at θ = 0 and at a DAgger solution.
 //!
 //! Per trajectory, coordinate j: `r_j = Var(g_j) / Var(g_{b,j})`, from `N` plain estimates (one
 //! trajectory each) and `N/m` baselined ones (each the mean of m trajectories, so
@@ -199,6 +199,9 @@ where
     Ok(total / n as f64)
 }
 
+/// Trajectories the state-dependent baseline of rows `6<tag>.b.var.s<suffix>` is fitted on.
+pub const STATE_FIT: usize = 1000;
+
 /// One point of the variance rows: where θ is, and θ.
 pub struct At<'a> {
     /// Row id suffix ("0", "D").
@@ -209,8 +212,10 @@ pub struct At<'a> {
     pub theta: DVector<f64>,
 }
 
-/// Rows `6<tag>.b.var<suffix>` per point of `at` and the control `6<tag>.b.var.ctl` at the last
-/// point: `n` plain trajectories against `n/m` leave-one-out samples of `m`.
+/// Rows `6<tag>.b.var<suffix>` per point of `at` (`n` plain trajectories against `n/m`
+/// leave-one-out samples of `m`), `6<tag>.b.var.s<suffix>` (against `n` estimates with the
+/// state-dependent baseline fitted on [`STATE_FIT`] other trajectories), and the control
+/// `6<tag>.b.var.ctl` at the last point.
 ///
 /// # Errors
 /// A roll-out's or an estimate's error.
@@ -224,7 +229,7 @@ pub fn variance_rows<T, P>(
     alpha: f64,
 ) -> Result<Vec<Check>, String>
 where
-    TaskProblem<T, P>: Sync + Clone,
+    TaskProblem<T, P>: Sync + Send + Clone,
     T: Task<f64>,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
@@ -249,6 +254,27 @@ where
             &format!("{name}, {what}: the leave-one-out baseline (m = {m}) reduces the variance per trajectory, tr Var(g_b) < tr Var(g)"),
             Role::Corrected,
             &r,
+            alpha,
+        ));
+        let state = Baseline::StateDependent {
+            features: None,
+            time: true,
+            decay: None,
+            ridge: None,
+        };
+        let fitted = samples(
+            p,
+            &point.theta,
+            &Estimator::Fitted(state, STATE_FIT),
+            n,
+            seed + 5,
+        )?;
+        let rs = reduction(&plain, &fitted, 1, 400, seed + 2, alpha);
+        rows.push(row(
+            &format!("6{tag}.b.var.s{}", point.suffix),
+            &format!("{name}, {what}: the state-dependent baseline b_i = w·(φ(s_i), i, 1) (the learner's features, the decision index and 1; w = A⁻¹c fitted on {STATE_FIT} other trajectories at θ) reduces the variance per trajectory, tr Var(g_b) < tr Var(g)"),
+            Role::Corrected,
+            &rs,
             alpha,
         ));
         if i + 1 == at.len() {
