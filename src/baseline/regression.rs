@@ -41,6 +41,8 @@ pub struct RunningRegression<S> {
     g: Vec<S>,
     products: (Vec<S>, Vec<S>),
     work: Vec<S>,
+    /// One trajectory's state features by columns, plain and weighted by ‖ψ_i‖².
+    columns: (Vec<S>, Vec<S>),
 }
 
 impl<S: Scalar> RunningRegression<S> {
@@ -60,6 +62,7 @@ impl<S: Scalar> RunningRegression<S> {
             g: Vec::new(),
             products: (Vec::new(), Vec::new()),
             work: Vec::new(),
+            columns: (Vec::new(), Vec::new()),
         }
     }
 
@@ -124,16 +127,27 @@ impl<S: Scalar> RunningRegression<S> {
         let n = cross.len();
         assert!(moment.len() >= n, "a moment per decision");
         assert!(features.len() >= n * k, "state features of {n} decisions");
-        for ((phi, y), m) in features.chunks_exact(k.max(1)).zip(cross).zip(moment) {
-            for (c, x) in self.pending_c.iter_mut().zip(phi) {
-                *c += y.clone() * x;
-            }
-            for (j, x) in phi.iter().enumerate() {
-                let mx = m.clone() * x;
-                let row = &mut self.pending_a[j * k + j..(j + 1) * k];
-                for (a, z) in row.iter_mut().zip(&phi[j..]) {
-                    *a += mx.clone() * z;
-                }
+        // The features by columns, plain and weighted by ‖ψ_i‖²: each sum over the decisions is
+        // then a dot product of two contiguous columns (in vector lanes for floats).
+        let (columns, weighted) = &mut self.columns;
+        columns.clear();
+        weighted.clear();
+        for j in 0..k {
+            columns.extend(features.chunks_exact(k).take(n).map(|row| row[j].clone()));
+            weighted.extend(
+                features
+                    .chunks_exact(k)
+                    .zip(moment)
+                    .take(n)
+                    .map(|(row, m)| m.clone() * &row[j]),
+            );
+        }
+        for (j, c) in self.pending_c.iter_mut().enumerate() {
+            *c += dot(&cross[..n], column(columns, j, n));
+        }
+        for j in 0..k {
+            for l in j..k {
+                self.pending_a[j * k + l] += dot(column(weighted, j, n), column(columns, l, n));
             }
         }
         self.pending = true;
@@ -174,6 +188,11 @@ impl<S: Scalar> RunningRegression<S> {
         self.w.resize(k, S::zero());
         solve_symmetric(&mut self.work, k, &mut self.w);
     }
+}
+
+/// Column j (n entries) of features stored by columns.
+fn column<S>(v: &[S], j: usize, n: usize) -> &[S] {
+    &v[j * n..(j + 1) * n]
 }
 
 /// A pivot counts only above this fraction of its diagonal entry ([`solve_symmetric`]).
