@@ -157,9 +157,10 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         recorded.score_row_products(out);
     }
 
-    /// The state features φ_b(s_i) of the first `decisions` scored decisions of `trajectory`, for
-    /// the state-dependent baseline `b_i = w·φ_b(s_i)` ([`crate::baseline::Baseline::StateDependent`]):
-    /// k entries per decision, decision by decision, into `out` (cleared first); k is returned.
+    /// The state features φ_b(s_i) of the first n = `decisions` scored decisions of `trajectory`,
+    /// for the state-dependent baseline `b_i = w·φ_b(s_i)`
+    /// ([`crate::baseline::Baseline::StateDependent`]), by columns into `out` (cleared first):
+    /// entry `j·n + i` is feature j of decision i; k, the number of columns, is returned.
     /// `leading` keeps only the first that many features. The features must be a function of
     /// s_i alone (nothing from a_i on), which keeps the baseline unbiased.
     ///

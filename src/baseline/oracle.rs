@@ -208,39 +208,29 @@ impl<P, S: Scalar> Baselined<P, S> {
     }
 }
 
-/// Each row of k state features (n rows) extended by the decision's index i and a constant 1,
-/// in place.
-fn with_time<S: Scalar>(phi: &mut Vec<S>, k: usize, n: usize) {
-    phi.resize(n * (k + 2), S::zero());
-    // i as a sum of ones (exact for every index a trajectory can have), counted down.
-    let mut index = S::from_i64(n as i64);
-    for i in (0..n).rev() {
-        index -= S::one();
-        for j in (0..k).rev() {
-            phi[i * (k + 2) + j] = phi[i * k + j].clone();
-        }
-        phi[i * (k + 2) + k] = index.clone();
-        phi[i * (k + 2) + k + 1] = S::one();
-    }
-}
-
-/// The state features of the first `n` scored decisions of `t` into `phi` (k per decision, k
-/// returned): the problem's ([`PerDecisionTerms::state_features`]), with the decision index and 1
-/// appended when `time`.
-fn state_rows<S: Scalar, P: PerDecisionTerms<S>>(
+/// The state features of the first `n` scored decisions of `t` by columns into `columns` (k of
+/// n entries, k returned): the problem's ([`PerDecisionTerms::state_features`]), then with
+/// `time` the decision index i (as a sum of ones, exact for every index a trajectory can have)
+/// and a column of ones.
+fn state_columns<S: Scalar, P: PerDecisionTerms<S>>(
     inner: &P,
     t: &P::Trajectory,
     n: usize,
     leading: Option<usize>,
     time: bool,
-    phi: &mut Vec<S>,
+    columns: &mut Vec<S>,
 ) -> Result<usize, OracleError> {
-    let k = inner.state_features(t, n, leading, phi)?;
-    if time {
-        with_time(phi, k, n);
-        return Ok(k + 2);
+    let k = inner.state_features(t, n, leading, columns)?;
+    if !time {
+        return Ok(k);
     }
-    Ok(k)
+    let mut index = S::zero();
+    for _ in 0..n {
+        columns.push(index.clone());
+        index += S::one();
+    }
+    columns.extend(std::iter::repeat_n(S::one(), n));
+    Ok(k + 2)
 }
 
 /// The error of a leave-one-out minibatch with fewer than two trajectories.
@@ -510,15 +500,8 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         running.clear_pending();
         for (t, r) in batch.iter().zip(records.iter_mut()) {
             let n = r.decisions();
-            let k = state_rows(inner, t, n, *leading, *time, phi)?;
-            baseline.clear();
-            if !running.weights().is_empty() {
-                baseline.extend(
-                    phi.chunks_exact(k.max(1))
-                        .take(n)
-                        .map(|row| running.baseline(row).unwrap_or_else(S::zero)),
-                );
-            }
+            let k = state_columns(inner, t, n, *leading, *time, phi)?;
+            running.baselines_into(phi, n, baseline);
             plain.clear();
             plain.resize(d, S::zero());
             inner.estimate_recorded(t, r, None, plain);
@@ -581,7 +564,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
                 features.resize_with(m, || (Vec::new(), 0));
             }
             for ((t, out), (phi, k)) in batch.iter().zip(terms.iter()).zip(features.iter_mut()) {
-                *k = state_rows(self.inner(), t, out.decisions(), *leading, *time, phi)?;
+                *k = state_columns(self.inner(), t, out.decisions(), *leading, *time, phi)?;
             }
         }
         let d = self.inner().dim();
@@ -641,9 +624,8 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
                 }
                 Kind::StateDependent { .. } => {
                     let r = regression.as_ref().expect("state-dependent kind");
-                    let (phi, k) = &features[j];
-                    let row = |i: usize| &phi[i * k..(i + 1) * k];
-                    t.estimate_into(|i| r.baseline(row(i)), g);
+                    r.baselines_into(&features[j].0, t.decisions(), totals);
+                    t.estimate_into(|i| totals.get(i).cloned(), g);
                 }
             }
             for (s, x) in sum.iter_mut().zip(g.iter()) {

@@ -41,8 +41,8 @@ pub struct RunningRegression<S> {
     g: Vec<S>,
     products: (Vec<S>, Vec<S>),
     work: Vec<S>,
-    /// One trajectory's state features by columns, plain and weighted by ‖ψ_i‖².
-    columns: (Vec<S>, Vec<S>),
+    /// One trajectory's state features by columns weighted by ‖ψ_i‖².
+    weighted: Vec<S>,
 }
 
 impl<S: Scalar> RunningRegression<S> {
@@ -62,7 +62,7 @@ impl<S: Scalar> RunningRegression<S> {
             g: Vec::new(),
             products: (Vec::new(), Vec::new()),
             work: Vec::new(),
-            columns: (Vec::new(), Vec::new()),
+            weighted: Vec::new(),
         }
     }
 
@@ -71,10 +71,25 @@ impl<S: Scalar> RunningRegression<S> {
         &self.w
     }
 
-    /// The committed baseline `w·φ` of a state with features `phi`; `None` (b = 0) before any
-    /// statistics were committed.
-    pub fn baseline(&self, phi: &[S]) -> Option<S> {
-        (!self.w.is_empty()).then(|| dot(&self.w, phi))
+    /// The committed baselines `b_i = w·φ_i` of n decisions whose features are given by columns
+    /// (`columns[j·n + i]` feature j of decision i) into `out` (cleared first), summed column by
+    /// column (for each i the order of `w·φ_i`'s terms); nothing before any statistics were
+    /// committed (every b_i = 0).
+    ///
+    /// # Panics
+    /// If `columns` does not hold k columns of n entries (k the number of weights).
+    pub fn baselines_into(&self, columns: &[S], n: usize, out: &mut Vec<S>) {
+        out.clear();
+        if self.w.is_empty() {
+            return;
+        }
+        assert_eq!(columns.len(), self.w.len() * n, "k columns of n entries");
+        out.resize(n, S::zero());
+        for (j, w) in self.w.iter().enumerate() {
+            for (b, x) in out.iter_mut().zip(column(columns, j, n)) {
+                *b += w.clone() * x;
+            }
+        }
     }
 
     /// Forget the pending statistics (a new estimate on the current trajectories replaces them).
@@ -86,12 +101,13 @@ impl<S: Scalar> RunningRegression<S> {
     }
 
     /// Add one trajectory's `Σ_i (g·ψ_i) φ_i` and `Σ_i ‖ψ_i‖² φ_i φ_iᵀ` (g the plain estimate of
-    /// `terms`, φ_i the k entries of `features` from `k·i` on) to the pending statistics.
+    /// `terms`, φ_i given by k columns of n entries, n its scored decisions:
+    /// `columns[j·n + i]` is feature j of decision i) to the pending statistics.
     ///
     /// # Panics
-    /// If `features` has fewer than k entries per scored decision, or k differs from earlier
+    /// If `columns` does not hold k columns of n entries, or k differs from earlier
     /// observations' (the problem fixes it).
-    pub fn observe(&mut self, terms: &DecisionTerms<S>, features: &[S], k: usize) {
+    pub fn observe(&mut self, terms: &DecisionTerms<S>, columns: &[S], k: usize) {
         let n = terms.decisions();
         self.g.clear();
         self.g.resize(terms.dim(), S::zero());
@@ -101,19 +117,20 @@ impl<S: Scalar> RunningRegression<S> {
         cross.extend((0..n).map(|i| dot(&self.g, terms.score(i))));
         moment.clear();
         moment.extend((0..n).map(|i| norm_sq(terms.score(i))));
-        self.observe_products(features, k, &cross, &moment);
+        self.observe_products(columns, k, &cross, &moment);
         self.products = (cross, moment);
     }
 
     /// Add one trajectory's statistics from its products: `Σ_i cross_i φ_i` and
     /// `Σ_i moment_i φ_i φ_iᵀ` with `cross_i = g·ψ_i`, `moment_i = ‖ψ_i‖²` (as
-    /// [`crate::oracle::ScoreProducts`] computes them), φ_i the k entries of `features` from
-    /// `k·i` on, for the decisions `cross` covers. A is symmetric: only its upper triangle is
-    /// summed (the solve reads it mirrored).
+    /// [`crate::oracle::ScoreProducts`] computes them) for its n = `cross.len()` decisions, φ_i
+    /// given by k columns of n entries. Each sum over the decisions is one dot product of
+    /// contiguous columns (in vector lanes for floats); A is symmetric, so only its upper
+    /// triangle is summed (the solve reads it mirrored).
     ///
     /// # Panics
     /// As [`RunningRegression::observe`], or if `moment` is shorter than `cross`.
-    pub fn observe_products(&mut self, features: &[S], k: usize, cross: &[S], moment: &[S]) {
+    pub fn observe_products(&mut self, columns: &[S], k: usize, cross: &[S], moment: &[S]) {
         if self.k == 0 {
             self.k = k;
             for v in [&mut self.a, &mut self.pending_a] {
@@ -126,24 +143,20 @@ impl<S: Scalar> RunningRegression<S> {
         assert_eq!(k, self.k, "state features per decision changed");
         let n = cross.len();
         assert!(moment.len() >= n, "a moment per decision");
-        assert!(features.len() >= n * k, "state features of {n} decisions");
-        // The features by columns, plain and weighted by ‖ψ_i‖²: each sum over the decisions is
-        // then a dot product of two contiguous columns (in vector lanes for floats).
-        let (columns, weighted) = &mut self.columns;
-        columns.clear();
+        assert_eq!(columns.len(), n * k, "k columns of {n} entries");
+        // The columns weighted by ‖ψ_i‖².
+        let weighted = &mut self.weighted;
         weighted.clear();
         for j in 0..k {
-            columns.extend(features.chunks_exact(k).take(n).map(|row| row[j].clone()));
             weighted.extend(
-                features
-                    .chunks_exact(k)
+                column(columns, j, n)
+                    .iter()
                     .zip(moment)
-                    .take(n)
-                    .map(|(row, m)| m.clone() * &row[j]),
+                    .map(|(x, m)| m.clone() * x),
             );
         }
         for (j, c) in self.pending_c.iter_mut().enumerate() {
-            *c += dot(&cross[..n], column(columns, j, n));
+            *c += dot(cross, column(columns, j, n));
         }
         for j in 0..k {
             for l in j..k {
@@ -191,7 +204,7 @@ impl<S: Scalar> RunningRegression<S> {
 }
 
 /// Column j (n entries) of features stored by columns.
-fn column<S>(v: &[S], j: usize, n: usize) -> &[S] {
+pub(crate) fn column<S>(v: &[S], j: usize, n: usize) -> &[S] {
     &v[j * n..(j + 1) * n]
 }
 
@@ -386,30 +399,30 @@ mod tests {
             terms.finish();
             let d = terms.decisions();
             let ones = vec![BigRational::from_integer(1.into()); d];
-            let onehot: Vec<BigRational> = (0..d)
-                .flat_map(|i| {
-                    (0..n).map(move |j| BigRational::from_integer(i64::from(i == j).into()))
-                })
-                .collect();
+            // Column j marks decision j (the n possible indices; d of them taken).
+            let onehot = |d: usize| -> Vec<BigRational> {
+                (0..n)
+                    .flat_map(|j| {
+                        (0..d).map(move |i| BigRational::from_integer(i64::from(i == j).into()))
+                    })
+                    .collect()
+            };
             optimum.observe(&terms);
             constant.observe(&terms, &ones, 1);
-            indexed.observe(&terms, &onehot, n);
+            indexed.observe(&terms, &onehot(d), n);
             optimum.commit();
             constant.commit();
             indexed.commit();
-            let one = [BigRational::from_integer(1.into())];
-            assert_eq!(
-                constant
-                    .baseline(&one)
-                    .filter(|_| optimum.constant().is_some()),
-                optimum.constant()
-            );
-            for i in 0..n {
-                let e: Vec<BigRational> = (0..n)
-                    .map(|j| BigRational::from_integer(i64::from(i == j).into()))
-                    .collect();
-                if let Some(b) = optimum.time_indexed(i) {
-                    assert_eq!(indexed.baseline(&e), Some(b), "b_{i}");
+            let mut b = Vec::new();
+            constant.baselines_into(&[BigRational::from_integer(1.into())], 1, &mut b);
+            if let Some(c) = optimum.constant() {
+                assert_eq!(b, vec![c]);
+            }
+            // Every index at once: the n × n identity by columns.
+            indexed.baselines_into(&onehot(n), n, &mut b);
+            for (i, bi) in b.iter().enumerate() {
+                if let Some(want) = optimum.time_indexed(i) {
+                    assert_eq!(bi, &want, "b_{i}");
                     checked += 1;
                 }
             }

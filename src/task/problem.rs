@@ -521,7 +521,7 @@ where
     }
 
     /// The learner's features φ(s_i) of each scored decision (their first `leading` entries),
-    /// as the roll-out stored them.
+    /// as the roll-out stored them, by columns.
     fn state_features(
         &self,
         trajectory: &Self::Trajectory,
@@ -537,8 +537,12 @@ where
             )));
         }
         out.clear();
-        for phi in trajectory.feature_rows().take(decisions) {
-            out.extend_from_slice(&phi[..k]);
+        let rows = &trajectory.feature_data()[..decisions * trajectory.feature_dim()];
+        for j in 0..k {
+            out.extend(
+                rows.chunks_exact(trajectory.feature_dim().max(1))
+                    .map(|phi| phi[j].clone()),
+            );
         }
         Ok(k)
     }

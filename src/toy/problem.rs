@@ -586,7 +586,8 @@ impl<S: Scalar> PerDecisionTerms<S> for ToyProblem<S> {
     }
 
     /// The one-hot vector of decision i's state s_i (|S| entries, or the first `leading`), so that
-    /// `b_i = w_{s_i}`: one baseline per state.
+    /// `b_i = w_{s_i}`: one baseline per state (by columns: column j marks the decisions in
+    /// state j).
     fn state_features(
         &self,
         trajectory: &ToyTrajectory,
@@ -597,9 +598,14 @@ impl<S: Scalar> PerDecisionTerms<S> for ToyProblem<S> {
         self.check(trajectory)?;
         let k = crate::baseline::leading_features(self.mdp.states, leading)?;
         let (states, _) = self.prefix(trajectory);
+        let states = &states[..decisions.min(states.len())];
         out.clear();
-        for &s in states.iter().take(decisions) {
-            out.extend((0..k).map(|j| if j == s { S::one() } else { S::zero() }));
+        for j in 0..k {
+            out.extend(
+                states
+                    .iter()
+                    .map(|&s| if j == s { S::one() } else { S::zero() }),
+            );
         }
         Ok(k)
     }
