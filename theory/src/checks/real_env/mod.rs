@@ -271,6 +271,22 @@ where
         24,
     )?;
     let baselined = compare(&baselined_samples, &r, z.alpha);
+    // The state-dependent baseline with the decision index, fitted on other trajectories at θ.
+    let state = ilopt::baseline::Baseline::StateDependent {
+        features: None,
+        time: true,
+        decay: None,
+        ridge: None,
+    };
+    let state_samples = samples(
+        p,
+        theta,
+        &Estimator::Fitted(state, variance::STATE_FIT),
+        z.n_oracle,
+        27,
+    )?;
+    let state_dependent = compare(&state_samples, &r, z.alpha);
+    let (s_ratio, s_lo, s_hi) = variance_ratio(&plain, &state_samples, 1, 400, 28, z.alpha);
     // The baselined row's own control: a baseline that peeks at a_i (the plain rows are not
     // asked to resolve it; their noise is the variance the baseline removes).
     let peeking_label = Mutation::PeekingBaseline.label();
@@ -346,6 +362,27 @@ where
         &format!(
             "; {} samples of m = {BASELINE_M} trajectories (as many trajectories as row 6{tag}); variance per trajectory tr Var(g)/tr Var(g_b) = {ratio:.3} [{ratio_lo:.3}, {ratio_hi:.3}] (level 1 − α, α = {a:.0e}: log ratio ± z·bootstrap s.e., 400 resamples)",
             baselined.n,
+            a = z.alpha
+        ),
+    ));
+    if let Some(last) = rows.last_mut() {
+        last.role = Role::Corrected;
+    }
+    rows.push(row_from(
+        &format!("6{tag}.b.s"),
+        format!(
+            "{name}: E[g_b(θ, τ)] = ∇F(θ), g_b = g − Σ_i b_i ψ_i with the state-dependent baseline b_i = w·(φ(s_i), i, 1), w fitted on {} other trajectories at θ (docs/math.md §9; beyond the thesis)",
+            variance::STATE_FIT
+        ),
+        RowKind::Claim,
+        None,
+        &state_dependent,
+        &r,
+        z.alpha,
+        &refs_b,
+        &format!(
+            "; {} estimates of one trajectory each; variance per trajectory tr Var(g)/tr Var(g_b) = {s_ratio:.3} [{s_lo:.3}, {s_hi:.3}] (level 1 − α, α = {a:.0e}: log ratio ± z·bootstrap s.e., 400 resamples)",
+            state_dependent.n,
             a = z.alpha
         ),
     ));

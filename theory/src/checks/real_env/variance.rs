@@ -267,7 +267,8 @@ where
             &point.theta,
             &Estimator::Fitted(state, STATE_FIT),
             n,
-            seed + 5,
+            // A family of its own (the points' families are 40 + 4i …).
+            1000 + seed,
         )?;
         let rs = reduction(&plain, &fitted, 1, 400, seed + 2, alpha);
         rows.push(row(
