@@ -26,7 +26,8 @@
 //! every probe trajectory before the timing), compared with `single`. Modes `oracle` and
 //! `oracle-estimated`: a whole oracle call through `Baselined` with m = 1 (roll-out of the
 //! learner, then its causal estimate), without a baseline and with the estimated per-decision
-//! constants (their statistics committed at each roll-out, as in training), compared. Modes
+//! constants (their statistics committed at each roll-out, as in training), compared; mode
+//! `oracle-state` the same with the state-dependent baseline of mode `state`. Modes
 //! `weighted`, `weighted-estimated`, `weighted-pairs` and `weighted-loo`: the per-decision
 //! importance-weighted old-point estimate of math.md §4 (IS-STORM's, θ_old = θ + 0.01 per entry)
 //! on one trajectory without a baseline and with the estimated constants (committed from every
@@ -73,7 +74,7 @@ fn oracle_once<P: IlProblem<f64>>(
 }
 
 /// Every mode the probe knows.
-const MODES: [&str; 21] = [
+const MODES: [&str; 22] = [
     "generic",
     "spec",
     "rollout",
@@ -91,6 +92,7 @@ const MODES: [&str; 21] = [
     "state",
     "oracle",
     "oracle-estimated",
+    "oracle-state",
     "weighted",
     "weighted-estimated",
     "weighted-pairs",
@@ -219,6 +221,7 @@ fn main() {
     )
     .expect("state");
     let oracle_estimated = estimated.clone();
+    let oracle_state = state.clone();
     // The weighted estimates use the committed baselines: statistics from every probe trajectory,
     // committed by one roll-out, as in training.
     let weighted_estimated = estimated.clone();
@@ -310,6 +313,11 @@ fn main() {
                         }
                         "oracle-estimated" => {
                             let (n, x) = oracle_once(&oracle_estimated, th, &mut rng, &mut cost);
+                            acc += x;
+                            n
+                        }
+                        "oracle-state" => {
+                            let (n, x) = oracle_once(&oracle_state, th, &mut rng, &mut cost);
                             acc += x;
                             n
                         }
@@ -417,6 +425,7 @@ fn main() {
         ("estimated", "single"),
         ("state", "single"),
         ("oracle-estimated", "oracle"),
+        ("oracle-state", "oracle"),
         ("weighted-estimated", "weighted"),
         ("weighted-loo", "weighted-pairs"),
     ] {

@@ -43,7 +43,7 @@ pub use tasks::{
     ObstacleProblem, cartpole_fixed, cartpole_theta, obstacle_problem, obstacle_theta,
 };
 pub use variance::{
-    At, Ratio, Reduction, dagger_solution, reduction, reduction_verdict, variance_rows,
+    At, Ratio, Reduction, STATE_FIT, dagger_solution, reduction, reduction_verdict, variance_rows,
 };
 
 use crate::protocol::RealSizes;
@@ -281,7 +281,7 @@ where
     let state_samples = samples(
         p,
         theta,
-        &Estimator::Fitted(state, variance::STATE_FIT),
+        &Estimator::Fitted(state, STATE_FIT),
         z.n_oracle,
         27,
     )?;
@@ -372,7 +372,7 @@ where
         &format!("6{tag}.b.s"),
         format!(
             "{name}: E[g_b(θ, τ)] = ∇F(θ), g_b = g − Σ_i b_i ψ_i with the state-dependent baseline b_i = w·(φ(s_i), i, 1), w fitted on {} other trajectories at θ (docs/math.md §9; beyond the thesis)",
-            variance::STATE_FIT
+            STATE_FIT
         ),
         RowKind::Claim,
         None,
