@@ -217,6 +217,55 @@ fn every_task_runs_with_every_algorithm_family() {
     }
 }
 
+/// `run.baseline`: every kind of baseline runs with SGD and IS-STORM on every task, the resolved
+/// config (with its baseline) reloads to itself, and on the toy MDP the baseline changes the run
+/// (the same seed without it ends elsewhere).
+#[test]
+fn every_baseline_kind_runs_on_every_task() {
+    let s = Scratch::new("baselines");
+    let kinds = [
+        (1, r#"{ kind = "constant", value = "1/2" }"#),
+        (
+            1,
+            r#"{ kind = "estimated", time_indexed = true, decay = 0.99 }"#,
+        ),
+        (2, r#"{ kind = "leave-one-out" }"#),
+        (1, r#"{ kind = "state-dependent", time = true }"#),
+    ];
+    for (tname, task) in [("toy", TOY), ("cartpole", CARTPOLE), ("obstacle", OBSTACLE)] {
+        for (aname, alg) in &ALGORITHMS[..2] {
+            let plain = config(task, alg, 400, 200, "[3]");
+            let out = s.path().join(format!("out-{tname}-{aname}"));
+            let without = run(
+                &s.write(&format!("{tname}-{aname}.toml"), &plain),
+                &out,
+                None,
+            );
+            for (k, (m, kind)) in kinds.iter().enumerate() {
+                let text = plain.replace(
+                    "[run]",
+                    &format!("[run]\ntrajectories_per_gradient = {m}\nbaseline = {kind}"),
+                );
+                let cfg = s.write(&format!("{tname}-{aname}-{k}.toml"), &text);
+                let out = s.path().join(format!("out-{tname}-{aname}-{k}"));
+                let summary = run(&cfg, &out, None);
+                let term = summary["runs"][0]["termination"].as_str().unwrap();
+                assert_eq!(term, "gradient-budget", "{tname}/{aname}/{kind}");
+                let written = RunFile::load(&out.join("config.toml")).unwrap();
+                let original = RunFile::load(&cfg).unwrap();
+                assert_eq!(written.file, original.file, "{tname}/{aname}/{kind}");
+                assert!(original.file.run.baseline.is_some());
+                if tname == "toy" && *m == 1 {
+                    assert_ne!(
+                        summary["final_mean"]["objective"], without["final_mean"]["objective"],
+                        "{aname}/{kind}: the baseline changes the run"
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// All files but `timings.json` of one directory.
 fn data_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
@@ -375,6 +424,23 @@ fn bad_configs_get_one_named_error_each() {
             config(CARTPOLE, ALGORITHMS[5].1, 300, 100, "[1]")
                 .replace("[run]", "[run]\ntrajectories_per_gradient = 4"),
             "run.trajectories_per_gradient",
+        ),
+        (
+            config(CARTPOLE, ALGORITHMS[6].1, 300, 100, "[1]")
+                .replace("[run]", "[run]\nbaseline = { kind = \"leave-one-out\" }"),
+            "run.baseline",
+        ),
+        (
+            config(CARTPOLE, ALGORITHMS[0].1, 300, 100, "[1]")
+                .replace("[run]", "[run]\nbaseline = { kind = \"leave-one-out\" }"),
+            "run.baseline",
+        ),
+        (
+            config(CARTPOLE, ALGORITHMS[0].1, 300, 100, "[1]").replace(
+                "[run]",
+                "[run]\nbaseline = { kind = \"state-dependent\", features = 9 }",
+            ),
+            "run.baseline",
         ),
         ("not toml [".into(), "TOML parse error"),
         (String::new(), "missing field"),
@@ -561,6 +627,7 @@ fn help_lists_every_key() {
         "budget_calls",
         "seeds",
         "trajectories_per_gradient",
+        "baseline",
         "theta0",
         "[evaluation]",
         "every_calls",

@@ -194,6 +194,10 @@ pub struct RunSection {
     /// Trajectories averaged per gradient (oracle methods; 1 for dataset learners); ≥ 1.
     #[serde(default = "one")]
     pub trajectories_per_gradient: usize,
+    /// A baseline subtracted from every decision's loss-to-go in eq. 3.15 (oracle methods;
+    /// [`crate::baseline::Baseline`], e.g. `{ kind = "leave-one-out" }`); absent: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub baseline: Option<crate::baseline::Baseline>,
     /// The seeds, one run each (non-empty, distinct).
     pub seeds: Vec<u64>,
     /// θ₀ (default `"zero"`).

@@ -10,6 +10,7 @@ use super::evaluation::evaluate;
 use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::task::Bench;
 use crate::algo::StepContext;
+use crate::baseline::Baselined;
 use crate::batched::Batched;
 use crate::problem::{Cost, IlProblem, KitRng};
 use nalgebra::DVector;
@@ -33,9 +34,19 @@ pub fn run_seed(
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(SeedRun, SeedTiming), RunError> {
     let m = config.file.run.trajectories_per_gradient;
+    let baseline = config
+        .file
+        .run
+        .baseline
+        .as_ref()
+        .filter(|b| **b != crate::baseline::Baseline::None);
     macro_rules! on {
         ($p:expr) => {
-            if m > 1 {
+            if let Some(b) = baseline {
+                let b = Baselined::<_, f64>::new($p.clone(), m, b)
+                    .map_err(|e| config.invalid("run.baseline", e))?;
+                drive(bench, &b, config, seed, progress)
+            } else if m > 1 {
                 let b = Batched::new($p.clone(), m)
                     .map_err(|e| config.invalid("run.trajectories_per_gradient", e))?;
                 drive(bench, &b, config, seed, progress)
@@ -184,4 +195,47 @@ pub fn check_algorithm(bench: &Bench, config: &LoadedConfig) -> Result<(), RunEr
         Bench::Toy(_) => alg.build::<f64, crate::toy::ToyProblem<f64>>().map(drop),
     };
     r.map_err(|e| config.invalid("algorithm", e))
+}
+
+/// Check the config's baseline against the problem before anything is written: its parameters
+/// ([`Baselined::new`]) and, on one throwaway roll-out at θ₀, what only the problem can tell
+/// (e.g. more state features asked for than it has). Other failures of that roll-out are left to
+/// the runs, where they are data.
+///
+/// # Errors
+/// [`RunError::Invalid`] naming `run.baseline`.
+pub fn check_baseline(bench: &Bench, config: &LoadedConfig) -> Result<(), RunError> {
+    use crate::problem::{Behaviour, EstimatorForm, OracleError};
+    let Some(b) = config
+        .file
+        .run
+        .baseline
+        .as_ref()
+        .filter(|b| **b != crate::baseline::Baseline::None)
+    else {
+        return Ok(());
+    };
+    let m = config.file.run.trajectories_per_gradient;
+    let theta = bench.theta0(config)?;
+    let bad = |e: OracleError| config.invalid("run.baseline", e);
+    macro_rules! on {
+        ($p:expr) => {{
+            let o = Baselined::<_, f64>::new($p.clone(), m, b).map_err(bad)?;
+            let mut rng = KitRng::seed_from_u64(0);
+            let mut cost = Cost::default();
+            let tried = o
+                .rollout(&Behaviour::Learner(&theta), &mut rng, &mut cost)
+                .and_then(|t| o.estimate(&theta, &t, EstimatorForm::Causal, &mut cost));
+            match tried {
+                Err(e @ OracleError::Baseline(_)) => Err(bad(e)),
+                _ => Ok(()),
+            }
+        }};
+    }
+    match bench {
+        Bench::CartPoleSoftmax(p) => on!(p),
+        Bench::CartPoleLogistic(p) => on!(p),
+        Bench::Obstacle { problem, .. } => on!(problem),
+        Bench::Toy(p) => on!(p),
+    }
 }

@@ -56,6 +56,7 @@ CONFIG KEYS (docs/run.md has types, defaults and ranges; relative paths are rela
   [run]         budget_calls = N                            budget in gradient calls, ≥ 1 (required)
                 seeds = [1, 2, 3]                           non-empty, distinct (required)
                 trajectories_per_gradient = 1               oracle methods, ≥ 1
+                baseline = { kind = \"leave-one-out\" } | …     oracle methods; default none
                 theta0 = \"zero\" | [numbers]                 default zero
   [evaluation]  every_calls = N                             checkpoint spacing, 1..=budget; default budget/10
                 episodes = 10                               deterministic episodes per checkpoint
@@ -86,6 +87,7 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     let bench = Bench::new(&config)?;
     bench.theta0(&config)?;
     driver::check_algorithm(&bench, &config)?;
+    driver::check_baseline(&bench, &config)?;
     let out = output::OutputDir::create(&args.out)?;
     let toml = config
         .to_toml()

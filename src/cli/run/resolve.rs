@@ -130,6 +130,12 @@ impl RunFile {
                 &"must be 1 for a dataset learner (set the algorithm's trajectories_per_iteration)",
             ));
         }
+        if r.baseline.is_some() && self.is_dataset_learner() {
+            return Err(bad(
+                "run.baseline",
+                &"a dataset learner takes no baseline (baselines apply to the oracle methods' eq. 3.15)",
+            ));
+        }
         if r.seeds.is_empty() {
             return Err(bad("run.seeds", &"give at least one seed"));
         }
