@@ -291,6 +291,35 @@ fn mean_of<S: Scalar, T>(
     Ok(g)
 }
 
+/// Trajectory `t`'s plain estimate from its records ([`PerDecisionTerms::estimate_recorded`]
+/// with its own losses) into `plain` (the problem's dimension), and added to `g`.
+fn add_plain<S: Scalar, P: PerDecisionTerms<S>>(
+    inner: &P,
+    t: &P::Trajectory,
+    r: &mut RecordedPass<S>,
+    plain: &mut Vec<S>,
+    g: &mut [S],
+) {
+    plain.clear();
+    plain.resize(inner.dim(), S::zero());
+    inner.estimate_recorded(t, r, None, plain);
+    for (gj, x) in g.iter_mut().zip(plain.iter()) {
+        *gj += x;
+    }
+}
+
+/// `g / m`, checked finite.
+///
+/// # Errors
+/// [`OracleError::NonFinite`] for a non-finite entry.
+fn checked_mean<S: Scalar>(g: &[S], m: &S) -> Result<DVector<S>, OracleError> {
+    let mean = DVector::from_iterator(g.len(), g.iter().map(|x| x.clone() / m));
+    if !mean.iter().all(Scalar::is_finite) {
+        return Err(OracleError::NonFinite("the baselined gradient estimate"));
+    }
+    Ok(mean)
+}
+
 /// Every trajectory of `batch` recorded ([`PerDecisionTerms::record_decisions`]) into the first m
 /// entries of `records`, grown to m if need be.
 fn record_batch<'r, S: Scalar, P: PerDecisionTerms<S>>(
@@ -368,11 +397,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             leave_one_out_losses(totals, r.losses(), &others, losses);
             inner.estimate_recorded(t, r, Some(losses), g);
         }
-        let mean = DVector::from_iterator(g.len(), g.iter().map(|x| x.clone() / &m));
-        if !mean.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the baselined gradient estimate"));
-        }
-        Ok(mean)
+        checked_mean(g, &m)
     }
 
     /// The mean estimate over `batch` with the committed variance-minimising baselines of
@@ -426,12 +451,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         }
         running.clear_pending();
         for (t, r) in batch.iter().zip(records.iter_mut()) {
-            plain.clear();
-            plain.resize(d, S::zero());
-            inner.estimate_recorded(t, r, None, plain);
-            for (gj, x) in g.iter_mut().zip(plain.iter()) {
-                *gj += x;
-            }
+            add_plain(inner, t, r, plain, g);
             let n = r.decisions();
             let (cross, moment) = running.pending_mut(n);
             let out = ScoreProducts {
@@ -443,12 +463,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             };
             inner.recorded_score_products(t, r, out);
         }
-        let m = S::from_i64(m as i64);
-        let mean = DVector::from_iterator(d, g.iter().map(|x| x.clone() / &m));
-        if !mean.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the baselined gradient estimate"));
-        }
-        Ok(mean)
+        checked_mean(g, &S::from_i64(m as i64))
     }
 
     /// The mean estimate over `batch` with the committed state-dependent baseline of
@@ -502,12 +517,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             let n = r.decisions();
             let k = state_columns(inner, t, n, *leading, *time, phi)?;
             running.baselines_into(phi, n, baseline);
-            plain.clear();
-            plain.resize(d, S::zero());
-            inner.estimate_recorded(t, r, None, plain);
-            for (gj, x) in g.iter_mut().zip(plain.iter()) {
-                *gj += x;
-            }
+            add_plain(inner, t, r, plain, g);
             for v in [&mut *cross, &mut *moment] {
                 v.clear();
                 v.resize(n, S::zero());
@@ -522,12 +532,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             inner.recorded_score_products(t, r, out);
             running.observe_products(phi, k, cross, moment);
         }
-        let m = S::from_i64(m as i64);
-        let mean = DVector::from_iterator(d, g.iter().map(|x| x.clone() / &m));
-        if !mean.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the baselined gradient estimate"));
-        }
-        Ok(mean)
+        checked_mean(g, &S::from_i64(m as i64))
     }
 
     /// The mean baselined estimate over `batch`, each trajectory's terms from `fill`.

@@ -171,6 +171,35 @@ impl<S: Scalar> OptimalStateBaseline<S> {
     }
 }
 
+/// (X1) `E‖g‖²` and, per slot, `E[Σ g·ψ_i]` and `E[Σ ‖ψ_i‖²]` over the scored decisions i that
+/// `slot(states, i)` assigns to it (`slots` of them): decision indices for the time-indexed
+/// baselines, states for the per-state one.
+fn slot_statistics<S: Scalar>(
+    problem: &ToyProblem<S>,
+    theta: &[S],
+    slots: usize,
+    slot: impl Fn(&[usize], usize) -> usize,
+) -> Result<(Vec<S>, Vec<S>, S), ExactError> {
+    let table = problem.table(theta)?;
+    let mut terms = DecisionTerms::new();
+    let mut g = vec![S::zero(); table.dim];
+    let mut cross = vec![S::zero(); slots];
+    let mut score_moment = vec![S::zero(); slots];
+    let mut m2 = S::zero();
+    for_each_prefix(problem, &table, |states, actions, p| {
+        let actions = problem.scored_actions(states, actions);
+        decision_terms(&table, states, actions, None, false, &mut terms);
+        terms.estimate_into(|_| None, &mut g);
+        m2 += p.clone() * norm_sq(&g);
+        for i in 0..terms.decisions() {
+            let k = slot(states, i);
+            cross[k] += p.clone() * dot(&g, terms.score(i));
+            score_moment[k] += p.clone() * norm_sq(terms.score(i));
+        }
+    })?;
+    Ok((cross, score_moment, m2))
+}
+
 /// (X1) The statistics `c_s`, `A_ss` of every state at θ, the optimal per-state baseline
 /// `w*_s = c_s/A_ss` and its second moment by enumeration and in closed form
 /// ([`OptimalStateBaseline`]).
@@ -181,24 +210,8 @@ pub fn optimal_state_baseline<S: Scalar>(
     problem: &ToyProblem<S>,
     theta: &[S],
 ) -> Result<OptimalStateBaseline<S>, ExactError> {
-    let n = problem.mdp().states;
-    let table = problem.table(theta)?;
-    let mut terms = DecisionTerms::new();
-    let mut g = vec![S::zero(); table.dim];
-    let mut cross = vec![S::zero(); n];
-    let mut score_moment = vec![S::zero(); n];
-    let mut m2 = S::zero();
-    for_each_prefix(problem, &table, |states, actions, p| {
-        let actions = problem.scored_actions(states, actions);
-        decision_terms(&table, states, actions, None, false, &mut terms);
-        terms.estimate_into(|_| None, &mut g);
-        m2 += p.clone() * norm_sq(&g);
-        for i in 0..terms.decisions() {
-            let s = states[i];
-            cross[s] += p.clone() * dot(&g, terms.score(i));
-            score_moment[s] += p.clone() * norm_sq(terms.score(i));
-        }
-    })?;
+    let (cross, score_moment, m2) =
+        slot_statistics(problem, theta, problem.mdp().states, |states, i| states[i])?;
     let weights: Vec<S> = cross
         .iter()
         .zip(&score_moment)
@@ -230,22 +243,7 @@ pub fn optimal_baselines<S: Scalar>(
     theta: &[S],
 ) -> Result<OptimalBaselines<S>, ExactError> {
     let decisions = problem.mdp().horizon - 2;
-    let table = problem.table(theta)?;
-    let mut terms = DecisionTerms::new();
-    let mut g = vec![S::zero(); table.dim];
-    let mut cross = vec![S::zero(); decisions];
-    let mut score_moment = vec![S::zero(); decisions];
-    let mut m2 = S::zero();
-    for_each_prefix(problem, &table, |states, actions, p| {
-        let actions = problem.scored_actions(states, actions);
-        decision_terms(&table, states, actions, None, false, &mut terms);
-        terms.estimate_into(|_| None, &mut g);
-        m2 += p.clone() * norm_sq(&g);
-        for i in 0..terms.decisions() {
-            cross[i] += p.clone() * dot(&g, terms.score(i));
-            score_moment[i] += p.clone() * norm_sq(terms.score(i));
-        }
-    })?;
+    let (cross, score_moment, m2) = slot_statistics(problem, theta, decisions, |_, i| i)?;
     let time_indexed: Vec<S> = cross
         .iter()
         .zip(&score_moment)
