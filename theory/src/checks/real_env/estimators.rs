@@ -287,30 +287,27 @@ where
         }
         _ => None,
     };
+    // One roll-out of a baselined oracle and its estimate at θ.
+    let baselined = |q: &ilopt::baseline::Baselined<TaskProblem<T, P>, f64>, rng: &mut KitRng| {
+        let mut c = Cost::default();
+        let t = q
+            .rollout(&Behaviour::Learner(theta), rng, &mut c)
+            .map_err(|e| e.to_string())?;
+        q.estimate(theta, &t, EstimatorForm::Causal, &mut c)
+            .map_err(|e| e.to_string())
+    };
     par_map(n, |i| {
         let mut rng = KitRng::seed_from_u64(estimator_seed(k, i));
         if let Some(q) = &fitted {
             let q = q.lock().map_err(|e| e.to_string())?.clone();
-            let mut c = Cost::default();
-            let t = q
-                .rollout(&Behaviour::Learner(theta), &mut rng, &mut c)
-                .map_err(|e| e.to_string())?;
-            return q
-                .estimate(theta, &t, EstimatorForm::Causal, &mut c)
-                .map_err(|e| e.to_string());
+            return baselined(&q, &mut rng);
         }
         if let Estimator::Baselined(b, m) = e {
             // A fresh oracle per sample: an estimated baseline then learns only from earlier
             // trajectories of the same sample, and samples stay independent.
             let q = ilopt::baseline::Baselined::<_, f64>::new(p.clone(), *m, b)
                 .map_err(|e| e.to_string())?;
-            let mut c = Cost::default();
-            let t = q
-                .rollout(&Behaviour::Learner(theta), &mut rng, &mut c)
-                .map_err(|e| e.to_string())?;
-            return q
-                .estimate(theta, &t, EstimatorForm::Causal, &mut c)
-                .map_err(|e| e.to_string());
+            return baselined(&q, &mut rng);
         }
         if let Estimator::Mutated(m) = e {
             let (t, starts) = rollout_marking_resets(p, theta, &mut rng)?;
