@@ -66,7 +66,8 @@ struct Buffers<S> {
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
 /// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines from
-/// earlier roll-outs only. This assumes, as every algorithm of the kit does, that a trajectory is
+/// earlier roll-outs only. The state-dependent baseline `b_i = w·φ_b(s_i)` works the same way,
+/// its weights from [`RunningRegression`] and φ_b from [`PerDecisionTerms::state_features`]. This assumes, as every algorithm of the kit does, that a trajectory is
 /// estimated before the next one is rolled out.
 #[derive(Debug, Clone)]
 pub struct Baselined<P, S> {
