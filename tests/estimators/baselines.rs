@@ -501,6 +501,35 @@ fn a_state_baseline_that_reads_the_next_state_is_biased() {
     );
 }
 
+/// The baselined oracle on a toy MDP in the scalar `S`.
+type ToyOracle<S> = Baselined<ToyProblem<S>, S>;
+
+/// The same batch estimated by the `f64`, exact and interval oracles: the `f64` estimate lies
+/// inside the interval run of the same code and the exact value inside both (the kit's tolerance
+/// policy); the exact estimate is returned.
+fn estimates_agree(
+    (of, ox, oi): (&ToyOracle<f64>, &ToyOracle<Q>, &ToyOracle<Interval>),
+    (theta_f, theta_x, theta_i): (&DVector<f64>, &DVector<Q>, &DVector<Interval>),
+    batch: &Vec<ToyTrajectory>,
+    what: &str,
+) -> DVector<Q> {
+    let mut cost = Cost::default();
+    let f = of
+        .estimate(theta_f, batch, EstimatorForm::Causal, &mut cost)
+        .unwrap();
+    let x = ox
+        .estimate(theta_x, batch, EstimatorForm::Causal, &mut cost)
+        .unwrap();
+    let i = oi
+        .estimate(theta_i, batch, EstimatorForm::Causal, &mut cost)
+        .unwrap();
+    assert!(
+        all_agree(f.as_slice(), x.as_slice(), i.as_slice()),
+        "{what}: {f:?} vs {x:?}"
+    );
+    x
+}
+
 /// The state-dependent oracle in `f64` against the exact one on the same trajectories, estimate
 /// after estimate with a roll-out (commit) between them: inside the interval run of the same
 /// code; from the second trajectory on the baseline changes the estimate.
@@ -535,18 +564,11 @@ fn f64_state_dependent_oracle_agrees_with_the_exact_one() {
             .unwrap();
         oi.rollout(&Behaviour::Learner(&theta_i), &mut r2, &mut cost)
             .unwrap();
-        let f = of
-            .estimate(&theta_f, &batch, EstimatorForm::Causal, &mut cost)
-            .unwrap();
-        let x = ox
-            .estimate(&theta_x, &batch, EstimatorForm::Causal, &mut cost)
-            .unwrap();
-        let i = oi
-            .estimate(&theta_i, &batch, EstimatorForm::Causal, &mut cost)
-            .unwrap();
-        assert!(
-            all_agree(f.as_slice(), x.as_slice(), i.as_slice()),
-            "{f:?} vs {x:?}"
+        let x = estimates_agree(
+            (&of, &ox, &oi),
+            (&theta_f, &theta_x, &theta_i),
+            &batch,
+            "state-dependent",
         );
         let plain = px
             .estimate(&theta_x, &batch[0], EstimatorForm::Causal, &mut cost)
@@ -733,18 +755,11 @@ fn f64_baselined_oracle_agrees_with_the_exact_one() {
             Baselined::<_, Interval>::new(ToyProblem::<Interval>::new(&mdp), m, &kind).unwrap();
         for chunk in batch.chunks(m) {
             let chunk = chunk.to_vec();
-            let f = of
-                .estimate(&theta_f, &chunk, EstimatorForm::Causal, &mut cost)
-                .unwrap();
-            let x = ox
-                .estimate(&theta_x, &chunk, EstimatorForm::Causal, &mut cost)
-                .unwrap();
-            let i = oi
-                .estimate(&theta_i, &chunk, EstimatorForm::Causal, &mut cost)
-                .unwrap();
-            assert!(
-                all_agree(f.as_slice(), x.as_slice(), i.as_slice()),
-                "{kind:?}: {f:?} vs {x:?}"
+            let x = estimates_agree(
+                (&of, &ox, &oi),
+                (&theta_f, &theta_x, &theta_i),
+                &chunk,
+                &format!("{kind:?}"),
             );
             // The baselined estimate differs from the plain one by Σ b_i ψ_i, computed here by
             // the independent causal code of the toy oracle.

@@ -44,7 +44,7 @@ pub fn run_seed(
         ($p:expr) => {
             if let Some(b) = baseline {
                 let b = Baselined::<_, f64>::new($p.clone(), m, b)
-                    .map_err(|e| config.invalid("run.baseline", e))?;
+                    .map_err(|e| config.invalid("run.baseline", baseline_message(e)))?;
                 drive(bench, &b, config, seed, progress)
             } else if m > 1 {
                 let b = Batched::new($p.clone(), m)
@@ -217,7 +217,7 @@ pub fn check_baseline(bench: &Bench, config: &LoadedConfig) -> Result<(), RunErr
     };
     let m = config.file.run.trajectories_per_gradient;
     let theta = bench.theta0(config)?;
-    let bad = |e: OracleError| config.invalid("run.baseline", e);
+    let bad = |e: OracleError| config.invalid("run.baseline", baseline_message(e));
     macro_rules! on {
         ($p:expr) => {{
             let o = Baselined::<_, f64>::new($p.clone(), m, b).map_err(bad)?;
@@ -237,5 +237,14 @@ pub fn check_baseline(bench: &Bench, config: &LoadedConfig) -> Result<(), RunErr
         Bench::CartPoleLogistic(p) => on!(p),
         Bench::Obstacle { problem, .. } => on!(problem),
         Bench::Toy(p) => on!(p),
+    }
+}
+
+/// An oracle's error about its baseline without the "baseline: " its message starts with (the
+/// key `run.baseline` already says it); any other error as it is.
+fn baseline_message(e: crate::problem::OracleError) -> String {
+    match e {
+        crate::problem::OracleError::Baseline(m) => m,
+        e => e.to_string(),
     }
 }
