@@ -105,6 +105,22 @@ fn ci_text(s: &Summary) -> String {
     }
 }
 
+/// A success rate (a fraction) as [`ci_text`] in percent, the unit of the rules and tables.
+fn percent_text(s: &Summary) -> String {
+    let pct = |x: f64| format!("{}%", num(100.0 * x));
+    if s.half_width.is_finite() {
+        format!(
+            "{} [{}, {}] (n = {})",
+            pct(s.mean),
+            pct(s.lo()),
+            pct(s.hi()),
+            s.n
+        )
+    } else {
+        format!("{} (n = {})", pct(s.mean), s.n)
+    }
+}
+
 /// `label: value; tally` for each row.
 fn evidence<'a>(rows: impl IntoIterator<Item = (&'a ConfigResult, String)>) -> String {
     rows.into_iter()
@@ -226,13 +242,13 @@ fn obstacle_success_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
         let (ev, v) = match thesis(o, label) {
             Some(c) => {
                 let s = success(c);
-                (evidence([(c, ci_text(&s))]), within(&s, lo, hi))
+                (evidence([(c, percent_text(&s))]), within(&s, lo, hi))
             }
             None => (format!("no thesis row {label}"), Verdict::Inconclusive),
         };
         claim(id, "§4.1.3, Fig. 4.3", text, &rule, ev, v)
     };
-    // BC ≈ 70 %, and constant: the per-seed change from the first checkpoint to the last.
+    // BC ≈ 70 %, and constant: the per-seed change from the second checkpoint to the last.
     if let Some(bc) = thesis(o, "BC") {
         let s = success(bc);
         let change: Vec<f64> = bc
@@ -250,7 +266,7 @@ fn obstacle_success_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
              (both inside: reproduced; either disjoint: not reproduced)",
             format!(
                 "{}; change {} pp",
-                evidence([(bc, ci_text(&s))]),
+                evidence([(bc, percent_text(&s))]),
                 ci_text(&Summary {
                     n: d.n,
                     mean: 100.0 * d.mean,
@@ -282,7 +298,7 @@ fn obstacle_success_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
         "STORM, DAgger and Adam reach ≈ 90% success for many expert trajectories",
         "each final success's 95% t-interval (diverged runs count as 0) lies in [80%, 100%]; \
          any disjoint from it: not reproduced",
-        evidence(trio.iter().map(|c| (*c, ci_text(&success(c))))),
+        evidence(trio.iter().map(|c| (*c, percent_text(&success(c))))),
         Verdict::all(
             &trio
                 .iter()
@@ -725,6 +741,17 @@ mod tests {
             censored(Verdict::Reproduced, &[3.0, 4.0], 100.0),
             Verdict::Reproduced
         );
+    }
+
+    #[test]
+    fn success_rates_are_printed_in_the_rules_unit() {
+        // The rules state success in percent; the evidence must not print the fraction.
+        let s = Summary::of(&[0.5, 0.6, 0.7]);
+        let text = percent_text(&s);
+        assert!(text.starts_with("60.00% ["), "{text}");
+        assert_eq!(text.matches('%').count(), 3, "{text}");
+        assert!(text.ends_with("(n = 3)"), "{text}");
+        assert_eq!(percent_text(&Summary::of(&[0.25])), "25.00% (n = 1)");
     }
 
     #[test]
