@@ -210,7 +210,7 @@ pub fn description(g: &GradientError, r: &GradientErrorResult) -> String {
          interval is the percentile bootstrap over the streams ({boot} resamples). \
          **(a) Toy MDP** (`{mdp}`, θ = ({theta})): the reference is ∇F computed in exact rationals \
          by the exact engine's forward DP (the `gradient` of `ilopt toy eval`), with no noise; \
-         σ² = {s2e} ≈ {s2:.6} exactly (E‖g‖² by enumerating every trajectory). Slope {ts}. \
+         σ² = {s2e} ≈ {s2:.6}, exact (E‖g‖² by enumerating every trajectory). Slope {ts}. \
          **(b) Obstacle task** under the thesis's fixed-horizon objective (T = {h} decisions, \
          absorbing ends: success 0, crash (2·v_max)² per remaining step), linear-Gaussian learner \
          (σ_π = {sigma}) over the 9 basic features at a fixed θ (a proportional pull towards the \
