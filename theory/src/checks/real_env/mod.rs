@@ -43,7 +43,8 @@ pub use tasks::{
     ObstacleProblem, cartpole_fixed, cartpole_theta, obstacle_problem, obstacle_theta,
 };
 pub use variance::{
-    At, Ratio, Reduction, STATE_FIT, dagger_solution, reduction, reduction_verdict, variance_rows,
+    At, Ratio, Reduction, STATE_FIT, STATE_FITS, dagger_solution, reduction, reduction_verdict,
+    variance_rows,
 };
 
 use crate::protocol::RealSizes;
@@ -381,7 +382,7 @@ where
         z.alpha,
         &refs_b,
         &format!(
-            "; {} estimates of one trajectory each; variance per trajectory tr Var(g)/tr Var(g_b) = {s_ratio:.3} [{s_lo:.3}, {s_hi:.3}] (level 1 − α, α = {a:.0e}: log ratio ± z·bootstrap s.e., 400 resamples)",
+            "; {} estimates of one trajectory each; variance per trajectory tr Var(g)/tr Var(g_b) = {s_ratio:.3} [{s_lo:.3}, {s_hi:.3}] (level 1 − α, α = {a:.0e}: log ratio ± z·bootstrap s.e., 400 resamples; for this one fit, whose own variability the interval leaves out: rows 6{tag}.b.var.s0/D measure {STATE_FITS} fits)",
             state_dependent.n,
             a = z.alpha
         ),

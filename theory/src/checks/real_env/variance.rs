@@ -202,6 +202,28 @@ where
 /// Trajectories the state-dependent baseline of rows `6<tag>.b.var.s<suffix>` is fitted on.
 pub const STATE_FIT: usize = 1000;
 
+/// Independent fits of the state-dependent baseline in rows `6<tag>.b.var.s<suffix>`: the
+/// reduction depends on the fit (on the trajectories it saw), so each row measures it for this
+/// many fits, each from its own seed family, and judges every one ([`fits_verdict`]).
+pub const STATE_FITS: usize = 4;
+
+/// "The fitted baseline reduces the variance", over independent fits, each with its interval at
+/// level 1 − α/F (so that the row's false-alarm probability stays α): holds when every fit's
+/// interval lies above 1, fails when some fit's lies below 1, inconclusive otherwise.
+///
+/// # Panics
+/// Without fits.
+pub fn fits_verdict(fits: &[Reduction]) -> Verdict {
+    assert!(!fits.is_empty(), "at least one fit");
+    if fits.iter().any(|r| r.total.hi < 1.0) {
+        Verdict::Fails
+    } else if fits.iter().all(|r| r.total.lo > 1.0) {
+        Verdict::Holds
+    } else {
+        Verdict::Inconclusive
+    }
+}
+
 /// One point of the variance rows: where θ is, and θ.
 pub struct At<'a> {
     /// Row id suffix ("0", "D").
@@ -262,20 +284,33 @@ where
             decay: None,
             ridge: None,
         };
-        let fitted = samples(
-            p,
-            &point.theta,
-            &Estimator::Fitted(state, STATE_FIT),
-            n,
-            // A family of its own (the points' families are 40 + 4i …).
-            1000 + seed,
-        )?;
-        let rs = reduction(&plain, &fitted, 1, 400, seed + 2, alpha);
-        rows.push(row(
+        // The n estimates split over the fits; fit f's family is 1000·(f + 1) + the point's
+        // (the points' families are 40 + 4i …, so every family is its own).
+        let per_fit = (n / STATE_FITS).max(2);
+        let fits = (0..STATE_FITS as u64)
+            .map(|f| {
+                let fitted = samples(
+                    p,
+                    &point.theta,
+                    &Estimator::Fitted(state.clone(), STATE_FIT),
+                    per_fit,
+                    1000 * (f + 1) + seed,
+                )?;
+                let level = alpha / STATE_FITS as f64;
+                Ok(reduction(
+                    &plain,
+                    &fitted,
+                    1,
+                    400,
+                    seed + 2 + 1000 * f,
+                    level,
+                ))
+            })
+            .collect::<Result<Vec<_>, String>>()?;
+        rows.push(fits_row(
             &format!("6{tag}.b.var.s{}", point.suffix),
-            &format!("{name}, {what}: the state-dependent baseline b_i = w·(φ(s_i), i, 1) (the learner's features, the decision index and 1; w = A⁻¹c fitted on {STATE_FIT} other trajectories at θ) reduces the variance per trajectory, tr Var(g_b) < tr Var(g)"),
-            Role::Corrected,
-            &rs,
+            &format!("{name}, {what}: the state-dependent baseline b_i = w·(φ(s_i), i, 1) (the learner's features, the decision index and 1; w = A⁻¹c fitted on {STATE_FIT} other trajectories at θ) reduces the variance per trajectory, tr Var(g_b) < tr Var(g), for each of {STATE_FITS} independent fits"),
+            &fits,
             alpha,
         ));
         if i + 1 == at.len() {
@@ -301,6 +336,35 @@ where
         }
     }
     Ok(rows)
+}
+
+/// Row `6<tag>.b.var.s<suffix>`: every fit's reduction, the verdict by [`fits_verdict`], and as
+/// the measured statistic the fit with the smallest reduction (the claim is about every fit).
+fn fits_row(id: &str, claim: &str, fits: &[Reduction], alpha: f64) -> Check {
+    let worst = fits
+        .iter()
+        .min_by(|a, b| a.total.value.total_cmp(&b.total.value))
+        .expect("at least one fit");
+    let each = fits
+        .iter()
+        .enumerate()
+        .map(|(f, r)| format!("fit {}: {}", f + 1, r.total.text()))
+        .collect::<Vec<_>>()
+        .join("; ");
+    let (lo, hi) = fits.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), r| {
+        (lo.min(r.total.value), hi.max(r.total.value))
+    });
+    let mut check = row(id, claim, Role::Corrected, worst, alpha / fits.len() as f64);
+    check.details = format!(
+        "{} independent fits of the baseline, each on {STATE_FIT} trajectories of its own seeds, each judged on {} estimates of its own against the same {} plain estimates (intervals at level 1 − α/{}); tr Var(g)/tr Var(g_b) per fit: {each}; spread over the fits {lo:.3}–{hi:.3}. The measured value is the smallest fit's, in detail: {}",
+        fits.len(),
+        worst.n_baselined,
+        worst.n_plain,
+        fits.len(),
+        check.details
+    );
+    check.verdict = fits_verdict(fits);
+    check
 }
 
 fn row(id: &str, claim: &str, role: Role, r: &Reduction, alpha: f64) -> Check {
@@ -385,5 +449,45 @@ mod tests {
         let r = reduction(&plain, &baselined, 16, 400, 2, 0.05);
         assert!(r.total.lo < 1.0 && r.total.hi > 1.0, "{:?}", r.total);
         assert_eq!(reduction_verdict(&r), Verdict::Inconclusive);
+    }
+
+    /// Every fit must reduce the variance: one fit that raises it fails the row, one that is
+    /// undecided leaves it inconclusive, however well the others do; the row reports the
+    /// smallest fit and every fit's ratio.
+    #[test]
+    fn a_row_over_fits_holds_only_if_every_fit_reduces_the_variance() {
+        let plain = alternating(200, 4.0, 1.0);
+        let good = reduction(&plain, &alternating(100, 1.0, 0.5), 1, 200, 1, 0.05);
+        let better = reduction(&plain, &alternating(100, 0.5, 0.5), 1, 200, 1, 0.05);
+        let worse = reduction(&plain, &alternating(100, 8.0, 8.0), 1, 200, 1, 0.05);
+        let mut rng = KitRng::seed_from_u64(3);
+        let noise = |n: usize, s: f64, rng: &mut KitRng| -> Vec<DVector<f64>> {
+            (0..n)
+                .map(|_| DVector::from_vec(vec![s * (rng.random::<f64>() - 0.5)]))
+                .collect()
+        };
+        let (a, b) = (noise(40, 4.0, &mut rng), noise(40, 1.0, &mut rng));
+        let undecided = reduction(&a, &b, 16, 400, 2, 0.05);
+        assert_eq!(
+            fits_verdict(&[good.clone(), better.clone()]),
+            Verdict::Holds
+        );
+        assert_eq!(
+            fits_verdict(&[good.clone(), worse.clone(), better.clone()]),
+            Verdict::Fails
+        );
+        assert_eq!(
+            fits_verdict(&[undecided.clone(), better.clone()]),
+            Verdict::Inconclusive
+        );
+        let check = fits_row("x", "claim", &[better.clone(), good.clone()], 0.01);
+        assert_eq!(check.verdict, Verdict::Holds);
+        let measured = check.measured.expect("measured");
+        assert_eq!(measured.value, good.total.value.min(better.total.value));
+        assert!(check.details.contains("fit 1: ") && check.details.contains("fit 2: "));
+        assert_eq!(
+            fits_row("x", "claim", &[better, worse], 0.01).verdict,
+            Verdict::Fails
+        );
     }
 }
