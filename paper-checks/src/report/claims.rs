@@ -92,32 +92,27 @@ fn last_value(
 }
 
 fn ci_text(s: &Summary) -> String {
-    if s.half_width.is_finite() {
-        format!(
-            "{} [{}, {}] (n = {})",
-            num(s.mean),
-            num(s.lo()),
-            num(s.hi()),
-            s.n
-        )
-    } else {
-        format!("{} (n = {})", num(s.mean), s.n)
-    }
+    interval_text(s, num)
 }
 
 /// A success rate (a fraction) as [`ci_text`] in percent, the unit of the rules and tables.
 fn percent_text(s: &Summary) -> String {
-    let pct = |x: f64| format!("{}%", num(100.0 * x));
+    interval_text(s, |x| format!("{}%", num(100.0 * x)))
+}
+
+/// `mean [lo, hi] (n = …)`, each number written by `show` (the mean alone without a finite
+/// interval).
+fn interval_text(s: &Summary, show: impl Fn(f64) -> String) -> String {
     if s.half_width.is_finite() {
         format!(
             "{} [{}, {}] (n = {})",
-            pct(s.mean),
-            pct(s.lo()),
-            pct(s.hi()),
+            show(s.mean),
+            show(s.lo()),
+            show(s.hi()),
             s.n
         )
     } else {
-        format!("{} (n = {})", pct(s.mean), s.n)
+        format!("{} (n = {})", show(s.mean), s.n)
     }
 }
 
