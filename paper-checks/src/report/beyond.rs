@@ -137,7 +137,8 @@ pub fn blocks(
              learned kind, a state-dependent baseline b_i = w·(φ(s_i), i, 1) with weights fitted on \
              earlier gradients, came after the committed profiles' protocol was fixed and is not in \
              their grids; the theorem table measures its unbiasedness and its variance reduction on \
-             both tasks (rows 6a.b.s, 6b.b.s, 6a.b.var.s0/D, 6b.b.var.s0/D)."
+             both tasks, the latter for four independent fits, since it depends on the fit (rows \
+             6a.b.s, 6b.b.s, 6a.b.var.s0/D, 6b.b.var.s0/D)."
                 .into(),
         ),
     ];
