@@ -43,8 +43,8 @@ pub use tasks::{
     ObstacleProblem, cartpole_fixed, cartpole_theta, obstacle_problem, obstacle_theta,
 };
 pub use variance::{
-    At, Ratio, Reduction, STATE_FIT, STATE_FITS, dagger_solution, reduction, reduction_verdict,
-    variance_rows,
+    At, Ratio, Reduction, STATE_FIT, STATE_FITS, dagger_solution, fits_verdict, reduction,
+    reduction_verdict, variance_rows,
 };
 
 use crate::protocol::RealSizes;
