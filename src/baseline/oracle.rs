@@ -225,11 +225,13 @@ fn state_columns<S: Scalar, P: PerDecisionTerms<S>>(
     if !time {
         return Ok(k);
     }
+    // By `extend` of a sized iterator: reserved once, so the running index stays in a register.
     let mut index = S::zero();
-    for _ in 0..n {
-        columns.push(index.clone());
+    columns.extend((0..n).map(|_| {
+        let i = index.clone();
         index += S::one();
-    }
+        i
+    }));
     columns.extend(std::iter::repeat_n(S::one(), n));
     Ok(k + 2)
 }
