@@ -39,6 +39,10 @@ struct Args {
     /// No progress output.
     #[arg(long, global = true)]
     quiet: bool,
+    /// Run the theorem table at this size instead of the profile's `theory_profile`: `quick`,
+    /// `full` (`ilopt-theory --full`) or `none`. The appendix and the provenance name the size.
+    #[arg(long, value_name = "SIZE", value_parser = ["quick", "full", "none"], global = true)]
+    theory: Option<String>,
     /// Compute only shard K of N (e.g. `3/16`) of the tuning and report runs into the output
     /// directory's unit store; run every shard twice (tuning first, then the report runs, which
     /// need every row's tuning) and then `paper-checks merge`.
@@ -74,7 +78,10 @@ fn main() -> ExitCode {
     };
     let start = std::time::Instant::now();
     let result = text.and_then(|text| {
-            let p = Profile::from_toml(&text, &path)?;
+            let mut p = Profile::from_toml(&text, &path)?;
+            if let Some(t) = &args.theory {
+                p.theory_profile.clone_from(t);
+            }
             let mode = match (&args.command, args.shard) {
                 (Some(Command::Merge), _) => Mode::Merge,
                 (None, Some(s)) => Mode::Shard(s),

@@ -329,7 +329,7 @@ fn tables(blocks: &[Block]) -> Vec<&Table> {
 #[test]
 fn the_theory_section_is_rendered_from_the_check_records() {
     let checks = two_checks();
-    let b = theory::blocks(&TheoryTable::Checks(checks.clone()), "tab:t");
+    let b = theory::blocks(&TheoryTable::Checks(checks.clone()), "quick", "tab:t");
     let t = tables(&b);
     // The check table split in two, then the constants.
     assert_eq!(t.len(), 3, "{b:?}");
@@ -435,14 +435,14 @@ fn the_theory_section_is_rendered_from_the_check_records() {
 fn an_undetected_control_fails_the_status_and_no_table_is_a_note() {
     let mut checks = two_checks();
     checks[1].verdict = ilopt_theory::check::Verdict::Holds;
-    let b = theory::blocks(&TheoryTable::Checks(checks), "tab:t");
+    let b = theory::blocks(&TheoryTable::Checks(checks), "quick", "tab:t");
     assert!(b.contains(&Block::Para(
         "Uninformative rows: none. Negative controls: 1a.control NOT detected.".into()
     )));
     assert!(b.contains(&Block::Para(
         "**Status: FAILS — negative control(s) not detected: 1a.control**".into()
     )));
-    let none = theory::blocks(&TheoryTable::NotRun, "tab:t");
+    let none = theory::blocks(&TheoryTable::NotRun, "none", "tab:t");
     assert_eq!(none.len(), 1);
     assert!(matches!(&none[0], Block::Para(p) if p.starts_with("*Not run")));
     assert!(theory::checks_by_erratum(TheoryTable::NotRun.checks()).is_empty());

@@ -204,18 +204,57 @@ fn details_blocks(checks: &[Check], label: &str) -> Vec<Block> {
 
 /// The theorem-check section's blocks: the check tables, the notes and status, then the
 /// constants once and the details referring to them; tables are labelled `label-…`.
-pub fn blocks(table: &TheoryTable, label: &str) -> Vec<Block> {
+pub fn blocks(table: &TheoryTable, size: &str, label: &str) -> Vec<Block> {
     let TheoryTable::Checks(checks) = table else {
         return vec![Block::Para(
-            "*Not run: the profile sets `theory_profile = \"none\"`. Run `cargo run --release -p \
-             ilopt-theory` or a profile with `theory_profile = \"quick\"`.*"
+            "*Not run: the profile sets `theory_profile = \"none\"` (or the run `--theory none`). \
+             Run `cargo run --release -p ilopt-theory`, or this appendix with `--theory quick` or \
+             `--theory full`.*"
                 .into(),
         )];
     };
-    let mut out: Vec<Block> = check_tables(checks, label).into();
+    let mut out = vec![Block::Para(size_text(size))];
+    out.extend(Vec::<Block>::from(check_tables(checks, label)));
     out.extend(notes(checks));
     out.extend(details_blocks(checks, label));
     out
+}
+
+/// Which size of the table this is, with the sizes that differ between the two (from
+/// `ilopt-theory`'s protocol, so that the text follows the code), and how to run the other.
+fn size_text(size: &str) -> String {
+    use ilopt_theory::certify::recheck::QUICK_SAMPLE;
+    use ilopt_theory::protocol::{Profile, real_sizes};
+    let of = |p: Profile| {
+        let (s, (cp, ob)) = (p.sizes(), real_sizes(p));
+        let (recheck, episodic) = match p {
+            Profile::Full => ("every certificate box".to_string(), "with"),
+            Profile::Quick => (
+                format!(
+                    "a seeded sample of {QUICK_SAMPLE} boxes per certificate region (and every \
+                     box within 1 % of its bound)"
+                ),
+                "without",
+            ),
+        };
+        format!(
+            "schedule rows to k = {}, {} Monte-Carlo runs per toy row, {} per STORM row, {} / {} \
+             oracle estimates per real-environment row (CartPole / obstacle), the second route \
+             re-checking {recheck}, {episodic} the rows of the obstacle task's episodic control \
+             objective (6e)",
+            s.schedule_k, s.runs, s.storm_runs, cp.n_oracle, ob.n_oracle
+        )
+    };
+    let (this, other, other_name, flag) = if size == "full" {
+        (of(Profile::Full), of(Profile::Quick), "quick", " --full")
+    } else {
+        (of(Profile::Quick), of(Profile::Full), "full", "")
+    };
+    format!(
+        "This is the **{size}** theorem table (`ilopt-theory{flag}`, real-environment rows \
+         included): {this}. The {other_name} table has {other}; `--theory {other_name}` runs this \
+         appendix with it (`--theory none` without a table)."
+    )
 }
 
 /// The ids of the checks of each erratum (`E1`, `E2`, …), in table order.
@@ -231,4 +270,25 @@ pub fn checks_by_erratum(checks: &[Check]) -> BTreeMap<String, Vec<String>> {
         }
     }
     m
+}
+
+#[cfg(test)]
+mod size_tests {
+    use super::size_text;
+    use ilopt_theory::protocol::Profile;
+
+    /// Each size's text names itself, its own command and the other size's flag, with the sizes
+    /// of `ilopt-theory`'s protocol.
+    #[test]
+    fn the_table_says_which_size_it_is() {
+        let quick = size_text("quick");
+        assert!(quick.starts_with("This is the **quick** theorem table (`ilopt-theory`,"));
+        let k = |p: Profile| format!("k = {}", p.sizes().schedule_k);
+        assert!(quick.contains(&k(Profile::Quick)) && quick.contains("`--theory full`"));
+        let full = size_text("full");
+        assert!(full.starts_with("This is the **full** theorem table (`ilopt-theory --full`,"));
+        assert!(full.contains(&k(Profile::Full)) && full.contains("`--theory quick`"));
+        assert!(full.find("every certificate box") < full.find("a seeded sample"));
+        assert!(quick.find("a seeded sample") < quick.find("every certificate box"));
+    }
 }
