@@ -173,6 +173,8 @@ pub fn write(
         "profile_file": profile_file.file_name().map(|f| f.to_string_lossy().to_string()),
         "profile_toml": profile_text,
         "profile_parsed": profile,
+        // The size the theorem table ran at: `profile_toml`'s `theory_profile`, or `--theory`.
+        "theory_table": profile.theory_profile,
         "seed_derivation": "report seed = SplitMix64(FNV-1a(\"task|label|algorithm-config-json|m=…|objective[|baseline=baseline-json]\") XOR SplitMix64(seed index)); tuning seed likewise from \"tuning|\" + that key; evaluation episodes (\"<task>-eval\" / \"<task>-tuning-eval\") and Fig. 4.2 streams likewise from their own keys",
         "run_seeds": seeds,
         "git_commit": crate::build_info::GIT_COMMIT,

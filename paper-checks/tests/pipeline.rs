@@ -365,6 +365,7 @@ fn files_no_row_produces_are_removed_and_provenance_records_the_command() {
         Some(paper_checks::build_info::SOURCE_HASH)
     );
     assert!(prov["git_commit"].as_str().is_some_and(|c| !c.is_empty()));
+    assert_eq!(prov["theory_table"], "none", "the size the table ran at");
     let _ = std::fs::remove_dir_all(&d);
 }
 
@@ -664,5 +665,38 @@ fn three_shards_merged_give_the_single_run_s_data_byte_for_byte() {
     );
     let (ok, err) = binary(&cfg, &shared, &["--shard", "4/3"]);
     assert!(!ok && err.contains("4/3"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `--theory` overrides the profile's `theory_profile`: a profile asking for the quick table runs
+/// without one under `--theory none`, and the provenance and the appendix say so; a size that
+/// does not exist is refused with the flag's name and the sizes there are.
+#[test]
+fn the_theory_flag_overrides_the_profile_s_size() {
+    let d = temp_dir("theory-flag");
+    std::fs::create_dir_all(&d).expect("writable");
+    let cfg = d.join("tiny.toml");
+    let text = TINY.replace("theory_profile = \"none\"", "theory_profile = \"quick\"");
+    assert_ne!(text, TINY, "the tiny profile names its theory size");
+    std::fs::write(&cfg, &text).expect("writable");
+    let out = d.join("out");
+    let (ok, err) = binary(&cfg, &out, &["--theory", "none"]);
+    assert!(ok, "{err}");
+    let prov: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("provenance.json")).expect("written"))
+            .expect("parses");
+    assert_eq!(prov["theory_table"], "none");
+    assert_eq!(prov["profile_parsed"]["theory_profile"], "none");
+    let appendix = std::fs::read_to_string(out.join("appendix.md")).expect("written");
+    assert!(
+        appendix.contains("*Not run: the profile sets"),
+        "{appendix}"
+    );
+    assert!(!out.join("theory.json").exists());
+    let (ok, err) = binary(&cfg, &out, &["--theory", "huge"]);
+    assert!(
+        !ok && err.contains("--theory") && err.contains("quick, full, none"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&d);
 }
