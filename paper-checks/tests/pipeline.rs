@@ -689,7 +689,8 @@ fn the_theory_flag_overrides_the_profile_s_size() {
     assert_eq!(prov["profile_parsed"]["theory_profile"], "none");
     let appendix = std::fs::read_to_string(out.join("appendix.md")).expect("written");
     assert!(
-        appendix.contains("*Not run: the profile sets"),
+        appendix
+            .contains("*Not run: `theory_profile = \"none\"` (in the profile, or `--theory none`)"),
         "{appendix}"
     );
     assert!(!out.join("theory.json").exists());

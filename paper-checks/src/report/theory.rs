@@ -207,8 +207,8 @@ fn details_blocks(checks: &[Check], label: &str) -> Vec<Block> {
 pub fn blocks(table: &TheoryTable, size: &str, label: &str) -> Vec<Block> {
     let TheoryTable::Checks(checks) = table else {
         return vec![Block::Para(
-            "*Not run: the profile sets `theory_profile = \"none\"` (or the run `--theory none`). \
-             Run `cargo run --release -p ilopt-theory`, or this appendix with `--theory quick` or \
+            "*Not run: `theory_profile = \"none\"` (in the profile, or `--theory none`). Run \
+             `cargo run --release -p ilopt-theory`, or this appendix with `--theory quick` or \
              `--theory full`.*"
                 .into(),
         )];
@@ -232,7 +232,7 @@ fn size_text(size: &str) -> String {
             Profile::Quick => (
                 format!(
                     "a seeded sample of {QUICK_SAMPLE} boxes per certificate region (and every \
-                     box within 1 % of its bound)"
+                     box within 1 % of the certified bound)"
                 ),
                 "without",
             ),
