@@ -305,6 +305,7 @@ fn two_checks() -> Vec<ilopt_theory::check::Check> {
             ucb: None,
             runs: Some(100),
             alpha: Some(0.01),
+            null_hypothesis: None,
         }),
         tightness: None,
         method: Method::Statistical,

@@ -35,13 +35,15 @@ pub fn power_items(checks: &[Check]) -> Vec<String> {
     let mut items = Vec::new();
     for c in checks.iter().filter(|c| c.method == Method::Statistical) {
         if let Some((lcb, ucb, bias)) = two_sided_power(c) {
+            let m = c.measured.as_ref();
             items.push(format!(
-                "**{}** ({}): H₀ mean 0, X̄ = {}, interval [{}, {}], minimum detectable bias {} → **{}**",
+                "**{}** ({}): H₀ {}, X̄ = {}, {}, minimum detectable bias {} → **{}**",
                 c.id,
                 c.role.name(),
-                number(c.measured.as_ref().map(|m| m.value)),
-                number(Some(lcb)),
-                number(Some(ucb)),
+                m.and_then(|m| m.null_hypothesis.as_deref())
+                    .unwrap_or("mean 0"),
+                number(m.map(|m| m.value)),
+                interval_text(lcb, ucb),
                 number(Some(bias)),
                 c.verdict.name()
             ));
@@ -59,6 +61,21 @@ pub fn power_items(checks: &[Check]) -> Vec<String> {
         }
     }
     items
+}
+
+/// `interval [lcb, ucb]`, or, when the two one-sided bounds cross (each side's bound is valid on
+/// its own; a mean that varies along the runs can push the lower above the upper), both with
+/// that said.
+pub fn interval_text(lcb: f64, ucb: f64) -> String {
+    if lcb <= ucb {
+        format!("interval [{}, {}]", number(Some(lcb)), number(Some(ucb)))
+    } else {
+        format!(
+            "one-sided bounds that cross (lower {} above upper {}: no constant mean fits the runs)",
+            number(Some(lcb)),
+            number(Some(ucb))
+        )
+    }
 }
 
 /// `id detected` / `id <missed>` for every row of `role` (detected: the check refuted it).
@@ -257,4 +274,52 @@ pub fn json(checks: &[Check]) -> serde_json::Value {
         })
         .collect();
     serde_json::Value::Array(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::check::Measured;
+
+    fn two_sided(id: &str, m: Measured, verdict: Verdict) -> Check {
+        Check::builder(id, "r", "c", Role::Corrected)
+            .measured(m)
+            .decided(Method::Statistical, verdict)
+    }
+
+    /// A two-sided row states its own null hypothesis (mean 0 unless the row names another),
+    /// and bounds that cross are said to cross rather than printed as an interval.
+    #[test]
+    fn the_power_list_states_each_rows_hypothesis_and_crossed_bounds() {
+        let zero = two_sided(
+            "2e",
+            Measured::statistic(1e-6).with_interval(-1e-5, 2e-5),
+            Verdict::Holds,
+        );
+        let midpoint = two_sided(
+            "5e.1",
+            Measured::statistic(0.66)
+                .with_interval(0.648, 0.667)
+                .with_null_hypothesis("E p_K = 0.54, the midpoint"),
+            Verdict::Holds,
+        );
+        let crossed = two_sided(
+            "2e.printed4",
+            Measured::statistic(-0.05547).with_interval(-0.05552, -0.05599),
+            Verdict::Fails,
+        );
+        let items = power_items(&[zero, midpoint, crossed]);
+        assert!(
+            items[0].contains("H₀ mean 0,") && items[0].contains("interval [-1.000e-5, 2.000e-5]")
+        );
+        assert!(
+            items[1].contains("H₀ E p_K = 0.54, the midpoint,") && !items[1].contains("mean 0")
+        );
+        assert!(
+            items[2].contains("cross") && !items[2].contains("interval ["),
+            "{}",
+            items[2]
+        );
+        assert_eq!(interval_text(1.0, 1.0), "interval [1.000, 1.000]");
+    }
 }

@@ -1,7 +1,7 @@
 //! Per-configuration aggregates over seeds (Student-t 95% intervals, [`Summary`]) and their
 //! printed form.
 
-use crate::experiment::{Checkpoint, SeedRun};
+use crate::experiment::{Checkpoint, RunStatus, SeedRun};
 use crate::results::{ConfigResult, ConfigTiming};
 use crate::stats::Summary;
 use serde::Serialize;
@@ -17,15 +17,16 @@ pub struct ConvergenceRow {
     pub seeds: usize,
     /// Over the converged seeds.
     pub gradient_calls: Summary,
-    /// Gradient calls of the whole run (all seeds).
+    /// Gradient calls of the whole run (all seeds; a diverged run's when it diverged).
     pub total_gradient_calls: Summary,
-    /// Final score (all seeds).
+    /// Final score (the seeds that did not diverge: a diverged run has no final policy, and its
+    /// last checkpoint evaluated an earlier one, θ₁ when it diverged before the first).
     pub final_score: Summary,
-    /// Final crashes (all seeds).
+    /// Final crashes (the seeds that did not diverge).
     pub final_crashes: Summary,
-    /// Final mean reward (all seeds).
+    /// Final mean reward (the seeds that did not diverge).
     pub final_reward: Summary,
-    /// Final evaluation loss (all seeds).
+    /// Final evaluation loss (the seeds that did not diverge).
     pub final_loss: Summary,
     /// Diverged runs ([`crate::experiment::RunStatus::Diverged`]: ‖θ‖ beyond the bound, a
     /// non-finite iterate, a failed step).
@@ -37,10 +38,27 @@ pub(crate) fn last(r: &SeedRun) -> Option<&Checkpoint> {
     r.checkpoints.last()
 }
 
-/// A summary over seeds of `f` at each run's last checkpoint.
+/// A summary of `f` at the last checkpoint of each run that did not diverge.
 pub(crate) fn summarise(c: &ConfigResult, f: impl Fn(&Checkpoint) -> f64) -> Summary {
-    let xs: Vec<f64> = c.runs.iter().filter_map(last).map(f).collect();
+    let xs: Vec<f64> = c
+        .runs
+        .iter()
+        .filter(|r| !r.status.is_diverged())
+        .filter_map(last)
+        .map(f)
+        .collect();
     Summary::of(&xs)
+}
+
+/// The gradient calls a run spent: when it diverged, or at its last checkpoint.
+fn spent(r: &SeedRun) -> Option<f64> {
+    match &r.status {
+        RunStatus::Diverged {
+            gradient_evaluations,
+            ..
+        } => Some(*gradient_evaluations as f64),
+        _ => last(r).map(|k| k.gradient_evaluations as f64),
+    }
 }
 
 /// The convergence row of one configuration.
@@ -58,7 +76,7 @@ pub fn convergence_row(c: &ConfigResult) -> ConvergenceRow {
         converged: calls.len(),
         seeds: c.runs.len(),
         gradient_calls: Summary::of(&calls),
-        total_gradient_calls: summarise(c, |k| k.gradient_evaluations as f64),
+        total_gradient_calls: Summary::of(&c.runs.iter().filter_map(spent).collect::<Vec<_>>()),
         final_score: summarise(c, |k| k.score),
         final_crashes: summarise(c, |k| f64::from(k.crashes)),
         final_reward: summarise(c, |k| k.reward),
@@ -112,5 +130,84 @@ pub(crate) fn percent(s: &Summary) -> Summary {
         mean: 100.0 * s.mean,
         half_width: 100.0 * s.half_width,
         n: s.n,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiment::TaskKind;
+
+    fn checkpoint(calls: u64, score: f64) -> Checkpoint {
+        serde_json::from_value(serde_json::json!({
+            "at_calls": calls, "iteration": 0, "trajectories": 0,
+            "gradient_evaluations": calls, "expert_queries": 0, "score": score,
+            "successes": 0, "crashes": 3, "timeouts": 0, "reward": 0.0, "loss": 0.5,
+            "loss_x": null, "loss_y": null, "grad_x": null, "grad_y": null
+        }))
+        .expect("a checkpoint")
+    }
+
+    fn run(i: u32, checkpoints: Vec<Checkpoint>, status: RunStatus) -> SeedRun {
+        SeedRun {
+            seed_index: i,
+            seed: u64::from(i),
+            termination: String::new(),
+            theta: vec![],
+            checkpoints,
+            converged: None,
+            status,
+            hyper_parameters: String::new(),
+        }
+    }
+
+    /// A diverged run has no final policy: its last checkpoint (here θ₁'s, before the first
+    /// checkpoint after it) stays out of the final means, and its whole run ends where it
+    /// diverged, not at its last checkpoint.
+    #[test]
+    fn diverged_runs_stay_out_of_the_final_means_and_count_their_own_calls() {
+        let diverged = RunStatus::Diverged {
+            reason: "‖θ‖ beyond the bound".into(),
+            gradient_evaluations: 1300,
+        };
+        let c = ConfigResult {
+            task: TaskKind::Obstacle,
+            label: "STORM".into(),
+            key_hash: String::new(),
+            entry: serde_json::from_value(serde_json::json!({
+                "label": "STORM",
+                "config": {"algorithm": "adam", "form": "causal", "alpha": 0.005,
+                           "beta1": 0.9, "beta2": 0.999, "epsilon": 1e-8}
+            }))
+            .expect("an entry"),
+            runs: vec![
+                run(
+                    0,
+                    vec![checkpoint(0, 0.0), checkpoint(1000, 0.5)],
+                    RunStatus::NotConverged,
+                ),
+                run(1, vec![checkpoint(0, 0.0)], diverged.clone()),
+                run(
+                    2,
+                    vec![checkpoint(0, 0.0), checkpoint(1000, 0.7)],
+                    RunStatus::NotConverged,
+                ),
+            ],
+        };
+        let row = convergence_row(&c);
+        assert_eq!(row.failed_runs, 1);
+        assert_eq!(row.final_score.n, 2);
+        assert!((row.final_score.mean - 0.6).abs() < 1e-12);
+        assert_eq!(row.total_gradient_calls.n, 3);
+        assert!((row.total_gradient_calls.mean - 1100.0).abs() < 1e-9);
+        // Every run diverged: no final value at all, but the calls they spent.
+        let all = ConfigResult {
+            runs: vec![run(0, vec![checkpoint(0, 0.0)], diverged)],
+            ..c
+        };
+        let row = convergence_row(&all);
+        assert_eq!((row.final_score.n, row.final_loss.n), (0, 0));
+        assert_eq!(ci(&row.final_score), "—");
+        assert!((row.total_gradient_calls.mean - 1300.0).abs() < 1e-9);
     }
 }

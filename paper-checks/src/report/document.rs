@@ -119,7 +119,8 @@ fn cost_tables(
     [
         Block::Table(Table {
             caption: Some(format!(
-                "**Table {calls_no}: gradient calls to converge** (kit vs thesis):"
+                "**Table {calls_no}: gradient calls to converge** (kit vs thesis; a diverged \
+                 run's whole run ends where it diverged):"
             )),
             label: format!("tab:pc-{}", calls_no.replace('.', "-")),
             header: strings(&[
@@ -427,7 +428,21 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
         }
         figures(&mut d, figs);
         d.push(Block::Table(Table {
-            caption: Some("**Final checkpoint** (all seeds):".into()),
+            caption: Some(format!(
+                "**Final checkpoint** (mean ± 95% half-width over the runs that did not diverge: a \
+                 diverged run has no final policy and counts only under failed runs; crashes = \
+                 evaluation episodes of {} {}):",
+                if obstacle {
+                    profile.obstacle.eval_episodes
+                } else {
+                    profile.cartpole.eval_episodes
+                },
+                if obstacle {
+                    "in which the discs overlapped"
+                } else {
+                    "that ended before 500 steps"
+                }
+            )),
             label: format!("tab:pc-final-{task}"),
             header: strings(&["algorithm", head1, "crashes", "loss", "failed runs"]),
             rows: final_rows(rows, obstacle)

@@ -446,7 +446,7 @@ impl ToyConstants {
         self.certified()
             .iter()
             .map(|(c, q, t)| {
-                let r = match &c.certificate {
+                let mut r = match &c.certificate {
                     Some(cert) => {
                         let mut r =
                             recheck(&self.mdp, *q, &charts, domain, cert, cert.upper, coverage);
@@ -469,6 +469,7 @@ impl ToyConstants {
                         r
                     }
                 };
+                r.max_in_constant_units = r.max_upper.is_finite().then(|| t(r.max_upper));
                 (c.name.clone(), r)
             })
             .collect()

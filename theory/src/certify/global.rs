@@ -386,6 +386,7 @@ impl GlobalConstants {
                         t(all.max_upper)
                     ));
                 }
+                all.max_in_constant_units = all.max_upper.is_finite().then(|| t(all.max_upper));
                 (c.name.clone(), all)
             })
             .collect()

@@ -197,6 +197,7 @@ impl BaselinedConstants {
                         t(all.max_upper)
                     ));
                 }
+                all.max_in_constant_units = all.max_upper.is_finite().then(|| t(all.max_upper));
                 (c.name.clone(), all)
             })
             .collect()

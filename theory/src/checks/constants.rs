@@ -111,13 +111,21 @@ pub fn recheck_summary(rechecks: &[(String, Recheck)], coverage: Coverage) -> St
             } else {
                 format!("FAILED: {}", r.failures.join("; "))
             };
+            // The largest re-checked bound in the constant's units, which the constant must
+            // not be below (the certificate's own units, G_F² or 2L̃², would not compare).
+            let largest = match r.max_in_constant_units {
+                Some(v) => format!("largest re-checked {name} {v:.6}"),
+                None => format!(
+                    "largest re-checked bound {:.6} (certificate units)",
+                    r.max_upper
+                ),
+            };
             format!(
-                "{name}: {} boxes, {} pieces, {} corners, tiling {}, max re-checked {:.6}, {verdict}",
+                "{name}: {} boxes, {} pieces, {} corners, tiling {}, {largest}, {verdict}",
                 r.boxes,
                 r.pieces,
                 r.corners,
                 if r.tiling { "exact" } else { "broken" },
-                r.max_upper
             )
         })
         .collect();
@@ -125,4 +133,36 @@ pub fn recheck_summary(rechecks: &[(String, Recheck)], coverage: Coverage) -> St
         "Second route (hand-written P2′ closed forms, enumeration and estimator; corner values enclosed at points and a Dual<Interval> gradient bound on each box; {scope}): {}",
         each.join("; ")
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The summary prints the largest re-checked bound in the constant's units (here G_F, not
+    /// the certificate's G_F²), so that it reads against the constant it must not exceed.
+    #[test]
+    fn the_recheck_summary_reads_in_the_constants_units() {
+        let r = Recheck {
+            boxes: 3,
+            pieces: 3,
+            corners: 8,
+            max_upper: 0.25,
+            max_in_constant_units: Some(0.5),
+            tiling: true,
+            failures: vec![],
+        };
+        let text = recheck_summary(&[("G_F".into(), r.clone())], Coverage::All);
+        assert!(
+            text.contains("largest re-checked G_F 0.500000, passed"),
+            "{text}"
+        );
+        assert!(!text.contains("0.250000"), "{text}");
+        let unset = Recheck {
+            max_in_constant_units: None,
+            ..r
+        };
+        let text = recheck_summary(&[("G_F".into(), unset)], Coverage::All);
+        assert!(text.contains("0.250000 (certificate units)"), "{text}");
+    }
 }

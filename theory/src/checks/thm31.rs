@@ -467,7 +467,10 @@ pub fn dagger_row(m: &Instance, s: DaggerSizes) -> Check {
         Measured::statistic(sample.mean)
             .with_interval(lcb, ucb)
             .with_runs(s.runs)
-            .with_alpha(s.alpha),
+            .with_alpha(s.alpha)
+            .with_null_hypothesis(format!(
+                "E p_K = {mid:.5}, the midpoint of p_PS and p_PO (holds when the interval lies on p_PS's side)"
+            )),
     );
     row.details = format!(
         "R = {} seeded runs of the kit's DAgger; mean p_K = {:.5}, interval [{lcb:.5}, {ucb:.5}] (α = {:.1e}, two-sided); p_PS = {} ≈ {ps:.5}, p_PO = {} ≈ {po:.5}, midpoint {mid:.5}",

@@ -286,7 +286,7 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
                 .with_alpha(alpha),
         )
         .details(format!(
-            "{}; {} runs, {} steps; z̄ = {:.3e}, two-sided {:.2}% interval [{:.3e}, {:.3e}] (Azuma–Hoeffding ∨ betting at α/4 each per side, valid for martingale differences; α = {:.1e}), range [−1, 1] (z = h·x/c); minimum detectable bias {:.3e} (in units of c) → {}",
+            "{}; {} runs, {} steps; z̄ = {:.3e}, two-sided {:.2}% interval [{:.3e}, {:.3e}]{} (Azuma–Hoeffding ∨ betting at α/4 each per side, valid for martingale differences; α = {:.1e}), range [−1, 1] (z = h·x/c); minimum detectable bias {:.3e} (in units of c) → {}",
             spec.context,
             t.runs,
             t.lows.len(),
@@ -294,6 +294,11 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
             100.0 * (1.0 - alpha),
             test.lcb,
             test.ucb,
+            if test.lcb > test.ucb {
+                ", whose one-sided bounds cross (the lower above the upper: no constant mean fits the runs)"
+            } else {
+                ""
+            },
             alpha,
             mdb,
             match (verdict, test.lcb > test.mean || test.ucb < test.mean) {

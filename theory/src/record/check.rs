@@ -55,6 +55,10 @@ pub struct Measured {
     /// False-alarm probability of the decision.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub alpha: Option<f64>,
+    /// The null hypothesis a two-sided interval is set against, as the power list states it
+    /// (absent: mean 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub null_hypothesis: Option<String>,
 }
 
 impl Measured {
@@ -66,6 +70,7 @@ impl Measured {
             ucb: None,
             runs: None,
             alpha: None,
+            null_hypothesis: None,
         }
     }
     /// A statistic `value` (a mean over runs, a worst z-score); add its confidence bounds, runs
@@ -91,6 +96,13 @@ impl Measured {
     #[must_use]
     pub fn with_alpha(mut self, alpha: f64) -> Self {
         self.alpha = Some(alpha);
+        self
+    }
+    /// The same with the null hypothesis its two-sided interval is set against (when it is not
+    /// mean 0).
+    #[must_use]
+    pub fn with_null_hypothesis(mut self, h0: impl Into<String>) -> Self {
+        self.null_hypothesis = Some(h0.into());
         self
     }
     /// The same with another point value (e.g. the mean of the runs' midpoints where the

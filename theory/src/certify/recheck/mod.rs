@@ -70,8 +70,13 @@ pub struct Recheck {
     pub pieces: usize,
     /// Distinct corners enclosed.
     pub corners: usize,
-    /// The largest upper bound the second route proved on a box, in the certificate's units.
+    /// The largest upper bound the second route proved on a box, in the certificate's units
+    /// (e.g. G_F², or 2L̃²).
     pub max_upper: f64,
+    /// The same in the constant's own units (G_F, L̃, …), set by the constant's re-check, which
+    /// compares it with the constant; `None` before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_in_constant_units: Option<f64>,
     /// Whether the boxes tile the domain exactly.
     pub tiling: bool,
     /// The first failures (at most five), empty if the certificate passed.
