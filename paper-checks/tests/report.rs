@@ -416,8 +416,8 @@ fn the_theory_section_is_rendered_from_the_check_records() {
     assert_eq!(
         b.last(),
         Some(&Block::List(vec![
-            "**1a** first Constants: K1, K2 (table of constants).".into(),
-            "**1a.control** second \\| x Constants: K1 (table of constants).".into(),
+            "**1a** first. Constants: K1, K2 (table of constants).".into(),
+            "**1a.control** second \\| x. Constants: K1 (table of constants).".into(),
         ]))
     );
     let md = doc::markdown(&b);

@@ -25,9 +25,13 @@ fn escape(s: &str) -> String {
 }
 
 /// The paragraph that explains the power of the statistical rows.
-pub const POWER_NOTE: &str = "**Power.** A statistical row flags every claimed bound B below its \
-     LCB; its minimum detectable violation is X̄ − LCB. It is *uninformative* when its LCB is ≤ 0 \
-     or its B is at least the largest value its statistic can take.";
+pub const POWER_NOTE: &str = "**Power.** A statistical bound row flags every claimed bound B \
+     below its LCB; its minimum detectable violation is X̄ − LCB; it is *uninformative* when its \
+     LCB is ≤ 0 or its B is at least the largest value its statistic can take. A two-sided row \
+     (each states its H₀ below) is uninformative when its interval spans the statistic's range; a \
+     real-environment unbiasedness row when some control's bias lies below the row's minimum \
+     detectable bias on every coordinate (the row could not have seen it); rows 7a and 7b when X̄ \
+     is within two standard errors of 0. Each row's details say which case it is.";
 
 /// Each statistical row's power: the interval and minimum detectable bias of a two-sided row,
 /// the smallest flagged bound and minimum detectable violation of a bound row.

@@ -180,7 +180,9 @@ fn episode_length_note(r: &Results) -> String {
         })
         .collect();
     format!(
-        "**Objective.** Every row but the controls minimises the thesis's F (eqs. 3.1–3.16): a fixed \
+        "**Objective.** Every oracle row (SGD, Adam, RMSProp, the STORM variants) but the controls \
+         minimises the thesis's F (eqs. 3.1–3.16), and BC and DAgger, which fit the expert's labels \
+         by supervised learning, roll out on the same horizon: a fixed \
          horizon of T decisions (CartPole T = 500: after a crash the environment resets and the \
          stream goes on, the thesis's protocol; obstacle task T = 200: after the episode ends the \
          remaining steps cost 0 after success and (2·v_max)² after a crash). The rows marked \
@@ -321,8 +323,9 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
         ),
         "**Reference policies** (no training; rows in *italics*, dashed lines in the figures): the \
          task's expert, and on the obstacle task *straight to goal* — full speed at the goal, ignoring \
-         the obstacle. They are evaluated on the same episodes as the learners and bracket what \
-         imitation achieves."
+         the obstacle. They are evaluated on the same episodes as the learners: the expert is the \
+         ceiling imitation aims at, straight to goal what a controller that ignores the obstacle \
+         achieves (some learners end below it)."
             .into(),
         format!(
             "**Converge.** A run converges at the first checkpoint of the first window of `sustain` consecutive checkpoints whose score is ≥ the task's threshold (sustained convergence; a diverged run never converges): \
@@ -336,9 +339,9 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
         ),
         "**Confidence intervals.** Mean ± half-width of the 95% Student-t interval over seeds, \
          `t(0.975, n−1)·s/√n`, in every table; figures shade the same interval at each checkpoint. \
-         The thesis's ± values are its own (their meaning is not stated). Claims are judged on \
-         intervals only (rules beside each claim): reproduced, not reproduced, or inconclusive when \
-         the intervals overlap."
+         The thesis's ± values are its own (their meaning is not stated). Claims are judged by the \
+         rule beside each, on intervals (C4 by an F test of two variances): reproduced, not \
+         reproduced, or inconclusive when the intervals overlap."
             .into(),
         "**Hyper-parameters** are selected by the pre-registered tuning protocol below (see `provenance.json`)."
             .into(),

@@ -159,7 +159,11 @@ fn details_blocks(checks: &[Check], label: &str) -> Vec<Block> {
         let text = one_line(&c.details.replace('|', "\\|"));
         let mut item = format!("**{id}** {text}");
         if !refs.is_empty() {
-            item += &format!(" Constants: {} (table of constants).", refs.join(", "));
+            let stop = if item.ends_with('.') { "" } else { "." };
+            item += &format!(
+                "{stop} Constants: {} (table of constants).",
+                refs.join(", ")
+            );
         }
         items.push(item);
     }
@@ -220,7 +224,7 @@ pub fn blocks(table: &TheoryTable, size: &str, label: &str) -> Vec<Block> {
     out
 }
 
-/// Which size of the table this is, with the sizes that differ between the two (from
+/// Which size of the table this is, with the main sizes that differ between the two (from
 /// `ilopt-theory`'s protocol, so that the text follows the code), and how to run the other.
 fn size_text(size: &str) -> String {
     use ilopt_theory::certify::recheck::QUICK_SAMPLE;
@@ -228,20 +232,21 @@ fn size_text(size: &str) -> String {
     let of = |p: Profile| {
         let (s, (cp, ob)) = (p.sizes(), real_sizes(p));
         let (recheck, episodic) = match p {
-            Profile::Full => ("every certificate box".to_string(), "with"),
+            Profile::Full => ("every box".to_string(), "with"),
             Profile::Quick => (
                 format!(
-                    "a seeded sample of {QUICK_SAMPLE} boxes per certificate region (and every \
-                     box within 1 % of the certified bound)"
+                    "a seeded sample of {QUICK_SAMPLE} boxes per region and every box within 1 % \
+                     of the certified bound"
                 ),
                 "without",
             ),
         };
         format!(
-            "schedule rows to k = {}, {} Monte-Carlo runs per toy row, {} per STORM row, {} / {} \
-             oracle estimates per real-environment row (CartPole / obstacle), the second route \
-             re-checking {recheck}, {episodic} the rows of the obstacle task's episodic control \
-             objective (6e)",
+            "the STORM schedule rows (2a, 2b) checked to k = {}; R = {} runs in the toy SGD \
+             and O2NC rows (1, 3b, 3d) and {} in the STORM rows (2c, 2e); {} (CartPole) and {} \
+             (obstacle) oracle estimates in the real-environment unbiasedness rows (6a, 6b); the \
+             rigorous constants' certificates re-checked by the independent second route on {recheck}; \
+             {episodic} the rows of the obstacle task's episodic control objective (6e)",
             s.schedule_k, s.runs, s.storm_runs, cp.n_oracle, ob.n_oracle
         )
     };
@@ -251,9 +256,10 @@ fn size_text(size: &str) -> String {
         (of(Profile::Quick), of(Profile::Full), "full", "")
     };
     format!(
-        "This is the **{size}** theorem table (`ilopt-theory{flag}`, real-environment rows \
-         included): {this}. The {other_name} table has {other}; `--theory {other_name}` runs this \
-         appendix with it (`--theory none` without a table)."
+        "This is the **{size}** theorem table, as `ilopt-theory{flag}` prints it, real-environment \
+         rows included. Its main sizes (rows that use others give them in their details): {this}. \
+         The {other_name} table has {other}; this appendix regenerated with `--theory {other_name}` \
+         holds it instead (with `--theory none`, no table)."
     )
 }
 
@@ -282,13 +288,13 @@ mod size_tests {
     #[test]
     fn the_table_says_which_size_it_is() {
         let quick = size_text("quick");
-        assert!(quick.starts_with("This is the **quick** theorem table (`ilopt-theory`,"));
+        assert!(quick.starts_with("This is the **quick** theorem table, as `ilopt-theory` prints"));
         let k = |p: Profile| format!("k = {}", p.sizes().schedule_k);
         assert!(quick.contains(&k(Profile::Quick)) && quick.contains("`--theory full`"));
         let full = size_text("full");
-        assert!(full.starts_with("This is the **full** theorem table (`ilopt-theory --full`,"));
+        assert!(full.starts_with("This is the **full** theorem table, as `ilopt-theory --full`"));
         assert!(full.contains(&k(Profile::Full)) && full.contains("`--theory quick`"));
-        assert!(full.find("every certificate box") < full.find("a seeded sample"));
-        assert!(quick.find("a seeded sample") < quick.find("every certificate box"));
+        assert!(full.find("on every box") < full.find("a seeded sample"));
+        assert!(quick.find("a seeded sample") < quick.find("on every box"));
     }
 }

@@ -66,7 +66,9 @@ fn protocol_list(profile: &Profile) -> Vec<String> {
             .map(|e| format!("{} → `{}`", e.label, e.horizon(t, kind.name()).label()))
             .collect();
         out.push(format!(
-            "**{}.** Objective `{}`{}; budget {} gradient calls per run for every method; \
+            "**{}.** Objective `{}`{}; budget {} gradient calls per run for every method (a run \
+             stops after the step that reaches it, whose calls count in full: DAgger's last round \
+             of retraining overshoots the most); \
              checkpoints every {} calls (and at the budget); sustained convergence = score ≥ {} at \
              {} consecutive checkpoints; diverged = ‖θ‖₂ > {} or a non-finite θ or a failed step; {}.{}",
             kind.name(),

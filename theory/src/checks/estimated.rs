@@ -195,7 +195,7 @@ pub fn sgd_row<P: IlProblem<f64>>(
     Check::builder(
         id,
         result,
-        format!("{name}: (1/K) Σ E‖∇F(θ_k)‖² ≤ L̂ησ̂² + 2B̂_F/(ηK), K = {}, η = {eta:.4}", s.k),
+        format!("{name}: (1/K) Σ E‖∇F(θ_k)‖² ≤ L̂ησ̂² + 2B̂_F/(ηK), K = {}, η = {eta:.4e}", s.k),
         Role::Thesis,
     )
     .assumptions(["constants are Monte-Carlo ESTIMATES (not certificates); L̂ is a local, sampled smoothness"])

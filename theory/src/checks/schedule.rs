@@ -25,8 +25,9 @@ pub fn rows(k_max: u64) -> Vec<Check> {
             Verdict::from_bool(corrected_ok),
             Role::Corrected,
             format!(
-                "C1 not proved at {:?}; C2 not proved at {:?}",
-                r.c1_not_proved, r.c2_not_proved
+                "C1 not proved at k = {}; C2 not proved at k = {}",
+                list_or_none(&r.c1_not_proved),
+                list_or_none(&r.c2_not_proved)
             ),
         ),
         base(
@@ -37,12 +38,21 @@ pub fn rows(k_max: u64) -> Vec<Check> {
             ),
             Role::Thesis,
             format!(
-                "proved positive (route fails) at k = {}; undecided at {:?}",
+                "proved positive (route fails) at k = {}; undecided at k = {}",
                 compress(&r.thesis_route_fails),
-                r.thesis_route_undecided
+                list_or_none(&r.thesis_route_undecided)
             ),
         ),
     ]
+}
+
+/// [`compress`]ed, or `none` for an empty list.
+fn list_or_none(ks: &[u64]) -> String {
+    if ks.is_empty() {
+        "none".into()
+    } else {
+        compress(ks)
+    }
 }
 
 /// `[1, 2, 3, 7]` → `"1..3, 7"`.

@@ -89,6 +89,15 @@ pub fn toy_rows(
     rows
 }
 
+/// `n/d`, or `n` when d = 1.
+fn ratio_text((n, d): (i64, i64)) -> String {
+    if d == 1 {
+        n.to_string()
+    } else {
+        format!("{n}/{d}")
+    }
+}
+
 /// Budget N and radius δ of rows 3d.c and 3d.c.printed5: a short run with a wide radius, so that
 /// the steps Δ_n (‖Δ_n‖ ≤ δ/T) and with them the printed Algorithm 5's bias, O(‖θ_n − w_n‖), are
 /// large; [`WIDE_RADIUS_RUNS`] runs.
@@ -122,8 +131,8 @@ pub fn wide_radius_tracking_rows(
             );
             let mut spec = o2nc_tracking_spec(variant, n, c);
             spec.claim = spec.claim.replace(
-                &format!("δ = {}/{}", O2NC_DELTA.0, O2NC_DELTA.1),
-                &format!("δ = {}/{}", delta.0, delta.1),
+                &format!("δ = {}", ratio_text(O2NC_DELTA)),
+                &format!("δ = {}", ratio_text(delta)),
             );
             if variant == O2ncVariant::Printed {
                 spec.id = "3d.c.printed5".into();
@@ -160,8 +169,8 @@ pub fn o2nc_tracking_spec(variant: O2ncVariant, n: u64, c: f64) -> TrackingSpec 
         id: id.into(),
         result: "Online-to-non-convex, Thm 3.7's premise E[g_n | Δ_n, F_{n−1}] = ∇F(w_n)".into(),
         claim: format!(
-            "E[sign(Δ_n)(g_n − ∇F(w_n)) | Δ_n, F_{{n−1}}] = 0 along {name}'s steps, N = {n}, δ = {}/{}",
-            O2NC_DELTA.0, O2NC_DELTA.1
+            "E[sign(Δ_n)(g_n − ∇F(w_n)) | Δ_n, F_{{n−1}}] = 0 along {name}'s steps, N = {n}, δ = {}",
+            ratio_text(O2NC_DELTA)
         ),
         assumptions: vec![
             format!("|g_n − ∇F(w_n)| ≤ c = G_∞ + G_F = {c:.4} (global constants, row 8b)"),

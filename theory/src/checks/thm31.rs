@@ -317,10 +317,12 @@ pub fn rows(m: &Instance) -> Vec<Check> {
             fd.eq_3_37_violated_at.is_none() && fd.eq_3_38_violated_at.is_none(),
             Role::Corrected,
             format!(
-                "(3.38): |p_{{k+1}} − p_PS| ≤ (|κ|/k) Σ_{{i≤k}} |p_i − p_PS| from p₁ = 1/2, first violation at k = {:?}, largest left/right ratio {:.6}; (3.37): |G_DA({{p_i}}) − G_DA({{p′_i}})| ≤ (|κ|/k) Σ_{{i≤k}} |p_i − p′_i| for p₁ = 1/2, p′₁ = 1/10, first violation at k = {:?} (exact rationals; the thesis prints θ′_i on the right of (3.38) where θ_PS is meant, E15)",
-                fd.eq_3_38_violated_at,
+                "(3.38): |p_{{k+1}} − p_PS| ≤ (|κ|/k) Σ_{{i≤k}} |p_i − p_PS| from p₁ = 1/2, first violation at k = {}, largest left/right ratio {:.6}; (3.37): |G_DA({{p_i}}) − G_DA({{p′_i}})| ≤ (|κ|/k) Σ_{{i≤k}} |p_i − p′_i| for p₁ = 1/2, p′₁ = 1/10, first violation at k = {} (exact rationals; the thesis prints θ′_i on the right of (3.38) where θ_PS is meant, E15)",
+                fd.eq_3_38_violated_at
+                    .map_or("none".into(), |k| k.to_string()),
                 Scalar::to_f64(&fd.eq_3_38_max_ratio),
                 fd.eq_3_37_violated_at
+                    .map_or("none".into(), |k| k.to_string())
             ),
             None,
         ),
