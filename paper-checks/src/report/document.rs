@@ -433,8 +433,8 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
         d.push(Block::Table(Table {
             caption: Some(format!(
                 "**Final checkpoint** (mean ± 95% half-width over the runs that did not diverge: a \
-                 diverged run has no final policy and counts only under failed runs; crashes = \
-                 evaluation episodes of {} {}):",
+                 diverged run has no final policy and counts only under failed runs; crashes = the \
+                 evaluation episodes (of {}) {}):",
                 if obstacle {
                     profile.obstacle.eval_episodes
                 } else {
