@@ -23,6 +23,24 @@ pub struct ConfigResult {
     pub runs: Vec<SeedRun>,
 }
 
+/// A configuration of the obstacle task labelled STORM with the given runs (its entry an Adam
+/// configuration; the report's tests read only the runs).
+#[cfg(test)]
+pub(crate) fn storm_config_for_tests(runs: Vec<SeedRun>) -> ConfigResult {
+    ConfigResult {
+        task: TaskKind::Obstacle,
+        label: "STORM".into(),
+        key_hash: String::new(),
+        entry: serde_json::from_value(serde_json::json!({
+            "label": "STORM",
+            "config": {"algorithm": "adam", "form": "causal", "alpha": 0.005,
+                       "beta1": 0.9, "beta2": 0.999, "epsilon": 1e-8}
+        }))
+        .expect("an entry"),
+        runs,
+    }
+}
+
 /// Wall times of one configuration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ConfigTiming {

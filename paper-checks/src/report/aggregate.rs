@@ -136,7 +136,6 @@ pub(crate) fn percent(s: &Summary) -> Summary {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::TaskKind;
 
     fn checkpoint(calls: u64, score: f64) -> Checkpoint {
         serde_json::from_value(serde_json::json!({
@@ -170,30 +169,19 @@ mod tests {
             reason: "‖θ‖ beyond the bound".into(),
             gradient_evaluations: 1300,
         };
-        let c = ConfigResult {
-            task: TaskKind::Obstacle,
-            label: "STORM".into(),
-            key_hash: String::new(),
-            entry: serde_json::from_value(serde_json::json!({
-                "label": "STORM",
-                "config": {"algorithm": "adam", "form": "causal", "alpha": 0.005,
-                           "beta1": 0.9, "beta2": 0.999, "epsilon": 1e-8}
-            }))
-            .expect("an entry"),
-            runs: vec![
-                run(
-                    0,
-                    vec![checkpoint(0, 0.0), checkpoint(1000, 0.5)],
-                    RunStatus::NotConverged,
-                ),
-                run(1, vec![checkpoint(0, 0.0)], diverged.clone()),
-                run(
-                    2,
-                    vec![checkpoint(0, 0.0), checkpoint(1000, 0.7)],
-                    RunStatus::NotConverged,
-                ),
-            ],
-        };
+        let c = crate::results::storm_config_for_tests(vec![
+            run(
+                0,
+                vec![checkpoint(0, 0.0), checkpoint(1000, 0.5)],
+                RunStatus::NotConverged,
+            ),
+            run(1, vec![checkpoint(0, 0.0)], diverged.clone()),
+            run(
+                2,
+                vec![checkpoint(0, 0.0), checkpoint(1000, 0.7)],
+                RunStatus::NotConverged,
+            ),
+        ]);
         let row = convergence_row(&c);
         assert_eq!(row.failed_runs, 1);
         assert_eq!(row.final_score.n, 2);
@@ -201,10 +189,11 @@ mod tests {
         assert_eq!(row.total_gradient_calls.n, 3);
         assert!((row.total_gradient_calls.mean - 1100.0).abs() < 1e-9);
         // Every run diverged: no final value at all, but the calls they spent.
-        let all = ConfigResult {
-            runs: vec![run(0, vec![checkpoint(0, 0.0)], diverged)],
-            ..c
-        };
+        let all = crate::results::storm_config_for_tests(vec![run(
+            0,
+            vec![checkpoint(0, 0.0)],
+            diverged,
+        )]);
         let row = convergence_row(&all);
         assert_eq!((row.final_score.n, row.final_loss.n), (0, 0));
         assert_eq!(ci(&row.final_score), "—");

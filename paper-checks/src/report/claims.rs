@@ -668,18 +668,7 @@ mod tests {
             converge_seconds: None,
         });
         (
-            ConfigResult {
-                task: crate::experiment::TaskKind::Obstacle,
-                label: "STORM".into(),
-                key_hash: String::new(),
-                entry: serde_json::from_value(serde_json::json!({
-                    "label": "STORM",
-                    "config": {"algorithm": "adam", "form": "causal", "alpha": 0.005,
-                               "beta1": 0.9, "beta2": 0.999, "epsilon": 1e-8}
-                }))
-                .unwrap(),
-                runs: runs.collect(),
-            },
+            crate::results::storm_config_for_tests(runs.collect()),
             ConfigTiming {
                 task: crate::experiment::TaskKind::Obstacle,
                 label: "STORM".into(),
