@@ -596,11 +596,19 @@ pub fn timing_claims(r: &Results) -> Vec<Claim> {
             id: id.into(),
             source: table.into(),
             claim: "DAgger's runtime is much higher than the other algorithms'".into(),
-            rule: "DAgger's training wall time per run (equal gradient-call budgets) has a 95% \
-                   t-interval wholly above every other thesis row's; diverged runs are left out (they \
-                   stop at their first non-finite or out-of-bound parameter), and a row with fewer \
-                   than two other runs makes its comparison inconclusive"
-                .into(),
+            rule: format!(
+                "DAgger's training wall time per run (the same gradient-call budget) has a 95% \
+                 t-interval wholly above that of every other row of the thesis's {table} ({}); \
+                 diverged runs are left out (they stop at their first non-finite or out-of-bound \
+                 parameter), and a row with fewer than two other runs makes its comparison \
+                 inconclusive",
+                labels
+                    .iter()
+                    .filter(|l| **l != "DAgger")
+                    .copied()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
             evidence: times
                 .iter()
                 .map(|(l, s, diverged)| runtime_text(l, s, *diverged))
