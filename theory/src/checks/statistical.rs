@@ -89,13 +89,9 @@ pub fn toy_rows(
     rows
 }
 
-/// `n/d`, or `n` when d = 1.
+/// `n/d`, or `n` when d = 1 (num-rational's display of the unreduced ratio).
 fn ratio_text((n, d): (i64, i64)) -> String {
-    if d == 1 {
-        n.to_string()
-    } else {
-        format!("{n}/{d}")
-    }
+    num_rational::Ratio::new_raw(n, d).to_string()
 }
 
 /// Budget N and radius δ of rows 3d.c and 3d.c.printed5: a short run with a wide radius, so that
@@ -400,4 +396,14 @@ pub fn storm_rows(mdp: &ToyMdp, g: &GlobalConstants, s: Sizes, alpha: f64) -> Ve
     rows.extend(tracking_rows);
     rows.extend(long_step_tracking_rows(mdp, g, alpha));
     rows
+}
+
+#[cfg(test)]
+mod ratio_text_tests {
+    /// The radii print as the claims state them: a whole number without a denominator.
+    #[test]
+    fn whole_ratios_print_without_a_denominator() {
+        assert_eq!(super::ratio_text((2, 1)), "2");
+        assert_eq!(super::ratio_text((1, 10)), "1/10");
+    }
 }
