@@ -264,6 +264,24 @@ fn field(file: &Path, name: &str, reason: impl Into<String>) -> Error {
     }
 }
 
+/// The committed profiles' TOML texts by name (`"quick"`, `"full"`), embedded so that an
+/// installed binary runs from any directory; `None` for any other name.
+pub fn committed_text(name: &str) -> Option<&'static str> {
+    match name {
+        "quick" => Some(include_str!("../configs/quick.toml")),
+        "full" => Some(include_str!("../configs/full.toml")),
+        _ => None,
+    }
+}
+
+/// The `theory_profile` a committed profile (`"quick"`, `"full"`) sets; `None` for any other
+/// name.
+pub fn committed_theory_profile(name: &str) -> Option<String> {
+    let text = committed_text(name)?;
+    let p = Profile::from_toml(text, Path::new(name)).expect("a committed profile is valid");
+    Some(p.theory_profile)
+}
+
 impl Profile {
     /// Parse and validate a profile from TOML text; `file` names it in errors.
     ///

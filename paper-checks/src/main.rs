@@ -1,6 +1,6 @@
 //! `paper-checks`: regenerate the thesis's chapter 4 as a reproducible appendix.
 use clap::{Parser, Subcommand};
-use paper_checks::config::Profile;
+use paper_checks::config::{Profile, committed_text};
 use paper_checks::pipeline::Options;
 use paper_checks::shard::{Mode, Shard};
 use std::path::PathBuf;
@@ -67,14 +67,15 @@ fn main() -> ExitCode {
             p.clone(),
             std::fs::read_to_string(p).map_err(|e| paper_checks::Error::io(p, e)),
         ),
-        None if args.full => (
-            PathBuf::from("configs/full.toml"),
-            Ok(include_str!("../configs/full.toml").to_string()),
-        ),
-        None => (
-            PathBuf::from("configs/quick.toml"),
-            Ok(include_str!("../configs/quick.toml").to_string()),
-        ),
+        None => {
+            let name = if args.full { "full" } else { "quick" };
+            (
+                PathBuf::from(format!("configs/{name}.toml")),
+                Ok(committed_text(name)
+                    .expect("a committed profile")
+                    .to_string()),
+            )
+        }
     };
     let start = std::time::Instant::now();
     let result = text.and_then(|text| {

@@ -200,13 +200,15 @@ fn episode_length_note(r: &Results) -> String {
 
 /// The flags after `cargo run --release -p paper-checks` that run `profile`: `--full` for the
 /// full profile, and `--theory SIZE` when a committed profile's theorem table was run at a size
-/// other than its own (`quick` for the quick profile, `full` for the full one).
+/// other than the one its file sets (`quick` for both committed profiles).
 fn command_flags(profile: &Profile) -> String {
     let mut flags = Vec::new();
     if profile.name == "full" {
         flags.push("--full".to_string());
     }
-    if matches!(profile.name.as_str(), "quick" | "full") && profile.theory_profile != profile.name {
+    if let Some(own) = crate::config::committed_theory_profile(&profile.name)
+        && profile.theory_profile != own
+    {
         flags.push(format!("--theory {}", profile.theory_profile));
     }
     if flags.is_empty() {
@@ -604,7 +606,7 @@ mod tests {
         assert_eq!(command_flags(&quick), " -- --theory none");
         let mut full = committed("full");
         assert_eq!(command_flags(&full), " -- --full");
-        full.theory_profile = "quick".into();
-        assert_eq!(command_flags(&full), " -- --full --theory quick");
+        full.theory_profile = "full".into();
+        assert_eq!(command_flags(&full), " -- --full --theory full");
     }
 }
