@@ -23,11 +23,13 @@
 //! the constant b = 50 and with the variance-minimising per-decision constants estimated from the
 //! earlier estimates (decay 0.99), the last two compared with the first; mode `state`: the same
 //! with the state-dependent baseline (the features, the decision index and 1; weights fitted on
-//! every probe trajectory before the timing), compared with `single`. Modes `oracle` and
+//! every probe trajectory before the timing; every estimate sums its statistics), compared with
+//! `single`. Modes `oracle` and
 //! `oracle-estimated`: a whole oracle call through `Baselined` with m = 1 (roll-out of the
 //! learner, then its causal estimate), without a baseline and with the estimated per-decision
 //! constants (their statistics committed at each roll-out, as in training), compared; mode
-//! `oracle-state` the same with the state-dependent baseline of mode `state`. Modes
+//! `oracle-state` the same with the state-dependent baseline (the statistics of the default share
+//! of trajectories, `DEFAULT_FIT_EVERY`), `oracle-state-all` with those of every trajectory. Modes
 //! `weighted`, `weighted-estimated`, `weighted-pairs` and `weighted-loo`: the per-decision
 //! importance-weighted old-point estimate of math.md §4 (IS-STORM's, θ_old = θ + 0.01 per entry)
 //! on one trajectory without a baseline and with the estimated constants (committed from every
@@ -74,7 +76,7 @@ fn oracle_once<P: IlProblem<f64>>(
 }
 
 /// Every mode the probe knows.
-const MODES: [&str; 22] = [
+const MODES: [&str; 23] = [
     "generic",
     "spec",
     "rollout",
@@ -93,6 +95,7 @@ const MODES: [&str; 22] = [
     "oracle",
     "oracle-estimated",
     "oracle-state",
+    "oracle-state-all",
     "weighted",
     "weighted-estimated",
     "weighted-pairs",
@@ -207,21 +210,38 @@ fn main() {
         },
     )
     .expect("estimated");
-    // The state-dependent baseline with the decision index, its weights fitted on every probe
-    // trajectory (committed by one roll-out) before the timing.
-    let state = Baselined::new(
-        p.clone(),
-        1,
-        &Baseline::StateDependent {
-            features: None,
-            time: true,
-            decay: None,
-            ridge: None,
-        },
-    )
-    .expect("state");
+    // The state-dependent baseline with the decision index, its weights fitted before the
+    // timing on the probe trajectories (each estimated, then committed by a roll-out) that its
+    // `fit_every` takes: every one for mode `state` (whose estimates then sum the statistics of
+    // every trajectory), the default share for mode `oracle-state` and every one for
+    // `oracle-state-all`.
+    let fitted_state = |fit_every: Option<u64>| {
+        let o = Baselined::new(
+            p.clone(),
+            1,
+            &Baseline::StateDependent {
+                features: None,
+                time: true,
+                decay: None,
+                ridge: None,
+                fit_every,
+            },
+        )
+        .expect("state");
+        let mut rng = KitRng::seed_from_u64(SEEDS);
+        let mut warm = Cost::default();
+        for one in &singles {
+            o.estimate(&theta, one, EstimatorForm::Causal, &mut warm)
+                .expect("estimate");
+            o.rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
+                .expect("roll-out");
+        }
+        o
+    };
+    let state = fitted_state(Some(1));
+    let oracle_state = fitted_state(None);
+    let oracle_state_all = fitted_state(Some(1));
     let oracle_estimated = estimated.clone();
-    let oracle_state = state.clone();
     // The weighted estimates use the committed baselines: statistics from every probe trajectory,
     // committed by one roll-out, as in training.
     let weighted_estimated = estimated.clone();
@@ -233,14 +253,6 @@ fn main() {
     }
     let mut rng = KitRng::seed_from_u64(SEEDS);
     weighted_estimated
-        .rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
-        .expect("roll-out");
-    for one in &singles {
-        state
-            .estimate(&theta, one, EstimatorForm::Causal, &mut warm)
-            .expect("estimate");
-    }
-    state
         .rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
         .expect("roll-out");
 
@@ -316,8 +328,13 @@ fn main() {
                             acc += x;
                             n
                         }
-                        "oracle-state" => {
-                            let (n, x) = oracle_once(&oracle_state, th, &mut rng, &mut cost);
+                        "oracle-state" | "oracle-state-all" => {
+                            let o = if mode == "oracle-state" {
+                                &oracle_state
+                            } else {
+                                &oracle_state_all
+                            };
+                            let (n, x) = oracle_once(o, th, &mut rng, &mut cost);
                             acc += x;
                             n
                         }
@@ -426,6 +443,7 @@ fn main() {
         ("state", "single"),
         ("oracle-estimated", "oracle"),
         ("oracle-state", "oracle"),
+        ("oracle-state-all", "oracle"),
         ("weighted-estimated", "weighted"),
         ("weighted-loo", "weighted-pairs"),
     ] {

@@ -433,6 +433,17 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
                 time: true,
                 decay: Some(ConfigNumber::ratio(99, 100)),
                 ridge: None,
+                fit_every: Some(1),
+            },
+        ),
+        (
+            2,
+            Baseline::StateDependent {
+                features: None,
+                time: true,
+                decay: Some(ConfigNumber::ratio(99, 100)),
+                ridge: None,
+                fit_every: None,
             },
         ),
     ] {

@@ -182,6 +182,19 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         ))
     }
 
+    /// The same features as [`PerDecisionTerms::state_features`] as the problem stores them, by
+    /// rows: `(data, stride)` with decision i's features starting at `data[i·stride]`, at least
+    /// `decisions` rows; `None` when the problem stores no such rows (the default), and the
+    /// state-dependent baseline then takes its features by columns.
+    fn state_feature_rows<'t>(
+        &self,
+        trajectory: &'t Self::Trajectory,
+        decisions: usize,
+    ) -> Option<(&'t [S], usize)> {
+        let _ = (trajectory, decisions);
+        None
+    }
+
     /// The trajectory's loss `Σ_t l_t` ([`IlProblem::trajectory_loss`] at the θ of the record)
     /// read off what [`PerDecisionTerms::record_decisions`] recorded on it, when the problem's
     /// records give the same value ([`IlProblem::trajectory_loss`]'s, bit for bit in floating

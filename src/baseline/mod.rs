@@ -50,6 +50,14 @@ pub use regression::{RunningRegression, solve_symmetric};
 pub use running::RunningOptimum;
 
 use crate::scalar::ConfigNumber;
+
+/// The state-dependent baseline's default share of trajectories whose statistics enter its
+/// weights: one in this many ([`Baseline::StateDependent`]'s `fit_every`). Summing the statistics
+/// of every trajectory costs more than the estimate's 10 % budget for a baseline
+/// (`benches/README.md`); one in eight keeps the weights on enough data (with m = 16
+/// trajectories per gradient and the experiments' decay 0.99, about 200 trajectories) and the
+/// cost of the statistics under a hundredth of the oracle's.
+pub const DEFAULT_FIT_EVERY: u64 = 8;
 use serde::{Deserialize, Serialize};
 
 /// Which baseline the oracle subtracts (JSON: `{"kind": "constant", "value": "1/2"}`).
@@ -103,5 +111,11 @@ pub enum Baseline {
         /// λ ≥ 0 added to the diagonal of A before the solve (absent: 0).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         ridge: Option<ConfigNumber>,
+        /// The weights' statistics from every this-many-th trajectory only, e ≥ 1 (absent:
+        /// [`DEFAULT_FIT_EVERY`]; 1: every trajectory). Which trajectories enter depends only
+        /// on their count, so the estimate stays unbiased for every e
+        /// ([`RunningRegression::takes_next`]).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        fit_every: Option<u64>,
     },
 }

@@ -1,6 +1,6 @@
 //! [`Baselined`]: m trajectories per oracle call, each estimate with a baseline.
 
-use super::{Baseline, PerDecisionTerms, RunningOptimum, RunningRegression};
+use super::{Baseline, PerDecisionTerms, RunningOptimum, RunningRegression, leading_features};
 use crate::batched::Batched;
 use crate::oracle::{DecisionTerms, Given, RecordedPass, ScoreProducts};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -132,7 +132,14 @@ impl<P, S: Scalar> Baselined<P, S> {
                 time,
                 decay,
                 ridge,
+                fit_every,
             } => {
+                let every = fit_every.unwrap_or(super::DEFAULT_FIT_EVERY);
+                if every == 0 {
+                    return Err(invalid(
+                        "a state-dependent baseline takes the statistics of every e-th trajectory, e ≥ 1; got fit_every = 0",
+                    ));
+                }
                 if *features == Some(0) {
                     return Err(invalid(
                         "a state-dependent baseline needs at least 1 state feature, got features = 0",
@@ -153,7 +160,10 @@ impl<P, S: Scalar> Baselined<P, S> {
                 Kind::StateDependent {
                     leading: *features,
                     time: *time,
-                    running: RefCell::new(RunningRegression::new(decay_of(decay.as_ref())?, ridge)),
+                    running: RefCell::new(
+                        RunningRegression::new(decay_of(decay.as_ref())?, ridge)
+                            .taking_every(every),
+                    ),
                 }
             }
             Baseline::LeaveOneOut => {
@@ -518,12 +528,28 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         running.clear_pending();
         for (t, r) in batch.iter().zip(records.iter_mut()) {
             let n = r.decisions();
-            let k = state_columns(inner, t, n, *leading, *time, phi)?;
-            running.baselines_into(phi, n, baseline);
+            // The statistics need the features by columns; a trajectory whose statistics are
+            // not taken reads its baselines off the stored rows when the problem has them.
+            let take = running.takes_next();
+            let from_rows = !take
+                && inner.state_feature_rows(t, n).is_some_and(|rows| {
+                    leading_features(rows.1, *leading)
+                        .is_ok_and(|k| running.baselines_from_rows(rows, k, *time, n, baseline))
+                });
+            let k = if from_rows {
+                0
+            } else {
+                let k = state_columns(inner, t, n, *leading, *time, phi)?;
+                running.baselines_into(phi, n, baseline);
+                k
+            };
             add_plain(inner, t, r, plain, g);
+            // Without statistics, the products pass makes the correction alone.
             for v in [&mut *cross, &mut *moment] {
                 v.clear();
-                v.resize(n, S::zero());
+                if take {
+                    v.resize(n, S::zero());
+                }
             }
             let out = ScoreProducts {
                 v: plain,
@@ -533,7 +559,9 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
                 g,
             };
             inner.recorded_score_products(t, r, out);
-            running.observe_products(phi, k, cross, moment);
+            if take {
+                running.observe_products(phi, k, cross, moment);
+            }
         }
         checked_mean(g, &S::from_i64(m as i64))
     }
@@ -651,7 +679,9 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             && observe
         {
             for (t, (phi, k)) in terms[..m].iter().zip(features.iter()) {
-                r.observe(t, phi, *k);
+                if r.takes_next() {
+                    r.observe(t, phi, *k);
+                }
             }
         }
         let m = S::from_i64(m as i64);

@@ -20,6 +20,13 @@ use crate::scalar::{Scalar, dot, norm_sq};
 /// the decision's state and of strictly earlier trajectories, so the estimate stays unbiased
 /// whatever the weights are. `decay` multiplies the committed sums at each commit; `ridge` λ ≥ 0
 /// is added to A's diagonal before the solve ([`solve_symmetric`]).
+///
+/// The statistics may be taken from every e-th trajectory only ([`RunningRegression::taking_every`],
+/// [`RunningRegression::takes_next`]): which trajectories enter depends only on how many were
+/// offered before, never on a trajectory's own actions, so the baselines stay functions of
+/// earlier trajectories and the estimate stays unbiased; the weights then rest on a 1/e share of
+/// the data. The statistics take k(k + 3)/2 multiply-adds per decision (k of them from `c`), the
+/// baselines k.
 #[derive(Debug, Clone)]
 pub struct RunningRegression<S> {
     decay: Option<S>,
@@ -43,6 +50,11 @@ pub struct RunningRegression<S> {
     work: Vec<S>,
     /// One trajectory's state features by columns weighted by ‖ψ_i‖².
     weighted: Vec<S>,
+    /// Statistics from every `every`-th trajectory offered ([`RunningRegression::takes_next`]).
+    every: u64,
+    /// Trajectories offered in committed batches, and since the last commit.
+    offered: u64,
+    pending_offered: u64,
 }
 
 impl<S: Scalar> RunningRegression<S> {
@@ -63,7 +75,32 @@ impl<S: Scalar> RunningRegression<S> {
             products: (Vec::new(), Vec::new()),
             work: Vec::new(),
             weighted: Vec::new(),
+            every: 1,
+            offered: 0,
+            pending_offered: 0,
         }
+    }
+
+    /// Take the statistics of every `every`-th trajectory offered only (the first, the
+    /// (every + 1)-th, …; 1: every trajectory, as [`RunningRegression::new`] does).
+    ///
+    /// # Panics
+    /// If `every` is 0.
+    #[must_use]
+    pub fn taking_every(mut self, every: u64) -> Self {
+        assert!(every >= 1, "statistics from every e-th trajectory, e ≥ 1");
+        self.every = every;
+        self
+    }
+
+    /// Offer the next trajectory: whether its statistics are to be observed. The n-th
+    /// trajectory offered since the start (counting from 0, committed batches and the pending
+    /// one) is taken when n is a multiple of `every`; offering the same batch again after
+    /// [`RunningRegression::clear_pending`] takes the same trajectories.
+    pub fn takes_next(&mut self) -> bool {
+        let n = self.offered + self.pending_offered;
+        self.pending_offered += 1;
+        n.is_multiple_of(self.every)
     }
 
     /// The committed weights w; empty before any trajectory's statistics were committed.
@@ -92,9 +129,48 @@ impl<S: Scalar> RunningRegression<S> {
         }
     }
 
+    /// The same baselines as [`RunningRegression::baselines_into`], bit for bit, from features
+    /// stored by rows (`rows[i·stride + j]` feature j of decision i, its first `k` used) with,
+    /// when `time`, the decision index and 1 after them, as the state-dependent oracle appends
+    /// them: each `w·φ_i` summed in the columns' order. Returns false, writing nothing, when the
+    /// committed weights are not k (+ 2 with `time`) many; `out` is cleared first and stays empty
+    /// before any statistics were committed.
+    pub fn baselines_from_rows(
+        &self,
+        (rows, stride): (&[S], usize),
+        k: usize,
+        time: bool,
+        n: usize,
+        out: &mut Vec<S>,
+    ) -> bool {
+        out.clear();
+        if self.w.is_empty() {
+            return true;
+        }
+        if self.w.len() != k + if time { 2 } else { 0 } || k > stride || rows.len() < n * stride {
+            return false;
+        }
+        let (state, extra) = self.w.split_at(k);
+        let mut index = S::zero();
+        out.extend(rows.chunks_exact(stride).take(n).map(|phi| {
+            let mut b = S::zero();
+            for (w, x) in state.iter().zip(phi) {
+                b += w.clone() * x;
+            }
+            if let [w_index, w_one] = extra {
+                b += w_index.clone() * &index;
+                b += w_one.clone() * S::one();
+                index += S::one();
+            }
+            b
+        }));
+        true
+    }
+
     /// Forget the pending statistics (a new estimate on the current trajectories replaces them).
     pub fn clear_pending(&mut self) {
         self.pending = false;
+        self.pending_offered = 0;
         for x in self.pending_a.iter_mut().chain(&mut self.pending_c) {
             *x = S::zero();
         }
@@ -167,9 +243,12 @@ impl<S: Scalar> RunningRegression<S> {
     }
 
     /// Move the pending statistics into the sums (every sum times the decay, plus the pending
-    /// one) and solve `(A + λI) w = c` for the weights ([`solve_symmetric`]). Nothing changes
-    /// before the first observation.
+    /// one) and solve `(A + λI) w = c` for the weights ([`solve_symmetric`]); the trajectories
+    /// offered since the last commit count as committed. Nothing else changes before the first
+    /// observation.
     pub fn commit(&mut self) {
+        self.offered += self.pending_offered;
+        self.pending_offered = 0;
         if self.k == 0 {
             return;
         }

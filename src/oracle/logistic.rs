@@ -360,8 +360,8 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         });
     }
 
-    /// With ψ_i = c_i φ_i from the recorded coefficient: `cross[i] += c_i (v·φ_i)`,
-    /// `moment[i] += c_i² ‖φ_i‖²` and `g −= (b_i c_i) φ_i`, for 1 to 8 features with the rows,
+    /// With ψ_i = c_i φ_i from the recorded coefficient: `g −= (b_i c_i) φ_i`, then
+    /// `cross[i] += c_i (v·φ_i)` and `moment[i] += c_i² ‖φ_i‖²`, for 1 to 8 features with the rows,
     /// v and g in `[S; N]` locals (registers for `f64`); else ψ_i formed in `Vec`s and
     /// [`ScoreProducts::add_rows`]. The same products up to rounding.
     fn score_products(&self, features: &[S], records: &[S], out: ScoreProducts<'_, S>) {
@@ -371,17 +371,10 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
             let ScoreProducts { v, baseline, cross, moment, g } = out;
             let v: [S; N] = std::array::from_fn(|j| v[j].clone());
             let (rows, _) = features.as_chunks::<N>();
-            let products = cross.iter_mut().zip(moment.iter_mut());
-            let mut decisions = rows.iter().zip(coefficients).zip(products);
-            let statistics = |phi: &[S; N], c: &S, cr: &mut S, mo: &mut S| {
-                *cr += c.clone() * crate::scalar::dot(&v, phi);
-                *mo += c.square() * crate::scalar::norm_sq(phi);
-            };
             // g has N entries (d = N for this policy) whenever there is a correction to make.
             if !baseline.is_empty() {
                 let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
-                for (((phi, c), (cr, mo)), b) in decisions.by_ref().zip(baseline) {
-                    statistics(phi, c, cr, mo);
+                for ((phi, c), b) in rows.iter().zip(coefficients).zip(baseline) {
                     let bc = b.clone() * c;
                     for (a, x) in acc.iter_mut().zip(phi) {
                         *a -= bc.clone() * x;
@@ -389,13 +382,16 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
                 }
                 g.clone_from_slice(&acc);
             }
-            for ((phi, c), (cr, mo)) in decisions {
-                statistics(phi, c, cr, mo);
+            // The statistics, for as many decisions as `cross` has (none: the correction alone).
+            let products = cross.iter_mut().zip(moment.iter_mut());
+            for ((phi, c), (cr, mo)) in rows.iter().zip(coefficients).zip(products) {
+                *cr += c.clone() * crate::scalar::dot(&v, phi);
+                *mo += c.square() * crate::scalar::norm_sq(phi);
             }
         }, _ => {
             let rows = features.chunks_exact(dim.max(1)).zip(coefficients);
             let scores: Vec<Vec<S>> = rows
-                .take(out.cross.len())
+                .take(out.cross.len().max(out.baseline.len()))
                 .map(|(phi, c)| phi.iter().map(|x| c.clone() * x).collect())
                 .collect();
             out.add_rows(scores.iter().map(Vec::as_slice));

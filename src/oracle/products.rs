@@ -13,7 +13,9 @@ use crate::scalar::Scalar;
 ///   with `g` holding v this is the baselined estimate `g_b = g − Σ_i b_i ψ_i`.
 ///
 /// Both need every ψ_i once the plain estimate is known, so they share one pass over the
-/// recorded decisions. `baseline` may be empty (statistics only; `g` is then untouched).
+/// recorded decisions. `baseline` may be empty (statistics only; `g` is then untouched), and so
+/// may `cross` and `moment` (the correction only, for every decision `baseline` covers: a
+/// trajectory whose statistics are not wanted).
 #[derive(Debug)]
 pub struct ScoreProducts<'a, S> {
     /// v, the trajectory's plain estimate (d entries).
@@ -30,7 +32,8 @@ pub struct ScoreProducts<'a, S> {
 
 impl<S: Scalar> ScoreProducts<'_, S> {
     /// The products and the correction for the scores ψ_0, ψ_1, … that `scores` yields, as far as
-    /// it and `cross` go, each in the order the fixed-dimension passes use: `cross[i]` with
+    /// it and `cross` go (as far as `baseline` goes when `cross` is empty: the correction only),
+    /// each in the order the fixed-dimension passes use: `cross[i]` with
     /// [`crate::scalar::dot`], `moment[i]` with [`crate::scalar::norm_sq`], then
     /// `g_j −= b_i ψ_ij` entry by entry.
     pub fn add_rows<'r>(self, scores: impl Iterator<Item = &'r [S]>)
@@ -44,6 +47,14 @@ impl<S: Scalar> ScoreProducts<'_, S> {
             moment,
             g,
         } = self;
+        if cross.is_empty() {
+            for (psi, b) in scores.zip(baseline) {
+                for (gj, x) in g.iter_mut().zip(psi) {
+                    *gj -= b.clone() * x;
+                }
+            }
+            return;
+        }
         let products = cross.iter_mut().zip(moment.iter_mut());
         for (i, (psi, (c, m))) in scores.zip(products).enumerate() {
             *c += crate::scalar::dot(v, psi);

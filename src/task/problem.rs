@@ -547,6 +547,17 @@ where
         Ok(k)
     }
 
+    /// The learner's features φ(s_i) as the roll-out stored them, one row per state.
+    fn state_feature_rows<'t>(
+        &self,
+        trajectory: &'t Self::Trajectory,
+        decisions: usize,
+    ) -> Option<(&'t [S], usize)> {
+        let stride = trajectory.feature_dim();
+        (stride > 0 && trajectory.rows >= decisions)
+            .then(|| (&trajectory.feature_data()[..decisions * stride], stride))
+    }
+
     /// From the policy's own records: the absorbing tail (recorded last), then the per-step
     /// losses in order, as [`IlProblem::trajectory_loss`] adds them; `None` for records made
     /// from rows.

@@ -243,6 +243,7 @@ fn check_state_oracle(
         time,
         decay: None,
         ridge: None,
+        fit_every: None,
     };
     let oracle = Baselined::<_, Q>::new(p.clone(), 1, &kind).map_err(|e| e.to_string())?;
     let mut cost = Cost::default();
@@ -546,6 +547,7 @@ fn f64_state_dependent_oracle_agrees_with_the_exact_one() {
         time: true,
         decay: Some(ConfigNumber::ratio(9, 10)),
         ridge: Some(ConfigNumber::ratio(1, 100)),
+        fit_every: None,
     };
     let pf = ToyProblem::<f64>::new(&mdp);
     let px = ToyProblem::<Q>::new(&mdp);
@@ -594,6 +596,7 @@ fn invalid_state_baselines_are_clear_errors() {
                 time: false,
                 decay,
                 ridge,
+                fit_every: None,
             },
         )
     };
@@ -881,12 +884,14 @@ fn the_configuration_round_trips_through_json() {
             time: true,
             decay: Some(ConfigNumber::ratio(99, 100)),
             ridge: None,
+            fit_every: None,
         },
         Baseline::StateDependent {
             features: None,
             time: false,
             decay: None,
             ridge: Some(ConfigNumber::from(0.5)),
+            fit_every: Some(3),
         },
     ] {
         let text = serde_json::to_string(&b).unwrap();
@@ -902,7 +907,8 @@ fn the_configuration_round_trips_through_json() {
             features: None,
             time: false,
             decay: None,
-            ridge: None
+            ridge: None,
+            fit_every: None,
         }
     );
 }
@@ -1086,4 +1092,73 @@ fn task_decision_terms_reproduce_the_task_estimators() {
         absorbed > 0,
         "no absorbing tail among the checked trajectories"
     );
+}
+
+/// `fit_every`: with e = 3 the state-dependent oracle takes the statistics of trajectories 0, 3,
+/// 6, … only, so its weights equal, bit for bit, those of an oracle that takes every trajectory
+/// and is shown only those; a trajectory whose statistics are not taken (its baselines read off
+/// the stored feature rows, the products pass making the correction alone) gets the same
+/// estimate, bit for bit, as from an oracle with the same weights that takes its statistics
+/// (features by columns). Fails if the selection depended on anything but the count, if the
+/// row route summed `w·φ_i` in another order, or if the correction stopped with the statistics.
+#[test]
+fn fit_every_takes_every_eth_trajectory_and_leaves_the_estimates_unchanged() {
+    use ilopt::policy::Logistic;
+    use ilopt::task::cartpole::{self, CartPoleTask};
+    use ilopt::task::{AfterEnd, Horizon, TaskProblem};
+    let p = TaskProblem {
+        task: CartPoleTask::<f64>::with_lqr().unwrap(),
+        policy: Logistic::new(cartpole::FEATURES).unwrap(),
+        horizon: Horizon::fixed(200, AfterEnd::Reset),
+    };
+    let theta = DVector::from_vec(vec![0.1, 0.5, 3.0, 1.0, 0.05]);
+    let make = |fit_every| {
+        Baselined::<_, f64>::new(
+            p.clone(),
+            1,
+            &Baseline::StateDependent {
+                features: None,
+                time: true,
+                decay: None,
+                ridge: None,
+                fit_every: Some(fit_every),
+            },
+        )
+        .unwrap()
+    };
+    // `every1` is shown trajectories 0, 3, 6, … only; its clones estimate every trajectory
+    // with its weights and are dropped with their statistics.
+    let (every3, every1) = (make(3), make(1));
+    let mut rng = KitRng::seed_from_u64(17);
+    let mut other = KitRng::seed_from_u64(0);
+    let mut cost = Cost::default();
+    for j in 0..10 {
+        let t = every3
+            .rollout(&Behaviour::Learner(&theta), &mut rng, &mut cost)
+            .unwrap();
+        every1
+            .rollout(&Behaviour::Learner(&theta), &mut other, &mut cost)
+            .unwrap();
+        assert_eq!(every3.state_weights(), every1.state_weights(), "before {j}");
+        let g3 = every3
+            .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
+            .unwrap();
+        let g1 = every1
+            .clone()
+            .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
+            .unwrap();
+        assert_eq!(g3, g1, "trajectory {j}");
+        if j % 3 == 0 {
+            every1
+                .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
+                .unwrap();
+        }
+    }
+    for o in [&every3, &every1] {
+        o.rollout(&Behaviour::Learner(&theta), &mut other, &mut cost)
+            .unwrap();
+    }
+    let w = every3.state_weights().unwrap();
+    assert!(w.len() == 7 && w.iter().any(|x| *x != 0.0), "{w:?}");
+    assert_eq!(Some(w), every1.state_weights());
 }

@@ -278,6 +278,8 @@ where
         time: true,
         decay: None,
         ridge: None,
+        // Every fitting trajectory enters the weights.
+        fit_every: Some(1),
     };
     let state_samples = samples(
         p,

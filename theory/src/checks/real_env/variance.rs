@@ -283,6 +283,8 @@ where
             time: true,
             decay: None,
             ridge: None,
+            // Every fitting trajectory enters the weights.
+            fit_every: Some(1),
         };
         // The n estimates split over the fits; fit f's family is 1000·(f + 1) + the point's
         // (the points' families are 40 + 4i …, so every family is its own).
