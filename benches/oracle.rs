@@ -170,6 +170,34 @@ fn cartpole(c: &mut Criterion) {
             &mut warm,
         )
         .unwrap();
+    // The state-dependent baseline (CartPole's features, the decision index and 1), its weights
+    // fitted on the set's trajectories (each estimated, then committed by a roll-out) that its
+    // `fit_every` takes: the default share, and every trajectory.
+    let fitted_state = |fit_every: Option<u64>| {
+        let o = Baselined::new(
+            generic.clone(),
+            1,
+            &Baseline::StateDependent {
+                features: None,
+                time: true,
+                decay: None,
+                ridge: None,
+                fit_every,
+            },
+        )
+        .unwrap();
+        let mut rng = KitRng::seed_from_u64(SEEDS);
+        let mut warm = Cost::default();
+        for one in &singles {
+            o.estimate(&theta, one, EstimatorForm::Causal, &mut warm)
+                .unwrap();
+            o.rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
+                .unwrap();
+        }
+        o
+    };
+    let state = fitted_state(None);
+    let state_all = fitted_state(Some(1));
     let loo = Baselined::new(generic.clone(), 2, &Baseline::LeaveOneOut).unwrap();
     let plain_pairs = Baselined::new(generic.clone(), 2, &Baseline::None).unwrap();
     let estimate_all = |p: &Baselined<_, f64>, batches: &[Vec<_>]| {
@@ -204,6 +232,14 @@ fn cartpole(c: &mut Criterion) {
     g.bench_function(
         "roll-out + causal estimate, estimated per-decision baselines, generic (f64)",
         |b| b.iter(|| oracle_pass(&estimated, black_box(&theta))),
+    );
+    g.bench_function(
+        "roll-out + causal estimate, state-dependent baseline (statistics from every 8th trajectory), generic (f64)",
+        |b| b.iter(|| oracle_pass(&state, black_box(&theta))),
+    );
+    g.bench_function(
+        "roll-out + causal estimate, state-dependent baseline (statistics from every trajectory), generic (f64)",
+        |b| b.iter(|| oracle_pass(&state_all, black_box(&theta))),
     );
     // Pairs rolled out per seed: the whole oracle call with leave-one-out against the plain mean.
     g.throughput(Throughput::Elements(steps_of(&loo, &theta)));

@@ -245,7 +245,8 @@ impl<S: Scalar> RunningRegression<S> {
     /// Move the pending statistics into the sums (every sum times the decay, plus the pending
     /// one) and solve `(A + λI) w = c` for the weights ([`solve_symmetric`]); the trajectories
     /// offered since the last commit count as committed. Nothing else changes before the first
-    /// observation.
+    /// observation. A commit that adds no statistics keeps the weights when λ = 0 (the decayed
+    /// system `d·A w = d·c` has the same solutions).
     pub fn commit(&mut self) {
         self.offered += self.pending_offered;
         self.pending_offered = 0;
@@ -257,7 +258,8 @@ impl<S: Scalar> RunningRegression<S> {
                 *x *= decay;
             }
         }
-        if self.pending {
+        let added = self.pending;
+        if added {
             for (x, p) in self.a.iter_mut().zip(&self.pending_a) {
                 *x += p;
             }
@@ -266,6 +268,11 @@ impl<S: Scalar> RunningRegression<S> {
             }
         }
         self.clear_pending();
+        // Without new statistics and without a ridge, the (decayed) system has the same
+        // solutions: the weights stand.
+        if !added && !self.w.is_empty() && self.ridge.is_certainly_zero() {
+            return;
+        }
         let k = self.k;
         self.work.clear();
         for r in 0..k {
