@@ -22,6 +22,8 @@
 
 #[path = "support/specialised.rs"]
 mod specialised;
+#[path = "support/state_baseline.rs"]
+mod state_baseline;
 
 use criterion::{Criterion, Throughput, black_box, criterion_group, criterion_main};
 use ilopt::algo::ConfigNumber;
@@ -37,6 +39,7 @@ use ilopt::task::{AfterEnd, Horizon, TaskProblem};
 use nalgebra::DVector;
 use rand::SeedableRng;
 use specialised::{D, Specialised, Trajectory};
+use state_baseline::fitted_state;
 
 /// Seeds rolled out per benchmark iteration.
 const SEEDS: u64 = 16;
@@ -170,34 +173,10 @@ fn cartpole(c: &mut Criterion) {
             &mut warm,
         )
         .unwrap();
-    // The state-dependent baseline (CartPole's features, the decision index and 1), its weights
-    // fitted on the set's trajectories (each estimated, then committed by a roll-out) that its
-    // `fit_every` takes: the default share, and every trajectory.
-    let fitted_state = |fit_every: Option<u64>| {
-        let o = Baselined::new(
-            generic.clone(),
-            1,
-            &Baseline::StateDependent {
-                features: None,
-                time: true,
-                decay: None,
-                ridge: None,
-                fit_every,
-            },
-        )
-        .unwrap();
-        let mut rng = KitRng::seed_from_u64(SEEDS);
-        let mut warm = Cost::default();
-        for one in &singles {
-            o.estimate(&theta, one, EstimatorForm::Causal, &mut warm)
-                .unwrap();
-            o.rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
-                .unwrap();
-        }
-        o
-    };
-    let state = fitted_state(None);
-    let state_all = fitted_state(Some(1));
+    // The state-dependent baseline with the default share of trajectories' statistics, and with
+    // every trajectory's.
+    let state = fitted_state(&generic, &theta, &singles, None, SEEDS);
+    let state_all = fitted_state(&generic, &theta, &singles, Some(1), SEEDS);
     let loo = Baselined::new(generic.clone(), 2, &Baseline::LeaveOneOut).unwrap();
     let plain_pairs = Baselined::new(generic.clone(), 2, &Baseline::None).unwrap();
     let estimate_all = |p: &Baselined<_, f64>, batches: &[Vec<_>]| {

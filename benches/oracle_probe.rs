@@ -38,6 +38,8 @@
 
 #[path = "support/specialised.rs"]
 mod specialised;
+#[path = "support/state_baseline.rs"]
+mod state_baseline;
 
 use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined};
@@ -49,6 +51,7 @@ use ilopt::task::cartpole::{self, CartPoleTask};
 use nalgebra::DVector;
 use rand::SeedableRng;
 use specialised::{D, Specialised, Trajectory};
+use state_baseline::fitted_state;
 use std::collections::BTreeMap;
 use std::hint::black_box;
 use std::time::Instant;
@@ -215,32 +218,8 @@ fn main() {
     // `fit_every` takes: every one for mode `state` (whose estimates then sum the statistics of
     // every trajectory), the default share for mode `oracle-state` and every one for
     // `oracle-state-all`.
-    let fitted_state = |fit_every: Option<u64>| {
-        let o = Baselined::new(
-            p.clone(),
-            1,
-            &Baseline::StateDependent {
-                features: None,
-                time: true,
-                decay: None,
-                ridge: None,
-                fit_every,
-            },
-        )
-        .expect("state");
-        let mut rng = KitRng::seed_from_u64(SEEDS);
-        let mut warm = Cost::default();
-        for one in &singles {
-            o.estimate(&theta, one, EstimatorForm::Causal, &mut warm)
-                .expect("estimate");
-            o.rollout(&Behaviour::Learner(&theta), &mut rng, &mut warm)
-                .expect("roll-out");
-        }
-        o
-    };
-    let state = fitted_state(Some(1));
-    let oracle_state = fitted_state(None);
-    let oracle_state_all = fitted_state(Some(1));
+    let fit = |fit_every| fitted_state(&p, &theta, &singles, fit_every, SEEDS);
+    let (state, oracle_state, oracle_state_all) = (fit(Some(1)), fit(None), fit(Some(1)));
     let oracle_estimated = estimated.clone();
     // The weighted estimates use the committed baselines: statistics from every probe trajectory,
     // committed by one roll-out, as in training.
