@@ -52,11 +52,10 @@ pub use running::RunningOptimum;
 use crate::scalar::ConfigNumber;
 
 /// The state-dependent baseline's default share of trajectories whose statistics enter its
-/// weights: one in this many ([`Baseline::StateDependent`]'s `fit_every`). Summing the statistics
-/// of every trajectory costs more than the estimate's 10 % budget for a baseline
-/// (`benches/README.md`); one in eight keeps the weights on enough data (with m = 16
-/// trajectories per gradient and the experiments' decay 0.99, about 200 trajectories) and the
-/// cost of the statistics under a hundredth of the oracle's.
+/// weights: one in this many ([`Baseline::StateDependent`]'s `fit_every`). The statistics take
+/// k(k + 3)/2 products per decision, about as much as the plain estimate itself; one trajectory
+/// in eight pays them, and the weights still rest on enough data (with m = 16 trajectories per
+/// gradient and a decay of 0.99, about 200 trajectories in the memory for k weights).
 pub const DEFAULT_FIT_EVERY: u64 = 8;
 use serde::{Deserialize, Serialize};
 
