@@ -50,6 +50,7 @@ pub use regression::{RunningRegression, solve_symmetric};
 pub use running::RunningOptimum;
 
 use crate::scalar::ConfigNumber;
+use serde::{Deserialize, Serialize};
 
 /// The state-dependent baseline's default share of trajectories whose statistics enter its
 /// weights: one in this many ([`Baseline::StateDependent`]'s `fit_every`). The statistics take
@@ -57,7 +58,6 @@ use crate::scalar::ConfigNumber;
 /// in eight pays them, and the weights still rest on enough data (with m = 16 trajectories per
 /// gradient and a decay of 0.99, about 200 trajectories in the memory for k weights).
 pub const DEFAULT_FIT_EVERY: u64 = 8;
-use serde::{Deserialize, Serialize};
 
 /// Which baseline the oracle subtracts (JSON: `{"kind": "constant", "value": "1/2"}`).
 ///

@@ -587,7 +587,7 @@ fn f64_state_dependent_oracle_agrees_with_the_exact_one() {
 #[test]
 fn invalid_state_baselines_are_clear_errors() {
     let p = ToyProblem::<f64>::new(&example("m1-tied.json"));
-    let make = |features, decay, ridge| {
+    let make_every = |features, decay, ridge, fit_every| {
         Baselined::<_, f64>::new(
             p.clone(),
             1,
@@ -596,10 +596,13 @@ fn invalid_state_baselines_are_clear_errors() {
                 time: false,
                 decay,
                 ridge,
-                fit_every: None,
+                fit_every,
             },
         )
     };
+    let make = |features, decay, ridge| make_every(features, decay, ridge, None);
+    let e = make_every(None, None, None, Some(0)).unwrap_err();
+    assert!(e.to_string().contains("fit_every = 0"), "{e}");
     let e = make(Some(0), None, None).unwrap_err();
     assert!(e.to_string().contains("features = 0"), "{e}");
     let e = make(None, Some(ConfigNumber::ratio(-1, 2)), None).unwrap_err();
@@ -1099,66 +1102,80 @@ fn task_decision_terms_reproduce_the_task_estimators() {
 /// and is shown only those; a trajectory whose statistics are not taken (its baselines read off
 /// the stored feature rows, the products pass making the correction alone) gets the same
 /// estimate, bit for bit, as from an oracle with the same weights that takes its statistics
-/// (features by columns). Fails if the selection depended on anything but the count, if the
-/// row route summed `w·φ_i` in another order, or if the correction stopped with the statistics.
+/// (features by columns). On CartPole (the logistic policy's own products pass; resets) and the
+/// obstacle task (the Gaussian policy's default pass through `ScoreProducts::add_rows`; an
+/// absorbing tail). Fails if the selection depended on anything but the count, if the row route
+/// summed `w·φ_i` in another order, or if the correction stopped with the statistics.
 #[test]
 fn fit_every_takes_every_eth_trajectory_and_leaves_the_estimates_unchanged() {
-    use ilopt::policy::Logistic;
+    use ilopt::policy::{LikelihoodRatio, Logistic};
     use ilopt::task::cartpole::{self, CartPoleTask};
-    use ilopt::task::{AfterEnd, Horizon, TaskProblem};
-    let p = TaskProblem {
+    use ilopt::task::{AfterEnd, Horizon, Task, TaskProblem};
+    use std::borrow::Borrow;
+
+    fn check<T, P>(p: &TaskProblem<T, P>, theta: &DVector<f64>, k: usize)
+    where
+        T: Task<f64> + Clone,
+        P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64> + Clone,
+        T::Label: Borrow<P::Label>,
+    {
+        let make = |fit_every| {
+            Baselined::<_, f64>::new(
+                p.clone(),
+                1,
+                &Baseline::StateDependent {
+                    features: None,
+                    time: true,
+                    decay: None,
+                    ridge: None,
+                    fit_every: Some(fit_every),
+                },
+            )
+            .unwrap()
+        };
+        // `every1` is shown trajectories 0, 3, 6, … only; its clones estimate every trajectory
+        // with its weights and are dropped with their statistics.
+        let (every3, every1) = (make(3), make(1));
+        let mut rng = KitRng::seed_from_u64(17);
+        let mut other = KitRng::seed_from_u64(0);
+        let mut cost = Cost::default();
+        for j in 0..10 {
+            let t = every3
+                .rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                .unwrap();
+            every1
+                .rollout(&Behaviour::Learner(theta), &mut other, &mut cost)
+                .unwrap();
+            assert_eq!(every3.state_weights(), every1.state_weights(), "before {j}");
+            let g3 = every3
+                .estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+                .unwrap();
+            let g1 = every1
+                .clone()
+                .estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+                .unwrap();
+            assert_eq!(g3, g1, "trajectory {j}");
+            if j % 3 == 0 {
+                every1
+                    .estimate(theta, &t, EstimatorForm::Causal, &mut cost)
+                    .unwrap();
+            }
+        }
+        for o in [&every3, &every1] {
+            o.rollout(&Behaviour::Learner(theta), &mut other, &mut cost)
+                .unwrap();
+        }
+        let w = every3.state_weights().unwrap();
+        assert!(w.len() == k + 2 && w.iter().any(|x| *x != 0.0), "{w:?}");
+        assert_eq!(Some(w), every1.state_weights());
+    }
+    let cartpole = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
         horizon: Horizon::fixed(200, AfterEnd::Reset),
     };
     let theta = DVector::from_vec(vec![0.1, 0.5, 3.0, 1.0, 0.05]);
-    let make = |fit_every| {
-        Baselined::<_, f64>::new(
-            p.clone(),
-            1,
-            &Baseline::StateDependent {
-                features: None,
-                time: true,
-                decay: None,
-                ridge: None,
-                fit_every: Some(fit_every),
-            },
-        )
-        .unwrap()
-    };
-    // `every1` is shown trajectories 0, 3, 6, … only; its clones estimate every trajectory
-    // with its weights and are dropped with their statistics.
-    let (every3, every1) = (make(3), make(1));
-    let mut rng = KitRng::seed_from_u64(17);
-    let mut other = KitRng::seed_from_u64(0);
-    let mut cost = Cost::default();
-    for j in 0..10 {
-        let t = every3
-            .rollout(&Behaviour::Learner(&theta), &mut rng, &mut cost)
-            .unwrap();
-        every1
-            .rollout(&Behaviour::Learner(&theta), &mut other, &mut cost)
-            .unwrap();
-        assert_eq!(every3.state_weights(), every1.state_weights(), "before {j}");
-        let g3 = every3
-            .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
-            .unwrap();
-        let g1 = every1
-            .clone()
-            .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
-            .unwrap();
-        assert_eq!(g3, g1, "trajectory {j}");
-        if j % 3 == 0 {
-            every1
-                .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
-                .unwrap();
-        }
-    }
-    for o in [&every3, &every1] {
-        o.rollout(&Behaviour::Learner(&theta), &mut other, &mut cost)
-            .unwrap();
-    }
-    let w = every3.state_weights().unwrap();
-    assert!(w.len() == 7 && w.iter().any(|x| *x != 0.0), "{w:?}");
-    assert_eq!(Some(w), every1.state_weights());
+    check(&cartpole, &theta, cartpole::FEATURES);
+    let (obstacle, w) = crate::common::absorbing_obstacle_problem();
+    check(&obstacle, &w, ilopt::task::obstacle::FEATURES);
 }
