@@ -134,7 +134,8 @@ impl<S: Scalar> RunningRegression<S> {
     /// when `time`, the decision index and 1 after them, as the state-dependent oracle appends
     /// them: each `w·φ_i` summed in the columns' order. Returns false, writing nothing, when the
     /// committed weights are not k (+ 2 with `time`) many; `out` is cleared first and stays empty
-    /// before any statistics were committed.
+    /// before any statistics were committed. For 1 to 8 state features a row's products run
+    /// over a compile-time length ([`add_row_baselines`]: the loop unrolls), one pass in all.
     pub fn baselines_from_rows(
         &self,
         (rows, stride): (&[S], usize),
@@ -151,19 +152,31 @@ impl<S: Scalar> RunningRegression<S> {
             return false;
         }
         let (state, extra) = self.w.split_at(k);
-        let mut index = S::zero();
-        out.extend(rows.chunks_exact(stride).take(n).map(|phi| {
-            let mut b = S::zero();
-            for (w, x) in state.iter().zip(phi) {
-                b += w.clone() * x;
+        let extra = match extra {
+            [w_index, w_one] => Some((w_index, w_one)),
+            _ => None,
+        };
+        out.resize(n, S::zero());
+        let rows = rows.chunks_exact(stride);
+        match k {
+            1 => add_row_baselines::<S, 1>(state, extra, rows, out),
+            2 => add_row_baselines::<S, 2>(state, extra, rows, out),
+            3 => add_row_baselines::<S, 3>(state, extra, rows, out),
+            4 => add_row_baselines::<S, 4>(state, extra, rows, out),
+            5 => add_row_baselines::<S, 5>(state, extra, rows, out),
+            6 => add_row_baselines::<S, 6>(state, extra, rows, out),
+            7 => add_row_baselines::<S, 7>(state, extra, rows, out),
+            8 => add_row_baselines::<S, 8>(state, extra, rows, out),
+            _ => {
+                let mut index = S::zero();
+                for (b, phi) in out.iter_mut().zip(rows) {
+                    for (w, x) in state.iter().zip(phi) {
+                        *b += w.clone() * x;
+                    }
+                    add_time_terms(b, extra, &mut index);
+                }
             }
-            if let [w_index, w_one] = extra {
-                b += w_index.clone() * &index;
-                b += w_one.clone() * S::one();
-                index += S::one();
-            }
-            b
-        }));
+        }
         true
     }
 
@@ -345,6 +358,37 @@ pub fn solve_symmetric<S: Scalar>(m: &mut [S], k: usize, w: &mut [S]) {
     }
 }
 
+/// `b += w_index · i + w_one · 1` for the decision whose index `index` holds, which then moves
+/// on to the next (nothing without the time features).
+#[inline(always)]
+fn add_time_terms<S: Scalar>(b: &mut S, extra: Option<(&S, &S)>, index: &mut S) {
+    if let Some((w_index, w_one)) = extra {
+        *b += w_index.clone() * &*index;
+        *b += w_one.clone() * S::one();
+        *index += S::one();
+    }
+}
+
+/// `out[i] += w_0 φ_i0 + … + w_{K−1} φ_i,K−1` term by term for the rows φ_i of `rows` (their
+/// first K entries), then the time terms ([`add_time_terms`]), with K known at compile time so
+/// that the loop over a row unrolls.
+fn add_row_baselines<'r, S: Scalar + 'r, const K: usize>(
+    w: &[S],
+    extra: Option<(&S, &S)>,
+    rows: impl Iterator<Item = &'r [S]>,
+    out: &mut [S],
+) {
+    let w: &[S; K] = w.try_into().expect("K weights");
+    let mut index = S::zero();
+    for (b, phi) in out.iter_mut().zip(rows) {
+        let phi: &[S; K] = phi[..K].try_into().expect("rows of at least K entries");
+        for (w, x) in w.iter().zip(phi) {
+            *b += w.clone() * x;
+        }
+        add_time_terms(b, extra, &mut index);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -454,6 +498,64 @@ mod tests {
         let mut m = vec![q(3), q(2), q(6), q(2), q(3), q(6)];
         solve_symmetric(&mut m, 2, &mut w);
         assert_eq!(w, vec![BigRational::new(6.into(), 5.into()); 2]);
+    }
+
+    /// `baselines_from_rows` (rows of any stride, every fixed-dimension arm and the fallback)
+    /// against `baselines_into` on the same features by columns, with and without the time
+    /// features: the same values to the last bit (compared by their `Debug` text, which tells
+    /// −0 from +0), in every scalar.
+    fn rows_give_the_columns_baselines<S: Scalar + std::fmt::Debug>() {
+        let mut rng = KitRng::seed_from_u64(17);
+        let value = |rng: &mut KitRng| {
+            let q = BigRational::new(
+                rng.random_range(-40i64..=40).into(),
+                rng.random_range(1i64..=9).into(),
+            );
+            S::from_rational(&q)
+        };
+        let mut compared = 0;
+        for k in 1..=10 {
+            for time in [false, true] {
+                for (stride, n) in [(k, 0), (k, 1), (k + 2, 9), (k + 1, 40)] {
+                    let mut r = RunningRegression::<S>::new(None, S::zero());
+                    r.w = (0..k + if time { 2 } else { 0 })
+                        .map(|_| value(&mut rng))
+                        .collect();
+                    let rows: Vec<S> = (0..n * stride).map(|_| value(&mut rng)).collect();
+                    let mut columns: Vec<S> = (0..k)
+                        .flat_map(|j| (0..n).map(move |i| i * stride + j))
+                        .map(|at| rows[at].clone())
+                        .collect();
+                    if time {
+                        columns.extend((0..n).map(|i| S::from_i64(i as i64)));
+                        columns.extend((0..n).map(|_| S::one()));
+                    }
+                    let (mut by_rows, mut by_columns) = (Vec::new(), Vec::new());
+                    assert!(r.baselines_from_rows((&rows, stride), k, time, n, &mut by_rows));
+                    r.baselines_into(&columns, n, &mut by_columns);
+                    assert_eq!(
+                        format!("{by_rows:?}"),
+                        format!("{by_columns:?}"),
+                        "k = {k}, time = {time}, stride = {stride}, n = {n} ({})",
+                        std::any::type_name::<S>()
+                    );
+                    compared += n;
+                    // Weights for another number of features are refused, writing nothing.
+                    assert!(!r.baselines_from_rows((&rows, stride), k + 1, time, n, &mut by_rows));
+                    assert!(by_rows.is_empty());
+                }
+            }
+        }
+        assert_eq!(compared, 2 * 50 * 10);
+    }
+
+    #[test]
+    fn baselines_from_rows_are_those_from_columns_in_every_scalar() {
+        rows_give_the_columns_baselines::<f64>();
+        rows_give_the_columns_baselines::<f32>();
+        rows_give_the_columns_baselines::<BigRational>();
+        rows_give_the_columns_baselines::<Interval>();
+        rows_give_the_columns_baselines::<Dual<f64>>();
     }
 
     /// Two routes to the same baselines: a constant feature φ = 1 gives
