@@ -2,7 +2,7 @@
 
 use super::{Baseline, PerDecisionTerms, RunningOptimum, RunningRegression, leading_features};
 use crate::batched::Batched;
-use crate::oracle::{DecisionTerms, Given, RecordedPass, ScoreProducts};
+use crate::oracle::{DecisionTerms, Given, LinearBaseline, RecordedPass, ScoreProducts};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::Scalar;
 use nalgebra::DVector;
@@ -486,7 +486,13 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
     /// ([`PerDecisionTerms::estimate_recorded`]), then one more read of its scores for the
     /// products `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
     /// ([`PerDecisionTerms::recorded_score_products`]), from which the statistics are summed
-    /// ([`RunningRegression::observe_products`]). No allocation per step.
+    /// ([`RunningRegression::observe_products`]). A trajectory whose statistics are not taken
+    /// ([`RunningRegression::takes_next`]) needs the correction alone: the problem's one pass
+    /// that forms each `b_i` off the stored feature rows as it reads ψ_i
+    /// ([`PerDecisionTerms::recorded_state_correction`]), else its baselines read off those rows
+    /// ([`RunningRegression::baselines_from_rows`]) or, without rows, from the columns, then the
+    /// products pass without statistics. Every route gives the same estimate, bit for bit. No
+    /// allocation per step.
     fn state_dependent(
         &self,
         theta: &DVector<S>,
@@ -528,9 +534,22 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
         running.clear_pending();
         for (t, r) in batch.iter().zip(records.iter_mut()) {
             let n = r.decisions();
-            // The statistics need the features by columns; a trajectory whose statistics are
-            // not taken reads its baselines off the stored rows when the problem has them.
             let take = running.takes_next();
+            add_plain(inner, t, r, plain, g);
+            // A trajectory whose statistics are not taken: its correction in one pass that forms
+            // the baselines off the stored rows, when the problem has one.
+            if !take
+                && inner.state_feature_rows(t, n).is_some_and(|(_, stride)| {
+                    leading_features(stride, *leading)
+                        .ok()
+                        .and_then(|k| LinearBaseline::new(running.weights(), k, *time))
+                        .is_some_and(|b| inner.recorded_state_correction(t, r, &b, g))
+                })
+            {
+                continue;
+            }
+            // The statistics need the features by columns; else the baselines are read off the
+            // stored rows when the problem has them.
             let from_rows = !take
                 && inner.state_feature_rows(t, n).is_some_and(|rows| {
                     leading_features(rows.1, *leading)
@@ -543,7 +562,6 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
                 running.baselines_into(phi, n, baseline);
                 k
             };
-            add_plain(inner, t, r, plain, g);
             // Without statistics, the products pass makes the correction alone.
             for v in [&mut *cross, &mut *moment] {
                 v.clear();

@@ -1,7 +1,7 @@
 //! [`RunningRegression`]: the variance-minimising state-dependent baseline `b(s) = w·φ_b(s)`,
 //! its weights estimated from earlier iterations only.
 
-use crate::oracle::DecisionTerms;
+use crate::oracle::{DecisionTerms, LinearBaseline};
 use crate::scalar::{Scalar, dot, norm_sq};
 
 /// Running estimates of the weights of the variance-minimising linear state-dependent baseline
@@ -135,7 +135,7 @@ impl<S: Scalar> RunningRegression<S> {
     /// them: each `w·φ_i` summed in the columns' order. Returns false, writing nothing, when the
     /// committed weights are not k (+ 2 with `time`) many; `out` is cleared first and stays empty
     /// before any statistics were committed. For 1 to 8 state features a row's products run
-    /// over a compile-time length ([`add_row_baselines`]: the loop unrolls), one pass in all.
+    /// over a compile-time length ([`crate::oracle::FixedLinearBaseline`]: the loop unrolls), one pass in all.
     pub fn baselines_from_rows(
         &self,
         (rows, stride): (&[S], usize),
@@ -148,32 +148,27 @@ impl<S: Scalar> RunningRegression<S> {
         if self.w.is_empty() {
             return true;
         }
-        if self.w.len() != k + if time { 2 } else { 0 } || k > stride || rows.len() < n * stride {
+        let Some(baseline) = LinearBaseline::new(&self.w, k, time) else {
+            return false;
+        };
+        if k > stride || rows.len() < n * stride {
             return false;
         }
-        let (state, extra) = self.w.split_at(k);
-        let extra = match extra {
-            [w_index, w_one] => Some((w_index, w_one)),
-            _ => None,
-        };
         out.resize(n, S::zero());
         let rows = rows.chunks_exact(stride);
         match k {
-            1 => add_row_baselines::<S, 1>(state, extra, rows, out),
-            2 => add_row_baselines::<S, 2>(state, extra, rows, out),
-            3 => add_row_baselines::<S, 3>(state, extra, rows, out),
-            4 => add_row_baselines::<S, 4>(state, extra, rows, out),
-            5 => add_row_baselines::<S, 5>(state, extra, rows, out),
-            6 => add_row_baselines::<S, 6>(state, extra, rows, out),
-            7 => add_row_baselines::<S, 7>(state, extra, rows, out),
-            8 => add_row_baselines::<S, 8>(state, extra, rows, out),
+            1 => add_row_baselines::<S, 1>(&baseline, rows, out),
+            2 => add_row_baselines::<S, 2>(&baseline, rows, out),
+            3 => add_row_baselines::<S, 3>(&baseline, rows, out),
+            4 => add_row_baselines::<S, 4>(&baseline, rows, out),
+            5 => add_row_baselines::<S, 5>(&baseline, rows, out),
+            6 => add_row_baselines::<S, 6>(&baseline, rows, out),
+            7 => add_row_baselines::<S, 7>(&baseline, rows, out),
+            8 => add_row_baselines::<S, 8>(&baseline, rows, out),
             _ => {
                 let mut index = S::zero();
                 for (b, phi) in out.iter_mut().zip(rows) {
-                    for (w, x) in state.iter().zip(phi) {
-                        *b += w.clone() * x;
-                    }
-                    add_time_terms(b, extra, &mut index);
+                    *b = baseline.next(phi, &mut index);
                 }
             }
         }
@@ -358,34 +353,20 @@ pub fn solve_symmetric<S: Scalar>(m: &mut [S], k: usize, w: &mut [S]) {
     }
 }
 
-/// `b += w_index · i + w_one · 1` for the decision whose index `index` holds, which then moves
-/// on to the next (nothing without the time features).
-#[inline(always)]
-fn add_time_terms<S: Scalar>(b: &mut S, extra: Option<(&S, &S)>, index: &mut S) {
-    if let Some((w_index, w_one)) = extra {
-        *b += w_index.clone() * &*index;
-        *b += w_one.clone() * S::one();
-        *index += S::one();
-    }
-}
-
-/// `out[i] += w_0 φ_i0 + … + w_{K−1} φ_i,K−1` term by term for the rows φ_i of `rows` (their
-/// first K entries), then the time terms ([`add_time_terms`]), with K known at compile time so
-/// that the loop over a row unrolls.
+/// `out[i] = b_i` for the rows φ_i of `rows` (their first K entries), with K known at compile
+/// time so that the products of a row unroll ([`FixedLinearBaseline::next`]).
 fn add_row_baselines<'r, S: Scalar + 'r, const K: usize>(
-    w: &[S],
-    extra: Option<(&S, &S)>,
+    baseline: &LinearBaseline<'_, S>,
     rows: impl Iterator<Item = &'r [S]>,
     out: &mut [S],
 ) {
-    let w: &[S; K] = w.try_into().expect("K weights");
+    let baseline = baseline.fixed::<K>().expect("K state features");
     let mut index = S::zero();
     for (b, phi) in out.iter_mut().zip(rows) {
-        let phi: &[S; K] = phi[..K].try_into().expect("rows of at least K entries");
-        for (w, x) in w.iter().zip(phi) {
-            *b += w.clone() * x;
-        }
-        add_time_terms(b, extra, &mut index);
+        *b = baseline.next(
+            phi[..K].try_into().expect("rows of at least K entries"),
+            &mut index,
+        );
     }
 }
 

@@ -7,6 +7,7 @@
 //! kernel in the same order.
 
 use super::kernel::{EstimatorKernel, causal_sum_by_steps};
+use super::linear_baseline::LinearBaseline;
 use super::products::ScoreProducts;
 use crate::policy::logistic::{brier, finite_logit, score_coefficient, sigmoid_of_finite};
 use crate::policy::softmax::check_action;
@@ -396,6 +397,40 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
                 .collect();
             out.add_rows(scores.iter().map(Vec::as_slice));
         });
+    }
+
+    /// For 1 to 8 features, with k all of them: per row b_i ([`super::FixedLinearBaseline::next`]),
+    /// then `g −= (b_i c_i) φ_i` with g in an `[S; N]` local, the operations of
+    /// [`EstimatorKernel::score_products`]'s correction in its order. Else false.
+    fn state_baseline_correction(
+        &self,
+        features: &[S],
+        records: &[S],
+        baseline: &LinearBaseline<'_, S>,
+        decisions: usize,
+        g: &mut [S],
+    ) -> bool {
+        let dim = Policy::<S>::feature_dim(self);
+        let coefficients = &records[..records.len() / 2];
+        by_feature_count!(dim, N => {
+            let Some(baseline) = baseline.fixed::<N>() else {
+                return false;
+            };
+            let Ok(g) = <&mut [S; N]>::try_from(g) else {
+                return false;
+            };
+            let (rows, _) = features.as_chunks::<N>();
+            let mut acc: [S; N] = g.clone();
+            let mut index = S::zero();
+            for (phi, c) in rows.iter().zip(coefficients).take(decisions) {
+                let bc = baseline.next(phi, &mut index) * c;
+                for (a, x) in acc.iter_mut().zip(phi) {
+                    *a -= bc.clone() * x;
+                }
+            }
+            *g = acc;
+            true
+        }, _ => false)
     }
 }
 

@@ -18,7 +18,8 @@
 //! (its [`EstimatorKernel`] overrides) the same arithmetic on `[f64; N]` rows, tested against the
 //! generic route. The data the baselines need are here too: a trajectory's [`DecisionTerms`],
 //! baselines known before a pass ([`Given`]), decisions recorded to be summed with losses chosen
-//! later ([`RecordedPass`]), and [`ScoreProducts`]. The toy MDPs' estimators
+//! later ([`RecordedPass`]), [`ScoreProducts`], and the linear state-dependent baseline evaluated
+//! off feature rows ([`LinearBaseline`]). The toy MDPs' estimators
 //! ([`crate::toy::estimator`]) are an independent route: the loss-to-go summed backwards.
 
 mod baselined;
@@ -27,6 +28,7 @@ mod decision_terms;
 mod full;
 mod given;
 pub mod kernel;
+mod linear_baseline;
 mod logistic;
 mod products;
 mod recorded;
@@ -36,6 +38,7 @@ mod terms;
 pub use decision_terms::DecisionTerms;
 pub use given::Given;
 pub use kernel::EstimatorKernel;
+pub use linear_baseline::{FixedLinearBaseline, LinearBaseline};
 pub use products::ScoreProducts;
 pub use recorded_pass::RecordedPass;
 

@@ -1099,13 +1099,15 @@ fn task_decision_terms_reproduce_the_task_estimators() {
 
 /// `fit_every`: with e = 3 the state-dependent oracle takes the statistics of trajectories 0, 3,
 /// 6, … only, so its weights equal, bit for bit, those of an oracle that takes every trajectory
-/// and is shown only those; a trajectory whose statistics are not taken (its baselines read off
-/// the stored feature rows, the products pass making the correction alone) gets the same
-/// estimate, bit for bit, as from an oracle with the same weights that takes its statistics
-/// (features by columns). On CartPole (the logistic policy's own products pass; resets) and the
-/// obstacle task (the Gaussian policy's default pass through `ScoreProducts::add_rows`; an
-/// absorbing tail). Fails if the selection depended on anything but the count, if the row route
-/// summed `w·φ_i` in another order, or if the correction stopped with the statistics.
+/// and is shown only those; a trajectory whose statistics are not taken gets the same estimate,
+/// bit for bit, as from an oracle with the same weights that takes its statistics (features by
+/// columns). On CartPole (resets; the logistic policy's correction pass forms each `w·φ_i` off
+/// the stored feature rows, `EstimatorKernel::state_baseline_correction`) and the obstacle task
+/// (an absorbing tail; the baselines read off the stored rows, then the Gaussian policy's
+/// default products pass through `ScoreProducts::add_rows` makes the correction alone). Fails if
+/// the selection depended on anything but the count, if a row route summed `w·φ_i` in another
+/// order or corrected a decision that is not scored, or if the correction stopped with the
+/// statistics.
 #[test]
 fn fit_every_takes_every_eth_trajectory_and_leaves_the_estimates_unchanged() {
     use ilopt::policy::{LikelihoodRatio, Logistic};

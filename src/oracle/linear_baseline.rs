@@ -1,0 +1,94 @@
+//! [`LinearBaseline`]: the linear state-dependent baseline `b_i = w·φ_b(s_i)` evaluated off
+//! feature rows, one decision after another.
+
+use crate::scalar::Scalar;
+
+/// The committed weights of a linear state-dependent baseline ([`crate::baseline`], math.md §9)
+/// split by what they weigh: `b_i = Σ_{j<k} w_j φ_ij`, and with the time features also
+/// `+ w_k·i + w_{k+1}·1` (i the decision's index from 0). Every b_i is summed from 0 in this
+/// order, the order of the features by columns
+/// ([`crate::baseline::RunningRegression::baselines_into`]), so that every route gives the same
+/// value bit for bit.
+#[derive(Debug, Clone, Copy)]
+pub struct LinearBaseline<'w, S> {
+    state: &'w [S],
+    time: Option<(&'w S, &'w S)>,
+}
+
+impl<'w, S: Scalar> LinearBaseline<'w, S> {
+    /// The weights of k state features, with `time` those of the index and the constant after
+    /// them; `None` unless `weights` holds exactly that many (before any statistics were
+    /// committed it holds none).
+    pub fn new(weights: &'w [S], k: usize, time: bool) -> Option<Self> {
+        if weights.len() != k + if time { 2 } else { 0 } {
+            return None;
+        }
+        let (state, extra) = weights.split_at(k);
+        let time = match extra {
+            [w_index, w_one] => Some((w_index, w_one)),
+            _ => None,
+        };
+        Some(Self { state, time })
+    }
+
+    /// k, the state features the weights take (each row's first k entries).
+    pub fn state_features(&self) -> usize {
+        self.state.len()
+    }
+
+    /// The same baseline with k = K known at compile time (a row's products unroll); `None`
+    /// when k is not K.
+    pub fn fixed<const K: usize>(&self) -> Option<FixedLinearBaseline<'w, S, K>> {
+        Some(FixedLinearBaseline {
+            state: self.state.try_into().ok()?,
+            time: self.time,
+        })
+    }
+
+    /// b_i of the decision with state features `phi` (its first k entries) and index `index`,
+    /// which then moves on to the next decision's.
+    ///
+    /// # Panics
+    /// If `phi` has fewer than k entries.
+    #[inline]
+    pub fn next(&self, phi: &[S], index: &mut S) -> S {
+        let mut b = S::zero();
+        for (w, x) in self.state.iter().zip(&phi[..self.state.len()]) {
+            b += w.clone() * x;
+        }
+        add_time_terms(&mut b, self.time, index);
+        b
+    }
+}
+
+/// A [`LinearBaseline`] with K state features known at compile time.
+#[derive(Debug, Clone, Copy)]
+pub struct FixedLinearBaseline<'w, S, const K: usize> {
+    state: &'w [S; K],
+    time: Option<(&'w S, &'w S)>,
+}
+
+impl<S: Scalar, const K: usize> FixedLinearBaseline<'_, S, K> {
+    /// [`LinearBaseline::next`] for a row of K entries: the same value, bit for bit.
+    #[inline(always)]
+    pub fn next(&self, phi: &[S; K], index: &mut S) -> S {
+        let mut b = S::zero();
+        for (w, x) in self.state.iter().zip(phi) {
+            b += w.clone() * x;
+        }
+        add_time_terms(&mut b, self.time, index);
+        b
+    }
+}
+
+/// `b += w_index·i + w_one·1` for the decision whose index `index` holds, which then moves on to
+/// the next (nothing without the time features). The product with 1 is kept: the columns route
+/// multiplies the column of ones.
+#[inline(always)]
+fn add_time_terms<S: Scalar>(b: &mut S, time: Option<(&S, &S)>, index: &mut S) {
+    if let Some((w_index, w_one)) = time {
+        *b += w_index.clone() * &*index;
+        *b += w_one.clone() * S::one();
+        *index += S::one();
+    }
+}
