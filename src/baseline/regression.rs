@@ -134,8 +134,9 @@ impl<S: Scalar> RunningRegression<S> {
     /// when `time`, the decision index and 1 after them, as the state-dependent oracle appends
     /// them: each `w·φ_i` summed in the columns' order. Returns false, writing nothing, when the
     /// committed weights are not k (+ 2 with `time`) many; `out` is cleared first and stays empty
-    /// before any statistics were committed. For 1 to 8 state features a row's products run
-    /// over a compile-time length ([`crate::oracle::FixedLinearBaseline`]: the loop unrolls), one pass in all.
+    /// before any statistics were committed. One pass; for 1 to 8 state features a row's
+    /// products run over a compile-time length ([`crate::oracle::FixedLinearBaseline`]: the loop
+    /// unrolls).
     pub fn baselines_from_rows(
         &self,
         (rows, stride): (&[S], usize),

@@ -250,12 +250,12 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
 
     /// The correction alone of [`EstimatorKernel::score_products`], `g −= Σ_i b_i ψ_i` over the
     /// first `decisions` decisions recorded in `records` for `features` (the scored ones: a
-    /// trajectory's last decision may be recorded and not scored), with each b_i formed from the decision's
-    /// own row of `features` ([`LinearBaseline::next`]: the state features are the policy's,
-    /// their first k) in the same pass that reads ψ_i. Returns true having subtracted, bit for
-    /// bit, what [`EstimatorKernel::score_products`] subtracts given those b_i; false, with `g`
-    /// untouched, when the policy has no such pass (the default) or none for this k, and the
-    /// caller forms the b_i itself.
+    /// trajectory's last decision may be recorded and not scored), with each b_i formed from
+    /// the decision's own row of `features` ([`LinearBaseline::next`]: the state features are
+    /// the policy's, their first k) in the same pass that reads ψ_i. Returns true having
+    /// subtracted, bit for bit, what [`EstimatorKernel::score_products`] subtracts given those
+    /// b_i; false, with `g` untouched, when the policy has no such pass (the default) or none
+    /// for this k, and the caller forms the b_i itself.
     fn state_baseline_correction(
         &self,
         features: &[S],

@@ -31,11 +31,6 @@ impl<'w, S: Scalar> LinearBaseline<'w, S> {
         Some(Self { state, time })
     }
 
-    /// k, the state features the weights take (each row's first k entries).
-    pub fn state_features(&self) -> usize {
-        self.state.len()
-    }
-
     /// The same baseline with k = K known at compile time (a row's products unroll); `None`
     /// when k is not K.
     pub fn fixed<const K: usize>(&self) -> Option<FixedLinearBaseline<'w, S, K>> {

@@ -399,9 +399,10 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         });
     }
 
-    /// For 1 to 8 features, with k all of them: per row b_i ([`super::FixedLinearBaseline::next`]),
-    /// then `g −= (b_i c_i) φ_i` with g in an `[S; N]` local, the operations of
-    /// [`EstimatorKernel::score_products`]'s correction in its order. Else false.
+    /// For 1 to 8 features, with k all of them: per row b_i
+    /// ([`super::FixedLinearBaseline::next`]), then `g −= (b_i c_i) φ_i` with g in an `[S; N]`
+    /// local, the operations of [`EstimatorKernel::score_products`]'s correction in its order.
+    /// Else false.
     fn state_baseline_correction(
         &self,
         features: &[S],
