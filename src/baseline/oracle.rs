@@ -536,25 +536,22 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
             let n = r.decisions();
             let take = running.takes_next();
             add_plain(inner, t, r, plain, g);
-            // A trajectory whose statistics are not taken: its correction in one pass that forms
-            // the baselines off the stored rows, when the problem has one.
+            // A trajectory whose statistics are not taken, when the problem stores its feature
+            // rows: its correction in one pass that forms the baselines off them, when the
+            // problem has one, else its baselines read off them. The statistics need the
+            // features by columns.
+            let mut from_rows = false;
             if !take
-                && inner.state_feature_rows(t, n).is_some_and(|(_, stride)| {
-                    leading_features(stride, *leading)
-                        .ok()
-                        .and_then(|k| LinearBaseline::new(running.weights(), k, *time))
-                        .is_some_and(|b| inner.recorded_state_correction(t, r, &b, g))
-                })
+                && let Some(rows) = inner.state_feature_rows(t, n)
+                && let Ok(k) = leading_features(rows.1, *leading)
             {
-                continue;
+                if LinearBaseline::new(running.weights(), k, *time)
+                    .is_some_and(|b| inner.recorded_state_correction(t, r, &b, g))
+                {
+                    continue;
+                }
+                from_rows = running.baselines_from_rows(rows, k, *time, n, baseline);
             }
-            // The statistics need the features by columns; else the baselines are read off the
-            // stored rows when the problem has them.
-            let from_rows = !take
-                && inner.state_feature_rows(t, n).is_some_and(|rows| {
-                    leading_features(rows.1, *leading)
-                        .is_ok_and(|k| running.baselines_from_rows(rows, k, *time, n, baseline))
-                });
             let k = if from_rows {
                 0
             } else {

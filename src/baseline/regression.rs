@@ -1,7 +1,7 @@
 //! [`RunningRegression`]: the variance-minimising state-dependent baseline `b(s) = w·φ_b(s)`,
 //! its weights estimated from earlier iterations only.
 
-use crate::oracle::{DecisionTerms, LinearBaseline};
+use crate::oracle::{DecisionTerms, LinearBaseline, by_feature_count};
 use crate::scalar::{Scalar, dot, norm_sq};
 
 /// Running estimates of the weights of the variance-minimising linear state-dependent baseline
@@ -157,22 +157,12 @@ impl<S: Scalar> RunningRegression<S> {
         }
         out.resize(n, S::zero());
         let rows = rows.chunks_exact(stride);
-        match k {
-            1 => add_row_baselines::<S, 1>(&baseline, rows, out),
-            2 => add_row_baselines::<S, 2>(&baseline, rows, out),
-            3 => add_row_baselines::<S, 3>(&baseline, rows, out),
-            4 => add_row_baselines::<S, 4>(&baseline, rows, out),
-            5 => add_row_baselines::<S, 5>(&baseline, rows, out),
-            6 => add_row_baselines::<S, 6>(&baseline, rows, out),
-            7 => add_row_baselines::<S, 7>(&baseline, rows, out),
-            8 => add_row_baselines::<S, 8>(&baseline, rows, out),
-            _ => {
-                let mut index = S::zero();
-                for (b, phi) in out.iter_mut().zip(rows) {
-                    *b = baseline.next(phi, &mut index);
-                }
+        by_feature_count!(k, K => add_row_baselines::<S, K>(&baseline, rows, out), _ => {
+            let mut index = S::zero();
+            for (b, phi) in out.iter_mut().zip(rows) {
+                *b = baseline.next(phi, &mut index);
             }
-        }
+        });
         true
     }
 
@@ -355,7 +345,7 @@ pub fn solve_symmetric<S: Scalar>(m: &mut [S], k: usize, w: &mut [S]) {
 }
 
 /// `out[i] = b_i` for the rows φ_i of `rows` (their first K entries), with K known at compile
-/// time so that the products of a row unroll ([`FixedLinearBaseline::next`]).
+/// time so that the products of a row unroll ([`crate::oracle::FixedLinearBaseline::next`]).
 fn add_row_baselines<'r, S: Scalar + 'r, const K: usize>(
     baseline: &LinearBaseline<'_, S>,
     rows: impl Iterator<Item = &'r [S]>,

@@ -47,12 +47,7 @@ impl<'w, S: Scalar> LinearBaseline<'w, S> {
     /// If `phi` has fewer than k entries.
     #[inline]
     pub fn next(&self, phi: &[S], index: &mut S) -> S {
-        let mut b = S::zero();
-        for (w, x) in self.state.iter().zip(&phi[..self.state.len()]) {
-            b += w.clone() * x;
-        }
-        add_time_terms(&mut b, self.time, index);
-        b
+        value(self.state, &phi[..self.state.len()], self.time, index)
     }
 }
 
@@ -67,23 +62,24 @@ impl<S: Scalar, const K: usize> FixedLinearBaseline<'_, S, K> {
     /// [`LinearBaseline::next`] for a row of K entries: the same value, bit for bit.
     #[inline(always)]
     pub fn next(&self, phi: &[S; K], index: &mut S) -> S {
-        let mut b = S::zero();
-        for (w, x) in self.state.iter().zip(phi) {
-            b += w.clone() * x;
-        }
-        add_time_terms(&mut b, self.time, index);
-        b
+        value(self.state, phi, self.time, index)
     }
 }
 
+/// `b = Σ_j w_j φ_j`, summed from 0 in the order of j, then with the time features
 /// `b += w_index·i + w_one·1` for the decision whose index `index` holds, which then moves on to
-/// the next (nothing without the time features). The product with 1 is kept: the columns route
-/// multiplies the column of ones.
+/// the next. The product with 1 is kept: the columns route multiplies the column of ones.
+/// Inlined, so that a caller's compile-time length unrolls the sum.
 #[inline(always)]
-fn add_time_terms<S: Scalar>(b: &mut S, time: Option<(&S, &S)>, index: &mut S) {
+fn value<S: Scalar>(w: &[S], phi: &[S], time: Option<(&S, &S)>, index: &mut S) -> S {
+    let mut b = S::zero();
+    for (w, x) in w.iter().zip(phi) {
+        b += w.clone() * x;
+    }
     if let Some((w_index, w_one)) = time {
-        *b += w_index.clone() * &*index;
-        *b += w_one.clone() * S::one();
+        b += w_index.clone() * &*index;
+        b += w_one.clone() * S::one();
         *index += S::one();
     }
+    b
 }

@@ -56,7 +56,7 @@ fn non_finite_logit<S: Scalar>(phi: &[S]) -> PolicyError {
 /// compile-time dimension: the loops unroll and the accumulators live in registers), else `$other`.
 macro_rules! by_feature_count {
     ($dim:expr, $n:ident => $fixed:expr, _ => $other:expr $(,)?) => {
-        by_feature_count!(@arms ($dim, $n, $fixed, $other) 1 2 3 4 5 6 7 8)
+        $crate::oracle::by_feature_count!(@arms ($dim, $n, $fixed, $other) 1 2 3 4 5 6 7 8)
     };
     (@arms ($dim:expr, $n:ident, $fixed:expr, $other:expr) $($k:literal)*) => {
         match $dim {
@@ -68,6 +68,7 @@ macro_rules! by_feature_count {
         }
     };
 }
+pub(crate) use by_feature_count;
 
 /// θ as an array of its `N` entries (the fixed-dimension passes' view).
 ///

@@ -45,6 +45,7 @@ pub use recorded_pass::RecordedPass;
 pub(crate) use baselined::baselined_pass;
 pub(crate) use causal::causal_pass;
 pub(crate) use full::full_pass;
+pub(crate) use logistic::by_feature_count;
 pub(crate) use recorded::{record_pass, sum_recorded};
 pub(crate) use terms::terms_pass;
 
