@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
-# Regenerate the appendix on a Slurm cluster: N shards as a job array, run twice (the report runs
-# need every row's tuning), then one merge job. The output directory must be on a file system
-# every node sees. Usage (from the repository root, after `cargo build --release -p paper-checks`):
+# Regenerate the appendix on a Slurm cluster: N shards as a job array, run PASSES times one after
+# the other (each pass advances every row's tuning by one rung of successive halving, an edge
+# extension starts the rungs again, and the report runs need every row's tuning: PASSES defaults
+# to 1 + rungs × (extensions + 1) of the full profile, 17), then one merge job. A pass with
+# nothing left to compute ends at once. The output directory must be on a file system every node
+# sees. Usage (from the repository root, after `cargo build --release -p paper-checks`):
 #
 #   paper-checks/scripts/slurm-shards.sh 16 out/appendix --full
 #
@@ -12,7 +15,10 @@ out="${2:?output directory}"
 shift 2
 bin="${PAPER_CHECKS:-target/release/paper-checks}"
 shard="$bin $* --quiet --out $out --shard \$((SLURM_ARRAY_TASK_ID))/$n"
-tuning=$(sbatch --parsable --array=1-"$n" --job-name=ilopt-tune --wrap "$shard")
-report=$(sbatch --parsable --array=1-"$n" --job-name=ilopt-report \
-  --dependency=afterok:"$tuning" --wrap "$shard")
-sbatch --dependency=afterok:"$report" --job-name=ilopt-merge --wrap "$bin $* --out $out merge"
+passes="${PASSES:-17}"
+previous=""
+for pass in $(seq "$passes"); do
+  previous=$(sbatch --parsable --array=1-"$n" --job-name=ilopt-pass-"$pass" \
+    ${previous:+--dependency=afterok:"$previous"} --wrap "$shard")
+done
+sbatch --dependency=afterok:"$previous" --job-name=ilopt-merge --wrap "$bin $* --out $out merge"

@@ -24,6 +24,9 @@ pub struct Profile {
     pub tuning_seeds: u32,
     /// Which size of the theorem-check suite to run: `"quick"`, `"full"` or `"none"` (skip it).
     pub theory_profile: String,
+    /// The tuning protocol's successive halving and edge extension ([`crate::tuning`]).
+    #[serde(default)]
+    pub tuning: TuningProtocol,
     /// Fig. 4.2.
     pub gradient_error: GradientError,
     /// Figs. 4.3–4.6, Tables 4.1/4.2.
@@ -33,6 +36,7 @@ pub struct Profile {
 }
 
 pub use crate::gradient_error::GradientError;
+pub use crate::tuning::TuningProtocol;
 
 /// One task's experiment: the learner, the evaluation, the convergence criterion, the algorithms.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -221,6 +225,11 @@ pub struct AlgorithmEntry {
     /// dimension varying slowest); empty: the config is used as it is.
     #[serde(default)]
     pub grid: Vec<GridDim>,
+    /// A grid made of several products (sub-grids), tried together: e.g. a constant step
+    /// schedule over (η, a) beside an adaptive one over its own constants. Exclusive with
+    /// `grid`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub grids: Vec<Vec<GridDim>>,
     /// Take the hyper-parameters (config and m) selected for the row of this label instead of
     /// tuning (control rows: the same method under another objective).
     #[serde(default)]
@@ -235,12 +244,40 @@ impl AlgorithmEntry {
             .unwrap_or_else(|| default_horizon(task_name))
     }
 
+    /// The row's grid as sub-grids: `grids`, or `grid` as the one product (none without a
+    /// grid).
+    pub fn subgrids(&self) -> Vec<Vec<GridDim>> {
+        if !self.grids.is_empty() {
+            self.grids.clone()
+        } else if self.grid.is_empty() {
+            Vec::new()
+        } else {
+            vec![self.grid.clone()]
+        }
+    }
+
+    /// Whether the row has a grid to tune.
+    pub fn has_grid(&self) -> bool {
+        !(self.grid.is_empty() && self.grids.is_empty())
+    }
+
     /// The row's grid points in grid order ([`crate::grid::points`]).
     ///
     /// # Errors
     /// As [`crate::grid::points`].
     pub fn grid_points(&self) -> Result<Vec<crate::grid::GridPoint>, String> {
-        crate::grid::points(&self.config, self.m, self.baseline.as_ref(), &self.grid)
+        self.points_of(&self.subgrids())
+    }
+
+    /// The points of `subgrids` (this row's grid, possibly extended) around the row's config.
+    ///
+    /// # Errors
+    /// As [`crate::grid::points`].
+    pub fn points_of(
+        &self,
+        subgrids: &[Vec<GridDim>],
+    ) -> Result<Vec<crate::grid::GridPoint>, String> {
+        crate::grid::points(&self.config, self.m, self.baseline.as_ref(), subgrids)
     }
 
     /// Whether the algorithm draws its gradients from the oracle (m applies), rather than
@@ -320,6 +357,9 @@ impl Profile {
         if self.tuning_seeds == 0 {
             return Err(field(file, "tuning_seeds", "must be at least 1"));
         }
+        self.tuning
+            .validate()
+            .map_err(|(name, reason)| field(file, &format!("tuning.{name}"), reason))?;
         if !matches!(self.theory_profile.as_str(), "quick" | "full" | "none") {
             return Err(field(
                 file,
@@ -457,7 +497,7 @@ impl Profile {
                             ),
                         ));
                     }
-                    if !a.grid.is_empty() {
+                    if a.has_grid() {
                         return Err(field(
                             file,
                             &format!("{here}.grid"),
@@ -466,6 +506,13 @@ impl Profile {
                     }
                 }
                 // The algorithm's own validation (names the hyper-parameter), at every grid point.
+                if !a.grid.is_empty() && !a.grids.is_empty() {
+                    return Err(field(
+                        file,
+                        &format!("{here}.grids"),
+                        "give either `grid` (one product) or `grids` (several), not both",
+                    ));
+                }
                 let points = a
                     .grid_points()
                     .map_err(|e| field(file, &format!("{here}.grid"), e))?;
@@ -478,7 +525,8 @@ impl Profile {
                         ));
                     }
                     if p.baseline != ilopt::baseline::Baseline::None {
-                        let where_ = if a.grid.iter().any(|d| d.path == "baseline") {
+                        let where_ = if a.subgrids().iter().flatten().any(|d| d.path == "baseline")
+                        {
                             format!("{here}.grid")
                         } else {
                             format!("{here}.baseline")

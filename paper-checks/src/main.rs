@@ -44,8 +44,10 @@ struct Args {
     #[arg(long, value_name = "SIZE", value_parser = ["quick", "full", "none"], global = true)]
     theory: Option<String>,
     /// Compute only shard K of N (e.g. `3/16`) of the tuning and report runs into the output
-    /// directory's unit store; run every shard twice (tuning first, then the report runs, which
-    /// need every row's tuning) and then `paper-checks merge`.
+    /// directory's unit store; run every shard in passes until it says its report runs are
+    /// stored (each pass advances every row's tuning by one rung of successive halving, and the
+    /// report runs need every row's tuning: at most 1 + rungs × (extensions + 1) passes), then
+    /// `paper-checks merge`.
     #[arg(long, value_name = "K/N", value_parser = Shard::parse)]
     shard: Option<Shard>,
     #[command(subcommand)]
@@ -111,7 +113,7 @@ fn main() -> ExitCode {
                     } else if r.tuning_complete {
                         "this shard's report runs are stored; merge when every shard has finished"
                     } else {
-                        "the tuning of other shards is not stored yet: run this shard again when they have finished, for its report runs"
+                        "the tuning needs units of other shards or of the next rung: run this shard again when the other shards have finished this pass"
                     }
                 ));
             }

@@ -160,7 +160,7 @@ pub fn write(
                 "m": p.m,
                 "baseline": p.baseline,
                 "grid_points": t.points.len(),
-                "selection_score": if t.dims.is_empty() { None } else { Some(t.points[t.selected].score) },
+                "selection_score": if t.dims.is_empty() { None } else { t.points[t.selected].score.clone() },
                 "tuning_seeds": t.points.iter().flat_map(|q| q.runs.iter().map(|x| x.seed)).collect::<Vec<_>>(),
             })
         })

@@ -17,6 +17,7 @@ pub mod data;
 pub mod doc;
 pub mod document;
 pub mod figures;
+pub mod sensitivity;
 pub mod speedup;
 pub mod tex;
 pub mod theory;
@@ -47,8 +48,8 @@ pub fn write(profile: &Profile, r: &Results, out: &Path, png: bool) -> Result<()
         .iter()
         .map(|c| aggregate::convergence_row(&c.0))
         .collect();
-    let cl = claims::claims(r, profile.cartpole.full_episode_cap);
-    let tcl = claims::timing_claims(r);
+    let cl = claims::claims(r, profile);
+    let tcl = claims::timing_claims(r, profile);
     data::write_tables(out, &obs, &cp, &cl)?;
     let figs = figures::figures(profile, r);
     let png_ok = figures::write_figures(&figs, &fig_dir, png)?;
@@ -64,5 +65,12 @@ pub fn write(profile: &Profile, r: &Results, out: &Path, png: bool) -> Result<()
         png: png_ok,
         machine: &machine,
     });
+    let sensitivity = sensitivity::write(r, &fig_dir, png_ok)?;
+    let mut blocks = blocks;
+    let at = blocks
+        .iter()
+        .position(|b| matches!(b, doc::Block::Table(t) if t.label == "tab:pc-sensitivity"))
+        .map_or(blocks.len(), |i| i + 1);
+    blocks.splice(at..at, sensitivity);
     document::write_documents(&blocks, out)
 }

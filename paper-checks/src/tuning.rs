@@ -1,28 +1,48 @@
 //! The pre-registered hyper-parameter protocol.
 //!
-//! **Grid.** Each algorithm row of a profile may carry a `grid`: dimensions, each a dotted path
-//! into the row's [`AlgorithmConfig`](ilopt::algo::AlgorithmConfig) (its JSON form) or `"m"` (trajectories per gradient through
-//! [`ilopt::batched::Batched`]), with the values tried. The grid is their Cartesian product, the
-//! first dimension varying slowest ([`crate::grid::points`]); the grid order is the profile's order.
+//! **Grid.** Each algorithm row of a profile may carry a `grid` (one product of dimensions) or
+//! `grids` (several products tried together): dimensions are dotted paths into the row's
+//! [`AlgorithmConfig`](ilopt::algo::AlgorithmConfig) (its JSON form), `"m"` (trajectories per
+//! gradient through [`ilopt::batched::Batched`]) or `"baseline"`, each with a list of values or
+//! a log range over the half-decade series ([`crate::grid::GridDim`]).
 //!
 //! **Tuning seeds.** Every grid point is run on `tuning_seeds` seeds whose RNG seeds are derived
 //! from the key `"tuning|<run key>"` ([`tuning_seed`]) and whose evaluation episodes come from
 //! the key `"<task>-tuning-eval"`; the report runs use `"<run key>"` and `"<task>-eval"`. The
 //! pipeline checks that no tuning seed equals a report seed before it runs anything.
 //!
-//! **Selection rule** ([`selection_score`], [`select`]): the median over the tuning seeds of the
-//! gradient calls at the sustained-convergence checkpoint, a run that did not converge or diverged
-//! counting `2 × budget`; the smallest median wins, ties go to the first point in grid order. A
-//! tuning run stops at sustained convergence or divergence (the rule needs nothing later). The
-//! thesis's numbers never enter: the rule reads only the tuning runs.
+//! **Score** ([`Score`], lexicographic, [`Score::cmp_better`]): first the median over the tuning
+//! seeds of the gradient calls to sustained convergence (+∞ for a run that did not converge or
+//! diverged); then, among points tied there (including "nothing converged"), the larger mean over
+//! the seeds of the area under the learning curve ([`area_under_curve`]: the mean score over the
+//! checkpoints, a diverged run scoring 0 from the point it diverged); then the smaller step (the
+//! point's first log dimension); then the fewer trajectories per gradient. A tie that survives
+//! all four is broken by the point's text and *reported* as a tie ([`TuningResult::tie`]).
+//! There is no first-in-grid tie-break.
 //!
-//! Every point's result is kept ([`TuningResult`]) and published as the appendix's sensitivity
-//! table; the selected point is recorded in the provenance.
+//! **Successive halving** (Jamieson & Talwalkar 2016; the rung schedule of Hyperband, Li et al.
+//! 2018; [`TuningProtocol`]): every point runs to the first rung's budget, the best
+//! ⌈n / `halving`⌉ by the score at that budget go on to the next rung — with every point tied
+//! with the last of them on the two run-reading keys, so that a rung that cannot tell points
+//! apart eliminates none — and so on; the last rung is the whole budget. A run is deterministic in its key, so a run to a larger budget repeats
+//! the shorter one and extends it; a run that converged or diverged at a lower rung is not run
+//! again (its result at any larger budget is the same).
+//!
+//! **Edge extension**: when the pick lies on an end of one of its log dimensions, that dimension
+//! grows by the next value of the series beyond the end and the selection is made again over
+//! the grown grid, up to `extensions` times. Every round is recorded ([`Round`]); a pick still
+//! on an edge after the last round, or one whose tuning runs never converged, is reported as
+//! such and caps the verdicts of the claims its row enters ([`TuningResult::weakness`]).
+//!
+//! Tuning runs stop at sustained convergence or divergence (the score needs nothing later: the
+//! curve of a converged run is carried at its last score). The thesis's numbers never enter: the
+//! rule reads only the tuning runs.
 
 use crate::experiment::{RunStatus, TaskKind};
 use crate::grid::GridPoint;
 use crate::stats::derive_seed;
 use serde::{Deserialize, Serialize};
+use std::cmp::Ordering;
 
 /// The RNG seed of tuning seed `index` of a run key: the key namespace `"tuning|…"`, disjoint
 /// in construction from the report seeds' `"<run key>"` (and checked by the pipeline).
@@ -35,21 +55,181 @@ pub fn tuning_eval_key(kind: TaskKind, seed_index: u32) -> String {
     format!("{}-tuning-eval|{seed_index}", kind.name())
 }
 
-/// The selection statistic of one grid point: the median over its runs of the gradient calls at
-/// sustained convergence, `2 × budget` for a run that did not converge or diverged.
-pub fn selection_score(statuses: &[RunStatus], budget: u64) -> f64 {
-    let mut xs: Vec<f64> = statuses
-        .iter()
-        .map(|s| match s {
-            RunStatus::Converged {
-                gradient_evaluations,
-                ..
-            } => *gradient_evaluations as f64,
-            _ => 2.0 * budget as f64,
+/// The profile's successive-halving schedule and edge-extension limit (`[tuning]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TuningProtocol {
+    /// The rungs' budgets as fractions of the task's budget, increasing, the last 1; each is
+    /// rounded up to a whole number of checkpoint intervals ([`TuningProtocol::rung_budgets`]).
+    /// Default `[1]`: every point runs to the whole budget (exhaustive tuning).
+    #[serde(default = "default_rungs")]
+    pub rungs: Vec<f64>,
+    /// At each rung the best ⌈n / `halving`⌉ points go on (default 3; at least 2).
+    #[serde(default = "default_halving")]
+    pub halving: u32,
+    /// How many rounds of edge extension a row may take (default 0).
+    #[serde(default)]
+    pub extensions: u32,
+}
+
+fn default_rungs() -> Vec<f64> {
+    vec![1.0]
+}
+
+fn default_halving() -> u32 {
+    3
+}
+
+impl Default for TuningProtocol {
+    fn default() -> Self {
+        TuningProtocol {
+            rungs: default_rungs(),
+            halving: default_halving(),
+            extensions: 0,
+        }
+    }
+}
+
+impl TuningProtocol {
+    /// Check the schedule.
+    ///
+    /// # Errors
+    /// `(field, reason)` for empty or non-increasing rungs, a rung outside (0, 1], a last rung
+    /// other than 1, or `halving` below 2.
+    pub fn validate(&self) -> Result<(), (String, String)> {
+        let bad = |f: &str, r: &str| Err((f.to_string(), r.to_string()));
+        if self.rungs.is_empty() {
+            return bad("rungs", "must list at least one fraction (the last 1)");
+        }
+        if self
+            .rungs
+            .iter()
+            .any(|f| !(f.is_finite() && *f > 0.0 && *f <= 1.0))
+        {
+            return bad("rungs", "every fraction must lie in (0, 1]");
+        }
+        if self.rungs.windows(2).any(|w| w[0] >= w[1]) {
+            return bad("rungs", "the fractions must increase");
+        }
+        if *self.rungs.last().unwrap_or(&0.0) != 1.0 {
+            return bad("rungs", "the last rung must be 1 (the whole budget)");
+        }
+        if self.halving < 2 {
+            return bad("halving", "must be at least 2");
+        }
+        Ok(())
+    }
+
+    /// The rungs' budgets in gradient calls for a task with this budget and checkpoint
+    /// interval: each fraction of the budget rounded up to a multiple of `every` (so that a
+    /// rung's checkpoints are the first of the whole run's), at most the budget, repeats
+    /// dropped.
+    pub fn rung_budgets(&self, budget: u64, every: u64) -> Vec<u64> {
+        let mut out: Vec<u64> = Vec::new();
+        for f in &self.rungs {
+            let raw = (f * budget as f64).ceil() as u64;
+            let b = raw
+                .div_ceil(every.max(1))
+                .saturating_mul(every.max(1))
+                .min(budget);
+            if out.last() != Some(&b) {
+                out.push(b);
+            }
+        }
+        out
+    }
+
+    /// How many points go on from a rung of `n` points: ⌈n / halving⌉.
+    pub fn kept(&self, n: usize) -> usize {
+        n.div_ceil(self.halving.max(2) as usize)
+    }
+}
+
+/// One tuning run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct TuningRun {
+    /// Tuning seed index.
+    pub seed_index: u32,
+    /// Its RNG seed.
+    pub seed: u64,
+    /// The budget it was run to (a rung's).
+    pub budget: u64,
+    /// How it ended.
+    pub status: RunStatus,
+    /// Gradient calls when it stopped.
+    pub gradient_evaluations: u64,
+    /// The score at each checkpoint reached, in order (calls 0, `every`, 2·`every`, …).
+    pub scores: Vec<f64>,
+    /// The gradient calls actually spent at each of those checkpoints (a step may overshoot).
+    pub calls: Vec<u64>,
+}
+
+impl TuningRun {
+    /// Score of its last checkpoint.
+    pub fn last_score(&self) -> Option<f64> {
+        self.scores.last().copied()
+    }
+
+    /// Whether the run's result at a larger budget is this one: it converged or diverged.
+    pub fn is_final(&self) -> bool {
+        !matches!(self.status, RunStatus::NotConverged)
+    }
+
+    /// This run as the same seed's run to `budget` would have been (runs are deterministic in
+    /// their key, and a run to a smaller budget is the first part of a run to a larger one):
+    /// itself when it converged or diverged by then; its first checkpoints, not converged,
+    /// when it ran past `budget`; `None` when it stopped short of `budget` without converging
+    /// or diverging (it must be run again).
+    pub fn at_budget(&self, budget: u64, every: u64) -> Option<TuningRun> {
+        let n = checkpoint_count(budget, every);
+        if self.is_final() && self.scores.len() <= n {
+            return Some(TuningRun {
+                budget,
+                ..self.clone()
+            });
+        }
+        if self.budget < budget || self.scores.len() < n {
+            return None;
+        }
+        Some(TuningRun {
+            budget,
+            status: RunStatus::NotConverged,
+            gradient_evaluations: self.calls.get(n - 1).copied().unwrap_or(0),
+            scores: self.scores[..n].to_vec(),
+            calls: self.calls[..n.min(self.calls.len())].to_vec(),
+            ..self.clone()
         })
-        .collect();
+    }
+}
+
+/// The number of checkpoints of a run to `budget` with checkpoints every `every` calls: the
+/// call counts 0, `every`, 2·`every`, … below the budget, and the budget.
+pub fn checkpoint_count(budget: u64, every: u64) -> usize {
+    (budget.div_ceil(every.max(1)) + 1) as usize
+}
+
+/// The area under a run's learning curve up to `budget`: the mean of its scores over the
+/// [`checkpoint_count`] checkpoints, where the checkpoints after a divergence score 0 and those
+/// after sustained convergence (where a tuning run stops) keep the last score.
+pub fn area_under_curve(run: &TuningRun, budget: u64, every: u64) -> f64 {
+    let n = checkpoint_count(budget, every);
+    if n == 0 {
+        return 0.0;
+    }
+    let fill = match run.status {
+        RunStatus::Diverged { .. } => 0.0,
+        _ => run.last_score().unwrap_or(0.0),
+    };
+    let sum: f64 = (0..n)
+        .map(|i| run.scores.get(i).copied().unwrap_or(fill))
+        .sum();
+    sum / n as f64
+}
+
+/// The median of `xs` (+∞ entries allowed; NaN for none).
+fn median(mut xs: Vec<f64>) -> f64 {
     if xs.is_empty() {
-        return f64::INFINITY;
+        return f64::NAN;
     }
     xs.sort_by(f64::total_cmp);
     let n = xs.len();
@@ -60,44 +240,150 @@ pub fn selection_score(statuses: &[RunStatus], budget: u64) -> f64 {
     }
 }
 
-/// The selected point: the smallest score, ties to the first in grid order.
-pub fn select(scores: &[f64]) -> usize {
-    let mut best = 0;
-    for (i, s) in scores.iter().enumerate() {
-        if s.total_cmp(&scores[best]).is_lt() {
-            best = i;
+/// A grid point's lexicographic tuning score at one budget (module docs).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Score {
+    /// The budget the runs were scored at.
+    pub budget: u64,
+    /// Median over the seeds of the calls to sustained convergence (+∞: not converged or
+    /// diverged; serialised as `null`).
+    #[serde(with = "infinite_as_null")]
+    pub median_calls: f64,
+    /// Mean over the seeds of [`area_under_curve`].
+    pub auc: f64,
+    /// The point's step: its first log dimension's value (+∞ when it has none).
+    #[serde(with = "infinite_as_null")]
+    pub step: f64,
+    /// Trajectories per gradient.
+    pub m: usize,
+    /// Runs converged / diverged (of the seeds).
+    pub converged: usize,
+    /// Runs that diverged.
+    pub diverged: usize,
+}
+
+mod infinite_as_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+    pub fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if x.is_finite() {
+            s.serialize_f64(*x)
+        } else {
+            s.serialize_none()
         }
     }
-    best
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::INFINITY))
+    }
 }
 
-/// One tuning run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TuningRun {
-    /// Tuning seed index.
-    pub seed_index: u32,
-    /// Its RNG seed.
-    pub seed: u64,
-    /// How it ended.
-    pub status: RunStatus,
-    /// Gradient calls when it stopped.
-    pub gradient_evaluations: u64,
-    /// Score of its last checkpoint.
-    pub last_score: Option<f64>,
+impl Score {
+    /// The score of `point`'s runs at `budget` (checkpoints every `every` calls).
+    pub fn of(point: &GridPoint, runs: &[TuningRun], budget: u64, every: u64) -> Self {
+        let calls: Vec<f64> = runs
+            .iter()
+            .map(|r| match r.status {
+                RunStatus::Converged {
+                    gradient_evaluations,
+                    ..
+                } if gradient_evaluations <= budget => gradient_evaluations as f64,
+                _ => f64::INFINITY,
+            })
+            .collect();
+        let converged = calls.iter().filter(|c| c.is_finite()).count();
+        let auc = if runs.is_empty() {
+            0.0
+        } else {
+            runs.iter()
+                .map(|r| area_under_curve(r, budget, every))
+                .sum::<f64>()
+                / runs.len() as f64
+        };
+        Score {
+            budget,
+            median_calls: median(calls),
+            auc,
+            step: point_step(point),
+            m: point.m,
+            converged,
+            diverged: runs.iter().filter(|r| r.status.is_diverged()).count(),
+        }
+    }
+
+    /// `Less` when `self` is the better score: fewer median calls, then the larger area, then
+    /// the smaller step, then the fewer trajectories per gradient.
+    pub fn cmp_better(&self, other: &Score) -> Ordering {
+        self.median_calls
+            .total_cmp(&other.median_calls)
+            .then(other.auc.total_cmp(&self.auc))
+            .then(self.step.total_cmp(&other.step))
+            .then(self.m.cmp(&other.m))
+    }
+
+    /// Whether the two scores tie on the two keys that read the runs (median calls and area).
+    pub fn ties_on_runs(&self, other: &Score) -> bool {
+        self.median_calls.total_cmp(&other.median_calls).is_eq()
+            && self.auc.total_cmp(&other.auc).is_eq()
+    }
 }
 
-/// One grid point's tuning runs and statistic.
+/// A point's step: the value of its first log dimension ([`crate::grid::GridDim::is_log`]),
+/// recorded in the point's values; +∞ when it has none.
+fn point_step(point: &GridPoint) -> f64 {
+    point
+        .log_dims
+        .first()
+        .and_then(|path| point.values.iter().find(|(p, _)| p == path))
+        .and_then(|(_, v)| v.as_f64())
+        .unwrap_or(f64::INFINITY)
+}
+
+/// The order of `scored` (index, score, text) from best to worst: [`Score::cmp_better`], then
+/// the point's text (a deterministic last resort, reported as a tie).
+pub fn ranking(scored: &[(usize, &Score, String)]) -> Vec<usize> {
+    let mut order: Vec<&(usize, &Score, String)> = scored.iter().collect();
+    order.sort_by(|a, b| a.1.cmp_better(b.1).then_with(|| a.2.cmp(&b.2)));
+    order.into_iter().map(|x| x.0).collect()
+}
+
+/// One grid point's tuning runs and score at the highest rung it reached.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PointResult {
     /// The point.
     pub point: GridPoint,
-    /// Its runs, in seed order.
+    /// Its runs at that rung, in seed order.
     pub runs: Vec<TuningRun>,
-    /// [`selection_score`] of the runs.
-    pub score: f64,
+    /// Its score there (absent for a row without a grid).
+    pub score: Option<Score>,
+    /// The highest rung it reached (0-based).
+    pub rung: usize,
 }
 
-/// A row's whole tuning: every grid point and the one selected.
+/// One rung of one round of successive halving.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RungRecord {
+    /// Its budget in gradient calls.
+    pub budget: u64,
+    /// How many points ran at it.
+    pub points: usize,
+    /// How many went on to the next rung (the pick, at the last).
+    pub kept: usize,
+}
+
+/// One round of selection: successive halving over the grid as it stood, and the extension
+/// the pick asked for.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Round {
+    /// The grid's size in points.
+    pub points: usize,
+    /// The rungs.
+    pub rungs: Vec<RungRecord>,
+    /// The pick (its text).
+    pub pick: String,
+    /// The dimensions extended after this round (`path: from … to` as grown).
+    pub extended: Vec<String>,
+}
+
+/// A row's whole tuning: every grid point tried and the one selected.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct TuningResult {
     /// The task.
@@ -106,20 +392,64 @@ pub struct TuningResult {
     pub label: String,
     /// Reuse key.
     pub key_hash: String,
-    /// The grid's dimensions (paths) in order.
+    /// The grid's dimensions (paths) in order, over every sub-grid.
     pub dims: Vec<String>,
-    /// Every point, in grid order.
+    /// Every point tried, in grid order of the final grid.
     pub points: Vec<PointResult>,
     /// Index of the selected point.
     pub selected: usize,
-    /// The budget the statistic is relative to.
+    /// The task's budget (the last rung's).
     pub budget: u64,
+    /// The rounds of selection (empty for a row without a grid).
+    #[serde(default)]
+    pub rounds: Vec<Round>,
+    /// The log dimensions on whose end the pick still lies after the last round.
+    #[serde(default)]
+    pub on_edge: Vec<String>,
+    /// The points the pick tied with on both run-reading keys (median calls and area).
+    #[serde(default)]
+    pub tied_with: Vec<String>,
+    /// How many tuning seeds each point ran.
+    #[serde(default)]
+    pub tuning_seeds: u32,
 }
 
 impl TuningResult {
     /// The selected point.
     pub fn chosen(&self) -> &GridPoint {
         &self.points[self.selected].point
+    }
+
+    /// Whether this row was tuned (it has a grid of its own).
+    pub fn is_tuned(&self) -> bool {
+        !self.rounds.is_empty()
+    }
+
+    /// Why the pick cannot carry a "not reproduced": no tuning run of the pick converged, the
+    /// pick lies on an edge of its grid after extension, or fewer than 3 tuning seeds; `None`
+    /// when none applies or the row was not tuned.
+    pub fn weakness(&self) -> Option<String> {
+        if !self.is_tuned() {
+            return None;
+        }
+        let mut why = Vec::new();
+        let chosen = &self.points[self.selected];
+        if chosen.score.as_ref().is_some_and(|s| s.converged == 0) {
+            why.push("no tuning run of its pick converged".to_string());
+        }
+        if !self.on_edge.is_empty() {
+            why.push(format!(
+                "its pick lies on an edge of {} after extension",
+                self.on_edge.join(", ")
+            ));
+        }
+        if self.tuning_seeds < 3 {
+            why.push(format!(
+                "{} tuning seed(s), fewer than 3",
+                self.tuning_seeds
+            ));
+        }
+        (!why.is_empty()).then(|| why.join("; "))
     }
 }
 
@@ -141,6 +471,7 @@ mod tests {
             )
             .unwrap(),
             grid,
+            grids: Vec::new(),
             hyper_parameters_of: None,
         }
     }
@@ -148,37 +479,28 @@ mod tests {
     #[test]
     fn grid_is_the_product_in_order() {
         let e = entry(vec![
-            GridDim {
-                path: "alpha".into(),
-                values: vec![0.001.into(), 0.01.into()],
-            },
-            GridDim {
-                path: "m".into(),
-                values: vec![1.into(), 16.into()],
-            },
+            GridDim::list("alpha", vec![0.001.into(), 0.01.into()]),
+            GridDim::list("m", vec![1.into(), 16.into()]),
         ]);
         let pts = e.grid_points().unwrap();
         assert_eq!(pts.len(), 4);
         assert_eq!(pts[1].m, 16);
         assert_eq!(pts[1].describe(), "alpha=0.001, m=16");
         assert_eq!(pts[2].describe(), "alpha=0.01, m=1");
-        let bad = entry(vec![GridDim {
-            path: "alhpa".into(),
-            values: vec![0.1.into()],
-        }]);
+        let bad = entry(vec![GridDim::list("alhpa", vec![0.1.into()])]);
         assert!(bad.grid_points().unwrap_err().contains("alhpa"));
     }
 
     #[test]
     fn a_baseline_grid_dimension_sets_the_points_baseline_and_keys_name_it() {
         use ilopt::baseline::Baseline;
-        let mut e = entry(vec![GridDim {
-            path: "baseline".into(),
-            values: vec![
+        let mut e = entry(vec![GridDim::list(
+            "baseline",
+            vec![
                 serde_json::json!({"kind": "none"}),
                 serde_json::json!({"kind": "leave-one-out"}),
             ],
-        }]);
+        )]);
         e.m = Some(16);
         let pts = e.grid_points().unwrap();
         assert_eq!(pts[0].baseline, Baseline::None);
@@ -198,10 +520,7 @@ mod tests {
         assert!(!key(&Baseline::None).contains("baseline"));
         assert!(key(&Baseline::LeaveOneOut).ends_with(r#"|baseline={"kind":"leave-one-out"}"#));
         // A baseline fixed outside the grid is named in the point's description.
-        e.grid = vec![GridDim {
-            path: "alpha".into(),
-            values: vec![0.01.into()],
-        }];
+        e.grid = vec![GridDim::list("alpha", vec![0.01.into()])];
         e.baseline = Some(Baseline::LeaveOneOut);
         assert_eq!(
             e.grid_points().unwrap()[0].describe(),
@@ -209,25 +528,216 @@ mod tests {
         );
     }
 
+    fn run(status: RunStatus, scores: &[f64]) -> TuningRun {
+        TuningRun {
+            seed_index: 0,
+            seed: 0,
+            budget: 400,
+            gradient_evaluations: 0,
+            scores: scores.to_vec(),
+            calls: (0..scores.len() as u64).map(|i| 100 * i + 3).collect(),
+            status,
+        }
+    }
+
     #[test]
-    fn selection_takes_the_median_with_failures_at_twice_the_budget() {
-        let c = |g| RunStatus::Converged {
+    fn a_run_at_a_smaller_budget_is_the_first_part_of_a_longer_one() {
+        // Run to 400 (checkpoints at 0..=400 every 100), not converged.
+        let long = run(RunStatus::NotConverged, &[0.1, 0.2, 0.3, 0.4, 0.5]);
+        let short = long.at_budget(200, 100).unwrap();
+        assert_eq!(short.scores, vec![0.1, 0.2, 0.3]);
+        assert_eq!((short.budget, short.gradient_evaluations), (200, 203));
+        assert_eq!(short.status, RunStatus::NotConverged);
+        // A longer budget than it ran needs a new run, unless it had ended.
+        assert!(long.at_budget(800, 100).is_none());
+        let mut d = run(div(), &[0.5, 1.0]);
+        d.budget = 200;
+        assert_eq!(d.at_budget(800, 100).unwrap().status, div());
+        // Converged at the third checkpoint (the window ended at 200): converged at 200 and
+        // later, not converged at 100 (its window had not ended).
+        let mut c = run(conv(0), &[0.9, 0.9, 0.9]);
+        c.budget = 400;
+        assert!(c.at_budget(200, 100).unwrap().status.is_converged());
+        assert!(c.at_budget(800, 100).unwrap().status.is_converged());
+        let early = c.at_budget(100, 100).unwrap();
+        assert_eq!(early.status, RunStatus::NotConverged);
+        assert_eq!(early.scores, vec![0.9, 0.9]);
+    }
+
+    fn conv(calls: u64) -> RunStatus {
+        RunStatus::Converged {
             checkpoint: 1,
-            gradient_evaluations: g,
-        };
-        let d = RunStatus::Diverged {
+            gradient_evaluations: calls,
+        }
+    }
+
+    fn div() -> RunStatus {
+        RunStatus::Diverged {
             reason: "x".into(),
-            gradient_evaluations: 5,
-        };
-        assert_eq!(selection_score(&[c(10), c(30), c(20)], 100), 20.0);
-        // A diverged run is never counted converged: it counts 2 × budget.
-        assert_eq!(selection_score(&[c(10), d.clone(), d], 100), 200.0);
-        assert_eq!(
-            selection_score(&[c(10), RunStatus::NotConverged], 100),
-            105.0
+            gradient_evaluations: 150,
+        }
+    }
+
+    fn point(eta: f64, m: usize) -> GridPoint {
+        let e = entry(vec![
+            GridDim::log("alpha", eta, eta),
+            GridDim::list("m", vec![m.into()]),
+        ]);
+        e.grid_points().unwrap().remove(0)
+    }
+
+    #[test]
+    fn the_area_fills_diverged_runs_with_zero_and_converged_ones_with_their_last_score() {
+        // Budget 400, every 100: checkpoints at 0, 100, 200, 300, 400.
+        assert_eq!(checkpoint_count(400, 100), 5);
+        assert_eq!(checkpoint_count(450, 100), 6);
+        let close = |a: f64, b: f64| assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+        let d = run(div(), &[0.5, 1.0]);
+        close(area_under_curve(&d, 400, 100), 1.5 / 5.0);
+        let c = run(conv(100), &[0.0, 1.0, 0.5]);
+        close(
+            area_under_curve(&c, 400, 100),
+            (0.0 + 1.0 + 0.5 * 3.0) / 5.0,
         );
-        assert_eq!(select(&[200.0, 50.0, 50.0]), 1);
-        assert_eq!(select(&[200.0, 200.0]), 0);
+        let n = run(RunStatus::NotConverged, &[0.1, 0.2, 0.3, 0.4, 0.5]);
+        close(area_under_curve(&n, 400, 100), 0.3);
+        // At a lower rung only the first checkpoints count.
+        close(area_under_curve(&n, 200, 100), 0.2);
+    }
+
+    #[test]
+    fn the_score_is_lexicographic_median_then_area_then_step_then_m() {
+        let p = point(1e-3, 1);
+        // Median calls over three seeds; a diverged or unconverged run counts +∞.
+        let s = Score::of(
+            &p,
+            &[run(conv(300), &[]), run(conv(100), &[]), run(div(), &[])],
+            400,
+            100,
+        );
+        assert_eq!((s.median_calls, s.converged, s.diverged), (300.0, 2, 1));
+        let s = Score::of(
+            &p,
+            &[
+                run(conv(100), &[]),
+                run(div(), &[]),
+                run(RunStatus::NotConverged, &[]),
+            ],
+            400,
+            100,
+        );
+        assert!(s.median_calls.is_infinite());
+        // Convergence after the scored budget does not count at a lower rung.
+        let late = Score::of(&p, &[run(conv(300), &[])], 200, 100);
+        assert!(late.median_calls.is_infinite());
+        assert_eq!(s.step, 1e-3);
+        let base = Score {
+            budget: 400,
+            median_calls: f64::INFINITY,
+            auc: 0.5,
+            step: 1e-3,
+            m: 16,
+            converged: 0,
+            diverged: 0,
+        };
+        let with = |f: &dyn Fn(&mut Score)| {
+            let mut x = base.clone();
+            f(&mut x);
+            x
+        };
+        let faster = with(&|x| x.median_calls = 300.0);
+        let higher = with(&|x| x.auc = 0.6);
+        let smaller = with(&|x| x.step = 1e-4);
+        let fewer = with(&|x| x.m = 1);
+        assert_eq!(faster.cmp_better(&higher), Ordering::Less);
+        assert_eq!(higher.cmp_better(&smaller), Ordering::Less);
+        assert_eq!(smaller.cmp_better(&fewer), Ordering::Less);
+        assert_eq!(fewer.cmp_better(&base), Ordering::Less);
+        assert_eq!(base.cmp_better(&base.clone()), Ordering::Equal);
+        assert!(base.ties_on_runs(&smaller) && !base.ties_on_runs(&higher));
+        // The ranking never depends on the grid order: only on the scores and the texts.
+        let a = (0, &base, "b".to_string());
+        let b = (1, &higher, "a".to_string());
+        let c = (2, &base, "a".to_string());
+        assert_eq!(ranking(&[a.clone(), b.clone(), c.clone()]), vec![1, 2, 0]);
+        assert_eq!(ranking(&[c, a, b]), vec![1, 2, 0]);
+    }
+
+    #[test]
+    fn a_pick_is_weak_without_convergence_on_an_edge_or_with_few_seeds() {
+        let p = point(1e-3, 1);
+        let converged = Score::of(&p, &[run(conv(100), &[])], 400, 100);
+        let never = Score::of(&p, &[run(RunStatus::NotConverged, &[])], 400, 100);
+        let result = |score: Score, on_edge: Vec<String>, seeds: u32| TuningResult {
+            task: TaskKind::Obstacle,
+            label: "SGD".into(),
+            key_hash: String::new(),
+            dims: vec!["alpha".into()],
+            points: vec![PointResult {
+                point: p.clone(),
+                runs: vec![],
+                score: Some(score),
+                rung: 0,
+            }],
+            selected: 0,
+            budget: 400,
+            rounds: vec![Round {
+                points: 1,
+                rungs: vec![],
+                pick: String::new(),
+                extended: vec![],
+            }],
+            on_edge,
+            tied_with: vec![],
+            tuning_seeds: seeds,
+        };
+        assert_eq!(result(converged.clone(), vec![], 3).weakness(), None);
+        let w = result(never, vec![], 3).weakness().unwrap();
+        assert!(w.contains("no tuning run"), "{w}");
+        let w = result(converged.clone(), vec!["alpha (upper end)".into()], 3)
+            .weakness()
+            .unwrap();
+        assert!(w.contains("edge of alpha (upper end)"), "{w}");
+        let w = result(converged.clone(), vec![], 2).weakness().unwrap();
+        assert!(w.contains("fewer than 3"), "{w}");
+        // A row that was not tuned (no rounds) carries no weakness.
+        let mut untuned = result(converged, vec![], 1);
+        untuned.rounds.clear();
+        assert_eq!(untuned.weakness(), None);
+    }
+
+    #[test]
+    fn rung_budgets_are_whole_checkpoint_intervals_and_the_schedule_is_validated() {
+        let p = TuningProtocol {
+            rungs: vec![1.0 / 9.0, 1.0 / 3.0, 1.0],
+            halving: 3,
+            extensions: 2,
+        };
+        assert_eq!(p.validate(), Ok(()));
+        assert_eq!(
+            p.rung_budgets(2_000_000, 200_000),
+            vec![400_000, 800_000, 2_000_000]
+        );
+        // Rounding up may merge rungs.
+        assert_eq!(p.rung_budgets(300, 100), vec![100, 300]);
+        assert_eq!((p.kept(26), p.kept(9), p.kept(1)), (9, 3, 1));
+        for (bad, field) in [
+            (vec![], "rungs"),
+            (vec![0.5, 0.5, 1.0], "rungs"),
+            (vec![0.0, 1.0], "rungs"),
+            (vec![0.5], "rungs"),
+        ] {
+            let q = TuningProtocol {
+                rungs: bad,
+                ..p.clone()
+            };
+            assert_eq!(q.validate().unwrap_err().0, field);
+        }
+        let q = TuningProtocol {
+            halving: 1,
+            ..p.clone()
+        };
+        assert_eq!(q.validate().unwrap_err().0, "halving");
     }
 }
 

@@ -72,8 +72,25 @@ fn progress_for(profile: &Profile, opts: &Options) -> Progress {
     let tuning_total: usize = tasks
         .iter()
         .flat_map(|t| &t.algorithms)
-        .filter(|e| !e.grid.is_empty() && e.hyper_parameters_of.is_none())
-        .map(|e| e.grid_points().map_or(0, |p| p.len()) * profile.tuning_seeds as usize)
+        .filter(|e| e.has_grid() && e.hyper_parameters_of.is_none())
+        .map(|e| {
+            // Successive halving without extensions: n points at the first rung, ⌈n/halving⌉
+            // at the next, … (runs that ended at a lower rung are not run again).
+            let mut n = e.grid_points().map_or(0, |p| p.len());
+            let mut total = 0;
+            let rungs = profile
+                .tuning
+                .rung_budgets(profile.obstacle.budget.max(1), 1)
+                .len()
+                .min(profile.tuning.rungs.len());
+            for r in 0..rungs {
+                total += n;
+                if r + 1 < rungs {
+                    n = profile.tuning.kept(n);
+                }
+            }
+            total * profile.tuning_seeds as usize
+        })
         .sum();
     let report_total: usize =
         tasks.iter().map(|t| t.algorithms.len()).sum::<usize>() * profile.seeds as usize;

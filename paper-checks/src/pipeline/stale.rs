@@ -29,7 +29,7 @@ pub fn remove_stale(
     ] {
         for e in &t.algorithms {
             let stem = format!("{}-{}.json", kind.name(), slug(&e.label));
-            if !e.grid.is_empty() && e.hyper_parameters_of.is_none() {
+            if e.has_grid() && e.hyper_parameters_of.is_none() {
                 keep_runs.push(format!("tuning-{stem}"));
             }
             keep_runs.push(stem.clone());

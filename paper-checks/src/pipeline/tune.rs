@@ -4,7 +4,7 @@
 use super::Options;
 use super::benches::Benches;
 use super::keys::tuning_key;
-use crate::config::{AlgorithmEntry, Profile};
+use crate::config::{AlgorithmEntry, Profile, TaskSection};
 use crate::error::Error;
 use crate::experiment::{RunSpec, TaskKind, run_key_of, run_spec};
 use crate::grid::GridPoint;
@@ -13,9 +13,11 @@ use crate::progress::Progress;
 use crate::shard::{Mode, Units, unit_key};
 use crate::storage::{read_json, to_json, write_atomic};
 use crate::tuning::{
-    PointResult, TuningResult, TuningRun, select, selection_score, tuning_eval_key, tuning_seed,
+    PointResult, Round, RungRecord, Score, TuningResult, TuningRun, ranking, tuning_eval_key,
+    tuning_seed,
 };
 use rayon::prelude::*;
+use std::collections::HashMap;
 
 /// A row with the hyper-parameters of `p` (no grid left).
 pub(super) fn at_point(e: &AlgorithmEntry, p: &GridPoint) -> AlgorithmEntry {
@@ -27,6 +29,7 @@ pub(super) fn at_point(e: &AlgorithmEntry, p: &GridPoint) -> AlgorithmEntry {
         b => Some(b.clone()),
     };
     x.grid.clear();
+    x.grids.clear();
     x
 }
 
@@ -42,7 +45,7 @@ pub(super) fn tune(
 ) -> Result<Option<Vec<TuningResult>>, Error> {
     let runs_dir = opts.out.join("runs");
     let mut out: Vec<Option<TuningResult>> = Vec::new();
-    // (slot, task, section, entry, key, file, points)
+    // (slot, task, section, entry, key, file)
     let mut todo = Vec::new();
     for (kind, t) in [
         (TaskKind::Obstacle, &profile.obstacle),
@@ -54,7 +57,7 @@ pub(super) fn tune(
                 .map_err(|m| Error::experiment(&e.label, m))?;
             let key = tuning_key(profile, kind, t, e, &opts.source_version);
             let file = runs_dir.join(format!("tuning-{}-{}.json", kind.name(), slug(&e.label)));
-            if e.grid.is_empty() || e.hyper_parameters_of.is_some() {
+            if !e.has_grid() || e.hyper_parameters_of.is_some() {
                 out.push(Some(TuningResult {
                     task: kind,
                     label: e.label.clone(),
@@ -65,11 +68,16 @@ pub(super) fn tune(
                         .map(|point| PointResult {
                             point,
                             runs: Vec::new(),
-                            score: f64::NAN,
+                            score: None,
+                            rung: 0,
                         })
                         .collect(),
                     selected: 0,
                     budget: t.budget,
+                    rounds: Vec::new(),
+                    on_edge: Vec::new(),
+                    tied_with: Vec::new(),
+                    tuning_seeds: 0,
                 }));
                 continue;
             }
@@ -77,7 +85,7 @@ pub(super) fn tune(
             match cached {
                 Some(c) if c.key_hash == key => out.push(Some(c)),
                 _ => {
-                    todo.push((out.len(), kind, t, e, key, file, points));
+                    todo.push((out.len(), kind, t, e, key, file));
                     out.push(None);
                 }
             }
@@ -85,80 +93,19 @@ pub(super) fn tune(
     }
     let computed = todo
         .par_iter()
-        .map(|(slot, kind, t, e, key, file, points)| {
-            let h = e.horizon(t, kind.name());
-            let bench = benches.get(*kind, h);
-            let jobs: Vec<(usize, u32)> = (0..points.len())
-                .flat_map(|i| (0..profile.tuning_seeds).map(move |s| (i, s)))
-                .collect();
-            let unit_keys: Vec<String> = jobs
-                .iter()
-                .map(|(i, s)| unit_key(key, &format!("point={i}|seed={s}")))
-                .collect();
-            let runs = jobs
-                .par_iter()
-                .zip(&unit_keys)
-                .map(|(&(i, s), ukey)| {
-                    units.get(ukey, || {
-                        let p = &points[i];
-                        let rk = run_key_of(*kind, &e.label, &p.config, p.m, h, &p.baseline);
-                        let seed = tuning_seed(&rk, s);
-                        let (run, _) = run_spec(
-                            bench,
-                            &RunSpec {
-                                kind: *kind,
-                                task: t,
-                                config: &p.config,
-                                m: p.m,
-                                baseline: p.baseline.clone(),
-                                key: format!("tuning|{rk}"),
-                                seed,
-                                seed_index: s,
-                                eval_key: tuning_eval_key(*kind, s),
-                                stop_at_convergence: true,
-                                hyper_parameters: p.describe(),
-                            },
-                        )?;
-                        progress.seed_done(&format!("tuning {} / {}", kind.name(), e.label));
-                        Ok(TuningRun {
-                            seed_index: s,
-                            seed,
-                            gradient_evaluations: run
-                                .checkpoints
-                                .last()
-                                .map_or(0, |c| c.gradient_evaluations),
-                            last_score: run.checkpoints.last().map(|c| c.score),
-                            status: run.status,
-                        })
-                    })
-                })
-                .collect::<Result<Vec<_>, Error>>()?;
-            let Some(runs) = runs.into_iter().collect::<Option<Vec<_>>>() else {
-                return Ok((*slot, None));
+        .map(|(slot, kind, t, e, key, file)| {
+            let row = Row {
+                profile,
+                benches,
+                progress,
+                units,
+                kind: *kind,
+                task: t,
+                entry: e,
+                key,
             };
-            let mut it = runs.into_iter();
-            let points: Vec<PointResult> = points
-                .iter()
-                .map(|p| {
-                    let runs: Vec<TuningRun> =
-                        it.by_ref().take(profile.tuning_seeds as usize).collect();
-                    let statuses: Vec<_> = runs.iter().map(|r| r.status.clone()).collect();
-                    PointResult {
-                        point: p.clone(),
-                        score: selection_score(&statuses, t.budget),
-                        runs,
-                    }
-                })
-                .collect();
-            let scores: Vec<f64> = points.iter().map(|p| p.score).collect();
-            let r = TuningResult {
-                task: *kind,
-                label: e.label.clone(),
-                key_hash: key.clone(),
-                dims: e.grid.iter().map(|d| d.path.clone()).collect(),
-                selected: select(&scores),
-                points,
-                budget: t.budget,
+            let Some((r, unit_keys)) = row.tune()? else {
+                return Ok((*slot, None));
             };
             // Shards never write assembled files: two of them could assemble the same row.
             if !matches!(units.mode(), Mode::Shard(_)) {
@@ -204,13 +151,285 @@ pub(super) fn tune(
                 r.points = vec![PointResult {
                     point: p,
                     runs: Vec::new(),
-                    score: f64::NAN,
+                    score: None,
+                    rung: 0,
                 }];
                 r.selected = 0;
             }
         }
     }
     Ok(Some(all))
+}
+
+/// One row's tuning: rounds of successive halving over its grid, the grid grown at the pick's
+/// log edges between rounds ([`crate::tuning`]).
+struct Row<'a> {
+    profile: &'a Profile,
+    benches: &'a Benches,
+    progress: &'a Progress,
+    units: &'a Units,
+    kind: TaskKind,
+    task: &'a TaskSection,
+    entry: &'a AlgorithmEntry,
+    key: &'a str,
+}
+
+/// The longest run so far of each (run key, tuning seed).
+type Memo = HashMap<(String, u32), TuningRun>;
+
+impl Row<'_> {
+    /// The row's tuning and the unit keys it read, `None` when a unit is missing (a shard's
+    /// pass, or a merge before every shard has run).
+    fn tune(&self) -> Result<Option<(TuningResult, Vec<String>)>, Error> {
+        let (kind, t, e) = (self.kind, self.task, self.entry);
+        let protocol = &self.profile.tuning;
+        let seeds = self.profile.tuning_seeds;
+        let budgets = protocol.rung_budgets(t.budget, t.checkpoint_every);
+        let h = e.horizon(t, kind.name());
+        let mut grids = e.subgrids();
+        let mut memo = Memo::new();
+        let mut unit_keys = Vec::new();
+        let mut rounds = Vec::new();
+        loop {
+            let points = e
+                .points_of(&grids)
+                .map_err(|m| Error::experiment(&e.label, m))?;
+            let texts: Vec<String> = points.iter().map(GridPoint::describe).collect();
+            let rks: Vec<String> = points
+                .iter()
+                .map(|p| run_key_of(kind, &e.label, &p.config, p.m, h, &p.baseline))
+                .collect();
+            let mut reached: Vec<Option<PointResult>> = vec![None; points.len()];
+            let mut alive: Vec<usize> = (0..points.len()).collect();
+            let mut rungs = Vec::new();
+            for (r, &b) in budgets.iter().enumerate() {
+                let jobs: Vec<(usize, u32)> = alive
+                    .iter()
+                    .flat_map(|&i| (0..seeds).map(move |s| (i, s)))
+                    .collect();
+                let got = jobs
+                    .par_iter()
+                    .map(|&(i, s)| self.run_at(&memo, &points[i], &rks[i], s, b, h))
+                    .collect::<Result<Vec<_>, Error>>()?;
+                let mut by_point: HashMap<usize, Vec<TuningRun>> = HashMap::new();
+                for (&(i, s), g) in jobs.iter().zip(got) {
+                    let Some((run, ukey)) = g else {
+                        return Ok(None);
+                    };
+                    unit_keys.extend(ukey);
+                    let slot = memo
+                        .entry((rks[i].clone(), s))
+                        .or_insert_with(|| run.clone());
+                    if slot.scores.len() < run.scores.len() || (!slot.is_final() && run.is_final())
+                    {
+                        *slot = run.clone();
+                    }
+                    by_point.entry(i).or_default().push(run);
+                }
+                let scored: Vec<(usize, Score)> = alive
+                    .iter()
+                    .map(|&i| {
+                        let runs = &by_point[&i];
+                        (i, Score::of(&points[i], runs, b, t.checkpoint_every))
+                    })
+                    .collect();
+                for (i, score) in &scored {
+                    reached[*i] = Some(PointResult {
+                        point: points[*i].clone(),
+                        runs: by_point[i].clone(),
+                        score: Some(score.clone()),
+                        rung: r,
+                    });
+                }
+                let order = ranking(
+                    &scored
+                        .iter()
+                        .map(|(i, sc)| (*i, sc, texts[*i].clone()))
+                        .collect::<Vec<_>>(),
+                );
+                let last = r + 1 == budgets.len();
+                let score_of = |i: usize| &scored.iter().find(|x| x.0 == i).expect("scored").1;
+                let keep = if last {
+                    1
+                } else {
+                    // The best ⌈n/halving⌉, and every point tied with the last of them on the
+                    // run-reading keys: a rung that cannot tell points apart eliminates none of
+                    // them (the step tie-break is for the final pick, not for promotion).
+                    let k = protocol.kept(alive.len());
+                    let cutoff = score_of(order[k - 1]);
+                    k + order[k..]
+                        .iter()
+                        .take_while(|&&i| score_of(i).ties_on_runs(cutoff))
+                        .count()
+                };
+                rungs.push(RungRecord {
+                    budget: b,
+                    points: alive.len(),
+                    kept: keep,
+                });
+                alive = order.into_iter().take(keep).collect();
+                alive.sort_unstable();
+            }
+            let pick = alive[0];
+            // The pick's log dimensions at an end of their range.
+            let sub = grids[points[pick].subgrid].clone();
+            let mut edges: Vec<(usize, bool)> = Vec::new();
+            for (d, dim) in sub.iter().enumerate() {
+                let (Some(from), Some(to)) = (dim.from, dim.to) else {
+                    continue;
+                };
+                let v = points[pick]
+                    .values
+                    .iter()
+                    .find(|(p, _)| p == &dim.path)
+                    .and_then(|(_, v)| v.as_f64());
+                if v == Some(from) {
+                    edges.push((d, false));
+                }
+                if v == Some(to) {
+                    edges.push((d, true));
+                }
+            }
+            let may_extend = rounds.len() < protocol.extensions as usize;
+            let mut extended = Vec::new();
+            if may_extend {
+                let g = points[pick].subgrid;
+                for &(d, up) in &edges {
+                    if let Some(grown) = grids[g][d].extended(up) {
+                        extended.push(format!(
+                            "{} {} to {}",
+                            grown.path,
+                            if up { "up" } else { "down" },
+                            if up {
+                                grown.to.unwrap_or(f64::NAN)
+                            } else {
+                                grown.from.unwrap_or(f64::NAN)
+                            }
+                        ));
+                        grids[g][d] = grown;
+                    }
+                }
+            }
+            rounds.push(Round {
+                points: points.len(),
+                rungs,
+                pick: texts[pick].clone(),
+                extended: extended.clone(),
+            });
+            if extended.is_empty() {
+                let final_score = reached[pick]
+                    .as_ref()
+                    .and_then(|p| p.score.clone())
+                    .ok_or_else(|| Error::experiment(&e.label, "the pick has no score"))?;
+                let tied_with = reached
+                    .iter()
+                    .flatten()
+                    .filter(|p| p.point.index != pick)
+                    .filter(|p| {
+                        p.score.as_ref().is_some_and(|s| {
+                            s.budget == final_score.budget && s.ties_on_runs(&final_score)
+                        })
+                    })
+                    .map(|p| p.point.describe())
+                    .collect();
+                let on_edge = edges
+                    .iter()
+                    .map(|&(d, up)| {
+                        format!(
+                            "{} ({} end)",
+                            sub[d].path,
+                            if up { "upper" } else { "lower" }
+                        )
+                    })
+                    .collect();
+                let points: Vec<PointResult> = reached.into_iter().flatten().collect();
+                let selected = points
+                    .iter()
+                    .position(|p| p.point.index == pick)
+                    .unwrap_or(0);
+                unit_keys.sort();
+                unit_keys.dedup();
+                return Ok(Some((
+                    TuningResult {
+                        task: kind,
+                        label: e.label.clone(),
+                        key_hash: self.key.to_string(),
+                        dims: grids.iter().flatten().map(|d| d.path.clone()).collect(),
+                        points,
+                        selected,
+                        budget: t.budget,
+                        rounds,
+                        on_edge,
+                        tied_with,
+                        tuning_seeds: seeds,
+                    },
+                    unit_keys,
+                )));
+            }
+        }
+    }
+
+    /// Tuning seed `s` of `point` to the budget `b`: from the memo when a run there covers it
+    /// (a longer run, or one that converged or diverged before `b`), else from its unit.
+    /// `None` when the unit is neither stored nor computed by this process.
+    fn run_at(
+        &self,
+        memo: &Memo,
+        point: &GridPoint,
+        rk: &str,
+        s: u32,
+        b: u64,
+        h: ilopt::task::Horizon,
+    ) -> Result<Option<(TuningRun, Option<String>)>, Error> {
+        let every = self.task.checkpoint_every;
+        if let Some(prev) = memo.get(&(rk.to_string(), s))
+            && let Some(run) = prev.at_budget(b, every)
+        {
+            return Ok(Some((run, None)));
+        }
+        let ukey = unit_key(self.key, &format!("point={rk}|seed={s}|budget={b}"));
+        let got = self.units.get(&ukey, || {
+            let mut task = self.task.clone();
+            task.budget = b;
+            let seed = tuning_seed(rk, s);
+            let bench = self.benches.get(self.kind, h);
+            let (run, _) = run_spec(
+                bench,
+                &RunSpec {
+                    kind: self.kind,
+                    task: &task,
+                    config: &point.config,
+                    m: point.m,
+                    baseline: point.baseline.clone(),
+                    key: format!("tuning|{rk}"),
+                    seed,
+                    seed_index: s,
+                    eval_key: tuning_eval_key(self.kind, s),
+                    stop_at_convergence: true,
+                    hyper_parameters: point.describe(),
+                },
+            )?;
+            self.progress.seed_done(&format!(
+                "tuning {} / {}",
+                self.kind.name(),
+                self.entry.label
+            ));
+            Ok(TuningRun {
+                seed_index: s,
+                seed,
+                budget: b,
+                gradient_evaluations: run.checkpoints.last().map_or(0, |c| c.gradient_evaluations),
+                scores: run.checkpoints.iter().map(|c| c.score).collect(),
+                calls: run
+                    .checkpoints
+                    .iter()
+                    .map(|c| c.gradient_evaluations)
+                    .collect(),
+                status: run.status,
+            })
+        })?;
+        Ok(got.map(|run| (run, Some(ukey))))
+    }
 }
 
 /// Every tuning seed of the results (the seeds actually used, or those a grid would use).

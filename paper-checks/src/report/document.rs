@@ -497,7 +497,7 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
                     c.claim.clone(),
                     c.rule.clone(),
                     c.evidence.clone(),
-                    format!("**{}**", c.verdict.text()),
+                    format!("**{}**", c.verdict_text()),
                 ]
             })
             .collect(),

@@ -7,7 +7,7 @@ use super::doc::{Block, Table};
 use crate::config::{Profile, Role, TaskSection};
 use crate::experiment::{RunStatus, TaskKind};
 use crate::results::Results;
-use crate::tuning::TuningResult;
+use crate::tuning::{Score, TuningResult};
 
 fn strings(xs: &[&str]) -> Vec<String> {
     xs.iter().map(|s| (*s).to_string()).collect()
@@ -28,16 +28,62 @@ fn section(profile: &Profile, kind: TaskKind) -> &TaskSection {
     }
 }
 
-/// A selection statistic as text: calls, or "2 × budget" when the median tuning run did not
-/// converge (or diverged).
-pub fn score_text(score: f64, budget: u64) -> String {
-    if !score.is_finite() {
-        "—".into()
-    } else if score >= 2.0 * budget as f64 {
-        "2 × budget (median run not converged)".into()
-    } else {
-        num(score)
+/// A tuning score as text: the median calls to sustained convergence (or "none converged"),
+/// and the area under the learning curve.
+pub fn score_text(score: Option<&Score>) -> String {
+    match score {
+        None => "—".into(),
+        Some(s) => format!(
+            "{}; area {}",
+            if s.median_calls.is_finite() {
+                format!("median {} calls", num(s.median_calls))
+            } else {
+                "median not converged".into()
+            },
+            num(s.auc)
+        ),
     }
+}
+
+/// How a tuned row's pick was reached: the rounds (each with its rungs and extensions), where
+/// the pick lies, and its ties.
+pub fn selection_text(t: &TuningResult) -> String {
+    let rounds: Vec<String> = t
+        .rounds
+        .iter()
+        .enumerate()
+        .map(|(k, round)| {
+            let rungs: Vec<String> = round
+                .rungs
+                .iter()
+                .map(|g| format!("{}→{} at {}", g.points, g.kept, num(g.budget as f64)))
+                .collect();
+            let ext = if round.extended.is_empty() {
+                String::new()
+            } else {
+                format!("; extended {}", round.extended.join(", "))
+            };
+            format!("round {}: {}{ext}", k + 1, rungs.join(", "))
+        })
+        .collect();
+    let place = if t.on_edge.is_empty() {
+        "interior".to_string()
+    } else {
+        format!("on an edge: {}", t.on_edge.join(", "))
+    };
+    let ties = if t.tied_with.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; tied on calls and area with {} (broken by the smaller step, then m)",
+            t.tied_with.len()
+        )
+    };
+    format!(
+        "{}; {}; {place}{ties}",
+        rounds.join("; "),
+        score_text(t.points[t.selected].score.as_ref())
+    )
 }
 
 fn counts(statuses: &[&RunStatus]) -> String {
@@ -98,16 +144,35 @@ fn protocol_list(profile: &Profile) -> Vec<String> {
             }
         ));
     }
+    let p = &profile.tuning;
     out.push(format!(
-        "**Tuning (pre-registered in the committed profile).** Each row's grid is run on {} tuning \
-         seeds whose RNG seeds and evaluation episodes come from their own key namespace (checked \
-         disjoint from the {} report seeds before any report run). Rule: the median over tuning seeds \
-         of the gradient calls at sustained convergence, a run that did not converge or diverged \
-         counting 2 × budget; the smallest median wins, ties to the first point in grid order. The \
-         thesis's numbers never enter (when every point scores 2 × budget the rule selects the first \
-         point in grid order). Tuning runs stop at sustained convergence or divergence. \
-         Rows borrowing another row's selection say so.",
-        profile.tuning_seeds, profile.seeds
+        "**Tuning (pre-registered in the committed profile, protocol v2).** Each row's grid is run \
+         on {} tuning seeds whose RNG seeds and evaluation episodes come from their own key \
+         namespace (checked disjoint from the {} report seeds before any report run). Step sizes \
+         run over log ranges (…, 10⁻³, 3·10⁻³, 10⁻², … or powers of ten). **Score**, \
+         lexicographic: (1) the median over tuning seeds of the gradient calls to sustained \
+         convergence (a run that did not converge or diverged counts +∞); (2) among points tied \
+         there, including \"nothing converged\", the larger mean area under the learning curve \
+         (the mean score over the checkpoints; a diverged run scores 0 from the point it \
+         diverged, a converged tuning run, which stops there, keeps its last score); (3) the \
+         smaller step; (4) the fewer trajectories per gradient. Grid order never decides: a tie \
+         that survives (1)–(2) is reported. **Successive halving** over the rungs {} of the \
+         budget: every point runs to the first rung, the best ⌈n/{}⌉ go on to the next (with \
+         every point tied with the last of them), the last rung is the whole budget. **Edge \
+         extension**: a pick on an end of a log range grows that range by its next value and the \
+         selection is made again, up to {} time(s). A pick whose tuning runs never converged, \
+         one still on an edge after extension, or fewer than 3 tuning seeds make every \"not \
+         reproduced\" of the claims its row enters \"inconclusive (tuning)\". The thesis's \
+         numbers never enter. Rows borrowing another row's selection say so.",
+        profile.tuning_seeds,
+        profile.seeds,
+        p.rungs
+            .iter()
+            .map(|f| num(*f))
+            .collect::<Vec<_>>()
+            .join(", "),
+        p.halving,
+        p.extensions
     ));
     out
 }
@@ -126,12 +191,8 @@ fn selected_table(profile: &Profile, r: &Results) -> Table {
             .collect();
         let how = match entry.and_then(|e| e.hyper_parameters_of.clone()) {
             Some(of) => format!("as selected for {of}"),
-            None if t.dims.is_empty() => "as configured (no grid)".into(),
-            None => format!(
-                "tuned over {} points: median {}",
-                t.points.len(),
-                score_text(t.points[t.selected].score, t.budget)
-            ),
+            None if !t.is_tuned() => "as configured (no grid)".into(),
+            None => format!("{} points tried; {}", t.points.len(), selection_text(t)),
         };
         rows.push(vec![
             t.task.name().to_string(),
@@ -160,20 +221,25 @@ fn selected_table(profile: &Profile, r: &Results) -> Table {
             "report runs: converged / not / diverged",
         ]),
         rows,
-        spec: "llp{1.5cm}p{4cm}p{3cm}p{2.5cm}l".into(),
+        spec: "llp{1.5cm}p{3cm}p{3cm}p{4.5cm}l".into(),
     }
 }
 
 fn sensitivity_table(tuning: &[TuningResult]) -> Table {
     let mut rows = Vec::new();
-    for t in tuning.iter().filter(|t| !t.dims.is_empty()) {
+    for t in tuning.iter().filter(|t| t.is_tuned()) {
         for (i, p) in t.points.iter().enumerate() {
             let st: Vec<&RunStatus> = p.runs.iter().map(|r| &r.status).collect();
             rows.push(vec![
                 t.task.name().to_string(),
                 t.label.clone(),
                 format!("`{}`", p.point.describe()),
-                score_text(p.score, t.budget),
+                format!(
+                    "{} (rung {}, {} calls)",
+                    score_text(p.score.as_ref()),
+                    p.rung + 1,
+                    num(p.score.as_ref().map_or(0.0, |s| s.budget as f64))
+                ),
                 counts(&st),
                 if i == t.selected {
                     "**selected**".into()
@@ -185,9 +251,10 @@ fn sensitivity_table(tuning: &[TuningResult]) -> Table {
     }
     Table {
         caption: Some(
-            "Sensitivity: every grid point's tuning result (the whole pre-registered grid, in grid \
-             order). STORM rows tune the schedule as a grid dimension: `kind=constant` (η, a) and \
-             `kind=adaptive` (Algorithm 4's schedule with E9 corrected, k' = w = 0.1, c as listed):"
+            "Sensitivity: every grid point tried (the pre-registered grid and its extensions, in \
+             grid order), scored at the highest rung of successive halving it reached. STORM rows \
+             tune the schedule: `kind=constant` (η, a) beside `kind=adaptive` (Algorithm 4's \
+             schedule with E9 corrected, its constants as listed):"
                 .into(),
         ),
         label: "tab:pc-sensitivity".into(),
@@ -195,7 +262,7 @@ fn sensitivity_table(tuning: &[TuningResult]) -> Table {
             "task",
             "row",
             "grid point",
-            "median calls to sustained convergence",
+            "score: median calls to sustained convergence; area under the curve",
             "tuning runs: converged / not / diverged",
             "",
         ]),
