@@ -242,10 +242,10 @@ const LANDSCAPE_RATIO: f64 = 257.0 / 170.0;
 /// Fit a table to the line width ([`LINE_PT`]). The estimate counts characters: about 64
 /// characters of `\small` text fit in 345 pt (10 pt article), less each column's
 /// padding (2\tabcolsep ≈ 2.7 characters), more at smaller sizes. A table whose natural widths
-/// fit at `\small`, `\footnotesize` or `\scriptsize` keeps `l`/`r` columns at the first of
-/// them; otherwise its columns wrap ([`shared_widths`]) at `\footnotesize` (or the largest
+/// fit at `\small` or `\footnotesize` keeps `l`/`r` columns at the first of them; otherwise its columns wrap ([`shared_widths`]) at `\footnotesize` (or the largest
 /// size at which the longest words fit, with 3 pt column padding at the smallest), on a
-/// landscape page when that halves rows taller than [`LANDSCAPE_LINES`] or nothing else fits.
+/// landscape page when that shortens rows taller than [`LANDSCAPE_LINES`] by a third or
+/// nothing else fits.
 /// Columns are right-aligned where `spec` says `r`.
 pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> ColumnLayout {
     let n = header.len().max(1);
@@ -293,8 +293,9 @@ pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> Col
         ),
     ];
     let budget = |(_, line, pad): (&str, f64, f64)| line - pad * n as f64;
-    // A table whose natural widths fit at some portrait size keeps l/r columns (one line a row).
-    if let Some(&(size, _, _)) = sizes[..3]
+    // A table whose natural widths fit at \small or \footnotesize keeps l/r columns (one line
+    // a row); \scriptsize is kept for tables that cannot be set larger.
+    if let Some(&(size, _, _)) = sizes[..2]
         .iter()
         .find(|&&sz| natural.iter().sum::<f64>() <= budget(sz))
     {
@@ -310,7 +311,7 @@ pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> Col
     // Otherwise wrapped columns: at \footnotesize when the longest words fit (smaller text is
     // harder to read than an extra line), else the largest size at which they do; a landscape
     // page when even then a row would average more than LANDSCAPE_LINES lines and the wider
-    // line halves that.
+    // line saves a third of them.
     let fits = |k: usize| minimum.iter().sum::<f64>() <= budget(sizes[k]);
     let mut pick = (1..sizes.len())
         .find(|&k| fits(k))
@@ -318,7 +319,7 @@ pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> Col
     let lines = |k: usize| row_lines(&shared_widths(&natural, &minimum, budget(sizes[k])), rows);
     if pick < sizes.len() - 1 {
         let portrait = lines(pick);
-        if portrait > LANDSCAPE_LINES && lines(sizes.len() - 1) * 2.0 <= portrait {
+        if portrait > LANDSCAPE_LINES && lines(sizes.len() - 1) <= LANDSCAPE_GAIN * portrait {
             pick = sizes.len() - 1;
         }
     }
@@ -357,8 +358,11 @@ fn own_number(counter: &str, number: Option<&str>) -> String {
 }
 
 /// Rows of a table average more lines than this (estimated at the portrait size): a landscape
-/// page, if it halves them.
+/// page, if it brings them down to [`LANDSCAPE_GAIN`] of that.
 const LANDSCAPE_LINES: f64 = 3.0;
+
+/// See [`LANDSCAPE_LINES`].
+const LANDSCAPE_GAIN: f64 = 0.7;
 
 /// Share `total` characters out among columns of these natural and minimum widths:
 /// columns narrower than an equal share keep their natural width, the others share the rest in
@@ -405,8 +409,12 @@ fn shared_widths(natural: &[f64], minimum: &[f64], total: f64) -> Vec<f64> {
     width
 }
 
+/// The part of a ragged-right line that words fill on average (a line breaks before the word
+/// that would overflow it).
+const RAGGED_FILL: f64 = 0.85;
+
 /// The mean over rows of each row's estimated height in lines (its tallest cell's characters
-/// over its column's width).
+/// over the characters that fill its column's lines).
 fn row_lines(width: &[f64], rows: &[Vec<String>]) -> f64 {
     if rows.is_empty() {
         return 1.0;
@@ -416,7 +424,11 @@ fn row_lines(width: &[f64], rows: &[Vec<String>]) -> f64 {
         .map(|r| {
             r.iter()
                 .zip(width)
-                .map(|(c, w)| (visible_len(c) as f64 / w.max(1.0)).ceil().max(1.0))
+                .map(|(c, w)| {
+                    (visible_len(c) as f64 / (RAGGED_FILL * w).max(1.0))
+                        .ceil()
+                        .max(1.0)
+                })
                 .fold(1.0, f64::max)
         })
         .sum();
@@ -603,5 +615,31 @@ mod tests {
             "{t}"
         );
         assert!(!t.contains("thesis Fig"), "{t}");
+    }
+
+    /// Short tables keep one line a row; a table of long descriptions wraps at \footnotesize,
+    /// and goes to a landscape page when its rows would be tall.
+    #[test]
+    fn tables_wrap_at_a_readable_size_and_turn_when_rows_are_tall() {
+        let h = |v: &[&str]| v.iter().map(|s| (*s).to_string()).collect::<Vec<_>>();
+        let short = column_layout(&h(&["a", "b"]), &[h(&["1", "2"])], "lr");
+        assert_eq!((short.size, short.landscape), ("\\small", false));
+        assert_eq!(short.columns, ["l", "r"]);
+        let words = "word ".repeat(30);
+        let two = column_layout(
+            &h(&["#", "text", "verdict"]),
+            &[h(&["C1", &words, "not reproduced"])],
+            "lll",
+        );
+        assert_eq!((two.size, two.landscape), ("\\footnotesize", false));
+        assert!(two.columns[1].contains("p{"), "{:?}", two.columns);
+        let long = "description ".repeat(25);
+        let cells: Vec<String> = (0..6).map(|_| long.clone()).collect();
+        let tall = column_layout(
+            &h(&["a", "b", "c", "d", "e", "f"]),
+            &[cells.clone(), cells],
+            "llllll",
+        );
+        assert!(tall.landscape, "{tall:?}");
     }
 }
