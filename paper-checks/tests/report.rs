@@ -640,3 +640,44 @@ fn latex_figures_float_but_stay_in_their_section() {
     assert!(!standalone.contains("float,"), "{standalone}");
     assert!(standalone.contains("\\input{appendix}"));
 }
+
+/// A curve with diverged runs says so in its panel title and draws a cross where each stopped;
+/// the figure's note explains the cross.
+#[test]
+fn diverged_runs_are_marked_in_titles_and_with_crosses() {
+    let mut f = capped_panels();
+    f.series[1].runs = 3;
+    f.series[1].diverged = 2;
+    f.series[1].diverged_at = vec![(0.4, 100.0), (2.0, 150.0)];
+    let crosses = f.diverged_points();
+    assert_eq!(
+        crosses[1],
+        vec![(0.4, 100.0), (2.0, 100.0)],
+        "clamped to the range"
+    );
+    assert!(crosses[0].is_empty());
+    let svg = f.to_svg().expect("draws");
+    let label = format!("{} (diverged 2/3)", ALGORITHMS[1]);
+    let texts = svg_texts(&svg);
+    assert!(texts.iter().any(|t| t.contains(&label)), "{texts:?}");
+    assert!(
+        texts.iter().any(|t| t.contains("× marks a diverged run")),
+        "{texts:?}"
+    );
+    // Without diverged runs: neither the label nor the note.
+    let plain = capped_panels().to_svg().expect("draws");
+    assert!(!plain.contains("diverged"));
+    // One plot with a legend: the legend entry carries the count.
+    let mut single = capped_panels();
+    single.panels = None;
+    single.series[0].runs = 4;
+    single.series[0].diverged = 1;
+    single.series[0].diverged_at = vec![(1.0, 50.0)];
+    let svg = single.to_svg().expect("draws");
+    assert!(
+        svg_texts(&svg)
+            .iter()
+            .any(|t| t.contains(&format!("{} (diverged 1/4)", ALGORITHMS[0]))),
+        "{svg}"
+    );
+}

@@ -194,3 +194,31 @@ pub(super) fn draw_title(
     }
     Ok(())
 }
+
+/// A large cross at each point of `v` (axis units, drawn at the chart's pixel coordinates): where
+/// a run diverged. In the series' colour with a white halo, so it stands out from the markers
+/// and bands.
+pub(super) fn draw_crosses(
+    chart: &Chart<'_, '_>,
+    root: &Area<'_>,
+    v: &[(f64, f64)],
+    st: &Style,
+) -> DrawResult {
+    let r = 9;
+    let halo = ShapeStyle::from(&WHITE).stroke_width(6);
+    let stroke = ShapeStyle::from(&st.color).stroke_width(3);
+    for p in v {
+        let (x, y) = chart.backend_coord(p);
+        for style in [halo, stroke] {
+            root.draw(&PathElement::new(
+                vec![(x - r, y - r), (x + r, y + r)],
+                style,
+            ))?;
+            root.draw(&PathElement::new(
+                vec![(x - r, y + r), (x + r, y - r)],
+                style,
+            ))?;
+        }
+    }
+    Ok(())
+}

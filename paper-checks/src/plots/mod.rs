@@ -46,6 +46,12 @@ pub struct Series {
     /// Checkpoints left out because they lie off the evaluation schedule (the last checkpoint of
     /// a run that stopped early); the figure notes them.
     pub off_schedule: usize,
+    /// Runs behind the curve (0 for a reference line).
+    pub runs: usize,
+    /// Runs that diverged: the legend or panel title says "(diverged k/n)".
+    pub diverged: usize,
+    /// Where each diverged run stopped, `(x, y)` of its last checkpoint: drawn as a cross.
+    pub diverged_at: Vec<(f64, f64)>,
 }
 
 impl Series {
@@ -60,6 +66,19 @@ impl Series {
             reference: false,
             non_finite: 0,
             off_schedule: 0,
+            runs: 0,
+            diverged: 0,
+            diverged_at: vec![],
+        }
+    }
+
+    /// The label shown in the legend or panel title: the label, and "(diverged k/n)" when runs
+    /// diverged.
+    pub fn shown_label(&self) -> String {
+        if self.diverged > 0 {
+            format!("{} (diverged {}/{})", self.label, self.diverged, self.runs)
+        } else {
+            self.label.clone()
         }
     }
 }
@@ -236,7 +255,47 @@ impl Figure {
                 off.join(", ")
             ));
         }
+        if self.series.iter().any(|s| s.diverged > 0) {
+            notes.push(
+                "× marks a diverged run at its last checkpoint (its value there); after it the curve is over the other seeds"
+                    .into(),
+            );
+        }
         (all, notes)
+    }
+
+    /// Each series' diverged-run crosses in axis units, clamped to [`Figure::y_range`] (a
+    /// cross the axes cannot show, e.g. at 0 on a log axis, is left out).
+    pub fn diverged_points(&self) -> Vec<Vec<(f64, f64)>> {
+        self.series
+            .iter()
+            .map(|s| {
+                s.diverged_at
+                    .iter()
+                    .filter_map(|&(x, y)| {
+                        let y = clamp_to(y, self.y_range);
+                        Some((tr(x, self.x_scale)?, tr(y, self.y_scale())?))
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The drawn points with the crosses as points of their own (for the axes' extent).
+    fn extent_points(
+        &self,
+        pts: &[Vec<BandPoint>],
+        crosses: &[Vec<(f64, f64)>],
+    ) -> Vec<Vec<BandPoint>> {
+        let mut all = pts.to_vec();
+        all.push(
+            crosses
+                .iter()
+                .flatten()
+                .map(|&(x, y)| (x, y, Some(y), y))
+                .collect(),
+        );
+        all
     }
 
     fn draw(&self, out: &mut String) -> Result<(), Box<dyn std::error::Error + '_>> {
@@ -258,11 +317,13 @@ impl Figure {
     /// Every series on one plot, the legend under it in columns, then the notes.
     fn draw_single(&self, out: &mut String) -> Result<(), Box<dyn std::error::Error + '_>> {
         let (pts, notes) = self.points();
-        let (x0, x1, y0, y1) = extent(&pts);
+        let crosses = self.diverged_points();
+        let (x0, x1, y0, y1) = extent(&self.extent_points(&pts, &crosses));
         let (styles, shown) = self.styles_and_shown(&pts);
+        let labels: Vec<String> = self.series.iter().map(Series::shown_label).collect();
         let entries: Vec<(&str, Style)> = shown
             .iter()
-            .map(|&i| (self.series[i].label.as_str(), styles[i]))
+            .map(|&i| (labels[i].as_str(), styles[i]))
             .collect();
         let legend = LegendLayout::of(&entries);
         let note_lines = note_lines(&notes);
@@ -304,6 +365,9 @@ impl Figure {
             for (i, v) in pts.iter().enumerate() {
                 draw_line(&mut chart, &root, v, &styles[i])?;
             }
+            for (i, c) in crosses.iter().enumerate() {
+                draw_crosses(&chart, &root, c, &styles[i])?;
+            }
             legend.draw(&root, legend_area.get_base_pixel(), &entries)?;
             draw_notes(&note_area, &note_lines)?;
             root.present()?;
@@ -321,21 +385,23 @@ impl Figure {
         columns: usize,
     ) -> Result<(), Box<dyn std::error::Error + '_>> {
         let (pts, notes) = self.points();
-        let (x0, x1, y0, y1) = extent(&pts);
+        let crosses = self.diverged_points();
+        let (x0, x1, y0, y1) = extent(&self.extent_points(&pts, &crosses));
         let (styles, shown) = self.styles_and_shown(&pts);
+        let labels: Vec<String> = self.series.iter().map(Series::shown_label).collect();
         let (refs, algos): (Vec<usize>, Vec<usize>) =
             shown.iter().partition(|&&i| self.series[i].reference);
         let grid = Grid::new(
             columns,
             &algos
                 .iter()
-                .map(|&i| self.series[i].label.as_str())
+                .map(|&i| labels[i].as_str())
                 .collect::<Vec<_>>(),
             text_width(&self.y_label, AXIS_FONT) as u32 + 12,
         );
         let ref_entries: Vec<(&str, Style)> = refs
             .iter()
-            .map(|&i| (self.series[i].label.as_str(), styles[i]))
+            .map(|&i| (labels[i].as_str(), styles[i]))
             .collect();
         let legend = if ref_entries.is_empty() {
             LegendLayout::none()
@@ -382,6 +448,7 @@ impl Figure {
                     draw_line(&mut chart, &root, &pts[j], &styles[j])?;
                 }
                 draw_line(&mut chart, &root, &pts[i], &styles[i])?;
+                draw_crosses(&chart, &root, &crosses[i], &styles[i])?;
                 draw_title(&root, &grid.titles[k], cell.title, &styles[i])?;
             }
             self.draw_axis_descriptions(&root, &grid)?;

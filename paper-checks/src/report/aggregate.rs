@@ -1,9 +1,9 @@
-//! Per-configuration aggregates over seeds (Student-t 95% intervals, [`Summary`]) and their
-//! printed form.
+//! Per-configuration aggregates over seeds (95% intervals that respect each quantity's range,
+//! [`Interval`]) and their printed form.
 
-use crate::experiment::{Checkpoint, RunStatus, SeedRun};
+use crate::experiment::{Checkpoint, RunStatus, SeedRun, TaskKind};
 use crate::results::{ConfigResult, ConfigTiming};
-use crate::stats::Summary;
+use crate::stats::{Interval, Range};
 use serde::Serialize;
 
 /// Gradient calls (or runtime) to converge of one configuration.
@@ -16,18 +16,18 @@ pub struct ConvergenceRow {
     /// Seeds.
     pub seeds: usize,
     /// Over the converged seeds.
-    pub gradient_calls: Summary,
+    pub gradient_calls: Interval,
     /// Gradient calls of the whole run (all seeds; a diverged run's when it diverged).
-    pub total_gradient_calls: Summary,
+    pub total_gradient_calls: Interval,
     /// Final score (the seeds that did not diverge: a diverged run has no final policy, and its
     /// last checkpoint evaluated an earlier one, θ₁ when it diverged before the first).
-    pub final_score: Summary,
+    pub final_score: Interval,
     /// Final crashes (the seeds that did not diverge).
-    pub final_crashes: Summary,
+    pub final_crashes: Interval,
     /// Final mean reward (the seeds that did not diverge).
-    pub final_reward: Summary,
+    pub final_reward: Interval,
     /// Final evaluation loss (the seeds that did not diverge).
-    pub final_loss: Summary,
+    pub final_loss: Interval,
     /// Diverged runs ([`crate::experiment::RunStatus::Diverged`]: ‖θ‖ beyond the bound, a
     /// non-finite iterate, a failed step).
     pub failed_runs: usize,
@@ -38,8 +38,14 @@ pub(crate) fn last(r: &SeedRun) -> Option<&Checkpoint> {
     r.checkpoints.last()
 }
 
-/// A summary of `f` at the last checkpoint of each run that did not diverge.
-pub(crate) fn summarise(c: &ConfigResult, f: impl Fn(&Checkpoint) -> f64) -> Summary {
+/// The interval of `f` (a quantity of `range`, named `what`) at the last checkpoint of each run
+/// that did not diverge.
+pub(crate) fn summarise(
+    c: &ConfigResult,
+    what: &str,
+    range: Range,
+    f: impl Fn(&Checkpoint) -> f64,
+) -> Interval {
     let xs: Vec<f64> = c
         .runs
         .iter()
@@ -47,7 +53,20 @@ pub(crate) fn summarise(c: &ConfigResult, f: impl Fn(&Checkpoint) -> f64) -> Sum
         .filter_map(last)
         .map(f)
         .collect();
-    Summary::of(&xs)
+    Interval::of(&xs, range, &key(c, what))
+}
+
+/// The bootstrap key of a configuration's quantity: task, algorithm and quantity.
+pub(crate) fn key(c: &ConfigResult, what: &str) -> String {
+    format!("{}/{}/{what}", c.task.name(), c.label)
+}
+
+/// The range of a success rate (a fraction of the evaluation episodes).
+pub(crate) const FRACTION: Range = Range::Bounded { lo: 0.0, hi: 1.0 };
+
+/// The range of a count out of `n` (crashes in n episodes, a reward of at most n steps).
+pub(crate) fn out_of(n: f64) -> Range {
+    Range::Bounded { lo: 0.0, hi: n }
 }
 
 /// The gradient calls a run spent: when it diverged, or at its last checkpoint.
@@ -61,8 +80,28 @@ fn spent(r: &SeedRun) -> Option<f64> {
     }
 }
 
+/// The evaluation episodes of a configuration's checkpoints (each ends in a success, a crash or
+/// a time-out): the range of its crash counts.
+pub(crate) fn episodes(c: &ConfigResult) -> f64 {
+    c.runs
+        .iter()
+        .flat_map(|r| &r.checkpoints)
+        .map(|k| f64::from(k.successes + k.crashes + k.timeouts))
+        .fold(0.0, f64::max)
+}
+
+/// The range of a task's mean episode reward: CartPole earns 1 a step for at most 500 steps
+/// (its score is reward / 500); the obstacle task's reward has no stated bound.
+pub(crate) fn reward_range(task: TaskKind) -> Range {
+    match task {
+        TaskKind::Cartpole => out_of(500.0),
+        TaskKind::Obstacle => Range::Real,
+    }
+}
+
 /// The convergence row of one configuration.
 pub fn convergence_row(c: &ConfigResult) -> ConvergenceRow {
+    let episodes = episodes(c);
     let calls: Vec<f64> = c
         .runs
         .iter()
@@ -75,25 +114,34 @@ pub fn convergence_row(c: &ConfigResult) -> ConvergenceRow {
         label: c.label.clone(),
         converged: calls.len(),
         seeds: c.runs.len(),
-        gradient_calls: Summary::of(&calls),
-        total_gradient_calls: Summary::of(&c.runs.iter().filter_map(spent).collect::<Vec<_>>()),
-        final_score: summarise(c, |k| k.score),
-        final_crashes: summarise(c, |k| f64::from(k.crashes)),
-        final_reward: summarise(c, |k| k.reward),
-        final_loss: summarise(c, |k| k.loss),
+        gradient_calls: Interval::of(&calls, Range::NonNegative, &key(c, "calls")),
+        total_gradient_calls: Interval::of(
+            &c.runs.iter().filter_map(spent).collect::<Vec<_>>(),
+            Range::NonNegative,
+            &key(c, "total-calls"),
+        ),
+        final_score: summarise(c, "score", FRACTION, |k| k.score),
+        final_crashes: summarise(c, "crashes", out_of(episodes), |k| f64::from(k.crashes)),
+        final_reward: summarise(c, "reward", reward_range(c.task), |k| k.reward),
+        final_loss: summarise(c, "loss", Range::NonNegative, |k| k.loss),
         failed_runs: c.runs.iter().filter(|r| r.status.is_diverged()).count(),
     }
 }
 
 /// Wall seconds to converge (converged seeds) and to train (all seeds) of one configuration;
 /// empty without timings.
-pub(crate) fn runtime(t: Option<&ConfigTiming>) -> (Summary, Summary) {
+pub(crate) fn runtime(t: Option<&ConfigTiming>) -> (Interval, Interval) {
     let Some(t) = t else {
-        return (Summary::of(&[]), Summary::of(&[]));
+        return (seconds(&[]), seconds(&[]));
     };
     let conv: Vec<f64> = t.runs.iter().filter_map(|r| r.converge_seconds).collect();
     let total: Vec<f64> = t.runs.iter().map(|r| r.train_seconds).collect();
-    (Summary::of(&conv), Summary::of(&total))
+    (seconds(&conv), seconds(&total))
+}
+
+/// The interval of wall times (non-negative: a clamped t interval, no bootstrap key needed).
+pub(crate) fn seconds(xs: &[f64]) -> Interval {
+    Interval::of(xs, Range::NonNegative, "seconds")
 }
 
 /// Four significant digits.
@@ -113,24 +161,27 @@ pub fn num(v: f64) -> String {
     }
 }
 
-/// `mean ± half-width` of a summary (`—` without seeds).
-pub fn ci(s: &Summary) -> String {
+/// `mean [lo, hi]` of an interval, a lower end raised to the range's bound marked `†` (`—`
+/// without seeds, the mean alone for one seed).
+pub fn ci(s: &Interval) -> String {
     if s.n == 0 {
         "—".into()
-    } else if s.half_width.is_finite() {
-        format!("{} ± {}", num(s.mean), num(s.half_width))
+    } else if s.has_ends() {
+        format!(
+            "{} [{}{}, {}]",
+            num(s.mean),
+            num(s.lo),
+            if s.clamped_lo { "†" } else { "" },
+            num(s.hi)
+        )
     } else {
         num(s.mean)
     }
 }
 
-/// A success-rate summary in percent.
-pub(crate) fn percent(s: &Summary) -> Summary {
-    Summary {
-        mean: 100.0 * s.mean,
-        half_width: 100.0 * s.half_width,
-        n: s.n,
-    }
+/// A success-rate interval in percent.
+pub(crate) fn percent(s: &Interval) -> Interval {
+    s.scaled(100.0)
 }
 
 #[cfg(test)]
@@ -198,5 +249,38 @@ mod tests {
         assert_eq!((row.final_score.n, row.final_loss.n), (0, 0));
         assert_eq!(ci(&row.final_score), "—");
         assert!((row.total_gradient_calls.mean - 1300.0).abs() < 1e-9);
+    }
+
+    /// Bounded quantities get intervals inside their range (the t interval of the same
+    /// success rates runs below 0); gradient calls a t interval clamped at 0 and marked †.
+    #[test]
+    fn intervals_stay_inside_the_quantitys_range() {
+        let mut runs: Vec<SeedRun> = (0..8)
+            .map(|i| {
+                let score = if i == 0 { 1.0 } else { 0.0 };
+                run(
+                    i,
+                    vec![checkpoint(0, 0.0), checkpoint(1000, score)],
+                    RunStatus::NotConverged,
+                )
+            })
+            .collect();
+        // Converged runs with very different costs: the t interval of their calls runs below 0.
+        for (r, calls) in runs.iter_mut().zip([500u64, 600, 90_000]) {
+            r.checkpoints.push(checkpoint(calls, 1.0));
+            r.converged = Some(2);
+        }
+        let c = crate::results::storm_config_for_tests(runs);
+        let row = convergence_row(&c);
+        let s = row.final_score;
+        assert_eq!(s.method, crate::stats::Method::Bootstrap);
+        assert!(s.lo >= 0.0 && s.hi <= 1.0 && s.lo <= s.mean, "{s:?}");
+        assert!(!ci(&percent(&s)).contains('−') && !ci(&percent(&s)).contains('-'));
+        // Crashes: 3 in each of the 3 episodes the checkpoints record, so inside [0, 3].
+        assert!(row.final_crashes.lo >= 0.0 && row.final_crashes.hi <= 3.0);
+        let g = row.gradient_calls;
+        assert_eq!(g.n, 3);
+        assert!(g.clamped_lo && g.lo == 0.0, "{g:?}");
+        assert!(ci(&g).contains("[0†, "), "{}", ci(&g));
     }
 }

@@ -49,12 +49,25 @@ impl Claim {
         self
     }
 
-    /// The verdict with its reason, as the tables print it.
+    /// The verdict with its reason in full, as the claims section prints it.
     pub fn verdict_text(&self) -> String {
         match &self.caveat {
             Some(c) => c.clone(),
             None => self.verdict.text().to_string(),
         }
+    }
+
+    /// The verdict with the kind of its reason only (`inconclusive (tuning)`,
+    /// `inconclusive (budget)`, `inconclusive (tuning, budget)`), as the summary prints it.
+    pub fn verdict_short(&self) -> String {
+        let Some(c) = &self.caveat else {
+            return self.verdict.text().to_string();
+        };
+        let kinds: Vec<&str> = ["tuning", "budget"]
+            .into_iter()
+            .filter(|k| c.contains(&format!("({k})")))
+            .collect();
+        format!("{} ({})", self.verdict.text(), kinds.join(", "))
     }
 }
 
@@ -201,24 +214,43 @@ fn last_value(
     Summary::of(&xs)
 }
 
+/// A non-negative quantity (crashes, rewards, losses, norms, calls, seconds) as
+/// [`interval_text`] with the interval's lower end clamped at 0.
 fn ci_text(s: &Summary) -> String {
-    interval_text(s, num)
+    interval_text(s, num, (0.0, f64::INFINITY))
 }
 
-/// A success rate (a fraction) as [`ci_text`] in percent, the unit of the rules and tables.
+/// A signed quantity as [`interval_text`], unclamped.
+fn signed_text(s: &Summary) -> String {
+    interval_text(s, num, (f64::NEG_INFINITY, f64::INFINITY))
+}
+
+/// A success rate (a fraction) as [`ci_text`] in percent, the unit of the rules and tables,
+/// its interval clamped to [0 %, 100 %].
 fn percent_text(s: &Summary) -> String {
-    interval_text(s, |x| format!("{}%", num(100.0 * x)))
+    interval_text(s, |x| format!("{}%", num(100.0 * x)), (0.0, 1.0))
 }
 
 /// `mean [lo, hi] (n = …)`, each number written by `show` (the mean alone without a finite
-/// interval).
-fn interval_text(s: &Summary, show: impl Fn(f64) -> String) -> String {
+/// interval); an end of the Student-t interval beyond the quantity's `range` is printed at the
+/// range's end and marked † (clamping decides no rule: the rules compare intervals with bands
+/// and with each other inside the range).
+fn interval_text(s: &Summary, show: impl Fn(f64) -> String, range: (f64, f64)) -> String {
     if s.half_width.is_finite() {
+        let end = |x: f64| {
+            if x < range.0 {
+                format!("{}†", show(range.0))
+            } else if x > range.1 {
+                format!("{}†", show(range.1))
+            } else {
+                show(x)
+            }
+        };
         format!(
             "{} [{}, {}] (n = {})",
             show(s.mean),
-            show(s.lo()),
-            show(s.hi()),
+            end(s.lo()),
+            end(s.hi()),
             s.n
         )
     } else {
@@ -403,7 +435,7 @@ fn obstacle_success_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
                 format!(
                     "{}; change {} pp",
                     evidence([(bc, percent_text(&s))]),
-                    ci_text(&Summary {
+                    signed_text(&Summary {
                         n: d.n,
                         mean: 100.0 * d.mean,
                         half_width: 100.0 * d.half_width
@@ -997,6 +1029,12 @@ mod tests {
         assert_eq!(text.matches('%').count(), 3, "{text}");
         assert!(text.ends_with("(n = 3)"), "{text}");
         assert_eq!(percent_text(&Summary::of(&[0.25])), "25.00% (n = 1)");
+        // An interval leaving [0, 1] is printed at the end it left, marked.
+        let low = percent_text(&Summary::of(&[0.0, 0.0, 0.5]));
+        assert!(low.starts_with("16.67% [0%†, "), "{low}");
+        let high = percent_text(&Summary::of(&[1.0, 1.0, 0.5]));
+        assert!(high.contains(", 100.0%†]"), "{high}");
+        assert!(signed_text(&Summary::of(&[-1.0, 1.0])).contains("[-"));
     }
 
     #[test]

@@ -95,7 +95,10 @@ pub fn write_tables(
         &to_json(
             "tables",
             &serde_json::json!({
-                "confidence_interval": "95% Student-t over seeds: mean ± t(0.975, n−1)·s/√n",
+                "confidence_interval": "95% over seeds, per quantity (each interval's `method`): \
+                    bounded quantities (success rate, crashes, CartPole reward) a seeded percentile \
+                    bootstrap of the mean; non-negative ones (gradient calls, loss) Student-t \
+                    mean ± t(0.975, n−1)·s/√n with the lower end clamped to 0 (`clamped_lo`)",
                 "obstacle": obstacle, "cartpole": cartpole, "claims": claims,
             }),
         )?,

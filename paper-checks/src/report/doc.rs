@@ -79,7 +79,11 @@ pub fn markdown(blocks: &[Block]) -> String {
                 o.push('\n');
             }
             Block::Figure { path, caption } => {
-                // The image, then its caption as text (Markdown viewers do not show alt text).
+                // The image, then its caption as text (Markdown viewers do not show alt text),
+                // numbered with the thesis's number as "Figure 4.3".
+                let caption = caption
+                    .strip_prefix("Fig. ")
+                    .map_or_else(|| caption.clone(), |c| format!("Figure {c}"));
                 let _ = writeln!(o, "![{caption}]({path})\n\n*{caption}.*\n");
             }
         }
@@ -107,8 +111,9 @@ const FLOAT_BARRIER: &str = "\\makeatletter\n\
 /// booktabs `longtable`s whose columns are sized to fit the line ([`column_layout`]), and figures
 /// as floats (`[htbp]`: here, or at the top or bottom of a page, or on a page of floats, so no
 /// page is cut short for a figure), kept inside their section by a `\FloatBarrier` before
-/// every heading. Captions are numbered by LaTeX alone: a leading thesis number
-/// ("Table 4.1: …", "Fig. 4.3: …") moves to the caption's end. A table without a caption is
+/// every heading. A caption that leads with a thesis number ("Table 4.1: …", "Fig. 4.3: …")
+/// is numbered with it (the float's `\thetable`/`\thefigure` set locally), so each float
+/// carries one number; the others keep the document's numbering. A table without a caption is
 /// captioned with its section's heading.
 pub fn latex(blocks: &[Block], preamble: &str) -> String {
     let mut o = String::from(preamble);
@@ -133,7 +138,7 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
             }
             Block::Table(t) => {
                 let c = t.caption.as_deref().unwrap_or(&section);
-                o += &latex_table(t, &caption_text(c));
+                o += &latex_table(t, &caption_parts(c));
             }
             Block::Figure { path, caption } => {
                 let svg_note = if path.ends_with(".svg") {
@@ -141,10 +146,11 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
                 } else {
                     ""
                 };
+                let (number, text) = caption_parts(caption);
                 let _ = writeln!(
                     o,
-                    "\\begin{{figure}}[htbp]\n\\centering\n{svg_note}\\includegraphics[width=\\linewidth]{{{path}}}\n\\caption{{{}}}\n\\end{{figure}}\n",
-                    caption_text(caption)
+                    "\\begin{{figure}}[htbp]\n\\centering\n{svg_note}\\includegraphics[width=\\linewidth]{{{path}}}\n{}\\caption{{{text}}}\n\\end{{figure}}\n",
+                    own_number("figure", number.as_deref())
                 );
             }
         }
@@ -152,10 +158,11 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
     o
 }
 
-/// A caption's LaTeX: the text without Markdown's trailing colon, a leading thesis number
-/// ("Table 4.1: x", "Fig. 4.2 (a): x", bold or not) moved to the end ("x (thesis Table 4.1)") so
-/// that LaTeX's own number is the only one in front, and the first letter capitalised.
-pub fn caption_text(c: &str) -> String {
+/// A caption's LaTeX: the thesis's number, if the caption leads with one ("Table 4.1: x",
+/// "Fig. 4.2 (a): x", bold or not), for the float to print as its own number (`4.1`,
+/// `4.2\,(a)`), and the text after it without Markdown's trailing colon, first letter
+/// capitalised.
+pub fn caption_parts(c: &str) -> (Option<String>, String) {
     let c = c.trim().trim_end_matches(':').trim_end();
     let (bold, body) = match c.strip_prefix("**") {
         Some(rest) => (true, rest),
@@ -163,29 +170,26 @@ pub fn caption_text(c: &str) -> String {
     };
     let mut number = None;
     let mut rest = body.to_string();
-    for kind in ["Table ", "Fig. ", "Figs. "] {
+    for kind in ["Table ", "Fig. ", "Figure "] {
         if let Some(after) = body.strip_prefix(kind) {
-            // The number: digits and dots, then an optional panel "(a)"; then ": " or " (".
+            // The number: digits and dots, then an optional panel "(a)"; then ": ".
             let n_end = after
                 .find(|ch: char| !(ch.is_ascii_digit() || ch == '.'))
                 .unwrap_or(after.len());
             let mut tail = &after[n_end..];
-            let mut num = format!("{kind}{}", &after[..n_end]);
+            let mut num = after[..n_end].to_string();
             if let Some(p) = tail
                 .strip_prefix(" (")
                 .filter(|p| p.get(1..3) == Some("):"))
             {
-                num += &format!(" ({})", &p[..1]);
+                num += &format!("\\,({})", &p[..1]);
                 tail = &p[2..];
             }
-            if n_end > 0 {
-                if let Some(t) = tail.strip_prefix(':') {
-                    number = Some(num);
-                    rest = t.trim_start().to_string();
-                } else if tail.is_empty() || tail.starts_with(',') {
-                    // The caption is only the number (and a qualifier): keep it as text.
-                    number = None;
-                }
+            if n_end > 0
+                && let Some(t) = tail.strip_prefix(':')
+            {
+                number = Some(num);
+                rest = t.trim_start().to_string();
             }
             break;
         }
@@ -199,11 +203,7 @@ pub fn caption_text(c: &str) -> String {
             text.replace_range(k..k + ch.len_utf8(), &up);
         }
     }
-    let mut out = inline(&text);
-    if let Some(n) = number {
-        out += &format!(" (thesis {})", inline(&n));
-    }
-    out
+    (number, inline(&text))
 }
 
 /// The visible length of Markdown inline text, in characters (markup removed).
@@ -233,14 +233,20 @@ pub struct ColumnLayout {
     pub columns: Vec<String>,
 }
 
-/// Fit a table to the line width. The estimate counts characters: about 64 characters of
-/// `\small` text fit in the line of a 345 pt text block (10 pt article), less each column's
+/// The text block's width the tables are laid out for: A4 less two 2 cm margins, 170 mm.
+const LINE_PT: f64 = 483.7;
+
+/// A landscape page's line over a portrait one's: (297 − 40) / (210 − 40) mm.
+const LANDSCAPE_RATIO: f64 = 257.0 / 170.0;
+
+/// Fit a table to the line width ([`LINE_PT`]). The estimate counts characters: about 64
+/// characters of `\small` text fit in 345 pt (10 pt article), less each column's
 /// padding (2\tabcolsep ≈ 2.7 characters), more at smaller sizes. A table whose natural widths
-/// fit keeps `l`/`r` columns; otherwise the largest font at which the longest words fit is
-/// chosen (the smallest with 3 pt column padding, else a landscape page) and the width is shared
-/// out: columns narrower than an equal share keep their natural width, the others share the rest
-/// in proportion to their natural widths (never below their longest word). Columns are
-/// right-aligned where `spec` says `r`.
+/// fit at `\small` or `\footnotesize` keeps `l`/`r` columns at the first of them; otherwise its columns wrap ([`shared_widths`]) at `\footnotesize` (or the largest
+/// size at which the longest words fit, with 3 pt column padding at the smallest), on a
+/// landscape page when that shortens rows taller than [`LANDSCAPE_LINES`] by a third or
+/// nothing else fits.
+/// Columns are right-aligned where `spec` says `r`.
 pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> ColumnLayout {
     let n = header.len().max(1);
     let right: Vec<bool> = {
@@ -272,32 +278,97 @@ pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> Col
             cells(j).map(longest_word).max().unwrap_or(0) as f64 + 1.0
         })
         .collect();
-    // (font size command, characters per 345 pt line, padding of a column in characters).
+    // (font size command, characters per line, padding of a column in characters): 64, 72 and
+    // 82 characters per 345 pt at the three sizes, scaled to the line of LINE_PT.
+    let per = LINE_PT / 345.0;
     let sizes = [
-        ("\\small", 64.0, 2.7),
-        ("\\footnotesize", 72.0, 3.0),
-        ("\\scriptsize\\setlength{\\tabcolsep}{3pt}", 82.0, 1.8),
-        // A landscape page: 1.6 times the line.
-        ("\\scriptsize\\setlength{\\tabcolsep}{3pt}", 131.0, 1.8),
+        ("\\small", 64.0 * per, 2.7),
+        ("\\footnotesize", 72.0 * per, 3.0),
+        ("\\scriptsize\\setlength{\\tabcolsep}{3pt}", 82.0 * per, 1.8),
+        // A landscape page: the page's height less the margins, across.
+        (
+            "\\scriptsize\\setlength{\\tabcolsep}{3pt}",
+            82.0 * per * LANDSCAPE_RATIO,
+            1.8,
+        ),
     ];
     let budget = |(_, line, pad): (&str, f64, f64)| line - pad * n as f64;
-    if natural.iter().sum::<f64>() <= budget(sizes[0]) {
+    // A table whose natural widths fit at \small or \footnotesize keeps l/r columns (one line
+    // a row); \scriptsize is kept for tables that cannot be set larger.
+    if let Some(&(size, _, _)) = sizes[..2]
+        .iter()
+        .find(|&&sz| natural.iter().sum::<f64>() <= budget(sz))
+    {
         return ColumnLayout {
             landscape: false,
-            size: sizes[0].0,
+            size,
             columns: right
                 .iter()
                 .map(|r| if *r { "r" } else { "l" }.to_string())
                 .collect(),
         };
     }
-    let pick = sizes
-        .iter()
-        .position(|&sz| minimum.iter().sum::<f64>() <= budget(sz))
+    // Otherwise wrapped columns: at \footnotesize when the longest words fit (smaller text is
+    // harder to read than an extra line), else the largest size at which they do; a landscape
+    // page when even then a row would average more than LANDSCAPE_LINES lines and the wider
+    // line saves a third of them.
+    let fits = |k: usize| minimum.iter().sum::<f64>() <= budget(sizes[k]);
+    let mut pick = (1..sizes.len())
+        .find(|&k| fits(k))
         .unwrap_or(sizes.len() - 1);
+    let lines = |k: usize| row_lines(&shared_widths(&natural, &minimum, budget(sizes[k])), rows);
+    if pick < sizes.len() - 1 {
+        let portrait = lines(pick);
+        if portrait > LANDSCAPE_LINES && lines(sizes.len() - 1) <= LANDSCAPE_GAIN * portrait {
+            pick = sizes.len() - 1;
+        }
+    }
     let (size, _, pad) = sizes[pick];
     let landscape = pick == sizes.len() - 1;
-    let total = budget(sizes[pick]);
+    let width = shared_widths(&natural, &minimum, budget(sizes[pick]));
+    // Each column's share of the line includes its padding (2\tabcolsep, subtracted again
+    // in the specification).
+    let sum: f64 = width.iter().map(|w| w + pad).sum();
+    let columns = (0..n)
+        .map(|j| {
+            let frac = (width[j] + pad) / sum;
+            let align = if right[j] {
+                "\\raggedleft"
+            } else {
+                "\\raggedright"
+            };
+            format!(
+                ">{{{align}\\arraybackslash\\hspace{{0pt}}}}p{{\\dimexpr{frac:.3}\\linewidth-2\\tabcolsep\\relax}}"
+            )
+        })
+        .collect();
+    ColumnLayout {
+        size,
+        landscape,
+        columns,
+    }
+}
+
+/// The float's number set to the thesis's (`\renewcommand{\thefigure}{4.3}`, local to the
+/// float's group), so the caption shows that number alone; nothing without one.
+fn own_number(counter: &str, number: Option<&str>) -> String {
+    number.map_or(String::new(), |n| {
+        format!("\\renewcommand{{\\the{counter}}}{{{n}}}")
+    })
+}
+
+/// Rows of a table average more lines than this (estimated at the portrait size): a landscape
+/// page, if it brings them down to [`LANDSCAPE_GAIN`] of that.
+const LANDSCAPE_LINES: f64 = 3.0;
+
+/// See [`LANDSCAPE_LINES`].
+const LANDSCAPE_GAIN: f64 = 0.7;
+
+/// Share `total` characters out among columns of these natural and minimum widths:
+/// columns narrower than an equal share keep their natural width, the others share the rest in
+/// proportion to their natural widths (never below their longest word).
+fn shared_widths(natural: &[f64], minimum: &[f64], total: f64) -> Vec<f64> {
+    let n = natural.len();
     // Water-filling: fix the columns that need less than an equal share of what is left.
     let mut width = vec![0.0; n];
     let mut open: Vec<usize> = (0..n).collect();
@@ -335,32 +406,39 @@ pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> Col
             }
         }
     }
-    // Each column's share of the line includes its padding (2\tabcolsep, subtracted again
-    // in the specification).
-    let sum: f64 = width.iter().map(|w| w + pad).sum();
-    let columns = (0..n)
-        .map(|j| {
-            let frac = (width[j] + pad) / sum;
-            let align = if right[j] {
-                "\\raggedleft"
-            } else {
-                "\\raggedright"
-            };
-            format!(
-                ">{{{align}\\arraybackslash\\hspace{{0pt}}}}p{{\\dimexpr{frac:.3}\\linewidth-2\\tabcolsep\\relax}}"
-            )
-        })
-        .collect();
-    ColumnLayout {
-        size,
-        landscape,
-        columns,
+    width
+}
+
+/// The part of a ragged-right line that words fill on average (a line breaks before the word
+/// that would overflow it).
+const RAGGED_FILL: f64 = 0.85;
+
+/// The mean over rows of each row's estimated height in lines (its tallest cell's characters
+/// over the characters that fill its column's lines).
+fn row_lines(width: &[f64], rows: &[Vec<String>]) -> f64 {
+    if rows.is_empty() {
+        return 1.0;
     }
+    let total: f64 = rows
+        .iter()
+        .map(|r| {
+            r.iter()
+                .zip(width)
+                .map(|(c, w)| {
+                    (visible_len(c) as f64 / (RAGGED_FILL * w).max(1.0))
+                        .ceil()
+                        .max(1.0)
+                })
+                .fold(1.0, f64::max)
+        })
+        .sum();
+    total / rows.len() as f64
 }
 
 /// A table as a booktabs `longtable` (it breaks across pages and stays where it stands), its
-/// columns laid out by [`column_layout`], the header repeated on every page.
-fn latex_table(t: &Table, caption: &str) -> String {
+/// columns laid out by [`column_layout`], the header repeated on every page; captioned with
+/// `(thesis number, text)` ([`caption_parts`]).
+fn latex_table(t: &Table, (number, caption): &(Option<String>, String)) -> String {
     let layout = column_layout(&t.header, &t.rows, &t.spec);
     let mut o = String::new();
     if layout.landscape {
@@ -368,8 +446,9 @@ fn latex_table(t: &Table, caption: &str) -> String {
     }
     let _ = writeln!(
         o,
-        "\\begingroup{}\\setlength{{\\LTpre}}{{6pt}}\\setlength{{\\LTpost}}{{6pt}}",
-        layout.size
+        "\\begingroup{}\\setlength{{\\LTpre}}{{6pt}}\\setlength{{\\LTpost}}{{6pt}}{}",
+        layout.size,
+        own_number("table", number.as_deref())
     );
     let _ = writeln!(
         o,
@@ -505,10 +584,62 @@ mod tests {
         );
         let t = latex(&b, "");
         assert!(
-            t.contains("\\caption{\\textbf{T} (kit) (thesis Table 4.1)}\\label{tab:x}"),
+            t.contains("\\renewcommand{\\thetable}{4.1}\n")
+                && t.contains("\\caption{\\textbf{T} (kit)}\\label{tab:x}"),
             "{t}"
         );
         assert!(t.contains("1 & p$|$q \\\\"), "{t}");
         assert!(t.contains("\\toprule") && t.contains("\\bottomrule"), "{t}");
+    }
+
+    /// A float whose caption leads with a thesis number carries that number alone; others
+    /// keep the document's numbering.
+    #[test]
+    fn floats_carry_the_thesis_number_only() {
+        assert_eq!(
+            caption_parts("Fig. 4.5 (a): obstacle task, x"),
+            (Some("4.5\\,(a)".into()), "Obstacle task, x".into())
+        );
+        assert_eq!(
+            caption_parts("**Table 4.2: runtime** (kit):"),
+            (Some("4.2".into()), "\\textbf{Runtime} (kit)".into())
+        );
+        assert_eq!(caption_parts("RMSE by N"), (None, "RMSE by N".into()));
+        let b = [Block::Figure {
+            path: "figures/f.png".into(),
+            caption: "Fig. 4.3: success".into(),
+        }];
+        let t = latex(&b, "");
+        assert!(
+            t.contains("\\renewcommand{\\thefigure}{4.3}\\caption{Success}"),
+            "{t}"
+        );
+        assert!(!t.contains("thesis Fig"), "{t}");
+    }
+
+    /// Short tables keep one line a row; a table of long descriptions wraps at \footnotesize,
+    /// and goes to a landscape page when its rows would be tall.
+    #[test]
+    fn tables_wrap_at_a_readable_size_and_turn_when_rows_are_tall() {
+        let h = |v: &[&str]| v.iter().map(|s| (*s).to_string()).collect::<Vec<_>>();
+        let short = column_layout(&h(&["a", "b"]), &[h(&["1", "2"])], "lr");
+        assert_eq!((short.size, short.landscape), ("\\small", false));
+        assert_eq!(short.columns, ["l", "r"]);
+        let words = "word ".repeat(30);
+        let two = column_layout(
+            &h(&["#", "text", "verdict"]),
+            &[h(&["C1", &words, "not reproduced"])],
+            "lll",
+        );
+        assert_eq!((two.size, two.landscape), ("\\footnotesize", false));
+        assert!(two.columns[1].contains("p{"), "{:?}", two.columns);
+        let long = "description ".repeat(25);
+        let cells: Vec<String> = (0..6).map(|_| long.clone()).collect();
+        let tall = column_layout(
+            &h(&["a", "b", "c", "d", "e", "f"]),
+            &[cells.clone(), cells],
+            "llllll",
+        );
+        assert!(tall.landscape, "{tall:?}");
     }
 }

@@ -2,7 +2,9 @@
 //! theorem checks and the errata, with the figures in their sections, as [`Block`]s rendered
 //! to `appendix.md` and `appendix.tex`.
 
-use super::aggregate::{ConvergenceRow, ci, last, num, percent, runtime};
+use super::aggregate::{
+    ConvergenceRow, FRACTION, ci, last, num, out_of, percent, reward_range, runtime,
+};
 use super::claims::Claim;
 use super::doc::{self, Block, Table};
 use super::figures::NamedFigure;
@@ -12,7 +14,7 @@ use crate::config::Profile;
 use crate::error::Error;
 use crate::experiment::{Checkpoint, SeedRun, TaskKind};
 use crate::results::{ConfigResult, ConfigWithTiming, Results};
-use crate::stats::Summary;
+use crate::stats::{Interval, Range};
 use crate::storage::write_atomic;
 use std::path::Path;
 
@@ -22,18 +24,24 @@ fn baseline_rows(r: &Results, task: TaskKind) -> Vec<Vec<String>> {
         .iter()
         .filter(|b| b.task == task)
         .map(|b| {
-            let s = |f: &dyn Fn(&Checkpoint) -> f64| {
-                Summary::of(&b.runs.iter().map(f).collect::<Vec<_>>())
+            let s = |what: &str, range: Range, f: &dyn Fn(&Checkpoint) -> f64| {
+                let key = format!("{}/{}/{what}", task.name(), b.label);
+                Interval::of(&b.runs.iter().map(f).collect::<Vec<_>>(), range, &key)
             };
+            let episodes = b
+                .runs
+                .iter()
+                .map(|k| f64::from(k.successes + k.crashes + k.timeouts))
+                .fold(0.0, f64::max);
             vec![
                 format!("*{}* (reference, no training)", b.label),
                 if task == TaskKind::Obstacle {
-                    ci(&percent(&s(&|c| c.score)))
+                    ci(&percent(&s("score", FRACTION, &|c| c.score)))
                 } else {
-                    ci(&s(&|c| c.reward))
+                    ci(&s("reward", reward_range(task), &|c| c.reward))
                 },
-                ci(&s(&|c| f64::from(c.crashes))),
-                ci(&s(&|c| c.loss)),
+                ci(&s("crashes", out_of(episodes), &|c| f64::from(c.crashes))),
+                ci(&s("loss", Range::NonNegative, &|c| c.loss)),
                 "—".into(),
             ]
         })
@@ -253,6 +261,81 @@ fn obstacle_learner_text(profile: &Profile) -> String {
     )
 }
 
+/// A column of the verdict summary: its header and the cell of a claim. A field added to
+/// [`Claim`] (a caveat, say) is one more line here.
+type ClaimColumn = (&'static str, fn(&Claim) -> String);
+
+/// The verdict summary's columns, in order (where in the thesis each claim stands is in the
+/// claims section, so that the statement reads in one or two lines).
+const SUMMARY_COLUMNS: [ClaimColumn; 3] = [
+    ("#", |c| c.id.clone()),
+    ("claim", |c| c.claim.clone()),
+    ("verdict", |c| format!("**{}**", c.verdict_short())),
+];
+
+/// The fields of a claim listed under its statement in the claims section, after the verdict:
+/// a label and the text (a new field of [`Claim`] is one more line here).
+const DETAIL_FIELDS: [ClaimColumn; 2] = [
+    ("Rule", |c| c.rule.clone()),
+    ("Numbers", |c| c.evidence.clone()),
+];
+
+/// The verdict summary at the top: a sentence counting the verdicts, then one row per claim
+/// ([`SUMMARY_COLUMNS`]).
+fn verdict_summary(claims: &[Claim], timing: &[Claim]) -> Vec<Block> {
+    use crate::verdict::Verdict;
+    let all: Vec<&Claim> = claims.iter().chain(timing).collect();
+    let count = |v: Verdict| all.iter().filter(|c| c.verdict == v).count();
+    vec![
+        Block::Heading {
+            level: 2,
+            text: "Verdicts at a glance".into(),
+        },
+        Block::Para(format!(
+            "{} claims of chapter 4: **{} reproduced**, **{} inconclusive**, **{} not \
+             reproduced**. Each is judged by a stated rule on 95% intervals; the rule and the \
+             numbers of each claim are in the section *Claims of chapter 4: rules and numbers* \
+             below.",
+            all.len(),
+            count(Verdict::Reproduced),
+            count(Verdict::Inconclusive),
+            count(Verdict::NotReproduced),
+        )),
+        Block::Table(Table {
+            caption: Some("The claims of chapter 4 and their verdicts".into()),
+            label: "tab:pc-verdicts".into(),
+            header: SUMMARY_COLUMNS.iter().map(|c| c.0.to_string()).collect(),
+            rows: all
+                .iter()
+                .map(|c| SUMMARY_COLUMNS.iter().map(|col| (col.1)(c)).collect())
+                .collect(),
+            spec: "llll".into(),
+        }),
+    ]
+}
+
+/// A claim in the claims section: id, place, statement and verdict, then [`DETAIL_FIELDS`].
+fn claim_details(c: &Claim) -> String {
+    let mut o = format!(
+        "**{}** ({}) {} — **{}**.",
+        c.id,
+        c.source,
+        c.claim,
+        c.verdict_text()
+    );
+    for (label, field) in DETAIL_FIELDS {
+        let text = field(c);
+        let text = text.trim_end();
+        let stop = if text.ends_with(['.', '!', '?']) {
+            ""
+        } else {
+            "."
+        };
+        o += &format!(" *{label}:* {text}{stop}");
+    }
+    o
+}
+
 /// Everything the appendix needs to say, in order.
 pub struct Inputs<'a> {
     /// The profile run.
@@ -298,6 +381,8 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
         level: 1,
         text: "Appendix: thesis chapter 4, regenerated".into(),
     });
+    d.extend(verdict_summary(x.claims, x.timing_claims));
+    d.push(h("How this appendix was made"));
     d.push(Block::Para(format!(
         "Generated by `cargo run --release -p paper-checks{}` (profile `{}`, {} seeds per configuration). \
          Every number below is computed from the per-seed data in this directory (`checkpoints.csv`, \
@@ -339,12 +424,27 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
              all seeds, a run that did not converge or diverged counting +∞.",
             profile.obstacle.converge_score, profile.cartpole.converge_score,
         ),
-        "**Confidence intervals.** Mean ± half-width of the 95% Student-t interval over seeds, \
-         `t(0.975, n−1)·s/√n`, in every table; figures shade the same interval at each checkpoint. \
-         The thesis's ± values are its own (their meaning is not stated). Claims are judged by the \
-         rule beside each, on intervals (C4 by an F test of two variances): reproduced, not \
-         reproduced, or inconclusive when the intervals overlap."
-            .into(),
+        format!(
+            "**Confidence intervals.** Tables print `mean [low, high]`, a 95% interval over seeds \
+             that stays inside the quantity's range; figures shade the same interval at each \
+             checkpoint. *Success rates, crashes (out of the evaluation episodes), CartPole \
+             rewards (0–500) and resets (0 to the cap)* — bounded on both sides — use the \
+             percentile bootstrap of the mean over seeds ({} resamples of the seeds with \
+             replacement, the 2.5% and 97.5% percentiles of their means; the generator is seeded \
+             from the task, algorithm and quantity, so the numbers are the same on every run). \
+             The seed is the unit: a seed's episodes share one policy, so they are not \
+             independent trials and a binomial (e.g. Wilson) interval on the pooled episodes \
+             would be too narrow. With few seeds the bootstrap interval is somewhat too narrow \
+             (it never leaves the range of the seeds' values). *Gradient calls, runtimes and \
+             losses* — non-negative, no upper bound — use the Student-t interval \
+             `mean ± t(0.975, n−1)·s/√n` with its lower end raised to 0 where it falls below, \
+             marked † (clamped). One seed: the mean alone. The claims' evidence keeps the \
+             t intervals its rules are stated on, and its medians use distribution-free order \
+             statistics. The thesis's ± values are its own (their meaning is not stated). \
+             Claims are judged by the rule beside each (C4 by an F test of two variances): \
+             reproduced, not reproduced, or inconclusive when the intervals overlap.",
+            crate::stats::BOOTSTRAP_RESAMPLES
+        ),
         "**Hyper-parameters** are selected by the pre-registered tuning protocol below (see `provenance.json`)."
             .into(),
         episode_length_note(r),
@@ -434,7 +534,7 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
         figures(&mut d, figs);
         d.push(Block::Table(Table {
             caption: Some(format!(
-                "**Final checkpoint** (mean ± 95% half-width over the runs that did not diverge: a \
+                "**Final checkpoint** (mean [95% interval] over the runs that did not diverge: a \
                  diverged run has no final policy and counts only under failed runs; crashes = the \
                  evaluation episodes (of {}) {}):",
                 if obstacle {
@@ -478,31 +578,19 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
         spec: "llrlrr".into(),
     }));
 
-    d.push(h("Claims of chapter 4 and verdicts"));
+    d.push(h("Claims of chapter 4: rules and numbers"));
     d.push(Block::Para(
-        "Each verdict is computed from the numbers by the stated rule.".into(),
+        "Each verdict is computed from the numbers by the stated rule (the verdicts are \
+         summarised at the top)."
+            .into(),
     ));
-    d.push(Block::Table(Table {
-        caption: None,
-        label: "tab:pc-claims".into(),
-        header: strings(&["#", "where", "claim", "rule", "numbers", "verdict"]),
-        rows: x
-            .claims
+    d.push(Block::List(
+        x.claims
             .iter()
             .chain(x.timing_claims)
-            .map(|c| {
-                vec![
-                    c.id.clone(),
-                    c.source.clone(),
-                    c.claim.clone(),
-                    c.rule.clone(),
-                    c.evidence.clone(),
-                    format!("**{}**", c.verdict_text()),
-                ]
-            })
+            .map(claim_details)
             .collect(),
-        spec: "llp{3cm}p{3.5cm}p{3.5cm}l".into(),
-    }));
+    ));
 
     d.push(h("Theorem checks (`ilopt-theory`)"));
     d.extend(theory::blocks(
@@ -537,7 +625,10 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
 /// The LaTeX fragment's opening comment.
 const LATEX_PREAMBLE: &str = "% Generated by paper-checks. \\input{} into a document whose preamble loads\n\
      % amsmath, amssymb, booktabs, longtable, array, graphicx and pdflscape\n\
-     % (appendix-standalone.tex does). Figures float ([htbp]); a \\FloatBarrier before each heading\n\
+     % (appendix-standalone.tex does). Tables are laid out for a text block about 17 cm wide (A4\n\
+     % with 2 cm margins, as the standalone document sets with geometry); a narrower one wraps\n\
+     % their cells more. A float whose caption leads with a thesis number carries that number\n\
+     % (\\thefigure/\\thetable set inside the float). Figures float ([htbp]); a \\FloatBarrier before each heading\n\
      % keeps them in their section (placeins' if loaded, else a kernel-only one defined below).\n\
      % Figures are referenced relative to this file's directory.\n";
 
@@ -549,7 +640,11 @@ pub fn latex_standalone() -> String {
          % Build: pdflatex -interaction=nonstopmode -halt-on-error appendix-standalone.tex (twice, for the\n\
          % longtables' column widths).\n\
          \\documentclass[10pt,a4paper]{{article}}\n\
+         \\usepackage[a4paper,margin=2cm]{{geometry}}\n\
          {}\
+         % The appendix's own tables and figures (those without a thesis number) are A.1, A.2, ….\n\
+         \\renewcommand{{\\thetable}}{{A.\\arabic{{table}}}}\n\
+         \\renewcommand{{\\thefigure}}{{A.\\arabic{{figure}}}}\n\
          \\setlength{{\\emergencystretch}}{{3em}}\n\
          % Floats may fill more of a text page, and a page of floats need not be nearly full,\n\
          % so figures sit close to their text rather than wait for a float page.\n\
@@ -583,8 +678,9 @@ pub fn write_documents(blocks: &[Block], out: &Path) -> Result<(), Error> {
 
 #[cfg(test)]
 mod tests {
-    use super::command_flags;
+    use super::{Block, Claim, command_flags, doc, verdict_summary};
     use crate::config::Profile;
+    use crate::verdict::Verdict;
     use std::path::Path;
 
     fn committed(name: &str) -> Profile {
@@ -604,5 +700,63 @@ mod tests {
         assert_eq!(command_flags(&full), " -- --full");
         full.theory_profile = "full".into();
         assert_eq!(command_flags(&full), " -- --full --theory full");
+    }
+
+    fn claim(id: &str, verdict: Verdict) -> Claim {
+        Claim {
+            id: id.into(),
+            source: "§4.1".into(),
+            claim: format!("claim {id}"),
+            rule: "a rule".into(),
+            evidence: "the numbers".into(),
+            verdict,
+            caveat: None,
+            task: None,
+            compared: Vec::new(),
+        }
+    }
+
+    /// The summary counts the verdicts and has a row per claim, in both renderings.
+    #[test]
+    fn the_verdict_summary_lists_every_claim_with_its_verdict() {
+        let blocks = verdict_summary(
+            &[
+                claim("C1", Verdict::Reproduced),
+                claim("C2", Verdict::NotReproduced),
+            ],
+            &[claim("T1", Verdict::Inconclusive)],
+        );
+        let Block::Table(t) = &blocks[2] else {
+            panic!("no table: {blocks:?}")
+        };
+        assert_eq!(t.header, ["#", "claim", "verdict"]);
+        assert_eq!(t.rows.len(), 3);
+        assert_eq!(t.rows[1], ["C2", "claim C2", "**not reproduced**"]);
+        let md = doc::markdown(&blocks);
+        assert!(
+            md.contains(
+                "3 claims of chapter 4: **1 reproduced**, **1 inconclusive**, **1 not reproduced**"
+            ),
+            "{md}"
+        );
+        assert!(md.contains("| T1 | claim T1 | **inconclusive** |"), "{md}");
+        let tex = doc::latex(&blocks, "");
+        assert!(
+            tex.contains("T1 & claim T1 & \\textbf{inconclusive} \\\\"),
+            "{tex}"
+        );
+        assert_eq!(
+            super::claim_details(&claim("C1", Verdict::Reproduced)),
+            "**C1** (§4.1) claim C1 — **reproduced**. *Rule:* a rule. *Numbers:* the numbers."
+        );
+        // A qualified verdict names its reason's kind in the summary, in full in the details.
+        let mut q = claim("O3", Verdict::Inconclusive);
+        q.caveat = Some("inconclusive (tuning): SGD: no tuning run of its pick converged".into());
+        let b = verdict_summary(std::slice::from_ref(&q), &[]);
+        let Block::Table(t) = &b[2] else {
+            panic!("no table")
+        };
+        assert_eq!(t.rows[0][2], "**inconclusive (tuning)**");
+        assert!(super::claim_details(&q).contains("— **inconclusive (tuning): SGD: no tuning run"));
     }
 }

@@ -6,17 +6,29 @@ use crate::error::Error;
 use crate::experiment::{Checkpoint, TaskKind};
 use crate::plots::{Figure, Scale, Series};
 use crate::results::{ConfigResult, Results};
-use crate::stats::Summary;
+use crate::stats::{Interval, Range};
 use std::path::Path;
 
 /// One figure: its file stem, the thesis figure it regenerates, and the figure.
 pub type NamedFigure = (&'static str, &'static str, Figure);
 
-/// Per-checkpoint band of a metric across seeds: (x = mean of `xf`, summary of `yf`).
+/// The interval kind of a figure's quantity from its physical range: bootstrap when bounded on
+/// both sides, a t interval clamped to 0 when only non-negative (as in the tables).
+fn range_of((lo, hi): (f64, f64)) -> Range {
+    if hi.is_finite() {
+        Range::Bounded { lo, hi }
+    } else {
+        Range::NonNegative
+    }
+}
+
+/// Per-checkpoint band of a metric across seeds: (x = mean of `xf`, the 95% interval of `yf`
+/// for a quantity of `range`), and where each diverged run stopped: its last checkpoint.
 fn band(
     c: &ConfigResult,
     xf: impl Fn(&Checkpoint) -> f64,
     yf: impl Fn(&Checkpoint) -> Option<f64>,
+    (what, range): (&str, Range),
 ) -> Series {
     // Checkpoints are aligned by their nominal call count, on the schedule of the longest run (a
     // diverged run stops early: its checkpoints are those it reached).
@@ -27,6 +39,15 @@ fn band(
         .map(|r| r.checkpoints.iter().map(|k| k.at_calls).collect())
         .unwrap_or_default();
     let mut s = Series::new(c.label.clone());
+    s.runs = c.runs.len();
+    for r in c.runs.iter().filter(|r| r.status.is_diverged()) {
+        s.diverged += 1;
+        if let Some(k) = r.checkpoints.last()
+            && let Some(y) = yf(k).filter(|y| y.is_finite())
+        {
+            s.diverged_at.push((xf(k), y));
+        }
+    }
     s.off_schedule = c
         .runs
         .iter()
@@ -46,19 +67,12 @@ fn band(
             continue;
         }
         let x = cps.iter().map(|c| xf(c)).sum::<f64>() / cps.len() as f64;
-        let sm = Summary::of(&ys);
+        let key = format!("{}/{what}/{it}", super::aggregate::key(c, "figure"));
+        let sm = Interval::of(&ys, range, &key);
         s.x.push(x);
         s.mean.push(sm.mean);
-        s.lo.push(if sm.half_width.is_finite() {
-            sm.lo()
-        } else {
-            sm.mean
-        });
-        s.hi.push(if sm.half_width.is_finite() {
-            sm.hi()
-        } else {
-            sm.mean
-        });
+        s.lo.push(if sm.has_ends() { sm.lo } else { sm.mean });
+        s.hi.push(if sm.has_ends() { sm.hi } else { sm.mean });
     }
     s
 }
@@ -72,8 +86,7 @@ fn reference_series(label: String, x: Vec<f64>, mean: Vec<f64>) -> Series {
         hi: mean.clone(),
         mean,
         reference: true,
-        non_finite: 0,
-        off_schedule: 0,
+        ..Series::new("")
     }
 }
 
@@ -136,12 +149,13 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
                         log_y: bool,
                         f: &dyn Fn(&Checkpoint) -> Option<f64>,
                         skip_dataset: bool,
-                        (x_label, x_scale, xf): XAxis<'_>| {
+                        (x_label, x_scale, xf): XAxis<'_>,
+                        range: (f64, f64)| {
         let series: Vec<Series> = r
             .obstacle
             .iter()
             .filter(|c| !(skip_dataset && matches!(c.0.label.as_str(), "BC" | "DAgger")))
-            .map(|c| band(&c.0, xf, f))
+            .map(|c| band(&c.0, xf, f, (y, range_of(range))))
             .collect();
         let lines = baseline_lines(
             r,
@@ -160,20 +174,21 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             series: series.into_iter().chain(lines).collect(),
             panels: None,
         }
+        .clamped(range)
     };
     let n_obs = f64::from(profile.obstacle.eval_episodes);
     figs.push((
         "fig4-3-success",
         "Fig. 4.3",
         obstacle_fig(
-            "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policies; one panel per algorithm)",
+            "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% interval band; dashed: reference policies; one panel per algorithm)",
             "success rate (fraction of episodes)",
             false,
             &|c| Some(c.score),
             false,
             by_trajectories,
+            (0.0, 1.0),
         )
-        .clamped((0.0, 1.0))
         // A dozen methods overlap at low success rates: one panel each.
         .in_panels(3),
     ));
@@ -181,14 +196,14 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         "fig4-4-crashes",
         "Fig. 4.4",
         obstacle_fig(
-            &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% CI band; dashed: reference policies; one panel per algorithm)"),
+            &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% interval band; dashed: reference policies; one panel per algorithm)"),
             &format!("crashes (episodes out of {n_obs})"),
             false,
             &|c| Some(f64::from(c.crashes)),
             false,
             by_trajectories,
+            (0.0, n_obs),
         )
-        .clamped((0.0, n_obs))
         .in_panels(3),
     ));
     // Figs. 4.5 (gradient-estimate rows, oracle methods only) and 4.6 (loss rows), against
@@ -198,7 +213,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         (
             "fig4-5a-gradient-x",
             "Fig. 4.5",
-            " (a): obstacle task, norm of the x-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band; one panel per algorithm)".into(),
+            " (a): obstacle task, norm of the x-row of the gradient estimate (oracle methods; mean over seeds, 95% interval band; one panel per algorithm)".into(),
             "‖gradient estimate, x-row‖ (log scale)",
             &|c| c.grad_x,
             true,
@@ -206,7 +221,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         (
             "fig4-5b-gradient-y",
             "Fig. 4.5",
-            " (b): obstacle task, norm of the y-row of the gradient estimate (oracle methods; mean over seeds, 95% CI band; one panel per algorithm)".into(),
+            " (b): obstacle task, norm of the y-row of the gradient estimate (oracle methods; mean over seeds, 95% interval band; one panel per algorithm)".into(),
             "‖gradient estimate, y-row‖ (log scale)",
             &|c| c.grad_y,
             true,
@@ -214,7 +229,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         (
             "fig4-6a-loss-x",
             "Fig. 4.6",
-            " (a): obstacle task, loss of the x velocity per decision (mean over seeds, 95% CI band; one panel per algorithm)".into(),
+            " (a): obstacle task, loss of the x velocity per decision (mean over seeds, 95% interval band; one panel per algorithm)".into(),
             "x-velocity squared error (log scale)",
             &|c| c.loss_x,
             false,
@@ -222,7 +237,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         (
             "fig4-6b-loss-y",
             "Fig. 4.6",
-            " (b): obstacle task, loss of the y velocity per decision (mean over seeds, 95% CI band; one panel per algorithm)".into(),
+            " (b): obstacle task, loss of the y velocity per decision (mean over seeds, 95% interval band; one panel per algorithm)".into(),
             "y-velocity squared error (log scale)",
             &|c| c.loss_y,
             false,
@@ -239,19 +254,23 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
                 f,
                 oracle_only,
                 by_iteration,
+                (0.0, f64::INFINITY),
             )
-            .clamped((0.0, f64::INFINITY))
             // The norms of a dozen methods overlap over a decade: one panel each.
             .in_panels(3),
         ));
     }
-    let cart_fig = |title: &str, y: &str, log_y: bool, f: &dyn Fn(&Checkpoint) -> Option<f64>| {
+    let cart_fig = |title: &str,
+                    y: &str,
+                    log_y: bool,
+                    f: &dyn Fn(&Checkpoint) -> Option<f64>,
+                    range: (f64, f64)| {
         // Checkpoints are evenly spaced in gradient calls: a linear axis in millions shows the
         // start (0 calls) of every algorithm alike.
         let series: Vec<Series> = r
             .cartpole
             .iter()
-            .map(|c| band(&c.0, |k| gc(k) / 1e6, f))
+            .map(|c| band(&c.0, |k| gc(k) / 1e6, f, (y, range_of(range))))
             .collect();
         let lines = baseline_lines(
             r,
@@ -270,17 +289,18 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             series: series.into_iter().chain(lines).collect(),
             panels: None,
         }
+        .clamped(range)
     };
     figs.push((
         "fig4-8-loss",
         "Fig. 4.8",
         cart_fig(
-            "Fig. 4.8: CartPole, Brier loss per decision against the expert's action (mean over seeds, 95% CI band; dashed: reference policy; one panel per algorithm)",
+            "Fig. 4.8: CartPole, Brier loss per decision against the expert's action (mean over seeds, 95% interval band; dashed: reference policy; one panel per algorithm)",
             "Brier loss per decision",
             false,
             &|c| Some(c.loss),
+            (0.0, f64::INFINITY),
         )
-        .clamped((0.0, f64::INFINITY))
         .in_panels(3),
     ));
     figs.push((
@@ -288,14 +308,14 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         "Fig. 4.9",
         cart_fig(
             &format!(
-                "Fig. 4.9: CartPole, resets until one full 500-step episode, capped at {} (mean over seeds, 95% CI band; one panel per algorithm)",
+                "Fig. 4.9: CartPole, resets until one full 500-step episode, capped at {} (mean over seeds, 95% interval band; one panel per algorithm)",
                 profile.cartpole.full_episode_cap
             ),
             "resets before a full episode (count)",
             false,
             &|c| c.resets_to_full_episode.map(f64::from),
+            (0.0, f64::from(profile.cartpole.full_episode_cap)),
         )
-        .clamped((0.0, f64::from(profile.cartpole.full_episode_cap)))
         // Most algorithms sit on the cap: one panel each, so none hides another.
         .in_panels(3),
     ));
@@ -303,15 +323,28 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
         "fig4-10-reward",
         "Fig. 4.10",
         cart_fig(
-            "Fig. 4.10: CartPole, mean episode reward of the deterministic policy (mean over seeds, 95% CI band; dashed: reference policy; one panel per algorithm)",
+            "Fig. 4.10: CartPole, mean episode reward of the deterministic policy (mean over seeds, 95% interval band; dashed: reference policy; one panel per algorithm)",
             "episode reward (steps, max. 500)",
             false,
             &|c| Some(c.reward),
+            (0.0, 500.0),
         )
-        .clamped((0.0, 500.0))
         .in_panels(3),
     ));
+    for (_, _, f) in figs.iter_mut().filter(|(_, n, _)| *n != "Fig. 4.2") {
+        f.title = with_divergence_key(&f.title);
+    }
     figs
+}
+
+/// A learner figure's caption with the key to diverged runs, inside its closing parenthesis.
+fn with_divergence_key(title: &str) -> String {
+    const KEY: &str = "; ×: a run that diverged, at its last checkpoint, and \"(diverged k/n)\" after \
+                       the algorithm's name; the band after it is over the other seeds";
+    match title.strip_suffix(')') {
+        Some(t) => format!("{t}{KEY})"),
+        None => format!("{title} ({})", &KEY[2..]),
+    }
 }
 
 /// Write every figure as `dir/<name>.svg` (and `.png` when `png`); returns whether the PNGs

@@ -7,7 +7,7 @@
 use super::aggregate::{ci, num};
 use crate::provenance::Machine;
 use crate::results::{ConfigTiming, ConfigWithTiming};
-use crate::stats::Summary;
+use crate::stats::Interval;
 
 /// What a kit wall time measures.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,7 +45,7 @@ pub struct SpeedupRow {
     pub label: String,
     /// The kit's mean training wall time in seconds (with its interval) and what it measures;
     /// `None` when no timing file exists (results reused from an older run).
-    pub kit: Option<(Summary, TimeBasis)>,
+    pub kit: Option<(Interval, TimeBasis)>,
     /// The thesis's runtime in seconds, if the thesis reports this algorithm.
     pub thesis_seconds: Option<f64>,
 }
@@ -73,15 +73,18 @@ impl SpeedupRow {
 /// The kit's time of one configuration: the mean training wall time to converge over the seeds
 /// that converged (as Tables 4.1/4.3 average gradient calls), or the whole run's when no seed
 /// converged.
-pub fn kit_time(t: &ConfigTiming) -> (Summary, TimeBasis) {
+pub fn kit_time(t: &ConfigTiming) -> (Interval, TimeBasis) {
     let conv: Vec<f64> = t.runs.iter().filter_map(|r| r.converge_seconds).collect();
     let seeds = t.runs.len();
     if conv.is_empty() {
         // No ratio for a method that did not converge (the row shows "—").
-        (Summary::of(&[]), TimeBasis::WholeRun { seeds })
+        (
+            super::aggregate::seconds(&[]),
+            TimeBasis::WholeRun { seeds },
+        )
     } else {
         (
-            Summary::of(&conv),
+            super::aggregate::seconds(&conv),
             TimeBasis::ToConverge {
                 converged: conv.len(),
                 seeds,

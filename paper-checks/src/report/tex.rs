@@ -123,6 +123,7 @@ fn math_symbol(c: char) -> Option<&'static str> {
         '↓' => "\\downarrow",
         '⊤' => "\\top",
         '⊥' => "\\perp",
+        '†' => "\\dagger",
         // Delimiters.
         '‖' => "\\|",
         '|' => "|",
