@@ -1,4 +1,4 @@
-//! STORM's mean linearisation measured on the two tasks (math.md §10.3).
+//! STORM's mean linearisation measured on the two tasks (math.md §10.4).
 //!
 //! For the thesis's unweighted old-point term, the linearised direction recursion is
 //! `d_{k+1} ≈ (1 − a)(I − η J_τ) d_k + a g` with `J_τ = ∂g(θ, τ)/∂θ` at a fixed recorded trajectory
