@@ -67,11 +67,14 @@ pub fn eigenvalues(m: &DMatrix<f64>) -> Result<Vec<Complex<f64>>, StabilityError
 /// [`StabilityError`] for a ∉ \[0, 1) or a negative or non-finite η.
 pub fn mean_radius(eigenvalues: &[Complex<f64>], eta: f64, a: f64) -> Result<f64, StabilityError> {
     check(eta, a)?;
+    if eigenvalues.is_empty() {
+        return Ok(1.0 - a);
+    }
     let worst = eigenvalues
         .iter()
         .map(|l| (Complex::new(1.0, 0.0) - l * eta).norm())
-        .fold(1.0f64, f64::max);
-    Ok((1.0 - a) * if eigenvalues.is_empty() { 1.0 } else { worst })
+        .fold(0.0f64, f64::max);
+    Ok((1.0 - a) * worst)
 }
 
 /// `η₊(λ)` of the module docs: the step size above which `(1 − a)|1 − ηλ| > 1`; +∞ for λ = 0.
