@@ -43,25 +43,25 @@ pub struct Unweighted<S> {
     pub second_moment: Matrix<S>,
 }
 
-/// The Jacobian rows of a dual vector: `m[i][j] = ∂x_i/∂θ_j`, with `x_i`'s value part in `values`.
+/// A dual vector split into its values `x_i` and its Jacobian rows `m[i][j] = ∂x_i/∂θ_j`.
 fn split<S: Scalar>(x: Vec<Dual<S>>, d: usize) -> (Vec<S>, Matrix<S>) {
     x.into_iter().map(|xi| xi.into_parts(d)).unzip()
 }
 
-/// A zero d × d matrix.
+/// A zero `rows × cols` matrix.
 fn zeros<S: Scalar>(rows: usize, cols: usize) -> Matrix<S> {
     vec![vec![S::zero(); cols]; rows]
 }
 
 /// Complete a prefix (s_1..s_{T−1}, a_1..a_{T−2}) into the trajectory the oracle takes: the last
 /// action and state do not enter the estimate.
-fn trajectory_of(problem_expert: &[usize], states: &[usize], actions: &[usize]) -> ToyTrajectory {
+fn trajectory_of(expert: &[usize], states: &[usize], actions: &[usize]) -> ToyTrajectory {
     let mut st = states.to_vec();
     st.push(states[states.len() - 1]);
     let mut ac = actions.to_vec();
     ac.push(0);
     ToyTrajectory {
-        labels: states.iter().map(|s| problem_expert[*s]).collect(),
+        labels: states.iter().map(|s| expert[*s]).collect(),
         states: st,
         actions: ac,
     }
