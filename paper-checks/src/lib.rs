@@ -26,6 +26,7 @@ pub mod results;
 pub mod shard;
 pub mod stats;
 pub mod storage;
+pub mod storm_stability;
 pub mod tuning;
 pub mod verdict;
 

@@ -11,6 +11,7 @@
 //! | [`first_order`] | the shell of SGD, Adam and RMSProp: an update rule applied to the eq. 3.15 estimate | Algorithm 3, §2.6 |
 //! | [`sgd`] | SGD on the IL objective | Algorithm 3 |
 //! | [`storm`] | STORM (eq. 3.40, E9-corrected), schedules (3.43), Cutkosky–Orabona adaptive, explicit; IS-STORM | Alg. 4, math.md §§3–4 |
+//! | [`storm_stability`] | when STORM's linearised direction recursion amplifies: ρ((1 − a)(I − ηA)), η*(a) | math.md §10 |
 //! | [`storm_plus`] | STORM+ | Levy, Kavis, Cevher (NeurIPS 2021) |
 //! | [`adam`], [`rmsprop`] | Adam, RMSProp | §2.6, eqs. 2.14–2.15 |
 //! | [`o2nc`] | online-to-non-convex conversion with OGD, IL-correct sampling | Alg. 5, math.md §5 |
@@ -73,6 +74,7 @@ pub mod sgd;
 pub mod smile;
 pub mod storm;
 pub mod storm_plus;
+pub mod storm_stability;
 mod vector;
 
 pub use crate::scalar::ConfigNumber;
