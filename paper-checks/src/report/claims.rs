@@ -410,8 +410,9 @@ fn dagger_most_calls(id: &str, source: &str, set: &[&ConfigResult]) -> Claim {
         source,
         "DAgger needs the most gradient calls to converge",
         &format!(
-            "{MEDIAN_RULE}; DAgger's interval wholly above every other's: reproduced; DAgger's \
-             median +∞, or another's interval wholly above it or +∞: not reproduced"
+            "{MEDIAN_RULE}; DAgger's lower end at or above every other's finite upper end (a \
+             lower end of +∞, DAgger never converging in most runs, counts): reproduced; DAgger's \
+             upper end below another's lower end: not reproduced; else inconclusive"
         ),
         calls_evidence(set),
         verdict,
