@@ -348,6 +348,17 @@ fn a_run_beyond_the_norm_bound_ends_as_diverged() {
     assert_eq!(seed["iterations"].as_u64(), Some(0));
     assert!(at_calls(&seed).is_empty());
     assert!(summary["runs"][0]["final"].is_null());
+    // Finite entries whose sum of squares overflows: the stated norm is still the true one,
+    // √6·10²⁰⁰.
+    let (_, seed) = run_one(
+        &s,
+        "huge",
+        &text.replace(
+            "theta0 = [1, 1, 1, 1, 1, 1]",
+            "theta0 = [1e200, 1e200, 1e200, 1e200, 1e200, 1e200]",
+        ),
+    );
+    assert_eq!(seed["termination"], "diverged: ‖θ‖ = 2.449e200 > 1e4");
 }
 
 /// All files but `timings.json` of one directory.
