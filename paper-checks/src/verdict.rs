@@ -8,7 +8,8 @@
 //! * Calls (or time) to converge are compared by **medians with distribution-free intervals**
 //!   ([`MedianCi`]: order statistics of the binomial law, exact coverage ≥ 95 %). A run that never
 //!   converged within its budget, or diverged, enters as +∞: a method whose median is +∞ did not
-//!   converge in most runs, and no claim that it is faster can be reproduced.
+//!   converge in most runs: no claim that it is faster can be reproduced, and against methods
+//!   that certainly converged it needs the most ([`most`]).
 //! * Levels ("≈ 70 % success") and extremes ("BC has the most crashes") use the means' Student-t
 //!   intervals ([`crate::stats::Summary`]).
 //! * A claim in favour of a method with **diverged** runs is never *reproduced*: the best it can
@@ -146,9 +147,9 @@ impl MedianCi {
             0 => f64::NAN,
             _ if n % 2 == 1 => v[n / 2],
             _ => {
-                // Sorted: a ≤ b, so an infinite middle value makes b infinite.
+                // Sorted: a ≤ b, so a middle value of +∞ makes b = +∞.
                 let (a, b) = (v[n / 2 - 1], v[n / 2]);
-                if b.is_infinite() {
+                if b == f64::INFINITY {
                     f64::INFINITY
                 } else {
                     0.5 * (a + b)
@@ -235,8 +236,10 @@ impl MedianCi {
 }
 
 /// "`a` needs less than `b`" for costs with median intervals: reproduced if `a`'s interval lies
-/// wholly below `b`'s, not reproduced if `b`'s lies wholly below `a`'s or `a` did not converge
-/// in most runs (median +∞), inconclusive otherwise (overlap, or an interval too small to exist).
+/// wholly below `b`'s (`a.hi < b.lo`), not reproduced if `b`'s lies wholly below `a`'s
+/// (`b.hi < a.lo`) or `a` did not converge in most runs (median +∞) or has no runs (median NaN),
+/// inconclusive otherwise (intervals that overlap or touch, or an interval too small to exist:
+/// an end that is NaN).
 pub fn less(a: &MedianCi, b: &MedianCi) -> Verdict {
     if a.median.is_infinite() || a.median.is_nan() {
         return Verdict::NotReproduced;
@@ -259,31 +262,34 @@ pub fn least(target: &MedianCi, others: &[&MedianCi]) -> Verdict {
     Verdict::all(&others.iter().map(|o| less(target, o)).collect::<Vec<_>>())
 }
 
-/// "`target` needs the most of all": reproduced if its interval lies wholly above every other
-/// method's (an other that never converged in most runs has median +∞ and cannot be exceeded),
-/// not reproduced if some other's lies wholly above its own, or `target` never converged in most
-/// runs (the ordering of calls to converge needs it to converge).
+/// "`target` needs the most of all", judged against each other method and combined by
+/// [`Verdict::all`]: reproduced against `o` if `target.lo > o.hi` with `o.hi` finite (a lower end
+/// of +∞ counts: a target that did not converge in most runs needs more than a method that
+/// certainly converged); not reproduced if `target.hi < o.lo` (the target certainly needs less);
+/// inconclusive otherwise: overlapping or touching intervals (as in [`less`]), both reaching +∞ (neither converged, nothing
+/// tells them apart), or an end that does not exist (NaN: too few runs; every comparison with it
+/// is false, so it decides nothing).
 pub fn most(target: &MedianCi, others: &[&MedianCi]) -> Verdict {
-    if target.median.is_infinite() || target.median.is_nan() {
-        return Verdict::NotReproduced;
-    }
     Verdict::all(
         &others
             .iter()
             .map(|o| {
-                if o.median.is_infinite() {
+                if o.hi < f64::INFINITY && target.lo > o.hi {
+                    Verdict::Reproduced
+                } else if target.hi < o.lo {
                     Verdict::NotReproduced
                 } else {
-                    less(o, target)
+                    Verdict::Inconclusive
                 }
             })
             .collect::<Vec<_>>(),
     )
 }
 
-/// "the mean lies in `[lo, hi]`": reproduced if the mean's interval lies inside the band, not
-/// reproduced if it is disjoint from it, inconclusive if it straddles an edge (or has no width:
-/// fewer than 2 values).
+/// "the mean lies in `[lo, hi]`" (a closed band): reproduced if the mean's interval lies inside
+/// the band (its ends may meet the band's), not reproduced if it is disjoint from it (wholly below
+/// `lo` or wholly above `hi`), inconclusive if it straddles or touches an edge from outside, or
+/// is not a finite interval (no width: fewer than 2 values; or an infinite mean or width).
 pub fn within(s: &Summary, lo: f64, hi: f64) -> Verdict {
     if !(s.mean.is_finite() && s.half_width.is_finite()) {
         return Verdict::Inconclusive;
@@ -299,7 +305,9 @@ pub fn within(s: &Summary, lo: f64, hi: f64) -> Verdict {
 
 /// "`target`'s mean is the largest" (`largest = true`) or the smallest: reproduced if its
 /// interval is disjoint from and beyond every other's, not reproduced if some other's interval is
-/// disjoint from and beyond its own, inconclusive otherwise.
+/// disjoint from and beyond its own, inconclusive otherwise (intervals that overlap or touch, no
+/// others, or an interval that is not finite: fewer than 2 values, or an infinite mean or width,
+/// which decides nothing against that method).
 pub fn extreme(target: &Summary, others: &[&Summary], largest: bool) -> Verdict {
     let above = |a: &Summary, b: &Summary| {
         if largest {
@@ -426,11 +434,11 @@ mod tests {
             .map(|o| o.cost())
             .collect();
         let slow: Vec<f64> = (20..30).map(f64::from).collect();
-        // A method that never converged is not faster than anything, and one that did is not
-        // "the slowest" against it.
+        // A method that never converged is not faster than anything, one that did is not "the
+        // slowest" against it, and it needs more than one that certainly converged.
         assert_eq!(less(&ci(&never), &ci(&slow)), Verdict::NotReproduced);
         assert_eq!(most(&ci(&slow), &[&ci(&never)]), Verdict::NotReproduced);
-        assert_eq!(most(&ci(&never), &[&ci(&slow)]), Verdict::NotReproduced);
+        assert_eq!(most(&ci(&never), &[&ci(&slow)]), Verdict::Reproduced);
     }
 
     #[test]
@@ -463,5 +471,357 @@ mod tests {
         assert_eq!(Verdict::all(&[Reproduced, Inconclusive]), Inconclusive);
         assert_eq!(Verdict::all(&[Inconclusive, NotReproduced]), NotReproduced);
         assert_eq!(Verdict::all(&[]), Inconclusive);
+    }
+
+    const INF: f64 = f64::INFINITY;
+
+    /// A median interval given by its ends (n = 10, as [`MedianCi::of`] would give at 95 %).
+    fn iv(lo: f64, median: f64, hi: f64) -> MedianCi {
+        MedianCi {
+            n: 10,
+            median,
+            lo,
+            hi,
+            coverage: 1.0 - 22.0 / 1024.0,
+        }
+    }
+
+    /// A mean's interval `mean ± half_width` (binary fractions, so its ends are exact).
+    fn sm(mean: f64, half_width: f64) -> Summary {
+        Summary {
+            n: 4,
+            mean,
+            half_width,
+        }
+    }
+
+    #[test]
+    fn verdicts_read_as_their_names() {
+        assert_eq!(Verdict::Reproduced.text(), "reproduced");
+        assert_eq!(Verdict::Inconclusive.text(), "inconclusive");
+        assert_eq!(Verdict::NotReproduced.text(), "not reproduced");
+    }
+
+    #[test]
+    fn a_conjunction_needs_every_part_and_fails_with_any() {
+        use Verdict::*;
+        assert_eq!(Verdict::all(&[Reproduced]), Reproduced);
+        assert_eq!(Verdict::all(&[Inconclusive]), Inconclusive);
+        assert_eq!(Verdict::all(&[NotReproduced]), NotReproduced);
+        assert_eq!(Verdict::all(&[Reproduced, NotReproduced]), NotReproduced);
+        assert_eq!(Verdict::all(&[NotReproduced, Reproduced]), NotReproduced);
+        assert_eq!(Verdict::all(&[Inconclusive, Reproduced]), Inconclusive);
+    }
+
+    #[test]
+    fn outcomes_cost_their_calls_or_infinity_and_tally_by_kind() {
+        assert_eq!(Outcome::Converged(3.5).cost(), 3.5);
+        assert_eq!(Outcome::Converged(0.0).cost(), 0.0);
+        assert_eq!(Outcome::NotConverged.cost(), INF);
+        assert_eq!(Outcome::Diverged.cost(), INF);
+        let runs = [
+            Outcome::Converged(1.0),
+            Outcome::Diverged,
+            Outcome::NotConverged,
+            Outcome::Converged(2.0),
+            Outcome::NotConverged,
+            Outcome::Converged(3.0),
+        ];
+        let t = Tally::of(&runs);
+        assert_eq!((t.converged, t.not_converged, t.diverged), (3, 2, 1));
+        assert_eq!(t.runs(), 6);
+        assert_eq!(t.text(), "converged 3/6, 2 never, 1 diverged");
+        let clean = Tally::of(&runs[3..4]);
+        assert_eq!(clean.runs(), 1);
+        assert_eq!(clean.text(), "converged 1/1");
+        let never = Tally::of(&[Outcome::NotConverged]);
+        assert_eq!(never.text(), "converged 0/1, 1 never");
+        let failed = Tally::of(&[Outcome::Diverged, Outcome::Diverged]);
+        assert_eq!(failed.text(), "converged 0/2, 2 diverged");
+        assert_eq!(Tally::of(&[]), Tally::default());
+        assert_eq!(Tally::default().runs(), 0);
+        assert_eq!(Tally::default().text(), "converged 0/0");
+    }
+
+    #[test]
+    fn the_median_is_the_middle_value_or_the_mean_of_the_two_middle_values() {
+        assert_eq!(ci(&[3.0, 1.0, 2.0]).median, 2.0);
+        assert_eq!(ci(&[7.0]).median, 7.0);
+        assert_eq!(ci(&[4.0, 1.0, 3.0, 2.0]).median, 2.5);
+        assert_eq!(ci(&[10.0, 20.0]).median, 15.0);
+        // +∞ as one of the two middle values makes the median +∞ (most runs did not converge).
+        assert_eq!(ci(&[1.0, INF]).median, INF);
+        assert_eq!(ci(&[-INF, INF]).median, INF);
+        assert_eq!(ci(&[1.0, 2.0, INF, INF]).median, INF);
+        // Two middle values of −∞ have the median −∞, not +∞.
+        assert_eq!(ci(&[-INF, -INF]).median, -INF);
+        let empty = ci(&[]);
+        assert_eq!(empty.n, 0);
+        assert!(empty.median.is_nan() && empty.lo.is_nan() && empty.hi.is_nan());
+        assert!(empty.coverage.is_nan());
+        let one = ci(&[7.0]);
+        assert_eq!(one.n, 1);
+        assert!(one.lo.is_nan() && one.hi.is_nan() && one.coverage.is_nan());
+    }
+
+    #[test]
+    fn the_interval_takes_the_largest_k_whose_tail_fits_the_level() {
+        let xs: Vec<f64> = (1..=10).map(f64::from).collect();
+        // n = 8 at 95 %: P(Bin(8, ½) ≤ 0) = 1/256 ≤ 0.025 < P(≤ 1) = 9/256, so k = 1.
+        let c = ci(&xs[..8]);
+        assert_eq!((c.lo, c.hi), (1.0, 8.0));
+        assert!((c.coverage - (1.0 - 2.0 / 256.0)).abs() < 1e-12);
+        // n = 10 at 80 %: P(≤ 2) = 56/1024 ≤ 0.1 < P(≤ 3) = 176/1024, so k = 3.
+        let c = MedianCi::of(&xs, 0.8);
+        assert_eq!((c.lo, c.hi), (3.0, 8.0));
+        assert!((c.coverage - (1.0 - 112.0 / 1024.0)).abs() < 1e-12);
+        // The threshold between k = 2 and k = 1 is the level whose α is P(≤ 1) itself: a level
+        // a hair below it gives k = 2 (coverage 1 − 2 P(≤ 1), just above the level), a hair
+        // above it only k = 1.
+        let p1 = Binomial::new(0.5, 10).unwrap().cdf(1);
+        assert!((p1 - 11.0 / 1024.0).abs() < 1e-15);
+        let c = MedianCi::of(&xs, 1.0 - 2.0 * p1 - 1e-12);
+        assert_eq!((c.lo, c.hi), (2.0, 9.0));
+        assert!(c.coverage >= 1.0 - 2.0 * p1 - 1e-12);
+        let c = MedianCi::of(&xs, 1.0 - 2.0 * p1 + 1e-12);
+        assert_eq!((c.lo, c.hi), (1.0, 10.0));
+        // Every interval covers at least its level.
+        for n in 6..=40 {
+            let ys: Vec<f64> = (0..n).map(f64::from).collect();
+            let c = ci(&ys);
+            assert!(c.coverage >= 0.95 && c.coverage < 1.0, "n = {n}: {c:?}");
+            assert!(c.lo <= c.median && c.median <= c.hi, "n = {n}: {c:?}");
+        }
+    }
+
+    #[test]
+    fn text_and_cell_write_the_median_its_ends_and_infinity() {
+        let num = |x: f64| format!("{x}");
+        let xs: Vec<f64> = (1..=10).map(f64::from).collect();
+        assert_eq!(ci(&xs).text(num), "5.5 [2, 9] (n = 10)");
+        assert_eq!(ci(&xs).cell(num), "5.5 [2, 9]");
+        let few = ci(&[1.0, 3.0, 5.0]);
+        assert_eq!(few.text(num), "3 (n = 3, too few for an interval)");
+        assert_eq!(few.cell(num), "3 (too few for an interval)");
+        let never = ci(&[INF; 10]);
+        assert_eq!(never.text(num), "∞ [∞, ∞] (n = 10)");
+        let mut half = xs.clone();
+        half[5..].fill(INF);
+        assert_eq!(ci(&half).cell(num), "∞ [2, ∞]");
+        assert_eq!(ci(&[INF]).cell(num), "∞ (too few for an interval)");
+    }
+
+    #[test]
+    fn less_needs_disjoint_intervals_and_a_finite_median() {
+        let a = iv(1.0, 2.0, 3.0);
+        // Touching intervals overlap at a point: inconclusive either way.
+        assert_eq!(less(&a, &iv(3.0, 4.0, 5.0)), Verdict::Inconclusive);
+        assert_eq!(less(&iv(3.0, 4.0, 5.0), &a), Verdict::Inconclusive);
+        assert_eq!(less(&a, &iv(3.5, 4.0, 5.0)), Verdict::Reproduced);
+        assert_eq!(less(&iv(3.5, 4.0, 5.0), &a), Verdict::NotReproduced);
+        assert_eq!(less(&a, &iv(2.5, 4.0, 5.0)), Verdict::Inconclusive);
+        // A median of +∞ (most runs did not converge) or NaN (no runs) is never faster, even
+        // when its interval overlaps the other's.
+        assert_eq!(less(&iv(2.0, INF, INF), &a), Verdict::NotReproduced);
+        assert_eq!(less(&ci(&[]), &a), Verdict::NotReproduced);
+        assert_eq!(less(&ci(&[]), &ci(&[])), Verdict::NotReproduced);
+        // An interval that does not exist decides nothing, whatever the other end says.
+        assert_eq!(less(&ci(&[1.0]), &iv(5.0, 6.0, 7.0)), Verdict::Inconclusive);
+        assert_eq!(
+            less(&iv(f64::NAN, 1.5, 2.0), &iv(5.0, 6.0, 7.0)),
+            Verdict::Inconclusive
+        );
+        assert_eq!(
+            less(&iv(5.0, 6.0, 7.0), &iv(f64::NAN, 1.5, 2.0)),
+            Verdict::Inconclusive
+        );
+        assert_eq!(less(&a, &ci(&[9.0])), Verdict::Inconclusive);
+        // Against a method that never converged, a finite interval is faster.
+        assert_eq!(less(&a, &iv(INF, INF, INF)), Verdict::Reproduced);
+    }
+
+    #[test]
+    fn least_is_less_than_every_other() {
+        let a = iv(1.0, 2.0, 3.0);
+        let (above, overlap, below) = (iv(4.0, 5.0, 6.0), iv(2.0, 5.0, 6.0), iv(0.0, 0.5, 0.9));
+        assert_eq!(
+            least(&a, &[&above, &iv(8.0, 9.0, INF)]),
+            Verdict::Reproduced
+        );
+        assert_eq!(least(&a, &[&above, &overlap]), Verdict::Inconclusive);
+        assert_eq!(least(&a, &[&above, &below]), Verdict::NotReproduced);
+        assert_eq!(least(&a, &[]), Verdict::Inconclusive);
+    }
+
+    #[test]
+    fn most_needs_the_target_above_every_finite_upper_end() {
+        let t = iv(20.0, 25.0, 30.0);
+        // Lower end above the other's upper end: reproduced; equal to it (touching) or a hair
+        // below: inconclusive.
+        assert_eq!(most(&t, &[&iv(5.0, 10.0, 19.5)]), Verdict::Reproduced);
+        assert_eq!(most(&t, &[&iv(5.0, 10.0, 20.0)]), Verdict::Inconclusive);
+        assert_eq!(most(&t, &[&iv(5.0, 10.0, 20.5)]), Verdict::Inconclusive);
+        assert_eq!(most(&t, &[&iv(1.0, 5.0, 10.0)]), Verdict::Reproduced);
+        // Upper end below the other's lower end: not reproduced; equal to it: inconclusive.
+        assert_eq!(most(&t, &[&iv(30.5, 40.0, 50.0)]), Verdict::NotReproduced);
+        assert_eq!(most(&t, &[&iv(30.0, 40.0, 50.0)]), Verdict::Inconclusive);
+        // Every other is judged: one overlap or one above decides.
+        let below = iv(1.0, 5.0, 10.0);
+        assert_eq!(most(&t, &[&below, &iv(2.0, 3.0, 4.0)]), Verdict::Reproduced);
+        assert_eq!(
+            most(&t, &[&below, &iv(5.0, 22.0, 25.0)]),
+            Verdict::Inconclusive
+        );
+        assert_eq!(
+            most(&t, &[&below, &iv(31.0, 40.0, 50.0)]),
+            Verdict::NotReproduced
+        );
+        assert_eq!(most(&t, &[]), Verdict::Inconclusive);
+    }
+
+    #[test]
+    fn a_target_that_did_not_converge_needs_the_most_against_methods_that_did() {
+        let never = iv(INF, INF, INF);
+        let finite = iv(1.0, 5.0, 10.0);
+        assert_eq!(most(&never, &[&finite]), Verdict::Reproduced);
+        assert_eq!(
+            most(&never, &[&finite, &iv(2.0, 3.0, 4.0)]),
+            Verdict::Reproduced
+        );
+        // Its median +∞ with a finite lower end: only what lies wholly below that end.
+        let mostly = iv(12.0, INF, INF);
+        assert_eq!(most(&mostly, &[&finite]), Verdict::Reproduced);
+        assert_eq!(most(&mostly, &[&iv(1.0, 5.0, 13.0)]), Verdict::Inconclusive);
+        // Another that may not converge either: nothing tells them apart.
+        assert_eq!(most(&never, &[&never]), Verdict::Inconclusive);
+        assert_eq!(most(&never, &[&iv(3.0, 7.0, INF)]), Verdict::Inconclusive);
+        assert_eq!(most(&never, &[&finite, &never]), Verdict::Inconclusive);
+        // A target that certainly converged against one that never did needs less.
+        assert_eq!(most(&finite, &[&never]), Verdict::NotReproduced);
+        assert_eq!(most(&finite, &[&iv(3.0, INF, INF)]), Verdict::Inconclusive);
+    }
+
+    #[test]
+    fn most_without_an_interval_decides_nothing() {
+        let t = iv(20.0, 25.0, 30.0);
+        assert_eq!(
+            most(&ci(&[25.0]), &[&iv(1.0, 2.0, 3.0)]),
+            Verdict::Inconclusive
+        );
+        assert_eq!(most(&ci(&[]), &[&iv(1.0, 2.0, 3.0)]), Verdict::Inconclusive);
+        assert_eq!(most(&t, &[&ci(&[1.0])]), Verdict::Inconclusive);
+        assert_eq!(most(&t, &[&ci(&[])]), Verdict::Inconclusive);
+        assert_eq!(most(&ci(&[INF]), &[&ci(&[1.0])]), Verdict::Inconclusive);
+    }
+
+    #[test]
+    fn within_is_inside_the_closed_band_or_disjoint_from_it() {
+        // The interval [0.625, 0.875].
+        let s = sm(0.75, 0.125);
+        assert_eq!((s.lo(), s.hi()), (0.625, 0.875));
+        assert_eq!(within(&s, 0.625, 0.875), Verdict::Reproduced);
+        assert_eq!(within(&s, 0.5, 1.0), Verdict::Reproduced);
+        assert_eq!(within(&s, 0.6875, 1.0), Verdict::Inconclusive);
+        assert_eq!(within(&s, 0.5, 0.8125), Verdict::Inconclusive);
+        assert_eq!(within(&s, 0.6875, 0.8125), Verdict::Inconclusive);
+        // Touching the band from outside is not disjoint from it.
+        assert_eq!(within(&s, 0.875, 1.0), Verdict::Inconclusive);
+        assert_eq!(within(&s, 0.0, 0.625), Verdict::Inconclusive);
+        // Wholly below the band, or wholly above it.
+        assert_eq!(within(&s, 0.9, 1.0), Verdict::NotReproduced);
+        assert_eq!(within(&s, 0.0, 0.5), Verdict::NotReproduced);
+        assert_eq!(within(&s, -INF, 0.5), Verdict::NotReproduced);
+        assert_eq!(within(&s, 0.0, INF), Verdict::Reproduced);
+    }
+
+    #[test]
+    fn within_an_interval_that_is_not_finite_is_inconclusive() {
+        assert_eq!(
+            within(&Summary::of(&[0.7]), 0.0, 1.0),
+            Verdict::Inconclusive
+        );
+        assert_eq!(
+            within(&Summary::of(&[0.7]), 0.8, 1.0),
+            Verdict::Inconclusive
+        );
+        assert_eq!(within(&Summary::of(&[]), 0.0, 1.0), Verdict::Inconclusive);
+        assert_eq!(within(&sm(INF, 1.0), 0.0, INF), Verdict::Inconclusive);
+        assert_eq!(within(&sm(INF, 1.0), 0.0, 1.0), Verdict::Inconclusive);
+        assert_eq!(within(&sm(-INF, 1.0), 0.0, 1.0), Verdict::Inconclusive);
+        assert_eq!(within(&sm(0.5, INF), -INF, INF), Verdict::Inconclusive);
+        assert_eq!(within(&sm(f64::NAN, 1.0), 0.0, 1.0), Verdict::Inconclusive);
+    }
+
+    #[test]
+    fn extreme_needs_disjoint_intervals_beyond_every_other() {
+        let t = sm(0.75, 0.125); // [0.625, 0.875]
+        let touching = sm(0.4375, 0.1875); // [0.25, 0.625]
+        let below = sm(0.375, 0.125); // [0.25, 0.5]
+        let above = sm(1.0, 0.0625); // [0.9375, 1.0625]
+        assert_eq!((touching.hi(), below.hi()), (0.625, 0.5));
+        for largest in [true, false] {
+            assert_eq!(extreme(&t, &[&touching], largest), Verdict::Inconclusive);
+            assert_eq!(extreme(&touching, &[&t], largest), Verdict::Inconclusive);
+            assert_eq!(extreme(&t, &[], largest), Verdict::Inconclusive);
+        }
+        assert_eq!(extreme(&t, &[&below], true), Verdict::Reproduced);
+        assert_eq!(extreme(&t, &[&below], false), Verdict::NotReproduced);
+        assert_eq!(extreme(&below, &[&t], false), Verdict::Reproduced);
+        assert_eq!(extreme(&below, &[&t], true), Verdict::NotReproduced);
+        assert_eq!(
+            extreme(&t, &[&below, &touching], true),
+            Verdict::Inconclusive
+        );
+        assert_eq!(extreme(&t, &[&below, &above], true), Verdict::NotReproduced);
+        assert_eq!(extreme(&above, &[&below, &t], true), Verdict::Reproduced);
+        assert_eq!(extreme(&below, &[&above, &t], false), Verdict::Reproduced);
+    }
+
+    #[test]
+    fn extreme_against_an_interval_that_is_not_finite_is_inconclusive() {
+        let t = sm(0.75, 0.125);
+        let one = Summary::of(&[0.1]);
+        for largest in [true, false] {
+            for bad in [
+                sm(INF, 1.0),
+                sm(-INF, 1.0),
+                sm(0.5, INF),
+                sm(f64::NAN, 0.1),
+                one,
+            ] {
+                assert_eq!(
+                    extreme(&bad, &[&t], largest),
+                    Verdict::Inconclusive,
+                    "{bad:?}"
+                );
+                assert_eq!(
+                    extreme(&t, &[&bad], largest),
+                    Verdict::Inconclusive,
+                    "{bad:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_cap_applies_only_to_a_reproduced_claim_with_a_diverged_favoured_run() {
+        use Verdict::*;
+        let clean = Tally {
+            converged: 5,
+            not_converged: 5,
+            diverged: 0,
+        };
+        let failed = Tally {
+            converged: 9,
+            not_converged: 0,
+            diverged: 1,
+        };
+        assert_eq!(cap_for_failures(Reproduced, &[]), Reproduced);
+        assert_eq!(cap_for_failures(Reproduced, &[clean]), Reproduced);
+        assert_eq!(cap_for_failures(Reproduced, &[failed]), Inconclusive);
+        assert_eq!(cap_for_failures(Reproduced, &[clean, failed]), Inconclusive);
+        assert_eq!(cap_for_failures(Inconclusive, &[failed]), Inconclusive);
+        assert_eq!(cap_for_failures(NotReproduced, &[failed]), NotReproduced);
+        assert_eq!(cap_for_failures(NotReproduced, &[clean]), NotReproduced);
     }
 }

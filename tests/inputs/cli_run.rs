@@ -266,6 +266,101 @@ fn every_baseline_kind_runs_on_every_task() {
     }
 }
 
+/// The summary and `seed-7.json` of a one-seed run of `text`.
+fn run_one(s: &Scratch, name: &str, text: &str) -> (Value, Value) {
+    let cfg = s.write(&format!("{name}.toml"), text);
+    let out = s.path().join(format!("out-{name}"));
+    let summary = run(&cfg, &out, None);
+    let seed = std::fs::read_to_string(out.join("seed-7.json")).unwrap();
+    (summary, serde_json::from_str(&seed).unwrap())
+}
+
+/// `run.norm_bound`: SGD with a huge constant step on the toy MDP takes ‖θ‖₂ from √6 to about
+/// 1.4·10⁴ in one step and to about 2.4·10⁴ in two, then little further. Under the default bound
+/// (1e4) the run is diverged after its first step, its termination stating the final θ's norm and
+/// the bound as paper-checks does, its θ₀ checkpoint kept; under a bound above every iterate's
+/// norm the same run uses its budget; a bound crossed mid-run keeps the checkpoints before it and
+/// evaluates no iterate beyond it; a θ₀ beyond the bound ends the run before any checkpoint.
+#[test]
+fn a_run_beyond_the_norm_bound_ends_as_diverged() {
+    let s = Scratch::new("norm-bound");
+    let huge = ALGORITHMS[0].1.replace("eta = 1e-3", "eta = 1e4");
+    let text = config(TOY, &huge, 400, 100, "[7]");
+    let with_bound = |b: &str| text.replace("[run]", &format!("[run]\nnorm_bound = {b}"));
+    let norm = |seed: &Value| {
+        let theta = seed["theta"].as_array().unwrap();
+        theta
+            .iter()
+            .map(|x| x.as_f64().unwrap().powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let at_calls = |seed: &Value| -> Vec<u64> {
+        seed["checkpoints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c["at_calls"].as_u64().unwrap())
+            .collect()
+    };
+
+    let (summary, seed) = run_one(&s, "default", &text);
+    let term = seed["termination"].as_str().unwrap();
+    let n = norm(&seed);
+    assert!(n > 1e4, "{n}");
+    assert_eq!(term, format!("diverged: ‖θ‖ = {n:.3e} > 1e4"));
+    assert!(term.ends_with("e4 > 1e4"), "{term}");
+    assert_eq!(summary["runs"][0]["termination"], seed["termination"]);
+    assert_eq!(summary["norm_bound"].as_f64(), Some(1e4));
+    assert_eq!(seed["iterations"].as_u64(), Some(1));
+    assert_eq!(at_calls(&seed), vec![0]);
+
+    let (summary, seed) = run_one(&s, "large", &with_bound("1e7"));
+    assert_eq!(seed["termination"], "gradient-budget");
+    assert_eq!(summary["runs"][0]["termination"], "gradient-budget");
+    assert_eq!(summary["norm_bound"].as_f64(), Some(1e7));
+    assert_eq!(at_calls(&seed), vec![0, 100, 200, 300, 400]);
+    let budget_norm = norm(&seed);
+    assert!(budget_norm > 2e4 && budget_norm <= 1e7, "{budget_norm}");
+
+    // Each step costs 3 calls: checkpoints at 0 and 3 are reached; the iterate after the second
+    // step (6 calls) is beyond 2e4 and is not evaluated.
+    let text3 = with_bound("2e4").replace("every_calls = 100", "every_calls = 3");
+    let (_, seed) = run_one(&s, "mid", &text3);
+    let n = norm(&seed);
+    assert!(n > 2e4, "{n}");
+    assert_eq!(
+        seed["termination"].as_str().unwrap(),
+        format!("diverged: ‖θ‖ = {n:.3e} > 2e4")
+    );
+    assert_eq!(seed["iterations"].as_u64(), Some(2));
+    assert_eq!(at_calls(&seed), vec![0, 3]);
+    let csv = std::fs::read_to_string(s.path().join("out-mid/seed-7.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 3, "{csv}");
+
+    // ‖θ₀‖ = √6 ≈ 2.449: within a bound of 2.5 (the run starts and leaves it at its first
+    // step), beyond a bound of 2 (the run ends at θ₀).
+    let (_, seed) = run_one(&s, "start-within", &with_bound("2.5"));
+    assert_eq!(seed["iterations"].as_u64(), Some(1));
+    assert_eq!(at_calls(&seed), vec![0]);
+    let (summary, seed) = run_one(&s, "start", &with_bound("2"));
+    assert_eq!(seed["termination"], "diverged: ‖θ‖ = 2.449e0 > 2e0");
+    assert_eq!(seed["iterations"].as_u64(), Some(0));
+    assert!(at_calls(&seed).is_empty());
+    assert!(summary["runs"][0]["final"].is_null());
+    // Finite entries whose sum of squares overflows: the stated norm is still the true one,
+    // √6·10²⁰⁰.
+    let (_, seed) = run_one(
+        &s,
+        "huge",
+        &text.replace(
+            "theta0 = [1, 1, 1, 1, 1, 1]",
+            "theta0 = [1e200, 1e200, 1e200, 1e200, 1e200, 1e200]",
+        ),
+    );
+    assert_eq!(seed["termination"], "diverged: ‖θ‖ = 2.449e200 > 1e4");
+}
+
 /// All files but `timings.json` of one directory.
 fn data_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
     let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
@@ -441,6 +536,26 @@ fn bad_configs_get_one_named_error_each() {
                 "[run]\nbaseline = { kind = \"state-dependent\", features = 9 }",
             ),
             "run.baseline",
+        ),
+        (
+            good.replace("[run]", "[run]\nnorm_bound = 0"),
+            "run.norm_bound",
+        ),
+        (
+            good.replace("[run]", "[run]\nnorm_bound = -1e4"),
+            "run.norm_bound",
+        ),
+        (
+            good.replace("[run]", "[run]\nnorm_bound = nan"),
+            "run.norm_bound",
+        ),
+        (
+            good.replace("[run]", "[run]\nnorm_bound = inf"),
+            "run.norm_bound",
+        ),
+        (
+            good.replace("[run]", "[run]\nnorm_bound = \"1e4\""),
+            "norm_bound",
         ),
         ("not toml [".into(), "TOML parse error"),
         (String::new(), "missing field"),
@@ -629,6 +744,7 @@ fn help_lists_every_key() {
         "trajectories_per_gradient",
         "baseline",
         "theta0",
+        "norm_bound",
         "[evaluation]",
         "every_calls",
         "episodes",

@@ -651,9 +651,9 @@ fn dagger_most_calls(id: &str, source: &str, set: &[&ConfigResult]) -> Claim {
         source,
         "DAgger needs the most gradient calls to converge",
         &format!(
-            "{MEDIAN_RULE}; DAgger's interval wholly above every other's (a DAgger that did not \
-             converge in most runs, median +∞, lies above every finite interval): reproduced; \
-             another's interval wholly above DAgger's: not reproduced; else inconclusive"
+            "{MEDIAN_RULE}; DAgger's lower end above every other's finite upper end (a \
+             lower end of +∞, DAgger never converging in most runs, counts): reproduced; DAgger's \
+             upper end below another's lower end: not reproduced; else inconclusive"
         ),
         calls_evidence(set),
         verdict,

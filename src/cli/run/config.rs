@@ -24,6 +24,8 @@ pub const MAX_TRAJECTORIES: usize = 100_000;
 pub const DEFAULT_SIGMA: f64 = 0.1;
 /// Default number of evaluation episodes per checkpoint.
 pub const DEFAULT_EPISODES: u32 = 10;
+/// Default bound on ‖θ‖₂ beyond which a run is diverged (the paper-checks profiles' bound).
+pub const DEFAULT_NORM_BOUND: f64 = 1e4;
 
 /// A whole config file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -203,10 +205,18 @@ pub struct RunSection {
     /// θ₀ (default `"zero"`).
     #[serde(default)]
     pub theta0: Theta0,
+    /// A run whose ‖θ‖₂ exceeds this bound (checked at θ₀ and after every step) ends as
+    /// diverged, as the appendix judges its runs; finite and > 0 (default 1e4).
+    #[serde(default = "default_norm_bound")]
+    pub norm_bound: f64,
 }
 
 fn one() -> usize {
     1
+}
+
+fn default_norm_bound() -> f64 {
+    DEFAULT_NORM_BOUND
 }
 
 /// `[evaluation]`.

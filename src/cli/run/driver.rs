@@ -2,7 +2,9 @@
 //! iterate is evaluated at the checkpoints 0, `every_calls`, …, the budget (each at the first
 //! iterate whose cumulative calls reach it; a step that crosses several serves each). The run's
 //! RNG is seeded by the seed alone, so a run does not depend on which thread carries it out.
-//! A failing step or a non-finite θ ends the run as *diverged*; that is data, not an error.
+//! A failing step, a non-finite θ or ‖θ‖₂ beyond `run.norm_bound` (checked at θ₀ and after every
+//! step, before that iterate is evaluated, as the appendix's runs are judged) ends the run as
+//! *diverged*; that is data, not an error.
 
 use super::config::LoadedConfig;
 use super::error::RunError;
@@ -74,6 +76,7 @@ fn drive<P: IlProblem<f64>>(
     let budget = f.run.budget_calls;
     let every = f.evaluation.every_calls.unwrap_or(budget).max(1);
     let episodes = f.evaluation.episodes.unwrap_or(1);
+    let bound = f.run.norm_bound;
     let mut algorithm = f
         .algorithm
         .build::<f64, P>()
@@ -103,6 +106,10 @@ fn drive<P: IlProblem<f64>>(
         let theta = algorithm.theta();
         if !theta.iter().all(|x| x.is_finite()) {
             break "diverged: non-finite θ".to_string();
+        }
+        let norm = norm_of(theta);
+        if norm > bound {
+            break format!("diverged: ‖θ‖ = {norm:.3e} > {bound:e}");
         }
         if next <= budget && cost.gradient_evaluations >= next {
             train += clock.elapsed();
@@ -179,6 +186,17 @@ fn drive<P: IlProblem<f64>>(
             checkpoint_seconds: seconds,
         },
     ))
+}
+
+/// ‖θ‖₂ of a finite θ. When the sum of squares overflows, the largest |θᵢ| is factored out so
+/// that the reported norm is the true one (finite whenever it is representable).
+fn norm_of(theta: &DVector<f64>) -> f64 {
+    let norm = theta.norm();
+    if norm.is_finite() {
+        return norm;
+    }
+    let largest = theta.amax();
+    largest * (theta / largest).norm()
 }
 
 /// Build the config's algorithm for the bench's problem once, so that invalid hyper-parameters

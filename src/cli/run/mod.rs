@@ -58,6 +58,7 @@ CONFIG KEYS (docs/run.md has types, defaults and ranges; relative paths are rela
                 trajectories_per_gradient = 1               oracle methods, ≥ 1
                 baseline = { kind = \"leave-one-out\" } | …     oracle methods; default none
                 theta0 = \"zero\" | [numbers]                 default zero
+                norm_bound = 1e4                            ‖θ‖₂ above it ends the run as diverged; > 0
   [evaluation]  every_calls = N                             checkpoint spacing, 1..=budget; default budget/10
                 episodes = 10                               deterministic episodes per checkpoint
 Examples: examples/run/*.toml";
@@ -129,6 +130,7 @@ fn summary(config: &LoadedConfig, bench: &Bench, runs: &[&SeedRun]) -> Value {
         "policy": bench.policy_name(),
         "algorithm": runs.first().map(|r| r.algorithm.clone()),
         "budget_calls": f.run.budget_calls,
+        "norm_bound": f.run.norm_bound,
         "dim": bench.dim(),
         "seeds": f.run.seeds,
         "final_mean": {

@@ -114,7 +114,8 @@ pub struct SeedRun {
     /// The algorithm's name.
     pub algorithm: String,
     /// Why the run ended: `gradient-budget`, `finished` (the algorithm's own schedule) or
-    /// `diverged: …` (a failing step or a non-finite θ; the checkpoints reached are kept).
+    /// `diverged: …` (a failing step, a non-finite θ, or `‖θ‖ = 3.200e5 > 1e4` when ‖θ‖₂
+    /// exceeds `run.norm_bound`; the checkpoints reached are kept).
     pub termination: String,
     /// Iterations taken.
     pub iterations: u64,

@@ -155,6 +155,15 @@ impl RunFile {
                 &format!("entry {i} (0-based) is not finite: {x}"),
             ));
         }
+        if !(r.norm_bound.is_finite() && r.norm_bound > 0.0) {
+            return Err(bad(
+                "run.norm_bound",
+                &format!(
+                    "must be finite and > 0, got {}",
+                    toml::Value::Float(r.norm_bound)
+                ),
+            ));
+        }
         let budget = r.budget_calls;
         let e = &mut self.evaluation;
         let every = *e.every_calls.get_or_insert((budget / 10).max(1));
