@@ -19,6 +19,7 @@ pub mod document;
 pub mod figures;
 pub mod sensitivity;
 pub mod speedup;
+pub mod storm_divergence;
 pub mod tex;
 pub mod theory;
 pub mod thesis;
@@ -71,6 +72,8 @@ pub fn write(profile: &Profile, r: &Results, out: &Path, png: bool) -> Result<()
         .iter()
         .position(|b| matches!(b, doc::Block::Table(t) if t.label == "tab:pc-sensitivity"))
         .map_or(blocks.len(), |i| i + 1);
-    blocks.splice(at..at, sensitivity);
+    let mut inserted = sensitivity;
+    inserted.extend(storm_divergence::blocks());
+    blocks.splice(at..at, inserted);
     document::write_documents(&blocks, out)
 }

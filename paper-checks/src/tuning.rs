@@ -70,6 +70,11 @@ pub struct TuningProtocol {
     /// How many rounds of edge extension a row may take (default 0).
     #[serde(default)]
     pub extensions: u32,
+    /// A grid of fewer points than this runs every point to the whole budget (successive
+    /// halving saves little on a small grid, and its early rungs can drop a slow starter);
+    /// default 0: every grid is halved.
+    #[serde(default)]
+    pub exhaustive_below: u32,
 }
 
 fn default_rungs() -> Vec<f64> {
@@ -86,6 +91,7 @@ impl Default for TuningProtocol {
             rungs: default_rungs(),
             halving: default_halving(),
             extensions: 0,
+            exhaustive_below: 0,
         }
     }
 }
@@ -137,6 +143,16 @@ impl TuningProtocol {
             }
         }
         out
+    }
+
+    /// The rung budgets for a grid of `points` points: [`TuningProtocol::rung_budgets`], or the
+    /// whole budget alone for a grid smaller than `exhaustive_below`.
+    pub fn rungs_for(&self, points: usize, budget: u64, every: u64) -> Vec<u64> {
+        if points < self.exhaustive_below as usize {
+            vec![budget]
+        } else {
+            self.rung_budgets(budget, every)
+        }
     }
 
     /// How many points go on from a rung of `n` points: ⌈n / halving⌉.
@@ -712,6 +728,7 @@ mod tests {
             rungs: vec![1.0 / 9.0, 1.0 / 3.0, 1.0],
             halving: 3,
             extensions: 2,
+            exhaustive_below: 16,
         };
         assert_eq!(p.validate(), Ok(()));
         assert_eq!(
@@ -721,6 +738,8 @@ mod tests {
         // Rounding up may merge rungs.
         assert_eq!(p.rung_budgets(300, 100), vec![100, 300]);
         assert_eq!((p.kept(26), p.kept(9), p.kept(1)), (9, 3, 1));
+        assert_eq!(p.rungs_for(15, 2_000_000, 200_000), vec![2_000_000]);
+        assert_eq!(p.rungs_for(16, 2_000_000, 200_000).len(), 3);
         for (bad, field) in [
             (vec![], "rungs"),
             (vec![0.5, 0.5, 1.0], "rungs"),

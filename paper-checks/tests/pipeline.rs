@@ -14,6 +14,11 @@ seeds = 2
 tuning_seeds = 1
 theory_profile = "none"
 
+[tuning]
+rungs = [0.5, 1.0]
+halving = 2
+extensions = 1
+
 [gradient_error]
 repetitions = 4
 bootstrap = 100
@@ -43,7 +48,7 @@ converge_score = 0.5
 [[obstacle.algorithms]]
 label = "SGD"
 config = { algorithm = "sgd", form = "causal", step = { kind = "constant", eta = 1e-5 } }
-grid = [{ path = "step.eta", values = [1e-5, 1e-4] }, { path = "m", values = [1, 2] }]
+grid = [{ path = "step.eta", from = 1e-5, to = 3e-5 }, { path = "m", values = [1, 2] }]
 
 [[obstacle.algorithms]]
 label = "DAgger"
@@ -160,12 +165,17 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
         .expect("the tuned SGD row");
     let chosen = sgd["selected"].as_str().expect("a description").to_string();
     assert!(chosen.starts_with("step.eta="), "{chosen}");
-    assert_eq!(sgd["grid_points"], 4);
-    assert_eq!(sgd["tuning_seeds"].as_array().map(Vec::len), Some(4));
+    // Four points, and two more when an edge pick grew the step's range.
+    let points = sgd["grid_points"].as_u64().expect("a count");
+    assert!(points == 4 || points == 6, "{points}");
+    assert_eq!(
+        sgd["tuning_seeds"].as_array().map(Vec::len),
+        Some(points as usize)
+    );
     let md = std::fs::read_to_string(a.join("appendix.md")).expect("appendix.md");
     assert!(md.contains(&format!("`{chosen}`")), "selection not printed");
     assert!(
-        md.contains("step.eta=0.0001, m=2"),
+        md.contains("step.eta=0.00003, m=2") && md.contains("step.eta=0.00001, m=1"),
         "the grid is not printed whole"
     );
     assert!(
@@ -453,8 +463,18 @@ fn bad_profiles_are_rejected_naming_file_and_field() {
         ),
         (
             "negative step at a grid point",
-            TINY.replace("values = [1e-5, 1e-4]", "values = [1e-5, -1e-4]"),
+            TINY.replace("from = 1e-5, to = 3e-5", "values = [1e-5, -1e-4]"),
             "obstacle.algorithms[0] (SGD).config",
+        ),
+        (
+            "a log range off the half-decade series",
+            TINY.replace("from = 1e-5, to = 3e-5", "from = 2e-5, to = 3e-5"),
+            "not in the half-decade series",
+        ),
+        (
+            "a successive-halving schedule whose last rung is not the budget",
+            TINY.replace("rungs = [0.5, 1.0]", "rungs = [0.5, 0.9]"),
+            "tuning.rungs",
         ),
         (
             "a grid path the config does not have",
@@ -629,8 +649,9 @@ fn three_shards_merged_give_the_single_run_s_data_byte_for_byte() {
         !ok && err.contains("units are not in") && err.contains("tuning"),
         "{err}"
     );
-    // Three shards, as separate processes, each twice (tuning, then report runs).
-    for round in 0..2 {
+    // Three shards, as separate processes, each in passes: successive halving's two rungs, twice
+    // (one extension), then the report runs.
+    for round in 0..5 {
         let children: Vec<_> = (1..=3)
             .map(|k| {
                 std::process::Command::new(env!("CARGO_BIN_EXE_paper-checks"))

@@ -40,7 +40,7 @@ pub(super) fn task_key(
 }
 
 /// The cache key of a row's tuning: the row with its grid, its task's section and expert, the
-/// number of tuning seeds, and the code version.
+/// number of tuning seeds, the protocol's rungs and extensions, and the code version.
 pub(super) fn tuning_key(
     profile: &Profile,
     kind: TaskKind,
@@ -51,11 +51,12 @@ pub(super) fn tuning_key(
     format!(
         "{:016x}",
         fnv1a(&format!(
-            "tuning|{}|{}|{}|{}|code={version}",
+            "tuning|{}|{}|{}|{}|{}|code={version}",
             kind.name(),
             section_key(kind, t),
             serde_json::to_string(e).unwrap_or_default(),
-            profile.tuning_seeds
+            profile.tuning_seeds,
+            serde_json::to_string(&profile.tuning).unwrap_or_default()
         ))
     )
 }

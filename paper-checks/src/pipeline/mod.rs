@@ -77,12 +77,8 @@ fn progress_for(profile: &Profile, opts: &Options) -> Progress {
             // Successive halving without extensions: n points at the first rung, ⌈n/halving⌉
             // at the next, … (runs that ended at a lower rung are not run again).
             let mut n = e.grid_points().map_or(0, |p| p.len());
+            let rungs = profile.tuning.rungs_for(n, u64::MAX, 1).len();
             let mut total = 0;
-            let rungs = profile
-                .tuning
-                .rung_budgets(profile.obstacle.budget.max(1), 1)
-                .len()
-                .min(profile.tuning.rungs.len());
             for r in 0..rungs {
                 total += n;
                 if r + 1 < rungs {

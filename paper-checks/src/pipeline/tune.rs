@@ -184,7 +184,6 @@ impl Row<'_> {
         let (kind, t, e) = (self.kind, self.task, self.entry);
         let protocol = &self.profile.tuning;
         let seeds = self.profile.tuning_seeds;
-        let budgets = protocol.rung_budgets(t.budget, t.checkpoint_every);
         let h = e.horizon(t, kind.name());
         let mut grids = e.subgrids();
         let mut memo = Memo::new();
@@ -199,6 +198,7 @@ impl Row<'_> {
                 .iter()
                 .map(|p| run_key_of(kind, &e.label, &p.config, p.m, h, &p.baseline))
                 .collect();
+            let budgets = protocol.rungs_for(points.len(), t.budget, t.checkpoint_every);
             let mut reached: Vec<Option<PointResult>> = vec![None; points.len()];
             let mut alive: Vec<usize> = (0..points.len()).collect();
             let mut rungs = Vec::new();

@@ -21,6 +21,17 @@ const M16: RGBColor = RGBColor(230, 159, 0);
 const OTHER: RGBColor = RGBColor(120, 120, 120);
 const DIVERGED: RGBColor = RGBColor(213, 94, 0);
 
+/// A call count as a short tick label (`300k`, `1.5M`).
+fn calls_tick(v: f64) -> String {
+    if v >= 1e6 {
+        format!("{}M", num(v / 1e6))
+    } else if v >= 1e3 {
+        format!("{}k", num(v / 1e3))
+    } else {
+        num(v)
+    }
+}
+
 /// The point's step (its first log dimension), if it has one.
 fn step(p: &PointResult) -> Option<f64> {
     p.score.as_ref().map(|s| s.step).filter(|x| x.is_finite())
@@ -111,19 +122,22 @@ fn draw_cell<'a>(cell: &Cell<'a>, t: &TuningResult) -> Result<(), Box<dyn std::e
         .margin(4)
         .x_label_area_size(28)
         .y_label_area_size(36)
-        .build_cartesian_2d(lo..hi, 0.0..budget * 1.1)?;
+        .build_cartesian_2d(lo..hi, 0.0..budget * 1.12)?;
     d.configure_mesh()
         .disable_mesh()
         .x_labels(5)
         .y_labels(4)
         .x_label_formatter(&|v| format!("1e{}", v.round() as i64))
-        .y_label_formatter(&|v| {
-            if *v > budget { "none".into() } else { num(*v) }
-        })
+        .y_label_formatter(&|v| calls_tick(*v))
         .x_desc("step (log10)")
         .y_desc("median calls")
         .label_style(("sans-serif", 10))
         .draw()?;
+    d.draw_series(std::iter::once(Text::new(
+        "not converged",
+        (lo, budget * 1.11),
+        ("sans-serif", 10).into_font().color(&OTHER),
+    )))?;
     for (i, p) in t.points.iter().enumerate() {
         let Some(x) = step(p).map(f64::log10) else {
             continue;
@@ -226,7 +240,7 @@ pub fn write(r: &Results, dir: &Path, png: bool) -> Result<Vec<Block>, Error> {
                 "Tuning sensitivity on the {} task (beyond the thesis): for each tuned row, every \
                  grid point tried, its area under the learning curve (top) and median gradient \
                  calls to sustained convergence (bottom; \"none\": the median tuning run did not \
-                 converge) against its step (η, α or, as triangles, adaptive STORM's k), on the \
+                 converge, drawn on the top line) against its step (η, α or, as triangles, adaptive STORM's k), on the \
                  tuning seeds. Large marks were scored at the whole budget, small ones at the \
                  lower rung of successive halving where they stopped; crosses: every tuning run \
                  of the point diverged; ringed: the pick.",

@@ -158,7 +158,8 @@ fn protocol_list(profile: &Profile) -> Vec<String> {
          smaller step; (4) the fewer trajectories per gradient. Grid order never decides: a tie \
          that survives (1)–(2) is reported. **Successive halving** over the rungs {} of the \
          budget: every point runs to the first rung, the best ⌈n/{}⌉ go on to the next (with \
-         every point tied with the last of them), the last rung is the whole budget. **Edge \
+         every point tied with the last of them), the last rung is the whole budget; a grid of \
+         fewer than {} points runs every point to the whole budget. **Edge \
          extension**: a pick on an end of a log range grows that range by its next value and the \
          selection is made again, up to {} time(s). A pick whose tuning runs never converged, \
          one still on an edge after extension, or fewer than 3 tuning seeds make every \"not \
@@ -172,6 +173,7 @@ fn protocol_list(profile: &Profile) -> Vec<String> {
             .collect::<Vec<_>>()
             .join(", "),
         p.halving,
+        p.exhaustive_below,
         p.extensions
     ));
     out
