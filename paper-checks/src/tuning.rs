@@ -17,7 +17,7 @@
 //! the seeds of the area under the learning curve ([`area_under_curve`]: the mean score over the
 //! checkpoints, a diverged run scoring 0 from the point it diverged); then the smaller step (the
 //! point's first log dimension); then the fewer trajectories per gradient. A tie that survives
-//! all four is broken by the point's text and *reported* as a tie ([`TuningResult::tie`]).
+//! all four is broken by the point's text and *reported* as a tie ([`TuningResult::tied_with`]).
 //! There is no first-in-grid tie-break.
 //!
 //! **Successive halving** (Jamieson & Talwalkar 2016; the rung schedule of Hyperband, Li et al.

@@ -352,7 +352,8 @@ fn claim(id: &str, source: &str, claim: &str, rule: &str, evidence: String, v: V
 ///
 /// The cap of Fig. 4.9's count (resets before one full episode, the profile's
 /// `full_episode_cap`): a run at the cap never completed an episode, so its count is censored
-/// and says nothing about a variance. Every "not reproduced" is then qualified ([`qualify`]).
+/// and says nothing about a variance. Every "not reproduced" is then qualified: a compared row's weak tuning or a short budget with
+/// unconverged runs makes it "inconclusive (tuning)" or "inconclusive (budget)".
 pub fn claims(r: &Results, profile: &Profile) -> Vec<Claim> {
     let mut out = vec![gradient_error_claim(r)];
     out.extend(obstacle_success_claims(&r.obstacle));

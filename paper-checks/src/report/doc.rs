@@ -239,12 +239,12 @@ const LINE_PT: f64 = 483.7;
 /// A landscape page's line over a portrait one's: (297 − 40) / (210 − 40) mm.
 const LANDSCAPE_RATIO: f64 = 257.0 / 170.0;
 
-/// Fit a table to the line width ([`LINE_PT`]). The estimate counts characters: about 64
+/// Fit a table to the line width (`LINE_PT`). The estimate counts characters: about 64
 /// characters of `\small` text fit in 345 pt (10 pt article), less each column's
 /// padding (2\tabcolsep ≈ 2.7 characters), more at smaller sizes. A table whose natural widths
-/// fit at `\small` or `\footnotesize` keeps `l`/`r` columns at the first of them; otherwise its columns wrap ([`shared_widths`]) at `\footnotesize` (or the largest
+/// fit at `\small` or `\footnotesize` keeps `l`/`r` columns at the first of them; otherwise its columns wrap (`shared_widths`) at `\footnotesize` (or the largest
 /// size at which the longest words fit, with 3 pt column padding at the smallest), on a
-/// landscape page when that shortens rows taller than [`LANDSCAPE_LINES`] by a third or
+/// landscape page when that shortens rows taller than `LANDSCAPE_LINES` by a third or
 /// nothing else fits.
 /// Columns are right-aligned where `spec` says `r`.
 pub fn column_layout(header: &[String], rows: &[Vec<String>], spec: &str) -> ColumnLayout {
@@ -361,7 +361,7 @@ fn own_number(counter: &str, number: Option<&str>) -> String {
 /// page, if it brings them down to [`LANDSCAPE_GAIN`] of that.
 const LANDSCAPE_LINES: f64 = 3.0;
 
-/// See [`LANDSCAPE_LINES`].
+/// See `LANDSCAPE_LINES`.
 const LANDSCAPE_GAIN: f64 = 0.7;
 
 /// Share `total` characters out among columns of these natural and minimum widths:

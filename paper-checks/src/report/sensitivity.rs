@@ -206,7 +206,7 @@ fn draw_cell<'a>(cell: &Cell<'a>, t: &TuningResult) -> Result<(), Box<dyn std::e
 /// `png`), and return the appendix's blocks that show them.
 ///
 /// # Errors
-/// [`Error::Io`] on a write failure, [`Error::Plot`]-like failures as [`Error::experiment`].
+/// [`Error::Io`] on a write failure; a drawing failure as [`Error::experiment`].
 pub fn write(r: &Results, dir: &Path, png: bool) -> Result<Vec<Block>, Error> {
     let mut blocks = Vec::new();
     for kind in [TaskKind::Obstacle, TaskKind::Cartpole] {

@@ -14,16 +14,16 @@ use nalgebra::DMatrix;
 /// writes the same note.
 const M1: &str = include_str!("../../../examples/toy/m1-tied.json");
 
-/// The exact instance: E[J], C and ∇²F of M1 at θ = 0 (one parameter), and the amplification
+/// The exact instance: `E[J]`, `C` and ∇²F of M1 at θ = 0 (one parameter), and the amplification
 /// thresholds η*(a) of the unweighted and the importance-weighted mean recursions.
 pub struct Instance {
-    /// E[J] (1 × 1).
+    /// `E[J]` (1 × 1).
     pub mean_jacobian: BigRational,
     /// C = E[g ∇log pᵀ] (1 × 1).
     pub covariance: BigRational,
     /// ∇²F (1 × 1).
     pub hessian: BigRational,
-    /// Whether E[J] + C == ∇²F and the per-decision weighted term's mean Jacobian == ∇²F, exactly.
+    /// Whether `E[J] + C == ∇²F` and the per-decision weighted term's mean Jacobian == ∇²F, exactly.
     pub identities_hold: bool,
     /// (a, η* unweighted, η* weighted).
     pub thresholds: Vec<(f64, f64, f64)>,
