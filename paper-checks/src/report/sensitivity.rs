@@ -243,7 +243,9 @@ pub fn write(r: &Results, dir: &Path, png: bool) -> Result<Vec<Block>, Error> {
                  converge, drawn on the top line) against its step (η, α or, as triangles, adaptive STORM's k), on the \
                  tuning seeds. Large marks were scored at the whole budget, small ones at the \
                  lower rung of successive halving where they stopped; crosses: every tuning run \
-                 of the point diverged; ringed: the pick.",
+                 of the point diverged; ringed: the pick. Why the unweighted STORM rows diverge \
+                 at steps where the importance-weighted rows do not is the next section's \
+                 subject.",
                 kind.name()
             ),
         });
