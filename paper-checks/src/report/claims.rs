@@ -98,13 +98,10 @@ pub fn thesis_calls(task: TaskKind, label: &str) -> Option<f64> {
 ///   ([`TuningResult::weakness`]);
 /// * **budget**: the task's budget is below twice the largest thesis figure among the compared
 ///   rows ([`thesis_calls`]), and some run of a compared row did not converge within it.
-fn qualify(mut c: Claim, r: &Results, budget_of: impl Fn(TaskKind) -> u64) -> Claim {
+fn qualify(c: Claim, r: &Results, budget_of: impl Fn(TaskKind) -> u64) -> Claim {
     let Some(task) = c.task else {
         return c;
     };
-    if c.verdict != Verdict::NotReproduced {
-        return c;
-    }
     let rows: Vec<&ConfigResult> = match task {
         TaskKind::Obstacle => &r.obstacle,
         TaskKind::Cartpole => &r.cartpole,
@@ -113,17 +110,32 @@ fn qualify(mut c: Claim, r: &Results, budget_of: impl Fn(TaskKind) -> u64) -> Cl
     .map(|x| &x.0)
     .filter(|x| c.compared.contains(&x.label))
     .collect();
+    qualify_with(c, &rows, &r.tuning, budget_of(task))
+}
+
+/// [`qualify`] on the compared `rows` of the claim's task, their `tuning` and the task's
+/// `budget`.
+fn qualify_with(
+    mut c: Claim,
+    rows: &[&ConfigResult],
+    tuning: &[crate::tuning::TuningResult],
+    budget: u64,
+) -> Claim {
+    let Some(task) = c.task else {
+        return c;
+    };
+    if c.verdict != Verdict::NotReproduced {
+        return c;
+    }
     let tuning: Vec<String> = rows
         .iter()
         .filter_map(|row| {
-            let t = r
-                .tuning
+            let t = tuning
                 .iter()
                 .find(|t| t.task == task && t.label == row.label)?;
             t.weakness().map(|w| format!("{}: {w}", row.label))
         })
         .collect();
-    let budget = budget_of(task);
     let largest = c
         .compared
         .iter()
@@ -954,6 +966,89 @@ mod tests {
         assert_eq!(xs[0], 1.0);
         assert!(xs[1].is_infinite() && xs[2].is_infinite());
         assert_eq!(xs[3], 31.0);
+    }
+
+    #[test]
+    fn a_not_reproduced_on_weak_tuning_or_a_short_budget_becomes_inconclusive_with_its_reason() {
+        use crate::tuning::{PointResult, Round, TuningResult};
+        let never = timed(&[RunStatus::NotConverged, RunStatus::NotConverged]).0;
+        let converged = RunStatus::Converged {
+            checkpoint: 1,
+            gradient_evaluations: 10,
+        };
+        let all = timed(&[converged.clone(), converged]).0;
+        let base = || {
+            claim(
+                "O9",
+                "Table 4.1",
+                "a claim",
+                "a rule",
+                "numbers".into(),
+                Verdict::NotReproduced,
+            )
+            .on(TaskKind::Obstacle, &["STORM"])
+        };
+        let tuned = |weak: bool| TuningResult {
+            task: TaskKind::Obstacle,
+            label: "STORM".into(),
+            key_hash: String::new(),
+            dims: vec![],
+            points: vec![PointResult {
+                point: crate::grid::points(&all.entry.config, None, None, &[])
+                    .unwrap()
+                    .remove(0),
+                runs: vec![],
+                score: None,
+                rung: 0,
+            }],
+            selected: 0,
+            budget: 1,
+            rounds: vec![Round {
+                points: 1,
+                rungs: vec![],
+                pick: String::new(),
+                extended: vec![],
+            }],
+            on_edge: if weak {
+                vec!["x (upper end)".into()]
+            } else {
+                vec![]
+            },
+            tied_with: vec![],
+            tuning_seeds: 3,
+        };
+        // The thesis's STORM figure on this task is 2764 calls: a budget of 10 000 is enough.
+        let q = qualify_with(base(), &[&never], &[tuned(false)], 10_000);
+        assert_eq!((q.verdict, q.caveat), (Verdict::NotReproduced, None));
+        let q = qualify_with(base(), &[&never], &[tuned(true)], 10_000);
+        assert_eq!(q.verdict, Verdict::Inconclusive);
+        assert_eq!(q.verdict_short(), "inconclusive (tuning)");
+        assert!(
+            q.caveat
+                .unwrap()
+                .contains("STORM: its pick lies on an edge of x")
+        );
+        // A budget below twice the thesis's figure matters only when a run did not converge.
+        let q = qualify_with(base(), &[&never], &[tuned(false)], 5_000);
+        assert_eq!(q.verdict_short(), "inconclusive (budget)");
+        assert!(q.caveat.unwrap().contains("STORM 2/2"));
+        let q = qualify_with(base(), &[&all], &[tuned(false)], 5_000);
+        assert_eq!(q.verdict, Verdict::NotReproduced);
+        let q = qualify_with(base(), &[&never], &[tuned(true)], 5_000);
+        assert_eq!(q.verdict_short(), "inconclusive (tuning, budget)");
+        // Other verdicts, and claims comparing no rows, stand.
+        let mut r = base();
+        r.verdict = Verdict::Reproduced;
+        assert_eq!(
+            qualify_with(r, &[&never], &[tuned(true)], 5_000).verdict,
+            Verdict::Reproduced
+        );
+        let mut none = base();
+        none.task = None;
+        assert_eq!(
+            qualify_with(none, &[&never], &[tuned(true)], 5_000).verdict,
+            Verdict::NotReproduced
+        );
     }
 
     #[test]
