@@ -165,9 +165,26 @@ pub fn write(
             })
         })
         .collect();
+    // Every tuned row's rounds of selection, extensions and where its pick lies.
+    let t_rounds: Vec<serde_json::Value> = r
+        .tuning
+        .iter()
+        .filter(|t| t.is_tuned())
+        .map(|t| {
+            serde_json::json!({
+                "task": t.task.name(),
+                "algorithm": t.label,
+                "rounds": t.rounds,
+                "on_edge": t.on_edge,
+                "tied_with": t.tied_with,
+                "weakness": t.weakness(),
+            })
+        })
+        .collect();
     let prov = serde_json::json!({
         "selected_hyper_parameters": selected,
-        "selection_rule": "median over tuning seeds of the gradient calls at sustained convergence (not converged or diverged = 2 × budget); smallest wins, ties to the first point in grid order",
+        "selection_rule": "lexicographic: the median over tuning seeds of the gradient calls to sustained convergence (not converged or diverged = +inf), then the larger mean area under the learning curve (a diverged run scores 0 from its divergence), then the smaller step, then the smaller m; successive halving over the profile's rungs on grids of at least `exhaustive_below` points; a pick on an end of a log range extends it, up to `extensions` times (the profile's [tuning])",
+        "tuning": t_rounds,
         "command": opts.command,
         "profile": profile.name,
         "profile_file": profile_file.file_name().map(|f| f.to_string_lossy().to_string()),
