@@ -106,7 +106,7 @@ fn draw_cell<'a>(cell: &Cell<'a>, t: &TuningResult) -> Result<(), Box<dyn std::e
         .caption(&t.label, ("sans-serif", 13))
         .margin(4)
         .x_label_area_size(18)
-        .y_label_area_size(36)
+        .y_label_area_size(46)
         .build_cartesian_2d(lo..hi, 0.0..1.0)?;
     c.configure_mesh()
         .disable_mesh()
@@ -121,7 +121,7 @@ fn draw_cell<'a>(cell: &Cell<'a>, t: &TuningResult) -> Result<(), Box<dyn std::e
     let mut d = ChartBuilder::on(&bottom)
         .margin(4)
         .x_label_area_size(28)
-        .y_label_area_size(36)
+        .y_label_area_size(46)
         .build_cartesian_2d(lo..hi, 0.0..budget * 1.12)?;
     d.configure_mesh()
         .disable_mesh()
