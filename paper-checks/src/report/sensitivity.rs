@@ -252,3 +252,88 @@ pub fn write(r: &Results, dir: &Path, png: bool) -> Result<Vec<Block>, Error> {
     }
     Ok(blocks)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiment::RunStatus;
+    use crate::grid::GridDim;
+    use crate::tuning::{Round, Score, TuningRun};
+
+    fn run(status: RunStatus) -> TuningRun {
+        TuningRun {
+            seed_index: 0,
+            seed: 0,
+            budget: 100,
+            status,
+            gradient_evaluations: 100,
+            scores: vec![0.0, 0.5],
+            calls: vec![0, 100],
+        }
+    }
+
+    /// A row with a converged pick and a diverged point draws a cell titled by the row, a ring
+    /// (the pick) and a cross (the diverged point); a task without tuned rows draws nothing.
+    #[test]
+    fn the_figure_marks_the_pick_and_the_diverged_points() {
+        let config: ilopt::algo::AlgorithmConfig = serde_json::from_value(serde_json::json!({
+            "algorithm": "sgd", "form": "causal", "step": {"kind": "constant", "eta": 1e-3}
+        }))
+        .unwrap();
+        let points = crate::grid::points(
+            &config,
+            None,
+            None,
+            &[vec![GridDim::log("step.eta", 1e-3, 3e-3)]],
+        )
+        .unwrap();
+        let conv = RunStatus::Converged {
+            checkpoint: 0,
+            gradient_evaluations: 50,
+        };
+        let div = RunStatus::Diverged {
+            reason: "x".into(),
+            gradient_evaluations: 50,
+        };
+        let results: Vec<PointResult> = points
+            .iter()
+            .zip([conv, div])
+            .map(|(p, st)| {
+                let runs = vec![run(st)];
+                PointResult {
+                    score: Some(Score::of(p, &runs, 100, 100)),
+                    point: p.clone(),
+                    runs,
+                    rung: 0,
+                }
+            })
+            .collect();
+        let t = TuningResult {
+            task: TaskKind::Obstacle,
+            label: "SGD-in-a-test".into(),
+            key_hash: String::new(),
+            dims: vec!["step.eta".into()],
+            points: results,
+            selected: 0,
+            budget: 100,
+            rounds: vec![Round {
+                points: 2,
+                rungs: vec![],
+                pick: String::new(),
+                extended: vec![],
+            }],
+            on_edge: vec![],
+            tied_with: vec![],
+            tuning_seeds: 1,
+        };
+        assert!(diverged(&t.points[1]) && !diverged(&t.points[0]));
+        let text = svg(&[&t], TaskKind::Obstacle).unwrap().expect("a figure");
+        assert!(text.contains("SGD-in-a-test"));
+        assert!(text.contains("not converged"));
+        // The pick's ring: a circle of radius 8 drawn with a stroke, not filled.
+        assert!(text.contains(r#"r="8""#), "no ring");
+        assert!(svg(&[], TaskKind::Cartpole).unwrap().is_none());
+        assert_eq!(calls_tick(2.5e6), "2.500M");
+        assert_eq!(calls_tick(300_000.0), "300.0k");
+    }
+}
