@@ -603,6 +603,31 @@ mod tests {
     }
 
     #[test]
+    fn tuning_seeds_and_episodes_have_keys_of_their_own() {
+        let rk = "obstacle|SGD|{}|m=1|fixed";
+        let seeds: Vec<u64> = (0..4).map(|i| tuning_seed(rk, i)).collect();
+        for (i, s) in seeds.iter().enumerate() {
+            assert_eq!(*s, derive_seed(&format!("tuning|{rk}"), i as u64));
+            assert_ne!(*s, derive_seed(rk, i as u64));
+        }
+        assert_eq!(
+            seeds
+                .iter()
+                .collect::<std::collections::BTreeSet<_>>()
+                .len(),
+            4
+        );
+        assert_eq!(
+            tuning_eval_key(TaskKind::Cartpole, 2),
+            "cartpole-tuning-eval|2"
+        );
+        assert_ne!(
+            tuning_eval_key(TaskKind::Obstacle, 0),
+            tuning_eval_key(TaskKind::Obstacle, 1)
+        );
+    }
+
+    #[test]
     fn the_area_fills_diverged_runs_with_zero_and_converged_ones_with_their_last_score() {
         // Budget 400, every 100: checkpoints at 0, 100, 200, 300, 400.
         assert_eq!(checkpoint_count(400, 100), 5);
