@@ -782,6 +782,21 @@ mod tests {
             ..p.clone()
         };
         assert_eq!(q.validate().unwrap_err().0, "halving");
+        // Halving by 2 is the smallest allowed.
+        let two = TuningProtocol {
+            halving: 2,
+            ..p.clone()
+        };
+        assert_eq!(two.validate(), Ok(()));
+        // A profile without `[tuning]` tunes exhaustively, without extension.
+        let d = TuningProtocol::default();
+        assert_eq!(
+            (d.rungs.clone(), d.halving, d.extensions, d.exhaustive_below),
+            (vec![1.0], 3, 0, 0)
+        );
+        assert_eq!(d.validate(), Ok(()));
+        let parsed: TuningProtocol = serde_json::from_str("{}").unwrap();
+        assert_eq!(parsed, d);
     }
 }
 
