@@ -204,7 +204,8 @@ impl TuningRun {
                 ..self.clone()
             });
         }
-        if self.budget < budget || self.scores.len() < n {
+        // Not converged nor diverged, and stopped before `budget`'s last checkpoint.
+        if self.scores.len() < n {
             return None;
         }
         Some(TuningRun {
@@ -564,11 +565,17 @@ mod tests {
         assert_eq!(short.scores, vec![0.1, 0.2, 0.3]);
         assert_eq!((short.budget, short.gradient_evaluations), (200, 203));
         assert_eq!(short.status, RunStatus::NotConverged);
+        assert_eq!(short.calls, vec![3, 103, 203]);
+        // A run to exactly that budget is itself.
+        let mut exact = run(RunStatus::NotConverged, &[0.1, 0.2, 0.3]);
+        exact.budget = 200;
+        assert_eq!(exact.at_budget(200, 100).unwrap().scores, exact.scores);
         // A longer budget than it ran needs a new run, unless it had ended.
         assert!(long.at_budget(800, 100).is_none());
         let mut d = run(div(), &[0.5, 1.0]);
         d.budget = 200;
-        assert_eq!(d.at_budget(800, 100).unwrap().status, div());
+        let later = d.at_budget(800, 100).unwrap();
+        assert_eq!((later.status, later.budget), (div(), 800));
         // Converged at the third checkpoint (the window ended at 200): converged at 200 and
         // later, not converged at 100 (its window had not ended).
         let mut c = run(conv(0), &[0.9, 0.9, 0.9]);
