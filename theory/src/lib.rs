@@ -14,6 +14,7 @@
 pub mod bounds;
 pub mod certify;
 pub mod checks;
+pub mod inputs;
 pub mod protocol;
 pub mod record;
 pub mod report;
