@@ -3,6 +3,7 @@
 pub mod baselined_sgd;
 pub mod baselined_storm;
 pub mod constants;
+pub mod errata;
 pub mod estimated;
 pub mod montecarlo;
 pub mod o2nc_formula;
@@ -15,3 +16,4 @@ pub mod storm;
 pub mod thm31;
 pub mod tracking;
 pub mod unbiased;
+pub mod unchecked;
