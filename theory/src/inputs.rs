@@ -9,6 +9,9 @@
 //! [`crate::bounds`], the constants as certified, the oracle unbiased.
 
 use crate::bounds::{self, O2ncParams};
+use crate::certify::box_constants::ToyConstants;
+use crate::certify::global::GlobalConstants;
+use crate::record::constant::Constant;
 use ilopt::scalar::{BigRational, Scalar};
 
 /// The bound formulas the table compares its measurements with (each a function of its constants,
@@ -97,6 +100,51 @@ impl TableInputs {
     /// perturbed constant is a deliberate error, not a bound that must stay rigorous).
     pub fn constant_f64(&self, kind: ConstantKind, certified: f64) -> f64 {
         self.constant(kind, certified)
+    }
+
+    /// A certified constant record as the rows must use it: value (and its exact form) scaled if
+    /// this input names `kind`; the certificate is kept, so a re-check of the scaled value against
+    /// it (row 8) sees the error.
+    pub fn constant_record(&self, kind: ConstantKind, c: &Constant) -> Constant {
+        let mut out = c.clone();
+        if let Some((k, factor)) = &self.constant_scale
+            && *k == kind
+        {
+            out.value = c.value * factor.to_f64();
+            out.rational = BigRational::from_float(out.value)
+                .map_or_else(|| "inf".into(), |q| q.to_string());
+        }
+        out
+    }
+
+    /// Box constants as the rows must use them ([`TableInputs::constant_record`] on each).
+    pub fn toy_constants(&self, k: &ToyConstants) -> ToyConstants {
+        use ConstantKind::*;
+        ToyConstants {
+            b_f: self.constant_record(BF, &k.b_f),
+            l_f: self.constant_record(LF, &k.l_f),
+            sigma2: self.constant_record(Sigma2, &k.sigma2),
+            g2: self.constant_record(G2, &k.g2),
+            g_f: self.constant_record(GF, &k.g_f),
+            g_inf: self.constant_record(GInf, &k.g_inf),
+            mdp: k.mdp.clone(),
+        }
+    }
+
+    /// Global constants as the rows must use them ([`TableInputs::constant_record`] on each; L̃
+    /// for both weightings).
+    pub fn global_constants(&self, g: &GlobalConstants) -> GlobalConstants {
+        use ConstantKind::*;
+        GlobalConstants {
+            b_f: self.constant_record(BF, &g.b_f),
+            l_f: self.constant_record(LF, &g.l_f),
+            l_tilde: self.constant_record(LTilde, &g.l_tilde),
+            l_tilde_pd: self.constant_record(LTilde, &g.l_tilde_pd),
+            sigma2: self.constant_record(Sigma2, &g.sigma2),
+            g_f: self.constant_record(GF, &g.g_f),
+            g_inf: self.constant_record(GInf, &g.g_inf),
+            mdp: g.mdp.clone(),
+        }
     }
 
     /// A gradient estimate as the rows must see it: `g + b·1` under an oracle bias b, else `g`.
