@@ -15,6 +15,7 @@ pub mod bounds;
 pub mod certify;
 pub mod checks;
 pub mod inputs;
+pub mod perturbation;
 pub mod protocol;
 pub mod record;
 pub mod report;
