@@ -1,5 +1,6 @@
 //! The checks of the theorem table, each a function returning [`crate::record::check::Check`] rows.
 
+pub mod attained;
 pub mod baselined_sgd;
 pub mod baselined_storm;
 pub mod constants;
