@@ -111,8 +111,8 @@ impl TableInputs {
             && *k == kind
         {
             out.value = c.value * factor.to_f64();
-            out.rational = BigRational::from_float(out.value)
-                .map_or_else(|| "inf".into(), |q| q.to_string());
+            out.rational =
+                BigRational::from_float(out.value).map_or_else(|| "inf".into(), |q| q.to_string());
         }
         out
     }

@@ -9,7 +9,7 @@
 
 use crate::bounds::{self, O2ncParams, harmonic};
 use crate::inputs::{ConstantKind, Formulas, TableInputs};
-use crate::record::check::Check;
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::scalar::{BigRational, parse_exact};
 
 /// One deliberate error: its name and the inputs that carry it.
@@ -179,48 +179,45 @@ pub fn outcome(name: &'static str, base: &[Check], perturbed: &[Check]) -> Outco
     Outcome { name, turned }
 }
 
-/// The report's section: one line per perturbation with the rows it turned, and a last line that
-/// says whether every perturbation was seen.
-pub fn markdown(outcomes: &[Outcome]) -> String {
-    let mut out = String::from(
-        "**Perturbation test.** The table's inputs rebuilt with each deliberate error below; the rows \
-         whose verdict it turns (unperturbed → perturbed):\n\n",
-    );
-    for o in outcomes {
-        let rows = if o.seen() {
-            o.turned
+/// One negative-control row per perturbation ("P1", "P2", …): the claim that the table with the
+/// error has every verdict unchanged, which must fail (the error is detected) — so an error no
+/// row sees fails the table's status like any undetected control.
+pub fn rows(outcomes: &[Outcome]) -> Vec<Check> {
+    outcomes
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            let turned = o
+                .turned
                 .iter()
                 .map(|(id, a, b)| format!("{id} ({a} → {b})"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        } else {
-            "**none — not seen**".into()
-        };
-        out += &format!("- {}: {rows}\n", o.name);
-    }
-    let unseen: Vec<&str> = outcomes
-        .iter()
-        .filter(|o| !o.seen())
-        .map(|o| o.name)
-        .collect();
-    out += &if unseen.is_empty() {
-        format!(
-            "\nEvery one of the {} perturbations turns at least one verdict.\n",
-            outcomes.len()
-        )
-    } else {
-        format!("\nNOT SEEN by any row: {}.\n", unseen.join("; "))
-    };
-    out
+                .collect::<Vec<_>>();
+            Check::builder(
+                format!("P{}", i + 1),
+                "Perturbation test (the table's own inputs, deliberately wrong)",
+                format!(
+                    "with {}, every verdict of the input-reading rows is unchanged",
+                    o.name
+                ),
+                Role::NegativeControl,
+            )
+            .measured(Measured::exact(o.turned.len() as f64))
+            .details(if turned.is_empty() {
+                "no row's verdict turned".to_string()
+            } else {
+                format!("rows turned: {}", turned.join(", "))
+            })
+            .decided(Method::Exact, Verdict::from_bool(!o.seen()))
+        })
+        .collect()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::record::check::{Role, Verdict};
 
     fn row(id: &str, v: Verdict) -> Check {
-        Check::builder(id, "r", "c", Role::Corrected).decided(crate::check::Method::Exact, v)
+        Check::builder(id, "r", "c", Role::Corrected).decided(Method::Exact, v)
     }
 
     #[test]
@@ -241,9 +238,15 @@ mod tests {
                 ("c".into(), "absent".into(), "holds".into()),
             ]
         );
-        let md = markdown(&[same, moved]);
-        assert!(md.contains("- x: **none — not seen**"), "{md}");
-        assert!(md.contains("NOT SEEN by any row: x."), "{md}");
+        let controls = rows(&[same, moved]);
+        assert_eq!(
+            controls[0].verdict,
+            Verdict::Holds,
+            "an unseen error: control not detected"
+        );
+        assert!(controls[0].undetected_control());
+        assert_eq!(controls[1].verdict, Verdict::Fails);
+        assert!(controls[1].details.contains("a (holds → fails)"));
     }
 
     /// Every formula perturbation makes its bound smaller (a larger bound would be a weaker, still
