@@ -14,6 +14,7 @@
 pub mod bounds;
 pub mod certify;
 pub mod checks;
+pub mod input_rows;
 pub mod inputs;
 pub mod perturbation;
 pub mod protocol;

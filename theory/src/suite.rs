@@ -6,9 +6,10 @@ use crate::certify::recheck::coverage_for;
 use crate::checks::constants::{global_row, toy_row};
 use crate::checks::montecarlo::McSettings;
 use crate::checks::{
-    baselined_sgd, baselined_storm, o2nc_formula, schedule, second_toy, statistical, thm31,
+    baselined_sgd, baselined_storm, errata, o2nc_formula, schedule, second_toy, statistical, thm31,
     unbiased,
 };
+use crate::input_rows::{Certified, with_perturbations};
 use crate::protocol::{
     CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes,
     STATISTICAL_CLAIMS, Sizes, m1_tied, real_sizes,
@@ -101,6 +102,17 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
         rows.push(timed("global constants' re-check", || {
             global_row(&g, "M1 (P2', c = 1/2, θ₁ = 0)", coverage)
         }));
+        let certified = Certified {
+            profile,
+            m1: m1.clone(),
+            theta1: vec![q("0")],
+            f_inf: q("7/8"),
+            k: k.clone(),
+            g: g.clone(),
+        };
+        rows.extend(timed("input-reading rows and their perturbations", || {
+            with_perturbations(&certified)
+        })?);
         rows.extend(second);
         rows.extend(
             storm
@@ -126,6 +138,15 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
         .filter(|(a, b)| a != b)
         .map(|(a, b)| (m1.clone(), vec![q(a)], vec![q(b)]))
         .collect();
+    rows.extend(errata::e2_rows(
+        &second_toy::m2_two_groups(),
+        &[
+            vec![q("0"), q("0")],
+            vec![q("1/2"), q("-1")],
+            vec![q("-2"), q("3")],
+        ],
+    )?);
+    rows.push(errata::e18_row(m1, &[vec![q("0")], vec![q("1")]])?);
     rows.push(unbiased::estimator(&cases));
     rows.push(unbiased::old_point(&pairs, Some(Weighting::Trajectory)));
     rows.push(unbiased::old_point(&pairs, Some(Weighting::PerDecision)));
