@@ -51,7 +51,8 @@ pub fn moments(problem: &ToyProblem<Q>, inputs: &TableInputs, w: &Q) -> Result<M
         mean += pg;
         mass += p.prob;
     }
-    let centred = grad.clone() * &grad * &mass - Q::from_integer(2.into()) * &grad * &mean + &second;
+    let centred =
+        grad.clone() * &grad * &mass - Q::from_integer(2.into()) * &grad * &mean + &second;
     let abs_dev = signed_pg - grad.clone() * &signed_p;
     Ok(Moments {
         grad,

@@ -30,7 +30,9 @@ fn seen(inputs: &TableInputs, g: &Q) -> Q {
 fn comparator(ev: &Evaluated, r: usize, k: usize) -> Q {
     let t = ev.runs.params.t as usize;
     let grads = || block(t, k).map(|n| &ev.moments[r][n - 1].grad);
-    let enclosed: Interval = grads().map(enclose_rational).fold(Interval::zero(), |a, b| a + b);
+    let enclosed: Interval = grads()
+        .map(enclose_rational)
+        .fold(Interval::zero(), |a, b| a + b);
     let negative = match enclosed.certain_cmp(&Interval::zero()) {
         Some(o) => o == std::cmp::Ordering::Less,
         None => grads().cloned().sum::<Q>().is_negative(),
@@ -82,7 +84,9 @@ impl SegmentEngine {
         for i in 0..j {
             let centre = enclose_rational(&at(2 * i + 1, 2 * j));
             let hull = enclose_rational(&at(i, j)).convex_hull(enclose_rational(&at(i + 1, j)));
-            let slope = forward(&self.point, &[centre]).map_err(|e| e.to_string())?.gradient[0];
+            let slope = forward(&self.point, &[centre])
+                .map_err(|e| e.to_string())?
+                .gradient[0];
             let curvature = forward(&self.jet, &Dual::variables(&[hull]))
                 .map_err(|e| e.to_string())?
                 .gradient
@@ -130,7 +134,11 @@ fn runs_text(ev: &Evaluated) -> String {
 }
 
 /// Rows 3b.s1 (E12: F(θ_0)) and 3b.s1.printed (F(θ_1)).
-pub(super) fn telescoping(mdp: &ToyMdp, ev: &Evaluated, pieces: usize) -> Result<Vec<Check>, String> {
+pub(super) fn telescoping(
+    mdp: &ToyMdp,
+    ev: &Evaluated,
+    pieces: usize,
+) -> Result<Vec<Check>, String> {
     let engine = SegmentEngine::new(mdp);
     let (t, kb) = (ev.runs.params.t as usize, ev.runs.params.k as usize);
     let (mut steps, mut printed) = (StepSlack::new(), StepSlack::new());
@@ -220,7 +228,11 @@ pub(super) fn unbiased(ev: &Evaluated) -> Check {
 }
 
 /// Rows 3b.s3 (pathwise OGD regret per block) and 3b.s3.e (E[‖g_t‖² | F_{t−1}] ≤ G²).
-pub(super) fn regret(inputs: &TableInputs, k: &ToyConstants, ev: &Evaluated) -> Result<Vec<Check>, String> {
+pub(super) fn regret(
+    inputs: &TableInputs,
+    k: &ToyConstants,
+    ev: &Evaluated,
+) -> Result<Vec<Check>, String> {
     let runs = &ev.runs;
     let (t, kb) = (runs.params.t as usize, runs.params.k as usize);
     let d = &runs.params.d;
@@ -281,7 +293,11 @@ pub(super) fn regret(inputs: &TableInputs, k: &ToyConstants, ev: &Evaluated) -> 
 }
 
 /// Rows 3b.s4 (E[‖X_t‖² | F_{t−1}] ≤ σ²) and 3b.s4.printed (the sum of norms of (3.69)).
-pub(super) fn martingale(inputs: &TableInputs, k: &ToyConstants, ev: &Evaluated) -> Result<Vec<Check>, String> {
+pub(super) fn martingale(
+    inputs: &TableInputs,
+    k: &ToyConstants,
+    ev: &Evaluated,
+) -> Result<Vec<Check>, String> {
     let sigma2 = inputs.constant(
         ConstantKind::Sigma2,
         Q::from_float(k.sigma2.value).ok_or("σ² is not finite")?,
@@ -351,7 +367,10 @@ pub(super) fn indexing(inputs: &TableInputs, ev: &Evaluated) -> Vec<Check> {
     for (r, path) in ev.runs.paths.iter().enumerate() {
         let u: Vec<Q> = (1..=kb).map(|b| comparator(ev, r, b)).collect();
         let term = |n: usize, j: usize| seen(inputs, &path.g[n - 1]) * (path.step(n) - &u[j - 1]);
-        let shifting: Q = (1..=kb).flat_map(|b| block(t, b).map(move |n| (n, b))).map(|(n, b)| term(n, b)).sum();
+        let shifting: Q = (1..=kb)
+            .flat_map(|b| block(t, b).map(move |n| (n, b)))
+            .map(|(n, b)| term(n, b))
+            .sum();
         let by_ceil: Q = (1..=kb * t).map(|n| term(n, n.div_ceil(t))).sum();
         corrected.exact(&(by_ceil - &shifting).abs(), &zero);
         let mut sum = Q::zero();
@@ -397,7 +416,11 @@ pub(super) fn indexing(inputs: &TableInputs, ev: &Evaluated) -> Vec<Check> {
         ));
         crate::record::check::Verdict::Fails
     } else {
-        p5 = p5.details(format!("{}; exact in ℚ; {}", printed.summary(), runs_text(ev)));
+        p5 = p5.details(format!(
+            "{}; exact in ℚ; {}",
+            printed.summary(),
+            runs_text(ev)
+        ));
         printed.verdict()
     };
     vec![s5, p5.erratum("E13").decided(Method::Exact, verdict)]
@@ -414,14 +437,18 @@ pub(super) fn spread(ev: &Evaluated) -> Vec<Check> {
         let s: Vec<Option<Q>> = (1..=path.w.len())
             .map(|n| {
                 let step = path.step(n);
-                (!step.is_certainly_zero()).then(|| (path.w[n - 1].clone() - &path.theta[n - 1]) / step)
+                (!step.is_certainly_zero())
+                    .then(|| (path.w[n - 1].clone() - &path.theta[n - 1]) / step)
             })
             .collect();
         for b in 1..=kb {
             for n in block(t, b) {
                 for n2 in n + 1..=b * t {
                     let diff = path.w[n - 1].clone() - &path.w[n2 - 1];
-                    bound.exact(&diff.abs(), &(d.clone() * Q::from_integer((n2 - n + 1).into())));
+                    bound.exact(
+                        &diff.abs(),
+                        &(d.clone() * Q::from_integer((n2 - n + 1).into())),
+                    );
                     if let (Some(sn), Some(_)) = (&s[n - 1], &s[n2 - 1]) {
                         let rhs = path.theta[n].clone()
                             - (Q::from_integer(1.into()) - sn) * path.step(n)
