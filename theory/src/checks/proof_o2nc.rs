@@ -23,6 +23,7 @@ mod close;
 mod path;
 mod point;
 mod steps;
+mod telescoping;
 
 pub use path::{RunPath, Runs, record};
 pub use point::{Moments, moments, objective};

@@ -1,14 +1,13 @@
-//! Rows 3b.s1–3b.s6: the steps of the proof of Theorems 3.7 and 3.8 at the recorded runs
-//! (module documentation of [`super`]).
+//! Rows 3b.s2–3b.s6 (3b.s1 is [`super::telescoping`]): the steps of the proof of Theorems 3.7
+//! and 3.8 at the recorded runs (module documentation of [`super`]).
 
 use super::{Evaluated, RESULT, StepSizes};
 use crate::certify::box_constants::ToyConstants;
 use crate::checks::proof_step::StepSlack;
 use crate::inputs::{ConstantKind, TableInputs};
 use crate::record::check::{Check, Method, Role};
-use ilopt::exact::forward::forward;
-use ilopt::scalar::{BigRational, Dual, Interval, Scalar, enclose_rational};
-use ilopt::toy::{ToyMdp, ToyProblem};
+use ilopt::scalar::{BigRational, Interval, Scalar, enclose_rational};
+use ilopt::toy::ToyMdp;
 use num_traits::Signed;
 use std::ops::RangeInclusive;
 
@@ -41,66 +40,6 @@ fn comparator(ev: &Evaluated, r: usize, k: usize) -> Q {
     if negative { d } else { -d }
 }
 
-/// `lo ≤ x ≤ hi` for the ends of an enclosure, decided exactly in ℚ.
-fn within(s: &mut StepSlack, x: &Q, iv: Interval) -> Result<(), String> {
-    let end = |e: f64| Q::from_float(e).ok_or_else(|| format!("unbounded enclosure {iv:?}"));
-    s.exact(&end(iv.inf())?, x);
-    s.exact(x, &end(iv.sup())?);
-    Ok(())
-}
-
-/// The engine in the two arithmetics the segment integrals need.
-pub struct SegmentEngine {
-    point: ToyProblem<Interval>,
-    jet: ToyProblem<Dual<Interval>>,
-}
-
-impl SegmentEngine {
-    /// For the problem `mdp`.
-    pub fn new(mdp: &ToyMdp) -> Self {
-        SegmentEngine {
-            point: ToyProblem::new(mdp),
-            jet: ToyProblem::new(mdp),
-        }
-    }
-
-    /// An enclosure of ∫₀¹ F′(θ + sΔ) Δ ds (the right side of (3.65), one parameter), by the
-    /// mean-value form on J sub-segments: with h = Δ/J, centre c_j and hull X_j of the j-th,
-    /// ∫_{X_j} F′ = h F′(c_j) + ∫ (F′(x) − F′(c_j)) dx and |∫ (F′(x) − F′(c_j)) dx| ≤
-    /// mag F″(X_j) h²/4; F′(c_j) by the forward DP (X2) in intervals, F″(X_j) by X2 in
-    /// `Dual<Interval>`.
-    ///
-    /// # Errors
-    /// If the engine cannot enclose F′ or F″ on a sub-segment.
-    pub fn integral(&self, theta: &Q, step: &Q, pieces: usize) -> Result<Interval, String> {
-        if step.is_certainly_zero() {
-            return Ok(Interval::zero());
-        }
-        let j = pieces.max(1) as i64;
-        let at = |num: i64, den: i64| theta.clone() + step.clone() * Q::new(num.into(), den.into());
-        let h = enclose_rational(&(step.clone() / Q::from_integer(j.into())));
-        let quarter_h2 = h.sqr() / Interval::from_i64(4);
-        let mut acc = Interval::zero();
-        for i in 0..j {
-            let centre = enclose_rational(&at(2 * i + 1, 2 * j));
-            let hull = enclose_rational(&at(i, j)).convex_hull(enclose_rational(&at(i + 1, j)));
-            let slope = forward(&self.point, &[centre])
-                .map_err(|e| e.to_string())?
-                .gradient[0];
-            let curvature = forward(&self.jet, &Dual::variables(&[hull]))
-                .map_err(|e| e.to_string())?
-                .gradient
-                .swap_remove(0)
-                .into_parts(1)
-                .1[0];
-            let m = curvature.mag();
-            let bend = Interval::try_from((-m, m)).map_err(|e| format!("|F″| ≤ {m}: {e:?}"))?;
-            acc += h * slope + bend * quarter_h2;
-        }
-        Ok(acc)
-    }
-}
-
 /// Every row of this file.
 ///
 /// # Errors
@@ -112,7 +51,7 @@ pub fn rows(
     ev: &Evaluated,
     sizes: &StepSizes,
 ) -> Result<Vec<Check>, String> {
-    let mut rows = telescoping(mdp, ev, sizes.pieces)?;
+    let mut rows = super::telescoping::telescoping(mdp, ev, sizes.pieces)?;
     rows.push(unbiased(ev));
     rows.extend(regret(inputs, k, ev)?);
     rows.extend(martingale(inputs, k, ev)?);
@@ -121,7 +60,7 @@ pub fn rows(
     Ok(rows)
 }
 
-fn runs_text(ev: &Evaluated) -> String {
+pub(super) fn runs_text(ev: &Evaluated) -> String {
     let p = &ev.runs.params;
     format!(
         "{} seeded runs of the kit's Algorithm 5 (IL-correct), T = {}, K = {}, M = {}, D = δ/T = {}",
@@ -131,77 +70,6 @@ fn runs_text(ev: &Evaluated) -> String {
         p.m,
         p.d
     )
-}
-
-/// Rows 3b.s1 (E12: F(θ_0)) and 3b.s1.printed (F(θ_1)).
-pub(super) fn telescoping(
-    mdp: &ToyMdp,
-    ev: &Evaluated,
-    pieces: usize,
-) -> Result<Vec<Check>, String> {
-    let engine = SegmentEngine::new(mdp);
-    let (t, kb) = (ev.runs.params.t as usize, ev.runs.params.k as usize);
-    let (mut steps, mut printed) = (StepSlack::new(), StepSlack::new());
-    let (mut worst_width, mut moved) = (0.0f64, 0usize);
-    for (r, path) in ev.runs.paths.iter().enumerate() {
-        let f = &ev.objective[r];
-        let m = path.w.len();
-        let mut integrals = Vec::with_capacity(m);
-        for n in 1..=m {
-            let iv = engine.integral(&path.theta[n - 1], &path.step(n), pieces)?;
-            worst_width = worst_width.max(iv.wid());
-            within(&mut steps, &(f[n].clone() - &f[n - 1]), iv)?;
-            integrals.push(iv);
-        }
-        let sum = |from: usize, to: usize| {
-            integrals[from - 1..to]
-                .iter()
-                .fold(Interval::zero(), |a, b| a + *b)
-        };
-        within(&mut steps, &(f[m].clone() - &f[0]), sum(1, m))?;
-        // The printed version on the run (θ'_0 = θ_0: OGD's Δ_1 = 0, so θ_1 = θ_0) and on every
-        // block entered after its first step, n = n₀..kT with n₀ = (k−1)T + 2 (a learner whose
-        // first step Δ'_1 = Δ_{n₀} is nonzero): F(θ_{kT}) − F(θ'_1) = F(θ_{kT}) − F(θ_{n₀})
-        // against Σ_{n=n₀}^{kT} ∫⟨∇F, Δ_n⟩.
-        within(&mut printed, &(f[m].clone() - &f[1]), sum(1, m))?;
-        for b in 1..=kb {
-            let n0 = (b - 1) * t + 2;
-            if n0 > b * t {
-                continue;
-            }
-            moved += usize::from(!path.step(n0).is_certainly_zero());
-            within(&mut printed, &(f[b * t].clone() - &f[n0]), sum(n0, b * t))?;
-        }
-    }
-    let claim = |start: &str| {
-        format!(
-            "F(θ_n) − F(θ_{{n−1}}) = ∫₀¹⟨∇F(θ_{{n−1}} + sΔ_n), Δ_n⟩ds at every step and F(θ_M) − {start} = Σ_n of them on every run"
-        )
-    };
-    let basis = format!(
-        "{}; the exact F(θ_n) − F(θ_{{n−1}}) in ℚ must lie in an enclosure of the integral (mean-value form on {pieces} sub-segments, ∇F and ∇²F by X2 in intervals; widest enclosure {worst_width:.3e}); each step, run or window is two points (lower end, upper end)",
-        runs_text(ev)
-    );
-    let s1 = steps
-        .row("3b.s1", RESULT, claim("F(θ_0)"), Role::Corrected)
-        .assumptions(["F well-behaved (3.61): F is C¹ on the toy"])
-        .erratum("E12")
-        .details(format!("{}; {basis}", steps.summary()))
-        .decided(Method::Rigorous, steps.verdict());
-    let p1 = printed
-        .row(
-            "3b.s1.printed",
-            RESULT,
-            "(3.64) as printed: F(θ_M) − F(θ_1) = Σ_{n=1}^M ∫₀¹⟨∇F(θ_{n−1} + sΔ_n), Δ_n⟩ds, on each run and each window of a block entered after its first step",
-            Role::Thesis,
-        )
-        .erratum("E12")
-        .details(format!(
-            "{}; on each run it agrees (OGD restarts at Δ_1 = 0, so θ_1 = θ_0); on the {moved} windows with a nonzero first step it drops F(θ'_1) − F(θ'_0); {basis}",
-            printed.summary()
-        ))
-        .decided(Method::Rigorous, printed.verdict());
-    Ok(vec![s1, p1])
 }
 
 /// Row 3b.s2 (E11): E[g(w_n, τ) | w_n] = ∇F(w_n), τ ∼ p(·; w_n), exactly at every visited w_n.
