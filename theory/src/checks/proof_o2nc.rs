@@ -9,6 +9,7 @@
 //! | row | step | errata |
 //! |---|---|---|
 //! | `3b.s1` (`.printed`) | (3.64)/(3.65): F(θ_n) − F(θ_{n−1}) = ∫₀¹⟨∇F(θ_{n−1} + sΔ_n), Δ_n⟩ds, summed to F(θ_M) − F(θ_0) | E12 |
+//! | `3b.s1.d0` | (3.66), first term: F(θ_0) − F(θ_M) ≤ Δ₀ | |
 //! | `3b.s2` | Thm 3.7's premise E[g_n \| Δ_n, F_{n−1}] = ∇F(w_n) at every visited w_n (τ_n ∼ p(·; w_n)) | E11 |
 //! | `3b.s3`, `3b.s3.e` | OGD: R_T(u^k) ≤ D²/(2η) + (η/2)Σ_t‖g_t‖² per block; E[‖g_t‖² \| F_{t−1}] ≤ G² | |
 //! | `3b.s4` (`.printed`) | (3.69): E[‖X_t‖² \| F_{t−1}] ≤ σ², X_t = ∇F(w_t) − g_t; the printed sum of norms | E13 |
@@ -195,7 +196,8 @@ mod tests {
         let inputs = TableInputs::thesis();
         let rows = rows_from(&inputs, &m1_tied(), k, thesis_runs(), &StepSizes::QUICK).unwrap();
         for id in [
-            "3b.s1", "3b.s2", "3b.s3", "3b.s3.e", "3b.s4", "3b.s5", "3b.s6", "3b.close", "3b.cor",
+            "3b.s1", "3b.s1.d0", "3b.s2", "3b.s3", "3b.s3.e", "3b.s4", "3b.s5", "3b.s6",
+            "3b.close", "3b.cor",
         ] {
             assert_eq!(verdict(&rows, id), Verdict::Holds, "{id}");
         }
@@ -208,7 +210,7 @@ mod tests {
         ] {
             assert_eq!(verdict(&rows, id), Verdict::Fails, "{id}");
         }
-        assert_eq!(rows.len(), 14);
+        assert_eq!(rows.len(), 15);
     }
 
     /// An oracle bias of 1/1000 on every estimate fails Thm 3.7's premise exactly.
@@ -239,6 +241,16 @@ mod tests {
         let inputs = scaled(ConstantKind::Sigma2, "1/4");
         let rows = rows_from(&inputs, &m1_tied(), k, thesis_runs(), &StepSizes::QUICK).unwrap();
         assert_eq!(verdict(&rows, "3b.s4"), Verdict::Fails);
+    }
+
+    /// A halved Δ₀ in the check (the runs as configured with the certified one) fails
+    /// F(θ_0) − F(θ_M) ≤ Δ₀.
+    #[test]
+    fn a_halved_delta0_fails_the_descent_step() {
+        let (k, _) = fixture();
+        let inputs = scaled(ConstantKind::BF, "1/2");
+        let row = telescoping::descent(&inputs, k, thesis_runs()).unwrap();
+        assert_eq!(row.verdict, Verdict::Fails, "{}", row.details);
     }
 
     fn theorem_without_sigma(d0: f64, delta: f64, g: f64, _sigma: f64, p: O2ncParams) -> f64 {

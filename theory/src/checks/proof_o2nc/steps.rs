@@ -52,6 +52,7 @@ pub fn rows(
     sizes: &StepSizes,
 ) -> Result<Vec<Check>, String> {
     let mut rows = super::telescoping::telescoping(mdp, ev, sizes.pieces)?;
+    rows.push(super::telescoping::descent(inputs, k, ev)?);
     rows.push(unbiased(ev));
     rows.extend(regret(inputs, k, ev)?);
     rows.extend(martingale(inputs, k, ev)?);

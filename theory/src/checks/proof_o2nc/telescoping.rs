@@ -1,10 +1,14 @@
 //! Rows 3b.s1 and 3b.s1.printed: (3.64)/(3.65) with E12, F(θ_n) − F(θ_{n−1}) =
 //! ∫₀¹⟨∇F(θ_{n−1} + sΔ_n), Δ_n⟩ds at every step of the recorded runs, summed to F(θ_M) − F(θ_0),
-//! the integral enclosed by the mean-value form.
+//! the integral enclosed by the mean-value form; and row 3b.s1.d0, the bound F(θ_0) − F(θ_M) ≤ Δ₀
+//! that (3.66) takes from it.
 
+use super::path::delta0_of;
 use super::steps::runs_text;
 use super::{Evaluated, RESULT};
+use crate::certify::box_constants::ToyConstants;
 use crate::checks::proof_step::StepSlack;
+use crate::inputs::TableInputs;
 use crate::record::check::{Check, Method, Role};
 use ilopt::exact::forward::forward;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar, enclose_rational};
@@ -141,4 +145,32 @@ pub fn telescoping(mdp: &ToyMdp, ev: &Evaluated, pieces: usize) -> Result<Vec<Ch
         ))
         .decided(Method::Rigorous, printed.verdict());
     Ok(vec![s1, p1])
+}
+
+/// Row 3b.s1.d0: the first term of (3.66), F(θ_0) − E F(θ_M) ≤ F(θ_0) − F* ≤ Δ₀, on every run:
+/// F(θ_0) − F(θ_M) ≤ Δ₀ exactly, Δ₀ = B_F read through `inputs`.
+///
+/// # Errors
+/// If the certified B_F is not finite.
+pub fn descent(inputs: &TableInputs, k: &ToyConstants, ev: &Evaluated) -> Result<Check, String> {
+    let delta0 = delta0_of(inputs, k)?;
+    let mut s = StepSlack::new();
+    for f in &ev.objective {
+        let last = f.last().ok_or("a run without iterates")?;
+        s.exact(&(f[0].clone() - last), &delta0);
+    }
+    Ok(s.row(
+        "3b.s1.d0",
+        RESULT,
+        "(3.66), first term: F(θ_0) − F(θ_M) ≤ F(θ_0) − F* ≤ Δ₀ on every run",
+        Role::Thesis,
+    )
+    .constants(vec![k.b_f.clone()])
+    .details(format!(
+        "{}; Δ₀ = B_F = {}; F by X2 in ℚ at the exact f64 iterates; {}",
+        s.summary(),
+        delta0,
+        runs_text(ev)
+    ))
+    .decided(Method::Exact, s.verdict()))
 }
