@@ -92,6 +92,9 @@ pub fn record(
             mdp.policy.dim()
         ));
     }
+    if sizes.delta.1 == 0 {
+        return Err("δ = n/0".into());
+    }
     let delta = Q::new(sizes.delta.0.into(), sizes.delta.1.into());
     let g = g_of(inputs, k);
     let delta0 = delta0_of(inputs, k)?;
