@@ -37,19 +37,18 @@ struct Parts {
 }
 
 impl Parts {
-    /// E R/(DM) with E R ≤ K(D²/(2η) + ηTG²/2), η = D/(G√T) (enclosed).
-    fn regret_term(&self) -> Interval {
+    /// The bound on E R = E R_T(u^1, …, u^K): K(D²/(2η) + ηTG²/2) with η = D/(G√T) (enclosed),
+    /// from the pathwise regret (row 3b.s3) and E‖g_t‖² ≤ G² (row 3b.s3.e).
+    fn expected_regret(&self) -> Interval {
         let two = Interval::from_i64(2);
         let eta = self.d / (self.g * self.root_t);
-        let per_block = self.d * self.d / (two * eta) + eta * self.t * self.g * self.g / two;
-        self.k * per_block / (self.d * self.m)
+        self.k * (self.d * self.d / (two * eta) + eta * self.t * self.g * self.g / two)
     }
 
-    /// Δ₀/(DM) + E R/(DM) + σ/√T, the bound assembled with the divisor `divisor` in place of
-    /// DM for the first two terms' common factor (DM corrected; KM as printed).
+    /// (Δ₀ + E R)/divisor + σ/√T: the bound of (3.66) with E R bounded as above, divided by DM
+    /// (corrected) or by KM (as printed).
     fn assembled(&self, divisor: Interval) -> Interval {
-        let dm = self.d * self.m;
-        (self.delta0 + self.regret_term() * dm) / divisor + self.sigma / self.root_t
+        (self.delta0 + self.expected_regret()) / divisor + self.sigma / self.root_t
     }
 }
 
@@ -122,8 +121,8 @@ pub fn rows(
             close.summary(),
             corrected.inf(),
             corrected.sup(),
-            parts.regret_term().inf(),
-            parts.regret_term().sup()
+            (parts.expected_regret() / (parts.d * parts.m)).inf(),
+            (parts.expected_regret() / (parts.d * parts.m)).sup()
         ))
         .decided(Method::Rigorous, close.verdict());
     let close_printed_row = close_printed
