@@ -304,23 +304,4 @@ mod tests {
         ev.runs.radius = ev.runs.radius.clone() / parse_exact("2").unwrap();
         assert_eq!(verdict(&steps::spread(&ev), "3b.s6"), Verdict::Fails);
     }
-
-    #[test]
-    #[ignore = "prints the rows"]
-    fn explore() {
-        let (k, domain) = fixture();
-        let t0 = std::time::Instant::now();
-        let rows = rows(
-            &TableInputs::thesis(),
-            &m1_tied(),
-            k,
-            domain,
-            &StepSizes::QUICK,
-        )
-        .unwrap();
-        eprintln!("rows {:?}", t0.elapsed());
-        for r in &rows {
-            eprintln!("{} {:?} {:?}\n   {}", r.id, r.verdict, r.role, r.details);
-        }
-    }
 }
