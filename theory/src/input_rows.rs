@@ -6,8 +6,8 @@
 
 use crate::certify::box_constants::{ToyConstants, b_f};
 use crate::certify::global::GlobalConstants;
-use crate::checks::{attained, errata};
-use crate::inputs::TableInputs;
+use crate::checks::{attained, errata, proof_o2nc};
+use crate::inputs::{ConstantKind, TableInputs};
 use crate::perturbation::{fixed_list, outcome, rows as perturbation_rows};
 use crate::protocol::Profile;
 use crate::record::check::Check;
@@ -30,6 +30,44 @@ pub struct Certified {
     pub k: ToyConstants,
     /// The global constants of the STORM rows.
     pub g: GlobalConstants,
+    /// The box the constants `k` hold on.
+    pub domain: Vec<[f64; 2]>,
+}
+
+/// The input-reading rows' own runs and their exact evaluation with the table's inputs as they
+/// are, computed once: a perturbation that changes neither the runs nor the oracle's moments (a
+/// formula, or a constant the runs do not use as a hyper-parameter) reuses them, which is the same
+/// computation.
+#[derive(Debug, Clone)]
+pub struct Runs {
+    o2nc: proof_o2nc::Evaluated,
+}
+
+impl Runs {
+    /// Record and evaluate every run of the input-reading rows with the unperturbed inputs.
+    ///
+    /// # Errors
+    /// A message if a run or an evaluation fails.
+    pub fn compute(c: &Certified) -> Result<Runs, String> {
+        let inputs = TableInputs::thesis();
+        let runs = proof_o2nc::record(&inputs, &c.m1, &c.k, &c.domain, &O2NC_SIZES)?;
+        Ok(Runs {
+            o2nc: proof_o2nc::evaluate(&inputs, &c.m1, runs)?,
+        })
+    }
+}
+
+/// The O2NC proof-step rows' runs (both profiles).
+const O2NC_SIZES: proof_o2nc::StepSizes = proof_o2nc::StepSizes::QUICK;
+
+/// Whether `inputs` changes what [`Runs`] holds: the oracle (every exact moment), or a constant
+/// that Algorithm 5 takes as a hyper-parameter (G², Δ₀ = B_F).
+fn changes_runs(inputs: &TableInputs) -> bool {
+    inputs.oracle_bias.is_some()
+        || matches!(
+            inputs.constant_scale,
+            Some((ConstantKind::G2 | ConstantKind::BF, _))
+        )
 }
 
 fn q(s: &str) -> BigRational {
@@ -40,7 +78,7 @@ fn q(s: &str) -> BigRational {
 ///
 /// # Errors
 /// A message if a row cannot be computed.
-pub fn input_rows(c: &Certified, inputs: &TableInputs) -> Result<Vec<Check>, String> {
+pub fn input_rows(c: &Certified, runs: &Runs, inputs: &TableInputs) -> Result<Vec<Check>, String> {
     let b_f_exact = b_f(&c.m1, &c.theta1, Some(&c.f_inf))?.value;
     let exact = [("B_F".to_string(), b_f_exact)];
     let k = inputs.toy_constants(&c.k);
@@ -54,6 +92,11 @@ pub fn input_rows(c: &Certified, inputs: &TableInputs) -> Result<Vec<Check>, Str
         .map(|t| (c.m1.clone(), vec![q(t)]))
         .collect();
     rows.extend(errata::e1_rows(inputs, &cases)?);
+    rows.extend(if changes_runs(inputs) {
+        proof_o2nc::rows(inputs, &c.m1, &c.k, &c.domain, &O2NC_SIZES)?
+    } else {
+        proof_o2nc::rows_from(inputs, &c.m1, &c.k, &runs.o2nc, &O2NC_SIZES)?
+    });
     Ok(rows)
 }
 
@@ -63,13 +106,55 @@ pub fn input_rows(c: &Certified, inputs: &TableInputs) -> Result<Vec<Check>, Str
 /// # Errors
 /// As [`input_rows`].
 pub fn with_perturbations(c: &Certified) -> Result<Vec<Check>, String> {
-    let base = input_rows(c, &TableInputs::thesis())?;
+    let runs = Runs::compute(c)?;
+    let base = input_rows(c, &runs, &TableInputs::thesis())?;
     let mut outcomes = vec![];
     for p in fixed_list() {
-        let rows = input_rows(c, &p.inputs)?;
+        let rows = input_rows(c, &runs, &p.inputs)?;
         outcomes.push(outcome(p.name, &base, &rows));
     }
     let mut rows = base;
     rows.extend(perturbation_rows(&outcomes));
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::certify::box_constants::{self, tied_softmax_g_inf_closed_form};
+    use crate::perturbation::fixed_list;
+    use crate::protocol::m1_tied;
+
+    /// A perturbation [`changes_runs`] says leaves the runs alone records the same runs (and,
+    /// without an oracle bias, the same exact moments): reusing [`Runs`] is the same computation.
+    #[test]
+    fn reused_runs_are_the_runs_a_perturbation_would_record() {
+        let r = 1000.0 * 0.05 * tied_softmax_g_inf_closed_form(3, 0.5);
+        let domain = vec![[-r, r]];
+        let m1 = m1_tied();
+        let k =
+            box_constants::compute(&m1, &[q("0")], Some(&q("7/8")), &domain, 1e-1, 20_000).unwrap();
+        let small = proof_o2nc::StepSizes {
+            budget: 20,
+            runs: 1,
+            ..O2NC_SIZES
+        };
+        let thesis = proof_o2nc::record(&TableInputs::thesis(), &m1, &k, &domain, &small).unwrap();
+        let mut reused = 0;
+        for p in fixed_list() {
+            let runs = proof_o2nc::record(&p.inputs, &m1, &k, &domain, &small).unwrap();
+            if changes_runs(&p.inputs) {
+                assert!(
+                    runs != thesis || p.inputs.oracle_bias.is_some(),
+                    "{}: said to change the runs, but does not",
+                    p.name
+                );
+            } else {
+                assert_eq!(runs, thesis, "{}", p.name);
+                assert!(p.inputs.oracle_bias.is_none());
+                reused += 1;
+            }
+        }
+        assert!(reused > 0);
+    }
 }

@@ -109,6 +109,7 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
             f_inf: q("7/8"),
             k: k.clone(),
             g: g.clone(),
+            domain: domain.to_vec(),
         };
         rows.extend(timed("input-reading rows and their perturbations", || {
             with_perturbations(&certified)

@@ -16,7 +16,7 @@ use std::cell::RefCell;
 type Q = BigRational;
 
 /// One run of Algorithm 5 (math.md §5), exactly as the f64 run visited it.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RunPath {
     /// The run's seed.
     pub seed: u64,
@@ -36,7 +36,7 @@ impl RunPath {
 }
 
 /// The runs of the proof-step rows with the parameters they ran with.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Runs {
     /// The recorded runs.
     pub paths: Vec<RunPath>,
