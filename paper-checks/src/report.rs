@@ -75,5 +75,9 @@ pub fn write(profile: &Profile, r: &Results, out: &Path, png: bool) -> Result<()
     let mut inserted = sensitivity;
     inserted.extend(storm_divergence::blocks());
     blocks.splice(at..at, inserted);
+    crate::storage::write_atomic(
+        &out.join("results.md"),
+        document::results_page(&cl, &tcl).as_bytes(),
+    )?;
     document::write_documents(&blocks, out)
 }

@@ -6,7 +6,7 @@
 //! included). `paper-checks --shard K/N` computes the units whose key falls to shard K and
 //! stores each in `runs/units/<key>.json`; the report runs need every row's tuning, so a shard
 //! computes its report units once the tuning units of all shards are in the store (run each shard
-//! twice, or the array twice: see the README). `paper-checks merge` then assembles the appendix
+//! twice, or the array twice: see docs/appendix.md). `paper-checks merge` then assembles the appendix
 //! from the store without computing anything, and a plain run computes whatever is missing.
 //! Every unit's result depends only on its key, so the merged data files are byte-identical to
 //! a single run's.

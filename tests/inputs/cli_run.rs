@@ -754,7 +754,7 @@ fn help_lists_every_key() {
     }
 }
 
-/// The example configs of `examples/run/` load and build (their runs are in the README).
+/// The example configs of `examples/run/` load and build (their runs are in docs/run.md and .ci/run).
 #[test]
 fn the_example_configs_are_valid() {
     let dir = Path::new(ROOT).join("examples/run");

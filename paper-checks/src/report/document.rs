@@ -294,8 +294,8 @@ fn verdict_summary(claims: &[Claim], timing: &[Claim]) -> Vec<Block> {
         Block::Para(format!(
             "{} claims of chapter 4: **{} reproduced**, **{} inconclusive**, **{} not \
              reproduced**. Each is judged by a stated rule on 95% intervals; the rule and the \
-             numbers of each claim are in the section *Claims of chapter 4: rules and numbers* \
-             below.",
+             numbers of each claim are in the appendix's section *Claims of chapter 4: rules and \
+             numbers*.",
             all.len(),
             count(Verdict::Reproduced),
             count(Verdict::Inconclusive),
@@ -312,6 +312,13 @@ fn verdict_summary(claims: &[Claim], timing: &[Claim]) -> Vec<Block> {
             spec: "llll".into(),
         }),
     ]
+}
+
+/// `results.md`: the verdict summary without its heading — the count sentence and the table, the
+/// same text as the appendix's "Verdicts at a glance" — for a front page to quote verbatim (the
+/// README's results block is this file of a quick run, and CI compares the two).
+pub fn results_page(claims: &[Claim], timing: &[Claim]) -> String {
+    doc::markdown(&verdict_summary(claims, timing)[1..])
 }
 
 /// A claim in the claims section: id, place, statement and verdict, then [`DETAIL_FIELDS`].
@@ -678,7 +685,7 @@ pub fn write_documents(blocks: &[Block], out: &Path) -> Result<(), Error> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Block, Claim, command_flags, doc, verdict_summary};
+    use super::{Block, Claim, command_flags, doc, results_page, verdict_summary};
     use crate::config::Profile;
     use crate::verdict::Verdict;
     use std::path::Path;
@@ -714,6 +721,28 @@ mod tests {
             task: None,
             compared: Vec::new(),
         }
+    }
+
+    /// `results.md` is the appendix's verdict summary, word for word, without its heading.
+    #[test]
+    fn the_results_page_is_the_appendixs_summary_without_its_heading() {
+        let claims = [
+            claim("O1", Verdict::Reproduced),
+            claim("C2", Verdict::NotReproduced),
+        ];
+        let timing = [claim("T1", Verdict::Inconclusive)];
+        let page = results_page(&claims, &timing);
+        let appendix = doc::markdown(&verdict_summary(&claims, &timing));
+        assert!(!page.contains("Verdicts at a glance"), "{page}");
+        assert!(appendix.contains("Verdicts at a glance"));
+        assert!(
+            appendix.trim_end().ends_with(page.trim_end()),
+            "{page}\n---\n{appendix}"
+        );
+        assert!(
+            page.contains("| C2 | claim C2 | **not reproduced** |"),
+            "{page}"
+        );
     }
 
     /// The summary counts the verdicts and has a row per claim, in both renderings.
