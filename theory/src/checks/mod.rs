@@ -6,6 +6,7 @@ pub mod constants;
 pub mod estimated;
 pub mod montecarlo;
 pub mod o2nc_formula;
+pub mod proof_sgd;
 pub mod proof_step;
 pub mod real_env;
 pub mod schedule;
