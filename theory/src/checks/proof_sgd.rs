@@ -546,6 +546,50 @@ pub fn rows(
     Ok(out)
 }
 
+/// The cases of row 1.s8, recorded in `slack`; returns what they were.
+fn closing_cases(
+    inputs: &TableInputs,
+    c: &Constants,
+    s: Sizes,
+    slack: &mut StepSlack,
+) -> Result<String, String> {
+    let eta = Q::from_ratio(SGD_ETA.0, SGD_ETA.1);
+    let eta_f = eta.to_f64();
+    let mut ks: Vec<u64> = vec![1, 10, s.k, 1000, 100_000];
+    ks.sort_unstable();
+    ks.dedup();
+    for &n in &ks {
+        let q = telescoped_bound(&[(eta.clone(), Q::from_i64(n as i64))], c)?;
+        let f = (inputs.formulas.sgd_constant)(c.l_f64, eta_f, c.sigma2_f64, c.b_f_f64, n);
+        agree(slack, f, &q)?;
+        // The f64 sum of K terms is within a relative K·2⁻⁵³ of the exact one: K ≤ 1000.
+        if n <= 1000 {
+            let f = (inputs.formulas.sgd_weighted)(
+                c.l_f64,
+                &vec![eta_f; n as usize],
+                c.sigma2_f64,
+                c.b_f_f64,
+            );
+            agree(slack, f, &q)?;
+        }
+    }
+    for n in [s.k, 1000] {
+        let etas = step_sizes(&schedule(true), n)?;
+        let steps: Vec<(Q, Q)> = etas.iter().map(|e| (e.clone(), Q::one())).collect();
+        let q = telescoped_bound(&steps, c)?;
+        let ef: Vec<f64> = etas.iter().map(Scalar::to_f64).collect();
+        agree(
+            slack,
+            (inputs.formulas.sgd_weighted)(c.l_f64, &ef, c.sigma2_f64, c.b_f_f64),
+            &q,
+        )?;
+    }
+    Ok(format!(
+        "η = {}/{} at K ∈ {ks:?} (sgd_constant; sgd_weighted for K ≤ 1000) and η_k = η₁·{DECREASING_K0}/({DECREASING_K0} + k − 1) at K ∈ {{{}, 1000}} (sgd_weighted); slack = 10⁻¹²·assembled − |closed form − assembled|",
+        SGD_ETA.0, SGD_ETA.1, s.k
+    ))
+}
+
 /// Row 1.s8: the bound the telescoped per-step coefficients give, assembled in ℚ
 /// ([`telescoped_bound`]), against the table's `sgd_constant` (3.27) and `sgd_weighted` (3.26),
 /// evaluated in f64, at row 1's η = 1/20 for several K and at the decreasing schedule.
@@ -560,47 +604,37 @@ fn closing_row(inputs: &TableInputs, c: &Constants, s: Sizes, consts: &[Constant
             .decided(Method::Exact, verdict)
     };
     let mut slack = StepSlack::new();
-    let result = (|| -> Result<String, String> {
-        let eta = Q::from_ratio(SGD_ETA.0, SGD_ETA.1);
-        let eta_f = eta.to_f64();
-        let mut ks: Vec<u64> = vec![1, 10, s.k, 1000, 100_000];
-        ks.sort_unstable();
-        ks.dedup();
-        for &n in &ks {
-            let q = telescoped_bound(&[(eta.clone(), Q::from_i64(n as i64))], c)?;
-            let f = (inputs.formulas.sgd_constant)(c.l_f64, eta_f, c.sigma2_f64, c.b_f_f64, n);
-            agree(&mut slack, f, &q)?;
-            // The f64 sum of K terms is within a relative K·2⁻⁵³ of the exact one: K ≤ 1000.
-            if n <= 1000 {
-                let f = (inputs.formulas.sgd_weighted)(
-                    c.l_f64,
-                    &vec![eta_f; n as usize],
-                    c.sigma2_f64,
-                    c.b_f_f64,
-                );
-                agree(&mut slack, f, &q)?;
-            }
-        }
-        for n in [s.k, 1000] {
-            let etas = step_sizes(&schedule(true), n)?;
-            let steps: Vec<(Q, Q)> = etas.iter().map(|e| (e.clone(), Q::one())).collect();
-            let q = telescoped_bound(&steps, c)?;
-            let ef: Vec<f64> = etas.iter().map(Scalar::to_f64).collect();
-            agree(
-                &mut slack,
-                (inputs.formulas.sgd_weighted)(c.l_f64, &ef, c.sigma2_f64, c.b_f_f64),
-                &q,
-            )?;
-        }
-        Ok(format!(
-            "η = {}/{} at K ∈ {ks:?} (sgd_constant; sgd_weighted for K ≤ 1000) and η_k = η₁·{DECREASING_K0}/({DECREASING_K0} + k − 1) at K ∈ {{{}, 1000}} (sgd_weighted); slack = 10⁻¹²·assembled − |closed form − assembled|",
-            SGD_ETA.0, SGD_ETA.1, s.k
-        ))
-    })();
+    let result = closing_cases(inputs, c, s, &mut slack);
     match result {
         Ok(extra) => build(&slack, extra, slack.verdict()),
         Err(e) => build(&slack, e, Verdict::Inconclusive),
     }
+}
+
+/// The cases of row 1.s9, recorded in `slack`; the ε skipped by the side condition in `skipped`.
+fn consistency_cases(
+    inputs: &TableInputs,
+    c: &Constants,
+    slack: &mut StepSlack,
+    skipped: &mut Vec<String>,
+) -> Result<(), String> {
+    for (num, den) in EPSILONS {
+        let eps2 = Q::from_ratio(num * num, den * den);
+        if eps2.clone() * &c.c > Q::from_i64(2) * &c.sigma2 {
+            skipped.push(format!("{num}/{den}"));
+            continue;
+        }
+        let eta = eps2.clone() / (Q::from_i64(2) * &c.sigma2 * &c.l);
+        let kq = Q::from_i64(8) * &c.sigma2 * &c.l * &c.b_f / (eps2.clone() * &eps2);
+        let q = telescoped_bound(&[(eta.clone(), kq.clone())], c)?;
+        slack.exact(&abs(q - &eps2), &Q::zero());
+        let kc = num_traits::ToPrimitive::to_u64(&kq.ceil().to_integer())
+            .ok_or_else(|| format!("K = {kq} does not fit in u64"))?;
+        let f = (inputs.formulas.sgd_constant)(c.l_f64, eta.to_f64(), c.sigma2_f64, c.b_f_f64, kc);
+        let tol = Q::one() + Q::from_ratio(FORMULA_RTOL.0, FORMULA_RTOL.1);
+        slack.exact(&exact(f, "a closed-form bound")?, &(eps2 * tol));
+    }
+    Ok(())
 }
 
 /// Row 1.s9: (3.28) — η = ε²/(2σ²L) and K = 8σ²LB_F/ε⁴ make the assembled bound exactly ε², and
@@ -610,26 +644,7 @@ fn consistency_row(inputs: &TableInputs, c: &Constants, consts: &[Constant]) -> 
     let claim = "(3.28): η = ε²/(2σ²L), K = 8σ²LB_F/ε⁴ give Lησ² + 2B_F/(ηK) = ε² exactly; the table's closed form at (η, ⌈K⌉) is ≤ ε²";
     let mut slack = StepSlack::new();
     let mut skipped = vec![];
-    let result = (|| -> Result<(), String> {
-        for (num, den) in EPSILONS {
-            let eps2 = Q::from_ratio(num * num, den * den);
-            if eps2.clone() * &c.c > Q::from_i64(2) * &c.sigma2 {
-                skipped.push(format!("{num}/{den}"));
-                continue;
-            }
-            let eta = eps2.clone() / (Q::from_i64(2) * &c.sigma2 * &c.l);
-            let kq = Q::from_i64(8) * &c.sigma2 * &c.l * &c.b_f / (eps2.clone() * &eps2);
-            let q = telescoped_bound(&[(eta.clone(), kq.clone())], c)?;
-            slack.exact(&abs(q - &eps2), &Q::zero());
-            let kc = num_traits::ToPrimitive::to_u64(&kq.ceil().to_integer())
-                .ok_or_else(|| format!("K = {kq} does not fit in u64"))?;
-            let f =
-                (inputs.formulas.sgd_constant)(c.l_f64, eta.to_f64(), c.sigma2_f64, c.b_f_f64, kc);
-            let tol = Q::one() + Q::from_ratio(FORMULA_RTOL.0, FORMULA_RTOL.1);
-            slack.exact(&exact(f, "a closed-form bound")?, &(eps2 * tol));
-        }
-        Ok(())
-    })();
+    let result = consistency_cases(inputs, c, &mut slack, &mut skipped);
     let list: Vec<String> = EPSILONS.iter().map(|(n, d)| format!("{n}/{d}")).collect();
     let (verdict, extra) = match result {
         Ok(()) => (
