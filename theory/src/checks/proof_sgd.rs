@@ -68,19 +68,21 @@ pub struct Sizes {
     pub k: u64,
 }
 
-/// The sizes of the quick table (`full = false`) or of the full one.
+/// The sizes of the quick table (`full = false`: 3 runs × 24 steps) or of the full one (4 runs ×
+/// 100 steps), plus the 2 attaining points. The points are few because each is costly: the next
+/// iterates θ − ηg(θ, τ) are rationals of several hundred bits, and F there of thousands.
 pub fn sizes(full: bool) -> Sizes {
     if full {
         Sizes {
-            constant_runs: 4,
-            decreasing_runs: 2,
+            constant_runs: 3,
+            decreasing_runs: 1,
             k: 100,
         }
     } else {
         Sizes {
             constant_runs: 2,
             decreasing_runs: 1,
-            k: 12,
+            k: 24,
         }
     }
 }
