@@ -68,7 +68,7 @@ pub struct Sizes {
     pub k: u64,
 }
 
-/// The sizes of the quick table (`full = false`: 3 runs × 24 steps) or of the full one (4 runs ×
+/// The sizes of the quick table (`full = false`: 3 runs × 16 steps) or of the full one (4 runs ×
 /// 100 steps), plus the 2 attaining points. The points are few because each is costly: the next
 /// iterates θ − ηg(θ, τ) are rationals of several hundred bits, and F there of thousands.
 pub fn sizes(full: bool) -> Sizes {
@@ -82,7 +82,7 @@ pub fn sizes(full: bool) -> Sizes {
         Sizes {
             constant_runs: 2,
             decreasing_runs: 1,
-            k: 24,
+            k: 16,
         }
     }
 }
