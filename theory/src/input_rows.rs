@@ -6,7 +6,7 @@
 
 use crate::certify::box_constants::{ToyConstants, b_f};
 use crate::certify::global::GlobalConstants;
-use crate::checks::{attained, errata, proof_o2nc};
+use crate::checks::{attained, errata, proof_o2nc, proof_sgd};
 use crate::inputs::{ConstantKind, TableInputs};
 use crate::perturbation::{fixed_list, outcome, rows as perturbation_rows};
 use crate::protocol::Profile;
@@ -41,6 +41,7 @@ pub struct Certified {
 #[derive(Debug, Clone)]
 pub struct Runs {
     o2nc: proof_o2nc::Evaluated,
+    sgd: proof_sgd::Evaluated,
 }
 
 impl Runs {
@@ -53,12 +54,19 @@ impl Runs {
         let runs = proof_o2nc::record(&inputs, &c.m1, &c.k, &c.domain, &O2NC_SIZES)?;
         Ok(Runs {
             o2nc: proof_o2nc::evaluate(&inputs, &c.m1, runs)?,
+            sgd: proof_sgd::evaluate(&inputs, &c.k, &c.domain, sgd_sizes())?,
         })
     }
 }
 
-/// The O2NC proof-step rows' runs (both profiles).
+/// The O2NC proof-step rows' runs (both profiles: the rows are exact, and every perturbation
+/// reruns them).
 const O2NC_SIZES: proof_o2nc::StepSizes = proof_o2nc::StepSizes::QUICK;
+
+/// The SGD proof-step rows' runs (the quick size in both profiles, as for O2NC).
+fn sgd_sizes() -> proof_sgd::Sizes {
+    proof_sgd::sizes(false)
+}
 
 /// Whether `inputs` changes what [`Runs`] holds: the oracle (every exact moment), or a constant
 /// that Algorithm 5 takes as a hyper-parameter (G², Δ₀ = B_F).
@@ -92,6 +100,11 @@ pub fn input_rows(c: &Certified, runs: &Runs, inputs: &TableInputs) -> Result<Ve
         .map(|t| (c.m1.clone(), vec![q(t)]))
         .collect();
     rows.extend(errata::e1_rows(inputs, &cases)?);
+    rows.extend(if inputs.oracle_bias.is_some() {
+        proof_sgd::rows(inputs, &c.k, &c.domain, sgd_sizes())?
+    } else {
+        proof_sgd::rows_from(inputs, &c.k, &runs.sgd, sgd_sizes())?
+    });
     rows.extend(if changes_runs(inputs) {
         proof_o2nc::rows(inputs, &c.m1, &c.k, &c.domain, &O2NC_SIZES)?
     } else {

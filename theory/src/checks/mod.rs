@@ -9,6 +9,7 @@ pub mod estimated;
 pub mod montecarlo;
 pub mod o2nc_formula;
 pub mod proof_o2nc;
+pub mod proof_sgd;
 pub mod proof_step;
 pub mod real_env;
 pub mod schedule;
