@@ -10,12 +10,11 @@ use crate::checks::{
     unbiased,
 };
 use crate::protocol::{
-    CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes,
-    STATISTICAL_CLAIMS, Sizes, m1_tied, real_sizes,
+    CARTPOLE_STORM_ETA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes, Sizes, family_level, m1_tied,
+    real_sizes,
 };
 use crate::record::check::Check;
 use crate::stage::timed;
-use crate::stats::bonferroni;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, parse_exact};
 use ilopt::toy::ToyMdp;
@@ -38,7 +37,7 @@ fn q(s: &str) -> BigRational {
 pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, String> {
     let s = profile.sizes();
     let m1 = m1_tied();
-    let alpha = bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS);
+    let alpha = family_level();
     std::thread::scope(|scope| {
         let (send, receive) = std::sync::mpsc::channel();
         let m1_global = &m1;
@@ -118,15 +117,13 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
     let mut rows = schedule::rows(s.schedule_k);
     rows.push(o2nc_formula::row(s.o2nc_cases, 1));
     let thetas = ["0", "1/3", "-2", "5/2", "1", "2"];
-    let cases: Vec<(ToyMdp, Vec<BigRational>)> =
-        thetas.iter().map(|t| (m1.clone(), vec![q(t)])).collect();
     let pairs: Vec<(ToyMdp, Vec<BigRational>, Vec<BigRational>)> = thetas
         .iter()
         .zip(thetas.iter().rev())
         .filter(|(a, b)| a != b)
         .map(|(a, b)| (m1.clone(), vec![q(a)], vec![q(b)]))
         .collect();
-    rows.push(unbiased::estimator(&cases));
+    rows.push(unbiased::estimator_all_theta(m1));
     rows.push(unbiased::old_point(&pairs, Some(Weighting::Trajectory)));
     rows.push(unbiased::old_point(&pairs, Some(Weighting::PerDecision)));
     rows.push(unbiased::old_point(&pairs, None));
@@ -149,9 +146,13 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
         3,
         0,
     ));
-    let dagger = match profile {
-        Profile::Quick => thm31::DAGGER_QUICK,
-        Profile::Full => thm31::DAGGER_FULL,
+    // Rows 5e are claims of the α family (protocol::FAMILY_CLAIMS).
+    let dagger = thm31::DaggerSizes {
+        alpha: family_level(),
+        ..match profile {
+            Profile::Quick => thm31::DAGGER_QUICK,
+            Profile::Full => thm31::DAGGER_FULL,
+        }
     };
     for (i, inst) in thm31::instances().iter().enumerate() {
         rows.extend(

@@ -84,9 +84,21 @@ pub fn toy_rows(
             mc.alpha,
         ));
     }
+    label_pair(&mut tracking_rows, "E11");
+    let mut wide = wide_radius_tracking_rows(mdp, k, g, mc.alpha);
+    label_pair(&mut wide, "E11");
     rows.extend(tracking_rows);
-    rows.extend(wide_radius_tracking_rows(mdp, k, g, mc.alpha));
+    rows.extend(wide);
     rows
+}
+
+/// Labels the first row of `rows` (the right algorithm) with what it resolves of `erratum`,
+/// against the second (the wrong algorithm through the same check):
+/// [`tracking::label_resolution`].
+fn label_pair(rows: &mut [Check], erratum: &str) {
+    if let [right, wrong, ..] = rows {
+        tracking::label_resolution(right, wrong, erratum);
+    }
 }
 
 /// `n/d`, or `n` when d = 1 (num-rational's display of the unreduced ratio).
@@ -393,8 +405,15 @@ pub fn storm_rows(mdp: &ToyMdp, g: &GlobalConstants, s: Sizes, alpha: f64) -> Ve
     rows.push(storm::adaptive_schedule(
         mdp, g, 0.0, 1.0, ADAPTIVE_K, mc, 1.0,
     ));
+    // Rows 2e and 2e.pd against the unweighted STORM (2e.unweighted) through the same check.
+    if let [tr, pd, unweighted, ..] = &mut tracking_rows[..] {
+        tracking::label_resolution(tr, unweighted, "E10");
+        tracking::label_resolution(pd, unweighted, "E10");
+    }
+    let mut long = long_step_tracking_rows(mdp, g, alpha);
+    label_pair(&mut long, "E10");
     rows.extend(tracking_rows);
-    rows.extend(long_step_tracking_rows(mdp, g, alpha));
+    rows.extend(long);
     rows
 }
 

@@ -257,7 +257,7 @@ pub struct TrackingSpec {
 }
 
 /// The row of a tracking test from its recorded values at level `alpha` (two-sided): fails if 0 is
-/// outside the interval, uninformative if the minimum detectable bias is the whole range.
+/// outside the interval, uninformative if the interval's half-width is the whole range.
 pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) -> Check {
     let header = Check::builder(spec.id, spec.result, spec.claim, spec.role)
         .assumptions(spec.assumptions)
@@ -282,11 +282,12 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
         .measured(
             Measured::statistic(test.mean)
                 .with_interval(test.lcb, test.ucb)
+                .with_se(test.se)
                 .with_runs(t.runs)
                 .with_alpha(alpha),
         )
         .details(format!(
-            "{}; {} runs, {} steps; z̄ = {:.3e}, two-sided {:.2}% interval [{:.3e}, {:.3e}]{} (Azuma–Hoeffding ∨ betting at α/4 each per side, valid for martingale differences; α = {:.1e}), range [−1, 1] (z = h·x/c); minimum detectable bias {:.3e} (in units of c) → {}",
+            "{}; {} runs, {} steps; z̄ = {:.3e}, two-sided {:.2}% interval [{:.3e}, {:.3e}]{} (Azuma–Hoeffding ∨ betting at α/4 each per side, valid for martingale differences; α = {:.1e}), range [−1, 1] (z = h·x/c); minimum detectable bias {:.3e} (in units of c; at power 0.8: half-width + 0.84·SE, SE = {:.2e}) → {}",
             spec.context,
             t.runs,
             t.lows.len(),
@@ -301,6 +302,7 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
             },
             alpha,
             mdb,
+            test.se,
             match (verdict, test.lcb > test.mean || test.ucb < test.mean) {
                 (Verdict::Fails, true) =>
                     "mean ≠ 0: the property fails along these iterates (the conditional means vary along the runs, so the betting interval need not contain z̄; the decision, 0 outside it, is what carries α)",
@@ -311,4 +313,39 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
             }
         ))
         .decided(Method::Statistical, verdict)
+}
+
+/// Whether tracking row `row` resolves, at its size, the error `erratum` of a wrong algorithm
+/// run through the same check (`wrong`: its probe or control, same sizes and level). The bias the
+/// wrong algorithm shows through the check is its measured |z̄| (the right algorithm's mean is
+/// 0), in the check's own normalisation on that algorithm; the check resolves it when that bias
+/// is at least the minimum detectable bias of the check there (half-width + z_{0.8}·SE,
+/// [`crate::stats::min_detectable`]), and is *uninformative for* the erratum otherwise. The
+/// label is appended to the row's claim and details and recorded for the power list
+/// ([`Measured::resolution`]); the verdict on the row's own claim is unchanged.
+pub fn label_resolution(row: &mut Check, wrong: &Check, erratum: &str) {
+    let seen = wrong.measured.as_ref().and_then(|m| {
+        let (lcb, ucb, se) = (m.lcb?, m.ucb?, m.se?);
+        let half = (m.value - lcb).max(ucb - m.value);
+        Some((m.value.abs(), crate::stats::min_detectable(half, se)))
+    });
+    let label = match seen {
+        Some((bias, mdb)) if bias >= mdb => format!(
+            "resolves {erratum} at this size: the bias through this check of {} is |z̄| = {bias:.2e} ≥ its minimum detectable bias {mdb:.2e}",
+            wrong.id
+        ),
+        Some((bias, mdb)) => format!(
+            "uninformative for {erratum} at this size: the bias through this check of {} is |z̄| = {bias:.2e} < its minimum detectable bias {mdb:.2e}",
+            wrong.id
+        ),
+        None => format!(
+            "resolution of {erratum} unknown: row {} has no interval",
+            wrong.id
+        ),
+    };
+    row.claim = format!("{} ({label})", row.claim);
+    row.details = format!("{}; {label}", row.details);
+    if let Some(m) = row.measured.as_mut() {
+        m.resolution = Some(label);
+    }
 }

@@ -369,6 +369,13 @@ fn fits_row(id: &str, claim: &str, fits: &[Reduction], alpha: f64) -> Check {
     check
 }
 
+/// The standard error of a ratio whose interval at level 1 − α is `value·exp(±z·s)` on the log
+/// scale: `value·s` (delta method), for the minimum detectable effect
+/// ([`crate::stats::min_detectable`]).
+fn ratio_se(r: &Ratio, alpha: f64) -> f64 {
+    r.value * (r.hi / r.lo).ln() / (2.0 * normal_upper_quantile(alpha / 2.0))
+}
+
 fn row(id: &str, claim: &str, role: Role, r: &Reduction, alpha: f64) -> Check {
     let per = r
         .per_coordinate
@@ -390,6 +397,7 @@ fn row(id: &str, claim: &str, role: Role, r: &Reduction, alpha: f64) -> Check {
     .measured(
         Measured::statistic(r.total.value)
             .with_interval(r.total.lo, r.total.hi)
+            .with_se(ratio_se(&r.total, alpha))
             .with_runs(r.n_plain),
     )
     .details(format!(
