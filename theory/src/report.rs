@@ -568,4 +568,205 @@ mod tests {
         );
         assert_eq!(interval_text(1.0, 1.0), "interval [1.000, 1.000]");
     }
+
+    fn row(id: &str, role: Role, method: Method, verdict: Verdict) -> Check {
+        Check::builder(id, "r", "c", role).decided(method, verdict)
+    }
+
+    /// A statistical claim of the α family at `alpha`.
+    fn claim_at(id: &str, alpha: f64) -> Check {
+        Check::builder(id, "r", "c", Role::Corrected)
+            .measured(
+                Measured::statistic(0.5)
+                    .with_interval(0.4, 0.6)
+                    .with_se(0.01)
+                    .with_alpha(alpha),
+            )
+            .decided(Method::Statistical, Verdict::Holds)
+    }
+
+    /// Every claim of the family at its level, a real-environment row at its own level, a
+    /// refuted thesis claim that fails and a detected control: the table passes.
+    fn passing_table() -> Vec<Check> {
+        let mut rows: Vec<Check> = FAMILY_CLAIMS
+            .iter()
+            .map(|id| claim_at(id, family_level()))
+            .collect();
+        rows.push(claim_at("6a", 1e-3));
+        rows.push(
+            Check::builder("4d", "r", "c", Role::Thesis)
+                .erratum("E10")
+                .refuted_by_erratum()
+                .decided(Method::Exact, Verdict::Fails),
+        );
+        rows.push(row(
+            "1.ctl",
+            Role::NegativeControl,
+            Method::Statistical,
+            Verdict::Fails,
+        ));
+        rows.push(row(
+            "2e.unweighted",
+            Role::Probe,
+            Method::Statistical,
+            Verdict::Holds,
+        ));
+        rows
+    }
+
+    #[test]
+    fn a_table_that_meets_every_expectation_passes_and_says_what_passed() {
+        let rows = passing_table();
+        assert_eq!(status(&rows), Ok(()));
+        let line = status_line(&rows);
+        assert!(line.starts_with(&format!("**{STATUS_PASSES} —")), "{line}");
+        assert!(
+            line.contains(&format!("the α family's {STATISTICAL_CLAIMS}")),
+            "{line}"
+        );
+        assert!(line.contains("6a (α = 1e-3)"), "{line}");
+        // CI checks for exactly this line.
+        assert!(
+            include_str!("../../.ci/run").contains(&format!("grep -q \"{STATUS_PASSES} —\"")),
+            "the CI grep of the status line is out of date"
+        );
+    }
+
+    /// A claim expected to hold that fails (row 8 failing) fails the status, named; so does a
+    /// refuted thesis claim the check did not refute, and an undetected control.
+    #[test]
+    fn a_failing_corrected_claim_fails_the_status_and_is_named() {
+        let mut rows = passing_table();
+        rows.push(row("8", Role::Corrected, Method::Rigorous, Verdict::Fails));
+        let e = status(&rows).expect_err("row 8 fails");
+        assert!(e.contains("claim(s) expected to hold fail: 8"), "{e}");
+        assert!(
+            status_line(&rows).starts_with("**Status: FAILS — claim(s) expected to hold fail: 8")
+        );
+        let mut rows = passing_table();
+        let d = rows.iter_mut().find(|c| c.id == "4d").expect("4d");
+        d.verdict = Verdict::Holds;
+        let e = status(&rows).expect_err("4d not refuted");
+        assert!(e.contains("not refuted by the check: 4d"), "{e}");
+        let mut rows = passing_table();
+        rows.iter_mut()
+            .find(|c| c.id == "1.ctl")
+            .expect("control")
+            .verdict = Verdict::Holds;
+        let e = status(&rows).expect_err("control missed");
+        assert!(e.contains("negative control(s) not detected: 1.ctl"), "{e}");
+        assert!(!e.contains("expected to hold"), "{e}");
+    }
+
+    /// An uninformative or inconclusive claim does not fail the status but is listed; a probe
+    /// that fails or holds is never required.
+    #[test]
+    fn undecided_claims_are_listed_and_probes_never_required() {
+        let mut rows = passing_table();
+        rows.push(row(
+            "7a",
+            Role::Thesis,
+            Method::Estimate,
+            Verdict::Uninformative,
+        ));
+        rows.push(row(
+            "4e",
+            Role::Corrected,
+            Method::Exact,
+            Verdict::Inconclusive,
+        ));
+        rows.push(row(
+            "2c.printed4",
+            Role::Probe,
+            Method::Exact,
+            Verdict::Fails,
+        ));
+        assert_eq!(status(&rows), Ok(()));
+        let text = uninformative_and_controls(&rows);
+        assert!(text.contains("7a, 4e (inconclusive)"), "{text}");
+        assert!(text.contains("4d refuted"), "{text}");
+        assert!(text.contains("1.ctl detected"), "{text}");
+    }
+
+    /// The emitted statistical claims must be the α family's, each at its level: an extra row,
+    /// a missing claim and a claim at another level each fail the status, named.
+    #[test]
+    fn the_alpha_family_is_counted_from_the_emitted_rows() {
+        assert_eq!(
+            alpha_family(&passing_table()).map(|f| f.claims.len()),
+            Ok(STATISTICAL_CLAIMS)
+        );
+        let mut extra = passing_table();
+        extra.push(claim_at("9", family_level()));
+        let e = status(&extra).expect_err("an extra statistical claim");
+        assert!(e.contains("not at a level of their own: 9"), "{e}");
+        let missing: Vec<Check> = passing_table()
+            .into_iter()
+            .filter(|c| c.id != "2e.c")
+            .collect();
+        let e = status(&missing).expect_err("a missing claim");
+        assert!(e.contains("not emitted: 2e.c"), "{e}");
+        let mut wrong = passing_table();
+        wrong
+            .iter_mut()
+            .find(|c| c.id == "3d.c")
+            .expect("3d.c")
+            .measured = claim_at("x", 0.01 / 11.0).measured;
+        let e = status(&wrong).expect_err("a claim at another level");
+        assert!(e.contains("3d.c (α = 9.091e-4)"), "{e}");
+        // Controls, probes and non-statistical rows take no share.
+        let mut more = passing_table();
+        more.push(row(
+            "9.ctl",
+            Role::NegativeControl,
+            Method::Statistical,
+            Verdict::Fails,
+        ));
+        more.push(row(
+            "9.probe",
+            Role::Probe,
+            Method::Statistical,
+            Verdict::Holds,
+        ));
+        more.push(row(
+            "9.exact",
+            Role::Corrected,
+            Method::Exact,
+            Verdict::Holds,
+        ));
+        assert_eq!(status(&more), Ok(()));
+    }
+
+    /// One minimum detectable effect for bound and two-sided rows: the width plus z₀.₈·SE; a row
+    /// without a standard error states none.
+    #[test]
+    fn the_minimum_detectable_effect_is_the_width_plus_the_power_quantile() {
+        let bound = Check::builder("1", "r", "c", Role::Thesis)
+            .bound(0.3)
+            .measured(
+                Measured::statistic(0.014)
+                    .with_interval(0.013, 0.02)
+                    .with_se(1e-4),
+            )
+            .decided(Method::Statistical, Verdict::Holds);
+        let e = min_detectable_effect(&bound).expect("stated");
+        assert!(
+            (e - (0.001 + crate::stats::POWER_Z * 1e-4)).abs() < 1e-15,
+            "{e}"
+        );
+        assert_eq!(power(&bound), Some((0.013, e)));
+        let two = claim_at("2e", 1e-3);
+        let e2 = min_detectable_effect(&two).expect("stated");
+        assert!(
+            (e2 - (0.1 + crate::stats::POWER_Z * 0.01)).abs() < 1e-12,
+            "{e2}"
+        );
+        let no_se = two_sided(
+            "x",
+            Measured::statistic(0.0).with_interval(-1.0, 1.0),
+            Verdict::Holds,
+        );
+        assert_eq!(min_detectable_effect(&no_se), None);
+        assert!(power_items(&[no_se])[0].contains("not stated"));
+    }
 }

@@ -349,3 +349,69 @@ pub fn label_resolution(row: &mut Check, wrong: &Check, erratum: &str) {
         m.resolution = Some(label);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measured(id: &str, mean: f64, half: f64, se: f64, role: Role) -> Check {
+        Check::builder(id, "r", "c", role)
+            .measured(
+                Measured::statistic(mean)
+                    .with_interval(mean - half, mean + half)
+                    .with_se(se),
+            )
+            .decided(Method::Statistical, Verdict::Holds)
+    }
+
+    /// A row whose wrong algorithm's bias is below the check's minimum detectable bias is
+    /// labelled uninformative for the erratum, one above it resolves it; the verdict is kept.
+    #[test]
+    fn a_tracking_row_is_labelled_by_what_it_resolves() {
+        let mut row = measured("2e", 2e-6, 1e-5, 3e-6, Role::Corrected);
+        label_resolution(
+            &mut row,
+            &measured("2e.unweighted", 4.6e-6, 1.2e-5, 3e-6, Role::Probe),
+            "E10",
+        );
+        assert!(
+            row.claim.contains("uninformative for E10 at this size"),
+            "{}",
+            row.claim
+        );
+        assert!(row.claim.contains("2e.unweighted"), "{}", row.claim);
+        assert_eq!(row.verdict, Verdict::Holds);
+        let m = row.measured.as_ref().expect("measured");
+        assert!(
+            m.resolution
+                .as_deref()
+                .is_some_and(|r| r.starts_with("uninformative for E10"))
+        );
+        let mut wide = measured("2e.c", -6e-5, 3.6e-4, 1e-5, Role::Corrected);
+        label_resolution(
+            &mut wide,
+            &measured(
+                "2e.c.unweighted",
+                1.1e-3,
+                5.3e-4,
+                1e-5,
+                Role::NegativeControl,
+            ),
+            "E10",
+        );
+        assert!(
+            wide.details.contains("resolves E10 at this size"),
+            "{}",
+            wide.details
+        );
+        let mut none = measured("3d", 0.0, 1e-3, 1e-4, Role::Corrected);
+        let bare = Check::builder("3d.printed5", "r", "c", Role::Probe)
+            .decided(Method::Statistical, Verdict::Inconclusive);
+        label_resolution(&mut none, &bare, "E11");
+        assert!(
+            none.claim.contains("resolution of E11 unknown"),
+            "{}",
+            none.claim
+        );
+    }
+}

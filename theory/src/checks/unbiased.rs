@@ -422,3 +422,45 @@ pub fn printed_algorithm_5_visited(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::m1_tied;
+
+    /// On M1 (P2', T = 3) the identity's numerator has degree ≤ 10, so row 4a checks 22 points
+    /// and states the identity for every θ; on the direct parameterisation no bound is claimed.
+    #[test]
+    fn row_4a_is_exact_for_every_theta_on_m1() {
+        let m1 = m1_tied();
+        assert_eq!(tied_softmax_degree_bound(&m1), Some(10));
+        let r = estimator_all_theta(&m1);
+        assert_eq!(r.verdict, Verdict::Holds, "{}", r.details);
+        assert!(r.claim.contains("for every θ ∈ ℝ"), "{}", r.claim);
+        assert!(r.details.starts_with("22 (MDP, θ) pairs"), "{}", r.details);
+        let half = Q::new(1.into(), 2.into());
+        let direct = ToyMdp::m_family(half.clone(), half, Q::one(), 3, PolicyKind::Direct, None)
+            .expect("a direct-parameterisation instance");
+        assert_eq!(tied_softmax_degree_bound(&direct), None);
+    }
+
+    /// The thesis rows refuted by their errata are expected to fail; 4a is expected to hold.
+    #[test]
+    fn refuted_printed_claims_are_expected_to_fail() {
+        use crate::record::check::Expected;
+        let m1 = m1_tied();
+        let q = |n: i64, d: i64| Q::new(n.into(), d.into());
+        let printed = old_point(&[(m1.clone(), vec![q(0, 1)], vec![q(1, 1)])], None);
+        assert_eq!(printed.expected(), Expected::Fails);
+        assert_eq!(printed.verdict, Verdict::Fails);
+        let weighted = old_point(
+            &[(m1.clone(), vec![q(0, 1)], vec![q(1, 1)])],
+            Some(Weighting::Trajectory),
+        );
+        assert_eq!(weighted.expected(), Expected::Holds);
+        assert_eq!(
+            estimator(&[(m1, vec![q(1, 2)])]).expected(),
+            Expected::Holds
+        );
+    }
+}
