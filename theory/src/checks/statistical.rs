@@ -22,7 +22,10 @@
 //! status requires it). The unweighted STORM and the printed Algorithm 5 are not: their biases are
 //! proportional to the step (η_k‖d_k‖, resp. (1 − s_n)‖Δ_n‖ ≤ δ/T), which is tiny at these sizes, so
 //! they stay probes, reported with their minimum detectable bias; the exact rows 4d and 4e detect
-//! both errors.
+//! both errors. Each right algorithm's tracking row is labelled with what its check resolves of
+//! the wrong one's error, computed from the wrong algorithm's row ([`tracking::label_resolution`]):
+//! 2e and 2e.pd against 2e.unweighted (E10), 3d against 3d.printed5 (E11), 2e.c and 3d.c against
+//! their controls.
 //!
 //! The scales are fixed in advance: ÷ 100 puts the stated bound below the measured mean of rows
 //! 1 and 3b (tightness ≈ 0.04 and 0.5); row 2c's tightness is ≈ 0.01, so ÷ 200.
