@@ -124,8 +124,8 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
         .map(|(a, b)| (m1.clone(), vec![q(a)], vec![q(b)]))
         .collect();
     rows.push(unbiased::estimator_all_theta(m1));
-    rows.push(unbiased::old_point(&pairs, Some(Weighting::Trajectory)));
-    rows.push(unbiased::old_point(&pairs, Some(Weighting::PerDecision)));
+    rows.push(unbiased::old_point_for_all(m1, Weighting::Trajectory));
+    rows.push(unbiased::old_point_for_all(m1, Weighting::PerDecision));
     rows.push(unbiased::old_point(&pairs, None));
     // Algorithm 5's hyper-parameters G = 2 ≥ √(sup E g²) ≈ 1.87 and Δ₀ = B_F = 1/2; the
     // printed Algorithm 4 in exact rationals for 3 steps (the rationals grow ≈ 8× per step).

@@ -111,6 +111,59 @@ pub fn estimator_all_theta(mdp: &ToyMdp) -> Check {
     c
 }
 
+/// The degree bounds (in θ, in θ′) of rows 4b/4c's identity on a one-parameter tied rational
+/// softmax (P2'), if `mdp` is one. A term of E_{τ∼θ′}[w·∇f(θ, τ)] is p(τ; θ′)·w·∇f(θ, τ), with
+/// p(τ; θ′) a product of n ≤ T − 1 factors u_a(θ′)/S(θ′) and w a product of m ≤ T − 1 ratios
+/// π(a|θ)/π(a|θ′) (trajectory or per-decision). Multiplied by
+/// S(θ′)^{T−1}(Π_a u_a(θ′))^{T−1}, its θ′-part is a polynomial of degree ≤ 2(T − 1)(1 + A)
+/// (A actions), whatever n and m are; multiplied by S(θ)^{T+2}(Π_a u_a(θ))^{T−1}, its θ-part
+/// (the ratios' numerators, l_t = N/S², ∇l_t = N/S³, ψ_i = N/(S·u_{a_i}), and ∇F = N/S^{T+2}) is
+/// a polynomial of degree ≤ 2(T + 2) + 2A(T − 1), whether or not the weights' u_a(θ) cancel the
+/// scores'. S and every u_a are positive on ℝ, so the difference from ∇F(θ) is
+/// N(θ, θ′)/(positive), and N vanishing on a grid of more than d_θ × d_θ′ distinct points
+/// (per coordinate) is N ≡ 0: the identity holds for all (θ, θ′) ∈ ℝ².
+pub fn old_point_degree_bounds(mdp: &ToyMdp) -> Option<(usize, usize)> {
+    let a = mdp.actions;
+    let t = mdp.horizon;
+    tied_softmax_degree_bound(mdp).map(|d| (d + 2 * a * (t - 1), 2 * (t - 1) * (1 + a)))
+}
+
+/// Rows 4b and 4c for every (θ, θ′) ∈ ℝ² on a one-parameter tied rational softmax MDP (M1):
+/// [`old_point`] on the grid θ = j/3 (d_θ + 2 values), θ′ = j/5 (d_θ′ + 2 values), more than
+/// [`old_point_degree_bounds`] needs per coordinate, which proves the identity for all pairs.
+/// On another parameterisation the row states the pairs it checked (θ, θ′ ∈ {−1, 0, 1}).
+pub fn old_point_for_all(mdp: &ToyMdp, weighting: Weighting) -> Check {
+    let (nx, ny, proof) = match old_point_degree_bounds(mdp) {
+        Some((dx, dy)) => (dx + 2, dy + 2, Some((dx, dy))),
+        None => (3, 3, None),
+    };
+    let grid = |n: usize, den: i64| -> Vec<Q> {
+        let half = (n / 2) as i64;
+        (-half..n as i64 - half)
+            .map(|j| Q::new(j.into(), den.into()))
+            .collect()
+    };
+    let (xs, ys) = (grid(nx, 3), grid(ny, 5));
+    let cases: Vec<(ToyMdp, Vec<Q>, Vec<Q>)> = xs
+        .iter()
+        .flat_map(|x| {
+            ys.iter()
+                .map(move |y| (mdp.clone(), vec![x.clone()], vec![y.clone()]))
+        })
+        .collect();
+    let mut c = old_point(&cases, Some(weighting));
+    if let Some((dx, dy)) = proof {
+        c.claim = format!(
+            "IS-STORM old-point term ({weighting:?} weights): E_{{τ∼θ′}}[w·∇f(θ, τ)] = ∇F(θ) exactly, for every (θ, θ′) ∈ ℝ²"
+        );
+        c.details = format!(
+            "{}; the difference times a positive polynomial is a polynomial of degree ≤ {dx} in θ and ≤ {dy} in θ′ (P2' on this MDP: policy probabilities u/S, Brier loss, transitions constant in θ), so zero on the {nx} × {ny} grid θ = j/3, θ′ = j/5 proves it ≡ 0",
+            c.details
+        );
+    }
+    c
+}
+
 /// The old-point term at θ with τ ∼ p(·; θ′): IS-weighted (`Some(w)`, math.md §4) or as printed
 /// (`None`, Algorithm 4 / E10). Claim: its mean is ∇F(θ).
 pub fn old_point(cases: &[(ToyMdp, Vec<Q>, Vec<Q>)], weighting: Option<Weighting>) -> Check {
@@ -442,6 +495,21 @@ mod tests {
         let direct = ToyMdp::m_family(half.clone(), half, Q::one(), 3, PolicyKind::Direct, None)
             .expect("a direct-parameterisation instance");
         assert_eq!(tied_softmax_degree_bound(&direct), None);
+    }
+
+    /// On M1 rows 4b and 4c check a 20 × 14 grid of (θ, θ′), more than the degree bounds
+    /// (18, 12) need, and state the identity for all pairs; the unweighted term fails on the
+    /// same kind of grid.
+    #[test]
+    fn rows_4b_4c_are_exact_for_every_pair_on_m1() {
+        let m1 = m1_tied();
+        assert_eq!(old_point_degree_bounds(&m1), Some((18, 12)));
+        for w in [Weighting::Trajectory, Weighting::PerDecision] {
+            let r = old_point_for_all(&m1, w);
+            assert_eq!(r.verdict, Verdict::Holds, "{}", r.details);
+            assert!(r.claim.contains("for every (θ, θ′) ∈ ℝ²"), "{}", r.claim);
+            assert!(r.details.starts_with("280 (θ, θ′) pairs"), "{}", r.details);
+        }
     }
 
     /// The thesis rows refuted by their errata are expected to fail; 4a is expected to hold.
