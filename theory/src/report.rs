@@ -355,22 +355,27 @@ pub fn status_line(checks: &[Check]) -> String {
     }
 }
 
-/// `; rows at a level of their own: 6a (α = 1e-3), …` (empty when there are none).
+/// `; real-environment rows at a level of their own: α = 1e-3 each: 6a, 6a.is-tr, …` (grouped by
+/// level; empty when there are none).
 fn own_level_text(fam: &AlphaFamily) -> String {
     if fam.own_level.is_empty() {
         return String::new();
     }
-    let rows: Vec<String> = fam
-        .own_level
-        .iter()
-        .map(|(id, a)| match a {
-            Some(a) => format!("{id} (α = {a:.0e})"),
-            None => id.clone(),
-        })
+    let mut groups: Vec<(String, Vec<&str>)> = vec![];
+    for (id, a) in &fam.own_level {
+        let level = a.map_or_else(|| "α not recorded".into(), |a| format!("α = {a:.0e} each"));
+        match groups.iter_mut().find(|(l, _)| *l == level) {
+            Some((_, ids)) => ids.push(id),
+            None => groups.push((level, vec![id])),
+        }
+    }
+    let text: Vec<String> = groups
+        .into_iter()
+        .map(|(level, ids)| format!("{level}: {}", ids.join(", ")))
         .collect();
     format!(
         "; real-environment rows at a level of their own: {}",
-        rows.join(", ")
+        text.join("; ")
     )
 }
 
@@ -624,7 +629,7 @@ mod tests {
             line.contains(&format!("the α family's {STATISTICAL_CLAIMS}")),
             "{line}"
         );
-        assert!(line.contains("6a (α = 1e-3)"), "{line}");
+        assert!(line.contains("α = 1e-3 each: 6a"), "{line}");
         // CI checks for exactly this line.
         assert!(
             include_str!("../../.ci/run").contains(&format!("grep -q \"{STATUS_PASSES} —\"")),

@@ -366,6 +366,10 @@ fn fits_row(id: &str, claim: &str, fits: &[Reduction], alpha: f64) -> Check {
         check.details
     );
     check.verdict = fits_verdict(fits);
+    // The row's level: α/fits per fit, α for the claim about every fit.
+    if let Some(m) = check.measured.as_mut() {
+        m.alpha = Some(alpha);
+    }
     check
 }
 
@@ -398,7 +402,8 @@ fn row(id: &str, claim: &str, role: Role, r: &Reduction, alpha: f64) -> Check {
         Measured::statistic(r.total.value)
             .with_interval(r.total.lo, r.total.hi)
             .with_se(ratio_se(&r.total, alpha))
-            .with_runs(r.n_plain),
+            .with_runs(r.n_plain)
+            .with_alpha(alpha),
     )
     .details(format!(
         "{} plain estimates (one trajectory each) against {} baselined estimates of m = {} trajectories; tr Var(g)/tr Var(g_b) = {}; per coordinate Var(g_j)/Var(g_b,j): {per}",
