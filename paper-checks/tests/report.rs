@@ -290,6 +290,7 @@ fn two_checks() -> Vec<ilopt_theory::check::Check> {
         verdict: Verdict::Holds,
         erratum: Some("E2".into()),
         role: Role::Thesis,
+        refuted_by_erratum: false,
         details: "first".into(),
     };
     let control = Check {
@@ -306,12 +307,15 @@ fn two_checks() -> Vec<ilopt_theory::check::Check> {
             runs: Some(100),
             alpha: Some(0.01),
             null_hypothesis: None,
+            se: Some(0.1),
+            resolution: None,
         }),
         tightness: None,
         method: Method::Statistical,
         verdict: Verdict::Fails,
         erratum: None,
         role: Role::NegativeControl,
+        refuted_by_erratum: false,
         details: "second | x".into(),
     };
     vec![thesis, control]
@@ -371,7 +375,7 @@ fn the_theory_section_is_rendered_from_the_check_records() {
                 "statistical",
                 "0.5000",
                 "1.000 (0.7500)",
-                "0.2500",
+                "0.3342",
                 "—",
                 "**fails**"
             ],
@@ -380,15 +384,15 @@ fn the_theory_section_is_rendered_from_the_check_records() {
     // The power of the statistical row, the controls and the status.
     assert!(b.contains(&Block::List(vec![
         "**1a.control** (negative control): B = 0.5000, flags B < 0.7500, minimum detectable \
-         violation 0.2500 → **fails**"
+         violation 0.3342 → **fails**"
             .into()
     ])));
     assert!(b.contains(&Block::Para(
-        "Uninformative rows: none. Negative controls: 1a.control detected.".into()
+        "Uninformative or inconclusive rows (no evidence either way; not a failure of the status): none. Thesis claims refuted by their errata (expected to fail): none. Negative controls: 1a.control detected.".into()
     )));
-    assert!(b.contains(&Block::Para(
-        "**Status: every negative control detected**".into()
-    )));
+    // Two rows alone are not the table's α family: the status names the claims not emitted.
+    assert!(b.iter().any(|x| matches!(x, Block::Para(p)
+        if p.starts_with("**Status: FAILS — α-family claim(s) not emitted: 1, 1b,"))));
     // Each constant once, with the checks using it; the details refer to it.
     let k = t[2];
     assert_eq!(k.label, "tab:t-constants");
@@ -438,11 +442,13 @@ fn an_undetected_control_fails_the_status_and_no_table_is_a_note() {
     checks[1].verdict = ilopt_theory::check::Verdict::Holds;
     let b = theory::blocks(&TheoryTable::Checks(checks), "quick", "tab:t");
     assert!(b.contains(&Block::Para(
-        "Uninformative rows: none. Negative controls: 1a.control NOT detected.".into()
+        "Uninformative or inconclusive rows (no evidence either way; not a failure of the status): none. Thesis claims refuted by their errata (expected to fail): none. Negative controls: 1a.control NOT detected.".into()
     )));
-    assert!(b.contains(&Block::Para(
-        "**Status: FAILS — negative control(s) not detected: 1a.control**".into()
-    )));
+    // The status names the undetected control (and, for these two rows alone, the α family's
+    // claims that were not emitted).
+    assert!(b.iter().any(|x| matches!(x, Block::Para(p)
+        if p.starts_with("**Status: FAILS — negative control(s) not detected: 1a.control;")
+            && p.contains("α-family claim(s) not emitted"))));
     let none = theory::blocks(&TheoryTable::NotRun, "none", "tab:t");
     assert_eq!(none.len(), 1);
     assert!(matches!(&none[0], Block::Para(p) if p.starts_with("*Not run")));

@@ -27,7 +27,9 @@ pub mod suite;
 
 /// The table's row records ([`record::check`]).
 pub mod check {
-    pub use crate::record::check::{Check, CheckBuilder, Measured, Method, Role, Verdict};
+    pub use crate::record::check::{
+        Check, CheckBuilder, Expected, Measured, Method, Role, Verdict,
+    };
 }
 
 /// The constant records ([`record::constant`]).

@@ -11,12 +11,11 @@ use crate::checks::{
 };
 use crate::input_rows::{Certified, with_perturbations};
 use crate::protocol::{
-    CARTPOLE_STORM_ETA, FAMILY_ALPHA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes,
-    STATISTICAL_CLAIMS, Sizes, m1_tied, real_sizes,
+    CARTPOLE_STORM_ETA, OBSTACLE_STORM_ETA, REAL_SIGMA, RealSizes, Sizes, family_level, m1_tied,
+    real_sizes,
 };
 use crate::record::check::Check;
 use crate::stage::timed;
-use crate::stats::bonferroni;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, parse_exact};
 use ilopt::toy::ToyMdp;
@@ -39,7 +38,7 @@ fn q(s: &str) -> BigRational {
 pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, String> {
     let s = profile.sizes();
     let m1 = m1_tied();
-    let alpha = bonferroni(FAMILY_ALPHA, STATISTICAL_CLAIMS);
+    let alpha = family_level();
     std::thread::scope(|scope| {
         let (send, receive) = std::sync::mpsc::channel();
         let m1_global = &m1;
@@ -131,8 +130,6 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
     let mut rows = schedule::rows(s.schedule_k);
     rows.push(o2nc_formula::row(s.o2nc_cases, 1));
     let thetas = ["0", "1/3", "-2", "5/2", "1", "2"];
-    let cases: Vec<(ToyMdp, Vec<BigRational>)> =
-        thetas.iter().map(|t| (m1.clone(), vec![q(t)])).collect();
     let pairs: Vec<(ToyMdp, Vec<BigRational>, Vec<BigRational>)> = thetas
         .iter()
         .zip(thetas.iter().rev())
@@ -148,9 +145,9 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
         ],
     )?);
     rows.push(errata::e18_row(m1, &[vec![q("0")], vec![q("1")]])?);
-    rows.push(unbiased::estimator(&cases));
-    rows.push(unbiased::old_point(&pairs, Some(Weighting::Trajectory)));
-    rows.push(unbiased::old_point(&pairs, Some(Weighting::PerDecision)));
+    rows.push(unbiased::estimator_all_theta(m1));
+    rows.push(unbiased::old_point_for_all(m1, Weighting::Trajectory));
+    rows.push(unbiased::old_point_for_all(m1, Weighting::PerDecision));
     rows.push(unbiased::old_point(&pairs, None));
     // Algorithm 5's hyper-parameters G = 2 ≥ √(sup E g²) ≈ 1.87 and Δ₀ = B_F = 1/2; the
     // printed Algorithm 4 in exact rationals for 3 steps (the rationals grow ≈ 8× per step).
@@ -171,9 +168,13 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
         3,
         0,
     ));
-    let dagger = match profile {
-        Profile::Quick => thm31::DAGGER_QUICK,
-        Profile::Full => thm31::DAGGER_FULL,
+    // Rows 5e are claims of the α family (protocol::FAMILY_CLAIMS).
+    let dagger = thm31::DaggerSizes {
+        alpha: family_level(),
+        ..match profile {
+            Profile::Quick => thm31::DAGGER_QUICK,
+            Profile::Full => thm31::DAGGER_FULL,
+        }
     };
     for (i, inst) in thm31::instances().iter().enumerate() {
         rows.extend(

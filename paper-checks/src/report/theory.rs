@@ -11,7 +11,7 @@ use super::doc::{Block, Table};
 use crate::results::TheoryTable;
 use ilopt_theory::check::{Check, Role};
 use ilopt_theory::report::{
-    POWER_NOTE, detections, number, power, power_items, probes_note, status, two_sided_power,
+    POWER_NOTE, detections, min_detectable_effect, number, power_items, probes_note, status_line,
     uninformative_and_controls,
 };
 use std::collections::BTreeMap;
@@ -43,7 +43,7 @@ fn number_cells(c: &Check) -> Vec<String> {
             None => number(Some(m.value)),
         },
     );
-    let detectable = power(c).map(|p| p.1).or(two_sided_power(c).map(|p| p.2));
+    let detectable = min_detectable_effect(c);
     vec![
         one_line(&c.id),
         c.method.name().into(),
@@ -87,7 +87,8 @@ fn check_tables(checks: &[Check], label: &str) -> [Block; 2] {
 
 /// What a statistical row can detect.
 /// The notes under the check tables: power, probes, uninformative rows, negative controls and
-/// the table's status ([`status`]: every negative control detected).
+/// the table's status ([`status_line`]: every row meets its expectation and the α family is the
+/// one emitted).
 fn notes(checks: &[Check]) -> Vec<Block> {
     let mut out = vec![Block::Para(POWER_NOTE.into())];
     let items = power_items(checks);
@@ -99,13 +100,7 @@ fn notes(checks: &[Check]) -> Vec<Block> {
         out.push(Block::Para(probes_note(&probes)));
     }
     out.push(Block::Para(uninformative_and_controls(checks)));
-    out.push(Block::Para(format!(
-        "**Status: {}**",
-        match status(checks) {
-            Ok(()) => "every negative control detected".to_string(),
-            Err(e) => format!("FAILS — {e}"),
-        }
-    )));
+    out.push(Block::Para(status_line(checks)));
     out
 }
 

@@ -165,6 +165,7 @@ pub fn e1_rows(
     .measured(Measured::exact(worst_printed.to_f64()))
     .bound(0.0)
     .erratum("E1")
+        .refuted_by_erratum()
     .details(format!(
         "max_j |E g_j − ∂_j F₀₁| over the points = {worst_printed}: the term E[λ_t ψ_t] the score sum over i < t omits"
     ))
@@ -251,6 +252,7 @@ pub fn e2_rows(mdp: &ToyMdp, thetas: &[Vec<BigRational>]) -> Result<Vec<Check>, 
     .measured(Measured::exact(worst_g.to_f64()))
     .bound(0.0)
     .erratum("E2")
+        .refuted_by_erratum()
     .details(format!(
         "max |∂_k g_j − ∂_j g_k| over the pairs = {worst_g} (∇l_t (Σ_{{i<t}} ψ_i)ᵀ is not symmetric)"
     ))
@@ -319,6 +321,7 @@ pub fn e18_row(mdp: &ToyMdp, thetas: &[Vec<BigRational>]) -> Result<Check, Strin
     .measured(Measured::exact(worst.to_f64()))
     .bound(0.0)
     .erratum("E18")
+    .refuted_by_erratum()
     .details(format!(
         "max over the points of E l(s_T, θ) = {worst}; the kit sums to T − 1 throughout"
     ))

@@ -205,7 +205,7 @@ pub fn sgd_row<P: IlProblem<f64>>(
         Constant::estimate("L_F", l, format!("max ‖ḡ(θ+ρu) − ḡ(θ)‖/ρ over {} probes, ρ = {}, common random numbers", s.probes, s.rho)),
     ])
     .bound(bound)
-    .measured(Measured::statistic(mean).with_interval(mean - 2.0 * se, mean + 2.0 * se).with_runs(s.runs))
+    .measured(Measured::statistic(mean).with_interval(mean - 2.0 * se, mean + 2.0 * se).with_se(se).with_runs(s.runs))
     .tightness(mean / bound)
     .erratum("E2")
     .details(format!(

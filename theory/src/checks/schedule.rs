@@ -9,38 +9,42 @@ use crate::schedule::check_schedule;
 pub fn rows(k_max: u64) -> Vec<Check> {
     let r = check_schedule(k_max);
     let corrected_ok = r.c1_not_proved.is_empty() && r.c2_not_proved.is_empty();
-    let base = |id: &str, claim: String, verdict, role, details: String| {
+    let base = |id: &str, claim: String, role, details: String| {
         Check::builder(id, "STORM, eq. 3.60 (schedule 3.43)", claim, role)
             .assumptions(["η_k = (1/4L)(7/(k+7))^{1/3}, a_{k+1} = 16L²η_k²"])
             .erratum("E7")
             .details(details)
-            .decided(Method::Rigorous, verdict)
     };
     vec![
         base(
             "2a",
             format!(
-                "(C1) Lη_k ≤ 1/2 and (C2) 4L²η_k² + (1−a_{{k+1}})² ≤ η_k/η_{{k−1}} for k = 1..{k_max}"
+                "(C1) Lη_k ≤ 1/2 (true by the schedule's form, Lη_k = (7/(k+7))^{{1/3}}/4 ≤ 1/4: this half cannot fail) and (C2) 4L²η_k² + (1−a_{{k+1}})² ≤ η_k/η_{{k−1}} for k = 1..{k_max}"
             ),
-            Verdict::from_bool(corrected_ok),
             Role::Corrected,
             format!(
                 "C1 not proved at k = {}; C2 not proved at k = {}",
                 list_or_none(&r.c1_not_proved),
                 list_or_none(&r.c2_not_proved)
             ),
-        ),
+        )
+        .decided(Method::Rigorous, Verdict::from_bool(corrected_ok)),
         base(
             "2b",
             format!("the thesis's e_k coefficient after (3.58)/(3.59) is ≤ 0 for k = 1..{k_max}"),
-            Verdict::from_bool(
-                r.thesis_route_fails.is_empty() && r.thesis_route_undecided.is_empty(),
-            ),
             Role::Thesis,
             format!(
                 "proved positive (route fails) at k = {}; undecided at k = {}",
                 compress(&r.thesis_route_fails),
                 list_or_none(&r.thesis_route_undecided)
+            ),
+        )
+        // E7: the printed claim is false for k = 1..23.
+        .refuted_by_erratum()
+        .decided(
+            Method::Rigorous,
+            Verdict::from_bool(
+                r.thesis_route_fails.is_empty() && r.thesis_route_undecided.is_empty(),
             ),
         ),
     ]

@@ -224,6 +224,7 @@ pub fn sgd_row(
     row.measured = Some(
         Measured::statistic(mean_mid)
             .with_interval(lcb, ucb)
+            .with_se(stats.se())
             .with_runs(s.runs)
             .with_alpha(s.alpha),
     );
@@ -236,8 +237,8 @@ pub fn sgd_row(
     // The rule flags exactly the bounds below the LCB; with LCB ≤ 0 it could flag none.
     let power = if lcb > 0.0 {
         format!(
-            "it would flag any B < {lcb:.5}, minimum detectable violation X̄ − LCB = {:.5}",
-            mean_mid - lcb
+            "it would flag any B < {lcb:.5}, minimum detectable violation (power 0.8) X̄ − LCB + 0.84·SE = {:.5}",
+            crate::stats::min_detectable(mean_mid - lcb, stats.se())
         )
     } else {
         "LCB ≤ 0: at this R it could flag no B ≥ 0 (uninformative; the range G_F² dominates)".into()
@@ -276,8 +277,8 @@ pub struct SecondToySizes {
 /// boxes re-checked, R = 200 runs (the range G_F² ≈ 14 puts Hoeffding's and Bernstein's LCB
 /// below 0, the betting LCB is ≈ 0.057 at X̄ ≈ 0.062, so the row flags any B below it); full:
 /// tolerance 0.02 and 50,000 boxes, every box re-checked, R = 10,000 runs. Both: η = 1/100, K = 2,000 (so B < G_F², the largest value the statistic can
-/// take), α = 0.01/11 (the suite's family-wise level split over its statistical claims, this one
-/// included: [`crate::protocol::STATISTICAL_CLAIMS`]).
+/// take), α = [`crate::protocol::family_level`] (the suite's family-wise level split over its
+/// statistical claims, this one included: [`crate::protocol::FAMILY_CLAIMS`]).
 pub fn sizes(full: bool) -> SecondToySizes {
     SecondToySizes {
         tol: if full { 0.02 } else { 0.1 },
@@ -287,10 +288,7 @@ pub fn sizes(full: bool) -> SecondToySizes {
             runs: if full { 10_000 } else { 200 },
             k: 2_000,
             eta: (1, 100),
-            alpha: crate::stats::bonferroni(
-                crate::protocol::FAMILY_ALPHA,
-                crate::protocol::STATISTICAL_CLAIMS,
-            ),
+            alpha: crate::protocol::family_level(),
         },
     }
 }

@@ -156,11 +156,11 @@ fn row(
         .measured(Measured::from_sample(&sample, mc.alpha).with_value(mean_mid))
         .tightness(mean_mid / bound)
         .details(format!(
-            "R = {} seeded runs; X̄ = {mean_mid:.5}, LCB = {lcb:.5}, UCB = {:.5} (max of Hoeffding, empirical Bernstein, betting at α/3 each; α = {:.1e}, range [0, {sample_range:.4}]), B = {bound:.5}; flags any B < {lcb:.5}, minimum detectable violation X̄ − LCB = {:.5}; the statistic cannot exceed {sample_range:.4}{}; {extra}",
+            "R = {} seeded runs; X̄ = {mean_mid:.5}, LCB = {lcb:.5}, UCB = {:.5} (max of Hoeffding, empirical Bernstein, betting at α/3 each; α = {:.1e}, range [0, {sample_range:.4}]), B = {bound:.5}; flags any B < {lcb:.5}, minimum detectable violation (power 0.8) X̄ − LCB + 0.84·SE = {:.5}; the statistic cannot exceed {sample_range:.4}{}; {extra}",
             mc.runs,
             sample.ucb(mc.alpha),
             mc.alpha,
-            mean_mid - lcb,
+            crate::stats::min_detectable(mean_mid - lcb, sample.se()),
             if bound >= sample_range {
                 " ≤ B, so no run could violate the bound (uninformative)"
             } else {

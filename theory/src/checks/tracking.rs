@@ -257,7 +257,7 @@ pub struct TrackingSpec {
 }
 
 /// The row of a tracking test from its recorded values at level `alpha` (two-sided): fails if 0 is
-/// outside the interval, uninformative if the minimum detectable bias is the whole range.
+/// outside the interval, uninformative if the interval's half-width is the whole range.
 pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) -> Check {
     let header = Check::builder(spec.id, spec.result, spec.claim, spec.role)
         .assumptions(spec.assumptions)
@@ -282,11 +282,12 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
         .measured(
             Measured::statistic(test.mean)
                 .with_interval(test.lcb, test.ucb)
+                .with_se(test.se)
                 .with_runs(t.runs)
                 .with_alpha(alpha),
         )
         .details(format!(
-            "{}; {} runs, {} steps; z̄ = {:.3e}, two-sided {:.2}% interval [{:.3e}, {:.3e}]{} (Azuma–Hoeffding ∨ betting at α/4 each per side, valid for martingale differences; α = {:.1e}), range [−1, 1] (z = h·x/c); minimum detectable bias {:.3e} (in units of c) → {}",
+            "{}; {} runs, {} steps; z̄ = {:.3e}, two-sided {:.2}% interval [{:.3e}, {:.3e}]{} (Azuma–Hoeffding ∨ betting at α/4 each per side, valid for martingale differences; α = {:.1e}), range [−1, 1] (z = h·x/c); minimum detectable bias {:.3e} (in units of c; at power 0.8: half-width + 0.84·SE, SE = {:.2e}) → {}",
             spec.context,
             t.runs,
             t.lows.len(),
@@ -301,6 +302,7 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
             },
             alpha,
             mdb,
+            test.se,
             match (verdict, test.lcb > test.mean || test.ucb < test.mean) {
                 (Verdict::Fails, true) =>
                     "mean ≠ 0: the property fails along these iterates (the conditional means vary along the runs, so the betting interval need not contain z̄; the decision, 0 outside it, is what carries α)",
@@ -311,4 +313,105 @@ pub fn row(spec: TrackingSpec, tracking: &Result<Tracking, String>, alpha: f64) 
             }
         ))
         .decided(Method::Statistical, verdict)
+}
+
+/// Whether tracking row `row` resolves, at its size, the error `erratum` of a wrong algorithm
+/// run through the same check (`wrong`: its probe or control, same sizes and level). The bias the
+/// wrong algorithm shows through the check is its measured |z̄| (the right algorithm's mean is
+/// 0), in the check's own normalisation on that algorithm; the check resolves it when that bias
+/// is at least the minimum detectable bias of the check there (half-width + z_{0.8}·SE,
+/// [`crate::stats::min_detectable`]), and is *uninformative for* the erratum otherwise. The
+/// label is appended to the row's claim and details and recorded for the power list
+/// ([`Measured::resolution`]); the verdict on the row's own claim is unchanged.
+pub fn label_resolution(row: &mut Check, wrong: &Check, erratum: &str) {
+    let seen = wrong.measured.as_ref().and_then(|m| {
+        let (lcb, ucb, se) = (m.lcb?, m.ucb?, m.se?);
+        let half = (m.value - lcb).max(ucb - m.value);
+        Some((m.value.abs(), crate::stats::min_detectable(half, se)))
+    });
+    let label = match seen {
+        Some((bias, mdb)) if bias >= mdb => format!(
+            "resolves {erratum} at this size: the bias through this check of {} is |z̄| = {bias:.2e} ≥ its minimum detectable bias {mdb:.2e}",
+            wrong.id
+        ),
+        Some((bias, mdb)) => format!(
+            "uninformative for {erratum} at this size: the bias through this check of {} is |z̄| = {bias:.2e} < its minimum detectable bias {mdb:.2e}",
+            wrong.id
+        ),
+        None => format!(
+            "resolution of {erratum} unknown: row {} has no interval",
+            wrong.id
+        ),
+    };
+    row.claim = format!("{} ({label})", row.claim);
+    row.details = format!("{}; {label}", row.details);
+    if let Some(m) = row.measured.as_mut() {
+        m.resolution = Some(label);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measured(id: &str, mean: f64, half: f64, se: f64, role: Role) -> Check {
+        Check::builder(id, "r", "c", role)
+            .measured(
+                Measured::statistic(mean)
+                    .with_interval(mean - half, mean + half)
+                    .with_se(se),
+            )
+            .decided(Method::Statistical, Verdict::Holds)
+    }
+
+    /// A row whose wrong algorithm's bias is below the check's minimum detectable bias is
+    /// labelled uninformative for the erratum, one above it resolves it; the verdict is kept.
+    #[test]
+    fn a_tracking_row_is_labelled_by_what_it_resolves() {
+        let mut row = measured("2e", 2e-6, 1e-5, 3e-6, Role::Corrected);
+        label_resolution(
+            &mut row,
+            &measured("2e.unweighted", 4.6e-6, 1.2e-5, 3e-6, Role::Probe),
+            "E10",
+        );
+        assert!(
+            row.claim.contains("uninformative for E10 at this size"),
+            "{}",
+            row.claim
+        );
+        assert!(row.claim.contains("2e.unweighted"), "{}", row.claim);
+        assert_eq!(row.verdict, Verdict::Holds);
+        let m = row.measured.as_ref().expect("measured");
+        assert!(
+            m.resolution
+                .as_deref()
+                .is_some_and(|r| r.starts_with("uninformative for E10"))
+        );
+        let mut wide = measured("2e.c", -6e-5, 3.6e-4, 1e-5, Role::Corrected);
+        label_resolution(
+            &mut wide,
+            &measured(
+                "2e.c.unweighted",
+                1.1e-3,
+                5.3e-4,
+                1e-5,
+                Role::NegativeControl,
+            ),
+            "E10",
+        );
+        assert!(
+            wide.details.contains("resolves E10 at this size"),
+            "{}",
+            wide.details
+        );
+        let mut none = measured("3d", 0.0, 1e-3, 1e-4, Role::Corrected);
+        let bare = Check::builder("3d.printed5", "r", "c", Role::Probe)
+            .decided(Method::Statistical, Verdict::Inconclusive);
+        label_resolution(&mut none, &bare, "E11");
+        assert!(
+            none.claim.contains("resolution of E11 unknown"),
+            "{}",
+            none.claim
+        );
+    }
 }

@@ -59,6 +59,16 @@ pub struct Measured {
     /// (absent: mean 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub null_hypothesis: Option<String>,
+    /// The standard error of `value` (sample standard deviation / √runs), from which the
+    /// minimum detectable effect at the table's stated power is computed
+    /// ([`crate::stats::min_detectable`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub se: Option<f64>,
+    /// What the row's check can resolve of a known error at its size, computed against the same
+    /// check run on the wrong algorithm (e.g. "uninformative for E10: …"), as the power list
+    /// states it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolution: Option<String>,
 }
 
 impl Measured {
@@ -71,6 +81,8 @@ impl Measured {
             runs: None,
             alpha: None,
             null_hypothesis: None,
+            se: None,
+            resolution: None,
         }
     }
     /// A statistic `value` (a mean over runs, a worst z-score); add its confidence bounds, runs
@@ -96,6 +108,12 @@ impl Measured {
     #[must_use]
     pub fn with_alpha(mut self, alpha: f64) -> Self {
         self.alpha = Some(alpha);
+        self
+    }
+    /// The same with the standard error of the value.
+    #[must_use]
+    pub fn with_se(mut self, se: f64) -> Self {
+        self.se = Some(se);
         self
     }
     /// The same with the null hypothesis its two-sided interval is set against (when it is not
@@ -162,8 +180,29 @@ pub struct Check {
     /// Whether the claim is the thesis's own (possibly wrong) statement, a corrected one, or a
     /// negative control expected to fail.
     pub role: Role,
+    /// The row states a thesis claim that its erratum (`erratum`) says is false as printed
+    /// (e.g. E7's "the first term is negative", E9–E11's printed algorithms): the table expects
+    /// it to fail ([`Check::expected`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub refuted_by_erratum: bool,
     /// Free-text details (numbers behind the verdict).
     pub details: String,
+}
+
+/// What the table requires of a row's verdict ([`Check::expected`]); the status
+/// ([`crate::report::status`]) fails on every row whose verdict contradicts it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Expected {
+    /// The claim is true (a thesis claim no erratum refutes, a corrected claim): a `Fails`
+    /// verdict fails the table; `Uninformative` or `Inconclusive` does not (no evidence either
+    /// way) but is listed.
+    Holds,
+    /// The claim is false (a negative control, a thesis claim its erratum refutes): any verdict
+    /// but `Fails` fails the table (the check did not see an error it must see).
+    Fails,
+    /// Reported, never required (a probe).
+    Either,
 }
 
 /// The role of a claim in the table.
@@ -207,6 +246,7 @@ impl Check {
             measured: None,
             tightness: None,
             erratum: None,
+            refuted_by_erratum: false,
             details: String::new(),
         }
     }
@@ -222,6 +262,28 @@ impl Check {
     /// `Fails`).
     pub fn undetected_control(&self) -> bool {
         self.role == Role::NegativeControl && self.verdict != Verdict::Fails
+    }
+
+    /// What the table requires of this row's verdict: a negative control must fail, a probe is
+    /// never required, a thesis claim that its erratum refutes ([`Check::refuted_by_erratum`])
+    /// must fail, and every other thesis or corrected claim must hold.
+    pub fn expected(&self) -> Expected {
+        match self.role {
+            Role::NegativeControl => Expected::Fails,
+            Role::Probe => Expected::Either,
+            Role::Thesis | Role::Corrected if self.refuted_by_erratum => Expected::Fails,
+            Role::Thesis | Role::Corrected => Expected::Holds,
+        }
+    }
+
+    /// Whether the verdict contradicts [`Check::expected`]: a row expected to hold fails, or a
+    /// row expected to fail does not.
+    pub fn unexpected(&self) -> bool {
+        match self.expected() {
+            Expected::Holds => self.verdict == Verdict::Fails,
+            Expected::Fails => self.verdict != Verdict::Fails,
+            Expected::Either => false,
+        }
     }
 }
 
@@ -240,6 +302,7 @@ pub struct CheckBuilder {
     measured: Option<Measured>,
     tightness: Option<f64>,
     erratum: Option<String>,
+    refuted_by_erratum: bool,
     details: String,
 }
 
@@ -289,6 +352,12 @@ impl CheckBuilder {
         self.erratum = e;
         self
     }
+    /// The claim is the thesis's as printed and its erratum says it is false: the table expects
+    /// the row to fail ([`Check::expected`]).
+    pub fn refuted_by_erratum(mut self) -> Self {
+        self.refuted_by_erratum = true;
+        self
+    }
     /// The numbers behind the verdict, as text.
     pub fn details(mut self, d: impl Into<String>) -> Self {
         self.details = d.into();
@@ -309,6 +378,7 @@ impl CheckBuilder {
             verdict,
             erratum: self.erratum,
             role: self.role,
+            refuted_by_erratum: self.refuted_by_erratum,
             details: self.details,
         }
     }

@@ -15,7 +15,7 @@ use ilopt_theory::checks::statistical::{self, CONTROL_SCALE, O2NC_DELTA, SGD_ETA
 use ilopt_theory::checks::storm::{self, StormVariant};
 use ilopt_theory::protocol::Profile;
 use ilopt_theory::protocol::m1_tied;
-use ilopt_theory::report::status;
+use ilopt_theory::report::expectation_status as status;
 use std::sync::OnceLock;
 
 /// The box of the table's SGD check (as the binary).

@@ -72,10 +72,10 @@ fn measure(
     let lcb = sample.lcb(mc.alpha);
     let verdict = assess(&sample, upper(bound), statistic_max, mc.alpha);
     let text = format!(
-        "R = {}; X̄ = {mean_mid:.5}, LCB = {lcb:.5} (max of Hoeffding, empirical Bernstein, betting at α/3 each; α = {:.1e}, range [0, {range:.4}]), B = {bound:.5}; flags any B < {lcb:.5}, minimum detectable violation X̄ − LCB = {:.5}; the statistic cannot exceed {statistic_max:.4}",
+        "R = {}; X̄ = {mean_mid:.5}, LCB = {lcb:.5} (max of Hoeffding, empirical Bernstein, betting at α/3 each; α = {:.1e}, range [0, {range:.4}]), B = {bound:.5}; flags any B < {lcb:.5}, minimum detectable violation (power 0.8) X̄ − LCB + 0.84·SE = {:.5}; the statistic cannot exceed {statistic_max:.4}",
         mc.runs,
         mc.alpha,
-        mean_mid - lcb,
+        crate::stats::min_detectable(mean_mid - lcb, sample.se()),
     );
     (
         Measured::from_sample(&sample, mc.alpha).with_value(mean_mid),

@@ -134,6 +134,7 @@ pub fn rows(
         )
         .bound(theorem)
         .erratum("E13")
+        .refuted_by_erratum()
         .details(format!(
             "{}; assembled with KM ∈ [{:.6e}, {:.6e}] against {theorem:.6e} (KDT = DM, not KM); {consts}",
             close_printed.summary(),

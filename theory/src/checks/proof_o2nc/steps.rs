@@ -217,6 +217,7 @@ pub(super) fn martingale(
             Role::Thesis,
         )
         .erratum("E13")
+        .refuted_by_erratum()
         .details(format!(
             "{}; per block, at its visited points with independent τ_t ∼ p(·; w_t), the exact conditional moments summed in intervals: (Σ_t E‖X_t‖)² against Σ_t E‖X_t‖²; smallest (Σ_t E‖X_t‖)²/(T Σ_t E‖X_t‖²) = {ratio:.4}, i.e. the sum of norms grows like T, not √T; {}",
             printed.summary(),
@@ -290,6 +291,7 @@ pub(super) fn indexing(inputs: &TableInputs, ev: &Evaluated) -> Vec<Check> {
                 runs_text(ev)
             ))
             .erratum("E13")
+        .refuted_by_erratum()
             .decided(Method::Exact, Verdict::Fails)
     } else {
         printed
@@ -300,6 +302,7 @@ pub(super) fn indexing(inputs: &TableInputs, ev: &Evaluated) -> Vec<Check> {
                 runs_text(ev)
             ))
             .erratum("E13")
+            .refuted_by_erratum()
             .decided(Method::Exact, printed.verdict())
     };
     vec![s5, p5]
@@ -361,6 +364,7 @@ pub(super) fn spread(ev: &Evaluated) -> Vec<Check> {
             Role::Thesis,
         )
         .erratum("E14")
+        .refuted_by_erratum()
         .details(format!(
             "{}; s_n = (w_n − θ_{{n−1}})/Δ_n at the pairs with Δ_n, Δ_{{n′}} ≠ 0 (with it the corrected line holds by definition); exact in ℚ; {}",
             printed.summary(),

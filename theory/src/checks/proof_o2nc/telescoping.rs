@@ -139,6 +139,7 @@ pub fn telescoping(mdp: &ToyMdp, ev: &Evaluated, pieces: usize) -> Result<Vec<Ch
             Role::Thesis,
         )
         .erratum("E12")
+        .refuted_by_erratum()
         .details(format!(
             "{}; on each run it agrees (OGD restarts at Δ_1 = 0, so θ_1 = θ_0); on the {moved} windows with a nonzero first step it drops F(θ'_1) − F(θ'_0); {basis}",
             printed.summary()

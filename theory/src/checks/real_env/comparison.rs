@@ -13,8 +13,9 @@ pub fn normal_upper_quantile(p: f64) -> f64 {
     -Normal::standard().inverse_cdf(p)
 }
 
-/// Φ⁻¹(0.8): the minimum detectable bias is the bias flagged with probability ≥ 0.8.
-pub const POWER_Z: f64 = 0.841_621_2;
+/// Φ⁻¹(0.8), the table's stated power ([`crate::stats::POWER`]): the minimum detectable bias is
+/// the bias flagged with probability ≥ 0.8.
+pub use crate::stats::POWER_Z;
 
 /// An estimator's samples against the reference, per coordinate.
 #[derive(Debug, Clone)]
@@ -94,7 +95,10 @@ pub fn compare(samples: &[DVector<f64>], r: &Reference, alpha: f64) -> Compariso
         n,
         mean: full.iter().map(|s| s.0).collect(),
         z: bias.iter().zip(&se).map(|(b, s)| b / s).collect(),
-        mdb: se.iter().map(|s| (z_crit + POWER_Z) * s).collect(),
+        mdb: se
+            .iter()
+            .map(|s| crate::stats::min_detectable(z_crit * s, *s))
+            .collect(),
         bias,
         se,
         se_reference: r.se.clone(),

@@ -366,7 +366,18 @@ fn fits_row(id: &str, claim: &str, fits: &[Reduction], alpha: f64) -> Check {
         check.details
     );
     check.verdict = fits_verdict(fits);
+    // The row's level: α/fits per fit, α for the claim about every fit.
+    if let Some(m) = check.measured.as_mut() {
+        m.alpha = Some(alpha);
+    }
     check
+}
+
+/// The standard error of a ratio whose interval at level 1 − α is `value·exp(±z·s)` on the log
+/// scale: `value·s` (delta method), for the minimum detectable effect
+/// ([`crate::stats::min_detectable`]).
+fn ratio_se(r: &Ratio, alpha: f64) -> f64 {
+    r.value * (r.hi / r.lo).ln() / (2.0 * normal_upper_quantile(alpha / 2.0))
 }
 
 fn row(id: &str, claim: &str, role: Role, r: &Reduction, alpha: f64) -> Check {
@@ -390,7 +401,9 @@ fn row(id: &str, claim: &str, role: Role, r: &Reduction, alpha: f64) -> Check {
     .measured(
         Measured::statistic(r.total.value)
             .with_interval(r.total.lo, r.total.hi)
-            .with_runs(r.n_plain),
+            .with_se(ratio_se(&r.total, alpha))
+            .with_runs(r.n_plain)
+            .with_alpha(alpha),
     )
     .details(format!(
         "{} plain estimates (one trajectory each) against {} baselined estimates of m = {} trajectories; tr Var(g)/tr Var(g_b) = {}; per coordinate Var(g_j)/Var(g_b,j): {per}",
