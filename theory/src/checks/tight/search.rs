@@ -1,0 +1,286 @@
+//! The search for tight instances: a seeded random search over the M family with P2' (the
+//! MDP's μ_A, p₀, p₁, T, the softmax's c, the start θ₁, the horizon K and the step), followed by
+//! a local refinement of the best point, maximising X̄/B.
+//!
+//! Each candidate is evaluated in `f64`: X̄ = E X over every path of the run ([`super::paths`]),
+//! and B from constants **estimated** on the hull of the iterates (the largest value on a grid of
+//! [`GRID`] points, pairs of points for L̃), with B_F = F(θ₁) (F ≥ 0). The estimates only rank
+//! candidates: the rows certify the constants of the instance they report
+//! ([`crate::certify::box_constants`]) and recompute X̄ exactly, so a candidate whose certified
+//! constants break its step condition is passed over for the next one.
+//!
+//! The search is a function of its [`Budget`] alone (the seed included), so the rows re-run it
+//! each time and any reader can reproduce it: `cargo test --release -p ilopt-theory --lib
+//! tight::search -- --nocapture` prints the quick budget's best instances.
+
+use super::instance::{Instance, exact};
+use super::paths::{sgd_mean, storm_mean};
+use crate::bounds::{sgd_constant, storm_fixed};
+use crate::inputs::TableInputs;
+use ilopt::exact::enumerate::{moments, prefixes};
+use ilopt::exact::forward::forward;
+use ilopt::scalar::{Dual, Scalar};
+use ilopt::toy::{ToyMdp, ToyProblem};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+
+/// Grid points per coordinate of the hull at which the constants are estimated.
+pub const GRID: usize = 33;
+/// The estimated constants must satisfy a step condition with this relative margin, so that the
+/// certified ones (slightly larger) usually still do.
+pub const MARGIN: f64 = 1.03;
+
+/// The algorithm whose bound a search maximises X̄/B for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Algorithm {
+    /// SGD with constant η, eq. 3.27; the step is η.
+    Sgd,
+    /// IS-STORM with schedule (3.43), eq. (3.60\*); the step parameter is the schedule's L.
+    Storm,
+}
+
+/// A candidate: an instance and its step parameter (η for SGD, L of (3.43) for STORM).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// The instance.
+    pub instance: Instance,
+    /// η (SGD) or L (STORM), a dyadic rational stored as `f64`.
+    pub step: f64,
+}
+
+/// A candidate's estimated X̄/B.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// The candidate.
+    pub candidate: Candidate,
+    /// X̄ (over every path, in `f64`).
+    pub x_bar: f64,
+    /// B with the estimated constants.
+    pub bound: f64,
+    /// X̄/B.
+    pub ratio: f64,
+    /// The hull of the iterates.
+    pub hull: Vec<[f64; 2]>,
+    /// Number of paths.
+    pub paths: u64,
+}
+
+/// The search's size and seed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Budget {
+    /// Random candidates.
+    pub random: usize,
+    /// Refinement candidates (neighbours of the best so far).
+    pub refine: usize,
+    /// RNG seed.
+    pub seed: u64,
+    /// Largest number of paths a candidate may have.
+    pub max_paths: u64,
+}
+
+/// `n` evenly spaced points of `[lo, hi]` (both ends included).
+fn grid(h: [f64; 2], n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| h[0] + (h[1] - h[0]) * i as f64 / (n - 1) as f64)
+        .collect()
+}
+
+/// max |F″| on the grid (X2 in second-order duals).
+fn l_f_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+    let p = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
+    let mut m = 0.0f64;
+    for &x in pts {
+        let v = Dual::variable(Dual::variable(x, 0, 1), 0, 1);
+        let obj = forward(&p, &[v]).map_err(|e| e.to_string())?.objective;
+        m = m.max(obj.gradient_padded(1)[0].gradient_padded(1)[0].abs());
+    }
+    Ok(m)
+}
+
+/// max Var g on the grid (X1).
+fn variance_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+    let p = ToyProblem::<f64>::new(mdp);
+    let mut m = 0.0f64;
+    for &x in pts {
+        m = m.max(moments(&p, &[x]).map_err(|e| e.to_string())?.variance);
+    }
+    Ok(m)
+}
+
+/// √(½ max |∂²V_IS/∂θ′²|) over pairs of grid points: the Taylor bound of (A4) that
+/// [`crate::certify::box_constants::l_tilde`] certifies, estimated.
+fn l_tilde_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+    let pf = ToyProblem::<f64>::new(mdp);
+    let pd = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
+    let mut m = 0.0f64;
+    for &x in pts {
+        let at = prefixes(&pf, &[x]).map_err(|e| e.to_string())?;
+        for &y in pts {
+            let v = Dual::variable(Dual::variable(y, 0, 1), 0, 1);
+            let at_prime = prefixes(&pd, &[v]).map_err(|e| e.to_string())?;
+            let lift = |x: f64| Dual::constant(Dual::constant(x));
+            let mut total = Dual::<Dual<f64>>::zero();
+            for (a, b) in at.iter().zip(&at_prime) {
+                let (p, g) = (lift(a.prob), lift(a.estimate[0]));
+                let (pp, gp) = (&b.prob, &b.estimate[0]);
+                total += pp.clone() * gp * gp - Dual::from_i64(2) * &p * gp * &g
+                    + p.clone() * &p / pp * &g * &g;
+            }
+            m = m.max(total.gradient_padded(1)[0].gradient_padded(1)[0].abs());
+        }
+    }
+    Ok((m / 2.0).sqrt())
+}
+
+/// Evaluate a candidate (module docs); `None` if its step condition fails with the estimated
+/// constants, or it cannot be evaluated (too many paths, a table that cannot be built).
+pub fn evaluate(algorithm: Algorithm, c: &Candidate, max_paths: u64) -> Option<Estimate> {
+    let inst = &c.instance;
+    let mdp = inst.mdp().ok()?;
+    let theta1 = [Scalar::to_f64(&inst.theta1)];
+    let inputs = TableInputs::thesis();
+    let run = match algorithm {
+        Algorithm::Sgd => sgd_mean(&mdp, &theta1, &c.step, inst.k, &inputs, max_paths),
+        Algorithm::Storm => storm_mean(&mdp, &theta1, &c.step, inst.k, &inputs, max_paths),
+    }
+    .ok()?;
+    let pts = grid(run.hull[0], GRID);
+    let l_f = l_f_estimate(&mdp, &pts).ok()?;
+    let sigma2 = variance_estimate(&mdp, &pts).ok()?;
+    let b_f = forward(&ToyProblem::<f64>::new(&mdp), &theta1)
+        .ok()?
+        .objective;
+    let bound = match algorithm {
+        Algorithm::Sgd => {
+            if c.step * l_f * MARGIN > 1.0 {
+                return None;
+            }
+            sgd_constant(l_f, c.step, sigma2, b_f, inst.k)
+        }
+        Algorithm::Storm => {
+            let coarse = grid(run.hull[0], GRID.div_ceil(4));
+            let l = l_f.max(l_tilde_estimate(&mdp, &coarse).ok()?);
+            if l * MARGIN > c.step {
+                return None;
+            }
+            storm_fixed(c.step, sigma2, b_f, inst.k)
+        }
+    };
+    let ratio = run.mean / bound;
+    ratio.is_finite().then(|| Estimate {
+        candidate: c.clone(),
+        x_bar: run.mean,
+        bound,
+        ratio,
+        hull: run.hull,
+        paths: run.paths,
+    })
+}
+
+const PROBS: [(i64, i64); 5] = [(0, 1), (1, 4), (1, 2), (3, 4), (1, 1)];
+const CS: [(i64, i64); 6] = [(1, 50), (1, 20), (1, 10), (1, 5), (1, 2), (1, 1)];
+const SGD_KS: [u64; 4] = [1, 2, 3, 4];
+const STORM_KS: [u64; 7] = [1, 2, 4, 8, 16, 24, 40];
+
+fn ratio(rng: &mut StdRng, set: &[(i64, i64)]) -> f64 {
+    let (n, d) = set[rng.random_range(0..set.len())];
+    n as f64 / d as f64
+}
+
+/// Round to a multiple of 2⁻¹⁰ (a short dyadic rational), at least 2⁻¹⁰.
+fn dyadic(x: f64) -> f64 {
+    ((x * 1024.0).round() / 1024.0).max(1.0 / 1024.0)
+}
+
+fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Candidate {
+    let k = match algorithm {
+        Algorithm::Sgd => SGD_KS[rng.random_range(0..SGD_KS.len())],
+        Algorithm::Storm => STORM_KS[rng.random_range(0..STORM_KS.len())],
+    };
+    let step = match algorithm {
+        Algorithm::Sgd => dyadic(2f64.powf(rng.random_range(-6.0..1.0))),
+        Algorithm::Storm => dyadic(2f64.powf(rng.random_range(-1.0..4.5))),
+    };
+    Candidate {
+        instance: Instance {
+            mu_a: exact(ratio(rng, &PROBS)),
+            p0: exact(ratio(rng, &PROBS)),
+            p1: exact(ratio(rng, &PROBS)),
+            horizon: rng.random_range(2..=3),
+            c: exact(ratio(rng, &CS)),
+            theta1: exact((rng.random_range(-64..=64) as f64) / 16.0),
+            k,
+        },
+        step,
+    }
+}
+
+/// A neighbour of `c`: θ₁ moved by up to `scale`, the step scaled by up to (1 ± scale/4), and
+/// now and then K moved by one.
+fn neighbour(algorithm: Algorithm, c: &Candidate, rng: &mut StdRng, scale: f64) -> Candidate {
+    let mut n = c.clone();
+    let t = Scalar::to_f64(&c.instance.theta1) + scale * rng.random_range(-1.0..1.0);
+    n.instance.theta1 = exact(dyadic(t.abs()) * t.signum());
+    n.step = dyadic(c.step * (1.0 + scale / 4.0 * rng.random_range(-1.0..1.0)));
+    if rng.random_bool(0.2) {
+        let ks: &[u64] = match algorithm {
+            Algorithm::Sgd => &SGD_KS,
+            Algorithm::Storm => &STORM_KS,
+        };
+        n.instance.k = ks[rng.random_range(0..ks.len())];
+    }
+    n
+}
+
+/// The search (module docs): `budget.random` random candidates, then `budget.refine` neighbours
+/// of the best so far at a shrinking scale. Returns every feasible candidate evaluated, best
+/// first (ties broken by the order of evaluation).
+pub fn search(algorithm: Algorithm, budget: Budget) -> Vec<Estimate> {
+    let mut rng = StdRng::seed_from_u64(budget.seed);
+    let mut found: Vec<Estimate> = vec![];
+    for _ in 0..budget.random {
+        let c = random_candidate(algorithm, &mut rng);
+        found.extend(evaluate(algorithm, &c, budget.max_paths));
+    }
+    for i in 0..budget.refine {
+        let Some(best) = found
+            .iter()
+            .max_by(|a, b| a.ratio.total_cmp(&b.ratio))
+            .cloned()
+        else {
+            break;
+        };
+        let scale = 0.5 * (1.0 - i as f64 / budget.refine as f64) + 1.0 / 64.0;
+        let c = neighbour(algorithm, &best.candidate, &mut rng, scale);
+        found.extend(evaluate(algorithm, &c, budget.max_paths));
+    }
+    found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
+    found
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quick budget's search, printed (the documented way to reproduce it).
+    #[test]
+    fn the_quick_search_finds_ratios_above_one_half() {
+        for algorithm in [Algorithm::Sgd, Algorithm::Storm] {
+            let b = super::super::Sizes::quick().budget(algorithm);
+            let found = search(algorithm, b);
+            for e in found.iter().take(3) {
+                println!(
+                    "{algorithm:?}: ratio {:.4}, X̄ = {:.5}, B = {:.5}, step {}, {}, {} paths, hull {:?}",
+                    e.ratio,
+                    e.x_bar,
+                    e.bound,
+                    e.candidate.step,
+                    e.candidate.instance.describe(),
+                    e.paths,
+                    e.hull
+                );
+            }
+            assert!(found[0].ratio > 0.5, "{algorithm:?}: {}", found[0].ratio);
+        }
+    }
+}
