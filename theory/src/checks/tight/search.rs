@@ -19,7 +19,7 @@ use crate::bounds::{sgd_constant, storm_fixed};
 use crate::inputs::TableInputs;
 use ilopt::exact::enumerate::{moments, prefixes};
 use ilopt::exact::forward::forward;
-use ilopt::scalar::{Dual, Scalar};
+use ilopt::scalar::{BigRational, Dual, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -178,13 +178,13 @@ pub fn evaluate(algorithm: Algorithm, c: &Candidate, max_paths: u64) -> Option<E
 }
 
 const PROBS: [(i64, i64); 5] = [(0, 1), (1, 4), (1, 2), (3, 4), (1, 1)];
-const CS: [(i64, i64); 6] = [(1, 50), (1, 20), (1, 10), (1, 5), (1, 2), (1, 1)];
+const CS: [(i64, i64); 7] = [(1, 100), (1, 50), (1, 20), (1, 10), (1, 5), (1, 2), (1, 1)];
 const SGD_KS: [u64; 4] = [1, 2, 3, 4];
-const STORM_KS: [u64; 7] = [1, 2, 4, 8, 16, 24, 40];
+const STORM_KS: [u64; 9] = [1, 2, 4, 8, 16, 24, 40, 64, 100];
 
-fn ratio(rng: &mut StdRng, set: &[(i64, i64)]) -> f64 {
+fn ratio(rng: &mut StdRng, set: &[(i64, i64)]) -> BigRational {
     let (n, d) = set[rng.random_range(0..set.len())];
-    n as f64 / d as f64
+    BigRational::from_ratio(n, d)
 }
 
 /// Round to a multiple of 2⁻¹⁰ (a short dyadic rational), at least 2⁻¹⁰.
@@ -192,27 +192,30 @@ fn dyadic(x: f64) -> f64 {
     ((x * 1024.0).round() / 1024.0).max(1.0 / 1024.0)
 }
 
-fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Candidate {
+/// A random candidate. The step is drawn relative to max |F″| on [θ₁ − 1, θ₁ + 1] (estimated on
+/// the grid), so that most draws satisfy their step condition: η = s/L̂ with s ∈ [1/5, 1] for SGD,
+/// the schedule's L = sL̂ with s ∈ [1, 5/2] for STORM.
+fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate> {
     let k = match algorithm {
         Algorithm::Sgd => SGD_KS[rng.random_range(0..SGD_KS.len())],
         Algorithm::Storm => STORM_KS[rng.random_range(0..STORM_KS.len())],
     };
-    let step = match algorithm {
-        Algorithm::Sgd => dyadic(2f64.powf(rng.random_range(-6.0..1.0))),
-        Algorithm::Storm => dyadic(2f64.powf(rng.random_range(-1.0..4.5))),
+    let instance = Instance {
+        mu_a: ratio(rng, &PROBS),
+        p0: ratio(rng, &PROBS),
+        p1: ratio(rng, &PROBS),
+        horizon: rng.random_range(2..=3),
+        c: ratio(rng, &CS),
+        theta1: exact((rng.random_range(-64..=64) as f64) / 16.0),
+        k,
     };
-    Candidate {
-        instance: Instance {
-            mu_a: exact(ratio(rng, &PROBS)),
-            p0: exact(ratio(rng, &PROBS)),
-            p1: exact(ratio(rng, &PROBS)),
-            horizon: rng.random_range(2..=3),
-            c: exact(ratio(rng, &CS)),
-            theta1: exact((rng.random_range(-64..=64) as f64) / 16.0),
-            k,
-        },
-        step,
-    }
+    let t = Scalar::to_f64(&instance.theta1);
+    let l = l_f_estimate(&instance.mdp().ok()?, &grid([t - 1.0, t + 1.0], GRID)).ok()?;
+    let step = match algorithm {
+        Algorithm::Sgd => dyadic(rng.random_range(0.2..1.0) / l),
+        Algorithm::Storm => dyadic(rng.random_range(1.0..2.5) * l),
+    };
+    Some(Candidate { instance, step })
 }
 
 /// A neighbour of `c`: θ₁ moved by up to `scale`, the step scaled by up to (1 ± scale/4), and
@@ -232,27 +235,36 @@ fn neighbour(algorithm: Algorithm, c: &Candidate, rng: &mut StdRng, scale: f64) 
     n
 }
 
-/// The search (module docs): `budget.random` random candidates, then `budget.refine` neighbours
-/// of the best so far at a shrinking scale. Returns every feasible candidate evaluated, best
-/// first (ties broken by the order of evaluation).
+/// Starting points of the refinement: the best distinct random candidates.
+pub const STARTS: usize = 4;
+
+/// The search (module docs): `budget.random` random candidates, then `budget.refine` neighbours,
+/// split evenly over the [`STARTS`] best random candidates, each a hill climb at a shrinking
+/// scale. Returns every feasible candidate evaluated, best first (ties in the order of
+/// evaluation).
 pub fn search(algorithm: Algorithm, budget: Budget) -> Vec<Estimate> {
     let mut rng = StdRng::seed_from_u64(budget.seed);
     let mut found: Vec<Estimate> = vec![];
     for _ in 0..budget.random {
-        let c = random_candidate(algorithm, &mut rng);
-        found.extend(evaluate(algorithm, &c, budget.max_paths));
+        if let Some(c) = random_candidate(algorithm, &mut rng) {
+            found.extend(evaluate(algorithm, &c, budget.max_paths));
+        }
     }
-    for i in 0..budget.refine {
-        let Some(best) = found
-            .iter()
-            .max_by(|a, b| a.ratio.total_cmp(&b.ratio))
-            .cloned()
-        else {
-            break;
-        };
-        let scale = 0.5 * (1.0 - i as f64 / budget.refine as f64) + 1.0 / 64.0;
-        let c = neighbour(algorithm, &best.candidate, &mut rng, scale);
-        found.extend(evaluate(algorithm, &c, budget.max_paths));
+    found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
+    let starts: Vec<Estimate> = found.iter().take(STARTS).cloned().collect();
+    let steps = budget.refine / STARTS.max(1);
+    for start in starts {
+        let mut best = start;
+        for i in 0..steps {
+            let scale = 0.5 * (1.0 - i as f64 / steps as f64) + 1.0 / 64.0;
+            let c = neighbour(algorithm, &best.candidate, &mut rng, scale);
+            if let Some(e) = evaluate(algorithm, &c, budget.max_paths) {
+                if e.ratio > best.ratio {
+                    best = e.clone();
+                }
+                found.push(e);
+            }
+        }
     }
     found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
     found

@@ -187,6 +187,12 @@ mod tests {
     fn the_tight_row_holds_and_a_halved_bound_turns_it() {
         let s = Sizes::quick();
         let rows = rows(&TableInputs::thesis(), &s);
+        for r in &rows {
+            println!(
+                "{} {:?} {:?}: {}\n  {}",
+                r.id, r.verdict, r.tightness, r.claim, r.details
+            );
+        }
         let ids: Vec<&str> = rows.iter().map(|r| r.id.as_str()).collect();
         assert_eq!(ids, ["1.tight", "1.tight.ctl"], "{rows:#?}");
         assert_eq!(rows[0].verdict, Verdict::Holds, "{}", rows[0].details);
