@@ -27,7 +27,7 @@ pub mod storm;
 
 use crate::inputs::TableInputs;
 use crate::record::check::Check;
-use search::{Algorithm, Budget};
+use search::{Algorithm, Budget, Noise};
 
 /// Sizes of the tight rows.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,7 +97,69 @@ impl Sizes {
 /// The rows are exact (SGD) or rigorous (STORM), so they take no false-alarm probability; a
 /// computation that fails leaves its rows inconclusive, with the reason in their details.
 pub fn rows(inputs: &TableInputs, sizes: Sizes) -> Vec<Check> {
-    let mut rows = sgd::rows(inputs, &sizes);
-    rows.extend(storm::rows(inputs, &sizes));
+    let mut rows = vec![];
+    for noise in [Noise::Any, Noise::Required] {
+        rows.extend(sgd::rows(inputs, &sizes, noise));
+        rows.extend(storm::rows(inputs, &sizes, noise));
+    }
     rows
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bounds::sgd_constant;
+    use crate::inputs::Formulas;
+    use crate::record::check::{Role, Verdict};
+
+    fn half(l: f64, eta: f64, s2: f64, b_f: f64, k: u64) -> f64 {
+        0.5 * sgd_constant(l, eta, s2, b_f, k)
+    }
+
+    /// At the quick size every stated claim holds and every control is refuted; with eq. 3.27's
+    /// formula halved both SGD rows (the noiseless and the noisy instance) fail.
+    #[test]
+    fn the_quick_rows_hold_their_controls_are_refuted_and_a_halved_sgd_bound_turns_both() {
+        let s = Sizes::quick();
+        let all = rows(&TableInputs::thesis(), s);
+        for r in &all {
+            println!(
+                "{} {:?} X̄/B = {:?}\n  {}\n  {}",
+                r.id, r.verdict, r.tightness, r.claim, r.details
+            );
+        }
+        let ids: Vec<&str> = all.iter().map(|r| r.id.as_str()).collect();
+        assert!(
+            ids.starts_with(&[
+                "1.tight",
+                "1.tight.ctl",
+                "2c.tight",
+                "2c.tight.ctl",
+                "1.tight.noisy",
+                "1.tight.noisy.ctl",
+                "2c.tight.noisy"
+            ]),
+            "{ids:?}"
+        );
+        for r in &all {
+            let want = if r.role == Role::NegativeControl {
+                Verdict::Fails
+            } else {
+                Verdict::Holds
+            };
+            assert_eq!(r.verdict, want, "{}: {}", r.id, r.details);
+        }
+        let wrong = TableInputs {
+            formulas: Formulas {
+                sgd_constant: half,
+                ..Formulas::THESIS
+            },
+            ..TableInputs::thesis()
+        };
+        let turned = rows(&wrong, s);
+        for id in ["1.tight", "1.tight.noisy"] {
+            let r = turned.iter().find(|r| r.id == id).expect("the row");
+            assert_eq!(r.verdict, Verdict::Fails, "{id}: {}", r.details);
+        }
+    }
 }

@@ -9,7 +9,7 @@
 use super::Sizes;
 use super::instance::exact;
 use super::paths::storm_mean;
-use super::search::{Algorithm, Estimate, search};
+use super::search::{Algorithm, Estimate, Noise, search};
 use super::sgd::search_text;
 use crate::bounds::upper;
 use crate::certify::box_constants::{b_f, l_f, l_tilde, sigma2};
@@ -25,6 +25,8 @@ const RESULT: &str = "STORM, eq. (3.60*) (tight instance)";
 pub struct Certified {
     /// The search's estimate for the candidate.
     pub estimate: Estimate,
+    /// The schedule's L (the candidate's, or raised to the certified constants).
+    pub l: f64,
     /// An enclosure of X̄ = E[Σ_k η_k ‖∇F(θ_k)‖² / Σ_k η_k].
     pub x_bar: Interval,
     /// The hull of the iterates the constants hold on.
@@ -35,62 +37,86 @@ pub struct Certified {
     pub constants: [Constant; 4],
 }
 
+/// Rounds of [`certify`]: how often the schedule's L may be raised to the certified
+/// max(L_F, L̃) of the previous round's hull.
+pub const ROUNDS: usize = 3;
+
+/// The smallest multiple of 2⁻¹⁰ that is ≥ `x` (a short dyadic rational).
+fn dyadic_up(x: f64) -> f64 {
+    (x * 1024.0).ceil() / 1024.0
+}
+
 /// Certify one candidate: X̄ enclosed over every path under `inputs`' oracle, the constants on the
-/// hull of those iterates; an error if the certified max(L_F, L̃) exceeds the schedule's L or a
-/// computation fails.
+/// hull of those iterates. Theorem S needs the schedule's L ≥ max(L_F, L̃) on that hull; where the
+/// certified constants (branch-and-bound upper bounds, above the search's estimates) exceed the
+/// candidate's L, L is raised to them (rounded up to a multiple of 2⁻¹⁰) and the run and the
+/// constants are redone, for at most [`ROUNDS`] rounds.
 ///
 /// # Errors
 /// A message saying why the candidate was passed over.
 pub fn certify(e: &Estimate, inputs: &TableInputs, s: &Sizes) -> Result<Certified, String> {
     let inst = &e.candidate.instance;
     let mdp = inst.mdp()?;
-    let l = Interval::from_rational(&exact(e.candidate.step));
-    let run = storm_mean(
-        &mdp,
-        &inst.theta1_in::<Interval>(),
-        &l,
-        inst.k,
-        inputs,
-        s.storm.max_paths,
-    )?;
     let one = BigRational::from_integer(1.into());
-    let lf = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-    let lt = l_tilde(&mdp, run.hull[0], s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-    let v = sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-    let bf = b_f(&mdp, std::slice::from_ref(&inst.theta1), None)?;
-    if lf.value.max(lt.value) > e.candidate.step {
-        return Err(format!(
-            "{}, L = {}: certified max(L_F, L̃) = max({:.5}, {:.5}) exceeds it",
-            inst.describe(),
-            e.candidate.step,
-            lf.value,
-            lt.value
-        ));
+    let mut l_s = e.candidate.step;
+    for _ in 0..ROUNDS {
+        let l = Interval::from_rational(&exact(l_s));
+        let run = storm_mean(
+            &mdp,
+            &inst.theta1_in::<Interval>(),
+            &l,
+            inst.k,
+            inputs,
+            s.storm.max_paths,
+        )?;
+        let lf = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
+        let lt = l_tilde(&mdp, run.hull[0], s.tol, s.max_boxes).map_err(|e| e.to_string())?;
+        let need = lf.value.max(lt.value);
+        if need > l_s {
+            l_s = dyadic_up(need);
+            continue;
+        }
+        let v = sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
+        let bf = b_f(&mdp, std::slice::from_ref(&inst.theta1), None)?;
+        return Ok(Certified {
+            estimate: e.clone(),
+            l: l_s,
+            x_bar: run.mean,
+            hull: run.hull,
+            paths: run.paths,
+            constants: [bf, lf, lt, v],
+        });
     }
-    Ok(Certified {
-        estimate: e.clone(),
-        x_bar: run.mean,
-        hull: run.hull,
-        paths: run.paths,
-        constants: [bf, lf, lt, v],
-    })
+    Err(format!(
+        "{}, L = {}: the certified max(L_F, L̃) still exceeds L after {ROUNDS} rounds",
+        inst.describe(),
+        e.candidate.step
+    ))
 }
 
 /// The row for `X̄ ≤ scale · B` at a certified candidate (scale 1: the theorem; ½: the negative
 /// control), B read through `inputs`: holds if the enclosure of X̄ is ≤ scale · upper(B), fails if
 /// it is above, inconclusive if it straddles.
-pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes) -> Check {
+pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: Noise) -> Check {
     let inst = &c.estimate.candidate.instance;
-    let l = c.estimate.candidate.step;
+    let l = c.l;
     let [bf, lf, lt, v] = &c.constants;
     let b_f = inputs.constant_f64(ConstantKind::BF, bf.value);
     let l_f = inputs.constant_f64(ConstantKind::LF, lf.value);
     let l_t = inputs.constant_f64(ConstantKind::LTilde, lt.value);
     let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
     let (id, role, prefix) = if scale == 1.0 {
-        ("2c.tight", Role::Corrected, String::new())
+        (
+            format!("2c.tight{}", noise.suffix()),
+            Role::Corrected,
+            String::new(),
+        )
     } else {
-        ("2c.tight.ctl", Role::NegativeControl, format!("{scale}·"))
+        (
+            format!("2c.tight{}.ctl", noise.suffix()),
+            Role::NegativeControl,
+            format!("{scale}·"),
+        )
     };
     let claim = format!(
         "Σ_k η_k E‖∇F(θ_k)‖² / Σ_k η_k ≤ {prefix}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))] / Σ_k (7/(k+7))^{{1/3}} for IS-STORM (trajectory weights), schedule (3.43) with L = {}, on the instance of largest X̄/B found: {}",
@@ -145,13 +171,22 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes) -> Check 
 
 /// Rows 2c.tight and 2c.tight.ctl (module docs), or one inconclusive row saying why no candidate
 /// could be certified.
-pub fn rows(inputs: &TableInputs, s: &Sizes) -> Vec<Check> {
-    let found = search(Algorithm::Storm, s.storm);
+pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Vec<Check> {
+    let found = search(Algorithm::Storm, noise, s.storm);
     let mut passed_over = vec![];
     for e in found.iter().take(s.tries) {
         match certify(e, inputs, s) {
             Ok(c) => {
-                let mut rows = vec![row(&c, inputs, 1.0, s), row(&c, inputs, 0.5, s)];
+                let main = row(&c, inputs, 1.0, s, noise);
+                // The B ÷ 2 control is stated where X̄/B ≥ ½ was reached; the search over every
+                // instance reaches it at every size the tests run, the noisy search need not.
+                let control = noise == Noise::Any || main.tightness.is_some_and(|t| t >= 0.5);
+                let mut rows = vec![main];
+                if control {
+                    rows.push(row(&c, inputs, 0.5, s, noise));
+                } else {
+                    rows[0].details += "; X̄/B < ½ here, so no B ÷ 2 control is stated";
+                }
                 if !passed_over.is_empty() {
                     for r in &mut rows {
                         r.details += &format!("; passed over: {}", passed_over.join("; "));
@@ -164,7 +199,7 @@ pub fn rows(inputs: &TableInputs, s: &Sizes) -> Vec<Check> {
     }
     vec![
         Check::builder(
-            "2c.tight",
+            format!("2c.tight{}", noise.suffix()),
             RESULT,
             "a tight instance of eq. (3.60*)",
             Role::Corrected,
@@ -194,7 +229,7 @@ mod tests {
     #[test]
     fn the_tight_row_holds_and_a_halved_bound_turns_it() {
         let s = Sizes::quick();
-        let rows = rows(&TableInputs::thesis(), &s);
+        let rows = rows(&TableInputs::thesis(), &s, Noise::Any);
         for r in &rows {
             println!(
                 "{} {:?} {:?}: {}\n  {}",
@@ -213,7 +248,7 @@ mod tests {
             },
             ..TableInputs::thesis()
         };
-        let turned = super::rows(&wrong, &s);
+        let turned = super::rows(&wrong, &s, Noise::Any);
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 }
