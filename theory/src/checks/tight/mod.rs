@@ -15,9 +15,19 @@
 //! * the bound is evaluated through the [`TableInputs`] the rows are given (formulas and
 //!   constants), and every gradient estimate of the runs is read through it too.
 //!
-//! Rows: `1.tight`, `1.tight.ctl` ([`sgd`]) and `2c.tight`, `2c.tight.ctl` ([`storm`]). The
-//! control states B/2 on the same instance and must be refuted; it is a meaningful control only
-//! because X̄/B ≥ ½ there, which the row reports.
+//! Rows: `1.tight`, `1.tight.ctl` ([`sgd`]) and `2c.tight`, `2c.tight.ctl` ([`storm`]) over every
+//! instance of the family, where the largest X̄/B is reached by noiseless instances (T = 2 and a
+//! deterministic start: the estimate is ∇F itself, σ² = 0, so the rows test the smoothness part of
+//! the bounds); then `1.tight.noisy` and `2c.tight.noisy` over the instances whose estimate is
+//! noisy, run for K ≥ 2 steps, so that the oracle's noise moves the iterates and σ² enters B
+//! ([`search::Noise`]). A control states B/2 on the same instance and must be refuted; it is a
+//! meaningful control only where X̄/B ≥ ½, so a noisy row states one only where that was reached
+//! (the row reports X̄/B either way).
+//!
+//! What the bounds' constants mean for these rows: in eq. 3.27, L enters B only through Lησ² and
+//! the step condition η ≤ 1/L, so on a noiseless instance a wrong L_F can only break the step
+//! condition (the row is then inconclusive), while a wrong B_F or a dropped factor of the
+//! formula moves B itself.
 
 pub mod instance;
 pub mod paths;
@@ -160,6 +170,26 @@ mod tests {
         for id in ["1.tight", "1.tight.noisy"] {
             let r = turned.iter().find(|r| r.id == id).expect("the row");
             assert_eq!(r.verdict, Verdict::Fails, "{id}: {}", r.details);
+        }
+    }
+
+    /// B_F halved (a certified constant understated by 2) turns both noiseless rows: there B is
+    /// proportional to B_F.
+    #[test]
+    fn a_halved_b_f_turns_the_noiseless_rows() {
+        let wrong = TableInputs {
+            constant_scale: Some((
+                crate::inputs::ConstantKind::BF,
+                ilopt::scalar::parse_exact("1/2").expect("a ratio"),
+            )),
+            ..TableInputs::thesis()
+        };
+        let s = Sizes::quick();
+        let turned = sgd::rows(&wrong, &s, Noise::Any)
+            .into_iter()
+            .chain(storm::rows(&wrong, &s, Noise::Any));
+        for r in turned.filter(|r| r.role != Role::NegativeControl) {
+            assert_eq!(r.verdict, Verdict::Fails, "{}: {}", r.id, r.details);
         }
     }
 }
