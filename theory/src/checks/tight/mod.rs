@@ -173,6 +173,29 @@ mod tests {
         }
     }
 
+    /// The full size: the same verdicts (run with `--ignored`; it prints the rows and the time).
+    #[test]
+    #[ignore = "the full profile's search and certificates take a while"]
+    fn the_full_rows_hold_and_their_controls_are_refuted() {
+        let start = std::time::Instant::now();
+        let all = rows(&TableInputs::thesis(), Sizes::full());
+        for r in &all {
+            println!(
+                "{} {:?} X̄/B = {:?}\n  {}",
+                r.id, r.verdict, r.tightness, r.details
+            );
+        }
+        println!("{:.1} s", start.elapsed().as_secs_f64());
+        for r in &all {
+            let want = if r.role == Role::NegativeControl {
+                Verdict::Fails
+            } else {
+                Verdict::Holds
+            };
+            assert_eq!(r.verdict, want, "{}: {}", r.id, r.details);
+        }
+    }
+
     /// B_F halved (a certified constant understated by 2) turns both noiseless rows: there B is
     /// proportional to B_F.
     #[test]

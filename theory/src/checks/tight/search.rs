@@ -24,8 +24,16 @@ use ilopt::toy::{ToyMdp, ToyProblem};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
-/// Grid points per coordinate of the hull at which the constants are estimated.
+/// Fewest grid points per coordinate of the hull at which the constants are estimated.
 pub const GRID: usize = 33;
+/// Largest spacing of the grid on which L_F and σ² are estimated (finer on wide hulls, so that
+/// a narrow peak of |F″| is not stepped over).
+pub const SPACING: f64 = 1.0 / 64.0;
+/// Largest spacing of the grid of pairs on which L̃ is estimated.
+pub const PAIR_SPACING: f64 = 1.0 / 8.0;
+/// Widest hull a candidate may have: tight instances move little, and a wide hull would need a
+/// fine grid (and the certificates many boxes) for little gain.
+pub const MAX_WIDTH: f64 = 4.0;
 /// The estimated constants must satisfy a step condition with this relative margin, so that the
 /// certified ones (slightly larger) usually still do.
 pub const MARGIN: f64 = 1.03;
@@ -101,8 +109,10 @@ pub struct Budget {
     pub max_paths: u64,
 }
 
-/// `n` evenly spaced points of `[lo, hi]` (both ends included).
-fn grid(h: [f64; 2], n: usize) -> Vec<f64> {
+/// Evenly spaced points of `[lo, hi]` (both ends included): at least `n`, and at most `spacing`
+/// apart.
+fn grid(h: [f64; 2], n: usize, spacing: f64) -> Vec<f64> {
+    let n = n.max(((h[1] - h[0]) / spacing).ceil() as usize + 1);
     (0..n)
         .map(|i| h[0] + (h[1] - h[0]) * i as f64 / (n - 1) as f64)
         .collect()
@@ -175,7 +185,11 @@ pub fn evaluate(
         Algorithm::Storm => storm_mean(&mdp, &theta1, &c.step, inst.k, &inputs, max_paths),
     }
     .ok()?;
-    let pts = grid(run.hull[0], GRID);
+    let width = run.hull[0][1] - run.hull[0][0];
+    if width.is_nan() || width > MAX_WIDTH {
+        return None;
+    }
+    let pts = grid(run.hull[0], GRID, SPACING);
     let l_f = l_f_estimate(&mdp, &pts).ok()?;
     let sigma2 = variance_estimate(&mdp, &pts).ok()?;
     if noise == Noise::Required && sigma2 <= 1e-9 {
@@ -192,7 +206,7 @@ pub fn evaluate(
             sgd_constant(l_f, c.step, sigma2, b_f, inst.k)
         }
         Algorithm::Storm => {
-            let coarse = grid(run.hull[0], GRID.div_ceil(4));
+            let coarse = grid(run.hull[0], GRID.div_ceil(4), PAIR_SPACING);
             let l = l_f.max(l_tilde_estimate(&mdp, &coarse).ok()?);
             if l * MARGIN > c.step {
                 return None;
@@ -245,7 +259,11 @@ fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate>
         k,
     };
     let t = Scalar::to_f64(&instance.theta1);
-    let l = l_f_estimate(&instance.mdp().ok()?, &grid([t - 1.0, t + 1.0], GRID)).ok()?;
+    let l = l_f_estimate(
+        &instance.mdp().ok()?,
+        &grid([t - 1.0, t + 1.0], GRID, SPACING),
+    )
+    .ok()?;
     let step = match algorithm {
         Algorithm::Sgd => dyadic(rng.random_range(0.2..1.0) / l),
         Algorithm::Storm => dyadic(rng.random_range(1.0..2.5) * l),
