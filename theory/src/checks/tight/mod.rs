@@ -56,12 +56,12 @@ pub struct Sizes {
 }
 
 impl Sizes {
-    /// The quick profile: 200 random candidates and 100 refinements per algorithm (seed 1), at
+    /// The quick profile: 400 random candidates and 400 pattern-search evaluations per algorithm (seed 1), at
     /// most 1,296 paths (6⁴) per candidate.
     pub fn quick() -> Self {
         let b = Budget {
-            random: 200,
-            refine: 100,
+            random: 400,
+            refine: 400,
             seed: 1,
             max_paths: 1296,
         };
@@ -70,11 +70,11 @@ impl Sizes {
             storm: b,
             tol: 1e-4,
             max_boxes: 4000,
-            tries: 4,
+            tries: 8,
         }
     }
 
-    /// The full profile: 1,000 random candidates and 500 refinements per algorithm (seed 1).
+    /// The full profile: 1,000 random candidates and 500 pattern-search evaluations per algorithm (seed 1).
     pub fn full() -> Self {
         let b = Budget {
             random: 1000,
@@ -87,7 +87,7 @@ impl Sizes {
             storm: b,
             tol: 1e-5,
             max_boxes: 20_000,
-            tries: 4,
+            tries: 8,
         }
     }
 

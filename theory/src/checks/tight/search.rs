@@ -1,8 +1,9 @@
 //! The search for tight instances: a seeded random search over the M family with P2' (the
 //! MDP's μ_A, p₀, p₁, T, the softmax's c, the start θ₁, the horizon K and the step), followed by
-//! a local refinement of the best point, maximising X̄/B.
+//! a pattern search from the best points, maximising X̄/B.
 //!
-//! Each candidate is evaluated in `f64`: X̄ = E X over every path of the run ([`super::paths`]),
+//! Each candidate is evaluated in `f64` (STORM's in intervals, as its row runs it, so that a run
+//! whose enclosure blows up is passed over): X̄ = E X over every path of the run ([`super::paths`]),
 //! and B from constants **estimated** on the hull of the iterates (the largest value on a grid of
 //! [`GRID`] points, pairs of points for L̃), with B_F = F(θ₁) (F ≥ 0). The estimates only rank
 //! candidates: the rows certify the constants of the instance they report
@@ -14,12 +15,12 @@
 //! tight::search -- --nocapture` prints the quick budget's best instances.
 
 use super::instance::{Instance, exact};
-use super::paths::{sgd_mean, storm_mean};
+use super::paths::{PathMean, sgd_mean, storm_mean};
 use crate::bounds::{sgd_constant, storm_fixed};
 use crate::inputs::TableInputs;
 use ilopt::exact::enumerate::{moments, prefixes};
 use ilopt::exact::forward::forward;
-use ilopt::scalar::{BigRational, Dual, Scalar};
+use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -101,7 +102,7 @@ pub struct Estimate {
 pub struct Budget {
     /// Random candidates.
     pub random: usize,
-    /// Refinement candidates (neighbours of the best so far).
+    /// Pattern-search evaluations, split over the [`STARTS`] best random candidates.
     pub refine: usize,
     /// RNG seed.
     pub seed: u64,
@@ -181,10 +182,31 @@ pub fn evaluate(
     let theta1 = [Scalar::to_f64(&inst.theta1)];
     let inputs = TableInputs::thesis();
     let run = match algorithm {
-        Algorithm::Sgd => sgd_mean(&mdp, &theta1, &c.step, inst.k, &inputs, max_paths),
-        Algorithm::Storm => storm_mean(&mdp, &theta1, &c.step, inst.k, &inputs, max_paths),
-    }
-    .ok()?;
+        Algorithm::Sgd => sgd_mean(&mdp, &theta1, &c.step, inst.k, &inputs, max_paths).ok()?,
+        Algorithm::Storm => {
+            // In intervals, as the row will run it: a long run whose enclosure grows useless
+            // (interval arithmetic's wrapping) is passed over here rather than at certification.
+            let iv = |x: f64| Interval::try_from((x, x)).ok();
+            let run = storm_mean(
+                &mdp,
+                &[iv(theta1[0])?],
+                &iv(c.step)?,
+                inst.k,
+                &inputs,
+                max_paths,
+            )
+            .ok()?;
+            let width = run.mean.wid();
+            if width.is_nan() || width > 1e-9 * run.mean.mid().abs() {
+                return None;
+            }
+            PathMean {
+                mean: run.mean.mid(),
+                hull: run.hull,
+                paths: run.paths,
+            }
+        }
+    };
     let width = run.hull[0][1] - run.hull[0][0];
     if width.is_nan() || width > MAX_WIDTH {
         return None;
@@ -229,7 +251,7 @@ pub fn evaluate(
 const PROBS: [(i64, i64); 5] = [(0, 1), (1, 4), (1, 2), (3, 4), (1, 1)];
 const CS: [(i64, i64); 7] = [(1, 100), (1, 50), (1, 20), (1, 10), (1, 5), (1, 2), (1, 1)];
 const SGD_KS: [u64; 4] = [1, 2, 3, 4];
-const STORM_KS: [u64; 9] = [1, 2, 4, 8, 16, 24, 40, 64, 100];
+const STORM_KS: [u64; 8] = [1, 2, 4, 8, 16, 24, 40, 64];
 
 fn ratio(rng: &mut StdRng, set: &[(i64, i64)]) -> BigRational {
     let (n, d) = set[rng.random_range(0..set.len())];
@@ -271,30 +293,65 @@ fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate>
     Some(Candidate { instance, step })
 }
 
-/// A neighbour of `c`: θ₁ moved by up to `scale`, the step scaled by up to (1 ± scale/4), and
-/// now and then K moved by one.
-fn neighbour(algorithm: Algorithm, c: &Candidate, rng: &mut StdRng, scale: f64) -> Candidate {
-    let mut n = c.clone();
-    let t = Scalar::to_f64(&c.instance.theta1) + scale * rng.random_range(-1.0..1.0);
-    n.instance.theta1 = exact(dyadic(t.abs()) * t.signum());
-    n.step = dyadic(c.step * (1.0 + scale / 4.0 * rng.random_range(-1.0..1.0)));
-    if rng.random_bool(0.2) {
-        let ks: &[u64] = match algorithm {
-            Algorithm::Sgd => &SGD_KS,
-            Algorithm::Storm => &STORM_KS,
-        };
-        n.instance.k = ks[rng.random_range(0..ks.len())];
+/// Index of `x` in `set` (the nearest entry), for moving to an adjacent one.
+fn position(set: &[(i64, i64)], x: &BigRational) -> usize {
+    let v = Scalar::to_f64(x);
+    (0..set.len())
+        .min_by(|a, b| {
+            let d = |i: usize| (set[i].0 as f64 / set[i].1 as f64 - v).abs();
+            d(*a).total_cmp(&d(*b))
+        })
+        .unwrap_or(0)
+}
+
+/// The moves of the pattern search from `c` at scale `h`: θ₁ ± h, the step × (1 ± h/4), and the
+/// adjacent K and c of their lists.
+fn moves(algorithm: Algorithm, c: &Candidate, h: f64) -> Vec<Candidate> {
+    let mut out = vec![];
+    let t = Scalar::to_f64(&c.instance.theta1);
+    for dt in [-h, h] {
+        let mut n = c.clone();
+        let x = t + dt;
+        n.instance.theta1 = exact(dyadic(x.abs()) * x.signum());
+        out.push(n);
     }
-    n
+    for f in [1.0 - h / 4.0, 1.0 + h / 4.0] {
+        let mut n = c.clone();
+        n.step = dyadic(c.step * f);
+        out.push(n);
+    }
+    let ks: &[u64] = match algorithm {
+        Algorithm::Sgd => &SGD_KS,
+        Algorithm::Storm => &STORM_KS,
+    };
+    if let Some(i) = ks.iter().position(|k| *k == c.instance.k) {
+        for j in [i.wrapping_sub(1), i + 1] {
+            if let Some(k) = ks.get(j) {
+                let mut n = c.clone();
+                n.instance.k = *k;
+                out.push(n);
+            }
+        }
+    }
+    let i = position(&CS, &c.instance.c);
+    for j in [i.wrapping_sub(1), i + 1] {
+        if let Some((num, den)) = CS.get(j) {
+            let mut n = c.clone();
+            n.instance.c = BigRational::from_ratio(*num, *den);
+            out.push(n);
+        }
+    }
+    out
 }
 
 /// Starting points of the refinement: the best distinct random candidates.
 pub const STARTS: usize = 4;
 
-/// The search (module docs) over the instances `noise` admits: `budget.random` random candidates, then `budget.refine` neighbours,
-/// split evenly over the [`STARTS`] best random candidates, each a hill climb at a shrinking
-/// scale. Returns every feasible candidate evaluated, best first (ties in the order of
-/// evaluation).
+/// The search (module docs) over the instances `noise` admits: `budget.random` random
+/// candidates, then a pattern search from each of the [`STARTS`] best of them, `budget.refine`
+/// evaluations in all: at scale h (from ½) every move of [`moves`] is tried, the best improving
+/// one is taken, and h is halved when none improves (down to 2⁻¹⁰). Returns every feasible
+/// distinct candidate evaluated, best first (ties in the order of evaluation).
 pub fn search(algorithm: Algorithm, noise: Noise, budget: Budget) -> Vec<Estimate> {
     let mut rng = StdRng::seed_from_u64(budget.seed);
     let mut found: Vec<Estimate> = vec![];
@@ -305,21 +362,32 @@ pub fn search(algorithm: Algorithm, noise: Noise, budget: Budget) -> Vec<Estimat
     }
     found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
     let starts: Vec<Estimate> = found.iter().take(STARTS).cloned().collect();
-    let steps = budget.refine / STARTS.max(1);
+    let per_start = budget.refine / STARTS.max(1);
     for start in starts {
-        let mut best = start;
-        for i in 0..steps {
-            let scale = 0.5 * (1.0 - i as f64 / steps as f64) + 1.0 / 64.0;
-            let c = neighbour(algorithm, &best.candidate, &mut rng, scale);
-            if let Some(e) = evaluate(algorithm, noise, &c, budget.max_paths) {
-                if e.ratio > best.ratio {
-                    best = e.clone();
+        let (mut best, mut h, mut spent) = (start, 0.5f64, 0usize);
+        while spent < per_start && h >= 1.0 / 1024.0 {
+            let mut improved = None::<Estimate>;
+            for c in moves(algorithm, &best.candidate, h) {
+                if spent >= per_start {
+                    break;
                 }
-                found.push(e);
+                spent += 1;
+                if let Some(e) = evaluate(algorithm, noise, &c, budget.max_paths) {
+                    if e.ratio > improved.as_ref().map_or(best.ratio, |i| i.ratio) {
+                        improved = Some(e.clone());
+                    }
+                    found.push(e);
+                }
+            }
+            match improved {
+                Some(e) => best = e,
+                None => h /= 2.0,
             }
         }
     }
     found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
+    // A candidate the pattern search revisited appears once (its copies are adjacent: equal ratio).
+    found.dedup_by(|a, b| a.candidate == b.candidate);
     found
 }
 

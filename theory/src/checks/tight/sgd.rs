@@ -138,8 +138,12 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
 /// The search's budget and seed, as the rows print them.
 pub(super) fn search_text(b: &super::search::Budget) -> String {
     format!(
-        "seeded random search, seed {}, {} random candidates then {} refinements, at most {} paths each",
-        b.seed, b.random, b.refine, b.max_paths
+        "seeded random search, seed {}, {} random candidates, then {} pattern-search evaluations from the best {}, at most {} paths each",
+        b.seed,
+        b.random,
+        b.refine,
+        super::search::STARTS,
+        b.max_paths
     )
 }
 

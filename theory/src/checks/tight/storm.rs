@@ -68,7 +68,8 @@ pub fn certify(e: &Estimate, inputs: &TableInputs, s: &Sizes) -> Result<Certifie
             inst.k,
             inputs,
             s.storm.max_paths,
-        )?;
+        )
+        .map_err(|m| format!("{}, L = {l_s}: {m}", inst.describe()))?;
         let lf = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
         let lt = l_tilde(&mdp, run.hull[0], s.tol, s.max_boxes).map_err(|e| e.to_string())?;
         let need = lf.value.max(lt.value);
