@@ -39,6 +39,9 @@ pub const MAX_WIDTH: f64 = 4.0;
 /// certified ones (slightly larger) usually still do.
 pub const MARGIN: f64 = 1.03;
 
+/// The least share of B that the σ² term must have on an instance [`Noise::Required`] admits.
+pub const NOISE_SHARE: f64 = 0.1;
+
 /// The algorithm whose bound a search maximises X̄/B for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Algorithm {
@@ -54,8 +57,9 @@ pub enum Noise {
     /// Every instance (the largest X̄/B is reached by deterministic ones, σ² = 0: the estimate is
     /// ∇F itself).
     Any,
-    /// Only instances whose estimate is noisy (estimated σ² > 0 on the hull) run for K ≥ 2
-    /// steps, so that the oracle's noise moves the iterates X̄ averages over and σ² enters B.
+    /// Only instances whose estimate is noisy, run for K ≥ 2 steps: the σ² term is at least
+    /// [`NOISE_SHARE`] of B (estimated constants), and the oracle's noise moves the iterates X̄
+    /// averages over.
     Required,
 }
 
@@ -214,18 +218,17 @@ pub fn evaluate(
     let pts = grid(run.hull[0], GRID, SPACING);
     let l_f = l_f_estimate(&mdp, &pts).ok()?;
     let sigma2 = variance_estimate(&mdp, &pts).ok()?;
-    if noise == Noise::Required && sigma2 <= 1e-9 {
-        return None;
-    }
     let b_f = forward(&ToyProblem::<f64>::new(&mdp), &theta1)
         .ok()?
         .objective;
-    let bound = match algorithm {
+    // B, and B with σ² = 0 (the step condition checked first).
+    let (bound, noiseless) = match algorithm {
         Algorithm::Sgd => {
             if c.step * l_f * MARGIN > 1.0 {
                 return None;
             }
-            sgd_constant(l_f, c.step, sigma2, b_f, inst.k)
+            let b = |s2: f64| sgd_constant(l_f, c.step, s2, b_f, inst.k);
+            (b(sigma2), b(0.0))
         }
         Algorithm::Storm => {
             let coarse = grid(run.hull[0], GRID.div_ceil(4), PAIR_SPACING);
@@ -233,9 +236,14 @@ pub fn evaluate(
             if l * MARGIN > c.step {
                 return None;
             }
-            storm_fixed(c.step, sigma2, b_f, inst.k)
+            let b = |s2: f64| storm_fixed(c.step, s2, b_f, inst.k);
+            (b(sigma2), b(0.0))
         }
     };
+    let share = (bound - noiseless) / bound;
+    if noise == Noise::Required && (share.is_nan() || share < NOISE_SHARE) {
+        return None;
+    }
     let ratio = run.mean / bound;
     ratio.is_finite().then(|| Estimate {
         candidate: c.clone(),

@@ -125,8 +125,9 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
         .measured(Measured::exact(x))
         .tightness(x / (bound * scale))
         .details(format!(
-            "X̄ = E X exactly in ℚ over all {} paths (X̄ = {x:.6}), B = {bound:.6}, X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); Lη = {:.4} ≤ 1",
+            "X̄ = E X exactly in ℚ over all {} paths (X̄ = {x:.6}), B = {bound:.6} (L_F = {l_f:.5}, σ² = {s2:.5}, B_F = {b_f:.5}, σ² term {:.1} % of B), X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); Lη = {:.4} ≤ 1",
             c.paths,
+            100.0 * l_f * eta * s2 / bound,
             x / bound,
             search_text(&s.sgd),
             c.estimate.ratio,

@@ -158,10 +158,11 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
         .measured(Measured::exact(x).with_interval(c.x_bar.inf(), c.x_bar.sup()))
         .tightness(x / (bound * scale))
         .details(format!(
-            "X̄ = E X enclosed in intervals over all {} paths, X̄ ∈ [{:.8}, {:.8}], B = {bound:.6}, X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); max(L_F, L̃) = {:.4} ≤ L",
+            "X̄ = E X enclosed in intervals over all {} paths, X̄ ∈ [{:.8}, {:.8}], B = {bound:.6} (σ² = {s2:.5}, B_F = {b_f:.5}, σ² term {:.1} % of B), X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); max(L_F, L̃) = {:.4} ≤ L",
             c.paths,
             c.x_bar.inf(),
             c.x_bar.sup(),
+            100.0 * (1.0 - (inputs.formulas.storm_fixed)(l, 0.0, b_f, inst.k) / bound),
             x / bound,
             search_text(&s.storm),
             c.estimate.ratio,
