@@ -17,8 +17,8 @@
 //!
 //! Rows: `1.tight`, `1.tight.ctl` ([`sgd`]) and `2c.tight`, `2c.tight.ctl` ([`storm`]) over every
 //! instance of the family, where the largest X̄/B is reached by noiseless instances (T = 2 and a
-//! deterministic start: the estimate is ∇F itself, σ² = 0, so the rows test the smoothness part of
-//! the bounds); then `1.tight.noisy` and `2c.tight.noisy` over the instances whose estimate is
+//! deterministic start: the estimate is ∇F itself and Var g ≡ 0, the certified σ² being only the
+//! enclosure's slack, so the rows test the smoothness part of the bounds); then `1.tight.noisy` and `2c.tight.noisy` over the instances whose estimate is
 //! noisy, run for K ≥ 2 steps, so that the oracle's noise moves the iterates and σ² enters B
 //! ([`search::Noise`]). A control states B/2 on the same instance and must be refuted; it is a
 //! meaningful control only where X̄/B ≥ ½, so a noisy row states one only where that was reached

@@ -54,8 +54,8 @@ pub enum Algorithm {
 /// Which instances a search admits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Noise {
-    /// Every instance (the largest X̄/B is reached by deterministic ones, σ² = 0: the estimate is
-    /// ∇F itself).
+    /// Every instance (the largest X̄/B is reached by noiseless ones, where the estimate is ∇F
+    /// itself and Var g ≡ 0).
     Any,
     /// Only instances whose estimate is noisy, run for K ≥ 2 steps: the σ² term is at least
     /// [`NOISE_SHARE`] of B (estimated constants), and the oracle's noise moves the iterates X̄
