@@ -17,6 +17,7 @@ pub mod second_toy;
 pub mod statistical;
 pub mod storm;
 pub mod thm31;
+pub mod tight;
 pub mod tracking;
 pub mod unbiased;
 pub mod unchecked;

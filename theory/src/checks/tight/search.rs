@@ -1,0 +1,435 @@
+//! The search for tight instances: a seeded random search over the M family with P2' (the
+//! MDP's μ_A, p₀, p₁, T, the softmax's c, the start θ₁, the horizon K and the step), followed by
+//! a pattern search from the best points, maximising X̄/B.
+//!
+//! Each candidate is evaluated in `f64` (STORM's in intervals, as its row runs it, so that a run
+//! whose enclosure blows up is passed over): X̄ = E X over every path of the run ([`super::paths`]),
+//! and B from constants **estimated** on the hull of the iterates (the largest value on a grid of
+//! [`GRID`] points, pairs of points for L̃), with B_F = F(θ₁) (F ≥ 0). The estimates only rank
+//! candidates: the rows certify the constants of the instance they report
+//! ([`crate::certify::box_constants`]) and recompute X̄ exactly, so a candidate whose certified
+//! constants break its step condition is passed over for the next one.
+//!
+//! The search is a function of its [`Budget`] alone (the seed included), so the rows re-run it
+//! each time and any reader can reproduce it: `cargo test --release -p ilopt-theory --lib
+//! tight::search -- --nocapture` prints the quick budget's best instances.
+
+use super::instance::{Instance, exact};
+use super::paths::{PathMean, sgd_mean, storm_mean};
+use crate::bounds::{sgd_constant, storm_fixed};
+use crate::inputs::TableInputs;
+use ilopt::exact::enumerate::{moments, prefixes};
+use ilopt::exact::forward::forward;
+use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
+use ilopt::toy::{ToyMdp, ToyProblem};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+
+/// Fewest grid points per coordinate of the hull at which the constants are estimated.
+pub const GRID: usize = 33;
+/// Largest spacing of the grid on which L_F and σ² are estimated (finer on wide hulls, so that
+/// a narrow peak of |F″| is not stepped over).
+pub const SPACING: f64 = 1.0 / 64.0;
+/// Largest spacing of the grid of pairs on which L̃ is estimated.
+pub const PAIR_SPACING: f64 = 1.0 / 8.0;
+/// Widest hull a candidate may have: tight instances move little, and a wide hull would need a
+/// fine grid (and the certificates many boxes) for little gain.
+pub const MAX_WIDTH: f64 = 4.0;
+/// The estimated constants must satisfy a step condition with this relative margin, so that the
+/// certified ones (slightly larger) usually still do.
+pub const MARGIN: f64 = 1.03;
+
+/// The least share of B that the σ² term must have on an instance [`Noise::Required`] admits.
+pub const NOISE_SHARE: f64 = 0.1;
+
+/// The algorithm whose bound a search maximises X̄/B for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Algorithm {
+    /// SGD with constant η, eq. 3.27; the step is η.
+    Sgd,
+    /// IS-STORM with schedule (3.43), eq. (3.60\*); the step parameter is the schedule's L.
+    Storm,
+}
+
+/// Which instances a search admits.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Noise {
+    /// Every instance (the largest X̄/B is reached by noiseless ones, where the estimate is ∇F
+    /// itself and Var g ≡ 0).
+    Any,
+    /// Only instances whose estimate is noisy, run for K ≥ 2 steps: the σ² term is at least
+    /// [`NOISE_SHARE`] of B (estimated constants), and the oracle's noise moves the iterates X̄
+    /// averages over.
+    Required,
+}
+
+impl Noise {
+    /// The suffix of the rows' ids: "" or ".noisy".
+    pub fn suffix(self) -> &'static str {
+        match self {
+            Noise::Any => "",
+            Noise::Required => ".noisy",
+        }
+    }
+}
+
+/// A candidate: an instance and its step parameter (η for SGD, L of (3.43) for STORM).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// The instance.
+    pub instance: Instance,
+    /// η (SGD) or L (STORM), a dyadic rational stored as `f64`.
+    pub step: f64,
+}
+
+/// A candidate's estimated X̄/B.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// The candidate.
+    pub candidate: Candidate,
+    /// X̄ (over every path, in `f64`).
+    pub x_bar: f64,
+    /// B with the estimated constants.
+    pub bound: f64,
+    /// X̄/B.
+    pub ratio: f64,
+    /// The hull of the iterates.
+    pub hull: Vec<[f64; 2]>,
+    /// Number of paths.
+    pub paths: u64,
+    /// The estimated σ² on the hull.
+    pub sigma2: f64,
+}
+
+/// The search's size and seed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Budget {
+    /// Random candidates.
+    pub random: usize,
+    /// Pattern-search evaluations, split over the [`STARTS`] best random candidates.
+    pub refine: usize,
+    /// RNG seed.
+    pub seed: u64,
+    /// Largest number of paths a candidate may have.
+    pub max_paths: u64,
+}
+
+/// Evenly spaced points of `[lo, hi]` (both ends included): at least `n`, and at most `spacing`
+/// apart.
+fn grid(h: [f64; 2], n: usize, spacing: f64) -> Vec<f64> {
+    let n = n.max(((h[1] - h[0]) / spacing).ceil() as usize + 1);
+    (0..n)
+        .map(|i| h[0] + (h[1] - h[0]) * i as f64 / (n - 1) as f64)
+        .collect()
+}
+
+/// max |F″| on the grid (X2 in second-order duals).
+fn l_f_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+    let p = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
+    let mut m = 0.0f64;
+    for &x in pts {
+        let v = Dual::variable(Dual::variable(x, 0, 1), 0, 1);
+        let obj = forward(&p, &[v]).map_err(|e| e.to_string())?.objective;
+        m = m.max(obj.gradient_padded(1)[0].gradient_padded(1)[0].abs());
+    }
+    Ok(m)
+}
+
+/// max Var g on the grid (X1).
+fn variance_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+    let p = ToyProblem::<f64>::new(mdp);
+    let mut m = 0.0f64;
+    for &x in pts {
+        m = m.max(moments(&p, &[x]).map_err(|e| e.to_string())?.variance);
+    }
+    Ok(m)
+}
+
+/// √(½ max |∂²V_IS/∂θ′²|) over pairs of grid points: the Taylor bound of (A4) that
+/// [`crate::certify::box_constants::l_tilde`] certifies, estimated.
+fn l_tilde_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+    let pf = ToyProblem::<f64>::new(mdp);
+    let pd = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
+    let mut m = 0.0f64;
+    for &x in pts {
+        let at = prefixes(&pf, &[x]).map_err(|e| e.to_string())?;
+        for &y in pts {
+            let v = Dual::variable(Dual::variable(y, 0, 1), 0, 1);
+            let at_prime = prefixes(&pd, &[v]).map_err(|e| e.to_string())?;
+            let lift = |x: f64| Dual::constant(Dual::constant(x));
+            let mut total = Dual::<Dual<f64>>::zero();
+            for (a, b) in at.iter().zip(&at_prime) {
+                let (p, g) = (lift(a.prob), lift(a.estimate[0]));
+                let (pp, gp) = (&b.prob, &b.estimate[0]);
+                total += pp.clone() * gp * gp - Dual::from_i64(2) * &p * gp * &g
+                    + p.clone() * &p / pp * &g * &g;
+            }
+            m = m.max(total.gradient_padded(1)[0].gradient_padded(1)[0].abs());
+        }
+    }
+    Ok((m / 2.0).sqrt())
+}
+
+/// Evaluate a candidate (module docs); `None` if its step condition fails with the estimated
+/// constants, or it cannot be evaluated (too many paths, a table that cannot be built).
+pub fn evaluate(
+    algorithm: Algorithm,
+    noise: Noise,
+    c: &Candidate,
+    max_paths: u64,
+) -> Option<Estimate> {
+    let inst = &c.instance;
+    if noise == Noise::Required && inst.k < 2 {
+        return None;
+    }
+    let mdp = inst.mdp().ok()?;
+    let theta1 = [Scalar::to_f64(&inst.theta1)];
+    let inputs = TableInputs::thesis();
+    let run = match algorithm {
+        Algorithm::Sgd => sgd_mean(&mdp, &theta1, &c.step, inst.k, &inputs, max_paths).ok()?,
+        Algorithm::Storm => {
+            // In intervals, as the row will run it: a long run whose enclosure grows useless
+            // (interval arithmetic's wrapping) is passed over here rather than at certification.
+            let iv = |x: f64| Interval::try_from((x, x)).ok();
+            let run = storm_mean(
+                &mdp,
+                &[iv(theta1[0])?],
+                &iv(c.step)?,
+                inst.k,
+                &inputs,
+                max_paths,
+            )
+            .ok()?;
+            let width = run.mean.wid();
+            if width.is_nan() || width > 1e-9 * run.mean.mid().abs() {
+                return None;
+            }
+            PathMean {
+                mean: run.mean.mid(),
+                hull: run.hull,
+                paths: run.paths,
+            }
+        }
+    };
+    let width = run.hull[0][1] - run.hull[0][0];
+    if width.is_nan() || width > MAX_WIDTH {
+        return None;
+    }
+    let pts = grid(run.hull[0], GRID, SPACING);
+    let l_f = l_f_estimate(&mdp, &pts).ok()?;
+    let sigma2 = variance_estimate(&mdp, &pts).ok()?;
+    let b_f = forward(&ToyProblem::<f64>::new(&mdp), &theta1)
+        .ok()?
+        .objective;
+    // B, and B with σ² = 0 (the step condition checked first).
+    let (bound, noiseless) = match algorithm {
+        Algorithm::Sgd => {
+            if c.step * l_f * MARGIN > 1.0 {
+                return None;
+            }
+            let b = |s2: f64| sgd_constant(l_f, c.step, s2, b_f, inst.k);
+            (b(sigma2), b(0.0))
+        }
+        Algorithm::Storm => {
+            let coarse = grid(run.hull[0], GRID.div_ceil(4), PAIR_SPACING);
+            let l = l_f.max(l_tilde_estimate(&mdp, &coarse).ok()?);
+            if l * MARGIN > c.step {
+                return None;
+            }
+            let b = |s2: f64| storm_fixed(c.step, s2, b_f, inst.k);
+            (b(sigma2), b(0.0))
+        }
+    };
+    let share = (bound - noiseless) / bound;
+    if noise == Noise::Required && (share.is_nan() || share < NOISE_SHARE) {
+        return None;
+    }
+    let ratio = run.mean / bound;
+    ratio.is_finite().then(|| Estimate {
+        candidate: c.clone(),
+        x_bar: run.mean,
+        bound,
+        ratio,
+        hull: run.hull,
+        paths: run.paths,
+        sigma2,
+    })
+}
+
+const PROBS: [(i64, i64); 5] = [(0, 1), (1, 4), (1, 2), (3, 4), (1, 1)];
+const CS: [(i64, i64); 7] = [(1, 100), (1, 50), (1, 20), (1, 10), (1, 5), (1, 2), (1, 1)];
+const SGD_KS: [u64; 4] = [1, 2, 3, 4];
+const STORM_KS: [u64; 8] = [1, 2, 4, 8, 16, 24, 40, 64];
+
+fn ratio(rng: &mut StdRng, set: &[(i64, i64)]) -> BigRational {
+    let (n, d) = set[rng.random_range(0..set.len())];
+    BigRational::from_ratio(n, d)
+}
+
+/// Round to a multiple of 2⁻¹⁰ (a short dyadic rational), at least 2⁻¹⁰.
+fn dyadic(x: f64) -> f64 {
+    ((x * 1024.0).round() / 1024.0).max(1.0 / 1024.0)
+}
+
+/// A random candidate. The step is drawn relative to max |F″| on [θ₁ − 1, θ₁ + 1] (estimated on
+/// the grid), so that most draws satisfy their step condition: η = s/L̂ with s ∈ [1/5, 1] for SGD,
+/// the schedule's L = sL̂ with s ∈ [1, 5/2] for STORM.
+fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate> {
+    let k = match algorithm {
+        Algorithm::Sgd => SGD_KS[rng.random_range(0..SGD_KS.len())],
+        Algorithm::Storm => STORM_KS[rng.random_range(0..STORM_KS.len())],
+    };
+    let instance = Instance {
+        mu_a: ratio(rng, &PROBS),
+        p0: ratio(rng, &PROBS),
+        p1: ratio(rng, &PROBS),
+        horizon: rng.random_range(2..=3),
+        c: ratio(rng, &CS),
+        theta1: exact((rng.random_range(-64..=64) as f64) / 16.0),
+        k,
+    };
+    let t = Scalar::to_f64(&instance.theta1);
+    let l = l_f_estimate(
+        &instance.mdp().ok()?,
+        &grid([t - 1.0, t + 1.0], GRID, SPACING),
+    )
+    .ok()?;
+    let step = match algorithm {
+        Algorithm::Sgd => dyadic(rng.random_range(0.2..1.0) / l),
+        Algorithm::Storm => dyadic(rng.random_range(1.0..2.5) * l),
+    };
+    Some(Candidate { instance, step })
+}
+
+/// Index of `x` in `set` (the nearest entry), for moving to an adjacent one.
+fn position(set: &[(i64, i64)], x: &BigRational) -> usize {
+    let v = Scalar::to_f64(x);
+    (0..set.len())
+        .min_by(|a, b| {
+            let d = |i: usize| (set[i].0 as f64 / set[i].1 as f64 - v).abs();
+            d(*a).total_cmp(&d(*b))
+        })
+        .unwrap_or(0)
+}
+
+/// The moves of the pattern search from `c` at scale `h`: θ₁ ± h, the step × (1 ± h/4), and the
+/// adjacent K and c of their lists.
+fn moves(algorithm: Algorithm, c: &Candidate, h: f64) -> Vec<Candidate> {
+    let mut out = vec![];
+    let t = Scalar::to_f64(&c.instance.theta1);
+    for dt in [-h, h] {
+        let mut n = c.clone();
+        let x = t + dt;
+        n.instance.theta1 = exact(dyadic(x.abs()) * x.signum());
+        out.push(n);
+    }
+    for f in [1.0 - h / 4.0, 1.0 + h / 4.0] {
+        let mut n = c.clone();
+        n.step = dyadic(c.step * f);
+        out.push(n);
+    }
+    let ks: &[u64] = match algorithm {
+        Algorithm::Sgd => &SGD_KS,
+        Algorithm::Storm => &STORM_KS,
+    };
+    if let Some(i) = ks.iter().position(|k| *k == c.instance.k) {
+        for j in [i.wrapping_sub(1), i + 1] {
+            if let Some(k) = ks.get(j) {
+                let mut n = c.clone();
+                n.instance.k = *k;
+                out.push(n);
+            }
+        }
+    }
+    let i = position(&CS, &c.instance.c);
+    for j in [i.wrapping_sub(1), i + 1] {
+        if let Some((num, den)) = CS.get(j) {
+            let mut n = c.clone();
+            n.instance.c = BigRational::from_ratio(*num, *den);
+            out.push(n);
+        }
+    }
+    out
+}
+
+/// Starting points of the refinement: the best distinct random candidates.
+pub const STARTS: usize = 4;
+
+/// The search (module docs) over the instances `noise` admits: `budget.random` random
+/// candidates, then a pattern search from each of the [`STARTS`] best of them, `budget.refine`
+/// evaluations in all: at scale h (from ½) every move of [`moves`] is tried, the best improving
+/// one is taken, and h is halved when none improves (down to 2⁻¹⁰). Returns every feasible
+/// distinct candidate evaluated, best first (ties in the order of evaluation).
+pub fn search(algorithm: Algorithm, noise: Noise, budget: Budget) -> Vec<Estimate> {
+    let mut rng = StdRng::seed_from_u64(budget.seed);
+    let mut found: Vec<Estimate> = vec![];
+    for _ in 0..budget.random {
+        if let Some(c) = random_candidate(algorithm, &mut rng) {
+            found.extend(evaluate(algorithm, noise, &c, budget.max_paths));
+        }
+    }
+    found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
+    let starts: Vec<Estimate> = found.iter().take(STARTS).cloned().collect();
+    let per_start = budget.refine / STARTS.max(1);
+    for start in starts {
+        let (mut best, mut h, mut spent) = (start, 0.5f64, 0usize);
+        while spent < per_start && h >= 1.0 / 1024.0 {
+            let mut improved = None::<Estimate>;
+            for c in moves(algorithm, &best.candidate, h) {
+                if spent >= per_start {
+                    break;
+                }
+                spent += 1;
+                if let Some(e) = evaluate(algorithm, noise, &c, budget.max_paths) {
+                    if e.ratio > improved.as_ref().map_or(best.ratio, |i| i.ratio) {
+                        improved = Some(e.clone());
+                    }
+                    found.push(e);
+                }
+            }
+            match improved {
+                Some(e) => best = e,
+                None => h /= 2.0,
+            }
+        }
+    }
+    found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
+    // A candidate the pattern search revisited appears once (its copies are adjacent: equal ratio).
+    found.dedup_by(|a, b| a.candidate == b.candidate);
+    found
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quick budget's search, printed (the documented way to reproduce it).
+    #[test]
+    fn the_quick_search_finds_ratios_above_one_half() {
+        for (algorithm, noise) in [
+            (Algorithm::Sgd, Noise::Any),
+            (Algorithm::Storm, Noise::Any),
+            (Algorithm::Sgd, Noise::Required),
+            (Algorithm::Storm, Noise::Required),
+        ] {
+            let b = super::super::Sizes::quick().budget(algorithm);
+            let found = search(algorithm, noise, b);
+            for e in found.iter().take(3) {
+                println!(
+                    "{algorithm:?} {noise:?}: σ² ≈ {:.4}, ratio {:.4}, X̄ = {:.5}, B = {:.5}, step {}, {}, {} paths, hull {:?}",
+                    e.sigma2,
+                    e.ratio,
+                    e.x_bar,
+                    e.bound,
+                    e.candidate.step,
+                    e.candidate.instance.describe(),
+                    e.paths,
+                    e.hull
+                );
+            }
+            if noise == Noise::Any {
+                assert!(found[0].ratio > 0.5, "{algorithm:?}: {}", found[0].ratio);
+            }
+        }
+    }
+}
