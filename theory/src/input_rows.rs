@@ -6,7 +6,7 @@
 
 use crate::certify::box_constants::{ToyConstants, b_f};
 use crate::certify::global::GlobalConstants;
-use crate::checks::{attained, errata, proof_o2nc, proof_sgd};
+use crate::checks::{attained, errata, proof_o2nc, proof_sgd, tight};
 use crate::inputs::{ConstantKind, TableInputs};
 use crate::perturbation::{fixed_list, outcome, rows as perturbation_rows};
 use crate::protocol::Profile;
@@ -42,6 +42,7 @@ pub struct Certified {
 pub struct Runs {
     o2nc: proof_o2nc::Evaluated,
     sgd: proof_sgd::Evaluated,
+    tight: tight::Prepared,
 }
 
 impl Runs {
@@ -55,6 +56,7 @@ impl Runs {
         Ok(Runs {
             o2nc: proof_o2nc::evaluate(&inputs, &c.m1, runs)?,
             sgd: proof_sgd::evaluate(&inputs, &c.k, &c.domain, sgd_sizes())?,
+            tight: tight::prepare(&inputs, tight_sizes(c.profile)),
         })
     }
 }
@@ -66,6 +68,14 @@ const O2NC_SIZES: proof_o2nc::StepSizes = proof_o2nc::StepSizes::QUICK;
 /// The SGD proof-step rows' runs (the quick size in both profiles, as for O2NC).
 fn sgd_sizes() -> proof_sgd::Sizes {
     proof_sgd::sizes(false)
+}
+
+/// The tight instances' search and certification budget.
+fn tight_sizes(profile: Profile) -> tight::Sizes {
+    match profile {
+        Profile::Quick => tight::Sizes::quick(),
+        Profile::Full => tight::Sizes::full(),
+    }
 }
 
 /// Whether `inputs` changes what [`Runs`] holds: the oracle (every exact moment), or a constant
@@ -104,6 +114,11 @@ pub fn input_rows(c: &Certified, runs: &Runs, inputs: &TableInputs) -> Result<Ve
         proof_sgd::rows(inputs, &c.k, &c.domain, sgd_sizes())?
     } else {
         proof_sgd::rows_from(inputs, &c.k, &runs.sgd, sgd_sizes())?
+    });
+    rows.extend(if inputs.oracle_bias.is_some() {
+        tight::rows(inputs, tight_sizes(c.profile))
+    } else {
+        tight::rows_from(inputs, tight_sizes(c.profile), &runs.tight)
     });
     rows.extend(if changes_runs(inputs) {
         proof_o2nc::rows(inputs, &c.m1, &c.k, &c.domain, &O2NC_SIZES)?

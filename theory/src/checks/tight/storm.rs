@@ -171,49 +171,72 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
         .decided(Method::Rigorous, verdict)
 }
 
-/// Rows 2c.tight and 2c.tight.ctl (module docs), or one inconclusive row saying why no candidate
-/// could be certified.
-pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Vec<Check> {
+/// The search's candidates and the first one certified under an oracle: what the rows need that
+/// depends on the inputs only through the oracle ([`TableInputs::estimate`]), so that rows for
+/// other constants or formulas reuse it.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// Feasible candidates the search found.
+    pub found: usize,
+    /// The first candidate certified, if any.
+    pub certified: Option<Certified>,
+    /// Why the candidates before it were passed over.
+    pub passed_over: Vec<String>,
+}
+
+/// Search (seeded, [`search`]) and certify the best candidates in order until one passes.
+pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Prepared {
     let found = search(Algorithm::Storm, noise, s.storm);
     let mut passed_over = vec![];
     for e in found.iter().take(s.tries) {
         match certify(e, inputs, s) {
             Ok(c) => {
-                let main = row(&c, inputs, 1.0, s, noise);
-                // The B ÷ 2 control is stated where X̄/B ≥ ½ was reached; the search over every
-                // instance reaches it at every size the tests run, the noisy search need not.
-                let control = noise == Noise::Any || main.tightness.is_some_and(|t| t >= 0.5);
-                let mut rows = vec![main];
-                if control {
-                    rows.push(row(&c, inputs, 0.5, s, noise));
-                } else {
-                    rows[0].details += "; X̄/B < ½ here, so no B ÷ 2 control is stated";
-                }
-                if !passed_over.is_empty() {
-                    for r in &mut rows {
-                        r.details += &format!("; passed over: {}", passed_over.join("; "));
-                    }
-                }
-                return rows;
+                return Prepared {
+                    found: found.len(),
+                    certified: Some(c),
+                    passed_over,
+                };
             }
             Err(m) => passed_over.push(m),
         }
     }
-    vec![
-        Check::builder(
-            format!("2c.tight{}", noise.suffix()),
-            RESULT,
-            "a tight instance of eq. (3.60*)",
-            Role::Corrected,
-        )
-        .details(format!(
-            "no candidate certified ({} feasible found by the {}): {}",
-            found.len(),
-            search_text(&s.storm),
-            passed_over.join("; ")
-        ))
-        .decided(Method::Rigorous, Verdict::Inconclusive),
-    ]
+    Prepared {
+        found: found.len(),
+        certified: None,
+        passed_over,
+    }
+}
+
+/// Rows 2c.tight and 2c.tight.ctl (module docs) from [`prepare`]d candidates (made with the same
+/// oracle, sizes and noise), or one inconclusive row saying why no candidate could be certified.
+pub fn rows_from(inputs: &TableInputs, s: &Sizes, noise: Noise, p: &Prepared) -> Vec<Check> {
+    match &p.certified {
+        Some(c) => super::with_control(
+            |scale| row(c, inputs, scale, s, noise),
+            noise,
+            &p.passed_over,
+        ),
+        None => vec![
+            Check::builder(
+                format!("2c.tight{}", noise.suffix()),
+                RESULT,
+                "a tight instance of eq. (3.60*)",
+                Role::Corrected,
+            )
+            .details(format!(
+                "no candidate certified ({} feasible found by the {}): {}",
+                p.found,
+                search_text(&s.storm),
+                p.passed_over.join("; ")
+            ))
+            .decided(Method::Rigorous, Verdict::Inconclusive),
+        ],
+    }
+}
+
+/// [`prepare`], then [`rows_from`].
+pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Vec<Check> {
+    rows_from(inputs, s, noise, &prepare(inputs, s, noise))
 }
 
 #[cfg(test)]
