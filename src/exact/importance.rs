@@ -10,7 +10,7 @@ use super::enumerate::for_each_prefix;
 use super::forward::forward;
 use crate::problem::{Cost, IlProblem, Weighting};
 use crate::scalar::Scalar;
-use crate::toy::estimator::causal;
+use crate::toy::estimator::{causal, weighted};
 use crate::toy::{ToyProblem, ToyTrajectory};
 use nalgebra::DVector;
 
@@ -79,8 +79,8 @@ pub struct StepSample<S> {
     pub prob: S,
     /// g(θ_new, τ̄), the causal form of eq. 3.15.
     pub new: Vec<S>,
-    /// The importance-weighted old-point term w g(θ_old, τ̄) (the oracle's own
-    /// [`IlProblem::weighted_estimate`]); its mean is ∇F(θ_old) by (I3).
+    /// The importance-weighted old-point term w g(θ_old, τ̄) (the estimator code of the oracle's
+    /// [`IlProblem::weighted_estimate`], [`weighted`]); its mean is ∇F(θ_old) by (I3).
     pub weighted: Vec<S>,
     /// The unweighted old-point term g(θ_old, τ̄) of eq. 3.40 verbatim (causal form); its mean is
     /// ∇F(θ_old) + b(θ_old, θ_new) by (I4).
@@ -89,7 +89,7 @@ pub struct StepSample<S> {
 
 /// Every positive-probability prefix at θ_new with the estimates of [`StepSample`]: the law of
 /// one STORM step's randomness given the past, so that every conditional expectation of the
-/// step is a finite sum over this list.
+/// step is a finite sum over this list. The two policy tables are built once for all prefixes.
 ///
 /// # Errors
 /// As [`weighted_expectation`].
@@ -101,33 +101,17 @@ pub fn step_samples<S: Scalar>(
 ) -> Result<Vec<StepSample<S>>, ExactError> {
     let table_new = problem.table(theta_new)?;
     let table_old = problem.table(theta_old)?;
-    let (old, new) = (
-        DVector::from_column_slice(theta_old),
-        DVector::from_column_slice(theta_new),
-    );
     let mut out = Vec::new();
-    let mut failure = None;
-    let mut cost = Cost::default();
     for_each_prefix(problem, &table_new, |states, actions, p| {
-        if failure.is_some() {
-            return;
-        }
-        let traj = completed(problem, states, actions);
         let scored = problem.scored_actions(states, actions);
-        match problem.weighted_estimate(&old, &new, &traj, weighting, &mut cost) {
-            Ok(w) => out.push(StepSample {
-                prob: p.clone(),
-                new: causal(&table_new, states, scored),
-                weighted: w.iter().cloned().collect(),
-                unweighted: causal(&table_old, states, scored),
-            }),
-            Err(e) => failure = Some(e),
-        }
+        out.push(StepSample {
+            prob: p.clone(),
+            new: causal(&table_new, states, scored),
+            weighted: weighted(&table_old, &table_new, states, scored, weighting),
+            unweighted: causal(&table_old, states, scored),
+        });
     })?;
-    match failure {
-        Some(e) => Err(e.into()),
-        None => Ok(out),
-    }
+    Ok(out)
 }
 
 /// `Σ_τ̄ p(τ̄; θ_new) g(θ_old, τ̄)`: the mean of the thesis's unweighted old-point term.

@@ -7,6 +7,7 @@ pub mod estimated;
 pub mod montecarlo;
 pub mod o2nc_formula;
 pub mod proof_step;
+pub mod proof_storm;
 pub mod real_env;
 pub mod schedule;
 pub mod second_toy;
