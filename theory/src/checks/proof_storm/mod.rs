@@ -6,7 +6,8 @@
 //! 2c), with the run's own η_k, a_{k+1} converted exactly from `f64`. Conditionally on F_k the
 //! step's randomness is one prefix drawn at θ_{k+1} = θ_k − η_k d_k, so every conditional
 //! expectation is a finite sum in ℚ ([`step`]); [`crate::checks::proof_step::StepSlack`] records
-//! each inequality's slack. Every constant, bound formula and gradient estimate is read through
+//! each inequality's slack. Rows 2c.s3c (the conditions over every step of the runs' schedules)
+//! and 2c.close (cube roots) are decided by rigorous enclosures instead. Every constant, bound formula and gradient estimate is read through
 //! [`TableInputs`], so a wrong constant, a dropped factor or a biased oracle turns a verdict.
 //!
 //! | row | inequality | module |
