@@ -15,6 +15,7 @@
 
 use super::table::PolicyTable;
 use crate::oracle::DecisionTerms;
+use crate::problem::Weighting;
 use crate::scalar::Scalar;
 
 /// Causal form (eq. 3.15): `g = Σ_t ∇l_t + Σ_{i=1}^{n} ψ_i Σ_{t=i+1}^{T−1} l_t` with n = `actions.len()`
@@ -84,6 +85,34 @@ pub fn per_decision<S: Scalar>(
         }
     }
     g
+}
+
+/// IS-STORM's importance-weighted old-point estimate (math.md §4) on a prefix sampled at θ′, from
+/// the tables `old` at θ and `new` at θ′: the whole-trajectory weight
+/// `w = Π_{i≤n} π_θ(a_i|s_i)/π_θ′(a_i|s_i)` times the causal form at θ, or the per-decision form
+/// [`per_decision`]. `states` and `actions` as in [`causal`].
+pub fn weighted<S: Scalar>(
+    old: &PolicyTable<S>,
+    new: &PolicyTable<S>,
+    states: &[usize],
+    actions: &[usize],
+    weighting: Weighting,
+) -> Vec<S> {
+    let ratios: Vec<S> = states
+        .iter()
+        .zip(actions)
+        .map(|(&s, &a)| old.prob(s, a).clone() / new.prob(s, a))
+        .collect();
+    match weighting {
+        Weighting::Trajectory => {
+            let w = ratios.iter().fold(S::one(), |acc, r| acc * r);
+            causal(old, states, actions)
+                .into_iter()
+                .map(|x| x * &w)
+                .collect()
+        }
+        Weighting::PerDecision => per_decision(old, states, actions, &ratios),
+    }
 }
 
 /// The causal form's per-decision terms ([`DecisionTerms`]) on a prefix, for the baselined

@@ -479,21 +479,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
         let old = self.shared_table(theta_old.as_slice())?;
         let new = self.shared_table(theta_new.as_slice())?;
         let (states, actions) = self.prefix(trajectory);
-        let ratios: Vec<S> = states
-            .iter()
-            .zip(actions)
-            .map(|(&s, &a)| old.prob(s, a).clone() / new.prob(s, a))
-            .collect();
-        let g = match weighting {
-            Weighting::Trajectory => {
-                let w = ratios.iter().fold(S::one(), |acc, r| acc * r);
-                estimator::causal(&old, states, actions)
-                    .into_iter()
-                    .map(|x| x * &w)
-                    .collect()
-            }
-            Weighting::PerDecision => estimator::per_decision(&old, states, actions, &ratios),
-        };
+        let g = estimator::weighted(&old, &new, states, actions, weighting);
         cost.gradient_evaluations += self.decision_count(states) as u64;
         Ok(DVector::from_vec(g))
     }

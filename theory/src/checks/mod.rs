@@ -11,6 +11,7 @@ pub mod o2nc_formula;
 pub mod proof_o2nc;
 pub mod proof_sgd;
 pub mod proof_step;
+pub mod proof_storm;
 pub mod real_env;
 pub mod schedule;
 pub mod second_toy;
