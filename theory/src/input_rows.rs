@@ -6,7 +6,7 @@
 
 use crate::certify::box_constants::{ToyConstants, b_f};
 use crate::certify::global::GlobalConstants;
-use crate::checks::{attained, errata, proof_o2nc, proof_sgd, tight};
+use crate::checks::{attained, errata, o2nc_formula, proof_o2nc, proof_sgd, proof_storm, tight};
 use crate::inputs::{ConstantKind, TableInputs};
 use crate::perturbation::{fixed_list, outcome, rows as perturbation_rows};
 use crate::protocol::Profile;
@@ -43,6 +43,8 @@ pub struct Runs {
     o2nc: proof_o2nc::Evaluated,
     sgd: proof_sgd::Evaluated,
     tight: tight::Prepared,
+    storm_states: proof_storm::Visited,
+    storm_steps: Vec<proof_storm::step::Step>,
 }
 
 impl Runs {
@@ -53,10 +55,14 @@ impl Runs {
     pub fn compute(c: &Certified) -> Result<Runs, String> {
         let inputs = TableInputs::thesis();
         let runs = proof_o2nc::record(&inputs, &c.m1, &c.k, &c.domain, &O2NC_SIZES)?;
+        let storm_states = proof_storm::visit(&c.m1, &c.g, storm_sizes(c.profile))?;
+        let storm_steps = proof_storm::steps(&inputs, &c.m1, &storm_states)?;
         Ok(Runs {
             o2nc: proof_o2nc::evaluate(&inputs, &c.m1, runs)?,
             sgd: proof_sgd::evaluate(&inputs, &c.k, &c.domain, sgd_sizes())?,
             tight: tight::prepare(&inputs, tight_sizes(c.profile)),
+            storm_states,
+            storm_steps,
         })
     }
 }
@@ -68,6 +74,13 @@ const O2NC_SIZES: proof_o2nc::StepSizes = proof_o2nc::StepSizes::QUICK;
 /// The SGD proof-step rows' runs (the quick size in both profiles, as for O2NC).
 fn sgd_sizes() -> proof_sgd::Sizes {
     proof_sgd::sizes(false)
+}
+
+/// The STORM proof-step rows' states. Their runs use the certified L = max(L_F, L̃) of the
+/// schedule (3.43), not the inputs' constants (the rows read those), so only the oracle changes
+/// what is cached.
+fn storm_sizes(profile: Profile) -> proof_storm::Sizes {
+    proof_storm::Sizes::for_profile(profile)
 }
 
 /// The tight instances' search and certification budget.
@@ -110,10 +123,18 @@ pub fn input_rows(c: &Certified, runs: &Runs, inputs: &TableInputs) -> Result<Ve
         .map(|t| (c.m1.clone(), vec![q(t)]))
         .collect();
     rows.extend(errata::e1_rows(inputs, &cases)?);
+    rows.push(o2nc_formula::row(inputs, c.profile.sizes().o2nc_cases, 1));
     rows.extend(if inputs.oracle_bias.is_some() {
         proof_sgd::rows(inputs, &c.k, &c.domain, sgd_sizes())?
     } else {
         proof_sgd::rows_from(inputs, &c.k, &runs.sgd, sgd_sizes())?
+    });
+    let storm_k = storm_sizes(c.profile).k_close;
+    rows.extend(if inputs.oracle_bias.is_some() {
+        let steps = proof_storm::steps(inputs, &c.m1, &runs.storm_states)?;
+        proof_storm::rows_from_steps(inputs, &c.g, &runs.storm_states, &steps, storm_k)?
+    } else {
+        proof_storm::rows_from_steps(inputs, &c.g, &runs.storm_states, &runs.storm_steps, storm_k)?
     });
     rows.extend(if inputs.oracle_bias.is_some() {
         tight::rows(inputs, tight_sizes(c.profile))

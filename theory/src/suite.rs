@@ -6,8 +6,7 @@ use crate::certify::recheck::coverage_for;
 use crate::checks::constants::{global_row, toy_row};
 use crate::checks::montecarlo::McSettings;
 use crate::checks::{
-    baselined_sgd, baselined_storm, errata, o2nc_formula, schedule, second_toy, statistical, thm31,
-    unbiased,
+    baselined_sgd, baselined_storm, errata, schedule, second_toy, statistical, thm31, unbiased,
 };
 use crate::input_rows::{Certified, with_perturbations};
 use crate::protocol::{
@@ -128,7 +127,6 @@ pub fn exact_suite(profile: Profile, domain: &[[f64; 2]]) -> Result<Vec<Check>, 
 fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
     let s = profile.sizes();
     let mut rows = schedule::rows(s.schedule_k);
-    rows.push(o2nc_formula::row(s.o2nc_cases, 1));
     let thetas = ["0", "1/3", "-2", "5/2", "1", "2"];
     let pairs: Vec<(ToyMdp, Vec<BigRational>, Vec<BigRational>)> = thetas
         .iter()

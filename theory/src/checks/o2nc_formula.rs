@@ -4,7 +4,8 @@
 //! Δ₀/(DM) + G/√T + σ/√T (realised T, K, M, D = δ/T) and the thesis's intermediate line
 //! 2TΔ₀/(δN) + 3G/√T must both be ≤ the corollary 2Δ₀/(δN) + max(5G^{2/3}Δ₀^{1/3}/(Nδ)^{1/3}, 6G/√N).
 
-use crate::bounds::{o2nc_corollary, o2nc_intermediate, o2nc_params, o2nc_theorem, upper};
+use crate::bounds::{o2nc_intermediate, o2nc_params, upper};
+use crate::inputs::{Formulas, TableInputs};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use rand::{Rng, SeedableRng};
 
@@ -17,9 +18,9 @@ pub struct Ratios {
     pub intermediate: f64,
 }
 
-/// Evaluate the ratios with a corollary scaled by `scale` (1 for the real claim; < 1 to show the
-/// check can fail).
-pub fn ratios(cases: usize, seed: u64, scale: f64) -> Ratios {
+/// Evaluate the ratios with `formulas`' theorem-level bound and corollary, the corollary scaled by
+/// `scale` (1 for the real claim; < 1 to show the check can fail).
+pub fn ratios(formulas: &Formulas, cases: usize, seed: u64, scale: f64) -> Ratios {
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
     let mut worst = Ratios {
         theorem: 0.0,
@@ -31,8 +32,10 @@ pub fn ratios(cases: usize, seed: u64, scale: f64) -> Ratios {
         let g = 10f64.powf(rng.random_range(-2.0..2.0));
         let d0 = 10f64.powf(rng.random_range(-3.0..2.0));
         let p = o2nc_params(n, delta, g, d0);
-        let cor = o2nc_corollary(d0, delta, g, n) * scale;
-        worst.theorem = worst.theorem.max(o2nc_theorem(d0, delta, g, g, p) / cor);
+        let cor = (formulas.o2nc_corollary)(d0, delta, g, n) * scale;
+        worst.theorem = worst
+            .theorem
+            .max((formulas.o2nc_theorem)(d0, delta, g, g, p) / cor);
         worst.intermediate = worst
             .intermediate
             .max(o2nc_intermediate(d0, delta, g, n, p.t) / cor);
@@ -40,9 +43,9 @@ pub fn ratios(cases: usize, seed: u64, scale: f64) -> Ratios {
     worst
 }
 
-/// The row of the table.
-pub fn row(cases: usize, seed: u64) -> Check {
-    let r = ratios(cases, seed, 1.0);
+/// The row of the table, with the bound formulas of `inputs`.
+pub fn row(inputs: &TableInputs, cases: usize, seed: u64) -> Check {
+    let r = ratios(&inputs.formulas, cases, seed, 1.0);
     let ok = r.theorem <= upper(1.0) && r.intermediate <= upper(1.0);
     let worst = r.theorem.max(r.intermediate);
     Check::builder(

@@ -7,6 +7,7 @@ use ilopt::scalar::BigRational;
 use ilopt::toy::ToyMdp;
 use ilopt_theory::check::{Role, Verdict};
 use ilopt_theory::checks::{o2nc_formula, schedule, thm31, unbiased};
+use ilopt_theory::inputs::{Formulas, TableInputs};
 
 fn example(name: &str) -> ToyMdp {
     ToyMdp::load(
@@ -114,12 +115,12 @@ fn check2_schedule_rows() {
 
 #[test]
 fn check3_corollary_follows_from_the_theorem() {
-    let row = o2nc_formula::row(20_000, 1);
+    let row = o2nc_formula::row(&TableInputs::thesis(), 20_000, 1);
     assert_eq!(row.verdict, Verdict::Holds, "{}", row.details);
-    let r = o2nc_formula::ratios(20_000, 1, 1.0);
+    let r = o2nc_formula::ratios(&Formulas::THESIS, 20_000, 1, 1.0);
     assert!(r.theorem <= 0.71, "math.md reports ≤ 0.70: {}", r.theorem);
     // A corollary understated by half is violated.
-    let half = o2nc_formula::ratios(20_000, 1, 0.5);
+    let half = o2nc_formula::ratios(&Formulas::THESIS, 20_000, 1, 0.5);
     assert!(half.theorem > 1.0 || half.intermediate > 1.0);
 }
 

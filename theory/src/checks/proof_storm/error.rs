@@ -40,6 +40,7 @@ pub fn rows(ctx: &Ctx<'_>) -> Vec<Check> {
                 Role::Thesis,
             )
             .erratum("E10")
+            .refuted_by_erratum()
             .assumptions(["Lemma 3.3's step \"E_{k+1} B = 0\" (3.46), read in IL, where τ_{k+1} is drawn at θ_{k+1}"]),
             &[],
             |s, _| (norm_sq(&s.mean_z_unweighted), zero.clone()),
@@ -51,6 +52,7 @@ pub fn rows(ctx: &Ctx<'_>) -> Vec<Check> {
                 Role::Thesis,
             )
             .erratum("E9, E10")
+            .refuted_by_erratum()
             .assumptions(["Algorithm 4 as printed, at the states of IS-STORM's runs"]),
             &[],
             |s, _| (norm_sq(&s.mean_u_printed), zero.clone()),

@@ -181,6 +181,7 @@ pub struct Inequality {
     erratum: Option<String>,
     assumptions: Vec<String>,
     tightness: bool,
+    refuted: bool,
 }
 
 impl Inequality {
@@ -193,6 +194,7 @@ impl Inequality {
             erratum: None,
             assumptions: vec![],
             tightness: false,
+            refuted: false,
         }
     }
 
@@ -208,6 +210,14 @@ impl Inequality {
     #[must_use]
     pub fn erratum(mut self, e: &str) -> Self {
         self.erratum = Some(e.into());
+        self
+    }
+
+    /// The inequality is the thesis's as printed and its erratum says it is false: the table
+    /// expects the row to fail ([`crate::record::check::Check::expected`]).
+    #[must_use]
+    pub fn refuted_by_erratum(mut self) -> Self {
+        self.refuted = true;
         self
     }
 
@@ -277,8 +287,13 @@ impl Ctx<'_> {
             .iter()
             .filter(|s| s.weighting == Weighting::Trajectory)
             .count();
-        slack
-            .row(ineq.id, RESULT, ineq.claim, ineq.role)
+        let row = slack.row(ineq.id, RESULT, ineq.claim, ineq.role);
+        let row = if ineq.refuted {
+            row.refuted_by_erratum()
+        } else {
+            row
+        };
+        row
             .assumptions(ineq.assumptions)
             .constants(self.constants(constants))
             .maybe_erratum(ineq.erratum)
@@ -321,8 +336,12 @@ pub fn rows_at(
     rows_from_steps(inputs, g, visited, &steps, k_close)
 }
 
-/// The rows from the steps at the visited states (computed with the same `inputs`).
-fn rows_from_steps(
+/// The rows from the steps at the visited states (computed by [`steps`] with the same oracle,
+/// `inputs.oracle_bias`).
+///
+/// # Errors
+/// If a constant is not finite.
+pub fn rows_from_steps(
     inputs: &TableInputs,
     g: &GlobalConstants,
     visited: &Visited,
