@@ -157,10 +157,37 @@ pub fn input_rows(c: &Certified, runs: &Runs, inputs: &TableInputs) -> Result<Ve
 pub fn with_perturbations(c: &Certified) -> Result<Vec<Check>, String> {
     let runs = Runs::compute(c)?;
     let base = input_rows(c, &runs, &TableInputs::thesis())?;
+    let list = fixed_list();
+    // The perturbations are independent: they run on every core, each taking the next index,
+    // and their rows are put back in the list's order (the same whatever the number of cores).
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut done: Vec<(usize, Result<Vec<Check>, String>)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads.min(list.len()))
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut mine = vec![];
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(p) = list.get(i) else { break };
+                        mine.push((i, input_rows(c, &runs, &p.inputs)));
+                    }
+                    mine
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| w.join().unwrap_or_default())
+            .collect()
+    });
+    if done.len() != list.len() {
+        return Err("a perturbation's thread panicked".into());
+    }
+    done.sort_by_key(|(i, _)| *i);
     let mut outcomes = vec![];
-    for p in fixed_list() {
-        let rows = input_rows(c, &runs, &p.inputs)?;
-        outcomes.push(outcome(p.name, &base, &rows));
+    for ((_, rows), p) in done.into_iter().zip(&list) {
+        outcomes.push(outcome(p.name, &base, &rows?));
     }
     let mut rows = base;
     rows.extend(perturbation_rows(&outcomes));

@@ -465,6 +465,10 @@ pub fn markdown(checks: &[Check]) -> String {
         uninformative_and_controls(checks),
         status_line(checks)
     );
+    out += "\n**Not checked, and why.**\n\n";
+    for u in crate::checks::unchecked::UNCHECKED {
+        out += &format!("- {}: {}.\n", u.statement, escape(u.reason));
+    }
     out += "\n**Details.**\n\n";
     for c in checks {
         out += &format!("- **{}** {}\n", c.id, escape(&c.details));

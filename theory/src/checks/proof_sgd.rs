@@ -371,22 +371,32 @@ impl StepSlacks {
 /// # Errors
 /// If some η violates η ≤ 1/(Lc), or there are no steps.
 fn telescoped_bound(steps: &[(Q, Q)], c: &Constants) -> Result<Q, String> {
-    let (mut sum_a, mut sum_b) = (Q::zero(), Q::zero());
+    // Σ n η and Σ n η² first, the constants once: the sums' denominators grow with K, and
+    // multiplying every term by L and σ² would make each addition that much longer.
+    let (mut s1, mut s2) = (Q::zero(), Q::zero());
+    let mut largest: Option<&Q> = None;
     for (eta, n) in steps {
-        if eta.clone() * &c.l * &c.c > Q::one() {
-            return Err(format!(
-                "η = {} violates η ≤ 1/(Lc) (L = {}, c = {})",
-                eta.to_f64(),
-                c.l.to_f64(),
-                c.c
-            ));
+        if largest.is_none_or(|m| eta > m) {
+            largest = Some(eta);
         }
-        sum_a += n.clone() * eta * half();
-        sum_b += n.clone() * &c.l * eta * eta * &c.sigma2 * half();
+        s1 += n.clone() * eta;
+        s2 += n.clone() * eta * eta;
     }
-    if sum_a <= Q::zero() {
+    if let Some(eta) = largest
+        && eta.clone() * &c.l * &c.c > Q::one()
+    {
+        return Err(format!(
+            "η = {} violates η ≤ 1/(Lc) (L = {}, c = {})",
+            eta.to_f64(),
+            c.l.to_f64(),
+            c.c
+        ));
+    }
+    if s1 <= Q::zero() {
         return Err("no steps".into());
     }
+    let sum_a = s1 * half();
+    let sum_b = s2 * &c.l * &c.sigma2 * half();
     Ok((c.b_f.clone() + sum_b) / sum_a)
 }
 

@@ -55,8 +55,23 @@ pub fn harmonic_tail(k_max: u64) -> Q {
     Q::new(p, q)
 }
 
-/// Rational bounds lo ≤ Σ_{k=1}^K (7/(k+7))^{1/3} ≤ hi.
+/// Rational bounds lo ≤ Σ_{k=1}^K (7/(k+7))^{1/3} ≤ hi. A pure function of K, computed once
+/// per K and process (the table asks for the same K under every perturbation).
 pub fn schedule_sum(k_max: u64) -> (Q, Q) {
+    static DONE: std::sync::OnceLock<std::sync::Mutex<std::collections::HashMap<u64, (Q, Q)>>> =
+        std::sync::OnceLock::new();
+    let done = DONE.get_or_init(Default::default);
+    if let Some(sum) = done.lock().map_or(None, |m| m.get(&k_max).cloned()) {
+        return sum;
+    }
+    let sum = schedule_sum_uncached(k_max);
+    if let Ok(mut m) = done.lock() {
+        m.insert(k_max, sum.clone());
+    }
+    sum
+}
+
+fn schedule_sum_uncached(k_max: u64) -> (Q, Q) {
     let (mut lo, mut hi) = (Q::zero(), Q::zero());
     for k in 1..=k_max {
         let (l, h) = cbrt_enclosure(&Q::from_ratio(7, k as i64 + 7), ROOT_BITS);
