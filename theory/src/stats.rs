@@ -353,6 +353,13 @@ pub fn bonferroni(alpha: f64, m: usize) -> f64 {
     alpha / m.max(1) as f64
 }
 
+/// The standard normal upper quantile Φ⁻¹(1 − p) = −Φ⁻¹(p) for 0 < p < 1/2 (statrs' inverse
+/// CDF, taken at p so that small p keeps its precision).
+pub fn normal_upper_quantile(p: f64) -> f64 {
+    use statrs::distribution::{ContinuousCDF, Normal};
+    -Normal::standard().inverse_cdf(p)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

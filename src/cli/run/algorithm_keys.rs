@@ -2,8 +2,7 @@
 //! drop keys they do not know, so an unknown key is found by writing the parsed config out again;
 //! and the resolved config keeps the numbers as the user wrote them.
 
-use super::config::invalid;
-use super::error::RunError;
+use super::error::{RunError, invalid};
 use crate::algo::AlgorithmConfig;
 use std::path::Path;
 

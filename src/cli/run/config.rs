@@ -4,7 +4,7 @@
 //! checked (the `resolve` module). Each failure is one [`RunError`] naming the file and the key.
 
 use super::algorithm_keys::{check_known_keys, overlay};
-use super::error::RunError;
+use super::error::{RunError, invalid};
 use crate::algo::AlgorithmConfig;
 use crate::task::AfterEnd;
 use crate::task::obstacle::ObstacleFeatures;
@@ -276,14 +276,6 @@ impl LoadedConfig {
     /// An [`RunError::Invalid`] for `key` of this config.
     pub fn invalid(&self, key: &str, message: impl std::fmt::Display) -> RunError {
         invalid(&self.path, key, message)
-    }
-}
-
-pub(super) fn invalid(path: &Path, key: &str, message: impl std::fmt::Display) -> RunError {
-    RunError::Invalid {
-        path: path.to_path_buf(),
-        key: key.into(),
-        message: message.to_string(),
     }
 }
 

@@ -1,6 +1,6 @@
 //! [`RunError`]: why `ilopt run` or `ilopt eval` failed, each naming the file and key at fault.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Why a run or an evaluation could not be carried out.
 #[derive(Debug, thiserror::Error)]
@@ -64,5 +64,14 @@ impl RunError {
             path: path.into(),
             source,
         }
+    }
+}
+
+/// [`RunError::Invalid`] for `key` of the config file at `path`.
+pub(super) fn invalid(path: &Path, key: &str, message: impl std::fmt::Display) -> RunError {
+    RunError::Invalid {
+        path: path.to_path_buf(),
+        key: key.into(),
+        message: message.to_string(),
     }
 }

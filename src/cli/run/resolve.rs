@@ -3,9 +3,9 @@
 
 use super::config::{
     DEFAULT_EPISODES, DEFAULT_SIGMA, ExpertChoice, HorizonKind, MAX_EPISODES, MAX_SEEDS, MAX_STEPS,
-    MAX_TRAJECTORIES, PolicyKind, RunFile, TaskName, Theta0, invalid,
+    MAX_TRAJECTORIES, PolicyKind, RunFile, TaskName, Theta0,
 };
-use super::error::RunError;
+use super::error::{RunError, invalid};
 use crate::task::AfterEnd;
 use crate::task::obstacle::ObstacleFeatures;
 use std::path::Path;

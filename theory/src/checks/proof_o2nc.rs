@@ -76,6 +76,21 @@ pub struct Evaluated {
     pub moments: Vec<Vec<Moments>>,
 }
 
+impl Evaluated {
+    /// The runs as a row's details state them.
+    pub fn describe(&self) -> String {
+        let p = &self.runs.params;
+        format!(
+            "{} seeded runs of the kit's Algorithm 5 (IL-correct), T = {}, K = {}, M = {}, D = δ/T = {}",
+            self.runs.paths.len(),
+            p.t,
+            p.k,
+            p.m,
+            p.d
+        )
+    }
+}
+
 /// Evaluate F along every run and the oracle's moments (through `inputs`) at every w_n.
 ///
 /// # Errors

@@ -61,18 +61,6 @@ pub fn rows(
     Ok(rows)
 }
 
-pub(super) fn runs_text(ev: &Evaluated) -> String {
-    let p = &ev.runs.params;
-    format!(
-        "{} seeded runs of the kit's Algorithm 5 (IL-correct), T = {}, K = {}, M = {}, D = δ/T = {}",
-        ev.runs.paths.len(),
-        p.t,
-        p.k,
-        p.m,
-        p.d
-    )
-}
-
 /// Row 3b.s2 (E11): E[g(w_n, τ) | w_n] = ∇F(w_n), τ ∼ p(·; w_n), exactly at every visited w_n.
 pub(super) fn unbiased(ev: &Evaluated) -> Check {
     let mut s = StepSlack::new();
@@ -91,7 +79,7 @@ pub(super) fn unbiased(ev: &Evaluated) -> Check {
     .details(format!(
         "{}; {}; E g by the prefix enumeration (X1), ∇F by X2, both in ℚ at the exact f64 points. The printed sampling τ_n ∼ p(·; θ_n) fails this premise at the points of row 4e",
         s.summary(),
-        runs_text(ev)
+        ev.describe()
     ))
     .decided(Method::Exact, s.verdict())
 }
@@ -139,7 +127,7 @@ pub(super) fn regret(
         .details(format!(
             "{}; {}; η = {:.6e}; exact in ℚ with the recorded g_t and Δ_t = θ_t − θ_{{t−1}}",
             path_slack.summary(),
-            runs_text(ev),
+            ev.describe(),
             runs.eta.to_f64()
         ))
         .decided(Method::Exact, path_slack.verdict());
@@ -155,7 +143,7 @@ pub(super) fn regret(
             "{}; G² = {:.6}; E‖g‖² by X1 in ℚ at the exact f64 points; {}",
             moment.summary(),
             g2.to_f64(),
-            runs_text(ev)
+            ev.describe()
         ))
         .decided(Method::Exact, moment.verdict());
     Ok(vec![s3, s3e])
@@ -206,7 +194,7 @@ pub(super) fn martingale(
             "{}; σ² = {:.6}; E‖X‖² by X1 in ℚ at the exact f64 points; {}",
             second.summary(),
             sigma2.to_f64(),
-            runs_text(ev)
+            ev.describe()
         ))
         .decided(Method::Exact, second.verdict());
     let p4 = printed
@@ -221,7 +209,7 @@ pub(super) fn martingale(
         .details(format!(
             "{}; per block, at its visited points with independent τ_t ∼ p(·; w_t), the exact conditional moments summed in intervals: (Σ_t E‖X_t‖)² against Σ_t E‖X_t‖²; smallest (Σ_t E‖X_t‖)²/(T Σ_t E‖X_t‖²) = {ratio:.4}, i.e. the sum of norms grows like T, not √T; {}",
             printed.summary(),
-            runs_text(ev)
+            ev.describe()
         ))
         .decided(Method::Rigorous, printed.verdict());
     Ok(vec![s4, p4])
@@ -269,7 +257,7 @@ pub(super) fn indexing(inputs: &TableInputs, ev: &Evaluated) -> Vec<Check> {
         .details(format!(
             "{}; exact in ℚ; {}",
             corrected.summary(),
-            runs_text(ev)
+            ev.describe()
         ))
         .decided(Method::Exact, corrected.verdict());
     let claim = "(3.67) as printed, u_n = u^{mod(n,T)+1}: Σ_n⟨g_n, Δ_n − u_n⟩ = R_T(u^1, …, u^K) on every run";
@@ -288,7 +276,7 @@ pub(super) fn indexing(inputs: &TableInputs, ev: &Evaluated) -> Vec<Check> {
             .details(format!(
                 "measured: the number of steps whose comparator u^{{mod(n,T)+1}} does not exist (index > K = {kb}; T = {t}), of {} steps{defined}; within a block the printed index also cycles through u^1, u^2, … instead of holding u^k; {}",
                 kb * t * ev.runs.paths.len(),
-                runs_text(ev)
+                ev.describe()
             ))
             .erratum("E13")
         .refuted_by_erratum()
@@ -299,7 +287,7 @@ pub(super) fn indexing(inputs: &TableInputs, ev: &Evaluated) -> Vec<Check> {
             .details(format!(
                 "{}; exact in ℚ; {}",
                 printed.summary(),
-                runs_text(ev)
+                ev.describe()
             ))
             .erratum("E13")
             .refuted_by_erratum()
@@ -353,7 +341,7 @@ pub(super) fn spread(ev: &Evaluated) -> Vec<Check> {
         .details(format!(
             "{}; D = the runs' projection radius; exact in ℚ; {}",
             bound.summary(),
-            runs_text(ev)
+            ev.describe()
         ))
         .decided(Method::Exact, bound.verdict());
     let p6 = printed
@@ -368,7 +356,7 @@ pub(super) fn spread(ev: &Evaluated) -> Vec<Check> {
         .details(format!(
             "{}; s_n = (w_n − θ_{{n−1}})/Δ_n at the pairs with Δ_n, Δ_{{n′}} ≠ 0 (with it the corrected line holds by definition); exact in ℚ; {}",
             printed.summary(),
-            runs_text(ev)
+            ev.describe()
         ))
         .decided(Method::Exact, printed.verdict());
     vec![s6, p6]

@@ -4,7 +4,6 @@
 //! that (3.66) takes from it.
 
 use super::path::delta0_of;
-use super::steps::runs_text;
 use super::{Evaluated, RESULT};
 use crate::certify::box_constants::ToyConstants;
 use crate::checks::proof_step::StepSlack;
@@ -123,7 +122,7 @@ pub fn telescoping(mdp: &ToyMdp, ev: &Evaluated, pieces: usize) -> Result<Vec<Ch
     };
     let basis = format!(
         "{}; the exact F(θ_n) − F(θ_{{n−1}}) in ℚ must lie in an enclosure of the integral (mean-value form on {pieces} sub-segments, ∇F and ∇²F by X2 in intervals; widest enclosure {worst_width:.3e}); each step with Δ_n ≠ 0, run or window is two points (lower end, upper end)",
-        runs_text(ev)
+        ev.describe()
     );
     let s1 = steps
         .row("3b.s1", RESULT, claim("F(θ_0)"), Role::Corrected)
@@ -171,7 +170,7 @@ pub fn descent(inputs: &TableInputs, k: &ToyConstants, ev: &Evaluated) -> Result
         "{}; Δ₀ = B_F = {}; F by X2 in ℚ at the exact f64 iterates; {}",
         s.summary(),
         delta0,
-        runs_text(ev)
+        ev.describe()
     ))
     .decided(Method::Exact, s.verdict()))
 }

@@ -5,13 +5,7 @@ use nalgebra::DVector;
 
 use super::mean_var;
 use super::reference::Reference;
-
-/// The standard normal upper quantile Φ⁻¹(1 − p) = −Φ⁻¹(p) for 0 < p < 1/2 (statrs' inverse
-/// CDF, taken at p so that small p keeps its precision).
-pub fn normal_upper_quantile(p: f64) -> f64 {
-    use statrs::distribution::{ContinuousCDF, Normal};
-    -Normal::standard().inverse_cdf(p)
-}
+use crate::stats::normal_upper_quantile;
 
 /// Φ⁻¹(0.8), the table's stated power ([`crate::stats::POWER`]): the minimum detectable bias is
 /// the bias flagged with probability ≥ 0.8.

@@ -34,7 +34,8 @@ mod reference;
 mod tasks;
 mod variance;
 
-pub use comparison::{Comparison, POWER_Z, compare, normal_upper_quantile, variance_ratio};
+pub use crate::stats::normal_upper_quantile;
+pub use comparison::{Comparison, POWER_Z, compare, variance_ratio};
 pub use estimators::{
     Estimator, Mutation, effective_sample_size, mutated_estimate, rollout_marking_resets, samples,
 };

@@ -12,9 +12,9 @@
 //! (b = −4·F̂, F̂ the mean loss of a trajectory), unbiased like every constant but with a larger
 //! variance, which the same rule must find to fail.
 
-use super::comparison::normal_upper_quantile;
 use super::estimators::{Estimator, samples};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
+use crate::stats::normal_upper_quantile;
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::{ConfigNumber, Runner, StoppingRule, Termination};
 use ilopt::baseline::Baseline;

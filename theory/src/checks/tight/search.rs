@@ -357,7 +357,7 @@ pub const STARTS: usize = 4;
 
 /// The search (module docs) over the instances `noise` admits: `budget.random` random
 /// candidates, then a pattern search from each of the [`STARTS`] best of them, `budget.refine`
-/// evaluations in all: at scale h (from ½) every move of [`moves`] is tried, the best improving
+/// evaluations in all: at scale h (from ½) every move of `moves` is tried, the best improving
 /// one is taken, and h is halved when none improves (down to 2⁻¹⁰). Returns every feasible
 /// distinct candidate evaluated, best first (ties in the order of evaluation).
 pub fn search(algorithm: Algorithm, noise: Noise, budget: Budget) -> Vec<Estimate> {
