@@ -421,6 +421,15 @@ pub fn uninformative_and_controls(checks: &[Check]) -> String {
     )
 }
 
+/// The statements the table does not check, one list item each with its reason
+/// ([`crate::checks::unchecked::UNCHECKED`]).
+pub fn unchecked_items() -> Vec<String> {
+    crate::checks::unchecked::UNCHECKED
+        .iter()
+        .map(|u| format!("{}: {}.", u.statement, escape(u.reason)))
+        .collect()
+}
+
 /// The Markdown table (one row per check), the closing note (every statistical row with its
 /// power and verdict, the uninformative rows, the controls and the overall status), then the
 /// details with the constants and their provenance.
@@ -466,8 +475,8 @@ pub fn markdown(checks: &[Check]) -> String {
         status_line(checks)
     );
     out += "\n**Not checked, and why.**\n\n";
-    for u in crate::checks::unchecked::UNCHECKED {
-        out += &format!("- {}: {}.\n", u.statement, escape(u.reason));
+    for item in unchecked_items() {
+        out += &format!("- {item}\n");
     }
     out += "\n**Details.**\n\n";
     for c in checks {

@@ -12,7 +12,7 @@ use crate::results::TheoryTable;
 use ilopt_theory::check::{Check, Role};
 use ilopt_theory::report::{
     POWER_NOTE, detections, min_detectable_effect, number, power_items, probes_note, status_line,
-    uninformative_and_controls,
+    unchecked_items, uninformative_and_controls,
 };
 use std::collections::BTreeMap;
 
@@ -101,6 +101,8 @@ fn notes(checks: &[Check]) -> Vec<Block> {
     }
     out.push(Block::Para(uninformative_and_controls(checks)));
     out.push(Block::Para(status_line(checks)));
+    out.push(Block::Para("**Not checked, and why.**".into()));
+    out.push(Block::List(unchecked_items()));
     out
 }
 
