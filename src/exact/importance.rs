@@ -6,12 +6,13 @@
 //! what the thesis's Algorithm 4 (E10) and Algorithm 5 (E11) actually estimate, minus ∇F.
 
 use super::ExactError;
+use super::baseline::prefix_trajectory;
 use super::enumerate::for_each_prefix;
 use super::forward::forward;
 use crate::problem::{Cost, IlProblem, Weighting};
 use crate::scalar::Scalar;
+use crate::toy::ToyProblem;
 use crate::toy::estimator::{causal, weighted};
-use crate::toy::{ToyProblem, ToyTrajectory};
 use nalgebra::DVector;
 
 /// `Σ_τ̄ p(τ̄; θ_new) · w · g(θ_old, τ̄)`, where `w · g` is the oracle's own
@@ -37,7 +38,7 @@ pub fn weighted_expectation<S: Scalar>(
         if failure.is_some() {
             return;
         }
-        let traj = completed(problem, states, actions);
+        let traj = prefix_trajectory(problem, states, actions);
         match problem.weighted_estimate(&old, &new, &traj, weighting, &mut cost) {
             Ok(g) => {
                 for (a, x) in acc.iter_mut().zip(g.iter()) {
@@ -50,24 +51,6 @@ pub fn weighted_expectation<S: Scalar>(
     match failure {
         Some(e) => Err(e.into()),
         None => Ok(acc),
-    }
-}
-
-/// The prefix completed into a trajectory the oracle accepts: the last action and state do not
-/// matter (no loss is paid at s_T and a_{T−1} scores nothing).
-fn completed<S: Scalar>(
-    problem: &ToyProblem<S>,
-    states: &[usize],
-    actions: &[usize],
-) -> ToyTrajectory {
-    let mut st = states.to_vec();
-    st.push(states[states.len() - 1]);
-    let mut ac = actions.to_vec();
-    ac.push(0);
-    ToyTrajectory {
-        labels: states.iter().map(|s| problem.mdp().expert[*s]).collect(),
-        states: st,
-        actions: ac,
     }
 }
 

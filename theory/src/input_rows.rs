@@ -42,7 +42,7 @@ pub struct Certified {
 pub struct Runs {
     o2nc: proof_o2nc::Evaluated,
     sgd: proof_sgd::Evaluated,
-    tight: tight::Prepared,
+    tight: tight::PreparedAll,
     storm_states: proof_storm::Visited,
     storm_steps: Vec<proof_storm::step::Step>,
 }

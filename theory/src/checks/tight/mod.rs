@@ -36,7 +36,7 @@ pub mod sgd;
 pub mod storm;
 
 use crate::inputs::TableInputs;
-use crate::record::check::Check;
+use crate::record::check::{Check, CheckBuilder, Method, Verdict};
 use search::{Algorithm, Budget, Noise};
 
 /// Sizes of the tight rows.
@@ -130,17 +130,70 @@ fn with_control(row: impl Fn(f64) -> Check, noise: Noise, passed_over: &[String]
     rows
 }
 
+/// The search's candidates and the first one certified under an oracle: what the rows need that
+/// depends on the inputs only through the oracle ([`TableInputs::estimate`]), so that rows for
+/// other constants or formulas reuse it.
+#[derive(Debug, Clone)]
+pub struct Prepared<C> {
+    /// Feasible candidates the search found.
+    pub found: usize,
+    /// The first candidate certified, if any.
+    pub certified: Option<C>,
+    /// Why the candidates before it were passed over.
+    pub passed_over: Vec<String>,
+}
+
+impl<C> Prepared<C> {
+    /// The inconclusive row that says why no candidate was certified.
+    fn none_certified(&self, row: CheckBuilder, budget: &Budget, method: Method) -> Check {
+        row.details(format!(
+            "no candidate certified ({} feasible found by the {}): {}",
+            self.found,
+            sgd::search_text(budget),
+            self.passed_over.join("; ")
+        ))
+        .decided(method, Verdict::Inconclusive)
+    }
+}
+
+/// Certify the first `tries` candidates in order until one passes, recording why the others
+/// were passed over.
+fn first_certified<E, C>(
+    found: &[E],
+    tries: usize,
+    certify: impl Fn(&E) -> Result<C, String>,
+) -> Prepared<C> {
+    let mut passed_over = vec![];
+    for e in found.iter().take(tries) {
+        match certify(e) {
+            Ok(c) => {
+                return Prepared {
+                    found: found.len(),
+                    certified: Some(c),
+                    passed_over,
+                };
+            }
+            Err(m) => passed_over.push(m),
+        }
+    }
+    Prepared {
+        found: found.len(),
+        certified: None,
+        passed_over,
+    }
+}
+
 /// Each algorithm's and noise's [`sgd::prepare`] / [`storm::prepare`] under one oracle.
 #[derive(Debug, Clone)]
-pub struct Prepared {
+pub struct PreparedAll {
     sgd: Vec<(Noise, sgd::Prepared)>,
     storm: Vec<(Noise, storm::Prepared)>,
 }
 
 /// Search and certify for both algorithms and both noise settings.
-pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> Prepared {
+pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
     let noises = [Noise::Any, Noise::Required];
-    Prepared {
+    PreparedAll {
         sgd: noises
             .iter()
             .map(|&n| (n, sgd::prepare(inputs, &sizes, n)))
@@ -153,7 +206,7 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> Prepared {
 }
 
 /// [`rows`] from [`prepare`]d candidates (made with the same oracle and sizes).
-pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &Prepared) -> Vec<Check> {
+pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Check> {
     let mut rows = vec![];
     for ((noise, s), (_, t)) in p.sgd.iter().zip(&p.storm) {
         rows.extend(sgd::rows_from(inputs, &sizes, *noise, s));

@@ -148,40 +148,13 @@ pub(super) fn search_text(b: &super::search::Budget) -> String {
     )
 }
 
-/// The search's candidates and the first one certified under an oracle: what the rows need that
-/// depends on the inputs only through the oracle ([`TableInputs::estimate`]), so that rows for
-/// other constants or formulas reuse it.
-#[derive(Debug, Clone)]
-pub struct Prepared {
-    /// Feasible candidates the search found.
-    pub found: usize,
-    /// The first candidate certified, if any.
-    pub certified: Option<Certified>,
-    /// Why the candidates before it were passed over.
-    pub passed_over: Vec<String>,
-}
+/// The search's candidates and the first one certified under an oracle ([`super::Prepared`]).
+pub type Prepared = super::Prepared<Certified>;
 
 /// Search (seeded, [`search`]) and certify the best candidates in order until one passes.
 pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Prepared {
     let found = search(Algorithm::Sgd, noise, s.sgd);
-    let mut passed_over = vec![];
-    for e in found.iter().take(s.tries) {
-        match certify(e, inputs, s) {
-            Ok(c) => {
-                return Prepared {
-                    found: found.len(),
-                    certified: Some(c),
-                    passed_over,
-                };
-            }
-            Err(m) => passed_over.push(m),
-        }
-    }
-    Prepared {
-        found: found.len(),
-        certified: None,
-        passed_over,
-    }
+    super::first_certified(&found, s.tries, |e| certify(e, inputs, s))
 }
 
 /// Rows 1.tight and 1.tight.ctl (module docs) from [`prepare`]d candidates (made with the same
@@ -193,21 +166,16 @@ pub fn rows_from(inputs: &TableInputs, s: &Sizes, noise: Noise, p: &Prepared) ->
             noise,
             &p.passed_over,
         ),
-        None => vec![
+        None => vec![p.none_certified(
             Check::builder(
                 format!("1.tight{}", noise.suffix()),
                 RESULT,
                 "a tight instance of eq. 3.27",
                 Role::Thesis,
-            )
-            .details(format!(
-                "no candidate certified ({} feasible found by the {}): {}",
-                p.found,
-                search_text(&s.sgd),
-                p.passed_over.join("; ")
-            ))
-            .decided(Method::Exact, Verdict::Inconclusive),
-        ],
+            ),
+            &s.sgd,
+            Method::Exact,
+        )],
     }
 }
 

@@ -171,40 +171,13 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
         .decided(Method::Rigorous, verdict)
 }
 
-/// The search's candidates and the first one certified under an oracle: what the rows need that
-/// depends on the inputs only through the oracle ([`TableInputs::estimate`]), so that rows for
-/// other constants or formulas reuse it.
-#[derive(Debug, Clone)]
-pub struct Prepared {
-    /// Feasible candidates the search found.
-    pub found: usize,
-    /// The first candidate certified, if any.
-    pub certified: Option<Certified>,
-    /// Why the candidates before it were passed over.
-    pub passed_over: Vec<String>,
-}
+/// The search's candidates and the first one certified under an oracle ([`super::Prepared`]).
+pub type Prepared = super::Prepared<Certified>;
 
 /// Search (seeded, [`search`]) and certify the best candidates in order until one passes.
 pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Prepared {
     let found = search(Algorithm::Storm, noise, s.storm);
-    let mut passed_over = vec![];
-    for e in found.iter().take(s.tries) {
-        match certify(e, inputs, s) {
-            Ok(c) => {
-                return Prepared {
-                    found: found.len(),
-                    certified: Some(c),
-                    passed_over,
-                };
-            }
-            Err(m) => passed_over.push(m),
-        }
-    }
-    Prepared {
-        found: found.len(),
-        certified: None,
-        passed_over,
-    }
+    super::first_certified(&found, s.tries, |e| certify(e, inputs, s))
 }
 
 /// Rows 2c.tight and 2c.tight.ctl (module docs) from [`prepare`]d candidates (made with the same
@@ -216,21 +189,16 @@ pub fn rows_from(inputs: &TableInputs, s: &Sizes, noise: Noise, p: &Prepared) ->
             noise,
             &p.passed_over,
         ),
-        None => vec![
+        None => vec![p.none_certified(
             Check::builder(
                 format!("2c.tight{}", noise.suffix()),
                 RESULT,
                 "a tight instance of eq. (3.60*)",
                 Role::Corrected,
-            )
-            .details(format!(
-                "no candidate certified ({} feasible found by the {}): {}",
-                p.found,
-                search_text(&s.storm),
-                p.passed_over.join("; ")
-            ))
-            .decided(Method::Rigorous, Verdict::Inconclusive),
-        ],
+            ),
+            &s.storm,
+            Method::Rigorous,
+        )],
     }
 }
 
