@@ -19,12 +19,12 @@ pub struct Profile {
     pub name: String,
     /// Report seeds per configuration (≥ 2 for a confidence interval; the committed profiles use ≥ 10).
     pub seeds: u32,
-    /// Tuning seeds per grid point of the pre-registered tuning protocol ([`crate::tuning`]);
+    /// Tuning seeds per grid point of the pre-registered tuning protocol ([`crate::protocol`]);
     /// their RNG seeds come from a key namespace of their own, disjoint from the report seeds'.
     pub tuning_seeds: u32,
     /// Which size of the theorem-check suite to run: `"quick"`, `"full"` or `"none"` (skip it).
-    pub theory_profile: String,
-    /// The tuning protocol's successive halving and edge extension ([`crate::tuning`]).
+    pub theory_profile: TheorySize,
+    /// The tuning protocol's successive halving and edge extension ([`crate::protocol`]).
     #[serde(default)]
     pub tuning: TuningProtocol,
     /// Fig. 4.2.
@@ -36,7 +36,36 @@ pub struct Profile {
 }
 
 pub use crate::gradient_error::GradientError;
-pub use crate::tuning::TuningProtocol;
+
+/// The size at which the theorem-check table runs (`ilopt-theory`'s profiles), or not at all.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum TheorySize {
+    /// `ilopt-theory`'s quick table.
+    Quick,
+    /// `ilopt-theory --full`.
+    Full,
+    /// No theorem table.
+    None,
+}
+
+impl TheorySize {
+    /// The name a profile and `--theory` use.
+    pub fn name(self) -> &'static str {
+        match self {
+            TheorySize::Quick => "quick",
+            TheorySize::Full => "full",
+            TheorySize::None => "none",
+        }
+    }
+}
+
+impl std::fmt::Display for TheorySize {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+pub use crate::protocol::TuningProtocol;
 
 /// One task's experiment: the learner, the evaluation, the convergence criterion, the algorithms.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -313,7 +342,7 @@ pub fn committed_text(name: &str) -> Option<&'static str> {
 
 /// The `theory_profile` a committed profile (`"quick"`, `"full"`) sets; `None` for any other
 /// name.
-pub fn committed_theory_profile(name: &str) -> Option<String> {
+pub fn committed_theory_profile(name: &str) -> Option<TheorySize> {
     let text = committed_text(name)?;
     let p = Profile::from_toml(text, Path::new(name)).expect("a committed profile is valid");
     Some(p.theory_profile)
@@ -360,13 +389,6 @@ impl Profile {
         self.tuning
             .validate()
             .map_err(|(name, reason)| field(file, &format!("tuning.{name}"), reason))?;
-        if !matches!(self.theory_profile.as_str(), "quick" | "full" | "none") {
-            return Err(field(
-                file,
-                "theory_profile",
-                "must be \"quick\", \"full\" or \"none\"",
-            ));
-        }
         self.gradient_error
             .validate()
             .map_err(|(name, reason)| field(file, &name, reason))?;

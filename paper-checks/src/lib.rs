@@ -4,7 +4,7 @@
 //! SVG/PNG figures, per-seed CSV/JSON, provenance).
 //!
 //! The binary (`cargo run --release -p paper-checks`) reads a committed TOML profile
-//! ([`config::Profile`]), selects every row's hyper-parameters by the pre-registered [`tuning`]
+//! ([`config::Profile`]), selects every row's hyper-parameters by the pre-registered [`protocol`]
 //! protocol (grids on tuning seeds disjoint from the report seeds), runs the [`experiment`]s
 //! through the [`pipeline`] (budgets in gradient calls, sustained convergence, diverged runs as
 //! data; seeds in parallel, results independent of the thread count, finished configurations
@@ -20,6 +20,7 @@ pub mod naming;
 pub mod pipeline;
 pub mod plots;
 pub mod progress;
+pub mod protocol;
 pub mod provenance;
 pub mod report;
 pub mod results;
@@ -27,7 +28,6 @@ pub mod shard;
 pub mod stats;
 pub mod storage;
 pub mod storm_stability;
-pub mod tuning;
 pub mod verdict;
 
 pub use error::Error;

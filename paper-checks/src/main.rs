@@ -41,8 +41,8 @@ struct Args {
     quiet: bool,
     /// Run the theorem table at this size instead of the profile's `theory_profile`: `quick`,
     /// `full` (`ilopt-theory --full`) or `none`. The appendix and the provenance name the size.
-    #[arg(long, value_name = "SIZE", value_parser = ["quick", "full", "none"], global = true)]
-    theory: Option<String>,
+    #[arg(long, value_name = "SIZE", global = true)]
+    theory: Option<paper_checks::config::TheorySize>,
     /// Compute only shard K of N (e.g. `3/16`) of the tuning and report runs into the output
     /// directory's unit store; run every shard in passes until it says its report runs are
     /// stored (each pass advances every row's tuning by one rung of successive halving, and the
@@ -83,7 +83,7 @@ fn main() -> ExitCode {
     let result = text.and_then(|text| {
             let mut p = Profile::from_toml(&text, &path)?;
             if let Some(t) = &args.theory {
-                p.theory_profile.clone_from(t);
+                p.theory_profile = *t;
             }
             let mode = match (&args.command, args.shard) {
                 (Some(Command::Merge), _) => Mode::Merge,

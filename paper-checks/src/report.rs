@@ -12,18 +12,18 @@ use std::path::Path;
 
 pub mod aggregate;
 pub mod beyond;
+pub mod blocks;
 pub mod claims;
 pub mod data;
-pub mod doc;
 pub mod document;
 pub mod figures;
+pub mod protocol_section;
 pub mod sensitivity;
 pub mod speedup;
 pub mod storm_divergence;
 pub mod tex;
 pub mod theory;
 pub mod thesis;
-pub mod tuning;
 
 pub use crate::verdict::Verdict;
 pub use aggregate::{ConvergenceRow, num};
@@ -70,7 +70,7 @@ pub fn write(profile: &Profile, r: &Results, out: &Path, png: bool) -> Result<()
     let mut blocks = blocks;
     let at = blocks
         .iter()
-        .position(|b| matches!(b, doc::Block::Table(t) if t.label == "tab:pc-sensitivity"))
+        .position(|b| matches!(b, blocks::Block::Table(t) if t.label == "tab:pc-sensitivity"))
         .map_or(blocks.len(), |i| i + 1);
     let mut inserted = sensitivity;
     inserted.extend(storm_divergence::blocks());

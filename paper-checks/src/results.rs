@@ -4,7 +4,7 @@
 use crate::config::AlgorithmEntry;
 use crate::experiment::{Checkpoint, ReferencePolicy, SeedRun, SeedTiming, TaskKind};
 pub use crate::gradient_error::GradientErrorResult;
-use crate::tuning::TuningResult;
+use crate::protocol::TuningResult;
 use ilopt_theory::check::Check;
 use serde::{Deserialize, Serialize};
 

@@ -1,10 +1,11 @@
 //! The appendix's rendering: the kit-vs-thesis speed-up table, the figures' clamping and tick
 //! labels, and the theorem-check section built from check records, on hand-made numbers.
 
+use paper_checks::config::TheorySize;
 use paper_checks::experiment::{SeedTiming, TaskKind};
 use paper_checks::pipeline::TheoryCache;
 use paper_checks::plots::{Figure, Marker, Scale, Series, Style, fmt_tick, style_for};
-use paper_checks::report::doc::{self, Block, Table};
+use paper_checks::report::blocks::{self, Block, Table};
 use paper_checks::report::speedup::{
     SpeedupRow, TimeBasis, kit_time, speedup_cells, speedup_row, speedup_total,
 };
@@ -334,7 +335,11 @@ fn tables(blocks: &[Block]) -> Vec<&Table> {
 #[test]
 fn the_theory_section_is_rendered_from_the_check_records() {
     let checks = two_checks();
-    let b = theory::blocks(&TheoryTable::Checks(checks.clone()), "quick", "tab:t");
+    let b = theory::blocks(
+        &TheoryTable::Checks(checks.clone()),
+        TheorySize::Quick,
+        "tab:t",
+    );
     let t = tables(&b);
     // The check table split in two, then the constants.
     assert_eq!(t.len(), 3, "{b:?}");
@@ -424,7 +429,7 @@ fn the_theory_section_is_rendered_from_the_check_records() {
             "**1a.control** second \\| x. Constants: K1 (table of constants).".into(),
         ]))
     );
-    let md = doc::markdown(&b);
+    let md = blocks::markdown(&b);
     assert_eq!(
         md.matches("interval branch-and-bound (727 boxes)").count(),
         1,
@@ -440,7 +445,7 @@ fn the_theory_section_is_rendered_from_the_check_records() {
 fn an_undetected_control_fails_the_status_and_no_table_is_a_note() {
     let mut checks = two_checks();
     checks[1].verdict = ilopt_theory::check::Verdict::Holds;
-    let b = theory::blocks(&TheoryTable::Checks(checks), "quick", "tab:t");
+    let b = theory::blocks(&TheoryTable::Checks(checks), TheorySize::Quick, "tab:t");
     assert!(b.contains(&Block::Para(
         "Uninformative or inconclusive rows (no evidence either way; not a failure of the status): none. Thesis claims refuted by their errata (expected to fail): none. Negative controls: 1a.control NOT detected.".into()
     )));
@@ -449,7 +454,7 @@ fn an_undetected_control_fails_the_status_and_no_table_is_a_note() {
     assert!(b.iter().any(|x| matches!(x, Block::Para(p)
         if p.starts_with("**Status: FAILS — negative control(s) not detected: 1a.control;")
             && p.contains("α-family claim(s) not emitted"))));
-    let none = theory::blocks(&TheoryTable::NotRun, "none", "tab:t");
+    let none = theory::blocks(&TheoryTable::NotRun, TheorySize::None, "tab:t");
     assert_eq!(none.len(), 1);
     assert!(matches!(&none[0], Block::Para(p) if p.starts_with("*Not run")));
     assert!(theory::checks_by_erratum(TheoryTable::NotRun.checks()).is_empty());

@@ -29,7 +29,7 @@ mod stale;
 #[cfg(test)]
 mod tests;
 mod theory_cache;
-mod tune;
+mod tuning_stage;
 
 /// How to run.
 #[derive(Debug, Clone)]

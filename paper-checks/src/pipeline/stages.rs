@@ -5,18 +5,18 @@ use super::Options;
 use super::benches::Benches;
 use super::keys::{gradient_key, task_key, theory_key};
 use super::theory_cache::{TheoryCache, write_theory_copies};
-use super::tune::{at_point, tune, tuning_seeds_of};
-use crate::config::Profile;
+use super::tuning_stage::{at_point, tune, tuning_seeds_of};
+use crate::config::{Profile, TheorySize};
 use crate::error::Error;
 use crate::experiment::{RunSpec, TaskKind, eval_key, run_key, run_spec};
 use crate::naming::slug;
 use crate::progress::Progress;
+use crate::protocol::TuningResult;
 use crate::results::{
     ConfigResult, ConfigTiming, ConfigWithTiming, GradientErrorResult, TheoryTable,
 };
 use crate::shard::{Mode, Units, unit_key};
 use crate::storage::{read_json, to_json, write_atomic};
-use crate::tuning::TuningResult;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -87,7 +87,7 @@ pub(super) fn stages(
             }
             return Ok(Some(TheoryTable::Checks(c.checks)));
         }
-        if profile.theory_profile == "none" {
+        if profile.theory_profile == TheorySize::None {
             // No table this time: a table left by an earlier profile must not sit beside it.
             for f in [&theory_file, &theory_json, &theory_cache_file] {
                 if sharded.is_none() && f.exists() {
@@ -99,7 +99,7 @@ pub(super) fn stages(
         if !computes(&tkey) {
             return Ok(None);
         }
-        let p = if profile.theory_profile == "full" {
+        let p = if profile.theory_profile == TheorySize::Full {
             ilopt_theory::suite::Profile::Full
         } else {
             ilopt_theory::suite::Profile::Quick

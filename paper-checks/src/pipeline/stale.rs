@@ -1,6 +1,6 @@
 //! Removing what this profile does not produce from the output directory.
 
-use crate::config::Profile;
+use crate::config::{Profile, TheorySize};
 use crate::error::Error;
 use crate::experiment::TaskKind;
 use crate::naming::slug;
@@ -19,7 +19,7 @@ pub fn remove_stale(
     timings_dir: &Path,
 ) -> Result<Vec<String>, Error> {
     let mut keep_runs = vec!["gradient-error.json".to_string()];
-    if profile.theory_profile != "none" {
+    if profile.theory_profile != TheorySize::None {
         keep_runs.push("theory.json".into());
     }
     let mut keep_timings = vec!["gradient-error.json".to_string()];

@@ -15,6 +15,6 @@ fn the_theory_cache_key_names_the_size_profile_and_the_code() {
     let quick = theory_key(&p, "a");
     assert_eq!(quick, theory_key(&p, "a"));
     assert_ne!(quick, theory_key(&p, "b"));
-    p.theory_profile = "full".into();
+    p.theory_profile = crate::config::TheorySize::Full;
     assert_ne!(quick, theory_key(&p, "a"));
 }

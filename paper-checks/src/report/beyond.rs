@@ -7,8 +7,8 @@
 //! uses). The section states counts, medians and intervals; it makes no claim of its own.
 
 use super::aggregate::{ConvergenceRow, ci, num, percent};
+use super::blocks::{Block, Table};
 use super::claims::calls;
-use super::doc::{Block, Table};
 use crate::results::{ConfigResult, ConfigWithTiming, Results};
 use crate::verdict::Tally;
 

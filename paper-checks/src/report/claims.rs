@@ -118,7 +118,7 @@ fn qualify(c: Claim, r: &Results, budget_of: impl Fn(TaskKind) -> u64) -> Claim 
 fn qualify_with(
     mut c: Claim,
     rows: &[&ConfigResult],
-    tuning: &[crate::tuning::TuningResult],
+    tuning: &[crate::protocol::TuningResult],
     budget: u64,
 ) -> Claim {
     let Some(task) = c.task else {
@@ -970,7 +970,7 @@ mod tests {
 
     #[test]
     fn a_not_reproduced_on_weak_tuning_or_a_short_budget_becomes_inconclusive_with_its_reason() {
-        use crate::tuning::{PointResult, Round, TuningResult};
+        use crate::protocol::{PointResult, Round, TuningResult};
         let never = timed(&[RunStatus::NotConverged, RunStatus::NotConverged]).0;
         let converged = RunStatus::Converged {
             checkpoint: 1,

@@ -5,11 +5,11 @@
 use super::aggregate::{
     ConvergenceRow, FRACTION, ci, last, num, out_of, percent, reward_range, runtime,
 };
+use super::blocks::{self, Block, Table};
 use super::claims::Claim;
-use super::doc::{self, Block, Table};
 use super::figures::NamedFigure;
 use super::thesis::{ERRATA, THESIS_T41, THESIS_T42, THESIS_T43, THESIS_T44};
-use super::{speedup, theory, tuning};
+use super::{protocol_section, speedup, theory};
 use crate::config::Profile;
 use crate::error::Error;
 use crate::experiment::{Checkpoint, SeedRun, TaskKind};
@@ -318,7 +318,7 @@ fn verdict_summary(claims: &[Claim], timing: &[Claim]) -> Vec<Block> {
 /// same text as the appendix's "Verdicts at a glance" — for a front page to quote verbatim (the
 /// README's results block is this file of a quick run, and CI compares the two).
 pub fn results_page(claims: &[Claim], timing: &[Claim]) -> String {
-    doc::markdown(&verdict_summary(claims, timing)[1..])
+    blocks::markdown(&verdict_summary(claims, timing)[1..])
 }
 
 /// A claim in the claims section: id, place, statement and verdict, then [`DETAIL_FIELDS`].
@@ -365,7 +365,7 @@ pub struct Inputs<'a> {
     pub machine: &'a crate::provenance::Machine,
 }
 
-/// The appendix as blocks, rendered by [`doc::markdown`] and [`doc::latex`].
+/// The appendix as blocks, rendered by [`blocks::markdown`] and [`blocks::latex`].
 pub fn document(x: &Inputs<'_>) -> Vec<Block> {
     let (profile, r) = (x.profile, x.results);
     let mut d = Vec::new();
@@ -456,7 +456,7 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
             .into(),
         episode_length_note(r),
     ]));
-    d.extend(tuning::blocks(profile, r));
+    d.extend(protocol_section::blocks(profile, r));
 
     d.push(h(
         "Fig. 4.2: gradient-estimate error vs number of trajectories",
@@ -602,7 +602,7 @@ pub fn document(x: &Inputs<'_>) -> Vec<Block> {
     d.push(h("Theorem checks (`ilopt-theory`)"));
     d.extend(theory::blocks(
         &r.theory,
-        &profile.theory_profile,
+        profile.theory_profile,
         "tab:pc-theory",
     ));
     d.push(h("Errata (math.md §0)"));
@@ -662,7 +662,7 @@ pub fn latex_standalone() -> String {
          \\begin{{document}}\n\
          \\input{{appendix}}\n\
          \\end{{document}}\n",
-        doc::LATEX_PACKAGES
+        blocks::LATEX_PACKAGES
     )
 }
 
@@ -672,10 +672,13 @@ pub fn latex_standalone() -> String {
 /// # Errors
 /// [`Error::Io`].
 pub fn write_documents(blocks: &[Block], out: &Path) -> Result<(), Error> {
-    write_atomic(&out.join("appendix.md"), doc::markdown(blocks).as_bytes())?;
+    write_atomic(
+        &out.join("appendix.md"),
+        blocks::markdown(blocks).as_bytes(),
+    )?;
     write_atomic(
         &out.join("appendix.tex"),
-        doc::latex(blocks, LATEX_PREAMBLE).as_bytes(),
+        blocks::latex(blocks, LATEX_PREAMBLE).as_bytes(),
     )?;
     write_atomic(
         &out.join("appendix-standalone.tex"),
@@ -685,7 +688,7 @@ pub fn write_documents(blocks: &[Block], out: &Path) -> Result<(), Error> {
 
 #[cfg(test)]
 mod tests {
-    use super::{Block, Claim, command_flags, doc, results_page, verdict_summary};
+    use super::{Block, Claim, blocks, command_flags, results_page, verdict_summary};
     use crate::config::Profile;
     use crate::verdict::Verdict;
     use std::path::Path;
@@ -701,11 +704,11 @@ mod tests {
     fn the_command_names_a_theory_size_other_than_the_profiles() {
         let mut quick = committed("quick");
         assert_eq!(command_flags(&quick), "");
-        quick.theory_profile = "none".into();
+        quick.theory_profile = crate::config::TheorySize::None;
         assert_eq!(command_flags(&quick), " -- --theory none");
         let mut full = committed("full");
         assert_eq!(command_flags(&full), " -- --full");
-        full.theory_profile = "full".into();
+        full.theory_profile = crate::config::TheorySize::Full;
         assert_eq!(command_flags(&full), " -- --full --theory full");
     }
 
@@ -732,7 +735,7 @@ mod tests {
         ];
         let timing = [claim("T1", Verdict::Inconclusive)];
         let page = results_page(&claims, &timing);
-        let appendix = doc::markdown(&verdict_summary(&claims, &timing));
+        let appendix = blocks::markdown(&verdict_summary(&claims, &timing));
         assert!(!page.contains("Verdicts at a glance"), "{page}");
         assert!(appendix.contains("Verdicts at a glance"));
         assert!(
@@ -761,7 +764,7 @@ mod tests {
         assert_eq!(t.header, ["#", "claim", "verdict"]);
         assert_eq!(t.rows.len(), 3);
         assert_eq!(t.rows[1], ["C2", "claim C2", "**not reproduced**"]);
-        let md = doc::markdown(&blocks);
+        let md = blocks::markdown(&blocks);
         assert!(
             md.contains(
                 "3 claims of chapter 4: **1 reproduced**, **1 inconclusive**, **1 not reproduced**"
@@ -769,7 +772,7 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("| T1 | claim T1 | **inconclusive** |"), "{md}");
-        let tex = doc::latex(&blocks, "");
+        let tex = blocks::latex(&blocks, "");
         assert!(
             tex.contains("T1 & claim T1 & \\textbf{inconclusive} \\\\"),
             "{tex}"

@@ -3,12 +3,12 @@
 //! calls to sustained convergence below — the pick ringed and diverged points drawn as crosses.
 
 use super::aggregate::num;
-use super::doc::Block;
+use super::blocks::Block;
 use crate::error::Error;
 use crate::experiment::TaskKind;
 use crate::plots::render_png;
+use crate::protocol::{PointResult, TuningResult};
 use crate::results::Results;
-use crate::tuning::{PointResult, TuningResult};
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -258,7 +258,7 @@ mod tests {
     use super::*;
     use crate::experiment::RunStatus;
     use crate::grid::GridDim;
-    use crate::tuning::{Round, Score, TuningRun};
+    use crate::protocol::{Round, Score, TuningRun};
 
     fn run(status: RunStatus) -> TuningRun {
         TuningRun {

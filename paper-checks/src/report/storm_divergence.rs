@@ -2,7 +2,7 @@
 //! (math.md §10), with the exact toy instance computed when the appendix is written.
 
 use super::aggregate::num;
-use super::doc::Block;
+use super::blocks::Block;
 use ilopt::algo::storm_stability::{eigenvalues, threshold};
 use ilopt::exact::storm_jacobian::{Matrix, hessian, unweighted, weighted};
 use ilopt::problem::Weighting;
@@ -150,7 +150,7 @@ mod tests {
         for (_, u, w) in &x.thresholds {
             assert!(u < w, "{u} vs {w}");
         }
-        let text = super::super::doc::markdown(&blocks());
+        let text = super::super::blocks::markdown(&blocks());
         assert!(
             text.contains(&format!("E[J] = {}, C = {}", x.mean_jacobian, x.covariance)),
             "{text}"

@@ -7,7 +7,8 @@
 //! certificate (exact, rigorous upper bound or estimate, and how it was obtained) and the checks
 //! that use them; each check's details refer to the table's rows.
 
-use super::doc::{Block, Table};
+use super::blocks::{Block, Table};
+use crate::config::TheorySize;
 use crate::results::TheoryTable;
 use ilopt_theory::check::{Check, Role};
 use ilopt_theory::report::{
@@ -205,7 +206,7 @@ fn details_blocks(checks: &[Check], label: &str) -> Vec<Block> {
 
 /// The theorem-check section's blocks: the check tables, the notes and status, then the
 /// constants once and the details referring to them; tables are labelled `label-…`.
-pub fn blocks(table: &TheoryTable, size: &str, label: &str) -> Vec<Block> {
+pub fn blocks(table: &TheoryTable, size: TheorySize, label: &str) -> Vec<Block> {
     let TheoryTable::Checks(checks) = table else {
         return vec![Block::Para(
             "*Not run: `theory_profile = \"none\"` (in the profile, or `--theory none`). Run \
@@ -223,7 +224,7 @@ pub fn blocks(table: &TheoryTable, size: &str, label: &str) -> Vec<Block> {
 
 /// Which size of the table this is, with the main sizes that differ between the two (from
 /// `ilopt-theory`'s protocol, so that the text follows the code), and how to run the other.
-fn size_text(size: &str) -> String {
+fn size_text(size: TheorySize) -> String {
     use ilopt_theory::certify::recheck::QUICK_SAMPLE;
     use ilopt_theory::protocol::{Profile, real_sizes};
     let of = |p: Profile| {
@@ -247,7 +248,7 @@ fn size_text(size: &str) -> String {
             s.schedule_k, s.runs, s.storm_runs, cp.n_oracle, ob.n_oracle
         )
     };
-    let (this, other, other_name, flag) = if size == "full" {
+    let (this, other, other_name, flag) = if size == TheorySize::Full {
         (of(Profile::Full), of(Profile::Quick), "quick", " --full")
     } else {
         (of(Profile::Quick), of(Profile::Full), "full", "")
@@ -284,11 +285,11 @@ mod size_tests {
     /// of `ilopt-theory`'s protocol.
     #[test]
     fn the_table_says_which_size_it_is() {
-        let quick = size_text("quick");
+        let quick = size_text(crate::config::TheorySize::Quick);
         assert!(quick.starts_with("This is the **quick** theorem table, as `ilopt-theory` prints"));
         let k = |p: Profile| format!("k = {}", p.sizes().schedule_k);
         assert!(quick.contains(&k(Profile::Quick)) && quick.contains("`--theory full`"));
-        let full = size_text("full");
+        let full = size_text(crate::config::TheorySize::Full);
         assert!(full.starts_with("This is the **full** theorem table, as `ilopt-theory --full`"));
         assert!(full.contains(&k(Profile::Full)) && full.contains("`--theory quick`"));
         assert!(full.find("on every box") < full.find("a seeded sample"));

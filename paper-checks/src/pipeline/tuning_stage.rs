@@ -10,12 +10,12 @@ use crate::experiment::{RunSpec, TaskKind, run_key_of, run_spec};
 use crate::grid::GridPoint;
 use crate::naming::slug;
 use crate::progress::Progress;
-use crate::shard::{Mode, Units, unit_key};
-use crate::storage::{read_json, to_json, write_atomic};
-use crate::tuning::{
+use crate::protocol::{
     PointResult, Round, RungRecord, Score, TuningResult, TuningRun, ranking, tuning_eval_key,
     tuning_seed,
 };
+use crate::shard::{Mode, Units, unit_key};
+use crate::storage::{read_json, to_json, write_atomic};
 use rayon::prelude::*;
 use std::collections::HashMap;
 
@@ -162,7 +162,7 @@ pub(super) fn tune(
 }
 
 /// One row's tuning: rounds of successive halving over its grid, the grid grown at the pick's
-/// log edges between rounds ([`crate::tuning`]).
+/// log edges between rounds ([`crate::protocol`]).
 struct Row<'a> {
     profile: &'a Profile,
     benches: &'a Benches,

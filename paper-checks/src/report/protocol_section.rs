@@ -3,11 +3,11 @@
 //! statuses, and the whole tuning grid's results (the sensitivity table).
 
 use super::aggregate::num;
-use super::doc::{Block, Table};
+use super::blocks::{Block, Table};
 use crate::config::{Profile, Role, TaskSection};
 use crate::experiment::{RunStatus, TaskKind};
+use crate::protocol::{Score, TuningResult};
 use crate::results::Results;
-use crate::tuning::{Score, TuningResult};
 
 fn strings(xs: &[&str]) -> Vec<String> {
     xs.iter().map(|s| (*s).to_string()).collect()
