@@ -4,19 +4,19 @@
 //! Prints one JSON object with `objective` (F(θ), forward DP X2), `gradient` (∇F(θ), X2),
 //! `expected_estimate` (E[∇f(θ, τ)] by enumeration X1, eq. 3.15) and `second_moment` (E‖∇f‖², X1).
 //! With `--baseline` (one number b for every decision, or T − 2 numbers b_1..b_{T−2}) the last two
-//! are those of the baselined estimator `g_b = g − Σ_i b_i ψ_i` (math.md §9; [`crate::baseline`]),
+//! are those of the baselined estimator `g_b = g − Σ_i b_i ψ_i` (math.md §9; [`ilopt::baseline`]),
 //! and `baseline` echoes the values. `--optimal-baseline` adds `optimal_baseline`: E[g·ψ_i],
 //! E‖ψ_i‖², the variance-minimising b*_i and b*_const, the second moments they reach, and the
-//! reduction factors E‖g‖²/E‖g_{b*}‖² ([`crate::exact::baseline`]); its `state` object gives the
+//! reduction factors E‖g‖²/E‖g_{b*}‖² ([`ilopt::exact::baseline`]); its `state` object gives the
 //! same for the variance-minimising baseline per state, `b_i = w*_{s_i}` (`cross` c_s, `score_moment`
 //! A_ss, `weights` w*_s = c_s/A_ss, `second_moment`, `reduction`).
 //! `exact` prints fraction strings (`"-13/24"`), `f64` prints numbers, `interval` prints `[lo, hi]`
 //! pairs that enclose the exact values.
 
-use crate::exact::evaluation::{EvaluationError, EvaluationOptions, evaluate};
-use crate::scalar::{BigRational, Interval, JsonScalar, parse_exact_list};
-use crate::toy::{ToyError, ToyMdp};
 use clap::{Args, Subcommand, ValueEnum};
+use ilopt::exact::evaluation::{EvaluationError, EvaluationOptions, evaluate};
+use ilopt::scalar::{BigRational, Interval, JsonScalar, parse_exact_list};
+use ilopt::toy::{ToyError, ToyMdp};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 

@@ -2,6 +2,9 @@
 //! dispatches. Errors go to stderr with a non-zero exit status (2 for usage errors, 1 for failures);
 //! results go to stdout as JSON.
 
+#![warn(missing_docs)]
+#![deny(unsafe_code)]
+
 pub mod eval;
 pub mod expert;
 pub mod replay;

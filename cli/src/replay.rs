@@ -15,8 +15,8 @@
 //! (correctly rounded).
 
 #[cfg(doc)]
-use crate::env::cartpole::cartpole_step;
-use crate::env::cartpole_replay::{Actions, ReplayError, parse_actions, parse_init, replay};
+use ilopt::env::cartpole::cartpole_step;
+use ilopt::env::cartpole_replay::{Actions, ReplayError, parse_actions, parse_init, replay};
 use serde_json::{Value, json};
 
 /// Arguments of `ilopt replay cartpole`.
