@@ -1,5 +1,5 @@
 //! The exact engine at one θ of a toy MDP, as `ilopt toy eval` reports it: F(θ) and ∇F(θ) by the
-//! forward DP (X2), E[∇f(θ, τ)] (eq. 3.15) and E‖∇f‖² by enumeration (X1) — of the baselined
+//! forward DP (X2), E\[∇f(θ, τ)\] (eq. 3.15) and E‖∇f‖² by enumeration (X1) — of the baselined
 //! estimator `g_b = g − Σ_i b_i ψ_i` when baselines are given (math.md §9) — and, on request, the
 //! variance-minimising baselines of [`super::baseline`].
 
@@ -30,7 +30,7 @@ pub struct Evaluation<S> {
     pub objective: S,
     /// ∇F(θ) (X2).
     pub gradient: Vec<S>,
-    /// E[g] of the estimator (eq. 3.15), or E[g_b] with baselines (X1).
+    /// E\[g\] of the estimator (eq. 3.15), or E\[g_b\] with baselines (X1).
     pub expected_estimate: Vec<S>,
     /// E‖g‖², or E‖g_b‖² with baselines (X1).
     pub second_moment: S,
@@ -55,7 +55,7 @@ pub enum EvaluationError {
     NonFinite(&'static str),
 }
 
-/// F(θ), ∇F(θ), E[g] and E‖g‖² of `mdp` at the exact `theta`, computed in scalar `S`, with what
+/// F(θ), ∇F(θ), E\[g\] and E‖g‖² of `mdp` at the exact `theta`, computed in scalar `S`, with what
 /// `options` adds.
 ///
 /// # Errors
