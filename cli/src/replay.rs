@@ -13,6 +13,9 @@
 //! says so in two more fields: `"first_terminal_step"` (1-based, or `null`) and
 //! `"steps_after_termination"`. The initial state is read as Python's `float()` reads it
 //! (correctly rounded).
+//!
+//! The parsing of the text forms and the replay are the library's ([`ilopt::env::cartpole_replay`]);
+//! this module reads the arguments, warns and prints.
 
 #[cfg(doc)]
 use ilopt::env::cartpole::cartpole_step;

@@ -12,6 +12,9 @@
 //! A_ss, `weights` w*_s = c_s/A_ss, `second_moment`, `reduction`).
 //! `exact` prints fraction strings (`"-13/24"`), `f64` prints numbers, `interval` prints `[lo, hi]`
 //! pairs that enclose the exact values.
+//!
+//! The quantities are the library's [`ilopt::exact::evaluation::evaluate`]; this module reads the
+//! files and arguments and prints.
 
 use clap::{Args, Subcommand, ValueEnum};
 use ilopt::exact::evaluation::{EvaluationError, EvaluationOptions, evaluate};
