@@ -84,8 +84,6 @@
 pub mod algo;
 pub mod baseline;
 pub mod batched;
-/// Command-line front ends (the `ilopt` binary's subcommands).
-pub mod cli;
 pub mod env;
 pub mod evaluate;
 pub mod exact;

@@ -17,6 +17,8 @@ use crate::scalar::{Scalar, Undecidable};
 
 pub mod cartpole;
 
+pub mod cartpole_replay;
+
 pub mod hypot;
 
 pub mod obstacle;

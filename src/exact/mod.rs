@@ -9,6 +9,7 @@
 //! | baselines | [`baseline`] | E\[g_b\], E‖g_b‖² of the baselined estimator, the optimal b*_i, b*_const (math.md §9) |
 //! | importance sampling | [`importance`] | Σ p(τ̄;θ′) w g(θ, τ̄) (identity I3) and the bias b(θ, θ′) (I4) |
 //! | STORM's mean linearisation | [`storm_jacobian`] | E\[J\], C = E\[g ∇log pᵀ\], the IS term's E\[J̃\] and ∇²F (math.md §10) |
+//! | at one θ, as `ilopt toy eval` reports | [`evaluation`] | F, ∇F (X2), E\[g\] or E\[g_b\] and their second moment (X1), optionally the optimal baselines |
 //!
 //! The identities (I1) F_X1 = F_X2 = F_X3 and (I2) ∇F_X2 = ∇F_X3 = ∇F_enum = E\[g\] = E\[g_full\] are
 //! the thesis's unbiasedness claim (eqs. 3.16/3.18) proved exactly.
@@ -21,6 +22,7 @@
 pub mod backward;
 pub mod baseline;
 pub mod enumerate;
+pub mod evaluation;
 pub mod forward;
 pub mod importance;
 pub mod rrm;

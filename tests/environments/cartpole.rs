@@ -92,11 +92,12 @@ fn matches_gymnasium_bit_for_bit() {
     assert!(terminating_cases >= 10 && terminating_cases < cases.len());
 }
 
-/// `ilopt replay cartpole` on every reference case: same states, same flags, and the printed JSON
-/// numbers read back to the same float64.
+/// The replay behind `ilopt replay cartpole`, from the text forms of every reference case: same
+/// states bit for bit, same flags, and the states printed as JSON numbers read back to the same
+/// float64.
 #[test]
-fn replay_command_matches_gymnasium() {
-    use ilopt::cli::replay::{ReplayCartpoleArgs, run};
+fn replay_matches_gymnasium() {
+    use ilopt::env::cartpole_replay::{parse_actions, parse_init, replay};
     let r = reference();
     for case in r["cases"].as_array().unwrap() {
         let name = case["name"].as_str().unwrap();
@@ -108,33 +109,25 @@ fn replay_command_matches_gymnasium() {
             .iter()
             .map(|a| a.to_string())
             .collect();
-        let init_arg = init.join(",");
-        let actions_arg = actions.join(",");
-        let args = <ReplayCartpoleArgs as clap::Parser>::try_parse_from([
-            "cartpole",
-            "--init",
-            init_arg.as_str(),
-            "--actions",
-            actions_arg.as_str(),
-        ])
-        .unwrap();
-        let out = run(&args).unwrap();
-        // What the binary prints, read back with a correctly rounded parser.
-        let printed = serde_json::to_string(&out).unwrap();
-        let reread: Value = serde_json::from_str(&printed).unwrap();
-        assert_eq!(reread["terminated"], case["terminated"], "{name}");
-        let got = out["states"].as_array().unwrap();
+        let init = parse_init(&init.join(",")).unwrap();
+        let actions = parse_actions(&actions.join(",")).unwrap();
+        let out = replay(init, &actions).unwrap();
+        assert_eq!(
+            serde_json::to_value(&out.terminated).unwrap(),
+            case["terminated"],
+            "{name}"
+        );
         let want = case["states"].as_array().unwrap();
-        assert_eq!(got.len(), want.len());
-        for (t, (g, w)) in got.iter().zip(want).enumerate() {
+        assert_eq!(out.states.len(), want.len());
+        for (t, (g, w)) in out.states.iter().zip(want).enumerate() {
             let w = state(w);
             for i in 0..4 {
-                let x = g[i].as_f64().unwrap();
-                assert_eq!(x.to_bits(), w[i].to_bits(), "{name}, step {}", t + 1);
+                assert_eq!(g[i].to_bits(), w[i].to_bits(), "{name}, step {}", t + 1);
+                // What the command prints, read back with a correctly rounded parser.
                 let text = serde_json::to_string(&g[i]).unwrap();
                 assert_eq!(
                     text.parse::<f64>().unwrap().to_bits(),
-                    x.to_bits(),
+                    g[i].to_bits(),
                     "{text}"
                 );
             }

@@ -52,12 +52,12 @@ pub fn check_cartpole(inp: &CartpoleInput) {
             }
         }
     }
-    // The CLI's parsers of the same inputs.
-    match ilopt::cli::replay::parse_init(&inp.text) {
+    // The parsers of `ilopt replay cartpole`'s text forms, on the same inputs.
+    match ilopt::env::cartpole_replay::parse_init(&inp.text) {
         Ok(s) => assert!(s.iter().all(|x| x.is_finite())),
         Err(e) => assert!(!e.to_string().is_empty()),
     }
-    match ilopt::cli::replay::parse_actions(&inp.text) {
+    match ilopt::env::cartpole_replay::parse_actions(&inp.text) {
         Ok(a) => assert!(!a.0.is_empty() && a.0.iter().all(|&x| x <= 1)),
         Err(e) => assert!(!e.to_string().is_empty()),
     }

@@ -3,7 +3,7 @@
 //!
 //! Prints one JSON object: the Monte-Carlo objective `F̂(θ)` with its standard error over
 //! `episodes` roll-outs of the stochastic learner under the config's objective
-//! ([`crate::evaluate::objective`]), and the deterministic evaluation of `ilopt run`'s
+//! ([`ilopt::evaluate::objective`]), and the deterministic evaluation of `ilopt run`'s
 //! checkpoints (CartPole: mean reward and 500-step episodes; obstacle: success rate; toy: the
 //! exact F(θ)).
 
@@ -12,9 +12,9 @@ use super::run::config::RunFile;
 use super::run::evaluation::evaluate;
 use super::run::records::SavedTheta;
 use super::run::task::Bench;
-use crate::evaluate::objective;
-use crate::problem::OracleError;
 use clap::Args;
+use ilopt::evaluate::objective;
+use ilopt::problem::OracleError;
 use nalgebra::DVector;
 use serde_json::{Value, json};
 use std::path::PathBuf;
@@ -76,7 +76,7 @@ pub fn run(args: &EvalArgs) -> Result<Value, RunError> {
         .unwrap_or(super::run::config::DEFAULT_EPISODES);
     let theta = DVector::from_vec(saved.theta.clone());
     let n = episodes as usize;
-    let f = |r: Result<crate::evaluate::Objective, OracleError>| {
+    let f = |r: Result<ilopt::evaluate::Objective, OracleError>| {
         r.map_err(|e| RunError::Evaluation(e.to_string()))
     };
     let obj = match &bench {

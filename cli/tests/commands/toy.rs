@@ -7,7 +7,7 @@ use std::process::Command;
 fn ilopt(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_ilopt"))
         .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(crate::ROOT)
         .output()
         .unwrap();
     (
@@ -208,7 +208,7 @@ fn terminal_flags_without_a_rule_are_a_clear_error() {
     let dir = std::env::temp_dir().join(format!("ilopt-cli-toy-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/toy/terminal-absorb.json"),
+        std::path::Path::new(crate::ROOT).join("examples/toy/terminal-absorb.json"),
     )
     .unwrap();
     let mut doc: Value = serde_json::from_str(&text).unwrap();
@@ -236,8 +236,7 @@ fn terminal_flags_without_a_rule_are_a_clear_error() {
 /// any prefix is visited is shown in the exact engine's unit tests, not by a timing).
 #[test]
 fn an_infeasible_horizon_is_refused_at_once_naming_size_and_limit() {
-    let text =
-        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(M1)).unwrap();
+    let text = std::fs::read_to_string(std::path::Path::new(crate::ROOT).join(M1)).unwrap();
     let mut v: Value = serde_json::from_str(&text).unwrap();
     v["horizon"] = json!(20);
     let path = std::env::temp_dir().join(format!("ilopt-horizon-20-{}.json", std::process::id()));

@@ -1,20 +1,21 @@
-//! The `ilopt` command line. Each subcommand lives in its own module; this module only parses and
-//! dispatches. Errors go to stderr with a non-zero exit status (2 for usage errors, 1 for failures);
-//! results go to stdout as JSON.
-
-pub mod eval;
-pub mod expert;
-pub mod replay;
-pub mod run;
-pub mod toy;
+//! The `ilopt` binary: parses the command line and dispatches to the subcommands of `ilopt_cli`.
+//! Errors go to stderr with a non-zero exit status (2 for usage errors, 1 for failures); results
+//! go to stdout as JSON. See `ilopt --help` and the README.
 
 use clap::{Parser, Subcommand};
+use ilopt_cli::{eval, expert, replay, run, toy};
 use std::process::ExitCode;
 
 /// ilopt: imitation learning as stochastic optimisation, checked.
 #[derive(Debug, Parser)]
-#[command(name = "ilopt", version, about, long_about = None)]
-pub struct Cli {
+// The about line is the core library's description (the root Cargo.toml's), not this package's.
+#[command(
+    name = "ilopt",
+    version,
+    about = "Imitation learning as stochastic optimisation: algorithms and checks of the thesis, generic over the scalar type",
+    long_about = None
+)]
+struct Cli {
     #[command(subcommand)]
     command: Command,
 }
@@ -48,8 +49,8 @@ enum ReplayCommand {
     Cartpole(replay::ReplayCartpoleArgs),
 }
 
-/// Run the CLI on the process arguments; returns the exit code.
-pub fn main() -> ExitCode {
+/// Runs the CLI on the process arguments; returns the exit code.
+fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

@@ -2,12 +2,11 @@
 //! byte-identical reruns across thread counts, one named error per bad config (never a panic),
 //! evaluation of a saved θ, and paths relative to the config file's directory.
 
-use ilopt::cli::run::RunFile;
+use crate::ROOT;
+use ilopt_cli::run::RunFile;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
 /// A scratch directory, removed when dropped.
 struct Scratch(PathBuf);
@@ -763,9 +762,9 @@ fn the_example_configs_are_valid() {
         let p = e.unwrap().path();
         if p.extension().is_some_and(|x| x == "toml") {
             let c = RunFile::load(&p).unwrap_or_else(|e| panic!("{p:?}: {e}"));
-            let bench = ilopt::cli::run::task::Bench::new(&c).unwrap();
+            let bench = ilopt_cli::run::task::Bench::new(&c).unwrap();
             bench.theta0(&c).unwrap();
-            ilopt::cli::run::driver::check_algorithm(&bench, &c).unwrap();
+            ilopt_cli::run::driver::check_algorithm(&bench, &c).unwrap();
             n += 1;
         }
     }

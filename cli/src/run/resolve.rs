@@ -6,8 +6,8 @@ use super::config::{
     MAX_TRAJECTORIES, PolicyKind, RunFile, TaskName, Theta0,
 };
 use super::error::{RunError, invalid};
-use crate::task::AfterEnd;
-use crate::task::obstacle::ObstacleFeatures;
+use ilopt::task::AfterEnd;
+use ilopt::task::obstacle::ObstacleFeatures;
 use std::path::Path;
 
 impl RunFile {

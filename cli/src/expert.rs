@@ -9,7 +9,7 @@
 //!
 //! # Output
 //! One JSON line per case, in input order: `{"u":[x,y],"J":J}` — the global minimiser of eq. 4.1
-//! and its objective, from [`crate::expert::vo::vo_expert`] (double cone, `v = 0` feasible) — or
+//! and its objective, from [`ilopt::expert::vo::vo_expert`] (double cone, `v = 0` feasible) — or
 //! `{"error":"line N: …"}` when the case has no solution (e.g. `line 3: inside the obstacle: …`)
 //! or line `N` (1-based, counting every line of the input) is malformed: bad JSON or UTF-8 (with
 //! the column), a missing or unknown field, or a field of the wrong shape, named (`field v_des:
@@ -21,7 +21,7 @@
 //! # Errors
 //! An unreadable input or a failed write is an [`ExpertCliError`] (the command fails).
 
-use crate::expert::vo::vo_expert;
+use ilopt::expert::vo::vo_expert;
 use serde::Serialize;
 use std::io::Write;
 use std::path::PathBuf;

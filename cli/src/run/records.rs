@@ -3,7 +3,7 @@
 //! reruns) and its final θ ([`SavedTheta`], what `ilopt eval` loads).
 
 use super::evaluation::Evaluation;
-use crate::problem::Cost;
+use ilopt::problem::Cost;
 use serde::{Deserialize, Serialize};
 
 /// One checkpoint of a run.

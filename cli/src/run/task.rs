@@ -8,16 +8,16 @@ use super::config::{
     ExpertChoice, HorizonKind, LoadedConfig, PolicyKind, RunFile, TaskName, Theta0,
 };
 use super::error::RunError;
-use crate::env::cartpole::MAX_EPISODE_STEPS;
-use crate::env::obstacle::ObstacleConfig;
-use crate::expert::ppo::{PpoExpert, PpoExpertFile};
-use crate::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
-use crate::policy::{LinearGaussian, Logistic, Softmax, SpeedLimitedGaussian};
-use crate::problem::IlProblem;
-use crate::task::cartpole::{self, CartPoleExpert, CartPoleTask};
-use crate::task::obstacle::ObstacleTask;
-use crate::task::{Horizon, TaskProblem};
-use crate::toy::{ToyMdp, ToyProblem};
+use ilopt::env::cartpole::MAX_EPISODE_STEPS;
+use ilopt::env::obstacle::ObstacleConfig;
+use ilopt::expert::ppo::{PpoExpert, PpoExpertFile};
+use ilopt::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
+use ilopt::policy::{LinearGaussian, Logistic, Softmax, SpeedLimitedGaussian};
+use ilopt::problem::IlProblem;
+use ilopt::task::cartpole::{self, CartPoleExpert, CartPoleTask};
+use ilopt::task::obstacle::ObstacleTask;
+use ilopt::task::{Horizon, TaskProblem};
+use ilopt::toy::{ToyMdp, ToyProblem};
 use nalgebra::DVector;
 
 /// The committed PPO expert, built into the binary so that a run works from any directory.

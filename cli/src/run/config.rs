@@ -5,9 +5,9 @@
 
 use super::algorithm_keys::{check_known_keys, overlay};
 use super::error::{RunError, invalid};
-use crate::algo::AlgorithmConfig;
-use crate::task::AfterEnd;
-use crate::task::obstacle::ObstacleFeatures;
+use ilopt::algo::AlgorithmConfig;
+use ilopt::task::AfterEnd;
+use ilopt::task::obstacle::ObstacleFeatures;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 use std::path::{Path, PathBuf};
@@ -197,9 +197,9 @@ pub struct RunSection {
     #[serde(default = "one")]
     pub trajectories_per_gradient: usize,
     /// A baseline subtracted from every decision's loss-to-go in eq. 3.15 (oracle methods;
-    /// [`crate::baseline::Baseline`], e.g. `{ kind = "leave-one-out" }`); absent: none.
+    /// [`ilopt::baseline::Baseline`], e.g. `{ kind = "leave-one-out" }`); absent: none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub baseline: Option<crate::baseline::Baseline>,
+    pub baseline: Option<ilopt::baseline::Baseline>,
     /// The seeds, one run each (non-empty, distinct).
     pub seeds: Vec<u64>,
     /// θ₀ (default `"zero"`).

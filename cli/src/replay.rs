@@ -13,11 +13,13 @@
 //! says so in two more fields: `"first_terminal_step"` (1-based, or `null`) and
 //! `"steps_after_termination"`. The initial state is read as Python's `float()` reads it
 //! (correctly rounded).
+//!
+//! The parsing of the text forms and the replay are the library's ([`ilopt::env::cartpole_replay`]);
+//! this module reads the arguments, warns and prints.
 
-use crate::env::EnvError;
 #[cfg(doc)]
-use crate::env::cartpole::cartpole_step;
-use crate::env::cartpole::{CartPoleDynamics, STATE_NAMES};
+use ilopt::env::cartpole::cartpole_step;
+use ilopt::env::cartpole_replay::{Actions, ReplayError, parse_actions, parse_init, replay};
 use serde_json::{Value, json};
 
 /// Arguments of `ilopt replay cartpole`.
@@ -41,114 +43,6 @@ pub struct ReplayCartpoleArgs {
     pub actions: Actions,
 }
 
-/// A non-empty sequence of CartPole actions (each 0 or 1).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Actions(pub Vec<usize>);
-
-/// Why `ilopt replay cartpole` failed.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum ReplayError {
-    /// `--init` does not have exactly four components.
-    #[error("--init: expected 4 comma-separated numbers X,XDOT,THETA,THETADOT, got {count}")]
-    InitCount {
-        /// How many components were given.
-        count: usize,
-    },
-    /// A component of `--init` is not a number.
-    #[error("--init: component {index} ({name}) {text:?} is not a number")]
-    InitNotANumber {
-        /// 1-based position.
-        index: usize,
-        /// The component's name.
-        name: &'static str,
-        /// The offending text.
-        text: String,
-    },
-    /// A component of `--init` is NaN or infinite.
-    #[error("--init: component {index} ({name}) {text:?} is not finite")]
-    InitNotFinite {
-        /// 1-based position.
-        index: usize,
-        /// The component's name.
-        name: &'static str,
-        /// The offending text.
-        text: String,
-    },
-    /// `--actions` is empty.
-    #[error("--actions: at least one action is needed")]
-    NoActions,
-    /// An action is not `0` or `1`.
-    #[error("--actions: action {index} is {text:?}; expected 0 (push left) or 1 (push right)")]
-    BadAction {
-        /// 1-based position.
-        index: usize,
-        /// The offending text.
-        text: String,
-    },
-    /// The dynamics failed (the state left the finite floats).
-    #[error("step {step}: {source}")]
-    Step {
-        /// 1-based step number.
-        step: usize,
-        /// What failed.
-        source: EnvError,
-    },
-}
-
-/// Parses `X,XDOT,THETA,THETADOT` (surrounding spaces of each component ignored).
-///
-/// # Errors
-/// [`ReplayError::InitCount`], [`ReplayError::InitNotANumber`], [`ReplayError::InitNotFinite`].
-pub fn parse_init(text: &str) -> Result<[f64; 4], ReplayError> {
-    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
-    if parts.len() != 4 {
-        return Err(ReplayError::InitCount {
-            count: if text.trim().is_empty() {
-                0
-            } else {
-                parts.len()
-            },
-        });
-    }
-    let mut init = [0.0; 4];
-    for (i, part) in parts.iter().enumerate() {
-        let (index, name, text) = (i + 1, STATE_NAMES[i], (*part).to_owned());
-        let v: f64 = part.parse().map_err(|_| ReplayError::InitNotANumber {
-            index,
-            name,
-            text: text.clone(),
-        })?;
-        if !v.is_finite() {
-            return Err(ReplayError::InitNotFinite { index, name, text });
-        }
-        init[i] = v;
-    }
-    Ok(init)
-}
-
-/// Parses `0,1,1,…` (surrounding spaces of each action ignored).
-///
-/// # Errors
-/// [`ReplayError::NoActions`], [`ReplayError::BadAction`].
-pub fn parse_actions(text: &str) -> Result<Actions, ReplayError> {
-    if text.trim().is_empty() {
-        return Err(ReplayError::NoActions);
-    }
-    text.split(',')
-        .enumerate()
-        .map(|(i, part)| match part.trim() {
-            "0" => Ok(0),
-            "1" => Ok(1),
-            other => Err(ReplayError::BadAction {
-                index: i + 1,
-                text: other.to_owned(),
-            }),
-        })
-        .collect::<Result<Vec<_>, _>>()
-        .map(Actions)
-}
-
 fn parse_init_arg(text: &str) -> Result<[f64; 4], String> {
     parse_init(text).map_err(|e| e.to_string())
 }
@@ -160,54 +54,27 @@ fn parse_actions_arg(text: &str) -> Result<Actions, String> {
 /// Replays the actions from the initial state and returns the JSON report (module docs).
 ///
 /// # Errors
-/// [`ReplayError::NoActions`] for an empty action list (possible only when the struct is built by
-/// hand), [`ReplayError::InitNotFinite`] for a non-finite initial state, and [`ReplayError::Step`] if
-/// a state becomes non-finite or an action is invalid.
+/// As [`replay`]: [`ReplayError::NoActions`] for an empty action list (possible only when the
+/// struct is built by hand), [`ReplayError::InitNotFinite`] for a non-finite initial state, and
+/// [`ReplayError::Step`] if a state becomes non-finite or an action is invalid.
 pub fn run(args: &ReplayCartpoleArgs) -> Result<Value, ReplayError> {
-    if args.actions.0.is_empty() {
-        return Err(ReplayError::NoActions);
-    }
-    for (i, v) in args.init.iter().enumerate() {
-        if !v.is_finite() {
-            return Err(ReplayError::InitNotFinite {
-                index: i + 1,
-                name: STATE_NAMES[i],
-                text: v.to_string(),
-            });
-        }
-    }
-    let dynamics = CartPoleDynamics::<f64>::new();
-    let mut state = args.init;
-    let mut states = Vec::with_capacity(args.actions.0.len());
-    let mut terminated = Vec::with_capacity(args.actions.0.len());
-    for (i, &a) in args.actions.0.iter().enumerate() {
-        let (next, term) = dynamics
-            .step(&state, a)
-            .map_err(|source| ReplayError::Step {
-                step: i + 1,
-                source,
-            })?;
-        states.push(next.to_vec());
-        terminated.push(term);
-        state = next;
-    }
-    let first = terminated.iter().position(|&t| t);
-    let after = first.map_or(0, |i| terminated.len() - i - 1);
-    if let Some(i) = first
+    let r = replay(args.init, &args.actions)?;
+    let first = r.first_terminal_step();
+    let after = r.steps_after_termination();
+    if let Some(step) = first
         && after > 0
     {
         eprintln!(
-            "warning: the episode terminated at step {} and {after} more steps were taken; \
+            "warning: the episode terminated at step {step} and {after} more steps were taken; \
              Gymnasium warns likewise: the states after a termination are outside the \
-             environment's defined behaviour",
-            i + 1
+             environment's defined behaviour"
         );
     }
     // Every state is finite (checked by the step), so serde_json writes plain numbers.
     Ok(json!({
-        "states": states,
-        "terminated": terminated,
-        "first_terminal_step": first.map(|i| i + 1),
+        "states": r.states,
+        "terminated": r.terminated,
+        "first_terminal_step": first,
         "steps_after_termination": after,
     }))
 }

@@ -9,7 +9,7 @@ const M1: &str = "examples/toy/m1-tied.json";
 
 fn ilopt(args: &[&str]) -> (i32, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_ilopt"))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(crate::ROOT)
         .args(args)
         .output()
         .unwrap();

@@ -9,11 +9,11 @@
 //! checkpoint of a run meets the same episodes (common random numbers).
 
 use super::task::Bench;
-use crate::env::cartpole::MAX_EPISODE_STEPS;
-use crate::env::obstacle::{ObstacleEnv, Outcome};
-use crate::policy::Policy;
-use crate::problem::KitRng;
-use crate::task::Task;
+use ilopt::env::cartpole::MAX_EPISODE_STEPS;
+use ilopt::env::obstacle::{ObstacleEnv, Outcome};
+use ilopt::policy::Policy;
+use ilopt::problem::KitRng;
+use ilopt::task::Task;
 use rand::SeedableRng;
 use serde::Serialize;
 
@@ -83,7 +83,7 @@ pub fn evaluate(
         ),
         Bench::Obstacle { .. } => obstacle(bench, theta, episodes, seed),
         Bench::Toy(p) => {
-            let f = crate::exact::forward::forward(p, theta).map_err(|e| e.to_string())?;
+            let f = ilopt::exact::forward::forward(p, theta).map_err(|e| e.to_string())?;
             Ok(Evaluation {
                 objective: Some(f.objective),
                 ..Evaluation::default()
@@ -96,7 +96,7 @@ pub fn evaluate(
 type CartPoleAct<'a> = dyn FnMut(&[f64], usize) -> Result<(usize, f64), String> + 'a;
 
 fn cartpole(
-    task: &crate::task::cartpole::CartPoleTask<f64>,
+    task: &ilopt::task::cartpole::CartPoleTask<f64>,
     act: &mut CartPoleAct<'_>,
     episodes: u32,
     seed: u64,

@@ -1,9 +1,9 @@
-//! The keys of the `[algorithm]` table: [`crate::algo::AlgorithmConfig`]'s structs accept and
+//! The keys of the `[algorithm]` table: [`ilopt::algo::AlgorithmConfig`]'s structs accept and
 //! drop keys they do not know, so an unknown key is found by writing the parsed config out again;
 //! and the resolved config keeps the numbers as the user wrote them.
 
 use super::error::{RunError, invalid};
-use crate::algo::AlgorithmConfig;
+use ilopt::algo::AlgorithmConfig;
 use std::path::Path;
 
 /// Replace the values of `written` by those of `raw` at the same keys (tables recursively).

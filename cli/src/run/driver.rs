@@ -11,10 +11,10 @@ use super::error::RunError;
 use super::evaluation::evaluate;
 use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::task::Bench;
-use crate::algo::StepContext;
-use crate::baseline::Baselined;
-use crate::batched::Batched;
-use crate::problem::{Cost, IlProblem, KitRng};
+use ilopt::algo::StepContext;
+use ilopt::baseline::Baselined;
+use ilopt::batched::Batched;
+use ilopt::problem::{Cost, IlProblem, KitRng};
 use nalgebra::DVector;
 use rand::SeedableRng;
 use std::time::{Duration, Instant};
@@ -41,7 +41,7 @@ pub fn run_seed(
         .run
         .baseline
         .as_ref()
-        .filter(|b| **b != crate::baseline::Baseline::None);
+        .filter(|b| **b != ilopt::baseline::Baseline::None);
     macro_rules! on {
         ($p:expr) => {
             if let Some(b) = baseline {
@@ -210,7 +210,7 @@ pub fn check_algorithm(bench: &Bench, config: &LoadedConfig) -> Result<(), RunEr
         Bench::CartPoleSoftmax(_) => alg.build::<f64, super::task::CartPoleSoftmax>().map(drop),
         Bench::CartPoleLogistic(_) => alg.build::<f64, super::task::CartPoleLogistic>().map(drop),
         Bench::Obstacle { .. } => alg.build::<f64, super::task::ObstacleProblem>().map(drop),
-        Bench::Toy(_) => alg.build::<f64, crate::toy::ToyProblem<f64>>().map(drop),
+        Bench::Toy(_) => alg.build::<f64, ilopt::toy::ToyProblem<f64>>().map(drop),
     };
     r.map_err(|e| config.invalid("algorithm", e))
 }
@@ -223,13 +223,13 @@ pub fn check_algorithm(bench: &Bench, config: &LoadedConfig) -> Result<(), RunEr
 /// # Errors
 /// [`RunError::Invalid`] naming `run.baseline`.
 pub fn check_baseline(bench: &Bench, config: &LoadedConfig) -> Result<(), RunError> {
-    use crate::problem::{Behaviour, EstimatorForm, OracleError};
+    use ilopt::problem::{Behaviour, EstimatorForm, OracleError};
     let Some(b) = config
         .file
         .run
         .baseline
         .as_ref()
-        .filter(|b| **b != crate::baseline::Baseline::None)
+        .filter(|b| **b != ilopt::baseline::Baseline::None)
     else {
         return Ok(());
     };
@@ -260,9 +260,9 @@ pub fn check_baseline(bench: &Bench, config: &LoadedConfig) -> Result<(), RunErr
 
 /// An oracle's error about its baseline without the "baseline: " its message starts with (the
 /// key `run.baseline` already says it); any other error as it is.
-fn baseline_message(e: crate::problem::OracleError) -> String {
+fn baseline_message(e: ilopt::problem::OracleError) -> String {
     match e {
-        crate::problem::OracleError::Baseline(m) => m,
+        ilopt::problem::OracleError::Baseline(m) => m,
         e => e.to_string(),
     }
 }

@@ -4,22 +4,22 @@
 //! Prints one JSON object with `objective` (F(θ), forward DP X2), `gradient` (∇F(θ), X2),
 //! `expected_estimate` (E[∇f(θ, τ)] by enumeration X1, eq. 3.15) and `second_moment` (E‖∇f‖², X1).
 //! With `--baseline` (one number b for every decision, or T − 2 numbers b_1..b_{T−2}) the last two
-//! are those of the baselined estimator `g_b = g − Σ_i b_i ψ_i` (math.md §9; [`crate::baseline`]),
+//! are those of the baselined estimator `g_b = g − Σ_i b_i ψ_i` (math.md §9; [`ilopt::baseline`]),
 //! and `baseline` echoes the values. `--optimal-baseline` adds `optimal_baseline`: E[g·ψ_i],
 //! E‖ψ_i‖², the variance-minimising b*_i and b*_const, the second moments they reach, and the
-//! reduction factors E‖g‖²/E‖g_{b*}‖² ([`crate::exact::baseline`]); its `state` object gives the
+//! reduction factors E‖g‖²/E‖g_{b*}‖² ([`ilopt::exact::baseline`]); its `state` object gives the
 //! same for the variance-minimising baseline per state, `b_i = w*_{s_i}` (`cross` c_s, `score_moment`
 //! A_ss, `weights` w*_s = c_s/A_ss, `second_moment`, `reduction`).
 //! `exact` prints fraction strings (`"-13/24"`), `f64` prints numbers, `interval` prints `[lo, hi]`
 //! pairs that enclose the exact values.
+//!
+//! The quantities are the library's [`ilopt::exact::evaluation::evaluate`]; this module reads the
+//! files and arguments and prints.
 
-use crate::exact::ExactError;
-use crate::exact::baseline::{baselined_moments, optimal_baselines, optimal_state_baseline};
-use crate::exact::enumerate::moments;
-use crate::exact::forward::forward;
-use crate::scalar::{BigRational, Interval, JsonScalar, Scalar, parse_exact_list};
-use crate::toy::{ToyError, ToyMdp, ToyProblem};
 use clap::{Args, Subcommand, ValueEnum};
+use ilopt::exact::evaluation::{EvaluationError, EvaluationOptions, evaluate};
+use ilopt::scalar::{BigRational, Interval, JsonScalar, parse_exact_list};
+use ilopt::toy::{ToyError, ToyMdp};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 
@@ -101,12 +101,10 @@ pub enum ToyCliError {
         /// T − 2.
         expected: usize,
     },
-    /// The exact engine.
-    #[error("at θ: {0}")]
-    Engine(#[from] ExactError),
-    /// A result is not a finite number in the chosen arithmetic (e.g. f64 overflow).
-    #[error("`{0}` is not finite in the chosen arithmetic; use --scalar exact")]
-    NonFinite(&'static str),
+    /// The exact engine at θ, or a result that is not a finite number in the chosen arithmetic
+    /// (e.g. f64 overflow).
+    #[error("{0}{hint}", hint = if matches!(.0, EvaluationError::NonFinite(_)) { "; use --scalar exact" } else { "" })]
+    Evaluation(#[from] EvaluationError),
 }
 
 /// Run `ilopt toy …`.
@@ -145,7 +143,7 @@ fn eval(args: &EvalArgs) -> Result<Value, ToyCliError> {
             Some(b)
         }
     };
-    let options = Options {
+    let options = EvaluationOptions {
         baseline: baseline.as_deref(),
         optimal_baseline: args.optimal_baseline,
     };
@@ -156,74 +154,30 @@ fn eval(args: &EvalArgs) -> Result<Value, ToyCliError> {
     }
 }
 
-/// What `toy eval` adds to the four quantities.
-#[derive(Debug, Clone, Default)]
-pub struct Options<'a> {
-    /// Baselines (one number, or T − 2): the estimator's moments become those of g_b.
-    pub baseline: Option<&'a [BigRational]>,
-    /// Print the exact optimal baselines.
-    pub optimal_baseline: bool,
-}
-
-/// The four quantities of `toy eval` in scalar `S`.
-///
-/// # Errors
-/// As [`run`].
-pub fn evaluate<S: JsonScalar>(mdp: &ToyMdp, theta: &[BigRational]) -> Result<Value, ToyCliError> {
-    evaluate_with::<S>(mdp, theta, &Options::default())
-}
-
-/// The quantities of `toy eval` in scalar `S`, with `options`.
-///
-/// # Errors
-/// As [`run`].
-pub fn evaluate_with<S: JsonScalar>(
+/// The quantities of `toy eval` in scalar `S`, with `options`, as the printed JSON object.
+fn evaluate_with<S: JsonScalar>(
     mdp: &ToyMdp,
     theta: &[BigRational],
-    options: &Options<'_>,
+    options: &EvaluationOptions<'_>,
 ) -> Result<Value, ToyCliError> {
-    let p = ToyProblem::<S>::new(mdp);
-    let th: Vec<S> = theta.iter().map(S::from_rational).collect();
-    let x2 = forward(&p, &th)?;
-    let x1 = moments(&p, &th)?;
-    let (expected_estimate, second_moment) = match options.baseline {
-        None => (x1.expected_estimate, x1.second_moment),
-        Some(b) => {
-            let b: Vec<S> = b.iter().map(S::from_rational).collect();
-            let m = baselined_moments(&p, &th, &b)?;
-            (m.expected_estimate, m.second_moment)
-        }
-    };
-    let finite = |name: &'static str, xs: &[S]| {
-        if xs.iter().all(Scalar::is_finite) {
-            Ok(())
-        } else {
-            Err(ToyCliError::NonFinite(name))
-        }
-    };
-    finite("objective", std::slice::from_ref(&x2.objective))?;
-    finite("gradient", &x2.gradient)?;
-    finite("expected_estimate", &expected_estimate)?;
-    finite("second_moment", std::slice::from_ref(&second_moment))?;
+    let e = evaluate::<S>(mdp, theta, options)?;
     let list = |xs: &[S]| Value::Array(xs.iter().map(JsonScalar::to_json).collect());
     let mut out = json!({
-        "objective": x2.objective.to_json(),
-        "gradient": list(&x2.gradient),
-        "expected_estimate": list(&expected_estimate),
-        "second_moment": second_moment.to_json(),
+        "objective": e.objective.to_json(),
+        "gradient": list(&e.gradient),
+        "expected_estimate": list(&e.expected_estimate),
+        "second_moment": e.second_moment.to_json(),
     });
-    if let Some(b) = options.baseline {
-        let b: Vec<S> = b.iter().map(S::from_rational).collect();
-        out["baseline"] = list(&b);
+    if let Some(b) = &e.baseline {
+        out["baseline"] = list(b);
     }
-    if options.optimal_baseline {
-        let o = optimal_baselines(&p, &th)?;
-        // A value that is not finite in this arithmetic (a ratio whose enclosure reaches 0)
-        // prints as null.
-        let one = |x: Option<S>| match x {
-            Some(x) if x.is_finite() => x.to_json(),
-            _ => Value::Null,
-        };
+    // A value that is not finite in this arithmetic (a ratio whose enclosure reaches 0) prints as
+    // null.
+    let one = |x: Option<S>| match x {
+        Some(x) if x.is_finite() => x.to_json(),
+        _ => Value::Null,
+    };
+    if let Some(o) = &e.optimal_baseline {
         out["optimal_baseline"] = json!({
             "cross": list(&o.cross),
             "score_moment": list(&o.score_moment),
@@ -235,7 +189,8 @@ pub fn evaluate_with<S: JsonScalar>(
             "reduction_time_indexed": one(o.reduction_time_indexed()),
             "reduction_constant": one(o.reduction_constant()),
         });
-        let st = optimal_state_baseline(&p, &th)?;
+    }
+    if let Some(st) = &e.optimal_state_baseline {
         out["optimal_baseline"]["state"] = json!({
             "cross": list(&st.cross),
             "score_moment": list(&st.score_moment),

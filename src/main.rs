@@ -1,4 +1,0 @@
-//! The `ilopt` binary: see `ilopt --help` and the README.
-fn main() -> std::process::ExitCode {
-    ilopt::cli::main()
-}
