@@ -1,9 +1,10 @@
 //! Run one stage of the theorem table alone, for profiling and before/after comparisons.
 use ilopt::scalar::BigRational;
-use ilopt_theory::certify::box_constants::compute;
+use ilopt_theory::certify::box_constants::{compute, tied_softmax_g_inf_closed_form};
 use ilopt_theory::checks::baselined_storm::choose;
 use ilopt_theory::checks::constants::toy_row;
 use ilopt_theory::checks::{second_toy, statistical};
+use ilopt_theory::input_rows::{Certified, with_perturbations};
 use ilopt_theory::protocol::m1_tied;
 use ilopt_theory::protocol::{FAMILY_ALPHA, Profile, STATISTICAL_CLAIMS};
 use ilopt_theory::report::markdown;
@@ -149,6 +150,43 @@ fn main() {
             let u = user_cpu();
             let rows = statistical::storm_rows(&m1, &g, s, alpha);
             eprintln!("storm rows user CPU: {:.2} s", user_cpu() - u);
+            println!("{}", markdown(&rows));
+        }
+        "inputs" => {
+            // The "input-reading rows and their perturbations" stage of the quick profile.
+            let m1 = m1_tied();
+            let s = Profile::Quick.sizes();
+            let r = 1000.0 * 0.05 * tied_softmax_g_inf_closed_form(3, 0.5);
+            let domain = vec![[-r, r]];
+            let zero = BigRational::from_integer(0.into());
+            let f_inf = BigRational::new(7.into(), 8.into());
+            let k = compute(
+                &m1,
+                std::slice::from_ref(&zero),
+                Some(&f_inf),
+                &domain,
+                s.bnb_tol,
+                200_000,
+            )
+            .unwrap();
+            let g = global_constants(&m1, s).unwrap();
+            let certified = Certified {
+                profile: Profile::Quick,
+                m1,
+                theta1: vec![zero],
+                f_inf,
+                k,
+                g,
+                domain,
+            };
+            let u = user_cpu();
+            let t = std::time::Instant::now();
+            let rows = with_perturbations(&certified).unwrap();
+            eprintln!(
+                "input-reading rows and their perturbations: {:.1} s wall, {:.2} s user CPU",
+                t.elapsed().as_secs_f64(),
+                user_cpu() - u
+            );
             println!("{}", markdown(&rows));
         }
         _ => panic!("unknown"),

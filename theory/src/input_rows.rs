@@ -8,7 +8,7 @@ use crate::certify::box_constants::{ToyConstants, b_f};
 use crate::certify::global::GlobalConstants;
 use crate::checks::{attained, errata, o2nc_formula, proof_o2nc, proof_sgd, proof_storm, tight};
 use crate::inputs::{ConstantKind, TableInputs};
-use crate::perturbation::{fixed_list, outcome, rows as perturbation_rows};
+use crate::perturbation::{Perturbation, fixed_list, outcome, rows as perturbation_rows};
 use crate::protocol::Profile;
 use crate::record::check::Check;
 use ilopt::scalar::{BigRational, parse_exact};
@@ -37,14 +37,16 @@ pub struct Certified {
 /// The input-reading rows' own runs and their exact evaluation with the table's inputs as they
 /// are, computed once: a perturbation that changes neither the runs nor the oracle's moments (a
 /// formula, or a constant the runs do not use as a hyper-parameter) reuses them, which is the same
-/// computation.
+/// computation. Within them the SGD step slacks (rows 1.s1–1.s6) and the STORM step rows
+/// (2c.s1a–2c.s3c) are kept with the constants they read ([`crate::reuse::Keyed`]), so an error
+/// in another constant or in a formula reuses them too; the tight instances' search reads no
+/// input, so an oracle bias repeats only their certification.
 #[derive(Debug, Clone)]
 pub struct Runs {
     o2nc: proof_o2nc::Evaluated,
     sgd: proof_sgd::Evaluated,
     tight: tight::PreparedAll,
-    storm_states: proof_storm::Visited,
-    storm_steps: Vec<proof_storm::step::Step>,
+    storm: proof_storm::Evaluated,
 }
 
 impl Runs {
@@ -54,15 +56,26 @@ impl Runs {
     /// A message if a run or an evaluation fails.
     pub fn compute(c: &Certified) -> Result<Runs, String> {
         let inputs = TableInputs::thesis();
-        let runs = proof_o2nc::record(&inputs, &c.m1, &c.k, &c.domain, &O2NC_SIZES)?;
-        let storm_states = proof_storm::visit(&c.m1, &c.g, storm_sizes(c.profile))?;
-        let storm_steps = proof_storm::steps(&inputs, &c.m1, &storm_states)?;
-        Ok(Runs {
-            o2nc: proof_o2nc::evaluate(&inputs, &c.m1, runs)?,
-            sgd: proof_sgd::evaluate(&inputs, &c.k, &c.domain, sgd_sizes())?,
-            tight: tight::prepare(&inputs, tight_sizes(c.profile)),
-            storm_states,
-            storm_steps,
+        let inputs = &inputs;
+        // The four parts share nothing and each is seeded on its own: they run side by side.
+        std::thread::scope(|scope| {
+            let o2nc = scope.spawn(move || {
+                let runs = proof_o2nc::record(inputs, &c.m1, &c.k, &c.domain, &O2NC_SIZES)?;
+                proof_o2nc::evaluate(inputs, &c.m1, runs)
+            });
+            let storm = scope.spawn(move || {
+                let states = proof_storm::visit(&c.m1, &c.g, storm_sizes(c.profile))?;
+                proof_storm::evaluate(inputs, &c.m1, &c.g, &states)
+            });
+            let tight = scope.spawn(move || tight::prepare(inputs, tight_sizes(c.profile)));
+            let sgd = proof_sgd::evaluate(inputs, &c.k, &c.domain, sgd_sizes());
+            let panicked = |what: &str| format!("the thread of {what} panicked");
+            Ok(Runs {
+                o2nc: o2nc.join().map_err(|_| panicked("the O2NC runs"))??,
+                sgd: sgd?,
+                tight: tight.join().map_err(|_| panicked("the tight instances"))?,
+                storm: storm.join().map_err(|_| panicked("the STORM runs"))??,
+            })
         })
     }
 }
@@ -131,13 +144,14 @@ pub fn input_rows(c: &Certified, runs: &Runs, inputs: &TableInputs) -> Result<Ve
     });
     let storm_k = storm_sizes(c.profile).k_close;
     rows.extend(if inputs.oracle_bias.is_some() {
-        let steps = proof_storm::steps(inputs, &c.m1, &runs.storm_states)?;
-        proof_storm::rows_from_steps(inputs, &c.g, &runs.storm_states, &steps, storm_k)?
+        let ev = proof_storm::evaluate(inputs, &c.m1, &c.g, runs.storm.visited())?;
+        proof_storm::rows_from(inputs, &c.g, &ev, storm_k)?
     } else {
-        proof_storm::rows_from_steps(inputs, &c.g, &runs.storm_states, &runs.storm_steps, storm_k)?
+        proof_storm::rows_from(inputs, &c.g, &runs.storm, storm_k)?
     });
     rows.extend(if inputs.oracle_bias.is_some() {
-        tight::rows(inputs, tight_sizes(c.profile))
+        let sizes = tight_sizes(c.profile);
+        tight::rows_from(inputs, sizes, &runs.tight.recertified(inputs, sizes))
     } else {
         tight::rows_from(inputs, tight_sizes(c.profile), &runs.tight)
     });
@@ -158,8 +172,22 @@ pub fn with_perturbations(c: &Certified) -> Result<Vec<Check>, String> {
     let runs = Runs::compute(c)?;
     let base = input_rows(c, &runs, &TableInputs::thesis())?;
     let list = fixed_list();
-    // The perturbations are independent: they run on every core, each taking the next index,
-    // and their rows are put back in the list's order (the same whatever the number of cores).
+    // The perturbations are independent: they run on every core, each taking the next index of
+    // `order`, and their rows are put back in the list's order (the same whatever the number of
+    // cores or the order). The costliest start first, so that no core is left with one of them
+    // at the end: an oracle bias recomputes every run's exact moments, a change of Algorithm 5's
+    // hyper-parameters its runs.
+    let cost = |p: &Perturbation| {
+        if p.inputs.oracle_bias.is_some() {
+            0
+        } else if changes_runs(&p.inputs) {
+            1
+        } else {
+            2
+        }
+    };
+    let mut order: Vec<usize> = (0..list.len()).collect();
+    order.sort_by_key(|&i| cost(&list[i]));
     let next = std::sync::atomic::AtomicUsize::new(0);
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut done: Vec<(usize, Result<Vec<Check>, String>)> = std::thread::scope(|scope| {
@@ -169,7 +197,9 @@ pub fn with_perturbations(c: &Certified) -> Result<Vec<Check>, String> {
                     let mut mine = vec![];
                     loop {
                         let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        let Some(p) = list.get(i) else { break };
+                        let Some((i, p)) = order.get(i).map(|&i| (i, &list[i])) else {
+                            break;
+                        };
                         mine.push((i, input_rows(c, &runs, &p.inputs)));
                     }
                     mine

@@ -20,6 +20,7 @@ pub mod perturbation;
 pub mod protocol;
 pub mod record;
 pub mod report;
+pub mod reuse;
 pub mod schedule;
 pub mod stage;
 pub mod stats;

@@ -33,6 +33,7 @@ use crate::checks::statistical::SGD_ETA;
 use crate::inputs::{ConstantKind, TableInputs};
 use crate::record::check::{Check, CheckBuilder, Method, Role, Verdict};
 use crate::record::constant::Constant;
+use crate::reuse::Keyed;
 use ilopt::algo::config::{AlgorithmConfig, RunConfig};
 use ilopt::algo::sgd::{SgdConfig, SgdRule, SgdStep};
 use ilopt::algo::{ConfigNumber, Runner, StoppingRule, Termination, UpdateRule};
@@ -231,15 +232,8 @@ struct Step {
     mean: Vec<Q>,
     second: Q,
     branches: Vec<Branch>,
-}
-
-impl Step {
     /// E_k F(θ_{k+1}) = Σ_τ p(τ; θ) F(θ − ηg(θ, τ)).
-    fn expected_next(&self) -> Q {
-        self.branches
-            .iter()
-            .fold(Q::zero(), |a, b| a + b.prob.clone() * &b.f_next)
-    }
+    expected_next: Q,
 }
 
 /// The certified box as rationals.
@@ -302,12 +296,16 @@ fn step_at(
             f_next,
         });
     }
+    let expected_next = branches
+        .iter()
+        .fold(Q::zero(), |a, b| a + b.prob.clone() * &b.f_next);
     Ok(Step {
         f: fw.objective,
         grad: fw.gradient,
         mean,
         second,
         branches,
+        expected_next,
     })
 }
 
@@ -331,8 +329,46 @@ struct StepSlacks {
     side: StepSlack,
 }
 
+/// The constants the per-step inequalities 1.s1–1.s6 read: L, σ² and c.
+#[derive(Debug, Clone, PartialEq)]
+struct StepConstants {
+    l: Q,
+    sigma2: Q,
+    c: Q,
+}
+
+impl StepConstants {
+    fn of(c: &Constants) -> StepConstants {
+        StepConstants {
+            l: c.l.clone(),
+            sigma2: c.sigma2.clone(),
+            c: c.c.clone(),
+        }
+    }
+}
+
 impl StepSlacks {
-    fn record(&mut self, s: &Step, eta: &Q, c: &Constants) {
+    /// The slacks at every point of the runs, in run order, then at the attaining points.
+    fn at_every_point(
+        paths: &[Path],
+        steps: &[Vec<Step>],
+        extremal: &[Step],
+        c: &StepConstants,
+    ) -> StepSlacks {
+        let mut slacks = StepSlacks::default();
+        for (p, st) in paths.iter().zip(steps) {
+            for (eta, s) in p.etas.iter().zip(st) {
+                slacks.record(s, eta, c);
+            }
+        }
+        let eta1 = Q::from_ratio(SGD_ETA.0, SGD_ETA.1);
+        for s in extremal {
+            slacks.record(s, &eta1, c);
+        }
+        slacks
+    }
+
+    fn record(&mut self, s: &Step, eta: &Q, c: &StepConstants) {
         let zero = Q::zero();
         let gn2 = norm_sq(&s.grad);
         let bias = s
@@ -349,15 +385,15 @@ impl StepSlacks {
             let rhs = s.f.clone() - eta.clone() * dot(&s.grad, &b.g) + lh.clone() * norm_sq(&b.g);
             self.quadratic.exact(&b.f_next, &rhs);
         }
-        let next = s.expected_next();
+        let next = &s.expected_next;
         let noise = lh.clone() * &c.sigma2;
         let rhs = s.f.clone() - eta.clone() * dot(&s.grad, &s.mean) + lh.clone() * &s.second;
-        self.descent.exact(&next, &rhs);
+        self.descent.exact(next, &rhs);
         let elc = eta.clone() * &c.l * &c.c;
         let rhs = s.f.clone() - eta.clone() * (Q::one() - elc.clone() * half()) * &gn2 + &noise;
-        self.combined.exact(&next, &rhs);
+        self.combined.exact(next, &rhs);
         let rhs = s.f.clone() - eta.clone() * half() * &gn2 + &noise;
-        self.halved.exact(&next, &rhs);
+        self.halved.exact(next, &rhs);
         self.side.exact(&elc, &Q::one());
     }
 }
@@ -409,17 +445,33 @@ fn agree(slack: &mut StepSlack, formula: f64, assembled: &Q) -> Result<(), Strin
 }
 
 /// Everything the rows 1.s1–1.s7 evaluate exactly, once per oracle: the runs, the exact step data
-/// at every point (through the inputs' oracle), F at each realised next iterate, and the steps at
+/// at every point (through the inputs' oracle), each run's telescoped left side, and the steps at
 /// the points where L_F and σ² are nearly attained. It depends on the inputs only through the
-/// oracle ([`TableInputs::estimate`]), so rows for other constants or formulas reuse it.
+/// oracle ([`TableInputs::estimate`]), so rows for other constants or formulas reuse it; the
+/// slacks of 1.s1–1.s6 are kept with the L, σ² and c they were computed with, and reused for
+/// inputs that give the same three values.
 #[derive(Debug, Clone)]
 pub struct Evaluated {
     paths: Vec<Path>,
     /// `steps[r][i]`: the step data at θ_i of run r.
     steps: Vec<Vec<Step>>,
-    /// `realised[r][i]`: F(θ_{i+1}) of run r.
-    realised: Vec<Vec<Q>>,
+    /// `telescoped[r]`: (Σ_k η_k‖∇F(θ_k)‖² − 2M_K)/Σ_k η_k along run r (row 1.s7's left side).
+    telescoped: Vec<Q>,
     extremal: Vec<Step>,
+    slacks: Keyed<StepConstants, StepSlacks>,
+}
+
+/// Row 1.s7's left side along a run: (Σ_k η_k‖∇F(θ_k)‖² − 2M_K)/Σ_k η_k with the martingale term
+/// M_K = Σ_k [F(θ_{k+1}) − E_k F(θ_{k+1})]; `realised[i]` = F(θ_{i+1}).
+fn telescoped_left(p: &Path, steps: &[Step], realised: &[Q]) -> Q {
+    let (mut weighted, mut martingale, mut sum_eta) = (Q::zero(), Q::zero(), Q::zero());
+    for ((eta, st), f_next) in p.etas.iter().zip(steps).zip(realised) {
+        weighted += eta.clone() * norm_sq(&st.grad);
+        martingale += f_next.clone() - &st.expected_next;
+        sum_eta += eta;
+    }
+    // Σ η_k‖∇F(θ_k)‖² − 2M_K ≤ 2(F(θ₁) − F(θ_{K+1})) + Lσ²Σ η_k² ≤ 2B_F + Lσ²Σ η_k².
+    (weighted - Q::from_i64(2) * martingale) / sum_eta
 }
 
 /// Run SGD and evaluate every point of the rows exactly (see [`Evaluated`]).
@@ -441,7 +493,7 @@ pub fn evaluate(
             paths.push(run(mdp, domain.len(), decreasing, s.k, seed)?);
         }
     }
-    let (mut steps, mut realised) = (vec![], vec![]);
+    let (mut steps, mut telescoped) = (vec![], vec![]);
     for p in &paths {
         let mut st = vec![];
         let mut re = vec![];
@@ -453,8 +505,8 @@ pub fn evaluate(
                     .objective,
             );
         }
+        telescoped.push(telescoped_left(p, &st, &re));
         steps.push(st);
-        realised.push(re);
     }
     let eta1 = Q::from_ratio(SGD_ETA.0, SGD_ETA.1);
     let mut extremal = vec![];
@@ -468,11 +520,15 @@ pub fn evaluate(
             .collect::<Result<Vec<Q>, String>>()?;
         extremal.push(step_at(&problem, inputs, &theta, &eta1, &dom)?);
     }
+    let slacks = Keyed::new(StepConstants::of(&constants(inputs, k)?), |c| {
+        StepSlacks::at_every_point(&paths, &steps, &extremal, c)
+    });
     Ok(Evaluated {
         paths,
         steps,
-        realised,
+        telescoped,
         extremal,
+        slacks,
     })
 }
 
@@ -505,30 +561,18 @@ pub fn rows_from(
 ) -> Result<Vec<Check>, String> {
     let c = constants(inputs, k)?;
     let paths = &ev.paths;
-    let mut slacks = StepSlacks::default();
+    let slacks = ev.slacks.get(&StepConstants::of(&c), |c| {
+        StepSlacks::at_every_point(paths, &ev.steps, &ev.extremal, c)
+    });
     let mut telescoped = StepSlack::new();
-    for (r, p) in paths.iter().enumerate() {
-        let (mut weighted, mut martingale, mut sum_eta) = (Q::zero(), Q::zero(), Q::zero());
-        for (i, eta) in p.etas.iter().enumerate() {
-            let st = &ev.steps[r][i];
-            slacks.record(st, eta, &c);
-            weighted += eta.clone() * norm_sq(&st.grad);
-            martingale += ev.realised[r][i].clone() - st.expected_next();
-            sum_eta += eta;
-        }
-        // Σ η_k‖∇F(θ_k)‖² − 2M_K ≤ 2(F(θ₁) − F(θ_{K+1})) + Lσ²Σ η_k² ≤ 2B_F + Lσ²Σ η_k².
-        let x = (weighted - Q::from_i64(2) * martingale) / sum_eta;
+    for (p, x) in paths.iter().zip(&ev.telescoped) {
         let etas: Vec<f64> = p.etas.iter().map(Scalar::to_f64).collect();
         let bound = if p.decreasing {
             (inputs.formulas.sgd_weighted)(c.l_f64, &etas, c.sigma2_f64, c.b_f_f64)
         } else {
             (inputs.formulas.sgd_constant)(c.l_f64, etas[0], c.sigma2_f64, c.b_f_f64, s.k)
         };
-        telescoped.exact(&x, &exact(upper(bound), "a closed-form bound")?);
-    }
-    let eta1 = Q::from_ratio(SGD_ETA.0, SGD_ETA.1);
-    for st in &ev.extremal {
-        slacks.record(st, &eta1, &c);
+        telescoped.exact(x, &exact(upper(bound), "a closed-form bound")?);
     }
     let extremal = ev.extremal.len();
     let where_ = format!(
@@ -842,6 +886,31 @@ mod tests {
             closing_row(&inputs, &c, sizes(false), &[]),
             consistency_row(&inputs, &c, &[]),
         )
+    }
+
+    /// Rows from the thesis's evaluation, whose step slacks are kept for the thesis's L, σ² and
+    /// c, are the rows a fresh evaluation under each perturbation with the same oracle gives: the
+    /// kept slacks are reused exactly where they are the same computation.
+    #[test]
+    fn rows_from_a_kept_evaluation_are_the_rows_computed_afresh() {
+        let small = Sizes {
+            constant_runs: 1,
+            decreasing_runs: 1,
+            k: 2,
+        };
+        let thesis = evaluate(&TableInputs::thesis(), constants_k(), &domain(), small).unwrap();
+        let mut reused = 0;
+        for p in crate::perturbation::fixed_list() {
+            if p.inputs.oracle_bias.is_some() {
+                continue;
+            }
+            let c = constants(&p.inputs, constants_k()).unwrap();
+            reused += usize::from(StepConstants::of(&c) == *thesis.slacks.key());
+            let kept = rows_from(&p.inputs, constants_k(), &thesis, small).unwrap();
+            let fresh = rows(&p.inputs, constants_k(), &domain(), small).unwrap();
+            assert_eq!(format!("{kept:?}"), format!("{fresh:?}"), "{}", p.name);
+        }
+        assert!(reused > 0 && reused < 15, "{reused}");
     }
 
     #[test]

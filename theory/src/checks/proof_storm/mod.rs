@@ -32,6 +32,7 @@ use crate::inputs::{ConstantKind, TableInputs};
 use crate::protocol::Profile;
 use crate::record::check::{Check, Method, Role};
 use crate::record::constant::Constant;
+use crate::reuse::Keyed;
 use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
@@ -238,17 +239,17 @@ pub struct Ctx<'a> {
     pub steps: &'a [Step],
     /// The constants through the inputs.
     pub c: Constants,
-    /// The certified constants (for the rows' constant records).
-    pub g: &'a GlobalConstants,
+    /// The certified constants' records ([`GlobalConstants::summary`]).
+    pub constants: &'a [Constant],
 }
 
 impl Ctx<'_> {
     /// The certified constants named `names`, for a row's record.
     pub fn constants(&self, names: &[&str]) -> Vec<Constant> {
-        self.g
-            .summary()
-            .into_iter()
+        self.constants
+            .iter()
             .filter(|c| names.contains(&c.name.as_str()))
+            .cloned()
             .collect()
     }
 
@@ -311,7 +312,7 @@ impl Ctx<'_> {
 ///
 /// # Errors
 /// A message naming the state if an exact step cannot be computed.
-pub fn steps(inputs: &TableInputs, m1: &ToyMdp, visited: &Visited) -> Result<Vec<Step>, String> {
+fn steps(inputs: &TableInputs, m1: &ToyMdp, visited: &Visited) -> Result<Vec<Step>, String> {
     let problem = ToyProblem::<Q>::new(m1);
     visited
         .states
@@ -320,44 +321,86 @@ pub fn steps(inputs: &TableInputs, m1: &ToyMdp, visited: &Visited) -> Result<Vec
         .collect()
 }
 
-/// The rows at already visited states: steps 1–3 at every state, (C1)/(C2) on the runs'
-/// schedules, and the closing at K = `k_close`.
-///
-/// # Errors
-/// As [`steps`], or if a constant is not finite.
-pub fn rows_at(
-    inputs: &TableInputs,
-    m1: &ToyMdp,
-    g: &GlobalConstants,
-    visited: &Visited,
-    k_close: u64,
-) -> Result<Vec<Check>, String> {
-    let steps = steps(inputs, m1, visited)?;
-    rows_from_steps(inputs, g, visited, &steps, k_close)
+/// What the step rows read besides the states and their steps: the constants through the inputs
+/// and the certified constants' records.
+type StepKey = (Constants, Vec<Constant>);
+
+/// The visited states, the exact step at each under one oracle, and the rows of steps 1–3
+/// (2c.s1a–2c.s3c) kept with the constants they were computed with: inputs with the same oracle
+/// and the same σ², L_F, L̃ and certified records get them without recomputing ([`Keyed`]).
+#[derive(Debug, Clone)]
+pub struct Evaluated {
+    visited: Visited,
+    steps: Vec<Step>,
+    step_rows: Keyed<StepKey, Vec<Check>>,
 }
 
-/// The rows from the steps at the visited states (computed by [`steps`] with the same oracle,
-/// `inputs.oracle_bias`).
-///
-/// # Errors
-/// If a constant is not finite.
-pub fn rows_from_steps(
-    inputs: &TableInputs,
-    g: &GlobalConstants,
-    visited: &Visited,
-    steps: &[Step],
-    k_close: u64,
-) -> Result<Vec<Check>, String> {
+impl Evaluated {
+    /// The visited states.
+    pub fn visited(&self) -> &Visited {
+        &self.visited
+    }
+
+    /// The rows of steps 1–3 for `key` (see [`Evaluated`]).
+    fn step_rows_for(&self, key: StepKey) -> Vec<Check> {
+        self.step_rows
+            .get(&key, |k| step_rows(&self.visited, &self.steps, k))
+            .into_owned()
+    }
+}
+
+fn step_key(inputs: &TableInputs, g: &GlobalConstants) -> Result<StepKey, String> {
+    Ok((Constants::new(inputs, g)?, g.summary()))
+}
+
+/// Rows 2c.s1a–2c.s3c: steps 1–3 at every state and (C1)/(C2) on the runs' schedules.
+fn step_rows(visited: &Visited, steps: &[Step], (c, summary): &StepKey) -> Vec<Check> {
     let ctx = Ctx {
         states: &visited.states,
         steps,
-        c: Constants::new(inputs, g)?,
-        g,
+        c: c.clone(),
+        constants: summary,
     };
     let mut rows = error::rows(&ctx);
     rows.extend(descent::rows(&ctx));
     rows.extend(potential::rows(&ctx));
     rows.push(potential::conditions(&ctx, &visited.schedules));
+    rows
+}
+
+/// The exact steps at `visited` with the gradient estimates of `inputs`, and the rows of steps
+/// 1–3 with the constants of `g` through `inputs`.
+///
+/// # Errors
+/// A message naming the state if an exact step cannot be computed, or if a constant is not
+/// finite.
+pub fn evaluate(
+    inputs: &TableInputs,
+    m1: &ToyMdp,
+    g: &GlobalConstants,
+    visited: &Visited,
+) -> Result<Evaluated, String> {
+    let steps = steps(inputs, m1, visited)?;
+    let step_rows = Keyed::new(step_key(inputs, g)?, |k| step_rows(visited, &steps, k));
+    Ok(Evaluated {
+        visited: visited.clone(),
+        steps,
+        step_rows,
+    })
+}
+
+/// The rows from an evaluation made with the same oracle (`inputs.oracle_bias`): steps 1–3 at
+/// every state, (C1)/(C2) on the runs' schedules, and the closing at K = `k_close`.
+///
+/// # Errors
+/// If a constant is not finite.
+pub fn rows_from(
+    inputs: &TableInputs,
+    g: &GlobalConstants,
+    ev: &Evaluated,
+    k_close: u64,
+) -> Result<Vec<Check>, String> {
+    let mut rows = ev.step_rows_for(step_key(inputs, g)?);
     rows.push(closing::row(inputs, g, k_close));
     Ok(rows)
 }
@@ -366,7 +409,7 @@ pub fn rows_from_steps(
 /// constants `g`, then every row through `inputs`.
 ///
 /// # Errors
-/// As [`visit`] and [`rows_at`].
+/// As [`visit`] and [`evaluate`].
 pub fn rows(
     inputs: &TableInputs,
     m1: &ToyMdp,
@@ -374,7 +417,8 @@ pub fn rows(
     sizes: Sizes,
 ) -> Result<Vec<Check>, String> {
     let visited = visit(m1, g, sizes)?;
-    rows_at(inputs, m1, g, &visited, sizes.k_close)
+    let ev = evaluate(inputs, m1, g, &visited)?;
+    rows_from(inputs, g, &ev, sizes.k_close)
 }
 
 #[cfg(test)]
@@ -406,18 +450,25 @@ pub(crate) mod tests {
     }
 
     /// The exact steps at the quick states with the unbiased oracle.
-    fn quick_steps() -> &'static Vec<Step> {
-        static S: OnceLock<Vec<Step>> = OnceLock::new();
-        S.get_or_init(|| steps(&TableInputs::thesis(), &m1_tied(), quick_states()).expect("steps"))
+    fn quick_steps() -> &'static Evaluated {
+        static S: OnceLock<Evaluated> = OnceLock::new();
+        S.get_or_init(|| {
+            evaluate(
+                &TableInputs::thesis(),
+                &m1_tied(),
+                quick_constants(),
+                quick_states(),
+            )
+            .expect("steps")
+        })
     }
 
     /// The rows at the quick states for inputs with the unbiased oracle (the steps are shared).
     fn quick_rows(inputs: &TableInputs) -> Vec<Check> {
         assert!(inputs.oracle_bias.is_none());
-        rows_from_steps(
+        rows_from(
             inputs,
             quick_constants(),
-            quick_states(),
             quick_steps(),
             Sizes::for_profile(Profile::Quick).k_close,
         )
@@ -478,6 +529,33 @@ pub(crate) mod tests {
         assert_eq!(quick_states().states.len(), 400);
     }
 
+    /// Rows from the thesis's evaluation, whose step rows are kept for the thesis's constants,
+    /// are the rows a fresh evaluation under each perturbation with the same oracle gives (at a
+    /// few of the quick states): the kept rows are reused exactly where they are the same
+    /// computation.
+    #[test]
+    fn rows_from_a_kept_evaluation_are_the_rows_computed_afresh() {
+        let few = Visited {
+            states: quick_states().states.iter().step_by(50).cloned().collect(),
+            schedules: quick_states().schedules.clone(),
+        };
+        let g = quick_constants();
+        let k_close = 100;
+        let thesis = evaluate(&TableInputs::thesis(), &m1_tied(), g, &few).unwrap();
+        let mut reused = 0;
+        for p in crate::perturbation::fixed_list() {
+            if p.inputs.oracle_bias.is_some() {
+                continue;
+            }
+            reused += usize::from(step_key(&p.inputs, g).unwrap() == *thesis.step_rows.key());
+            let kept = rows_from(&p.inputs, g, &thesis, k_close).unwrap();
+            let ev = evaluate(&p.inputs, &m1_tied(), g, &few).unwrap();
+            let fresh = rows_from(&p.inputs, g, &ev, k_close).unwrap();
+            assert_eq!(format!("{kept:?}"), format!("{fresh:?}"), "{}", p.name);
+        }
+        assert!(reused > 0 && reused < 15, "{reused}");
+    }
+
     /// A bias of 1/1000 on every gradient estimate breaks E[W | F_k] = 0 (it cancels in Z).
     #[test]
     fn a_biased_oracle_fails_the_mean_zero_step() {
@@ -485,11 +563,11 @@ pub(crate) mod tests {
             oracle_bias: Some(ilopt::scalar::parse_exact("1/1000").unwrap()),
             ..TableInputs::thesis()
         };
-        let rows = rows_at(
+        let ev = evaluate(&biased, &m1_tied(), quick_constants(), quick_states()).unwrap();
+        let rows = rows_from(
             &biased,
-            &m1_tied(),
             quick_constants(),
-            quick_states(),
+            &ev,
             Sizes::for_profile(Profile::Quick).k_close,
         )
         .unwrap();

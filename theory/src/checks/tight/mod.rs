@@ -37,7 +37,7 @@ pub mod storm;
 
 use crate::inputs::TableInputs;
 use crate::record::check::{Check, CheckBuilder, Method, Verdict};
-use search::{Algorithm, Budget, Noise};
+use search::{Algorithm, Budget, Estimate, Noise};
 
 /// Sizes of the tight rows.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -183,24 +183,60 @@ fn first_certified<E, C>(
     }
 }
 
-/// Each algorithm's and noise's [`sgd::prepare`] / [`storm::prepare`] under one oracle.
+/// The noise settings of the rows, in their order.
+const NOISES: [Noise; 2] = [Noise::Any, Noise::Required];
+
+/// Each algorithm's and noise's search candidates ([`sgd::candidates`], [`storm::candidates`])
+/// and their [`sgd::prepare_from`] / [`storm::prepare_from`] under one oracle.
 #[derive(Debug, Clone)]
 pub struct PreparedAll {
-    sgd: Vec<(Noise, sgd::Prepared)>,
-    storm: Vec<(Noise, storm::Prepared)>,
+    sgd: Vec<(Noise, Vec<Estimate>, sgd::Prepared)>,
+    storm: Vec<(Noise, Vec<Estimate>, storm::Prepared)>,
+}
+
+impl PreparedAll {
+    /// The same candidates certified under `inputs`' oracle: the search reads no input, so only
+    /// the certification is repeated.
+    pub fn recertified(&self, inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
+        PreparedAll {
+            sgd: self
+                .sgd
+                .iter()
+                .map(|(n, found, _)| (*n, found.clone(), sgd::prepare_from(found, inputs, &sizes)))
+                .collect(),
+            storm: self
+                .storm
+                .iter()
+                .map(|(n, found, _)| {
+                    (
+                        *n,
+                        found.clone(),
+                        storm::prepare_from(found, inputs, &sizes),
+                    )
+                })
+                .collect(),
+        }
+    }
 }
 
 /// Search and certify for both algorithms and both noise settings.
 pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
-    let noises = [Noise::Any, Noise::Required];
     PreparedAll {
-        sgd: noises
+        sgd: NOISES
             .iter()
-            .map(|&n| (n, sgd::prepare(inputs, &sizes, n)))
+            .map(|&n| {
+                let found = sgd::candidates(&sizes, n);
+                let p = sgd::prepare_from(&found, inputs, &sizes);
+                (n, found, p)
+            })
             .collect(),
-        storm: noises
+        storm: NOISES
             .iter()
-            .map(|&n| (n, storm::prepare(inputs, &sizes, n)))
+            .map(|&n| {
+                let found = storm::candidates(&sizes, n);
+                let p = storm::prepare_from(&found, inputs, &sizes);
+                (n, found, p)
+            })
             .collect(),
     }
 }
@@ -208,7 +244,7 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
 /// [`rows`] from [`prepare`]d candidates (made with the same oracle and sizes).
 pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Check> {
     let mut rows = vec![];
-    for ((noise, s), (_, t)) in p.sgd.iter().zip(&p.storm) {
+    for ((noise, _, s), (_, _, t)) in p.sgd.iter().zip(&p.storm) {
         rows.extend(sgd::rows_from(inputs, &sizes, *noise, s));
         rows.extend(storm::rows_from(inputs, &sizes, *noise, t));
     }

@@ -174,10 +174,19 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
 /// The search's candidates and the first one certified under an oracle ([`super::Prepared`]).
 pub type Prepared = super::Prepared<Certified>;
 
+/// The seeded search's candidates ([`search`]); it reads no input of the table.
+pub fn candidates(s: &Sizes, noise: Noise) -> Vec<Estimate> {
+    search(Algorithm::Storm, noise, s.storm)
+}
+
+/// Certify the best of the [`candidates`] in order until one passes, under `inputs`' oracle.
+pub fn prepare_from(found: &[Estimate], inputs: &TableInputs, s: &Sizes) -> Prepared {
+    super::first_certified(found, s.tries, |e| certify(e, inputs, s))
+}
+
 /// Search (seeded, [`search`]) and certify the best candidates in order until one passes.
 pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Prepared {
-    let found = search(Algorithm::Storm, noise, s.storm);
-    super::first_certified(&found, s.tries, |e| certify(e, inputs, s))
+    prepare_from(&candidates(s, noise), inputs, s)
 }
 
 /// Rows 2c.tight and 2c.tight.ctl (module docs) from [`prepare`]d candidates (made with the same
