@@ -6,7 +6,7 @@
 //! estimates across versions.
 
 use ilopt::oracle::EstimatorKernel;
-use ilopt::policy::{LikelihoodRatio, LinearGaussian, Logistic, Policy, Softmax};
+use ilopt::policy::{LikelihoodRatio, LinearGaussian, Logistic, Policy, PolicyExt, Softmax};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::scalar::{Real, Scalar};
 use ilopt::task::cartpole::{self, CartPoleTask};
