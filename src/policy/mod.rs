@@ -257,7 +257,7 @@ pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
     /// leave out their normaliser, so that the value exists in every scalar of their layer).
     ///
     /// # Errors
-    /// As [`Policy::score`].
+    /// As [`Policy::score_into`].
     fn log_prob(&self, theta: &[S], phi: &[S], action: &Self::Action) -> Result<S, PolicyError>;
 
     /// `log π_θ(a|s) − log π_{θ_other}(a|s)`. The default is the difference of
@@ -265,7 +265,7 @@ pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
     /// (the linear-Gaussian policy's).
     ///
     /// # Errors
-    /// As [`Policy::score`].
+    /// As [`Policy::score_into`].
     fn log_likelihood_ratio(
         &self,
         theta: &[S],

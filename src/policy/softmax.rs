@@ -233,7 +233,7 @@ fn brier_into<S: Scalar>(probs: &[S], expert: usize, phi: &[S], grad: &mut [S]) 
     loss
 }
 
-/// `(e_a − π)φᵀ` written into `score` (row-major `A × n`), as [`Policy::score`] of [`Softmax`].
+/// `(e_a − π)φᵀ` written into `score` (row-major `A × n`), as [`Policy::score_into`] of [`Softmax`].
 #[inline]
 fn score_into_rows<S: Scalar>(probs: &[S], action: usize, phi: &[S], score: &mut [S]) {
     let n = phi.len();
