@@ -21,7 +21,7 @@
 //! need `num_traits::Zero`, which intervals (inari's type, so the kit cannot add it) do not
 //! implement.
 
-use crate::policy::{LinearGaussian, Policy, PolicyError};
+use crate::policy::{LinearGaussian, Policy, PolicyError, PolicyExt};
 use crate::problem::KitRng;
 use crate::sampling::standard_normal;
 use crate::scalar::{Dual, Scalar, Sqrt};

@@ -11,7 +11,7 @@
 
 use ilopt::oracle::EstimatorKernel;
 use ilopt::policy::{
-    LikelihoodRatio, LinearGaussian, Logistic, Policy, Softmax, SpeedLimitedGaussian,
+    LikelihoodRatio, LinearGaussian, Logistic, Policy, PolicyExt, Softmax, SpeedLimitedGaussian,
 };
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use ilopt::task::cartpole::{self, CartPoleTask};
@@ -162,17 +162,17 @@ fn cartpole_step_primitives_allocate_nothing() {
     cartpole_step_primitives(&cartpole_softmax(), &as_softmax(&balancing()));
 }
 
-/// The allocating `Policy::loss` and `Policy::score` of the softmax policy are seen by the counter
-/// (so the softmax cases above and below could fail).
+/// The allocating `PolicyExt::loss` and `PolicyExt::score` of the softmax policy (each allocates
+/// its result) are seen by the counter (so the softmax cases above and below could fail).
 #[test]
 fn softmax_loss_and_score_allocate() {
     let p = cartpole_softmax();
     let theta = as_softmax(&balancing());
     let phi = [0.01, -0.02, 0.03, 0.0, 1.0];
     let (n, _) = count(|| p.policy.loss(theta.as_slice(), &phi, &1).unwrap());
-    assert!(n >= 2, "{n}");
+    assert!(n >= 1, "{n}");
     let (n, _) = count(|| p.policy.score(theta.as_slice(), &phi, &1).unwrap());
-    assert!(n >= 2, "{n}");
+    assert!(n >= 1, "{n}");
 }
 
 /// Roll-outs and estimates of many lengths with policy `P`: the allocation count of each call is

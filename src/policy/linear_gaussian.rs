@@ -20,8 +20,7 @@
 //! that sampling (and a roll-out storing the actions) allocates nothing; the numbers are the same.
 
 use super::{
-    LikelihoodRatio, Policy, PolicyError, check_out, check_positive, check_size, check_vec,
-    mat_vec, outer,
+    LikelihoodRatio, Policy, PolicyError, check_out, check_positive, check_size, check_vec, mat_vec,
 };
 use crate::problem::KitRng;
 use crate::sampling::standard_normal;
@@ -240,26 +239,8 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
         self.features
     }
 
-    /// `l = ‖Wφ − π*(s)‖²`, `∇_W l = 2(Wφ − π*)φᵀ` (math.md §1.3, P3); `label` is π*(s) ∈ Sᵐ.
-    fn loss(&self, theta: &[S], phi: &[S], label: &[S]) -> Result<(S, Vec<S>), PolicyError> {
-        check_vec("label", label, self.actions)?;
-        let r = residual(&self.mean(theta, phi)?, label);
-        let two_r: Vec<S> = r.iter().map(|x| S::from_i64(2) * x).collect();
-        Ok((crate::scalar::norm_sq(&r), outer(&two_r, phi)))
-    }
-
-    /// `∇_W log π(a|s) = (a − Wφ)φᵀ/σ_π²` (math.md §1.3, P3).
-    fn score(&self, theta: &[S], phi: &[S], action: &A) -> Result<Vec<S>, PolicyError> {
-        let action: &[S] = action.borrow();
-        check_vec("action", action, self.actions)?;
-        let r: Vec<S> = residual(action, &self.mean(theta, phi)?)
-            .into_iter()
-            .map(|x| x / &self.sigma_sq)
-            .collect();
-        Ok(outer(&r, phi))
-    }
-
-    /// As [`Policy::loss`], row by row of W without a temporary for the mean.
+    /// `l = ‖Wφ − π*(s)‖²`, `∇_W l = 2(Wφ − π*)φᵀ` into `grad` (math.md §1.3, P3); `label` is
+    /// π*(s) ∈ Sᵐ. Row by row of W, without a temporary for the mean.
     fn loss_into(
         &self,
         theta: &[S],
@@ -283,7 +264,8 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
         Ok(loss)
     }
 
-    /// As [`Policy::score`], row by row of W without a temporary for the mean.
+    /// `∇_W log π(a|s) = (a − Wφ)φᵀ/σ_π²` into `score` (math.md §1.3, P3), row by row of W
+    /// without a temporary for the mean.
     fn score_into(
         &self,
         theta: &[S],

@@ -172,23 +172,7 @@ impl<S: Real> Policy<S> for Logistic {
         self.features
     }
 
-    /// `l = 2(p − y)²`, `∇l = 4(p − y)p(1 − p)φ` with `y = 1[label = 1]`.
-    fn loss(&self, theta: &[S], phi: &[S], label: &usize) -> Result<(S, Vec<S>), PolicyError> {
-        check_action(*label, 2)?;
-        let p = self.prob_one(theta, phi)?;
-        let (l, dz) = brier(&p, *label);
-        Ok((l, phi.iter().map(|x| dz.clone() * x).collect()))
-    }
-
-    /// `∇_θ log π(a|s) = (a − p)φ`.
-    fn score(&self, theta: &[S], phi: &[S], action: &usize) -> Result<Vec<S>, PolicyError> {
-        check_action(*action, 2)?;
-        let p = self.prob_one(theta, phi)?;
-        let c = score_coefficient(p, *action);
-        Ok(phi.iter().map(|x| c.clone() * x).collect())
-    }
-
-    /// As [`Policy::loss`], writing `4(p − y)p(1 − p)φ` into `grad`.
+    /// `l = 2(p − y)²` with `y = 1[label = 1]`, writing `∇l = 4(p − y)p(1 − p)φ` into `grad`.
     #[inline]
     fn loss_into(
         &self,
@@ -203,7 +187,7 @@ impl<S: Real> Policy<S> for Logistic {
         Ok(brier_into(&p, *label, phi, grad))
     }
 
-    /// As [`Policy::score`], writing `(a − p)φ` into `score`.
+    /// `∇_θ log π(a|s) = (a − p)φ` written into `score`.
     #[inline]
     fn score_into(
         &self,

@@ -18,8 +18,8 @@
 
 use super::softmax::{check_action, log_softmax, sample_probs, score_logits};
 use super::{
-    LikelihoodRatio, Policy, PolicyError, brier_logit_gradient, check_positive, check_size,
-    check_vec, from_f64_exact, mat_vec_in_order, outer, softmax_probs,
+    LikelihoodRatio, Policy, PolicyError, brier_logit_gradient, check_out, check_positive,
+    check_size, check_vec, from_f64_exact, mat_vec_in_order, softmax_probs,
 };
 use crate::problem::KitRng;
 use crate::sampling::standard_normal;
@@ -151,24 +151,44 @@ impl Mlp {
         forward: &Forward<S>,
         delta: &[S],
     ) -> Result<Vec<S>, PolicyError> {
+        let mut grad = vec![S::zero(); self.param_dim()];
+        self.backward_into(theta, phi, forward, delta, &mut grad)?;
+        Ok(grad)
+    }
+
+    /// [`Mlp::backward`] written into `grad` (length [`Mlp::param_dim`]), allocating nothing: the
+    /// hidden layer's back-propagated `γ` is formed in the `b1` block and the `W1` block is read
+    /// off it.
+    ///
+    /// # Errors
+    /// As [`Mlp::backward`], and [`PolicyError::Shape`] for a `grad` of the wrong length.
+    pub fn backward_into<S: Scalar>(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        forward: &Forward<S>,
+        delta: &[S],
+        grad: &mut [S],
+    ) -> Result<(), PolicyError> {
         check_vec("theta", theta, self.param_dim())?;
         check_vec("phi", phi, self.inputs)?;
         check_vec("hidden", &forward.hidden, self.hidden)?;
         check_vec("delta", delta, self.outputs)?;
+        check_out("grad", grad, self.param_dim())?;
         let (_, _, w2, _) = self.split(theta);
-        let h = self.hidden;
-        let gamma: Vec<S> = (0..h)
-            .map(|i| {
-                let back = (0..self.outputs)
-                    .fold(S::zero(), |acc, r| acc + w2[r * h + i].clone() * &delta[r]);
-                back * (S::one() - forward.hidden[i].square())
-            })
-            .collect();
-        let mut grad = outer(&gamma, phi);
-        grad.extend(gamma);
-        grad.extend(outer(delta, &forward.hidden));
-        grad.extend(delta.iter().cloned());
-        Ok(grad)
+        let (n, h) = (self.inputs, self.hidden);
+        let (dw1, rest) = grad.split_at_mut(h * n);
+        let (gamma, rest) = rest.split_at_mut(h);
+        let (dw2, db2) = rest.split_at_mut(self.outputs * h);
+        for (i, gi) in gamma.iter_mut().enumerate() {
+            let back =
+                (0..self.outputs).fold(S::zero(), |acc, r| acc + w2[r * h + i].clone() * &delta[r]);
+            *gi = back * (S::one() - forward.hidden[i].square());
+        }
+        write_outer(gamma, phi, dw1);
+        write_outer(delta, &forward.hidden, dw2);
+        db2.clone_from_slice(delta);
+        Ok(())
     }
 
     fn split<'a, S>(&self, theta: &'a [S]) -> (&'a [S], &'a [S], &'a [S], &'a [S]) {
@@ -177,6 +197,15 @@ impl Mlp {
         let (b1, rest) = rest.split_at(h);
         let (w2, b2) = rest.split_at(k * h);
         (w1, b1, w2, b2)
+    }
+}
+
+/// The row-major outer product `u vᵀ` written into `out` (`u.len() · v.len()` entries).
+fn write_outer<S: Scalar>(u: &[S], v: &[S], out: &mut [S]) {
+    for (row, ui) in out.chunks_exact_mut(v.len().max(1)).zip(u) {
+        for (o, vj) in row.iter_mut().zip(v) {
+            *o = ui.clone() * vj;
+        }
     }
 }
 
@@ -228,22 +257,36 @@ impl<S: Real> Policy<S> for MlpSoftmax {
         self.net.inputs
     }
 
-    /// Brier loss on `softmax(o)`, back-propagated from `∂l/∂z` ([`brier_logit_gradient`]).
-    fn loss(&self, theta: &[S], phi: &[S], label: &usize) -> Result<(S, Vec<S>), PolicyError> {
+    /// Brier loss on `softmax(o)`, back-propagated from `∂l/∂z` ([`brier_logit_gradient`]) into
+    /// `grad` (the forward pass's layers are allocated, the gradient is not).
+    fn loss_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &usize,
+        grad: &mut [S],
+    ) -> Result<S, PolicyError> {
         check_action(*label, self.net.outputs)?;
         let f = self.net.forward(theta, phi)?;
         let p = softmax_probs(&f.output)?;
         let (l, dz) = brier_logit_gradient(&p, *label);
-        Ok((l, self.net.backward(theta, phi, &f, &dz)?))
+        self.net.backward_into(theta, phi, &f, &dz, grad)?;
+        Ok(l)
     }
 
-    /// `∇_θ log π(a|s)`, back-propagated from `e_a − π`.
-    fn score(&self, theta: &[S], phi: &[S], action: &usize) -> Result<Vec<S>, PolicyError> {
+    /// `∇_θ log π(a|s)`, back-propagated from `e_a − π` into `score`.
+    fn score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        action: &usize,
+        score: &mut [S],
+    ) -> Result<(), PolicyError> {
         check_action(*action, self.net.outputs)?;
         let f = self.net.forward(theta, phi)?;
         let p = softmax_probs(&f.output)?;
         self.net
-            .backward(theta, phi, &f, &score_logits(&p, *action))
+            .backward_into(theta, phi, &f, &score_logits(&p, *action), score)
     }
 
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
@@ -316,8 +359,15 @@ impl<S: Real> Policy<S> for MlpGaussian<S> {
         self.net.inputs
     }
 
-    /// `l = ‖o − π*(s)‖²`, back-propagated from `2(o − π*)`.
-    fn loss(&self, theta: &[S], phi: &[S], label: &[S]) -> Result<(S, Vec<S>), PolicyError> {
+    /// `l = ‖o − π*(s)‖²`, back-propagated from `2(o − π*)` into `grad` (the forward pass's
+    /// layers are allocated, the gradient is not).
+    fn loss_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &[S],
+        grad: &mut [S],
+    ) -> Result<S, PolicyError> {
         check_vec("label", label, self.net.outputs)?;
         let f = self.net.forward(theta, phi)?;
         let r: Vec<S> = f
@@ -327,14 +377,18 @@ impl<S: Real> Policy<S> for MlpGaussian<S> {
             .map(|(o, y)| o.clone() - y)
             .collect();
         let delta: Vec<S> = r.iter().map(|x| S::from_i64(2) * x).collect();
-        Ok((
-            crate::scalar::norm_sq(&r),
-            self.net.backward(theta, phi, &f, &delta)?,
-        ))
+        self.net.backward_into(theta, phi, &f, &delta, grad)?;
+        Ok(crate::scalar::norm_sq(&r))
     }
 
-    /// `∇_θ log π(a|s)`, back-propagated from `(a − o)/σ_π²`.
-    fn score(&self, theta: &[S], phi: &[S], action: &Vec<S>) -> Result<Vec<S>, PolicyError> {
+    /// `∇_θ log π(a|s)`, back-propagated from `(a − o)/σ_π²` into `score`.
+    fn score_into(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        action: &Vec<S>,
+        score: &mut [S],
+    ) -> Result<(), PolicyError> {
         check_vec("action", action, self.net.outputs)?;
         let f = self.net.forward(theta, phi)?;
         let delta: Vec<S> = action
@@ -342,7 +396,7 @@ impl<S: Real> Policy<S> for MlpGaussian<S> {
             .zip(&f.output)
             .map(|(a, o)| (a.clone() - o) / &self.sigma_sq)
             .collect();
-        self.net.backward(theta, phi, &f, &delta)
+        self.net.backward_into(theta, phi, &f, &delta, score)
     }
 
     /// `a = o + σ_π ε`, ε drawn as `k` f64 standard normals converted exactly.

@@ -103,6 +103,10 @@ pub fn from_f64_exact<S: Scalar>(x: f64, param: &'static str) -> Result<S, Polic
 
 /// The interface the gradient oracle needs from a learner over features (eq. 3.15): the loss on
 /// the policy's output with its gradient, the score ∇_θ log π_θ(a|s), and sampling.
+///
+/// The required methods are the in-place ones, which every policy implements without allocating
+/// (the oracle's hot loop); the allocating conveniences `loss` and `score` are
+/// [`PolicyExt`]'s, built on them for every policy and not overridable.
 pub trait Policy<S: Scalar> {
     /// A sampled action.
     type Action: Clone + std::fmt::Debug;
@@ -114,63 +118,40 @@ pub trait Policy<S: Scalar> {
     /// Number of features n (length of φ).
     fn feature_dim(&self) -> usize;
 
-    /// The loss `l(s, θ)` on the policy's output and its gradient `∇_θ l` (layout of θ).
+    /// The loss `l(s, θ)` on the policy's output, returned, and its gradient `∇_θ l` (layout of
+    /// θ) written into `grad` (length [`Policy::param_dim`]).
     ///
     /// # Errors
-    /// [`PolicyError::Shape`] for a θ, φ or label of the wrong size; [`PolicyError::NonFinite`] if
-    /// the output is not finite.
-    fn loss(&self, theta: &[S], phi: &[S], label: &Self::Label)
-    -> Result<(S, Vec<S>), PolicyError>;
-
-    /// The score `∇_θ log π_θ(a|s)` (layout of θ).
-    ///
-    /// # Errors
-    /// As [`Policy::loss`], plus [`PolicyError::Action`] for an impossible action.
-    fn score(&self, theta: &[S], phi: &[S], action: &Self::Action) -> Result<Vec<S>, PolicyError>;
-
-    /// Sample `a ∼ π_θ(·|s)`, drawing `f64` randomness and converting it exactly.
-    ///
-    /// # Errors
-    /// As [`Policy::loss`], plus [`PolicyError::Undecidable`] when an interval cannot be ordered.
-    fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng)
-    -> Result<Self::Action, PolicyError>;
-
-    /// [`Policy::loss`] without allocating: writes `∇_θ l` into `grad` (length
-    /// [`Policy::param_dim`]) and returns `l`. Bit-for-bit the values of [`Policy::loss`].
-    ///
-    /// The default calls [`Policy::loss`] and copies; the policies of this module override it
-    /// with a version that allocates nothing (the oracle's hot loop).
-    ///
-    /// # Errors
-    /// As [`Policy::loss`], and [`PolicyError::Shape`] for a `grad` of the wrong length.
+    /// [`PolicyError::Shape`] for a θ, φ, label or `grad` of the wrong size;
+    /// [`PolicyError::NonFinite`] if the output is not finite.
     fn loss_into(
         &self,
         theta: &[S],
         phi: &[S],
         label: &Self::Label,
         grad: &mut [S],
-    ) -> Result<S, PolicyError> {
-        let (l, g) = self.loss(theta, phi, label)?;
-        copy_into("grad", &g, grad)?;
-        Ok(l)
-    }
+    ) -> Result<S, PolicyError>;
 
-    /// [`Policy::score`] without allocating: writes `∇_θ log π_θ(a|s)` into `score` (length
-    /// [`Policy::param_dim`]). Bit-for-bit the values of [`Policy::score`]; the default calls it
-    /// and copies.
+    /// The score `∇_θ log π_θ(a|s)` (layout of θ) written into `score` (length
+    /// [`Policy::param_dim`]).
     ///
     /// # Errors
-    /// As [`Policy::score`], and [`PolicyError::Shape`] for a `score` of the wrong length.
+    /// As [`Policy::loss_into`], plus [`PolicyError::Action`] for an impossible action.
     fn score_into(
         &self,
         theta: &[S],
         phi: &[S],
         action: &Self::Action,
         score: &mut [S],
-    ) -> Result<(), PolicyError> {
-        let s = self.score(theta, phi, action)?;
-        copy_into("score", &s, score)
-    }
+    ) -> Result<(), PolicyError>;
+
+    /// Sample `a ∼ π_θ(·|s)`, drawing `f64` randomness and converting it exactly.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_into`], plus [`PolicyError::Undecidable`] when an interval cannot be
+    /// ordered.
+    fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng)
+    -> Result<Self::Action, PolicyError>;
 
     /// Both per-decision terms of eq. 3.15 at one state: `l` (returned), `∇_θ l` into `grad` and
     /// `∇_θ log π_θ(a|s)` into `score`, as [`Policy::loss_into`] then [`Policy::score_into`] (the
@@ -194,17 +175,43 @@ pub trait Policy<S: Scalar> {
     }
 }
 
-/// Copy `src` into `dst`, checking the length (the default `*_into` methods of [`Policy`]).
-fn copy_into<S: Scalar>(param: &'static str, src: &[S], dst: &mut [S]) -> Result<(), PolicyError> {
-    if src.len() != dst.len() {
-        return Err(PolicyError::Shape {
-            param,
-            expected: src.len(),
-            got: dst.len(),
-        });
+/// The allocating forms of [`Policy`]'s in-place methods, for every policy (a blanket
+/// implementation, so no policy can give them other values): each allocates its result of
+/// [`Policy::param_dim`] entries and fills it with the in-place method, bit for bit its values
+/// and its errors.
+pub trait PolicyExt<S: Scalar>: Policy<S> {
+    /// The loss `l(s, θ)` on the policy's output and its gradient `∇_θ l` (layout of θ):
+    /// [`Policy::loss_into`] into a fresh vector.
+    ///
+    /// # Errors
+    /// As [`Policy::loss_into`].
+    fn loss(&self, theta: &[S], phi: &[S], label: &Self::Label)
+    -> Result<(S, Vec<S>), PolicyError>;
+
+    /// The score `∇_θ log π_θ(a|s)` (layout of θ): [`Policy::score_into`] into a fresh vector.
+    ///
+    /// # Errors
+    /// As [`Policy::score_into`].
+    fn score(&self, theta: &[S], phi: &[S], action: &Self::Action) -> Result<Vec<S>, PolicyError>;
+}
+
+impl<S: Scalar, P: Policy<S> + ?Sized> PolicyExt<S> for P {
+    fn loss(
+        &self,
+        theta: &[S],
+        phi: &[S],
+        label: &Self::Label,
+    ) -> Result<(S, Vec<S>), PolicyError> {
+        let mut grad = vec![S::zero(); self.param_dim()];
+        let l = self.loss_into(theta, phi, label, &mut grad)?;
+        Ok((l, grad))
     }
-    dst.clone_from_slice(src);
-    Ok(())
+
+    fn score(&self, theta: &[S], phi: &[S], action: &Self::Action) -> Result<Vec<S>, PolicyError> {
+        let mut score = vec![S::zero(); self.param_dim()];
+        self.score_into(theta, phi, action, &mut score)?;
+        Ok(score)
+    }
 }
 
 /// Check that a parameter (σ_π, a speed limit) is finite and certainly > 0.
@@ -250,7 +257,7 @@ pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
     /// leave out their normaliser, so that the value exists in every scalar of their layer).
     ///
     /// # Errors
-    /// As [`Policy::score`].
+    /// As [`Policy::score_into`].
     fn log_prob(&self, theta: &[S], phi: &[S], action: &Self::Action) -> Result<S, PolicyError>;
 
     /// `log π_θ(a|s) − log π_{θ_other}(a|s)`. The default is the difference of
@@ -258,7 +265,7 @@ pub trait LikelihoodRatio<S: Scalar>: Policy<S> {
     /// (the linear-Gaussian policy's).
     ///
     /// # Errors
-    /// As [`Policy::score`].
+    /// As [`Policy::score_into`].
     fn log_likelihood_ratio(
         &self,
         theta: &[S],
@@ -331,12 +338,5 @@ pub(crate) fn mat_vec_in_order<S: Scalar>(m: &[S], x: &[S], rows: usize) -> Vec<
                 .zip(x)
                 .fold(S::zero(), |acc, (a, b)| acc + a.clone() * b)
         })
-        .collect()
-}
-
-/// The row-major outer product `u vᵀ` (the shape of every gradient with respect to a weight matrix).
-pub(crate) fn outer<S: Scalar>(u: &[S], v: &[S]) -> Vec<S> {
-    u.iter()
-        .flat_map(|ui| v.iter().map(move |vj| ui.clone() * vj))
         .collect()
 }

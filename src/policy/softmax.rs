@@ -21,7 +21,7 @@
 
 use super::{
     LikelihoodRatio, Policy, PolicyError, check_out, check_size, check_vec, check_vec_scalar,
-    from_f64_exact, mat_vec, outer,
+    from_f64_exact, mat_vec,
 };
 use crate::problem::KitRng;
 use crate::sampling::{dyadic_uniform, sample_categorical};
@@ -233,7 +233,7 @@ fn brier_into<S: Scalar>(probs: &[S], expert: usize, phi: &[S], grad: &mut [S]) 
     loss
 }
 
-/// `(e_a − π)φᵀ` written into `score` (row-major `A × n`), as [`Policy::score`] of [`Softmax`].
+/// `(e_a − π)φᵀ` written into `score` (row-major `A × n`), as [`Policy::score_into`] of [`Softmax`].
 #[inline]
 fn score_into_rows<S: Scalar>(probs: &[S], action: usize, phi: &[S], score: &mut [S]) {
     let n = phi.len();
@@ -471,22 +471,6 @@ impl<S: Real> Policy<S> for Softmax {
         self.features
     }
 
-    /// Brier loss against the expert action `label`: `∇_Θ l = (∂l/∂z)φᵀ` with ∂l/∂z from
-    /// [`brier_logit_gradient`].
-    fn loss(&self, theta: &[S], phi: &[S], label: &usize) -> Result<(S, Vec<S>), PolicyError> {
-        check_action(*label, self.actions)?;
-        let p = self.probs(theta, phi)?;
-        let (l, dz) = brier_logit_gradient(&p, *label);
-        Ok((l, outer(&dz, phi)))
-    }
-
-    /// `∇_Θ log π(a|s) = (e_a − π)φᵀ`.
-    fn score(&self, theta: &[S], phi: &[S], action: &usize) -> Result<Vec<S>, PolicyError> {
-        check_action(*action, self.actions)?;
-        let p = self.probs(theta, phi)?;
-        Ok(outer(&score_logits(&p, *action), phi))
-    }
-
     /// Allocates nothing for up to 16 actions (the probabilities in stack scratch).
     #[inline]
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
@@ -494,7 +478,8 @@ impl<S: Real> Policy<S> for Softmax {
         self.sample_checked_theta(theta, phi, rng)
     }
 
-    /// As [`Policy::loss`], writing `∇_Θ l` into `grad`; allocates nothing for up to 16 actions.
+    /// Brier loss against the expert action `label`: `∇_Θ l = (∂l/∂z)φᵀ` with ∂l/∂z from
+    /// [`brier_logit_gradient`], written into `grad`; allocates nothing for up to 16 actions.
     #[inline]
     fn loss_into(
         &self,
@@ -511,7 +496,7 @@ impl<S: Real> Policy<S> for Softmax {
         })
     }
 
-    /// As [`Policy::score`], writing `(e_a − π)φᵀ` into `score`; allocates nothing for up to 16
+    /// `∇_Θ log π(a|s) = (e_a − π)φᵀ` written into `score`; allocates nothing for up to 16
     /// actions.
     #[inline]
     fn score_into(
@@ -558,6 +543,7 @@ impl<S: Real> LikelihoodRatio<S> for Softmax {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::policy::PolicyExt;
     use crate::scalar::Dual;
     use rand::{Rng, SeedableRng};
 
@@ -565,9 +551,10 @@ mod tests {
         v.iter().map(|x| x.to_bits()).collect()
     }
 
-    /// The allocation-free methods against the allocating computation they replaced (`loss`,
-    /// `score`, `sample_categorical` on `probs`, `log_softmax` on `logits`): bit-for-bit, on random
-    /// inputs, for action counts on both sides of the stack scratch's size.
+    /// The allocation-free methods against the allocating computation (the Brier gradient and
+    /// the score formed from `probs` as vectors, then their outer products with φ;
+    /// `sample_categorical` on `probs`, `log_softmax` on `logits`): bit-for-bit, on random inputs,
+    /// for action counts on both sides of the stack scratch's size.
     #[test]
     fn in_place_methods_match_the_allocating_computation_bit_for_bit() {
         let mut rng = KitRng::seed_from_u64(3);
@@ -585,8 +572,17 @@ mod tests {
                     .collect();
                 let label = rng.random_range(0..actions);
                 let action = rng.random_range(0..actions);
-                let (l, g) = pi.loss(&theta, &phi, &label).unwrap();
-                let s = pi.score(&theta, &phi, &action).unwrap();
+                // The allocating computation: the probabilities, ∂l/∂z and e_a − π as vectors,
+                // then their outer products with φ.
+                let outer = |u: &[f64]| -> Vec<f64> {
+                    u.iter()
+                        .flat_map(|a| phi.iter().map(move |b| a * b))
+                        .collect()
+                };
+                let p = pi.probs(&theta, &phi).unwrap();
+                let (l, dz) = brier_logit_gradient(&p, label);
+                let g = outer(&dz);
+                let s = outer(&score_logits(&p, action));
                 let mut grad = vec![f64::NAN; d];
                 let mut score = vec![f64::NAN; d];
                 let l2 = pi.loss_into(&theta, &phi, &label, &mut grad).unwrap();

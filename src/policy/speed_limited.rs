@@ -203,25 +203,14 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
         Policy::<S>::feature_dim(&self.inner)
     }
 
-    /// `l = ‖c(Wφ) − π*(s)‖²` and `∇_W l = 2 J_c r φᵀ` (module docs).
-    fn loss(&self, theta: &[S], phi: &[S], label: &[S]) -> Result<(S, Vec<S>), PolicyError> {
-        let mut grad = vec![S::zero(); Policy::<S>::param_dim(self)];
-        let l = self.loss_into(theta, phi, label, &mut grad)?;
-        Ok((l, grad))
-    }
-
-    /// P3's score (the sampled action is the unclipped draw).
-    fn score(&self, theta: &[S], phi: &[S], action: &A) -> Result<Vec<S>, PolicyError> {
-        self.inner.score(theta, phi, action)
-    }
-
     /// P3's sample `a = Wφ + σ_π ε` (the environment clips it).
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
         self.inner.sample(theta, phi, rng)
     }
 
-    /// The loss without allocating: the outputs `m_i = (Wφ)_i` are parked in the first entry of
-    /// each row of `grad` until the rows are written.
+    /// `l = ‖c(Wφ) − π*(s)‖²` and `∇_W l = 2 J_c r φᵀ` (module docs) without allocating: the
+    /// outputs `m_i = (Wφ)_i` are parked in the first entry of each row of `grad` until the rows
+    /// are written.
     fn loss_into(
         &self,
         theta: &[S],
@@ -248,7 +237,7 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
         }
     }
 
-    /// P3's score without allocating.
+    /// P3's score without allocating (the sampled action is the unclipped draw).
     fn score_into(
         &self,
         theta: &[S],
@@ -320,6 +309,7 @@ impl<S: Sqrt, A: ActionVector<S>> LikelihoodRatio<S> for SpeedLimitedGaussian<S,
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::policy::PolicyExt;
     use crate::scalar::{Dual, Interval};
 
     const PHI: [f64; 3] = [0.7, -1.3, 1.0];

@@ -1,4 +1,4 @@
-//! The gradient oracle of eq. 3.15 and its variants: Monte-Carlo unbiasedness, the stored reference, sampling laws, task problems, the hand-specialised yardstick, baselines (the leave-one-out fast route against the reference), minibatches, the fixed-horizon objective and the trajectory loss.
+//! The gradient oracle of eq. 3.15 and its variants: every route against one reference (`routes`), Monte-Carlo unbiasedness, golden hashes, sampling laws, task problems, the hand-specialised yardstick, baselines (the leave-one-out fast route against the reference), minibatches, the fixed-horizon objective and the trajectory loss.
 //!
 //! One test binary of several modules, so that a fresh `cargo test` links the crate a few times
 //! rather than once per file.
@@ -11,10 +11,10 @@ mod batched;
 mod estimated_baseline;
 mod fixed_horizon;
 mod leave_one_out;
-mod noted_probabilities;
 mod oracle_monte_carlo;
 mod oracle_reference;
 mod oracle_sampling;
+mod routes;
 mod specialised;
 mod task_problems;
 mod trajectory_loss;

@@ -16,7 +16,7 @@ use approx::{abs_diff_eq, assert_abs_diff_eq};
 
 use ilopt::policy::{
     LikelihoodRatio, LinearGaussian, Logistic, Mlp, MlpGaussian, MlpSoftmax, Policy, PolicyError,
-    Softmax, from_f64_exact, logistic_sigmoid, softmax_probs, softplus, tanh,
+    PolicyExt, Softmax, from_f64_exact, logistic_sigmoid, softmax_probs, softplus, tanh,
 };
 use ilopt::problem::KitRng;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
@@ -151,16 +151,16 @@ where
     L: Fn(&[Dual<f64>], &[Dual<f64>], usize) -> Dual<f64>,
 {
     let d = theta.len();
-    let (_, dl) = Policy::<f64>::loss(policy, theta, phi, &label).map_err(|e| e.to_string())?;
+    let (_, dl) = PolicyExt::<f64>::loss(policy, theta, phi, &label).map_err(|e| e.to_string())?;
     let td = Dual::variables(theta);
-    let (ld, _) =
-        Policy::<Dual<f64>>::loss(policy, &td, &consts(phi), &label).map_err(|e| e.to_string())?;
+    let (ld, _) = PolicyExt::<Dual<f64>>::loss(policy, &td, &consts(phi), &label)
+        .map_err(|e| e.to_string())?;
     let mut worst = derivative_f64_error(&ld.gradient_padded(d), &dl);
     if !derivative_f64_agrees(&ld.gradient_padded(d), &dl) {
         return Err(format!("∇l: dual {:?} vs analytic {dl:?}", ld.gradient()));
     }
     for a in [0, 1] {
-        let psi = Policy::<f64>::score(policy, theta, phi, &a).map_err(|e| e.to_string())?;
+        let psi = PolicyExt::<f64>::score(policy, theta, phi, &a).map_err(|e| e.to_string())?;
         let lp = log_prob(&td, &consts(phi), a);
         let dual = lp.gradient_padded(d);
         worst = worst.max(derivative_f64_error(&dual, &psi));
@@ -228,8 +228,8 @@ proptest! {
         let sm = Softmax::new(2, n).unwrap();
         let mut big = vec![0.0; n];
         big.extend_from_slice(&theta);
-        let (l1, _) = Policy::<f64>::loss(&pol, &theta, &phi, &label).unwrap();
-        let (l2, _) = Policy::<f64>::loss(&sm, &big, &phi, &label).unwrap();
+        let (l1, _) = PolicyExt::<f64>::loss(&pol, &theta, &phi, &label).unwrap();
+        let (l2, _) = PolicyExt::<f64>::loss(&sm, &big, &phi, &label).unwrap();
         prop_assert!(derivative_f64_agrees(&[l1], &[l2]));
     }
 
@@ -580,19 +580,19 @@ fn invalid_arguments_are_rejected_with_the_parameter_named() {
     );
     let sm = Softmax::new(2, 1).unwrap();
     assert_eq!(
-        Policy::<f64>::score(&sm, &[0.0, 0.0], &[1.0], &2).unwrap_err(),
+        PolicyExt::<f64>::score(&sm, &[0.0, 0.0], &[1.0], &2).unwrap_err(),
         PolicyError::Action {
             action: 2,
             actions: 2
         }
     );
     assert!(matches!(
-        Policy::<f64>::loss(&sm, &[f64::INFINITY, 0.0], &[1.0], &0),
+        PolicyExt::<f64>::loss(&sm, &[f64::INFINITY, 0.0], &[1.0], &0),
         Err(PolicyError::NonFinite { param: "theta" })
     ));
     // Overflowing logits from finite inputs are reported, not turned into NaN.
     assert!(matches!(
-        Policy::<f64>::loss(&sm, &[1e300, 0.0], &[1e300], &0),
+        PolicyExt::<f64>::loss(&sm, &[1e300, 0.0], &[1e300], &0),
         Err(PolicyError::NonFinite { .. })
     ));
 }
@@ -634,15 +634,16 @@ mod intervals {
         let d = theta.len();
         let (t, p) = (iv(theta), iv(phi));
         let (_, dl) =
-            Policy::<Interval>::loss(policy, &t, &p, &label).map_err(|e| e.to_string())?;
+            PolicyExt::<Interval>::loss(policy, &t, &p, &label).map_err(|e| e.to_string())?;
         let td = Dual::variables(&t);
-        let (ld, _) = Policy::<Dual<Interval>>::loss(policy, &td, &consts(&p), &label)
+        let (ld, _) = PolicyExt::<Dual<Interval>>::loss(policy, &td, &consts(&p), &label)
             .map_err(|e| e.to_string())?;
         if !intersect(&ld.gradient_padded(d), &dl) {
             return Err(format!("∇l: {:?} vs {dl:?}", ld.gradient()));
         }
         for a in [0, 1] {
-            let psi = Policy::<Interval>::score(policy, &t, &p, &a).map_err(|e| e.to_string())?;
+            let psi =
+                PolicyExt::<Interval>::score(policy, &t, &p, &a).map_err(|e| e.to_string())?;
             if !intersect(&lp(&td, &consts(&p), a).gradient_padded(d), &psi) {
                 return Err(format!("score a={a}"));
             }
@@ -706,7 +707,7 @@ mod intervals {
         wrong[2] = p[0];
         wrong[3] = p[1];
         assert!(!intersect(&lp.gradient_padded(6), &wrong));
-        let right = Policy::<Interval>::score(&pol, &t, &p, &1).unwrap();
+        let right = PolicyExt::<Interval>::score(&pol, &t, &p, &1).unwrap();
         assert!(intersect(&lp.gradient_padded(6), &right));
     }
 

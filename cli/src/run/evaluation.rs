@@ -11,7 +11,7 @@
 use super::task::Bench;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::{ObstacleEnv, Outcome};
-use ilopt::policy::Policy;
+use ilopt::policy::PolicyExt;
 use ilopt::problem::KitRng;
 use ilopt::task::Task;
 use rand::SeedableRng;
@@ -62,7 +62,7 @@ pub fn evaluate(
         Bench::CartPoleSoftmax(p) => cartpole(
             &p.task,
             &mut |phi, label| {
-                let (l, _) = Policy::<f64>::loss(&p.policy, theta, phi, &label)
+                let (l, _) = PolicyExt::<f64>::loss(&p.policy, theta, phi, &label)
                     .map_err(|e| e.to_string())?;
                 let z = p.policy.logits(theta, phi).map_err(|e| e.to_string())?;
                 Ok((usize::from(z[1] > z[0]), l))
@@ -73,7 +73,7 @@ pub fn evaluate(
         Bench::CartPoleLogistic(p) => cartpole(
             &p.task,
             &mut |phi, label| {
-                let (l, _) = Policy::<f64>::loss(&p.policy, theta, phi, &label)
+                let (l, _) = PolicyExt::<f64>::loss(&p.policy, theta, phi, &label)
                     .map_err(|e| e.to_string())?;
                 let z = p.policy.logit(theta, phi).map_err(|e| e.to_string())?;
                 Ok((usize::from(z > 0.0), l))

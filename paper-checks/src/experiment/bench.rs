@@ -8,7 +8,7 @@ use crate::stats::derive_seed;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::{ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome};
 use ilopt::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
-use ilopt::policy::{LinearGaussian, Policy, Softmax, SpeedLimitedGaussian};
+use ilopt::policy::{LinearGaussian, PolicyExt, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
 use ilopt::task::cartpole::{self, CartPoleEpisode, CartPoleExpert, CartPoleTask};
 use ilopt::task::obstacle::{ObstacleFeatures, ObstacleTask};
@@ -227,7 +227,7 @@ impl Bench {
             ),
             Bench::Cartpole { problem, .. } => self.evaluate_cartpole(
                 &mut |_, phi, label| {
-                    let (l, _) = Policy::<f64>::loss(&problem.policy, theta, phi, &label)
+                    let (l, _) = PolicyExt::<f64>::loss(&problem.policy, theta, phi, &label)
                         .map_err(|x| err(&x))?;
                     let z = problem.policy.logits(theta, phi).map_err(|x| err(&x))?;
                     Ok((usize::from(z[1] > z[0]), l))
