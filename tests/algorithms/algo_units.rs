@@ -16,8 +16,8 @@ use ilopt::algo::sgd::{Sgd, SgdConfig, SgdStep};
 use ilopt::algo::storm::{Correction, Storm, StormConfig, StormSchedule};
 use ilopt::algo::storm_plus::{StormPlus, StormPlusConfig};
 use ilopt::algo::{
-    AlgoError, Algorithm, AlgorithmConfig, ConfigNumber, RunConfig, Runner, StepContext,
-    StoppingRule, Termination,
+    AlgoError, Algorithm, AlgorithmConfig, ConfigNumber, Divergence, RunConfig, Runner,
+    StepContext, StoppingRule, Termination,
 };
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::scalar::{BigRational, Interval, Roots, Scalar};
