@@ -14,7 +14,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use ilopt::algo::config::RunConfig;
-use ilopt::algo::runner::{RunRecord, Runner, Termination};
+use ilopt::algo::{RunRecord, Runner, Termination};
 use ilopt::policy::{LinearGaussian, Logistic};
 use ilopt::problem::IlProblem;
 use ilopt::task::TaskProblem;

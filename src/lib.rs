@@ -96,6 +96,7 @@ pub mod policy;
 pub mod problem;
 pub mod sampling;
 pub mod scalar;
+pub mod seeding;
 pub mod task;
 pub mod tolerance;
 pub mod toy;

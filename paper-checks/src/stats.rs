@@ -3,6 +3,7 @@
 //! quantities bounded on both sides, a Student-t interval clamped to 0 for non-negative ones) —
 //! and the seed derivation.
 
+use ilopt::seeding::splitmix64;
 use serde::Serialize;
 
 /// The 0.975 quantile of Student's t with `df` degrees of freedom (NaN for `df = 0`), from
@@ -164,16 +165,15 @@ pub fn t_clamped(xs: &[f64], floor: f64) -> Interval {
     }
 }
 
-/// SplitMix64 as a stream: the generator of the bootstrap's resamples.
+/// SplitMix64 as a stream ([`splitmix64`] of the states seed, seed + γ, …): the generator of
+/// the bootstrap's resamples.
 struct SplitMix(u64);
 
 impl SplitMix {
     fn next(&mut self) -> u64 {
+        let out = splitmix64(self.0);
         self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
+        out
     }
 
     /// A uniform index below `n` (Lemire's multiply-shift on the high 32 bits; the bias,
@@ -223,17 +223,9 @@ pub fn fnv1a(s: &str) -> u64 {
     h
 }
 
-/// SplitMix64 finaliser (decorrelates nearby hashes).
-pub fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
 /// A seed derived only from a key (the configuration's identity) and an index.
 pub fn derive_seed(key: &str, index: u64) -> u64 {
-    mix(fnv1a(key) ^ mix(index))
+    splitmix64(fnv1a(key) ^ splitmix64(index))
 }
 
 #[cfg(test)]

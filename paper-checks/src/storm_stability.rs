@@ -21,7 +21,7 @@ use crate::error::Error;
 use crate::experiment::Bench;
 use crate::experiment::TaskKind;
 use ilopt::algo::storm_stability::{eigenvalues, mean_radius, threshold};
-use ilopt::algo::{AlgorithmConfig, StepContext};
+use ilopt::algo::{AlgorithmConfig, Runner, StoppingRule};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
@@ -446,21 +446,20 @@ fn train<P: IlProblem<f64>>(
 ) -> Result<(DVector<f64>, u64), Error> {
     let e = |x: &dyn std::fmt::Display| Error::experiment("DAgger", x);
     let mut algorithm = config.build::<f64, P>().map_err(|x| e(&x))?;
-    let mut rng = KitRng::seed_from_u64(seed);
-    let mut cost = Cost::default();
-    let mut ctx = StepContext {
-        rng: &mut rng,
-        cost: &mut cost,
-    };
-    algorithm
-        .init(problem, DVector::zeros(problem.dim()), &mut ctx)
+    let rec = Runner::new(StoppingRule::gradient_budget(budget))
+        .map_err(|x| e(&x))?
+        .keep_history(false)
+        .run(
+            algorithm.as_mut(),
+            problem,
+            DVector::zeros(problem.dim()),
+            seed,
+        )
         .map_err(|x| e(&x))?;
-    let mut iterations = 0;
-    while ctx.cost.gradient_evaluations < budget {
-        algorithm.step(problem, &mut ctx).map_err(|x| e(&x))?;
-        iterations += 1;
+    if let Some(d) = rec.termination.divergence() {
+        return Err(e(d));
     }
-    Ok((algorithm.theta().clone(), iterations))
+    Ok((rec.theta, rec.iterations))
 }
 
 #[cfg(test)]

@@ -45,7 +45,7 @@
 //!
 //! # Known limitations
 //! * Under the direct parameterisation the score 1/π is unbounded, so large steps can leave the
-//!   open simplex; the run then ends with [`runner::Termination::Failed`] (a domain error),
+//!   open simplex; the run then ends with [`Termination::Failed`] (a domain error),
 //!   never with a silently clipped or NaN iterate. No algorithm projects onto the simplex.
 //! * Interval runs of Adam/RMSProp widen quickly once the gradients are small (the wrapping
 //!   effect in `m̂/√v̂`): fine for a few iterations, not for long runs.
@@ -64,6 +64,7 @@ pub mod first_order;
 pub mod forward_training;
 pub mod learner;
 pub mod o2nc;
+pub mod observer;
 mod parameter_range;
 mod prefetch;
 pub mod rmsprop;
@@ -75,6 +76,7 @@ pub mod smile;
 pub mod storm;
 pub mod storm_plus;
 pub mod storm_stability;
+pub mod termination;
 mod vector;
 
 pub use crate::scalar::ConfigNumber;
@@ -83,9 +85,11 @@ pub use config::{AlgorithmConfig, RunConfig};
 pub use error::AlgoError;
 pub use first_order::{FirstOrder, UpdateRule};
 pub use learner::{DataSchedule, DatasetLearner};
-pub use runner::{
-    IterationMetrics, Observer, RunRecord, Runner, StoppingRule, Termination, replay,
+pub use observer::{
+    CheckpointObserver, IterationMetrics, NormBound, Observer, Progress, Schedule, norm_of,
 };
+pub use runner::{RunFailure, RunRecord, Runner, StoppingRule, replay};
+pub use termination::{Divergence, Termination};
 
 pub(crate) use algorithm::oracle_draw;
 pub(crate) use error::{check_dim, check_finite, invalid, min_one};

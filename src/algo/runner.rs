@@ -1,22 +1,32 @@
-//! The runner (conventions.md 5–7, argmin's `Executor` without argmin): it owns the loop, the stopping
-//! rule, the observers, the seeded [`KitRng`], the cumulative [`Cost`] and the termination reason.
+//! The runner (conventions.md 5–7, argmin's `Executor` without argmin): the one loop that steps
+//! an [`Algorithm`]. It owns the seeded [`KitRng`], the cumulative [`Cost`], the stopping rule,
+//! the observers and the termination reason; `ilopt run`, paper-checks and the examples all run
+//! through it.
 //!
-//! Per iteration it records [`IterationMetrics`]: iteration, θ, cumulative cost (trajectories,
-//! environment steps, per-state gradient evaluations = the "gradient calls" of Tables 4.1/4.3,
-//! expert queries), wall time, the squared norm of the step's estimate, the step's loss estimate,
-//! and optionally the exact objective through a user closure. Iteration 0 is the state after
-//! [`Algorithm::init`] (which may already have sampled, e.g. STORM's d₁).
+//! Iteration 0 is the state after [`Algorithm::init`] (which may already have sampled, e.g.
+//! STORM's d₁). At every iterate k = 0, 1, …, in this order:
+//! 1. the [`Observer`]s see its [`IterationMetrics`] (θ, cumulative cost — trajectories,
+//!    environment steps, per-state gradient evaluations = the "gradient calls" of Tables 4.1/4.3,
+//!    expert queries —, wall time, the step's estimate and loss, optionally the exact objective
+//!    through a user closure); one may end the run (e.g. [`NormBound`](super::NormBound));
+//! 2. a non-finite θ ends the run ([`Divergence::NonFiniteTheta`]);
+//! 3. (k ≥ 1) the algorithm finished its own schedule ([`Termination::Finished`]);
+//! 4. `max_free_steps` steps in a row without a gradient call ([`Divergence::NoGradientCall`]);
+//! 5. the [`CheckpointObserver`] evaluates the iterate at every scheduled call count it reaches
+//!    ([`Schedule`]) and may end the run ([`Termination::Stopped`]);
+//! 6. the stopping rule: `max_iterations` reached; `max_gradient_evaluations` reached (the step
+//!    that crosses the budget completes, so the final count can exceed it by one step's cost);
+//!    the target loss is certainly reached (exact objective if a closure is given, else the
+//!    step's loss estimate); the time limit passed;
+//! 7. the next step; a failing step ends the run ([`Divergence::StepFailed`]).
 //!
-//! A failing step (oracle error, undecidable interval branch, **non-finite iterate**) ends the run
-//! with [`Termination::Failed`]; the record keeps everything up to that point.
-//!
-//! Stopping: after each step, in this order — the step failed; the algorithm finished its own
-//! schedule; `max_iterations` reached; `max_gradient_evaluations` reached (the step that crosses
-//! the budget completes, so the final count can exceed it by one step's cost); the target loss is
-//! certainly reached (exact objective if a closure is given, else the step's loss estimate); the
-//! time limit passed. Runs with a time limit are not reproducible when the limit binds.
+//! A run that diverges is data: the record keeps everything up to that point. Runs with a time
+//! limit are not reproducible when the limit binds. Time spent in the checkpoint observer is
+//! measured apart, so that training time excludes evaluation time.
 
 use super::config::RunConfig;
+use super::observer::{CheckpointObserver, IterationMetrics, Observer, Schedule};
+use super::termination::{Divergence, Termination};
 use super::{AlgoError, Algorithm, ConfigNumber, StepContext, StepReport, invalid, norm_sq};
 use crate::problem::{Cost, IlProblem, KitRng};
 use crate::scalar::{JsonScalar, Scalar};
@@ -24,7 +34,7 @@ use nalgebra::DVector;
 use rand::SeedableRng;
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// When a run stops (at least one of the bounds must be set).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -37,6 +47,10 @@ pub struct StoppingRule {
     pub target_loss: Option<ConfigNumber>,
     /// Wall-clock limit in milliseconds (≥ 1).
     pub time_limit_ms: Option<u64>,
+    /// End the run as diverged after this many steps in a row without a gradient call (≥ 1): an
+    /// algorithm whose steps cost nothing would never use up a gradient budget.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_free_steps: Option<u64>,
 }
 
 impl StoppingRule {
@@ -68,6 +82,7 @@ impl StoppingRule {
                 self.max_gradient_evaluations,
             ),
             ("stop.time_limit_ms", self.time_limit_ms),
+            ("stop.max_free_steps", self.max_free_steps),
         ] {
             if v == Some(0) {
                 return Err(invalid(name, "must be at least 1 (a zero budget)"));
@@ -86,102 +101,6 @@ impl StoppingRule {
             ));
         }
         Ok(())
-    }
-}
-
-/// Why a run ended.
-#[derive(Debug, Clone, PartialEq)]
-#[non_exhaustive]
-pub enum Termination {
-    /// `max_iterations` reached.
-    MaxIterations,
-    /// The gradient-evaluation budget is used up.
-    GradientBudget,
-    /// The target loss was reached.
-    TargetLoss,
-    /// The time limit passed.
-    TimeOut,
-    /// The algorithm completed its own schedule (O2NC, forward training).
-    Finished,
-    /// A step failed (including a non-finite iterate: [`AlgoError::NonFinite`]).
-    Failed(AlgoError),
-}
-
-impl std::fmt::Display for Termination {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Termination::MaxIterations => write!(f, "max-iterations"),
-            Termination::GradientBudget => write!(f, "gradient-budget"),
-            Termination::TargetLoss => write!(f, "target-loss"),
-            Termination::TimeOut => write!(f, "time-out"),
-            Termination::Finished => write!(f, "finished"),
-            Termination::Failed(e) => write!(f, "failed: {e}"),
-        }
-    }
-}
-
-/// What the runner records after each iteration.
-#[derive(Debug, Clone, PartialEq)]
-pub struct IterationMetrics<S> {
-    /// 0 after `init`, then 1, 2, ….
-    pub iteration: u64,
-    /// The iterate.
-    pub theta: DVector<S>,
-    /// Cumulative cost so far.
-    pub cost: Cost,
-    /// Seconds since the run started.
-    pub wall_time: f64,
-    /// The step's direction ([`StepReport::estimate`]: the oracle estimate for SGD, `d_{k+1}` for
-    /// STORM, `g_n = g(w_n, τ_n)` for O2NC), if it has one; what the theory checks compare with
-    /// the exact gradient.
-    pub estimate: Option<DVector<S>>,
-    /// `‖estimate‖²` of the step's direction, if it has one.
-    pub estimate_norm_sq: Option<S>,
-    /// `‖estimate‖` for reporting (`f64`).
-    pub estimate_norm: Option<f64>,
-    /// The step's loss estimate, if any.
-    pub loss: Option<S>,
-    /// The exact objective at θ, if the runner has an objective closure.
-    pub objective: Option<S>,
-    /// Where the step evaluated its gradient, when that is not θ (O2NC's w_n).
-    pub evaluated_at: Option<DVector<S>>,
-}
-
-/// Receives every [`IterationMetrics`] (metrics sinks, progress bars).
-pub trait Observer<S> {
-    /// Called after `init` (iteration 0) and after every step.
-    fn observe(&mut self, metrics: &IterationMetrics<S>);
-}
-
-impl<S, F: FnMut(&IterationMetrics<S>)> Observer<S> for F {
-    fn observe(&mut self, metrics: &IterationMetrics<S>) {
-        self(metrics)
-    }
-}
-
-/// A progress observer: one line on stderr every `every` iterations.
-#[derive(Debug, Clone)]
-pub struct Progress {
-    /// Print every this many iterations (≥ 1).
-    pub every: u64,
-}
-
-impl<S: Scalar> Observer<S> for Progress {
-    fn observe(&mut self, m: &IterationMetrics<S>) {
-        if m.iteration.is_multiple_of(self.every.max(1)) {
-            eprintln!(
-                "iter {:>8}  grads {:>10}  traj {:>8}  t {:>8.3}s  |d| {:>10}  loss {:>10}",
-                m.iteration,
-                m.cost.gradient_evaluations,
-                m.cost.trajectories,
-                m.wall_time,
-                m.estimate_norm.map_or("-".into(), |x| format!("{x:.4e}")),
-                m.objective
-                    .as_ref()
-                    .or(m.loss.as_ref())
-                    .map_or("-".into(), |x| format!("{:.4e}", x.to_f64())),
-            );
-        }
     }
 }
 
@@ -208,6 +127,12 @@ pub struct RunRecord<S> {
     pub history: Vec<IterationMetrics<S>>,
     /// Total wall time in seconds.
     pub wall_time: f64,
+    /// Wall time in seconds without the time spent in the checkpoint observer.
+    pub train_seconds: f64,
+    /// Time spent in the checkpoint observer (the evaluations), in seconds.
+    pub checkpoint_seconds: f64,
+    /// Training time ([`RunRecord::train_seconds`] so far) at each scheduled call count served.
+    pub seconds_at_checkpoints: Vec<f64>,
 }
 
 impl<S: Scalar> RunRecord<S> {
@@ -372,88 +297,110 @@ impl<'a, S: Scalar> Runner<'a, S> {
         theta0: DVector<S>,
         seed: u64,
     ) -> Result<RunRecord<S>, AlgoError> {
+        self.run_with_checkpoints(algorithm, problem, theta0, seed, None, &mut NoCheckpoints)
+            .map_err(|e| match e {
+                RunFailure::Start(e) => e,
+                RunFailure::Checkpoint(never) => match never {},
+            })
+    }
+
+    /// [`Runner::run`] with a checkpoint observer told at the call counts of `schedule` (none
+    /// without a schedule).
+    ///
+    /// # Errors
+    /// [`RunFailure::Start`] for a failing `init`, [`RunFailure::Checkpoint`] for a failing
+    /// evaluation (later step failures end the run with [`Termination::Failed`]).
+    pub fn run_with_checkpoints<P, C>(
+        &mut self,
+        algorithm: &mut dyn Algorithm<S, P>,
+        problem: &P,
+        theta0: DVector<S>,
+        seed: u64,
+        mut schedule: Option<Schedule>,
+        checkpoints: &mut C,
+    ) -> Result<RunRecord<S>, RunFailure<C::Error>>
+    where
+        P: IlProblem<S> + ?Sized,
+        C: CheckpointObserver<S> + ?Sized,
+    {
         let start = Instant::now();
+        let mut in_checkpoints = Duration::ZERO;
+        let mut seconds_at_checkpoints = Vec::new();
         let mut rng = KitRng::seed_from_u64(seed);
         let mut cost = Cost::default();
-        algorithm.init(
-            problem,
-            theta0,
-            &mut StepContext {
-                rng: &mut rng,
-                cost: &mut cost,
-            },
-        )?;
-        let mut history = Vec::new();
-        self.record(
-            &mut history,
-            0,
-            algorithm.theta(),
-            cost,
-            &start,
-            &StepReport::new(None, None),
-        );
-        let mut iterations = 0u64;
-        let termination = loop {
-            let step = algorithm.step(
+        algorithm
+            .init(
                 problem,
+                theta0,
                 &mut StepContext {
                     rng: &mut rng,
                     cost: &mut cost,
                 },
-            );
-            let report = match step {
-                Ok(r) => r,
-                Err(e) => break Termination::Failed(e),
-            };
-            iterations += 1;
-            let loss = report.loss.clone();
-            let objective = self.record(
+            )
+            .map_err(RunFailure::Start)?;
+        let mut history = Vec::new();
+        let mut iterations = 0u64;
+        let mut report = StepReport::new(None, None);
+        let mut free_steps = 0u64;
+        let termination = loop {
+            let scheduled = schedule.is_some();
+            let (unkept, stop) = self.record(
                 &mut history,
                 iterations,
                 algorithm.theta(),
                 cost,
                 &start,
                 &report,
+                scheduled,
             );
+            let m = unkept.as_ref().or(history.last());
+            if let Some(t) = stop {
+                break t;
+            }
             if !crate::scalar::all_finite(algorithm.theta().as_slice()) {
-                break Termination::Failed(AlgoError::NonFinite("θ"));
+                break Termination::Failed(Divergence::NonFiniteTheta);
             }
             if report.finished {
                 break Termination::Finished;
             }
-            if self.stop.max_iterations.is_some_and(|m| iterations >= m) {
-                break Termination::MaxIterations;
+            if self.stop.max_free_steps.is_some_and(|k| free_steps >= k) {
+                break Termination::Failed(Divergence::NoGradientCall { steps: free_steps });
             }
-            if self
-                .stop
-                .max_gradient_evaluations
-                .is_some_and(|b| cost.gradient_evaluations >= b)
-            {
-                break Termination::GradientBudget;
-            }
-            if let Some(target) = &self.target {
-                let value = if self.objective.is_some() {
-                    objective
-                } else {
-                    loss
-                };
-                if value.is_some_and(|v| {
-                    matches!(
-                        v.certain_cmp(target),
-                        Some(Ordering::Less | Ordering::Equal)
-                    )
-                }) {
-                    break Termination::TargetLoss;
+            let due = schedule
+                .as_mut()
+                .map_or_else(Vec::new, |s| s.due(cost.gradient_evaluations));
+            if let (false, Some(m)) = (due.is_empty(), m) {
+                let train = start.elapsed().saturating_sub(in_checkpoints).as_secs_f64();
+                seconds_at_checkpoints.extend(due.iter().map(|_| train));
+                let began = Instant::now();
+                let verdict = checkpoints.checkpoint(m, &due);
+                in_checkpoints += began.elapsed();
+                if let Some(t) = verdict.map_err(RunFailure::Checkpoint)? {
+                    break t;
                 }
             }
-            if self
-                .stop
-                .time_limit_ms
-                .is_some_and(|ms| start.elapsed().as_millis() >= u128::from(ms))
-            {
-                break Termination::TimeOut;
+            if let Some(t) = self.stopping_rule(iterations, &cost, m, &report, &start) {
+                break t;
             }
+            let before = cost.gradient_evaluations;
+            report = match algorithm.step(
+                problem,
+                &mut StepContext {
+                    rng: &mut rng,
+                    cost: &mut cost,
+                },
+            ) {
+                Ok(r) => r,
+                Err(e) => break Termination::Failed(Divergence::StepFailed(e)),
+            };
+            iterations += 1;
+            free_steps = if cost.gradient_evaluations == before {
+                free_steps + 1
+            } else {
+                0
+            };
         };
+        let wall = start.elapsed();
         Ok(RunRecord {
             config: None,
             algorithm: algorithm.name(),
@@ -464,11 +411,60 @@ impl<'a, S: Scalar> Runner<'a, S> {
             cost,
             termination,
             history,
-            wall_time: start.elapsed().as_secs_f64(),
+            wall_time: wall.as_secs_f64(),
+            train_seconds: wall.saturating_sub(in_checkpoints).as_secs_f64(),
+            checkpoint_seconds: in_checkpoints.as_secs_f64(),
+            seconds_at_checkpoints,
         })
     }
 
-    /// Build the metrics, notify observers, store them; returns the objective value.
+    /// The stopping rule at iterate `iterations` (step 6 of the module's order).
+    fn stopping_rule(
+        &self,
+        iterations: u64,
+        cost: &Cost,
+        metrics: Option<&IterationMetrics<S>>,
+        report: &StepReport<S>,
+        start: &Instant,
+    ) -> Option<Termination> {
+        if self.stop.max_iterations.is_some_and(|m| iterations >= m) {
+            return Some(Termination::MaxIterations);
+        }
+        if self
+            .stop
+            .max_gradient_evaluations
+            .is_some_and(|b| cost.gradient_evaluations >= b)
+        {
+            return Some(Termination::GradientBudget);
+        }
+        if let Some(target) = &self.target {
+            let value = if self.objective.is_some() {
+                metrics.and_then(|m| m.objective.as_ref())
+            } else {
+                report.loss.as_ref()
+            };
+            if value.is_some_and(|v| {
+                matches!(
+                    v.certain_cmp(target),
+                    Some(Ordering::Less | Ordering::Equal)
+                )
+            }) {
+                return Some(Termination::TargetLoss);
+            }
+        }
+        if self
+            .stop
+            .time_limit_ms
+            .is_some_and(|ms| start.elapsed().as_millis() >= u128::from(ms))
+        {
+            return Some(Termination::TimeOut);
+        }
+        None
+    }
+
+    /// Build the metrics (when anything needs them), tell every observer, store them in the
+    /// history if it is kept; returns them when they are not stored, and the first observer's
+    /// stop.
     #[allow(clippy::too_many_arguments)]
     fn record(
         &mut self,
@@ -478,9 +474,11 @@ impl<'a, S: Scalar> Runner<'a, S> {
         cost: Cost,
         start: &Instant,
         report: &StepReport<S>,
-    ) -> Option<S> {
-        if !self.keep_history && self.observers.is_empty() && self.objective.is_none() {
-            return None;
+        scheduled: bool,
+    ) -> (Option<IterationMetrics<S>>, Option<Termination>) {
+        if !self.keep_history && self.observers.is_empty() && self.objective.is_none() && !scheduled
+        {
+            return (None, None);
         }
         let estimate_norm_sq = report.estimate.as_ref().map(norm_sq);
         let m = IterationMetrics {
@@ -501,14 +499,39 @@ impl<'a, S: Scalar> Runner<'a, S> {
                 }
             }),
         };
+        let mut stop = None;
         for o in &mut self.observers {
-            o.observe(&m);
+            let t = o.observe(&m);
+            stop = stop.or(t);
         }
-        let objective = m.objective.clone();
         if self.keep_history {
             history.push(m);
+            return (None, stop);
         }
-        objective
+        (Some(m), stop)
+    }
+}
+
+/// Why [`Runner::run_with_checkpoints`] returned no record.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunFailure<E> {
+    /// [`Algorithm::init`] failed.
+    Start(AlgoError),
+    /// The checkpoint observer failed.
+    Checkpoint(E),
+}
+
+/// The checkpoint observer of a run without checkpoints.
+struct NoCheckpoints;
+
+impl<S> CheckpointObserver<S> for NoCheckpoints {
+    type Error = std::convert::Infallible;
+    fn checkpoint(
+        &mut self,
+        _: &IterationMetrics<S>,
+        _: &[u64],
+    ) -> Result<Option<Termination>, Self::Error> {
+        Ok(None)
     }
 }
 
@@ -523,3 +546,6 @@ pub fn replay<S: Scalar, P: IlProblem<S> + ?Sized>(
 ) -> Result<RunRecord<S>, AlgoError> {
     Runner::new(config.stop.clone())?.run_config(config, problem)
 }
+
+#[cfg(test)]
+mod tests;

@@ -545,7 +545,7 @@ fn a_time_limit_ends_the_run() {
     let mut seen_progress = false;
     let rec = Runner::new(cfg.stop.clone())
         .unwrap()
-        .with_observer(ilopt::algo::runner::Progress { every: u64::MAX })
+        .with_observer(ilopt::algo::Progress { every: u64::MAX })
         .with_observer(|m: &IterationMetrics<f64>| seen_progress |= m.wall_time > 0.0)
         .run_config(&cfg, &problem)
         .unwrap();

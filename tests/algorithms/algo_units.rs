@@ -16,8 +16,8 @@ use ilopt::algo::sgd::{Sgd, SgdConfig, SgdStep};
 use ilopt::algo::storm::{Correction, Storm, StormConfig, StormSchedule};
 use ilopt::algo::storm_plus::{StormPlus, StormPlusConfig};
 use ilopt::algo::{
-    AlgoError, Algorithm, AlgorithmConfig, ConfigNumber, RunConfig, Runner, StepContext,
-    StoppingRule, Termination,
+    AlgoError, Algorithm, AlgorithmConfig, ConfigNumber, Divergence, RunConfig, Runner,
+    StepContext, StoppingRule, Termination,
 };
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use ilopt::scalar::{BigRational, Interval, Roots, Scalar};
@@ -368,7 +368,7 @@ fn rmsprop_without_epsilon_stops_on_a_zero_denominator() {
         .unwrap();
     assert!(matches!(
         rec.termination,
-        Termination::Failed(AlgoError::NonFinite(_))
+        Termination::Failed(Divergence::StepFailed(AlgoError::NonFinite(_)))
     ));
 }
 
@@ -611,7 +611,7 @@ fn a_non_finite_iterate_stops_the_run() {
         .unwrap();
     assert_eq!(
         rec.termination,
-        Termination::Failed(AlgoError::NonFinite("θ"))
+        Termination::Failed(Divergence::StepFailed(AlgoError::NonFinite("θ")))
     );
     assert!(rec.history.iter().all(|m| m.theta[0].is_finite()));
 }

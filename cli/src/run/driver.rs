@@ -11,13 +11,15 @@ use super::error::RunError;
 use super::evaluation::evaluate;
 use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::task::Bench;
-use ilopt::algo::StepContext;
+use ilopt::algo::{
+    CheckpointObserver, IterationMetrics, NormBound, RunFailure, Runner, Schedule, StoppingRule,
+    Termination,
+};
 use ilopt::baseline::Baselined;
 use ilopt::batched::Batched;
 use ilopt::problem::{Cost, IlProblem, KitRng};
-use nalgebra::DVector;
 use rand::SeedableRng;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 /// Steps in a row without a gradient call after which a run is stopped (an algorithm whose
 /// steps cost nothing would never use up the budget).
@@ -65,6 +67,8 @@ pub fn run_seed(
     }
 }
 
+/// The runner ([`Runner`]) with a gradient budget, [`NormBound`], the progress callback and the
+/// checkpoint evaluations ([`Evaluations`]).
 fn drive<P: IlProblem<f64>>(
     bench: &Bench,
     problem: &P,
@@ -74,129 +78,103 @@ fn drive<P: IlProblem<f64>>(
 ) -> Result<(SeedRun, SeedTiming), RunError> {
     let f = &config.file;
     let budget = f.run.budget_calls;
-    let every = f.evaluation.every_calls.unwrap_or(budget).max(1);
-    let episodes = f.evaluation.episodes.unwrap_or(1);
-    let bound = f.run.norm_bound;
     let mut algorithm = f
         .algorithm
         .build::<f64, P>()
         .map_err(|e| config.invalid("algorithm", e))?;
-    let name = algorithm.name().to_string();
-    let mut rng = KitRng::seed_from_u64(seed);
-    let mut cost = Cost::default();
-    let (mut train, mut eval_time) = (Duration::ZERO, Duration::ZERO);
-    let mut clock = Instant::now();
-    algorithm
-        .init(
+    let stop = StoppingRule {
+        max_gradient_evaluations: Some(budget),
+        max_free_steps: Some(MAX_FREE_STEPS),
+        ..StoppingRule::default()
+    };
+    let mut evaluations = Evaluations {
+        bench,
+        episodes: f.evaluation.episodes.unwrap_or(1),
+        seed,
+        checkpoints: Vec::new(),
+        evaluation_seconds: 0.0,
+    };
+    let rec = Runner::new(stop)
+        .map_err(|e| config.invalid("run.budget_calls", e))?
+        .keep_history(false)
+        .with_observer(NormBound {
+            bound: f.run.norm_bound,
+        })
+        .with_observer(|m: &IterationMetrics<f64>| {
+            if m.iteration > 0 {
+                progress(m.cost.gradient_evaluations.min(budget));
+            }
+        })
+        .run_with_checkpoints(
+            algorithm.as_mut(),
             problem,
             bench.theta0(config)?,
-            &mut StepContext {
-                rng: &mut rng,
-                cost: &mut cost,
-            },
+            seed,
+            Some(Schedule::every(
+                f.evaluation.every_calls.unwrap_or(budget),
+                budget,
+            )),
+            &mut evaluations,
         )
-        .map_err(|e| config.invalid("algorithm", e))?;
-    let mut checkpoints = Vec::new();
-    let mut seconds = Vec::new();
-    let mut next = 0u64;
-    let mut iteration = 0u64;
-    let (mut train_loss, mut gradient_norm) = (None, None);
-    let mut free_steps = 0u64;
-    let termination = loop {
-        let theta = algorithm.theta();
-        if !theta.iter().all(|x| x.is_finite()) {
-            break "diverged: non-finite θ".to_string();
-        }
-        let norm = norm_of(theta);
-        if norm > bound {
-            break format!("diverged: ‖θ‖ = {norm:.3e} > {bound:e}");
-        }
-        if next <= budget && cost.gradient_evaluations >= next {
-            train += clock.elapsed();
-            let started = Instant::now();
-            let ev = evaluate(bench, theta.as_slice(), episodes, seed)
-                .map_err(|message| RunError::Run { seed, message })?;
-            eval_time += started.elapsed();
-            let c = Checkpoint::new(0, iteration, &cost, train_loss, gradient_norm, &ev);
-            while next <= budget && cost.gradient_evaluations >= next {
-                checkpoints.push(Checkpoint {
-                    at_calls: next,
-                    ..c.clone()
-                });
-                seconds.push(train.as_secs_f64());
-                next = if next == budget {
-                    u64::MAX
-                } else {
-                    (next + every).min(budget)
-                };
-            }
-            clock = Instant::now();
-        }
-        if cost.gradient_evaluations >= budget {
-            break "gradient-budget".to_string();
-        }
-        let before = cost.gradient_evaluations;
-        let step = algorithm.step(
-            problem,
-            &mut StepContext {
-                rng: &mut rng,
-                cost: &mut cost,
-            },
-        );
-        match step {
-            Ok(report) => {
-                iteration += 1;
-                train_loss = report.loss.filter(|l: &f64| l.is_finite());
-                gradient_norm = report
-                    .estimate
-                    .as_ref()
-                    .map(|d: &DVector<f64>| d.norm())
-                    .filter(|n| n.is_finite());
-                progress(cost.gradient_evaluations.min(budget));
-                if report.finished {
-                    break "finished".to_string();
-                }
-            }
-            Err(e) => break format!("diverged: step failed: {e}"),
-        }
-        free_steps = if cost.gradient_evaluations == before {
-            free_steps + 1
-        } else {
-            0
-        };
-        if free_steps >= MAX_FREE_STEPS {
-            break format!("diverged: {MAX_FREE_STEPS} steps in a row without a gradient call");
-        }
-    };
-    train += clock.elapsed();
+        .map_err(|e| match e {
+            RunFailure::Start(e) => config.invalid("algorithm", e),
+            RunFailure::Checkpoint(e) => e,
+        })?;
     Ok((
         SeedRun {
             seed,
-            algorithm: name,
-            termination,
-            iterations: iteration,
-            cost,
-            theta: algorithm.theta().iter().copied().collect(),
-            checkpoints,
+            algorithm: rec.algorithm.to_string(),
+            termination: rec.termination.to_string(),
+            iterations: rec.iterations,
+            cost: rec.cost,
+            theta: rec.theta.iter().copied().collect(),
+            checkpoints: evaluations.checkpoints,
         },
         SeedTiming {
             seed,
-            train_seconds: train.as_secs_f64(),
-            evaluation_seconds: eval_time.as_secs_f64(),
-            checkpoint_seconds: seconds,
+            train_seconds: rec.train_seconds,
+            evaluation_seconds: evaluations.evaluation_seconds,
+            checkpoint_seconds: rec.seconds_at_checkpoints,
         },
     ))
 }
 
-/// ‖θ‖₂ of a finite θ. When the sum of squares overflows, the largest |θᵢ| is factored out so
-/// that the reported norm is the true one (finite whenever it is representable).
-fn norm_of(theta: &DVector<f64>) -> f64 {
-    let norm = theta.norm();
-    if norm.is_finite() {
-        return norm;
+/// The checkpoint observer of `ilopt run`: [`evaluate`] at the iterate, one [`Checkpoint`] per
+/// call count it serves.
+struct Evaluations<'b> {
+    bench: &'b Bench,
+    episodes: u32,
+    seed: u64,
+    checkpoints: Vec<Checkpoint>,
+    evaluation_seconds: f64,
+}
+
+impl CheckpointObserver<f64> for Evaluations<'_> {
+    type Error = RunError;
+    fn checkpoint(
+        &mut self,
+        m: &IterationMetrics<f64>,
+        at_calls: &[u64],
+    ) -> Result<Option<Termination>, RunError> {
+        let started = Instant::now();
+        let seed = self.seed;
+        let ev = evaluate(self.bench, m.theta.as_slice(), self.episodes, seed)
+            .map_err(|message| RunError::Run { seed, message })?;
+        self.evaluation_seconds += started.elapsed().as_secs_f64();
+        let train_loss = m.loss.filter(|l| l.is_finite());
+        let gradient_norm = m
+            .estimate
+            .as_ref()
+            .map(|d| d.norm())
+            .filter(|n| n.is_finite());
+        let c = Checkpoint::new(0, m.iteration, &m.cost, train_loss, gradient_norm, &ev);
+        self.checkpoints
+            .extend(at_calls.iter().map(|&at_calls| Checkpoint {
+                at_calls,
+                ..c.clone()
+            }));
+        Ok(None)
     }
-    let largest = theta.amax();
-    largest * (theta / largest).norm()
 }
 
 /// Build the config's algorithm for the bench's problem once, so that invalid hyper-parameters

@@ -13,6 +13,7 @@ use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::{ObstacleEnv, Outcome};
 use ilopt::policy::PolicyExt;
 use ilopt::problem::KitRng;
+use ilopt::seeding::splitmix64;
 use ilopt::task::Task;
 use rand::SeedableRng;
 use serde::Serialize;
@@ -39,13 +40,7 @@ pub struct Evaluation {
 /// The RNG seed of evaluation episode `j` of `seed` (SplitMix64 of both, with a tag that keeps
 /// it apart from the run's own seed).
 pub fn episode_seed(seed: u64, j: u64) -> u64 {
-    fn mix(mut z: u64) -> u64 {
-        z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    mix(mix(seed ^ 0x6576_616c_7561_7465) ^ j)
+    splitmix64(splitmix64(seed ^ 0x6576_616c_7561_7465) ^ j)
 }
 
 /// Evaluate the learner at θ on `episodes` episodes keyed by `seed`.

@@ -7,7 +7,10 @@ use super::{
 use crate::config::{AlgorithmEntry, TaskSection, Theta1};
 use crate::error::Error;
 use crate::stats::derive_seed;
-use ilopt::algo::{AlgorithmConfig, StepContext};
+use ilopt::algo::{
+    AlgorithmConfig, CheckpointObserver, IterationMetrics, NormBound, RunFailure, Runner, Schedule,
+    StoppingRule, Termination,
+};
 use ilopt::baseline::{Baseline as OracleBaseline, Baselined, PerDecisionTerms};
 use ilopt::batched::Batched;
 use ilopt::problem::{Cost, IlProblem, KitRng};
@@ -168,8 +171,13 @@ fn drive_with<P: PerDecisionTerms<f64> + Clone>(
     }
 }
 
-/// The run loop: steps until the budget, divergence or (tuning) sustained convergence; the
-/// checkpoints at the fixed call counts; training time without the evaluations.
+/// Steps in a row without a gradient call after which a run is stopped as diverged (an
+/// algorithm whose steps cost nothing would never use up the budget).
+const MAX_FREE_STEPS: u64 = 10_000;
+
+/// The run: ilopt's [`Runner`] with the task's budget, its [`NormBound`] and the checkpoint
+/// evaluations ([`Evaluations`], which also stop tuning runs at sustained convergence);
+/// training time without the evaluations.
 fn drive<P: IlProblem<f64>>(
     bench: &Bench,
     problem: &P,
@@ -186,114 +194,48 @@ fn drive<P: IlProblem<f64>>(
         .config
         .build::<f64, P>()
         .map_err(|e| Error::experiment(&what, e))?;
-    let mut rng = KitRng::seed_from_u64(spec.seed);
-    let mut cost = Cost::default();
-    let mut train = std::time::Duration::ZERO;
-    let mut clock = std::time::Instant::now();
-    algorithm
-        .init(
+    let stop = StoppingRule {
+        max_gradient_evaluations: Some(task.budget),
+        max_free_steps: Some(MAX_FREE_STEPS),
+        ..StoppingRule::default()
+    };
+    let mut evaluations = Evaluations {
+        bench,
+        spec,
+        checkpoints: Vec::new(),
+    };
+    let rec = Runner::new(stop)
+        .map_err(|e| Error::experiment(&what, e))?
+        .keep_history(false)
+        .with_observer(NormBound {
+            bound: task.norm_bound,
+        })
+        .run_with_checkpoints(
+            algorithm.as_mut(),
             problem,
             theta1(task.theta1, bench.dim(), &spec.key),
-            &mut StepContext {
-                rng: &mut rng,
-                cost: &mut cost,
-            },
+            spec.seed,
+            Some(Schedule::every(task.checkpoint_every, task.budget)),
+            &mut evaluations,
         )
-        .map_err(|e| Error::experiment(&what, e))?;
-    let mut checkpoints: Vec<Checkpoint> = Vec::new();
-    let mut seconds = Vec::new();
-    let mut next = 0u64;
-    let mut iteration = 0u64;
-    let mut diverged: Option<(String, u64)> = None;
-    loop {
-        let theta = algorithm.theta();
-        let norm = theta.norm();
-        if !norm.is_finite() {
-            diverged = Some(("non-finite θ".into(), cost.gradient_evaluations));
-        } else if norm > task.norm_bound {
-            diverged = Some((
-                format!("‖θ‖ = {norm:.3e} > {:e}", task.norm_bound),
-                cost.gradient_evaluations,
-            ));
-        }
-        if diverged.is_some() {
-            break;
-        }
-        // Checkpoints due (a step that crosses several call counts serves each).
-        if next <= task.budget && cost.gradient_evaluations >= next {
-            train += clock.elapsed();
-            let ev = bench.evaluate(theta.as_slice(), task.eval_episodes, &spec.eval_key)?;
-            let grad = bench.gradient_xy(
-                theta,
-                task.grad_trajectories,
-                derive_seed(
-                    &format!("{}|grad", spec.key),
-                    iteration * 1000 + u64::from(spec.seed_index),
-                ),
-            )?;
-            let full = bench.resets_to_full_episode(
-                theta.as_slice(),
-                task.full_episode_cap,
-                &spec.eval_key,
-            )?;
-            let mut c =
-                Checkpoint::from_eval(&ev, spec.kind, task.eval_episodes, iteration, &cost, grad);
-            c.resets_to_full_episode = full;
-            while next <= task.budget && cost.gradient_evaluations >= next {
-                let mut c = c.clone();
-                c.at_calls = next;
-                checkpoints.push(c);
-                seconds.push(train.as_secs_f64());
-                next = if next == task.budget {
-                    u64::MAX
-                } else {
-                    (next + task.checkpoint_every).min(task.budget)
-                };
-            }
-            clock = std::time::Instant::now();
-            if spec.stop_at_convergence {
-                let scores: Vec<f64> = checkpoints.iter().map(|c| c.score).collect();
-                if sustained(&scores, task.converge_score, task.sustain).is_some() {
-                    break;
-                }
-            }
-        }
-        if cost.gradient_evaluations >= task.budget {
-            break;
-        }
-        match algorithm.step(
-            problem,
-            &mut StepContext {
-                rng: &mut rng,
-                cost: &mut cost,
-            },
-        ) {
-            Ok(_) => iteration += 1,
-            Err(e) => {
-                diverged = Some((format!("step failed: {e}"), cost.gradient_evaluations));
-                break;
-            }
-        }
-    }
-    train += clock.elapsed();
-    let status = status_of(
-        &checkpoints,
-        task.converge_score,
-        task.sustain,
-        diverged.clone(),
-    );
+        .map_err(|e| match e {
+            RunFailure::Start(e) => Error::experiment(&what, e),
+            RunFailure::Checkpoint(e) => e,
+        })?;
+    let checkpoints = evaluations.checkpoints;
+    let diverged = rec
+        .termination
+        .divergence()
+        .map(|d| (d.to_string(), rec.cost.gradient_evaluations));
+    let status = status_of(&checkpoints, task.converge_score, task.sustain, diverged);
     let converged = status.checkpoint();
-    let termination = match &diverged {
-        Some((reason, _)) => format!("diverged: {reason}"),
-        None if cost.gradient_evaluations >= task.budget => "gradient-budget".into(),
-        None => "sustained-convergence".into(),
-    };
+    let seconds = rec.seconds_at_checkpoints;
     Ok((
         SeedRun {
             seed_index: spec.seed_index,
             seed: spec.seed,
-            termination,
-            theta: algorithm.theta().iter().copied().collect(),
+            termination: rec.termination.to_string(),
+            theta: rec.theta.iter().copied().collect(),
             checkpoints,
             converged,
             status,
@@ -301,12 +243,74 @@ fn drive<P: IlProblem<f64>>(
         },
         SeedTiming {
             seed_index: spec.seed_index,
-            train_seconds: train.as_secs_f64(),
+            train_seconds: rec.train_seconds,
             converge_seconds: converged.map(|i| seconds[i]),
             checkpoint_seconds: seconds,
         },
     ))
 }
+
+/// The checkpoint observer of the appendix's runs: the evaluation episodes, the obstacle task's
+/// gradient rows and CartPole's resets to a full episode at the iterate, one [`Checkpoint`] per
+/// call count it serves; tuning runs stop at sustained convergence.
+struct Evaluations<'b, 's> {
+    bench: &'b Bench,
+    spec: &'b RunSpec<'s>,
+    checkpoints: Vec<Checkpoint>,
+}
+
+impl CheckpointObserver<f64> for Evaluations<'_, '_> {
+    type Error = Error;
+    fn checkpoint(
+        &mut self,
+        m: &IterationMetrics<f64>,
+        at_calls: &[u64],
+    ) -> Result<Option<Termination>, Error> {
+        let (spec, task) = (self.spec, self.spec.task);
+        let theta = &m.theta;
+        let ev = self
+            .bench
+            .evaluate(theta.as_slice(), task.eval_episodes, &spec.eval_key)?;
+        let grad = self.bench.gradient_xy(
+            theta,
+            task.grad_trajectories,
+            derive_seed(
+                &format!("{}|grad", spec.key),
+                m.iteration * 1000 + u64::from(spec.seed_index),
+            ),
+        )?;
+        let full = self.bench.resets_to_full_episode(
+            theta.as_slice(),
+            task.full_episode_cap,
+            &spec.eval_key,
+        )?;
+        let mut c = Checkpoint::from_eval(
+            &ev,
+            spec.kind,
+            task.eval_episodes,
+            m.iteration,
+            &m.cost,
+            grad,
+        );
+        c.resets_to_full_episode = full;
+        self.checkpoints
+            .extend(at_calls.iter().map(|&at_calls| Checkpoint {
+                at_calls,
+                ..c.clone()
+            }));
+        // At the budget the run ends anyway, as `gradient-budget`.
+        if spec.stop_at_convergence && m.cost.gradient_evaluations < task.budget {
+            let scores: Vec<f64> = self.checkpoints.iter().map(|c| c.score).collect();
+            if sustained(&scores, task.converge_score, task.sustain).is_some() {
+                return Ok(Some(Termination::Stopped(SUSTAINED_CONVERGENCE)));
+            }
+        }
+        Ok(None)
+    }
+}
+
+/// The termination of a tuning run stopped at sustained convergence.
+pub const SUSTAINED_CONVERGENCE: &str = "sustained-convergence";
 
 /// The key of a seed's evaluation episodes: the same episodes for every algorithm, checkpoint
 /// and baseline of that seed (common random numbers).
