@@ -11,7 +11,7 @@ use super::run::RunError;
 use super::run::config::RunFile;
 use super::run::evaluation::evaluate;
 use super::run::records::SavedTheta;
-use super::run::task::Bench;
+use super::run::task::TaskLearner;
 use clap::Args;
 use ilopt::evaluate::objective;
 use ilopt::problem::OracleError;
@@ -43,7 +43,7 @@ pub struct EvalArgs {
 /// policy, or a failing roll-out.
 pub fn run(args: &EvalArgs) -> Result<Value, RunError> {
     let config = RunFile::load(&args.config)?;
-    let bench = Bench::new(&config)?;
+    let bench = TaskLearner::new(&config)?;
     let text = std::fs::read_to_string(&args.theta).map_err(|e| RunError::io(&args.theta, e))?;
     let bad = |message: String| RunError::Theta {
         path: args.theta.clone(),
@@ -80,10 +80,10 @@ pub fn run(args: &EvalArgs) -> Result<Value, RunError> {
         r.map_err(|e| RunError::Evaluation(e.to_string()))
     };
     let obj = match &bench {
-        Bench::CartPoleSoftmax(p) => f(objective(p, &theta, n, args.seed))?,
-        Bench::CartPoleLogistic(p) => f(objective(p, &theta, n, args.seed))?,
-        Bench::Obstacle { problem, .. } => f(objective(problem, &theta, n, args.seed))?,
-        Bench::Toy(p) => f(objective(p, &theta, n, args.seed))?,
+        TaskLearner::CartPoleSoftmax(p) => f(objective(p, &theta, n, args.seed))?,
+        TaskLearner::CartPoleLogistic(p) => f(objective(p, &theta, n, args.seed))?,
+        TaskLearner::Obstacle { problem, .. } => f(objective(problem, &theta, n, args.seed))?,
+        TaskLearner::Toy(p) => f(objective(p, &theta, n, args.seed))?,
     };
     let ev = evaluate(&bench, &saved.theta, episodes, args.seed).map_err(RunError::Evaluation)?;
     Ok(json!({

@@ -18,8 +18,8 @@
 
 use crate::config::{Profile, TaskSection};
 use crate::error::Error;
-use crate::experiment::Bench;
 use crate::experiment::TaskKind;
+use crate::experiment::TaskLearner;
 use ilopt::algo::storm_stability::{eigenvalues, mean_radius, threshold};
 use ilopt::algo::{AlgorithmConfig, Runner, StoppingRule};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
@@ -385,26 +385,26 @@ pub fn measure<P: IlProblem<f64>>(
 /// # Errors
 /// As [`measure`].
 pub fn measure_bench(
-    bench: &Bench,
+    bench: &TaskLearner,
     theta: &DVector<f64>,
     opts: &Options,
 ) -> Result<Measurement, Error> {
     match bench {
-        Bench::Obstacle { problem, .. } => measure(problem, theta, opts),
-        Bench::Cartpole { problem, .. } => measure(problem, theta, opts),
+        TaskLearner::Obstacle { problem, .. } => measure(problem, theta, opts),
+        TaskLearner::Cartpole { problem, .. } => measure(problem, theta, opts),
     }
 }
 
 /// A task's bench as the profile sets it up (learner, expert, objective).
 ///
 /// # Errors
-/// As [`Bench::new`].
-pub fn bench_of(profile: &Profile, kind: TaskKind) -> Result<Bench, Error> {
+/// As [`TaskLearner::new`].
+pub fn bench_of(profile: &Profile, kind: TaskKind) -> Result<TaskLearner, Error> {
     let task = task_of(profile, kind);
     let horizon = task
         .horizon
         .unwrap_or_else(|| crate::config::default_horizon(kind.name()));
-    Bench::new(kind, task, horizon)
+    TaskLearner::new(kind, task, horizon)
 }
 
 fn task_of(profile: &Profile, kind: TaskKind) -> &TaskSection {
@@ -423,7 +423,7 @@ fn task_of(profile: &Profile, kind: TaskKind) -> &TaskSection {
 pub fn dagger_solution(
     profile: &Profile,
     kind: TaskKind,
-    bench: &Bench,
+    bench: &TaskLearner,
     seed: u64,
 ) -> Result<(DVector<f64>, u64), Error> {
     let task = task_of(profile, kind);
@@ -433,8 +433,8 @@ pub fn dagger_solution(
         .find(|a| matches!(a.config, AlgorithmConfig::Dagger(_)))
         .ok_or_else(|| Error::experiment(kind.name(), "the profile has no DAgger row"))?;
     match bench {
-        Bench::Obstacle { problem, .. } => train(problem, &entry.config, task.budget, seed),
-        Bench::Cartpole { problem, .. } => train(problem, &entry.config, task.budget, seed),
+        TaskLearner::Obstacle { problem, .. } => train(problem, &entry.config, task.budget, seed),
+        TaskLearner::Cartpole { problem, .. } => train(problem, &entry.config, task.budget, seed),
     }
 }
 
@@ -469,7 +469,7 @@ mod tests {
     /// Bad options are errors, not panics.
     #[test]
     fn bad_options_are_refused() {
-        let bench = Bench::obstacle(0.1, Default::default()).unwrap();
+        let bench = TaskLearner::obstacle(0.1, Default::default()).unwrap();
         let theta = DVector::zeros(bench.dim());
         for opts in [
             Options {

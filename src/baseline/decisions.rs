@@ -44,7 +44,7 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     /// The default assembles it from [`PerDecisionTerms::decision_terms`] (one pass, storing each
     /// decision's score); a problem may override it with a faster pass (the real tasks fold the
     /// baseline into the plain estimator's loop, see
-    /// [`crate::oracle::EstimatorKernel::causal_sum_trusted`]).
+    /// [`crate::oracle::EstimatorKernel::causal_sum_validated`]).
     ///
     /// # Errors
     /// As [`PerDecisionTerms::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list

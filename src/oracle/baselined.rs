@@ -15,7 +15,7 @@ use std::borrow::Borrow;
 ///
 /// Without an absorbing tail, on a trajectory whose features are known valid, the baseline is
 /// folded into the plain estimator's loop as per-decision loss shifts `δ_t = b_t − b_{t−1}`
-/// ([`EstimatorKernel::causal_sum_trusted`]); otherwise the estimate is assembled from the
+/// ([`EstimatorKernel::causal_sum_validated`]); otherwise the estimate is assembled from the
 /// [`DecisionTerms`] of [`terms_pass`].
 pub(crate) fn baselined_pass<S, P, L, A>(
     policy: &P,
@@ -54,7 +54,7 @@ where
         }
         let mut scratch = Vec::new();
         policy
-            .causal_sum_trusted(
+            .causal_sum_validated(
                 theta,
                 t.feature_data,
                 t.labels,

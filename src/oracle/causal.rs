@@ -32,7 +32,7 @@ use std::borrow::Borrow;
 /// Per decision: one [`Policy::loss_score_into`](crate::policy::Policy::loss_score_into) into
 /// preallocated buffers and O(d) field operations ([`accumulate`]), no allocation; on validated
 /// features without weights, the whole pass (the tail's term included) is the policy's
-/// [`EstimatorKernel::causal_sum_trusted`]. When the loss fails at one decision and the
+/// [`EstimatorKernel::causal_sum_validated`]. When the loss fails at one decision and the
 /// likelihood ratio at an earlier one, the ratio's error is reported.
 pub(crate) fn causal_pass<S, P, L, A>(
     policy: &P,
@@ -53,12 +53,12 @@ where
     let mut g = vec![S::zero(); d];
     let mut log_w = S::zero();
     // θ has been checked by the caller; with every φ checked here once, the per-decision calls can
-    // skip the policy's own checks (`causal_step_trusted`). Otherwise the checked calls below
+    // skip the policy's own checks (`causal_step_validated`). Otherwise the checked calls below
     // report the first failure.
-    // A baseline needs each decision's score, which the trusted step does not write out.
-    let trusted = !per_decision && baseline.is_none() && features_valid(policy, t);
+    // A baseline needs each decision's score, which the validated step does not write out.
+    let validated = !per_decision && baseline.is_none() && features_valid(policy, t);
     let tail = t.absorbed;
-    if trusted && ratio.is_none() {
+    if validated && ratio.is_none() {
         // The plain causal estimator: the whole pass in the policy (one loop it may specialise),
         // the absorbing tail's term after it.
         let (rows, actions, labels) = (t.feature_data, t.actions, t.labels);
@@ -77,7 +77,7 @@ where
                 loss,
                 &mut scratch,
             ),
-            None => policy.causal_sum_trusted(
+            None => policy.causal_sum_validated(
                 theta,
                 rows,
                 labels,
@@ -97,9 +97,9 @@ where
     // `w_{1:t−1}` of the current step t (per-decision weights): `exp` of the log-ratios so far.
     let mut w = log_w.exp();
     for (step, ((phi, a), y)) in t.feature_rows().zip(t.actions).zip(t.labels).enumerate() {
-        if trusted {
+        if validated {
             let l = policy
-                .causal_step_trusted(theta, phi, y.borrow(), a, grad, score, &mut g, score_sum)
+                .causal_step_validated(theta, phi, y.borrow(), a, grad, score, &mut g, score_sum)
                 .map_err(policy_error)?;
             if let Some(total) = loss.as_deref_mut() {
                 *total += l;

@@ -37,7 +37,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     ///
     /// # Errors
     /// As [`Policy::loss_into`].
-    fn loss_trusted(
+    fn loss_validated(
         &self,
         theta: &[S],
         phi: &[S],
@@ -56,7 +56,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// # Errors
     /// As [`Policy::sample`].
     #[inline]
-    fn sample_trusted(
+    fn sample_validated(
         &self,
         theta: &[S],
         phi: &[S],
@@ -76,7 +76,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// As [`Policy::loss_score_into`].
     #[allow(clippy::too_many_arguments)] // the estimator's whole per-decision state
     #[inline]
-    fn causal_step_trusted(
+    fn causal_step_validated(
         &self,
         theta: &[S],
         phi: &[S],
@@ -109,14 +109,14 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     ///
     /// `scratch` is working storage the implementation sizes as it needs (the default:
     /// `3 ·` [`Policy::param_dim`] entries; the logistic policy's fixed-dimension loop needs
-    /// none). The default runs [`EstimatorKernel::causal_step_trusted`] decision after decision
+    /// none). The default runs [`EstimatorKernel::causal_step_validated`] decision after decision
     /// (`causal_sum_by_steps`).
     ///
     /// # Errors
-    /// As [`EstimatorKernel::causal_step_trusted`] at the first failing decision.
+    /// As [`EstimatorKernel::causal_step_validated`] at the first failing decision.
     #[allow(clippy::too_many_arguments)] // the trajectory, the shifts and the output
     #[inline]
-    fn causal_sum_trusted<L: Borrow<Self::Label>>(
+    fn causal_sum_validated<L: Borrow<Self::Label>>(
         &self,
         theta: &[S],
         features: &[S],
@@ -139,13 +139,13 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         0
     }
 
-    /// [`EstimatorKernel::sample_trusted`] (the same action, draws and errors), appending to
+    /// [`EstimatorKernel::sample_validated`] (the same action, draws and errors), appending to
     /// `notes` the [`EstimatorKernel::note_len`] entries of this decision that
     /// [`EstimatorKernel::causal_sum_noted`] reads instead of recomputing them (the softmax
     /// policy's probabilities). The default notes nothing.
     ///
     /// # Errors
-    /// As [`EstimatorKernel::sample_trusted`]; `notes` then holds at most this decision's
+    /// As [`EstimatorKernel::sample_validated`]; `notes` then holds at most this decision's
     /// entries more.
     #[inline]
     fn sample_noting(
@@ -156,17 +156,17 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         notes: &mut Vec<S>,
     ) -> Result<Self::Action, PolicyError> {
         let _ = notes;
-        self.sample_trusted(theta, phi, rng)
+        self.sample_validated(theta, phi, rng)
     }
 
-    /// [`EstimatorKernel::causal_sum_trusted`] without shifts (the same values and errors) for
+    /// [`EstimatorKernel::causal_sum_validated`] without shifts (the same values and errors) for
     /// a trajectory sampled at this θ by [`EstimatorKernel::sample_noting`], whose notes
     /// ([`EstimatorKernel::note_len`] entries per row of `features`) it reads instead of
     /// recomputing them. The caller guarantees that θ, the features and the notes are those of
     /// the roll-out. The default ignores the notes.
     ///
     /// # Errors
-    /// As [`EstimatorKernel::causal_sum_trusted`].
+    /// As [`EstimatorKernel::causal_sum_validated`].
     #[allow(clippy::too_many_arguments)] // the trajectory, its notes and the output
     fn causal_sum_noted<L: Borrow<Self::Label>>(
         &self,
@@ -181,13 +181,13 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
         let _ = notes;
-        self.causal_sum_trusted(
+        self.causal_sum_validated(
             theta, features, labels, actions, None, end, g, loss, scratch,
         )
     }
 
     /// The decisions of one trajectory recorded for the causal estimator of eq. 3.15, without
-    /// summing it (the inputs of [`EstimatorKernel::causal_sum_trusted`], no shifts): every
+    /// summing it (the inputs of [`EstimatorKernel::causal_sum_validated`], no shifts): every
     /// decision's loss `l_t` into `losses` (one entry per row) and into `records` what
     /// [`EstimatorKernel::accumulate_recorded`] needs to form `Σ_t [∇_θ l_t + l'_t Σ_{i<t} ψ_i]`
     /// for losses `l'_t` chosen afterwards, in a form of the policy's choosing. It serves
@@ -202,7 +202,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// # Errors
     /// As [`Policy::loss_score_into`] at the first failing decision; `losses` and `records` are
     /// then unspecified.
-    fn record_trusted<L: Borrow<Self::Label>>(
+    fn record_validated<L: Borrow<Self::Label>>(
         &self,
         theta: &[S],
         features: &[S],
@@ -215,10 +215,10 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     }
 
     /// `g += Σ_{t<n} [∇_θ l_t + l'_t Σ_{i<t} ψ_i] + l'_n Σ_{i<n} ψ_i` over the n decisions that
-    /// [`EstimatorKernel::record_trusted`] recorded in `records` for the same `features`, with
+    /// [`EstimatorKernel::record_validated`] recorded in `records` for the same `features`, with
     /// the losses `l'` given: n entries, or n + 1 when one more loss (an absorbing tail, a
     /// baseline's weight after the last decision) weighs every score. With the recorded losses
-    /// and n entries it is the plain causal estimate of [`EstimatorKernel::causal_sum_trusted`],
+    /// and n entries it is the plain causal estimate of [`EstimatorKernel::causal_sum_validated`],
     /// bit for bit for the logistic policy (the default adds `Σ_t ∇_θ l_t` first, so its sums
     /// differ from the plain pass's in the last bits).
     ///
@@ -237,7 +237,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         accumulate_rows(records, self.param_dim(), losses, g, scratch);
     }
 
-    /// [`ScoreProducts`] for the decisions that [`EstimatorKernel::record_trusted`] recorded in
+    /// [`ScoreProducts`] for the decisions that [`EstimatorKernel::record_validated`] recorded in
     /// `records` for the same `features`: the statistics of the variance-minimising baseline
     /// ([`crate::baseline::RunningOptimum`]) and the baseline's correction of the estimate.
     /// The default reads the rows of `record_rows` ([`ScoreProducts::add_rows`]).
@@ -269,7 +269,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     }
 }
 
-/// The default [`EstimatorKernel::record_trusted`]: per decision [`Policy::loss_score_into`]
+/// The default [`EstimatorKernel::record_validated`]: per decision [`Policy::loss_score_into`]
 /// (with the policy's checks), its loss appended to `losses` and the row ψ_t to `records`
 /// (through [`record_by_steps`]), then the sum `Σ_t ∇_θ l_t` as one more row (the losses do
 /// not weigh it, so it is kept summed: one row of d per decision).
@@ -386,7 +386,7 @@ fn split_score_rows<S>(records: &[S], d: usize) -> (&[S], &[S]) {
     records.split_at(records.len().saturating_sub(d))
 }
 
-/// Every decision of a trajectory recorded, as [`EstimatorKernel::record_trusted`] records
+/// Every decision of a trajectory recorded, as [`EstimatorKernel::record_validated`] records
 /// them: `losses` and `scores` are cleared (with room reserved once for `n` losses and
 /// `n · score_len` record entries), then for each row φ_t of `features` (`feature_dim`
 /// entries), its label and its action, `step(φ_t, y_t, a_t, scores)` appends the decision's
@@ -434,8 +434,8 @@ pub(crate) fn subtract_score_rows<S: Scalar>(
     }
 }
 
-/// The default [`EstimatorKernel::causal_sum_trusted`]: per decision, `g += δ_t Σ_{i<t} ψ_i`
-/// (with shifts) then [`EstimatorKernel::causal_step_trusted`], with `scratch` resized to
+/// The default [`EstimatorKernel::causal_sum_validated`]: per decision, `g += δ_t Σ_{i<t} ψ_i`
+/// (with shifts) then [`EstimatorKernel::causal_step_validated`], with `scratch` resized to
 /// `3 · param_dim` zeros and split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`; then `g += L Σ_{i≤n} ψ_i`
 /// for an `end` L; with `loss`, each `l_t` added to it in order.
 #[allow(clippy::too_many_arguments)] // the method's arguments and the policy
@@ -468,13 +468,13 @@ where
         loss,
         scratch,
         |_, phi, y, a, grad, score, g, score_sum| {
-            policy.causal_step_trusted(theta, phi, y, a, grad, score, g, score_sum)
+            policy.causal_step_validated(theta, phi, y, a, grad, score, g, score_sum)
         },
     )
 }
 
 /// `causal_sum_by_steps` with the per-decision step given: `step(t, φ_t, y_t, a_t, ∇l_t, ψ_t,
-/// g, Σ_{i<t} ψ_i)` does what [`EstimatorKernel::causal_step_trusted`] does for decision t
+/// g, Σ_{i<t} ψ_i)` does what [`EstimatorKernel::causal_step_validated`] does for decision t
 /// (0-based) and returns `l_t`.
 #[allow(clippy::too_many_arguments)] // the trajectory, the shifts, the output and the step
 #[inline]
@@ -563,13 +563,13 @@ pub(crate) fn accumulate<S: Scalar>(
     }
 }
 
-/// `causal_step_trusted` and `record_trusted` of a policy with a `loss_score_checked_inputs`:
+/// `causal_step_validated` and `record_validated` of a policy with a `loss_score_validated`:
 /// [`Policy::loss_score_into`]'s work after the θ and φ checks (the same values and, for
 /// validated θ and φ, the same errors), then the default's accumulation or records.
-macro_rules! steps_by_checked_inputs {
+macro_rules! steps_by_validated {
     ($label:ty, $action:ty) => {
         #[inline]
-        fn causal_step_trusted(
+        fn causal_step_validated(
             &self,
             theta: &[S],
             phi: &[S],
@@ -580,12 +580,12 @@ macro_rules! steps_by_checked_inputs {
             g: &mut [S],
             score_sum: &mut [S],
         ) -> Result<S, PolicyError> {
-            let l = self.loss_score_checked_inputs(theta, phi, label, action, grad, score)?;
+            let l = self.loss_score_validated(theta, phi, label, action, grad, score)?;
             accumulate(g, None, &l, grad, score, score_sum);
             Ok(l)
         }
 
-        fn record_trusted<L: Borrow<$label>>(
+        fn record_validated<L: Borrow<$label>>(
             &self,
             theta: &[S],
             features: &[S],
@@ -601,9 +601,7 @@ macro_rules! steps_by_checked_inputs {
                 actions,
                 losses,
                 records,
-                |phi, y, a, grad, score| {
-                    self.loss_score_checked_inputs(theta, phi, y, a, grad, score)
-                },
+                |phi, y, a, grad, score| self.loss_score_validated(theta, phi, y, a, grad, score),
             )
         }
     };
@@ -613,27 +611,27 @@ macro_rules! steps_by_checked_inputs {
 /// same operations after them, so the defaults' values and errors), and the loss without the
 /// gradient.
 impl<S: Real> EstimatorKernel<S> for Softmax {
-    fn loss_trusted(
+    fn loss_validated(
         &self,
         theta: &[S],
         phi: &[S],
         label: &usize,
         _scratch: &mut [S],
     ) -> Result<S, PolicyError> {
-        self.loss_only_checked_inputs(theta, phi, *label)
+        self.loss_only_validated(theta, phi, *label)
     }
 
     #[inline]
-    fn sample_trusted(
+    fn sample_validated(
         &self,
         theta: &[S],
         phi: &[S],
         rng: &mut KitRng,
     ) -> Result<usize, PolicyError> {
-        self.sample_checked_theta(theta, phi, rng)
+        self.sample_validated_theta(theta, phi, rng)
     }
 
-    steps_by_checked_inputs!(usize, usize);
+    steps_by_validated!(usize, usize);
 
     /// The probabilities π_θ(·|s_t): A entries per decision.
     fn note_len(&self) -> usize {
@@ -698,43 +696,43 @@ impl<S: Real> EstimatorKernel<S> for MlpGaussian<S> {}
 /// The loss without the gradient, and every per-decision method without the θ, φ checks the
 /// oracle has made once (the same operations after them, so the defaults' values and errors).
 impl<S: Scalar, A: ActionVector<S>> EstimatorKernel<S> for LinearGaussian<S, A> {
-    fn loss_trusted(
+    fn loss_validated(
         &self,
         theta: &[S],
         phi: &[S],
         label: &[S],
         _scratch: &mut [S],
     ) -> Result<S, PolicyError> {
-        self.loss_unchecked(theta, phi, label)
+        self.loss_only_validated(theta, phi, label)
     }
 
     #[inline]
-    fn sample_trusted(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
-        self.sample_checked_theta(theta, phi, rng)
+    fn sample_validated(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
+        self.sample_validated_theta(theta, phi, rng)
     }
 
-    steps_by_checked_inputs!([S], A);
+    steps_by_validated!([S], A);
 }
 
 /// The loss without the gradient, and every per-decision method without the θ, φ checks the
 /// oracle has made once (sampling is the linear-Gaussian policy's).
 impl<S: Sqrt, A: ActionVector<S>> EstimatorKernel<S> for SpeedLimitedGaussian<S, A> {
-    fn loss_trusted(
+    fn loss_validated(
         &self,
         theta: &[S],
         phi: &[S],
         label: &[S],
         scratch: &mut [S],
     ) -> Result<S, PolicyError> {
-        self.loss_unchecked(theta, phi, label, scratch)
+        self.loss_only_validated(theta, phi, label, scratch)
     }
 
     #[inline]
-    fn sample_trusted(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
-        self.inner().sample_checked_theta(theta, phi, rng)
+    fn sample_validated(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
+        self.inner().sample_validated_theta(theta, phi, rng)
     }
 
-    steps_by_checked_inputs!([S], A);
+    steps_by_validated!([S], A);
 }
 
 #[cfg(test)]
@@ -787,28 +785,28 @@ mod tests {
         let d = pi.param_dim();
         let phi = &rows[..pi.feature_dim()];
         let (mut r1, mut r2) = (KitRng::seed_from_u64(seed), KitRng::seed_from_u64(seed));
-        let a1 = pi.sample_trusted(theta, phi, &mut r1);
+        let a1 = pi.sample_validated(theta, phi, &mut r1);
         let a2 = pi.sample(theta, phi, &mut r2);
         assert_eq!((a1, &r1), (a2, &r2));
         let mut r = KitRng::seed_from_u64(seed);
         assert_eq!(
-            pi.sample_trusted(theta, bad_phi, &mut r).err(),
+            pi.sample_validated(theta, bad_phi, &mut r).err(),
             Some(PolicyError::NonFinite { param: "phi" })
         );
         let (y, a) = (labels[0].borrow(), &actions[0]);
         let mut scratch = vec![S::zero(); d];
         let mut grad = vec![S::zero(); d];
         assert!(same_result(
-            &pi.loss_trusted(theta, phi, y, &mut scratch),
+            &pi.loss_validated(theta, phi, y, &mut scratch),
             &pi.loss_into(theta, phi, y, &mut grad),
         ));
         // One causal step from the same non-zero running sums.
         let start: Vec<S> = (0..d).map(|j| S::from_i64(j as i64 - 2)).collect();
-        let run = |trusted: bool| {
+        let run = |validated: bool| {
             let (mut g, mut ss) = (start.clone(), start.clone());
             let (mut gr, mut sc) = (vec![S::zero(); d], vec![S::zero(); d]);
-            let l = if trusted {
-                pi.causal_step_trusted(theta, phi, y, a, &mut gr, &mut sc, &mut g, &mut ss)
+            let l = if validated {
+                pi.causal_step_validated(theta, phi, y, a, &mut gr, &mut sc, &mut g, &mut ss)
             } else {
                 pi.loss_score_into(theta, phi, y, a, &mut gr, &mut sc)
                     .inspect(|l| accumulate(&mut g, None, l, &gr, &sc, &mut ss))
@@ -818,10 +816,10 @@ mod tests {
         let ((step, g1, s1), (l2, g2, s2)) = (run(true), run(false));
         assert!(same_result(&step, &l2), "{step:?} {l2:?}");
         assert!(same_all(&g1, &g2) && same_all(&s1, &s2));
-        let record = |trusted: bool| {
+        let record = |validated: bool| {
             let (mut losses, mut records) = (vec![], vec![]);
-            let r = if trusted {
-                pi.record_trusted(theta, rows, labels, actions, &mut losses, &mut records)
+            let r = if validated {
+                pi.record_validated(theta, rows, labels, actions, &mut losses, &mut records)
             } else {
                 record_rows(pi, theta, rows, labels, actions, &mut losses, &mut records)
             };
@@ -879,18 +877,18 @@ mod tests {
                 let seed = rng.random();
                 let ok = assert_kernel_as_defaults(&pi, &theta, &rows, &labels, &acts, &bad, seed);
                 outcomes[usize::from(ok)] += 1;
-                noted_sum_as_trusted(&pi, &theta, &rows, &labels, &acts, from(0.75), seed);
+                noted_sum_as_validated(&pi, &theta, &rows, &labels, &acts, from(0.75), seed);
             }
         }
         // Both outcomes occur: values, and errors (overflowing logits, labels out of range).
         assert!(outcomes[0] > 0 && outcomes[1] > 0, "{outcomes:?}");
     }
 
-    /// Sampling every row with notes draws as `sample_trusted` does and notes `note_len`
-    /// entries per row; the causal sum from those notes is the trusted sum's, bit for bit
+    /// Sampling every row with notes draws as `sample_validated` does and notes `note_len`
+    /// entries per row; the causal sum from those notes is the validated sum's, bit for bit
     /// (floats), with its errors, with an absorbing tail's losses `end` and the summed loss.
     #[allow(clippy::too_many_arguments)] // a trajectory
-    fn noted_sum_as_trusted<S: Real>(
+    fn noted_sum_as_validated<S: Real>(
         pi: &Softmax,
         theta: &[S],
         rows: &[S],
@@ -906,7 +904,7 @@ mod tests {
         let k = EstimatorKernel::<S>::note_len(pi);
         for row in rows.chunks_exact(n) {
             let a = pi.sample_noting(theta, row, &mut ra, &mut notes);
-            assert_eq!((&a, &ra), (&pi.sample_trusted(theta, row, &mut rb), &rb));
+            assert_eq!((&a, &ra), (&pi.sample_validated(theta, row, &mut rb), &rb));
             sampled &= a.is_ok();
         }
         if !sampled {
@@ -929,7 +927,7 @@ mod tests {
                     &mut scratch,
                 )
             } else {
-                pi.causal_sum_trusted(
+                pi.causal_sum_validated(
                     theta,
                     rows,
                     labels,

@@ -17,13 +17,13 @@ use crate::sampling::{dyadic_uniform, sample_binary};
 use crate::scalar::{Real, Scalar};
 use std::borrow::Borrow;
 
-/// `z = θ·φ` with θ trusted (checked by the caller) and φ checked: its length, and its entries'
+/// `z = θ·φ` with θ validated (checked by the caller) and φ checked: its length, and its entries'
 /// finiteness — where non-finite numbers propagate through sums and products
 /// ([`Scalar::NON_FINITE_PROPAGATES`]: floats, rationals), by one test of `z` instead of one per
 /// entry, the entries being looked at only to name the culprit. The same result and errors as
 /// `check_vec_scalar("phi", …)` followed by the dot product and the sigmoid's test of `z`.
 #[inline]
-fn trusted_logit<S: Scalar>(theta: &[S], phi: &[S], features: usize) -> Result<S, PolicyError> {
+fn validated_logit<S: Scalar>(theta: &[S], phi: &[S], features: usize) -> Result<S, PolicyError> {
     if S::NON_FINITE_PROPAGATES {
         check_out("phi", phi, features)?;
     } else {
@@ -94,7 +94,7 @@ fn add_decision<S: Scalar>(g: &mut [S], score_sum: &mut [S], phi: &[S], dz: &S, 
 }
 
 /// One decision of the causal pass on a validated θ and φ, with the checks of
-/// [`EstimatorKernel::causal_step_trusted`]: adds `∇_θ l_t + l_t Σ_{i<t} ψ_i` to `g` and ψ_t to
+/// [`EstimatorKernel::causal_step_validated`]: adds `∇_θ l_t + l_t Σ_{i<t} ψ_i` to `g` and ψ_t to
 /// `score_sum`, and returns `l_t`.
 #[allow(clippy::too_many_arguments)] // the decision and the estimator's state
 #[inline]
@@ -116,7 +116,7 @@ fn causal_step<S: Real>(
 
 /// One decision's loss `l_t`, score coefficient `c_t = a_t − p_t` and loss-gradient
 /// coefficient `dz_t` on a validated θ and φ, with the checks of
-/// [`EstimatorKernel::causal_step_trusted`] in its order (label, logit, action).
+/// [`EstimatorKernel::causal_step_validated`] in its order (label, logit, action).
 #[inline]
 fn decision_coefficients<S: Real>(
     theta: &[S],
@@ -174,7 +174,7 @@ fn record_fixed<S: Real, L: Borrow<usize>, const N: usize>(
 
 /// The second half of the causal pass of `record_fixed`: `g += Σ_{t<n} [dz_t φ_t + l_t Σ_{i<t}
 /// ψ_i]` with ψ_i = c_i φ_i over the n recorded decisions, per decision the operations of
-/// [`EstimatorKernel::causal_step_trusted`] in the same order (`add_decision`; so the same `g`
+/// [`EstimatorKernel::causal_step_validated`] in the same order (`add_decision`; so the same `g`
 /// bit for bit), with `g` and `Σ_{i<t} ψ_i` in `[S; N]` locals (registers for `f64`); then, if
 /// `losses` has an (n + 1)-th entry `l_n`, `g += l_n Σ_{i<n} ψ_i`. `g` has `N` entries; `l_t`
 /// may carry a baseline's shift (it weighs `Σ_{i<t} ψ_i` only).
@@ -206,21 +206,21 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     /// As [`Policy::sample`] without the θ check. `#[inline(always)]`: it is the policy's part of
     /// the roll-out's hot loop.
     #[inline(always)]
-    fn sample_trusted(
+    fn sample_validated(
         &self,
         theta: &[S],
         phi: &[S],
         rng: &mut KitRng,
     ) -> Result<usize, PolicyError> {
         let features = Policy::<S>::feature_dim(self);
-        let p = logistic_sigmoid(&trusted_logit(theta, phi, features)?)?;
+        let p = logistic_sigmoid(&validated_logit(theta, phi, features)?)?;
         let u: S = dyadic_uniform(rng);
         Ok(sample_binary(&u, S::one() - &p, &p)?)
     }
 
     /// With `∇_θ l_t` and `ψ_t` used entry by entry, never stored (`grad` and `score` untouched).
     #[inline]
-    fn causal_step_trusted(
+    fn causal_step_validated(
         &self,
         theta: &[S],
         phi: &[S],
@@ -238,9 +238,9 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     /// With a compile-time dimension for 1 to 8 features in two loops (`record_fixed`, with the
     /// records in `scratch`, then `accumulate_fixed`, each loss shifted first when `shifts` is
     /// given, the `end` loss after them), else (and to report a failing decision) the default
-    /// loop over [`EstimatorKernel::causal_step_trusted`].
+    /// loop over [`EstimatorKernel::causal_step_validated`].
     #[inline]
-    fn causal_sum_trusted<L: Borrow<usize>>(
+    fn causal_sum_validated<L: Borrow<usize>>(
         &self,
         theta: &[S],
         features: &[S],
@@ -297,8 +297,8 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     /// n entries of `records`, `dz_t` (∇_θ l_t = dz_t φ_t) in the next n. With a compile-time
     /// dimension for 1 to 8 features in one loop (`record_fixed`); else (and to report a failing
     /// decision) decision by decision with the checks of
-    /// [`EstimatorKernel::causal_step_trusted`].
-    fn record_trusted<L: Borrow<usize>>(
+    /// [`EstimatorKernel::causal_step_validated`].
+    fn record_validated<L: Borrow<usize>>(
         &self,
         theta: &[S],
         features: &[S],
@@ -330,7 +330,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         Ok(())
     }
 
-    /// From the coefficients of [`EstimatorKernel::record_trusted`]: with a compile-time
+    /// From the coefficients of [`EstimatorKernel::record_validated`]: with a compile-time
     /// dimension for 1 to 8 features in registers (`accumulate_fixed`), else with `Σ_{i<t} ψ_i`
     /// in `scratch`, per decision the same operations.
     fn accumulate_recorded(
@@ -476,7 +476,7 @@ mod tests {
                     let mut g = vec![0.0; n];
                     let mut scratch = Vec::new();
                     let r = if fast {
-                        pi.causal_sum_trusted(
+                        pi.causal_sum_validated(
                             &theta,
                             features,
                             labels,
@@ -584,7 +584,7 @@ mod tests {
                 let record = |actions: &[usize], fast: bool| {
                     let (mut losses, mut records) = (vec![], vec![]);
                     let r = if fast {
-                        pi.record_trusted(
+                        pi.record_validated(
                             &theta,
                             &features,
                             &labels,
@@ -637,7 +637,7 @@ mod tests {
                 }
                 let (mut g, mut g_plain) = (vec![0.5; n], vec![0.5; n]);
                 pi.accumulate_recorded(&features, &coefficients, &losses, &mut g, &mut vec![]);
-                pi.causal_sum_trusted(
+                pi.causal_sum_validated(
                     &theta,
                     &features,
                     &labels,
@@ -658,13 +658,13 @@ mod tests {
         }
     }
 
-    /// `sample_trusted` of `pi` against `sample` (φ checked entry by entry): the same result.
-    fn assert_trusted_as_checked<S: Real>(pi: &Logistic, theta: &[S], phi: &[S]) {
+    /// `sample_validated` of `pi` against `sample` (φ checked entry by entry): the same result.
+    fn assert_validated_as_checked<S: Real>(pi: &Logistic, theta: &[S], phi: &[S]) {
         use rand::SeedableRng;
-        let run = |trusted: bool| {
+        let run = |validated: bool| {
             let mut rng = KitRng::seed_from_u64(3);
-            if trusted {
-                pi.sample_trusted(theta, phi, &mut rng)
+            if validated {
+                pi.sample_validated(theta, phi, &mut rng)
             } else {
                 pi.sample(theta, phi, &mut rng)
             }
@@ -672,12 +672,12 @@ mod tests {
         assert_eq!(run(true), run(false), "phi = {phi:?}");
     }
 
-    /// `sample_trusted` (φ's finiteness checked through the logit, for floats) fails exactly as
+    /// `sample_validated` (φ's finiteness checked through the logit, for floats) fails exactly as
     /// `sample` does: a non-finite feature is φ's error, an overflowing logit the logit's — in
     /// `f64`, and in duals (entry by entry, as in intervals, where `[0, 0]·[1, ∞]` is finite; see
-    /// `sample_trusted_checks_unbounded_interval_features`).
+    /// `sample_validated_checks_unbounded_interval_features`).
     #[test]
-    fn sample_trusted_fails_as_sample_does() {
+    fn sample_validated_fails_as_sample_does() {
         use crate::scalar::Dual;
         use rand::SeedableRng;
         let pi = Logistic::new(3).unwrap();
@@ -687,8 +687,8 @@ mod tests {
             for j in 0..3 {
                 let mut phi = [0.25, -0.5, 1.0];
                 phi[j] = bad;
-                assert_trusted_as_checked(&pi, &theta, &phi);
-                assert_trusted_as_checked(
+                assert_validated_as_checked(&pi, &theta, &phi);
+                assert_validated_as_checked(
                     &pi,
                     &theta.map(Dual::constant),
                     &phi.map(Dual::constant),
@@ -696,7 +696,8 @@ mod tests {
             }
         }
         // The three outcomes occur: φ's error, the logit's, and a sample.
-        let sample = |phi: [f64; 3]| pi.sample_trusted(&theta, &phi, &mut KitRng::seed_from_u64(3));
+        let sample =
+            |phi: [f64; 3]| pi.sample_validated(&theta, &phi, &mut KitRng::seed_from_u64(3));
         assert_eq!(
             sample([0.0, f64::NAN, 0.0]),
             Err(PolicyError::NonFinite { param: "phi" })
@@ -716,7 +717,7 @@ mod tests {
     /// [0, 0]`), and is still φ's error.
     #[cfg(feature = "mpfr")]
     #[test]
-    fn sample_trusted_checks_unbounded_interval_features() {
+    fn sample_validated_checks_unbounded_interval_features() {
         use crate::scalar::Interval;
         use rand::SeedableRng;
         let pi = Logistic::new(3).unwrap();
@@ -725,9 +726,9 @@ mod tests {
         let phi = [unbounded, Interval::one(), Interval::one()];
         assert!((theta[0] * unbounded).is_finite());
         assert_eq!(
-            pi.sample_trusted(&theta, &phi, &mut KitRng::seed_from_u64(3)),
+            pi.sample_validated(&theta, &phi, &mut KitRng::seed_from_u64(3)),
             Err(PolicyError::NonFinite { param: "phi" })
         );
-        assert_trusted_as_checked(&pi, &theta, &phi);
+        assert_validated_as_checked(&pi, &theta, &phi);
     }
 }

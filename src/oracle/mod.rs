@@ -5,7 +5,7 @@
 //! `ψ_t = ∇_θ log π_θ(a_t|s_t)`:
 //!
 //! * the causal estimator of eq. 3.15, `g = Σ_t [∇l_t + l_t Σ_{i<t} ψ_i]`
-//!   ([`EstimatorKernel::causal_sum_trusted`], and the weighted pass below);
+//!   ([`EstimatorKernel::causal_sum_validated`], and the weighted pass below);
 //! * the full form `Σ_t ∇l_t + (Σ_t l_t) Σ_{i<n} ψ_i` (eq. 3.16);
 //! * the importance-weighted old-point estimates of math.md §4, with per-decision ratios
 //!   `π_old(a_i|s_i)/π_new(a_i|s_i) = exp(log π_old − log π_new)`;

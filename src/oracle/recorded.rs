@@ -10,7 +10,7 @@ use std::borrow::Borrow;
 
 /// Fills `out` on a trajectory whose θ and features are validated: the per-step losses `l_t`,
 /// then `L_abs` when it absorbed; the number of scored decisions (n − 1; n when it absorbed);
-/// and the decisions' records in the policy's form ([`EstimatorKernel::record_trusted`]).
+/// and the decisions' records in the policy's form ([`EstimatorKernel::record_validated`]).
 pub(crate) fn record_pass<S, P, L, A>(
     policy: &P,
     theta: &[S],
@@ -25,7 +25,7 @@ where
     out.estimate.clear();
     out.score_rows = false;
     policy
-        .record_trusted(
+        .record_validated(
             theta,
             t.feature_data,
             t.labels,

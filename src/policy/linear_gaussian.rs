@@ -94,7 +94,7 @@ impl<S: Scalar, A> LinearGaussian<S, A> {
     ///
     /// # Errors
     /// [`PolicyError::Shape`] / [`PolicyError::NonFinite`] for a bad label.
-    pub(crate) fn loss_unchecked(
+    pub(crate) fn loss_only_validated(
         &self,
         theta: &[S],
         phi: &[S],
@@ -301,14 +301,14 @@ impl<S: Scalar, A: ActionVector<S>> Policy<S> for LinearGaussian<S, A> {
     ) -> Result<S, PolicyError> {
         check_vec("label", label, self.actions)?;
         self.check(theta, phi)?;
-        self.loss_score_checked_inputs(theta, phi, label, action, grad, score)
+        self.loss_score_validated(theta, phi, label, action, grad, score)
     }
 
     /// `a = Wφ + σ_π ε` with ε drawn as `m` f64 standard normals (coordinate by coordinate),
     /// converted exactly.
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<A, PolicyError> {
         check_vec("theta", theta, self.actions * self.features)?;
-        self.sample_checked_theta(theta, phi, rng)
+        self.sample_validated_theta(theta, phi, rng)
     }
 }
 
@@ -320,7 +320,7 @@ impl<S: Scalar, A: ActionVector<S>> LinearGaussian<S, A> {
     /// # Errors
     /// As [`Policy::loss_score_into`].
     #[inline]
-    pub(crate) fn loss_score_checked_inputs(
+    pub(crate) fn loss_score_validated(
         &self,
         theta: &[S],
         phi: &[S],
@@ -360,7 +360,7 @@ impl<S: Scalar, A: ActionVector<S>> LinearGaussian<S, A> {
     /// # Errors
     /// As [`Policy::sample`].
     #[inline]
-    pub(crate) fn sample_checked_theta(
+    pub(crate) fn sample_validated_theta(
         &self,
         theta: &[S],
         phi: &[S],

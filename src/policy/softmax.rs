@@ -319,13 +319,13 @@ impl Softmax {
     ) -> Result<(), PolicyError> {
         check_vec("theta", theta, self.actions * self.features)?;
         check_vec("phi", phi, self.features)?;
-        self.logits_unchecked_into(theta, phi, z);
+        self.logits_validated_into(theta, phi, z);
         Ok(())
     }
 
     /// [`Softmax::logits_into`] without its checks of θ and φ (callers have checked them).
     #[inline]
-    fn logits_unchecked_into<S: Scalar>(&self, theta: &[S], phi: &[S], z: &mut [S]) {
+    fn logits_validated_into<S: Scalar>(&self, theta: &[S], phi: &[S], z: &mut [S]) {
         for (zi, row) in z.iter_mut().zip(theta.chunks_exact(self.features)) {
             *zi = crate::scalar::dot(row, phi);
         }
@@ -341,13 +341,13 @@ impl Softmax {
     /// [`Softmax::probs_into`] without its checks of θ and φ (callers have checked them): the
     /// same operations, so the same probabilities and the same softmax error.
     #[inline]
-    fn probs_unchecked_into<S: Real>(
+    fn probs_validated_into<S: Real>(
         &self,
         theta: &[S],
         phi: &[S],
         p: &mut [S],
     ) -> Result<(), PolicyError> {
-        self.logits_unchecked_into(theta, phi, p);
+        self.logits_validated_into(theta, phi, p);
         softmax_in_place(p)
     }
 
@@ -357,7 +357,7 @@ impl Softmax {
     /// # Errors
     /// As [`Policy::sample`].
     #[inline]
-    pub(crate) fn sample_checked_theta<S: Real>(
+    pub(crate) fn sample_validated_theta<S: Real>(
         &self,
         theta: &[S],
         phi: &[S],
@@ -366,7 +366,7 @@ impl Softmax {
         // Entry by entry: φ was just written by the roll-out (see `check_vec_scalar`).
         check_vec_scalar("phi", phi, self.features)?;
         on_scratch!(S, self.actions, |p| {
-            self.probs_unchecked_into(theta, phi, p)?;
+            self.probs_validated_into(theta, phi, p)?;
             sample_probs(p, rng)
         })
     }
@@ -378,7 +378,7 @@ impl Softmax {
     /// # Errors
     /// As [`Policy::loss_score_into`].
     #[inline]
-    pub(crate) fn loss_score_checked_inputs<S: Real>(
+    pub(crate) fn loss_score_validated<S: Real>(
         &self,
         theta: &[S],
         phi: &[S],
@@ -389,12 +389,12 @@ impl Softmax {
     ) -> Result<S, PolicyError> {
         check_action(*label, self.actions)?;
         on_scratch!(S, self.actions, |p| {
-            self.probs_unchecked_into(theta, phi, p)?;
+            self.probs_validated_into(theta, phi, p)?;
             self.loss_score_from_probs(p, phi, *label, *action, grad, score)
         })
     }
 
-    /// [`Softmax::loss_score_checked_inputs`] after the probabilities: from π = `probs` (those
+    /// [`Softmax::loss_score_validated`] after the probabilities: from π = `probs` (those
     /// of θ at φ, e.g. noted when the action was sampled), the same operations, values and
     /// errors.
     ///
@@ -419,7 +419,7 @@ impl Softmax {
         Ok(l)
     }
 
-    /// [`Softmax::sample_checked_theta`], appending the probabilities π it sampled from to
+    /// [`Softmax::sample_validated_theta`], appending the probabilities π it sampled from to
     /// `notes` (A entries; nothing on an error).
     ///
     /// # Errors
@@ -434,7 +434,7 @@ impl Softmax {
     ) -> Result<usize, PolicyError> {
         check_vec_scalar("phi", phi, self.features)?;
         on_scratch!(S, self.actions, |p| {
-            self.probs_unchecked_into(theta, phi, p)?;
+            self.probs_validated_into(theta, phi, p)?;
             notes.extend_from_slice(p);
             sample_probs(p, rng)
         })
@@ -446,7 +446,7 @@ impl Softmax {
     /// # Errors
     /// As [`Policy::loss_into`].
     #[inline]
-    pub(crate) fn loss_only_checked_inputs<S: Real>(
+    pub(crate) fn loss_only_validated<S: Real>(
         &self,
         theta: &[S],
         phi: &[S],
@@ -454,7 +454,7 @@ impl Softmax {
     ) -> Result<S, PolicyError> {
         check_action(label, self.actions)?;
         on_scratch!(S, self.actions, |p| {
-            self.probs_unchecked_into(theta, phi, p)?;
+            self.probs_validated_into(theta, phi, p)?;
             Ok(brier_loss(p, label))
         })
     }
@@ -475,7 +475,7 @@ impl<S: Real> Policy<S> for Softmax {
     #[inline]
     fn sample(&self, theta: &[S], phi: &[S], rng: &mut KitRng) -> Result<usize, PolicyError> {
         check_vec("theta", theta, self.actions * self.features)?;
-        self.sample_checked_theta(theta, phi, rng)
+        self.sample_validated_theta(theta, phi, rng)
     }
 
     /// Brier loss against the expert action `label`: `∇_Θ l = (∂l/∂z)φᵀ` with ∂l/∂z from
@@ -530,7 +530,7 @@ impl<S: Real> Policy<S> for Softmax {
         check_action(*label, self.actions)?;
         check_vec("theta", theta, self.actions * self.features)?;
         check_vec("phi", phi, self.features)?;
-        self.loss_score_checked_inputs(theta, phi, label, action, grad, score)
+        self.loss_score_validated(theta, phi, label, action, grad, score)
     }
 }
 
@@ -589,7 +589,7 @@ mod tests {
                 assert_eq!((l.to_bits(), bits(&g)), (l2.to_bits(), bits(&grad)));
                 assert_eq!(
                     l.to_bits(),
-                    pi.loss_only_checked_inputs(&theta, &phi, label)
+                    pi.loss_only_validated(&theta, &phi, label)
                         .unwrap()
                         .to_bits()
                 );
@@ -647,7 +647,7 @@ mod tests {
             pi.loss(&theta, &phi, &3).map(|(l, _)| l)
         );
         assert_eq!(
-            pi.loss_only_checked_inputs(&theta, &phi, 3),
+            pi.loss_only_validated(&theta, &phi, 3),
             pi.loss(&theta, &phi, &3).map(|(l, _)| l)
         );
         assert!(matches!(
@@ -669,7 +669,7 @@ mod tests {
         let li = pi
             .loss_score_into(&th, &ph, &2, &0, &mut gi, &mut si)
             .unwrap();
-        assert_eq!(pi.loss_only_checked_inputs(&th, &ph, 2).unwrap(), l);
+        assert_eq!(pi.loss_only_validated(&th, &ph, 2).unwrap(), l);
         assert_eq!((l, g), (li, gi));
         assert_eq!(pi.score(&th, &ph, &0).unwrap(), si);
     }

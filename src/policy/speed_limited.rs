@@ -61,7 +61,7 @@ impl<S: Sqrt, A: ActionVector<S>> SpeedLimitedGaussian<S, A> {
     ///
     /// # Errors
     /// As [`Policy::loss_into`] for a bad label, an undecidable speed limit or a non-finite loss.
-    pub(crate) fn loss_unchecked(
+    pub(crate) fn loss_only_validated(
         &self,
         theta: &[S],
         phi: &[S],
@@ -78,7 +78,7 @@ impl<S: Sqrt, A: ActionVector<S>> SpeedLimitedGaussian<S, A> {
             scratch[i * n] = m;
         }
         if !certainly_less(&self.v_max_sq, &n2, "speed limit: ‖Wφ‖ > v")? {
-            return self.inner.loss_unchecked(theta, phi, label);
+            return self.inner.loss_only_validated(theta, phi, label);
         }
         let s = self.v_max.clone() / n2.sqrt();
         let mut loss = S::zero();
@@ -153,7 +153,7 @@ impl<S: Sqrt, A: ActionVector<S>> SpeedLimitedGaussian<S, A> {
     /// # Errors
     /// As [`Policy::loss_score_into`].
     #[inline]
-    pub(crate) fn loss_score_checked_inputs(
+    pub(crate) fn loss_score_validated(
         &self,
         theta: &[S],
         phi: &[S],
@@ -266,7 +266,7 @@ impl<S: Sqrt, A: ActionVector<S>> Policy<S> for SpeedLimitedGaussian<S, A> {
         check_vec("label", label, k)?;
         check_vec("theta", theta, k * n)?;
         check_vec("phi", phi, n)?;
-        self.loss_score_checked_inputs(theta, phi, label, action, grad, score)
+        self.loss_score_validated(theta, phi, label, action, grad, score)
     }
 }
 

@@ -322,11 +322,11 @@ where
         let mut grad = vec![S::zero(); self.dim()];
         // θ is checked above; with every φ checked once, the loss alone is computed per decision
         // (the same values as `loss_into`'s, without its gradient).
-        let trusted = features_valid(&self.policy, &trajectory.decisions());
+        let validated = features_valid(&self.policy, &trajectory.decisions());
         for (phi, y) in trajectory.feature_rows().zip(&trajectory.labels) {
             let th = theta.as_slice();
-            total += if trusted {
-                self.policy.loss_trusted(th, phi, y.borrow(), &mut grad)
+            total += if validated {
+                self.policy.loss_validated(th, phi, y.borrow(), &mut grad)
             } else {
                 self.policy.loss_into(th, phi, y.borrow(), &mut grad)
             }
@@ -469,7 +469,7 @@ where
     }
 
     /// On validated features, the policy's own records
-    /// ([`EstimatorKernel::record_trusted`]); otherwise the checked route of
+    /// ([`EstimatorKernel::record_validated`]); otherwise the checked route of
     /// [`PerDecisionTerms::decision_terms`], which reports the first invalid input.
     fn record_decisions(
         &self,

@@ -14,7 +14,9 @@ pub(super) fn sample_learner<S: Scalar, P: EstimatorKernel<S>>(
     phi: &[S],
     rng: &mut KitRng,
 ) -> Result<P::Action, OracleError> {
-    policy.sample_trusted(theta, phi, rng).map_err(policy_error)
+    policy
+        .sample_validated(theta, phi, rng)
+        .map_err(policy_error)
 }
 
 /// The error of a task whose feature vectors changed length during an episode.
@@ -71,7 +73,7 @@ impl<T, P> TaskProblem<T, P> {
     }
 
     /// The learner θ's roll-out ([`TaskProblem::rollout_with`] sampling with
-    /// [`EstimatorKernel::sample_trusted`]), keeping what the policy notes per decision
+    /// [`EstimatorKernel::sample_validated`]), keeping what the policy notes per decision
     /// ([`EstimatorKernel::sample_noting`]) and θ with it, for the estimate at the same θ. θ is
     /// checked by the caller; every φ is checked by the sampler, so the features are marked finite.
     pub(super) fn learner_rollout<S>(

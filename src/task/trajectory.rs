@@ -23,7 +23,7 @@ pub struct TaskTrajectory<S, L, A> {
     /// Number of feature rows stored.
     pub(super) rows: usize,
     /// `true` when every feature entry is known to be finite: a learner's roll-out, where every φ
-    /// went through [`EstimatorKernel::sample_trusted`], which checks φ. The estimators then skip their own
+    /// went through [`EstimatorKernel::sample_validated`], which checks φ. The estimators then skip their own
     /// pass over the features. `false`: unknown (checked when needed).
     pub(super) features_finite: bool,
     /// a_t.

@@ -317,7 +317,7 @@ where
             let labels: Vec<&P::Label> = t.labels.iter().map(Borrow::borrow).collect();
             let (mut g, mut loss, mut scratch) = (vec![0.0; th.len()], tail.unwrap_or(0.0), vec![]);
             p.policy
-                .causal_sum_trusted(
+                .causal_sum_validated(
                     th,
                     t.feature_data(),
                     &labels,
@@ -329,12 +329,12 @@ where
                     &mut scratch,
                 )
                 .unwrap();
-            same(&route("causal_sum_trusted"), &g, &want);
+            same(&route("causal_sum_validated"), &g, &want);
             assert_eq!(
                 loss.to_bits(),
                 total.to_bits(),
                 "{}",
-                route("causal_sum_trusted loss")
+                route("causal_sum_validated loss")
             );
             // Shifts δ_t = b_t − b_{t−1} fold a baseline into the kernel's pass (b_t = 0 from the
             // first unscored decision on).
@@ -353,7 +353,7 @@ where
             let end = tail.map(|l| l - b(t.len() - 1));
             let mut g = vec![0.0; th.len()];
             p.policy
-                .causal_sum_trusted(
+                .causal_sum_validated(
                     th,
                     t.feature_data(),
                     &labels,
@@ -366,14 +366,14 @@ where
                 )
                 .unwrap();
             close(
-                &route("causal_sum_trusted with shifts"),
+                &route("causal_sum_validated with shifts"),
                 &g,
                 &reference(&ref_terms, tail, false, &b).0,
             );
             // The policy's records summed with the recorded losses, and with other losses.
             let (mut losses, mut records) = (vec![], vec![]);
             p.policy
-                .record_trusted(
+                .record_validated(
                     th,
                     t.feature_data(),
                     &labels,
@@ -386,7 +386,7 @@ where
                 bits(&losses),
                 bits(&ref_terms.losses),
                 "{}",
-                route("record_trusted losses")
+                route("record_validated losses")
             );
             let mut g = vec![0.0; th.len()];
             let mut with_tail = losses.clone();
@@ -398,7 +398,7 @@ where
                 &mut g,
                 &mut scratch,
             );
-            close(&route("record_trusted + accumulate_recorded"), &g, &want);
+            close(&route("record_validated + accumulate_recorded"), &g, &want);
 
             // The per-decision terms, unweighted.
             let mut dt = DecisionTerms::new();

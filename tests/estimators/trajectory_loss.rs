@@ -1,4 +1,4 @@
-//! The trajectory loss computes each decision's loss alone (`EstimatorKernel::loss_trusted`): bit for bit
+//! The trajectory loss computes each decision's loss alone (`EstimatorKernel::loss_validated`): bit for bit
 //! the sum of `Policy::loss_into`'s values, inside and beyond the speed limit, with and without an
 //! absorbing end; and the loss summed in the estimate's own pass is the same.
 

@@ -10,7 +10,7 @@ use super::config::LoadedConfig;
 use super::error::RunError;
 use super::evaluation::evaluate;
 use super::records::{Checkpoint, SeedRun, SeedTiming};
-use super::task::Bench;
+use super::task::TaskLearner;
 use ilopt::algo::{
     CheckpointObserver, IterationMetrics, NormBound, RunFailure, Runner, Schedule, StoppingRule,
     Termination,
@@ -32,7 +32,7 @@ const MAX_FREE_STEPS: u64 = 10_000;
 /// [`RunError::Invalid`] for an algorithm or θ₀ the problem rejects; [`RunError::Run`] if an
 /// evaluation fails.
 pub fn run_seed(
-    bench: &Bench,
+    bench: &TaskLearner,
     config: &LoadedConfig,
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
@@ -60,17 +60,17 @@ pub fn run_seed(
         };
     }
     match bench {
-        Bench::CartPoleSoftmax(p) => on!(p),
-        Bench::CartPoleLogistic(p) => on!(p),
-        Bench::Obstacle { problem, .. } => on!(problem),
-        Bench::Toy(p) => on!(p),
+        TaskLearner::CartPoleSoftmax(p) => on!(p),
+        TaskLearner::CartPoleLogistic(p) => on!(p),
+        TaskLearner::Obstacle { problem, .. } => on!(problem),
+        TaskLearner::Toy(p) => on!(p),
     }
 }
 
 /// The runner ([`Runner`]) with a gradient budget, [`NormBound`], the progress callback and the
 /// checkpoint evaluations ([`Evaluations`]).
 fn drive<P: IlProblem<f64>>(
-    bench: &Bench,
+    bench: &TaskLearner,
     problem: &P,
     config: &LoadedConfig,
     seed: u64,
@@ -142,7 +142,7 @@ fn drive<P: IlProblem<f64>>(
 /// The checkpoint observer of `ilopt run`: [`evaluate`] at the iterate, one [`Checkpoint`] per
 /// call count it serves.
 struct Evaluations<'b> {
-    bench: &'b Bench,
+    bench: &'b TaskLearner,
     episodes: u32,
     seed: u64,
     checkpoints: Vec<Checkpoint>,
@@ -182,13 +182,17 @@ impl CheckpointObserver<f64> for Evaluations<'_> {
 ///
 /// # Errors
 /// [`RunError::Invalid`] naming `algorithm` with the algorithm's own message.
-pub fn check_algorithm(bench: &Bench, config: &LoadedConfig) -> Result<(), RunError> {
+pub fn check_algorithm(bench: &TaskLearner, config: &LoadedConfig) -> Result<(), RunError> {
     let alg = &config.file.algorithm;
     let r = match bench {
-        Bench::CartPoleSoftmax(_) => alg.build::<f64, super::task::CartPoleSoftmax>().map(drop),
-        Bench::CartPoleLogistic(_) => alg.build::<f64, super::task::CartPoleLogistic>().map(drop),
-        Bench::Obstacle { .. } => alg.build::<f64, super::task::ObstacleProblem>().map(drop),
-        Bench::Toy(_) => alg.build::<f64, ilopt::toy::ToyProblem<f64>>().map(drop),
+        TaskLearner::CartPoleSoftmax(_) => {
+            alg.build::<f64, super::task::CartPoleSoftmax>().map(drop)
+        }
+        TaskLearner::CartPoleLogistic(_) => {
+            alg.build::<f64, super::task::CartPoleLogistic>().map(drop)
+        }
+        TaskLearner::Obstacle { .. } => alg.build::<f64, super::task::ObstacleProblem>().map(drop),
+        TaskLearner::Toy(_) => alg.build::<f64, ilopt::toy::ToyProblem<f64>>().map(drop),
     };
     r.map_err(|e| config.invalid("algorithm", e))
 }
@@ -200,7 +204,7 @@ pub fn check_algorithm(bench: &Bench, config: &LoadedConfig) -> Result<(), RunEr
 ///
 /// # Errors
 /// [`RunError::Invalid`] naming `run.baseline`.
-pub fn check_baseline(bench: &Bench, config: &LoadedConfig) -> Result<(), RunError> {
+pub fn check_baseline(bench: &TaskLearner, config: &LoadedConfig) -> Result<(), RunError> {
     use ilopt::problem::{Behaviour, EstimatorForm, OracleError};
     let Some(b) = config
         .file
@@ -229,10 +233,10 @@ pub fn check_baseline(bench: &Bench, config: &LoadedConfig) -> Result<(), RunErr
         }};
     }
     match bench {
-        Bench::CartPoleSoftmax(p) => on!(p),
-        Bench::CartPoleLogistic(p) => on!(p),
-        Bench::Obstacle { problem, .. } => on!(problem),
-        Bench::Toy(p) => on!(p),
+        TaskLearner::CartPoleSoftmax(p) => on!(p),
+        TaskLearner::CartPoleLogistic(p) => on!(p),
+        TaskLearner::Obstacle { problem, .. } => on!(problem),
+        TaskLearner::Toy(p) => on!(p),
     }
 }
 

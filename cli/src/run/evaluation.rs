@@ -8,7 +8,7 @@
 //! Episode j of a seed's evaluation draws from an RNG seeded by (seed, j) only, so every
 //! checkpoint of a run meets the same episodes (common random numbers).
 
-use super::task::Bench;
+use super::task::TaskLearner;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::{ObstacleEnv, Outcome};
 use ilopt::policy::PolicyExt;
@@ -48,13 +48,13 @@ pub fn episode_seed(seed: u64, j: u64) -> u64 {
 /// # Errors
 /// A message if an episode, the expert or the policy fails.
 pub fn evaluate(
-    bench: &Bench,
+    bench: &TaskLearner,
     theta: &[f64],
     episodes: u32,
     seed: u64,
 ) -> Result<Evaluation, String> {
     match bench {
-        Bench::CartPoleSoftmax(p) => cartpole(
+        TaskLearner::CartPoleSoftmax(p) => cartpole(
             &p.task,
             &mut |phi, label| {
                 let (l, _) = PolicyExt::<f64>::loss(&p.policy, theta, phi, &label)
@@ -65,7 +65,7 @@ pub fn evaluate(
             episodes,
             seed,
         ),
-        Bench::CartPoleLogistic(p) => cartpole(
+        TaskLearner::CartPoleLogistic(p) => cartpole(
             &p.task,
             &mut |phi, label| {
                 let (l, _) = PolicyExt::<f64>::loss(&p.policy, theta, phi, &label)
@@ -76,8 +76,8 @@ pub fn evaluate(
             episodes,
             seed,
         ),
-        Bench::Obstacle { .. } => obstacle(bench, theta, episodes, seed),
-        Bench::Toy(p) => {
+        TaskLearner::Obstacle { .. } => obstacle(bench, theta, episodes, seed),
+        TaskLearner::Toy(p) => {
             let f = ilopt::exact::forward::forward(p, theta).map_err(|e| e.to_string())?;
             Ok(Evaluation {
                 objective: Some(f.objective),
@@ -129,8 +129,13 @@ fn cartpole(
 
 /// Obstacle episodes with the executed mean velocity; a non-finite velocity is replaced by zero
 /// (the episode then times out) and counted in the loss as it is.
-fn obstacle(bench: &Bench, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
-    let Bench::Obstacle {
+fn obstacle(
+    bench: &TaskLearner,
+    theta: &[f64],
+    episodes: u32,
+    seed: u64,
+) -> Result<Evaluation, String> {
+    let TaskLearner::Obstacle {
         problem,
         env,
         expert,

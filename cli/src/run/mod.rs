@@ -35,7 +35,7 @@ use clap::Args;
 use records::SeedRun;
 use serde_json::{Value, json};
 use std::path::PathBuf;
-use task::Bench;
+use task::TaskLearner;
 
 /// The keys of a config file, for `ilopt run --help` (docs/run.md has the full reference).
 pub const CONFIG_KEYS: &str = "\
@@ -85,7 +85,7 @@ pub struct RunArgs {
 /// [`RunError`] naming the file and key at fault, or the seed whose run failed.
 pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     let config = RunFile::load(&args.config)?;
-    let bench = Bench::new(&config)?;
+    let bench = TaskLearner::new(&config)?;
     bench.theta0(&config)?;
     driver::check_algorithm(&bench, &config)?;
     driver::check_baseline(&bench, &config)?;
@@ -116,7 +116,7 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
 
 /// The summary: per seed its termination and final checkpoint, and the mean over seeds of the
 /// final checkpoint's metrics.
-fn summary(config: &LoadedConfig, bench: &Bench, runs: &[&SeedRun]) -> Value {
+fn summary(config: &LoadedConfig, bench: &TaskLearner, runs: &[&SeedRun]) -> Value {
     let f = &config.file;
     let mean = |get: &dyn Fn(&records::Checkpoint) -> Option<f64>| -> Option<f64> {
         let v: Vec<f64> = runs

@@ -8,7 +8,7 @@ use super::driver::run_seed;
 use super::error::RunError;
 use super::output::OutputDir;
 use super::records::{SeedRun, SeedTiming};
-use super::task::Bench;
+use super::task::TaskLearner;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::sync::Mutex;
@@ -23,7 +23,7 @@ pub type SeedResult = (SeedRun, SeedTiming);
 /// # Errors
 /// The first seed's error (in seed order); the seeds not yet started are then skipped.
 pub fn run_seeds(
-    bench: &Bench,
+    bench: &TaskLearner,
     config: &LoadedConfig,
     out: &OutputDir,
     threads: usize,

@@ -1,4 +1,4 @@
-//! Building a config's task, expert, policy and objective into an IL problem ([`Bench`]), with
+//! Building a config's task, expert, policy and objective into an IL problem ([`TaskLearner`]), with
 //! the choices of the thesis's experiments: CartPole with the softmax learner over
 //! φ(s) = (x, ẋ, θ, θ̇, 1) and the PPO expert, T = 500 with a reset after a crash; the obstacle
 //! task with the linear-Gaussian learner, the loss of the executed (speed-clipped) velocity and
@@ -37,7 +37,7 @@ pub type CartPoleLogistic = TaskProblem<CartPoleTask<f64>, Logistic>;
 // One instance per run: the size difference between the variants costs nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
-pub enum Bench {
+pub enum TaskLearner {
     /// CartPole with the softmax learner.
     CartPoleSoftmax(CartPoleSoftmax),
     /// CartPole with the logistic learner.
@@ -55,7 +55,7 @@ pub enum Bench {
     Toy(ToyProblem<f64>),
 }
 
-impl Bench {
+impl TaskLearner {
     /// Build the config's task.
     ///
     /// # Errors
@@ -81,12 +81,12 @@ impl Bench {
                 }
                 .map_err(|e| task_err(&e))?;
                 match f.policy.kind.unwrap_or(PolicyKind::Softmax) {
-                    PolicyKind::Softmax => Bench::CartPoleSoftmax(TaskProblem {
+                    PolicyKind::Softmax => TaskLearner::CartPoleSoftmax(TaskProblem {
                         task: expert,
                         policy: Softmax::new(2, cartpole::FEATURES).map_err(|e| task_err(&e))?,
                         horizon,
                     }),
-                    PolicyKind::Logistic => Bench::CartPoleLogistic(TaskProblem {
+                    PolicyKind::Logistic => TaskLearner::CartPoleLogistic(TaskProblem {
                         task: expert,
                         policy: Logistic::new(cartpole::FEATURES).map_err(|e| task_err(&e))?,
                         horizon,
@@ -104,7 +104,7 @@ impl Bench {
                 let inner = LinearGaussian::new(2, task.feature_dim(), sigma)
                     .and_then(LinearGaussian::with_actions::<[f64; 2]>)
                     .map_err(|e| config.invalid("policy.sigma", e))?;
-                Bench::Obstacle {
+                TaskLearner::Obstacle {
                     problem: TaskProblem {
                         policy: SpeedLimitedGaussian::new(inner, env.agent_max_speed)
                             .map_err(|e| task_err(&e))?,
@@ -123,7 +123,7 @@ impl Bench {
                     .ok_or_else(|| config.invalid("task.mdp", "required for the toy task"))?;
                 let mdp = ToyMdp::load(path)
                     .map_err(|e| config.invalid("task.mdp", format!("{}: {e}", path.display())))?;
-                Bench::Toy(ToyProblem::new(&mdp))
+                TaskLearner::Toy(ToyProblem::new(&mdp))
             }
         })
     }
@@ -131,10 +131,10 @@ impl Bench {
     /// The number of policy parameters.
     pub fn dim(&self) -> usize {
         match self {
-            Bench::CartPoleSoftmax(p) => IlProblem::<f64>::dim(p),
-            Bench::CartPoleLogistic(p) => IlProblem::<f64>::dim(p),
-            Bench::Obstacle { problem, .. } => IlProblem::<f64>::dim(problem),
-            Bench::Toy(p) => IlProblem::<f64>::dim(p),
+            TaskLearner::CartPoleSoftmax(p) => IlProblem::<f64>::dim(p),
+            TaskLearner::CartPoleLogistic(p) => IlProblem::<f64>::dim(p),
+            TaskLearner::Obstacle { problem, .. } => IlProblem::<f64>::dim(problem),
+            TaskLearner::Toy(p) => IlProblem::<f64>::dim(p),
         }
     }
 
@@ -142,10 +142,10 @@ impl Bench {
     /// `"toy"`), recorded with a saved θ.
     pub fn policy_name(&self) -> &'static str {
         match self {
-            Bench::CartPoleSoftmax(_) => "softmax",
-            Bench::CartPoleLogistic(_) => "logistic",
-            Bench::Obstacle { .. } => "linear-gaussian",
-            Bench::Toy(_) => "toy",
+            TaskLearner::CartPoleSoftmax(_) => "softmax",
+            TaskLearner::CartPoleLogistic(_) => "logistic",
+            TaskLearner::Obstacle { .. } => "linear-gaussian",
+            TaskLearner::Toy(_) => "toy",
         }
     }
 

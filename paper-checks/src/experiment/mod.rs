@@ -26,15 +26,15 @@
 //! is not finite, or whose step fails is *diverged* — it stops there, is never converged (even if
 //! it had met the criterion before), and is counted among the failed runs.
 
-mod bench;
 mod records;
 mod run;
 mod status;
+mod task_learner;
 
-pub use bench::*;
 pub use records::*;
 pub use run::*;
 pub use status::*;
+pub use task_learner::*;
 
 use serde::{Deserialize, Serialize};
 

@@ -1,7 +1,7 @@
 //! What a run records: its checkpoints ([`Checkpoint`]), its result ([`SeedRun`]) and its
 //! timings ([`SeedTiming`]).
 
-use super::bench::Eval;
+use super::task_learner::Eval;
 use super::{RunStatus, TaskKind, cartpole_max_steps};
 use ilopt::problem::Cost;
 use serde::{Deserialize, Serialize};

@@ -2,7 +2,7 @@
 //! checkpoints ([`run_spec`]), and the reference policies' seeds.
 
 use super::{
-    Bench, Checkpoint, ReferencePolicy, SeedRun, SeedTiming, TaskKind, status_of, sustained,
+    Checkpoint, ReferencePolicy, SeedRun, SeedTiming, TaskKind, TaskLearner, status_of, sustained,
 };
 use crate::config::{AlgorithmEntry, TaskSection, Theta1};
 use crate::error::Error;
@@ -108,7 +108,7 @@ fn theta1(law: Theta1, dim: usize, key: &str) -> DVector<f64> {
 /// # Errors
 /// As [`run_spec`].
 pub fn run_seed(
-    bench: &Bench,
+    bench: &TaskLearner,
     kind: TaskKind,
     task: &TaskSection,
     entry: &AlgorithmEntry,
@@ -144,17 +144,17 @@ pub fn run_seed(
 /// [`Error::Experiment`] if the run cannot start or an evaluation fails. A run that fails
 /// mid-way (a non-finite iterate, a failing step, ‖θ‖ beyond the bound) is *not* an error: its
 /// status is [`RunStatus::Diverged`](super::RunStatus::Diverged) and it keeps the checkpoints reached.
-pub fn run_spec(bench: &Bench, spec: &RunSpec<'_>) -> Result<(SeedRun, SeedTiming), Error> {
+pub fn run_spec(bench: &TaskLearner, spec: &RunSpec<'_>) -> Result<(SeedRun, SeedTiming), Error> {
     match bench {
-        Bench::Obstacle { problem, .. } => drive_with(bench, problem, spec),
-        Bench::Cartpole { problem, .. } => drive_with(bench, problem, spec),
+        TaskLearner::Obstacle { problem, .. } => drive_with(bench, problem, spec),
+        TaskLearner::Cartpole { problem, .. } => drive_with(bench, problem, spec),
     }
 }
 
 /// [`drive`] on `problem` as the spec wants it: with its baseline ([`Baselined`], m
 /// trajectories per gradient), m trajectories per gradient ([`Batched`]), or as it is.
 fn drive_with<P: PerDecisionTerms<f64> + Clone>(
-    bench: &Bench,
+    bench: &TaskLearner,
     problem: &P,
     spec: &RunSpec<'_>,
 ) -> Result<(SeedRun, SeedTiming), Error> {
@@ -179,7 +179,7 @@ const MAX_FREE_STEPS: u64 = 10_000;
 /// evaluations ([`Evaluations`], which also stop tuning runs at sustained convergence);
 /// training time without the evaluations.
 fn drive<P: IlProblem<f64>>(
-    bench: &Bench,
+    bench: &TaskLearner,
     problem: &P,
     spec: &RunSpec<'_>,
 ) -> Result<(SeedRun, SeedTiming), Error> {
@@ -254,7 +254,7 @@ fn drive<P: IlProblem<f64>>(
 /// gradient rows and CartPole's resets to a full episode at the iterate, one [`Checkpoint`] per
 /// call count it serves; tuning runs stop at sustained convergence.
 struct Evaluations<'b, 's> {
-    bench: &'b Bench,
+    bench: &'b TaskLearner,
     spec: &'b RunSpec<'s>,
     checkpoints: Vec<Checkpoint>,
 }
@@ -323,7 +323,7 @@ pub fn eval_key(kind: TaskKind, seed_index: u32) -> String {
 /// # Errors
 /// [`Error::Experiment`] if an episode fails.
 pub fn baseline_seed(
-    bench: &Bench,
+    bench: &TaskLearner,
     kind: TaskKind,
     task: &TaskSection,
     baseline: ReferencePolicy,

@@ -16,16 +16,16 @@ use crate::progress::Progress;
 use crate::results::Results;
 use crate::shard::{Mode, Units};
 use crate::storage::{mkdir, to_json, write_atomic};
-use benches::{Benches, baselines_job};
 use stages::{Experiments, stages};
 pub use stale::remove_stale;
 use std::path::PathBuf;
+use task_learners::{TaskLearners, baselines_job};
 pub use theory_cache::TheoryCache;
 
-mod benches;
 mod keys;
 mod stages;
 mod stale;
+mod task_learners;
 #[cfg(test)]
 mod tests;
 mod theory_cache;
@@ -105,7 +105,7 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
     mkdir(&runs_dir)?;
     mkdir(&timings_dir)?;
     let progress = progress_for(profile, opts);
-    let benches = Benches::new(profile)?;
+    let benches = TaskLearners::new(profile)?;
     let seeds: Vec<u32> = (0..profile.seeds).collect();
     let mode = match opts.mode {
         Mode::Shard(_) => Mode::All,
@@ -188,7 +188,7 @@ pub fn run_shard(profile: &Profile, opts: &Options) -> Result<ShardSummary, Erro
     mkdir(&runs_dir)?;
     mkdir(&opts.out.join("timings"))?;
     let progress = progress_for(profile, opts);
-    let benches = Benches::new(profile)?;
+    let benches = TaskLearners::new(profile)?;
     let units = Units::new(&runs_dir, opts.mode, opts.redo);
     let st = stages(profile, opts, &progress, &benches, &units)?;
     progress.finish();

@@ -2,8 +2,8 @@
 //! runs.
 
 use super::Options;
-use super::benches::Benches;
 use super::keys::{gradient_key, task_key, theory_key};
+use super::task_learners::TaskLearners;
 use super::theory_cache::{TheoryCache, write_theory_copies};
 use super::tuning_stage::{at_point, tune, tuning_seeds_of};
 use crate::config::{Profile, TheorySize};
@@ -44,7 +44,7 @@ pub(super) fn stages(
     profile: &Profile,
     opts: &Options,
     progress: &Progress,
-    benches: &Benches,
+    benches: &TaskLearners,
     units: &Units,
 ) -> Result<Stages, Error> {
     let runs_dir = opts.out.join("runs");

@@ -2,8 +2,8 @@
 //! matches.
 
 use super::Options;
-use super::benches::Benches;
 use super::keys::tuning_key;
+use super::task_learners::TaskLearners;
 use crate::config::{AlgorithmEntry, Profile, TaskSection};
 use crate::error::Error;
 use crate::experiment::{RunSpec, TaskKind, run_key_of, run_spec};
@@ -39,7 +39,7 @@ pub(super) fn at_point(e: &AlgorithmEntry, p: &GridPoint) -> AlgorithmEntry {
 pub(super) fn tune(
     profile: &Profile,
     opts: &Options,
-    benches: &Benches,
+    benches: &TaskLearners,
     progress: &Progress,
     units: &Units,
 ) -> Result<Option<Vec<TuningResult>>, Error> {
@@ -165,7 +165,7 @@ pub(super) fn tune(
 /// log edges between rounds ([`crate::protocol`]).
 struct Row<'a> {
     profile: &'a Profile,
-    benches: &'a Benches,
+    benches: &'a TaskLearners,
     progress: &'a Progress,
     units: &'a Units,
     kind: TaskKind,

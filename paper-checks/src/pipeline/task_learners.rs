@@ -3,17 +3,17 @@
 
 use crate::config::Profile;
 use crate::error::Error;
-use crate::experiment::{Bench, ReferencePolicy, TaskKind, baseline_seed};
+use crate::experiment::{ReferencePolicy, TaskKind, TaskLearner, baseline_seed};
 use crate::results::BaselineResult;
 use ilopt::task::Horizon;
 use rayon::prelude::*;
 
 /// The benches of a profile: one per (task, objective) used by its rows.
-pub(super) struct Benches(Vec<(TaskKind, Horizon, Bench)>);
+pub(super) struct TaskLearners(Vec<(TaskKind, Horizon, TaskLearner)>);
 
-impl Benches {
+impl TaskLearners {
     pub(super) fn new(profile: &Profile) -> Result<Self, Error> {
-        let mut v: Vec<(TaskKind, Horizon, Bench)> = Vec::new();
+        let mut v: Vec<(TaskKind, Horizon, TaskLearner)> = Vec::new();
         for (kind, t) in [
             (TaskKind::Obstacle, &profile.obstacle),
             (TaskKind::Cartpole, &profile.cartpole),
@@ -21,13 +21,13 @@ impl Benches {
             for e in &t.algorithms {
                 let h = e.horizon(t, kind.name());
                 if !v.iter().any(|(k, hh, _)| *k == kind && *hh == h) {
-                    v.push((kind, h, Bench::new(kind, t, h)?));
+                    v.push((kind, h, TaskLearner::new(kind, t, h)?));
                 }
             }
         }
-        Ok(Benches(v))
+        Ok(TaskLearners(v))
     }
-    pub(super) fn get(&self, kind: TaskKind, h: Horizon) -> &Bench {
+    pub(super) fn get(&self, kind: TaskKind, h: Horizon) -> &TaskLearner {
         self.0
             .iter()
             .find(|(k, hh, _)| *k == kind && *hh == h)
@@ -35,7 +35,7 @@ impl Benches {
             .expect("a bench for every row's objective")
     }
     /// The task's bench under its default objective (baselines: no training).
-    pub(super) fn of_task(&self, kind: TaskKind) -> &Bench {
+    pub(super) fn of_task(&self, kind: TaskKind) -> &TaskLearner {
         self.0
             .iter()
             .find(|(k, _, _)| *k == kind)
@@ -48,7 +48,7 @@ impl Benches {
 /// never cached).
 pub(super) fn baselines_job(
     profile: &Profile,
-    benches: &Benches,
+    benches: &TaskLearners,
     seeds: &[u32],
 ) -> Result<Vec<BaselineResult>, Error> {
     let mut out = Vec::new();

@@ -1,4 +1,4 @@
-//! A task with its learner, expert and evaluation ([`Bench`]), and the reference policies
+//! A task with its learner, expert and evaluation ([`TaskLearner`]), and the reference policies
 //! evaluated beside the learners ([`ReferencePolicy`]).
 
 use super::{TaskKind, cartpole_max_steps};
@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 // Two instances exist per run, so the size difference between the variants costs nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
-pub enum Bench {
+pub enum TaskLearner {
     /// The obstacle task.
     Obstacle {
         /// The IL problem (velocities stored inline: no allocation per step).
@@ -59,10 +59,10 @@ pub enum ReferencePolicy {
 
 impl ReferencePolicy {
     /// Its label in tables and figures.
-    pub fn label(self, bench: &Bench) -> String {
+    pub fn label(self, bench: &TaskLearner) -> String {
         match (self, bench) {
-            (ReferencePolicy::Expert, Bench::Obstacle { .. }) => "Expert (VO)".into(),
-            (ReferencePolicy::Expert, Bench::Cartpole { expert, .. }) => {
+            (ReferencePolicy::Expert, TaskLearner::Obstacle { .. }) => "Expert (VO)".into(),
+            (ReferencePolicy::Expert, TaskLearner::Cartpole { expert, .. }) => {
                 format!("Expert ({})", expert.name())
             }
             (ReferencePolicy::StraightToGoal, _) => "Straight to goal".into(),
@@ -96,7 +96,7 @@ pub(super) struct Eval {
     pub(super) loss_xy: Option<(f64, f64)>,
 }
 
-impl Bench {
+impl TaskLearner {
     /// Build the task's bench.
     ///
     /// # Errors
@@ -109,7 +109,7 @@ impl Bench {
                     task.sigma.unwrap_or(0.02),
                     task.features.unwrap_or_default(),
                 )?;
-                if let Bench::Obstacle { problem, .. } = &mut b {
+                if let TaskLearner::Obstacle { problem, .. } = &mut b {
                     problem.horizon = horizon;
                 }
                 b
@@ -123,7 +123,7 @@ impl Bench {
                         .and_then(|x| CartPoleTask::new(CartPoleExpert::Ppo(x), MAX_EPISODE_STEPS)),
                 }
                 .map_err(|x| e(&x))?;
-                Bench::Cartpole {
+                TaskLearner::Cartpole {
                     problem: TaskProblem {
                         task: t,
                         policy: Softmax::new(2, cartpole::FEATURES).map_err(|x| e(&x))?,
@@ -151,7 +151,7 @@ impl Bench {
         let inner = LinearGaussian::new(2, task.feature_dim(), sigma)
             .and_then(LinearGaussian::with_actions::<[f64; 2]>)
             .map_err(|x| e(&x))?;
-        Ok(Bench::Obstacle {
+        Ok(TaskLearner::Obstacle {
             problem: TaskProblem {
                 policy: SpeedLimitedGaussian::new(inner, env.agent_max_speed).map_err(|x| e(&x))?,
                 task,
@@ -165,8 +165,8 @@ impl Bench {
     /// The objective of the bench's problem.
     pub fn horizon(&self) -> Horizon {
         match self {
-            Bench::Obstacle { problem, .. } => problem.horizon,
-            Bench::Cartpole { problem, .. } => problem.horizon,
+            TaskLearner::Obstacle { problem, .. } => problem.horizon,
+            TaskLearner::Cartpole { problem, .. } => problem.horizon,
         }
     }
 
@@ -179,7 +179,7 @@ impl Bench {
         cap: u32,
         key: &str,
     ) -> Result<Option<u32>, Error> {
-        let Bench::Cartpole { problem, .. } = self else {
+        let TaskLearner::Cartpole { problem, .. } = self else {
             return Ok(None);
         };
         let err = |x: &dyn std::fmt::Display| Error::experiment(format!("Fig. 4.9 ({key})"), x);
@@ -205,8 +205,8 @@ impl Bench {
     /// Number of policy parameters.
     pub fn dim(&self) -> usize {
         match self {
-            Bench::Obstacle { problem, .. } => IlProblem::<f64>::dim(problem),
-            Bench::Cartpole { problem, .. } => IlProblem::<f64>::dim(problem),
+            TaskLearner::Obstacle { problem, .. } => IlProblem::<f64>::dim(problem),
+            TaskLearner::Cartpole { problem, .. } => IlProblem::<f64>::dim(problem),
         }
     }
 
@@ -214,7 +214,7 @@ impl Bench {
     pub(super) fn evaluate(&self, theta: &[f64], episodes: u32, key: &str) -> Result<Eval, Error> {
         let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
         match self {
-            Bench::Obstacle { problem, .. } => self.evaluate_obstacle(
+            TaskLearner::Obstacle { problem, .. } => self.evaluate_obstacle(
                 &mut |_, phi| {
                     let m = problem
                         .policy
@@ -225,7 +225,7 @@ impl Bench {
                 episodes,
                 key,
             ),
-            Bench::Cartpole { problem, .. } => self.evaluate_cartpole(
+            TaskLearner::Cartpole { problem, .. } => self.evaluate_cartpole(
                 &mut |_, phi, label| {
                     let (l, _) = PolicyExt::<f64>::loss(&problem.policy, theta, phi, &label)
                         .map_err(|x| err(&x))?;
@@ -247,12 +247,13 @@ impl Bench {
     ) -> Result<Eval, Error> {
         let err = |x: &dyn std::fmt::Display| Error::experiment(format!("baseline ({key})"), x);
         match (self, b) {
-            (Bench::Obstacle { expert, .. }, ReferencePolicy::Expert) => self.evaluate_obstacle(
-                &mut |obs, _| expert.act(obs).map_err(|x| err(&x)),
-                episodes,
-                key,
-            ),
-            (Bench::Obstacle { env, .. }, ReferencePolicy::StraightToGoal) => self
+            (TaskLearner::Obstacle { expert, .. }, ReferencePolicy::Expert) => self
+                .evaluate_obstacle(
+                    &mut |obs, _| expert.act(obs).map_err(|x| err(&x)),
+                    episodes,
+                    key,
+                ),
+            (TaskLearner::Obstacle { env, .. }, ReferencePolicy::StraightToGoal) => self
                 .evaluate_obstacle(
                     &mut |obs, _| {
                         let d = [
@@ -270,10 +271,10 @@ impl Bench {
                     episodes,
                     key,
                 ),
-            (Bench::Cartpole { .. }, ReferencePolicy::Expert) => {
+            (TaskLearner::Cartpole { .. }, ReferencePolicy::Expert) => {
                 self.evaluate_cartpole(&mut |_, _, label| Ok((label, 0.0)), episodes, key)
             }
-            (Bench::Cartpole { .. }, ReferencePolicy::StraightToGoal) => {
+            (TaskLearner::Cartpole { .. }, ReferencePolicy::StraightToGoal) => {
                 Err(err(&"CartPole has no goal"))
             }
         }
@@ -287,7 +288,7 @@ impl Bench {
         episodes: u32,
         key: &str,
     ) -> Result<Eval, Error> {
-        let Bench::Obstacle {
+        let TaskLearner::Obstacle {
             env,
             expert,
             problem,
@@ -350,7 +351,7 @@ impl Bench {
         episodes: u32,
         key: &str,
     ) -> Result<Eval, Error> {
-        let Bench::Cartpole { problem, .. } = self else {
+        let TaskLearner::Cartpole { problem, .. } = self else {
             return Err(Error::experiment(key, "not CartPole"));
         };
         let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
@@ -390,7 +391,7 @@ impl Bench {
         n: u32,
         seed: u64,
     ) -> Result<Option<(f64, f64)>, Error> {
-        let Bench::Obstacle { problem, .. } = self else {
+        let TaskLearner::Obstacle { problem, .. } = self else {
             return Ok(None);
         };
         if n == 0 {
