@@ -88,7 +88,7 @@ pub use learner::{DataSchedule, DatasetLearner};
 pub use observer::{
     CheckpointObserver, IterationMetrics, NormBound, Observer, Progress, Schedule, norm_of,
 };
-pub use runner::{RunFailure, RunRecord, Runner, StoppingRule, replay};
+pub use runner::{MAX_FREE_STEPS, RunFailure, RunRecord, Runner, StoppingRule, replay};
 pub use termination::{Divergence, Termination};
 
 pub(crate) use algorithm::oracle_draw;

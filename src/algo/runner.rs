@@ -36,6 +36,11 @@ use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
 use std::time::{Duration, Instant};
 
+/// The `max_free_steps` that `ilopt run` and the appendix's runs set: steps in a row without a
+/// gradient call after which a run ends as diverged (an algorithm whose steps cost nothing would
+/// never use up a gradient budget).
+pub const MAX_FREE_STEPS: u64 = 10_000;
+
 /// When a run stops (at least one of the bounds must be set).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct StoppingRule {

@@ -21,10 +21,6 @@ use ilopt::problem::{Cost, IlProblem, KitRng};
 use rand::SeedableRng;
 use std::time::Instant;
 
-/// Steps in a row without a gradient call after which a run is stopped (an algorithm whose
-/// steps cost nothing would never use up the budget).
-const MAX_FREE_STEPS: u64 = 10_000;
-
 /// Run one seed of a config on its bench; `progress` receives the calls used so far (capped at
 /// the budget) after every step.
 ///
@@ -84,7 +80,7 @@ fn drive<P: IlProblem<f64>>(
         .map_err(|e| config.invalid("algorithm", e))?;
     let stop = StoppingRule {
         max_gradient_evaluations: Some(budget),
-        max_free_steps: Some(MAX_FREE_STEPS),
+        max_free_steps: Some(ilopt::algo::MAX_FREE_STEPS),
         ..StoppingRule::default()
     };
     let mut evaluations = Evaluations {

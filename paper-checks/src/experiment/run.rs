@@ -171,10 +171,6 @@ fn drive_with<P: PerDecisionTerms<f64> + Clone>(
     }
 }
 
-/// Steps in a row without a gradient call after which a run is stopped as diverged (an
-/// algorithm whose steps cost nothing would never use up the budget).
-const MAX_FREE_STEPS: u64 = 10_000;
-
 /// The run: ilopt's [`Runner`] with the task's budget, its [`NormBound`] and the checkpoint
 /// evaluations ([`Evaluations`], which also stop tuning runs at sustained convergence);
 /// training time without the evaluations.
@@ -196,7 +192,7 @@ fn drive<P: IlProblem<f64>>(
         .map_err(|e| Error::experiment(&what, e))?;
     let stop = StoppingRule {
         max_gradient_evaluations: Some(task.budget),
-        max_free_steps: Some(MAX_FREE_STEPS),
+        max_free_steps: Some(ilopt::algo::MAX_FREE_STEPS),
         ..StoppingRule::default()
     };
     let mut evaluations = Evaluations {
