@@ -45,7 +45,7 @@
 //!
 //! # Known limitations
 //! * Under the direct parameterisation the score 1/π is unbounded, so large steps can leave the
-//!   open simplex; the run then ends with [`Termination::Failed`] (a domain error),
+//!   open simplex; the run then ends with [`Termination::Diverged`] (a domain error),
 //!   never with a silently clipped or NaN iterate. No algorithm projects onto the simplex.
 //! * Interval runs of Adam/RMSProp widen quickly once the gradients are small (the wrapping
 //!   effect in `m̂/√v̂`): fine for a few iterations, not for long runs.

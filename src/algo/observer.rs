@@ -92,7 +92,7 @@ impl Observer<f64> for NormBound {
             return None;
         }
         let norm = norm_of(&m.theta);
-        (norm > self.bound).then_some(Termination::Failed(Divergence::NormBound {
+        (norm > self.bound).then_some(Termination::Diverged(Divergence::NormBound {
             norm,
             bound: self.bound,
         }))

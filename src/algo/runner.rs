@@ -294,7 +294,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
     /// Run an algorithm from `theta0` with a ChaCha8 RNG seeded by `seed`.
     ///
     /// # Errors
-    /// A failing `init` (later failures end the run with [`Termination::Failed`]).
+    /// A failing `init` (later failures end the run with [`Termination::Diverged`]).
     pub fn run<P: IlProblem<S> + ?Sized>(
         &mut self,
         algorithm: &mut dyn Algorithm<S, P>,
@@ -314,7 +314,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
     ///
     /// # Errors
     /// [`RunFailure::Start`] for a failing `init`, [`RunFailure::Checkpoint`] for a failing
-    /// evaluation (later step failures end the run with [`Termination::Failed`]).
+    /// evaluation (later step failures end the run with [`Termination::Diverged`]).
     pub fn run_with_checkpoints<P, C>(
         &mut self,
         algorithm: &mut dyn Algorithm<S, P>,
@@ -363,13 +363,13 @@ impl<'a, S: Scalar> Runner<'a, S> {
                 break t;
             }
             if !crate::scalar::all_finite(algorithm.theta().as_slice()) {
-                break Termination::Failed(Divergence::NonFiniteTheta);
+                break Termination::Diverged(Divergence::NonFiniteTheta);
             }
             if report.finished {
                 break Termination::Finished;
             }
             if self.stop.max_free_steps.is_some_and(|k| free_steps >= k) {
-                break Termination::Failed(Divergence::NoGradientCall { steps: free_steps });
+                break Termination::Diverged(Divergence::NoGradientCall { steps: free_steps });
             }
             let due = schedule
                 .as_mut()
@@ -396,7 +396,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
                 },
             ) {
                 Ok(r) => r,
-                Err(e) => break Termination::Failed(Divergence::StepFailed(e)),
+                Err(e) => break Termination::Diverged(Divergence::StepFailed(e)),
             };
             iterations += 1;
             free_steps = if cost.gradient_evaluations == before {

@@ -20,7 +20,7 @@ pub enum Termination {
     Finished,
     /// The run diverged: a step failed, θ is not finite, ‖θ‖ left its bound, or the steps stopped
     /// costing gradient calls. The record keeps everything up to that point.
-    Failed(Divergence),
+    Diverged(Divergence),
     /// A checkpoint observer's criterion was met (paper-checks' `sustained-convergence`); the
     /// string is the reason as written in the results.
     Stopped(&'static str),
@@ -34,7 +34,7 @@ impl std::fmt::Display for Termination {
             Termination::TargetLoss => write!(f, "target-loss"),
             Termination::TimeOut => write!(f, "time-out"),
             Termination::Finished => write!(f, "finished"),
-            Termination::Failed(d) => write!(f, "diverged: {d}"),
+            Termination::Diverged(d) => write!(f, "diverged: {d}"),
             Termination::Stopped(reason) => write!(f, "{reason}"),
         }
     }
@@ -44,7 +44,7 @@ impl Termination {
     /// The divergence, if the run diverged.
     pub fn divergence(&self) -> Option<&Divergence> {
         match self {
-            Termination::Failed(d) => Some(d),
+            Termination::Diverged(d) => Some(d),
             _ => None,
         }
     }

@@ -412,7 +412,7 @@ fn measure_every_algorithm_on_m1() {
                 stop: StoppingRule::iterations(K),
             };
             let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
-            if matches!(rec.termination, Termination::Failed(_)) {
+            if matches!(rec.termination, Termination::Diverged(_)) {
                 failed += 1;
                 continue;
             }

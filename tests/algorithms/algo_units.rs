@@ -368,7 +368,7 @@ fn rmsprop_without_epsilon_stops_on_a_zero_denominator() {
         .unwrap();
     assert!(matches!(
         rec.termination,
-        Termination::Failed(Divergence::StepFailed(AlgoError::NonFinite(_)))
+        Termination::Diverged(Divergence::StepFailed(AlgoError::NonFinite(_)))
     ));
 }
 
@@ -611,7 +611,7 @@ fn a_non_finite_iterate_stops_the_run() {
         .unwrap();
     assert_eq!(
         rec.termination,
-        Termination::Failed(Divergence::StepFailed(AlgoError::NonFinite("θ")))
+        Termination::Diverged(Divergence::StepFailed(AlgoError::NonFinite("θ")))
     );
     assert!(rec.history.iter().all(|m| m.theta[0].is_finite()));
 }

@@ -185,7 +185,7 @@ fn a_failing_step_diverges_and_keeps_the_iterate_before_it() {
     );
     assert_eq!(
         rec.termination,
-        Termination::Failed(Divergence::StepFailed(AlgoError::State("scripted failure")))
+        Termination::Diverged(Divergence::StepFailed(AlgoError::State("scripted failure")))
     );
     assert_eq!((rec.iterations, rec.theta[0]), (1, 1.0));
     assert_eq!(
@@ -202,7 +202,7 @@ fn a_non_finite_iterate_diverges_after_the_observers_saw_it() {
     );
     assert_eq!(
         rec.termination,
-        Termination::Failed(Divergence::NonFiniteTheta)
+        Termination::Diverged(Divergence::NonFiniteTheta)
     );
     assert_eq!((rec.iterations, rec.history.len()), (1, 2));
     assert_eq!(rec.termination.to_string(), "diverged: non-finite θ");
@@ -226,7 +226,7 @@ fn steps_without_a_gradient_call_diverge_after_the_limit() {
     let rec = run(stop, &mut w);
     assert_eq!(
         rec.termination,
-        Termination::Failed(Divergence::NoGradientCall { steps: 3 })
+        Termination::Diverged(Divergence::NoGradientCall { steps: 3 })
     );
     assert_eq!(rec.iterations, 3);
     assert_eq!(
@@ -249,7 +249,7 @@ fn the_norm_bound_observer_ends_the_run_once_the_norm_exceeds_it() {
         .unwrap();
     assert_eq!(
         rec.termination,
-        Termination::Failed(Divergence::NormBound {
+        Termination::Diverged(Divergence::NormBound {
             norm: 20.0,
             bound: 15.0
         })
@@ -273,7 +273,7 @@ fn the_norm_bound_observer_ends_the_run_once_the_norm_exceeds_it() {
     assert_eq!(rec.iterations, 0);
     assert!(matches!(
         rec.termination,
-        Termination::Failed(Divergence::NormBound { .. })
+        Termination::Diverged(Divergence::NormBound { .. })
     ));
 }
 

@@ -163,7 +163,7 @@ pub fn sgd_row<P: IlProblem<f64>>(
                 .with_observer(obs)
                 .run_config(&cfg, p)
         }) {
-            Ok(rec) if !matches!(rec.termination, Termination::Failed(_)) => {}
+            Ok(rec) if !matches!(rec.termination, Termination::Diverged(_)) => {}
             Ok(rec) => return fail(format!("run {r}: {}", rec.termination)),
             Err(e) => return fail(e.to_string()),
         }

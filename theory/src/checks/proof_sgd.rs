@@ -176,7 +176,7 @@ fn run(mdp: &ToyMdp, dim: usize, decreasing: bool, k: u64, seed: u64) -> Result<
     let rec = Runner::<f64>::new(cfg.stop.clone())
         .and_then(|mut r| r.run_config(&cfg, &ToyProblem::<f64>::new(mdp)))
         .map_err(|e| format!("SGD run (seed {seed}): {e}"))?;
-    if let Termination::Failed(e) = &rec.termination {
+    if let Termination::Diverged(e) = &rec.termination {
         return Err(format!("SGD run (seed {seed}) failed: {e}"));
     }
     if rec.history.len() as u64 != k + 1 {

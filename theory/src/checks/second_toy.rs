@@ -129,7 +129,7 @@ pub fn sgd_sample(
         let (lo, mid, seen, left, err, far) = acc.into_inner();
         out.farthest = out.farthest.max(far);
         match rec {
-            Ok(rec) if !matches!(rec.termination, Termination::Failed(_)) && err.is_none() => {
+            Ok(rec) if !matches!(rec.termination, Termination::Diverged(_)) && err.is_none() => {
                 if seen != s.k {
                     return Err(format!(
                         "run {r}: {seen} iterates observed, expected {}",

@@ -95,7 +95,7 @@ fn simulate<P: IlProblem<f64>>(
         });
         let (lo, mid, wsum, count, err) = acc.into_inner();
         match rec {
-            Ok(rec) if !matches!(rec.termination, Termination::Failed(_)) && err.is_none() => {
+            Ok(rec) if !matches!(rec.termination, Termination::Diverged(_)) && err.is_none() => {
                 if count != k {
                     return Err(format!("run {r}: {count} iterates, expected {k}"));
                 }

@@ -442,7 +442,7 @@ pub fn dagger_row(m: &Instance, s: DaggerSizes) -> Check {
         match Runner::new(cfg.stop.clone())
             .and_then(|runner| runner.keep_history(false).run_config(&cfg, &problem))
         {
-            Ok(rec) if !matches!(rec.termination, Termination::Failed(_)) => {
+            Ok(rec) if !matches!(rec.termination, Termination::Diverged(_)) => {
                 // θ = π(0|·), p = π(1|·) = 1 − θ.
                 finals.push(1.0 - rec.theta[0]);
             }

@@ -170,7 +170,7 @@ pub fn o2nc_sample_tracked(
         });
         match rec {
             Err(e) => return Err(format!("run {r}: {e}")),
-            Ok(rec) if matches!(rec.termination, Termination::Failed(_)) => {
+            Ok(rec) if matches!(rec.termination, Termination::Diverged(_)) => {
                 return Err(format!("run {r}: {}", rec.termination));
             }
             Ok(_) => {}

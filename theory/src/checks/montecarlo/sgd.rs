@@ -74,7 +74,7 @@ pub fn sgd_sample_on<P: IlProblem<f64>>(
         });
         let (lo, mid, err) = acc.into_inner();
         match rec {
-            Ok(rec) if !matches!(rec.termination, Termination::Failed(_)) && err.is_none() => {
+            Ok(rec) if !matches!(rec.termination, Termination::Diverged(_)) && err.is_none() => {
                 // The sum's own rounding (relative ≤ K·2⁻⁵³) is absorbed by the factor.
                 lows.push(lo / k as f64 * (1.0 - 1e-9));
                 mids.push(mid / k as f64);

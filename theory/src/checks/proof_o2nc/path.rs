@@ -136,7 +136,7 @@ pub fn record(
                     .run_config(&cfg, &pf)
             })
             .map_err(|e| format!("run {seed}: {e}"))?;
-        if let Termination::Failed(_) = rec.termination {
+        if let Termination::Diverged(_) = rec.termination {
             return Err(format!("run {seed}: {}", rec.termination));
         }
         let steps = steps.into_inner();

@@ -173,7 +173,7 @@ pub fn dagger_solution<P: IlProblem<f64>>(
     let rec = Runner::new(cfg.stop.clone())
         .and_then(|r| r.keep_history(false).run_config(&cfg, p))
         .map_err(|e| e.to_string())?;
-    if let Termination::Failed(e) = &rec.termination {
+    if let Termination::Diverged(e) = &rec.termination {
         return Err(format!("DAgger: {e}"));
     }
     Ok(DVector::from_iterator(p.dim(), rec.theta.iter().copied()))
