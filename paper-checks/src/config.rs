@@ -154,13 +154,32 @@ impl Theta1 {
     }
 }
 
+/// The two tasks of chapter 4.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum TaskKind {
+    /// §4.1, linear-Gaussian learner, velocity-obstacle expert.
+    Obstacle,
+    /// §4.2, softmax learner, PPO or LQR expert.
+    Cartpole,
+}
+
+impl TaskKind {
+    /// `"obstacle"` / `"cartpole"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            TaskKind::Obstacle => "obstacle",
+            TaskKind::Cartpole => "cartpole",
+        }
+    }
+}
+
 /// The default objective of a task: CartPole 500 decisions with resets (the thesis's Fig. 4.9
 /// protocol), the obstacle task 200 decisions with an absorbing end.
-pub fn default_horizon(task: &str) -> Horizon {
-    if task == "cartpole" {
-        Horizon::fixed(500, AfterEnd::Reset)
-    } else {
-        Horizon::fixed(200, AfterEnd::Absorb)
+pub fn default_horizon(task: TaskKind) -> Horizon {
+    match task {
+        TaskKind::Cartpole => Horizon::fixed(500, AfterEnd::Reset),
+        TaskKind::Obstacle => Horizon::fixed(200, AfterEnd::Absorb),
     }
 }
 
@@ -267,10 +286,10 @@ pub struct AlgorithmEntry {
 
 impl AlgorithmEntry {
     /// The objective of this row's runs.
-    pub fn horizon(&self, task: &TaskSection, task_name: &str) -> Horizon {
+    pub fn horizon(&self, task: &TaskSection, kind: TaskKind) -> Horizon {
         self.horizon
             .or(task.horizon)
-            .unwrap_or_else(|| default_horizon(task_name))
+            .unwrap_or_else(|| default_horizon(kind))
     }
 
     /// The row's grid as sub-grids: `grids`, or `grid` as the one product (none without a
@@ -392,18 +411,22 @@ impl Profile {
         self.gradient_error
             .validate()
             .map_err(|(name, reason)| field(file, &name, reason))?;
-        for (name, t) in [("obstacle", &self.obstacle), ("cartpole", &self.cartpole)] {
-            if name == "obstacle" && !t.sigma.is_some_and(|s| s.is_finite() && s > 0.0) {
+        for (kind, t) in [
+            (TaskKind::Obstacle, &self.obstacle),
+            (TaskKind::Cartpole, &self.cartpole),
+        ] {
+            let name = kind.name();
+            if kind == TaskKind::Obstacle && !t.sigma.is_some_and(|s| s.is_finite() && s > 0.0) {
                 return Err(field(file, "obstacle.sigma", "must be set, finite and > 0"));
             }
-            if name == "obstacle" && t.expert.is_some() {
+            if kind == TaskKind::Obstacle && t.expert.is_some() {
                 return Err(field(
                     file,
                     "obstacle.expert",
                     "the obstacle task's expert is the velocity-obstacle expert; remove the field",
                 ));
             }
-            if name == "cartpole" && t.features.is_some() {
+            if kind == TaskKind::Cartpole && t.features.is_some() {
                 return Err(field(
                     file,
                     "cartpole.features",
@@ -414,7 +437,7 @@ impl Profile {
                 f.validate()
                     .map_err(|e| field(file, &format!("{name}.features"), e.to_string()))?;
             }
-            if name == "cartpole" && t.sigma.is_some() {
+            if kind == TaskKind::Cartpole && t.sigma.is_some() {
                 return Err(field(
                     file,
                     "cartpole.sigma",

@@ -830,7 +830,7 @@ mod profile_tests {
                 (TaskKind::Cartpole, &p.cartpole),
             ] {
                 for e in &t.algorithms {
-                    let h = e.horizon(t, kind.name());
+                    let h = e.horizon(t, kind);
                     for pt in e.grid_points().unwrap() {
                         let rk = run_key_of(kind, &e.label, &pt.config, pt.m, h, &pt.baseline);
                         for s in 0..p.seeds {

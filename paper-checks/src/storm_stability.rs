@@ -403,7 +403,7 @@ pub fn bench_of(profile: &Profile, kind: TaskKind) -> Result<TaskLearner, Error>
     let task = task_of(profile, kind);
     let horizon = task
         .horizon
-        .unwrap_or_else(|| crate::config::default_horizon(kind.name()));
+        .unwrap_or_else(|| crate::config::default_horizon(kind));
     TaskLearner::new(kind, task, horizon)
 }
 

@@ -36,24 +36,4 @@ pub use run::*;
 pub use status::*;
 pub use task_learner::*;
 
-use serde::{Deserialize, Serialize};
-
-/// The two tasks of chapter 4.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum TaskKind {
-    /// §4.1, linear-Gaussian learner, velocity-obstacle expert.
-    Obstacle,
-    /// §4.2, softmax learner, PPO or LQR expert.
-    Cartpole,
-}
-
-impl TaskKind {
-    /// `"obstacle"` / `"cartpole"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            TaskKind::Obstacle => "obstacle",
-            TaskKind::Cartpole => "cartpole",
-        }
-    }
-}
+pub use crate::config::TaskKind;

@@ -53,7 +53,7 @@ pub fn run_key(kind: TaskKind, task: &TaskSection, entry: &AlgorithmEntry) -> St
         &entry.label,
         &entry.config,
         entry.m.unwrap_or(1),
-        entry.horizon(task, kind.name()),
+        entry.horizon(task, kind),
         &entry.baseline.clone().unwrap_or_default(),
     )
 }

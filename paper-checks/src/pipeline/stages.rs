@@ -190,7 +190,7 @@ pub(super) fn stages(
             .par_iter()
             .map(|(kind, t, e, hyper, key, file)| {
                 let start = Instant::now();
-                let bench = benches.get(*kind, e.horizon(t, kind.name()));
+                let bench = benches.get(*kind, e.horizon(t, *kind));
                 let rk = run_key(*kind, t, e);
                 let unit_keys: Vec<String> = seeds
                     .iter()

@@ -19,7 +19,7 @@ impl TaskLearners {
             (TaskKind::Cartpole, &profile.cartpole),
         ] {
             for e in &t.algorithms {
-                let h = e.horizon(t, kind.name());
+                let h = e.horizon(t, kind);
                 if !v.iter().any(|(k, hh, _)| *k == kind && *hh == h) {
                     v.push((kind, h, TaskLearner::new(kind, t, h)?));
                 }

@@ -184,7 +184,7 @@ impl Row<'_> {
         let (kind, t, e) = (self.kind, self.task, self.entry);
         let protocol = &self.profile.tuning;
         let seeds = self.profile.tuning_seeds;
-        let h = e.horizon(t, kind.name());
+        let h = e.horizon(t, kind);
         let mut grids = e.subgrids();
         let mut memo = Memo::new();
         let mut unit_keys = Vec::new();

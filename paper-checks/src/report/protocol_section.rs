@@ -109,7 +109,7 @@ fn protocol_list(profile: &Profile) -> Vec<String> {
             .algorithms
             .iter()
             .filter(|e| e.horizon.is_some())
-            .map(|e| format!("{} → `{}`", e.label, e.horizon(t, kind.name()).label()))
+            .map(|e| format!("{} → `{}`", e.label, e.horizon(t, kind).label()))
             .collect();
         out.push(format!(
             "**{}.** Objective `{}`{}; budget {} gradient calls per run for every method (a run \
@@ -119,7 +119,7 @@ fn protocol_list(profile: &Profile) -> Vec<String> {
              {} consecutive checkpoints; diverged = ‖θ‖₂ > {} or a non-finite θ or a failed step; {}.{}",
             kind.name(),
             t.horizon
-                .unwrap_or_else(|| crate::config::default_horizon(kind.name()))
+                .unwrap_or_else(|| crate::config::default_horizon(kind))
                 .label(),
             if overrides.is_empty() {
                 String::new()
