@@ -6,7 +6,9 @@
 //! | [`config`] | the TOML schema and its loading |
 //! | `resolve` | defaults, absolute paths, range checks |
 //! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
-//! | [`task`] | the config's task, expert, policy and objective as an IL problem |
+//! | [`runnable`] | what a run needs of a task: [`RunTask`] (built-in or a program's own) |
+//! | [`task`] | the config's built-in task, expert, policy and objective as an IL problem |
+//! | [`plugin`] | a program's own environment and expert as a task ([`EnvRun`]) |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
 //! | [`driver`] | one seed's run with its checkpoints |
 //! | [`parallel`] | the seeds on a thread pool, with a progress bar |
@@ -24,18 +26,22 @@ pub mod error;
 pub mod evaluation;
 pub mod output;
 pub mod parallel;
+pub mod plugin;
 pub mod records;
 mod resolve;
+pub mod runnable;
 pub mod task;
 
 pub use config::{LoadedConfig, RunFile};
 pub use error::RunError;
+pub use plugin::EnvRun;
+pub use runnable::RunTask;
 
 use clap::Args;
 use records::SeedRun;
 use serde_json::{Value, json};
-use std::path::PathBuf;
-use task::TaskLearner;
+use std::path::{Path, PathBuf};
+use task::{TaskLearner, with_learner};
 
 /// The keys of a config file, for `ilopt run --help` (docs/run.md has the full reference).
 pub const CONFIG_KEYS: &str = "\
@@ -85,28 +91,43 @@ pub struct RunArgs {
 /// [`RunError`] naming the file and key at fault, or the seed whose run failed.
 pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     let config = RunFile::load(&args.config)?;
-    let bench = TaskLearner::new(&config)?;
-    bench.theta0(&config)?;
-    driver::check_algorithm(&bench, &config)?;
-    driver::check_baseline(&bench, &config)?;
-    let out = output::OutputDir::create(&args.out)?;
+    let learner = TaskLearner::new(&config)?;
+    let threads = args.threads.map(|n| n as usize);
+    with_learner!(&learner, t => run_task(t, &config, &args.out, threads))
+}
+
+/// Train on `task` as `config` says, for every seed, on up to `threads` threads (default: the
+/// available parallelism; capped by [`RunTask::max_threads`]), and write the outputs of
+/// `ilopt run` into `out`: the entry point for a built-in task and a program's own alike. The
+/// config's `[task]` and `[policy]` sections describe a built-in task; a plug-in task brings its
+/// own, and its config has `task.name = "custom"` (the default when `[task]` is left out).
+/// Returns the summary (also written to `summary.json`).
+///
+/// # Errors
+/// [`RunError`] naming the file and key at fault, or the seed whose run failed.
+pub fn run_task<T: RunTask + ?Sized>(
+    task: &T,
+    config: &LoadedConfig,
+    out: &Path,
+    threads: Option<usize>,
+) -> Result<Value, RunError> {
+    driver::check_config(task, config)?;
+    let out = output::OutputDir::create(out)?;
     let toml = config
         .to_toml()
         .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
     out.write("config.toml", &toml)?;
-    let threads = args.threads.map_or_else(
-        || std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
-        |n| n as usize,
-    );
+    let threads = threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
     let started = std::time::Instant::now();
-    let results = parallel::run_seeds(&bench, &config, &out, threads)?;
+    let results = parallel::run_seeds(task, config, &out, threads)?;
     let runs: Vec<&SeedRun> = results.iter().map(|(r, _)| r).collect();
-    let summary = summary(&config, &bench, &runs);
+    let summary = summary(config, task, &runs);
     out.write_json("summary.json", &summary)?;
     out.write_json(
         "timings.json",
         &json!({
-            "threads": threads,
+            "threads": threads.min(task.max_threads()),
             "total_seconds": started.elapsed().as_secs_f64(),
             "seeds": results.iter().map(|(_, t)| t).collect::<Vec<_>>(),
         }),
@@ -116,7 +137,7 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
 
 /// The summary: per seed its termination and final checkpoint, and the mean over seeds of the
 /// final checkpoint's metrics.
-fn summary(config: &LoadedConfig, bench: &TaskLearner, runs: &[&SeedRun]) -> Value {
+fn summary<T: RunTask + ?Sized>(config: &LoadedConfig, task: &T, runs: &[&SeedRun]) -> Value {
     let f = &config.file;
     let mean = |get: &dyn Fn(&records::Checkpoint) -> Option<f64>| -> Option<f64> {
         let v: Vec<f64> = runs
@@ -126,12 +147,12 @@ fn summary(config: &LoadedConfig, bench: &TaskLearner, runs: &[&SeedRun]) -> Val
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
     json!({
-        "task": f.task.name.name(),
-        "policy": bench.policy_name(),
+        "task": task.task_name(),
+        "policy": task.policy_name(),
         "algorithm": runs.first().map(|r| r.algorithm.clone()),
         "budget_calls": f.run.budget_calls,
         "norm_bound": f.run.norm_bound,
-        "dim": bench.dim(),
+        "dim": task.dim(),
         "seeds": f.run.seeds,
         "final_mean": {
             "score": mean(&|c| c.score),
