@@ -1,7 +1,10 @@
 //! Evaluating a learned θ: the Monte-Carlo objective `F̂(θ) = (1/n) Σ_j L(θ, τ_j)` over `n`
 //! seeded roll-outs of the learner, `L` the problem's trajectory loss (for a task problem: the
 //! summed imitation loss of one stream or episode, the absorbing tail included), with its
-//! standard error.
+//! standard error; and deterministic evaluation episodes ([`episodes`]), the success rates and
+//! rewards chapter 4 reports.
+
+pub mod episodes;
 
 use crate::problem::{Behaviour, Cost, IlProblem, KitRng, OracleError};
 use nalgebra::DVector;

@@ -10,14 +10,12 @@
 
 use super::task::ObstacleLearner;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
-use ilopt::env::obstacle::{ObstacleEnv, Outcome};
+use ilopt::evaluate::episodes::{obstacle_episodes, task_episodes};
 use ilopt::policy::{Greedy, PolicyExt};
-use ilopt::problem::KitRng;
 use ilopt::seeding::splitmix64;
+use ilopt::task::TaskProblem;
 use ilopt::task::cartpole::CartPoleTask;
-use ilopt::task::{Task, TaskProblem};
 use ilopt::toy::ToyProblem;
-use rand::SeedableRng;
 use serde::Serialize;
 
 /// What one evaluation gives.
@@ -58,7 +56,7 @@ pub fn evaluate_toy(problem: &ToyProblem<f64>, theta: &[f64]) -> Result<Evaluati
 }
 
 /// CartPole episodes with the learner's deterministic action ([`Greedy`]); an episode that
-/// completes 500 steps is a success.
+/// completes 500 steps is a success ([`task_episodes`]).
 ///
 /// # Errors
 /// A message if an episode, the expert or the policy fails.
@@ -71,42 +69,38 @@ pub fn evaluate_cartpole<P>(
 where
     P: Greedy<f64, Action = usize, Label = usize>,
 {
-    let (task, policy) = (&problem.task, &problem.policy);
-    let (mut reward, mut loss, mut decisions, mut successes) = (0.0, 0.0, 0u64, 0u32);
-    for j in 0..episodes {
-        let mut rng = KitRng::seed_from_u64(episode_seed(seed, u64::from(j)));
-        let mut ep = task.start(&mut rng).map_err(|e| e.to_string())?;
-        loop {
-            let phi = task.features(&ep);
-            let (label, _) = task.expert(&ep).map_err(|e| e.to_string())?;
+    let policy = &problem.policy;
+    let s = task_episodes(
+        &problem.task,
+        &mut |_, phi, label| {
             let (l, _) =
-                PolicyExt::<f64>::loss(policy, theta, &phi, &label).map_err(|e| e.to_string())?;
-            let a = policy.greedy(theta, &phi).map_err(|e| e.to_string())?;
-            loss += l;
-            decisions += 1;
-            if task.advance(&mut ep, &a).map_err(|e| e.to_string())? {
-                break;
+                PolicyExt::<f64>::loss(policy, theta, phi, label).map_err(|e| e.to_string())?;
+            Ok((policy.greedy(theta, phi).map_err(|e| e.to_string())?, l))
+        },
+        episodes,
+        &|j| episode_seed(seed, j),
+        None,
+        &mut |_, steps, s| {
+            s.reward += steps as f64;
+            if steps >= MAX_EPISODE_STEPS {
+                s.successes += 1;
+            } else {
+                s.crashes += 1;
             }
-        }
-        reward += ep.steps as f64;
-        if ep.steps >= MAX_EPISODE_STEPS {
-            successes += 1;
-        }
-    }
-    let reward = reward / f64::from(episodes);
+        },
+    )?;
     Ok(Evaluation {
-        score: Some(reward / MAX_EPISODE_STEPS as f64),
-        reward: Some(reward),
-        successes: Some(successes),
-        crashes: Some(episodes - successes),
+        score: Some(s.reward / MAX_EPISODE_STEPS as f64),
+        reward: Some(s.reward),
+        successes: Some(s.successes),
+        crashes: Some(s.crashes),
         timeouts: None,
-        loss: Some(loss / decisions.max(1) as f64),
+        loss: Some(s.loss),
         objective: None,
     })
 }
 
-/// Obstacle episodes with the executed mean velocity; a non-finite velocity is replaced by zero
-/// (the episode then times out) and counted in the loss as it is.
+/// Obstacle episodes with the executed mean velocity ([`obstacle_episodes`]).
 ///
 /// # Errors
 /// A message if an episode, the expert or the policy fails.
@@ -121,53 +115,27 @@ pub fn evaluate_obstacle(
         env,
         expert,
     } = learner;
-    let (mut successes, mut crashes, mut timeouts) = (0u32, 0u32, 0u32);
-    let (mut reward, mut loss, mut decisions) = (0.0, 0.0, 0u64);
-    for j in 0..episodes {
-        let mut rng = KitRng::seed_from_u64(episode_seed(seed, u64::from(j)));
-        let mut e = ObstacleEnv::new(env.clone()).map_err(|e| e.to_string())?;
-        let mut obs = e.reset(&mut rng);
-        loop {
-            let phi = problem.task.observation_features(&obs);
+    let s = obstacle_episodes(
+        env,
+        &|obs| problem.task.observation_features(obs),
+        expert,
+        &mut |_, phi| {
             let m = problem
                 .policy
-                .executed_mean(theta, &phi)
+                .executed_mean(theta, phi)
                 .map_err(|e| e.to_string())?;
-            let star = expert.act(&obs).map_err(|e| e.to_string())?;
-            loss += (m[0] - star[0]).powi(2) + (m[1] - star[1]).powi(2);
-            decisions += 1;
-            let a = if m.iter().all(|v| v.is_finite()) {
-                [m[0], m[1]]
-            } else {
-                [0.0, 0.0]
-            };
-            let s = e.step(a).map_err(|e| e.to_string())?;
-            reward += s.reward;
-            obs = s.observation;
-            match s.outcome {
-                Outcome::Running => {}
-                Outcome::Success => {
-                    successes += 1;
-                    break;
-                }
-                Outcome::Crash => {
-                    crashes += 1;
-                    break;
-                }
-                Outcome::TimeOut => {
-                    timeouts += 1;
-                    break;
-                }
-            }
-        }
-    }
+            Ok([m[0], m[1]])
+        },
+        episodes,
+        &|j| episode_seed(seed, j),
+    )?;
     Ok(Evaluation {
-        score: Some(f64::from(successes) / f64::from(episodes)),
-        reward: Some(reward / f64::from(episodes)),
-        successes: Some(successes),
-        crashes: Some(crashes),
-        timeouts: Some(timeouts),
-        loss: Some(loss / decisions.max(1) as f64),
+        score: Some(f64::from(s.successes) / f64::from(episodes)),
+        reward: Some(s.reward),
+        successes: Some(s.successes),
+        crashes: Some(s.crashes),
+        timeouts: Some(s.timeouts),
+        loss: Some(s.loss),
         objective: None,
     })
 }

@@ -16,10 +16,10 @@ use super::evaluation::{Evaluation, episode_seed};
 use super::runnable::RunTask;
 use ilopt::baseline::PerDecisionTerms;
 use ilopt::env::Env;
+use ilopt::evaluate::episodes::task_episodes;
 use ilopt::policy::{Greedy, PolicyExt};
-use ilopt::problem::{IlProblem, KitRng};
+use ilopt::problem::IlProblem;
 use ilopt::task::{EnvEpisode, EnvTask, Horizon, Task, TaskProblem};
-use rand::SeedableRng;
 use std::borrow::Borrow;
 
 /// A plug-in task (module docs): the IL problem over a program's own environment, with the names
@@ -157,30 +157,23 @@ where
     }
 
     fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
-        let (task, policy) = (&self.problem.task, &self.problem.policy);
-        let (mut total, mut loss, mut decisions) = (0.0, 0.0, 0u64);
-        for j in 0..episodes {
-            let mut rng = KitRng::seed_from_u64(episode_seed(seed, u64::from(j)));
-            let mut ep = task.start(&mut rng).map_err(|e| e.to_string())?;
-            while ep.steps() < self.eval_steps {
-                let phi = task.features(&ep);
-                let (label, _) = task.expert(&ep).map_err(|e| e.to_string())?;
-                let (l, _) = PolicyExt::<f64>::loss(policy, theta, &phi, label.borrow())
+        let policy = &self.problem.policy;
+        let s = task_episodes(
+            &self.problem.task,
+            &mut |_, phi, label| {
+                let (l, _) = PolicyExt::<f64>::loss(policy, theta, phi, label.borrow())
                     .map_err(|e| e.to_string())?;
-                let a = policy.greedy(theta, &phi).map_err(|e| e.to_string())?;
-                loss += l;
-                decisions += 1;
-                if task.advance(&mut ep, &a).map_err(|e| e.to_string())? {
-                    break;
-                }
-            }
-            total += *ep.total_reward();
-        }
-        let mean = total / f64::from(episodes.max(1));
+                Ok((policy.greedy(theta, phi).map_err(|e| e.to_string())?, l))
+            },
+            episodes,
+            &|j| episode_seed(seed, j),
+            Some(self.eval_steps),
+            &mut |ep, _, s| s.reward += *ep.total_reward(),
+        )?;
         Ok(Evaluation {
-            score: Some(mean),
-            reward: Some(mean),
-            loss: Some(loss / decisions.max(1) as f64),
+            score: Some(s.reward),
+            reward: Some(s.reward),
+            loss: Some(s.loss),
             ..Evaluation::default()
         })
     }

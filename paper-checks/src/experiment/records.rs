@@ -1,8 +1,8 @@
 //! What a run records: its checkpoints ([`Checkpoint`]), its result ([`SeedRun`]) and its
 //! timings ([`SeedTiming`]).
 
-use super::task_learner::Eval;
 use super::{RunStatus, TaskKind, cartpole_max_steps};
+use ilopt::evaluate::episodes::EpisodeStats;
 use ilopt::problem::Cost;
 use serde::{Deserialize, Serialize};
 
@@ -49,7 +49,7 @@ pub struct Checkpoint {
 impl Checkpoint {
     /// A checkpoint from an evaluation and the run's cost so far.
     pub(super) fn from_eval(
-        ev: &Eval,
+        ev: &EpisodeStats,
         kind: TaskKind,
         episodes: u32,
         iteration: u64,

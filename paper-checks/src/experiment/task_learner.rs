@@ -6,11 +6,14 @@ use crate::config::{CartPoleExpertChoice, TaskSection};
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
-use ilopt::env::obstacle::{ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome};
+use ilopt::env::obstacle::ObstacleConfig;
+use ilopt::evaluate::episodes::{
+    EpisodeStats, ObstacleAct, TaskAct, obstacle_episodes, task_episodes,
+};
 use ilopt::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
-use ilopt::policy::{LinearGaussian, PolicyExt, Softmax, SpeedLimitedGaussian};
+use ilopt::policy::{Greedy, LinearGaussian, PolicyExt, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
-use ilopt::task::cartpole::{self, CartPoleEpisode, CartPoleExpert, CartPoleTask};
+use ilopt::task::cartpole::{self, CartPoleExpert, CartPoleTask};
 use ilopt::task::obstacle::{ObstacleFeatures, ObstacleTask};
 use ilopt::task::{Horizon, Task, TaskProblem};
 use nalgebra::DVector;
@@ -78,23 +81,8 @@ impl ReferencePolicy {
     }
 }
 
-/// An obstacle-task policy for evaluation: (observation, φ(s)) ↦ velocity.
-type ObstacleAct<'a> = dyn FnMut(&ObstacleObs, &[f64]) -> Result<[f64; 2], Error> + 'a;
-
 /// A CartPole policy for evaluation: (episode, φ(s), expert's action) ↦ (action, its loss).
-type CartPoleAct<'a> =
-    dyn FnMut(&CartPoleEpisode<f64>, &[f64], usize) -> Result<(usize, f64), Error> + 'a;
-
-/// What one evaluation gives.
-#[derive(Default)]
-pub(super) struct Eval {
-    pub(super) successes: u32,
-    pub(super) crashes: u32,
-    pub(super) timeouts: u32,
-    pub(super) reward: f64,
-    pub(super) loss: f64,
-    pub(super) loss_xy: Option<(f64, f64)>,
-}
+type CartPoleAct<'a> = TaskAct<'a, CartPoleTask<f64>>;
 
 impl TaskLearner {
     /// Build the task's bench.
@@ -189,8 +177,7 @@ impl TaskLearner {
             let mut ep = task.start(&mut rng).map_err(|x| err(&x))?;
             loop {
                 let phi = task.features(&ep);
-                let z = problem.policy.logits(theta, &phi).map_err(|x| err(&x))?;
-                let a = usize::from(z[1] > z[0]);
+                let a = problem.policy.greedy(theta, &phi).map_err(|x| err(&x))?;
                 if task.advance(&mut ep, &a).map_err(|x| err(&x))? {
                     break;
                 }
@@ -211,8 +198,13 @@ impl TaskLearner {
     }
 
     /// Evaluate the learner at θ (deterministic: the Gaussian mean, the most probable action).
-    pub(super) fn evaluate(&self, theta: &[f64], episodes: u32, key: &str) -> Result<Eval, Error> {
-        let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
+    pub(super) fn evaluate(
+        &self,
+        theta: &[f64],
+        episodes: u32,
+        key: &str,
+    ) -> Result<EpisodeStats, Error> {
+        let err = |x: &dyn std::fmt::Display| x.to_string();
         match self {
             TaskLearner::Obstacle { problem, .. } => self.evaluate_obstacle(
                 &mut |_, phi| {
@@ -227,10 +219,10 @@ impl TaskLearner {
             ),
             TaskLearner::Cartpole { problem, .. } => self.evaluate_cartpole(
                 &mut |_, phi, label| {
-                    let (l, _) = PolicyExt::<f64>::loss(&problem.policy, theta, phi, &label)
+                    let (l, _) = PolicyExt::<f64>::loss(&problem.policy, theta, phi, label)
                         .map_err(|x| err(&x))?;
-                    let z = problem.policy.logits(theta, phi).map_err(|x| err(&x))?;
-                    Ok((usize::from(z[1] > z[0]), l))
+                    let a = problem.policy.greedy(theta, phi).map_err(|x| err(&x))?;
+                    Ok((a, l))
                 },
                 episodes,
                 key,
@@ -244,8 +236,8 @@ impl TaskLearner {
         b: ReferencePolicy,
         episodes: u32,
         key: &str,
-    ) -> Result<Eval, Error> {
-        let err = |x: &dyn std::fmt::Display| Error::experiment(format!("baseline ({key})"), x);
+    ) -> Result<EpisodeStats, Error> {
+        let err = |x: &dyn std::fmt::Display| x.to_string();
         match (self, b) {
             (TaskLearner::Obstacle { expert, .. }, ReferencePolicy::Expert) => self
                 .evaluate_obstacle(
@@ -272,22 +264,21 @@ impl TaskLearner {
                     key,
                 ),
             (TaskLearner::Cartpole { .. }, ReferencePolicy::Expert) => {
-                self.evaluate_cartpole(&mut |_, _, label| Ok((label, 0.0)), episodes, key)
+                self.evaluate_cartpole(&mut |_, _, label| Ok((*label, 0.0)), episodes, key)
             }
-            (TaskLearner::Cartpole { .. }, ReferencePolicy::StraightToGoal) => {
-                Err(err(&"CartPole has no goal"))
-            }
+            (TaskLearner::Cartpole { .. }, ReferencePolicy::StraightToGoal) => Err(
+                Error::experiment(format!("baseline ({key})"), "CartPole has no goal"),
+            ),
         }
     }
 
-    /// Obstacle episodes driven by `act(observation, φ(s))`; non-finite velocities are replaced
-    /// by zero (the episode then times out) and counted in the loss as they are.
+    /// Obstacle episodes driven by `act(observation, φ(s))` ([`obstacle_episodes`]).
     fn evaluate_obstacle(
         &self,
         act: &mut ObstacleAct<'_>,
         episodes: u32,
         key: &str,
-    ) -> Result<Eval, Error> {
+    ) -> Result<EpisodeStats, Error> {
         let TaskLearner::Obstacle {
             env,
             expert,
@@ -296,91 +287,45 @@ impl TaskLearner {
         else {
             return Err(Error::experiment(key, "not the obstacle task"));
         };
-        let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
-        let mut ev = Eval::default();
-        let mut decisions = 0u64;
-        let (mut lx, mut ly) = (0.0, 0.0);
-        for j in 0..episodes {
-            let mut rng = KitRng::seed_from_u64(derive_seed(key, u64::from(j)));
-            let mut e = ObstacleEnv::new(env.clone()).map_err(|x| err(&x))?;
-            let mut obs = e.reset(&mut rng);
-            loop {
-                let phi = problem.task.observation_features(&obs);
-                let m = act(&obs, &phi)?;
-                let star = expert.act(&obs).map_err(|x| err(&x))?;
-                lx += (m[0] - star[0]).powi(2);
-                ly += (m[1] - star[1]).powi(2);
-                decisions += 1;
-                let a = if m.iter().all(|v| v.is_finite()) {
-                    m
-                } else {
-                    [0.0, 0.0]
-                };
-                let s = e.step(a).map_err(|x| err(&x))?;
-                ev.reward += s.reward;
-                obs = s.observation;
-                match s.outcome {
-                    Outcome::Running => {}
-                    Outcome::Success => {
-                        ev.successes += 1;
-                        break;
-                    }
-                    Outcome::Crash => {
-                        ev.crashes += 1;
-                        break;
-                    }
-                    _ => {
-                        ev.timeouts += 1;
-                        break;
-                    }
-                }
-            }
-        }
-        let n = decisions.max(1) as f64;
-        ev.loss_xy = Some((lx / n, ly / n));
-        ev.loss = (lx + ly) / n;
-        ev.reward /= f64::from(episodes);
-        Ok(ev)
+        obstacle_episodes(
+            env,
+            &|obs| problem.task.observation_features(obs),
+            expert,
+            act,
+            episodes,
+            &|j| derive_seed(key, j),
+        )
+        .map_err(|x| Error::experiment(format!("evaluation ({key})"), x))
     }
 
-    /// CartPole episodes driven by `act(episode, φ(s), expert's action) = (action, loss)`; the
-    /// loss is the learner's per-decision supervised loss (the expert's own is 0).
+    /// CartPole episodes driven by `act(episode, φ(s), expert's action) = (action, loss)`
+    /// ([`task_episodes`]); the loss is the learner's per-decision supervised loss (the expert's
+    /// own is 0).
     fn evaluate_cartpole(
         &self,
         act: &mut CartPoleAct<'_>,
         episodes: u32,
         key: &str,
-    ) -> Result<Eval, Error> {
+    ) -> Result<EpisodeStats, Error> {
         let TaskLearner::Cartpole { problem, .. } = self else {
             return Err(Error::experiment(key, "not CartPole"));
         };
-        let err = |x: &dyn std::fmt::Display| Error::experiment(format!("evaluation ({key})"), x);
-        let task = &problem.task;
-        let mut ev = Eval::default();
-        let mut decisions = 0u64;
-        for j in 0..episodes {
-            let mut rng = KitRng::seed_from_u64(derive_seed(key, u64::from(j)));
-            let mut ep = task.start(&mut rng).map_err(|x| err(&x))?;
-            loop {
-                let phi = task.features(&ep);
-                let (label, _) = task.expert(&ep).map_err(|x| err(&x))?;
-                let (a, l) = act(&ep, &phi, label)?;
-                ev.loss += l;
-                decisions += 1;
-                if task.advance(&mut ep, &a).map_err(|x| err(&x))? {
-                    break;
+        task_episodes(
+            &problem.task,
+            act,
+            episodes,
+            &|j| derive_seed(key, j),
+            None,
+            &mut |_, steps, ev| {
+                ev.reward += steps as f64;
+                if steps >= cartpole_max_steps() {
+                    ev.successes += 1;
+                } else {
+                    ev.crashes += 1;
                 }
-            }
-            ev.reward += ep.steps as f64;
-            if ep.steps >= cartpole_max_steps() {
-                ev.successes += 1;
-            } else {
-                ev.crashes += 1;
-            }
-        }
-        ev.loss /= decisions.max(1) as f64;
-        ev.reward /= f64::from(episodes);
-        Ok(ev)
+            },
+        )
+        .map_err(|x| Error::experiment(format!("evaluation ({key})"), x))
     }
 
     /// Norms of the x and y rows of the mean eq. 3.15 estimate over `n` learner roll-outs
