@@ -220,6 +220,17 @@ mod tests {
         assert!(hi - lo <= ratio(1, 1 << 39));
     }
 
+    /// Square roots (degree 2) are enclosed the same way, above and below 1.
+    #[test]
+    fn square_roots_are_enclosed() {
+        for (n, d) in [(9, 4), (2, 1), (1, 3), (50, 1)] {
+            let x = ratio(n, d);
+            let (lo, hi) = root_enclosure(&x, 2, 40);
+            assert!(lo.clone() * &lo <= x && x <= hi.clone() * &hi, "{x}");
+            assert!(hi - lo <= ratio(n.max(d), d) * ratio(1, 1 << 39), "{x}");
+        }
+    }
+
     /// E7 (math.md §3.1): the thesis route fails exactly for k = 1..23; (C1), (C2) hold throughout.
     #[test]
     fn erratum_e7_and_the_corrected_conditions() {
