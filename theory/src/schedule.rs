@@ -14,26 +14,33 @@ use num_rational::BigRational;
 use num_traits::{One, Zero};
 use serde::{Deserialize, Serialize};
 
-/// Rational bounds `lo ≤ q^{1/3} ≤ hi` for q ≥ 0, of width ≤ 2^{−bits}·max(1, q): `bits` steps
-/// of bisection of `[0, max(1, q)]`, keeping `lo³ ≤ q ≤ hi³`.
+/// Rational bounds `lo ≤ q^{1/3} ≤ hi` for q ≥ 0, of width ≤ 2^{−bits}·max(1, q)
+/// ([`root_enclosure`] of degree 3).
+pub fn cbrt_enclosure(q: &BigRational, bits: u32) -> (BigRational, BigRational) {
+    root_enclosure(q, 3, bits)
+}
+
+/// Rational bounds `lo ≤ q^{1/n} ≤ hi` for q ≥ 0 and a degree n ≥ 1, of width
+/// ≤ 2^{−bits}·max(1, q): `bits` steps of bisection of `[0, max(1, q)]`, keeping
+/// `loⁿ ≤ q ≤ hiⁿ`.
 ///
 /// Every midpoint is `H·j/2^b` with `H = max(1, q) = n_H/d_H` and an integer j, so with
-/// `q = n/d` the test `mid³ ≤ q` is the integer comparison `n_H³ j³ d ≤ n d_H³ 2^{3b}`: the same
+/// `q = n/d` the test `midⁿ ≤ q` is the integer comparison `n_Hⁿ jⁿ d ≤ n d_Hⁿ 2^{nb}`: the same
 /// bisection as in rationals, without a gcd per step.
-pub fn cbrt_enclosure(q: &BigRational, bits: u32) -> (BigRational, BigRational) {
+pub fn root_enclosure(q: &BigRational, degree: u32, bits: u32) -> (BigRational, BigRational) {
     let h = q.clone().max(BigRational::one());
     let (n, d) = (q.numer(), q.denom());
     let (nh, dh) = (h.numer(), h.denom());
-    // mid³ ≤ q ⟺ j³ · (n_H³ d) ≤ (n d_H³) · 2^{3b} at depth b.
-    let left = nh * nh * nh * d;
-    let right = n * dh * dh * dh;
+    // midⁿ ≤ q ⟺ jⁿ · (n_Hⁿ d) ≤ (n d_Hⁿ) · 2^{nb} at depth b.
+    let left = nh.pow(degree) * d;
+    let right = n * dh.pow(degree);
     let (mut lo, mut hi) = (BigInt::zero(), BigInt::one());
     for b in 1..=bits {
         // The interval [lo, hi]/2^{b−1} halved: [2lo, 2hi]/2^b, midpoint lo + hi.
         let mid = lo.clone() + &hi;
         lo <<= 1;
         hi <<= 1;
-        if mid.pow(3) * &left <= right.clone() << (3 * b as usize) {
+        if mid.pow(degree) * &left <= right.clone() << ((degree * b) as usize) {
             lo = mid;
         } else {
             hi = mid;
@@ -211,6 +218,17 @@ mod tests {
         let (lo, hi) = cbrt_enclosure(&ratio(7, 8), 40);
         assert!(lo.clone() * &lo * &lo <= ratio(7, 8) && ratio(7, 8) <= hi.clone() * &hi * &hi);
         assert!(hi - lo <= ratio(1, 1 << 39));
+    }
+
+    /// Square roots (degree 2) are enclosed the same way, above and below 1.
+    #[test]
+    fn square_roots_are_enclosed() {
+        for (n, d) in [(9, 4), (2, 1), (1, 3), (50, 1)] {
+            let x = ratio(n, d);
+            let (lo, hi) = root_enclosure(&x, 2, 40);
+            assert!(lo.clone() * &lo <= x && x <= hi.clone() * &hi, "{x}");
+            assert!(hi - lo <= ratio(n.max(d), d) * ratio(1, 1 << 39), "{x}");
+        }
     }
 
     /// E7 (math.md §3.1): the thesis route fails exactly for k = 1..23; (C1), (C2) hold throughout.

@@ -6,7 +6,8 @@ use crate::certify::recheck::coverage_for;
 use crate::checks::constants::{global_row, toy_row};
 use crate::checks::montecarlo::McSettings;
 use crate::checks::{
-    baselined_sgd, baselined_storm, errata, schedule, second_toy, statistical, thm31, unbiased,
+    baselined_sgd, baselined_storm, errata, schedule, second_toy, statistical, storm_stability,
+    thm31, unbiased,
 };
 use crate::input_rows::{Certified, with_perturbations};
 use crate::protocol::{
@@ -184,6 +185,10 @@ fn exact_rows(profile: Profile, m1: &ToyMdp) -> Result<Vec<Check>, String> {
                 }),
         );
     }
+    // Rows 10a–10c: STORM's mean linearisation (math.md §10) on M1, the second toy and M5.
+    rows.extend(timed("rows 10 (STORM stability)", || {
+        storm_stability::rows(&storm_stability::cases(m1, &second_toy::m2_two_groups()))
+    })?);
     Ok(rows)
 }
 

@@ -17,6 +17,7 @@ pub mod schedule;
 pub mod second_toy;
 pub mod statistical;
 pub mod storm;
+pub mod storm_stability;
 pub mod thm31;
 pub mod tight;
 pub mod tracking;
