@@ -67,16 +67,18 @@ const SGD: &str =
 const ADAM: &str = "algorithm = \"adam\"\nform = \"causal\"\nalpha = 0.05\nbeta1 = 0.9\nbeta2 = 0.999\nepsilon = 1e-8";
 const BC: &str = "algorithm = \"bc\"\ntrajectories_per_iteration = 1\nretrain = \"warm-start\"\ninner = { iterations = 5, rule = { rule = \"sgd\", step = { kind = \"constant\", eta = 0.1 } } }";
 
-/// An SVG element's attribute.
+/// An SVG element's attribute (`element` as [`elements`] gives it, from the space after the tag).
 fn attr<'a>(element: &'a str, name: &str) -> Option<&'a str> {
     let start = element.find(&format!(" {name}=\""))? + name.len() + 3;
     element[start..].split('"').next()
 }
 
-/// The elements `<tag …>` of an SVG.
+/// The elements `<tag …>` of an SVG: their attributes, each after a space.
 fn elements<'a>(svg: &'a str, tag: &str) -> Vec<&'a str> {
-    svg.split(&format!("<{tag} "))
+    let open = format!("<{tag}");
+    svg.split(&open)
         .skip(1)
+        .filter(|e| e.starts_with(' '))
         .filter_map(|e| e.split('>').next())
         .collect()
 }
