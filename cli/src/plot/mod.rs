@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 /// `ilopt plot`'s arguments.
 #[derive(Debug, Clone, Args)]
 pub struct PlotArgs {
-    /// `ilopt run` output directories (each with its config.toml and seed-<n>.csv files), one
+    /// `ilopt run` output directories (each with its `config.toml` and `seed-<n>.csv` files), one
     /// curve each; colours follow this order.
     #[arg(required = true, value_name = "RUN_DIR")]
     pub runs: Vec<PathBuf>,
