@@ -79,3 +79,102 @@ pub fn curve(run: &RunDir, label: &str, metric: Metric, x: XAxis, range: (f64, f
         clamped_ends,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::plot::run_dir::SeedRecord;
+    use crate::run::config::TaskName;
+    use ilopt_plot::band::t975;
+
+    /// A checkpoint at `at` calls (iteration at / 10) with objective `y`.
+    fn row(at: u64, y: f64) -> Row {
+        let mut values = [None; 6];
+        values[5] = Some(y);
+        Row {
+            at_calls: at,
+            calls: at as f64 + 1.0,
+            iteration: at as f64 / 10.0,
+            values,
+        }
+    }
+
+    fn seed(seed: u64, ys: &[f64], diverged: bool) -> SeedRecord {
+        SeedRecord {
+            seed,
+            rows: ys
+                .iter()
+                .enumerate()
+                .map(|(k, y)| row(100 * k as u64, *y))
+                .collect(),
+            diverged,
+        }
+    }
+
+    fn run(seeds: Vec<SeedRecord>) -> RunDir {
+        RunDir {
+            path: "r".into(),
+            task: TaskName::Toy,
+            dataset_learner: false,
+            seeds,
+        }
+    }
+
+    #[test]
+    fn the_band_is_the_student_t_interval_of_the_seeds() {
+        let r = run(vec![
+            seed(1, &[1.0, 0.1], false),
+            seed(2, &[2.0, 0.2], false),
+            seed(3, &[3.0, 0.9], false),
+        ]);
+        let c = curve(
+            &r,
+            "a",
+            Metric::Objective,
+            XAxis::Calls,
+            (0.0, f64::INFINITY),
+        );
+        let s = &c.series;
+        assert_eq!(s.x, vec![1.0, 101.0], "x: the mean gradient calls");
+        assert_eq!(s.mean[0], 2.0);
+        // s = 1 over n = 3: half-width t(0.975, 2)/√3 = 2.48 > 2, so the lower end is below 0.
+        let hw = t975(2) / 3f64.sqrt();
+        assert!((s.lo[0] - (2.0 - hw)).abs() < 1e-12 && (s.hi[0] - (2.0 + hw)).abs() < 1e-12);
+        assert_eq!(
+            c.clamped_ends, 2,
+            "both checkpoints' lower ends are below 0"
+        );
+        assert!(s.shaded && s.diverged == 0 && s.runs == 3);
+        let by_iteration = curve(&r, "a", Metric::Objective, XAxis::Iterations, (0.0, 1.0));
+        assert_eq!(by_iteration.series.x, vec![0.0, 10.0]);
+        // At the second checkpoint mean 0.4 and half-width 1.08: both ends leave [0, 1] too.
+        assert_eq!(by_iteration.clamped_ends, 4, "and both upper ends above 1");
+    }
+
+    #[test]
+    fn a_diverged_seed_is_crossed_and_later_means_are_over_the_others() {
+        let r = run(vec![
+            seed(1, &[1.0, 0.5, 0.25], false),
+            seed(2, &[1.0, 7.0], true),
+        ]);
+        let c = curve(
+            &r,
+            "a",
+            Metric::Objective,
+            XAxis::Calls,
+            (0.0, f64::INFINITY),
+        );
+        let s = &c.series;
+        assert_eq!((s.diverged, s.runs), (1, 2));
+        assert_eq!(s.diverged_at, vec![(101.0, 7.0)]);
+        assert_eq!(s.mean, vec![1.0, 3.75, 0.25]);
+        // The last checkpoint has one seed: no interval there.
+        assert_eq!((s.lo[2], s.hi[2]), (0.25, 0.25));
+        let one = run(vec![seed(4, &[1.0, 0.5], false)]);
+        assert!(
+            !curve(&one, "b", Metric::Objective, XAxis::Calls, (0.0, 1.0))
+                .series
+                .shaded
+        );
+    }
+}

@@ -18,6 +18,7 @@ pub mod run_dir;
 pub use error::PlotError;
 pub use metric::{Layout, Metric, XAxis};
 
+use crate::run::config::TaskName;
 use clap::Args;
 use ilopt_plot::{Figure, Scale, by_position};
 use run_dir::RunDir;
@@ -132,21 +133,16 @@ fn range_text((lo, hi): (f64, f64)) -> String {
     format!("{open}{}, {}{close}", end(lo), end(hi))
 }
 
-/// Draw the runs as `args` says and write the figure; returns what was drawn (JSON).
+/// The task of every run in `runs`, drawn against `x`.
 ///
 /// # Errors
-/// [`PlotError`]: a bad extension, a run directory that cannot be read, runs of different tasks,
-/// iterations of oracle methods and dataset learners on one axis, a metric a run does not record,
-/// labels that do not match the directories, or a figure that cannot be drawn or written.
-pub fn run(args: &PlotArgs) -> Result<Value, PlotError> {
-    let format = format_of(&args.out)?;
-    let labels = labels(args)?;
-    let runs: Vec<RunDir> = args
-        .runs
-        .iter()
-        .map(|d| RunDir::read(d))
-        .collect::<Result<_, _>>()?;
-    let task = runs[0].task;
+/// [`PlotError::Input`] for runs of different tasks, or `--x iterations` over both a dataset
+/// learner and an oracle method.
+fn common_task(runs: &[RunDir], x: XAxis) -> Result<TaskName, PlotError> {
+    let task = runs
+        .first()
+        .map(|r| r.task)
+        .ok_or_else(|| PlotError::Input("no run directory given".into()))?;
     if let Some(r) = runs.iter().find(|r| r.task != task) {
         return Err(PlotError::Input(format!(
             "mixed tasks: {} is a {} run but {} is a {} run; their metrics do not share an axis",
@@ -156,7 +152,7 @@ pub fn run(args: &PlotArgs) -> Result<Value, PlotError> {
             r.task.name()
         )));
     }
-    if args.x == XAxis::Iterations
+    if x == XAxis::Iterations
         && let Some(d) = runs.iter().find(|r| r.dataset_learner)
         && let Some(o) = runs.iter().find(|r| !r.dataset_learner)
     {
@@ -167,8 +163,15 @@ pub fn run(args: &PlotArgs) -> Result<Value, PlotError> {
             o.path.display()
         )));
     }
-    let metric = args.metric.unwrap_or(Metric::default_for(task));
-    for r in &runs {
+    Ok(task)
+}
+
+/// Every run records `metric`.
+///
+/// # Errors
+/// [`PlotError::Input`] naming the first run without a value of it and listing what it records.
+fn check_recorded(runs: &[RunDir], metric: Metric, task: TaskName) -> Result<(), PlotError> {
+    for r in runs {
         let recorded = r.recorded();
         if !recorded.contains(&metric) {
             let names: Vec<&str> = recorded.iter().map(|m| m.column()).collect();
@@ -185,12 +188,12 @@ pub fn run(args: &PlotArgs) -> Result<Value, PlotError> {
             )));
         }
     }
-    let range = metric.range(task);
-    let curves: Vec<curve::Curve> = runs
-        .iter()
-        .zip(&labels)
-        .map(|(r, l)| curve::curve(r, l, metric, args.x, range))
-        .collect();
+    Ok(())
+}
+
+/// The notes under the figure: how the lines and bands are computed, the clamping to the
+/// metric's range (with the count of clamped band ends), the runs of one seed.
+fn notes(curves: &[curve::Curve], metric: Metric, range: (f64, f64)) -> Vec<String> {
     let mut notes = vec![
         "lines: the mean over seeds at each checkpoint; bands: its 95% Student-t interval, mean ± t(0.975, n − 1)·s/√n over the n seeds"
             .to_string(),
@@ -212,6 +215,33 @@ pub fn run(args: &PlotArgs) -> Result<Value, PlotError> {
     if !single.is_empty() {
         notes.push(format!("one seed, no band: {}", single.join(", ")));
     }
+    notes
+}
+
+/// Draw the runs as `args` says and write the figure; returns what was drawn (JSON).
+///
+/// # Errors
+/// [`PlotError`]: a bad extension, a run directory that cannot be read, runs of different tasks,
+/// iterations of oracle methods and dataset learners on one axis, a metric a run does not record,
+/// labels that do not match the directories, or a figure that cannot be drawn or written.
+pub fn run(args: &PlotArgs) -> Result<Value, PlotError> {
+    let format = format_of(&args.out)?;
+    let labels = labels(args)?;
+    let runs: Vec<RunDir> = args
+        .runs
+        .iter()
+        .map(|d| RunDir::read(d))
+        .collect::<Result<_, _>>()?;
+    let task = common_task(&runs, args.x)?;
+    let metric = args.metric.unwrap_or(Metric::default_for(task));
+    check_recorded(&runs, metric, task)?;
+    let range = metric.range(task);
+    let curves: Vec<curve::Curve> = runs
+        .iter()
+        .zip(&labels)
+        .map(|(r, l)| curve::curve(r, l, metric, args.x, range))
+        .collect();
+    let notes = notes(&curves, metric, range);
     let title = args.title.clone().unwrap_or_else(|| {
         format!(
             "{} task: {} (mean over seeds, 95% band)",
