@@ -3,7 +3,7 @@
 //! go to stdout as JSON. See `ilopt --help` and the README.
 
 use clap::{Parser, Subcommand};
-use ilopt_cli::{eval, expert, replay, run, toy};
+use ilopt_cli::{eval, expert, plot, replay, run, toy};
 use std::process::ExitCode;
 
 /// ilopt: imitation learning as stochastic optimisation, checked.
@@ -35,6 +35,8 @@ enum Command {
     Run(run::RunArgs),
     /// Evaluate a saved policy parameter (`theta-seed-<n>.json`) on a config's task.
     Eval(eval::EvalArgs),
+    /// Draw `ilopt run` output directories: mean and 95% band over seeds, to SVG or PNG.
+    Plot(plot::PlotArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -85,6 +87,7 @@ fn main() -> ExitCode {
         }
         Command::Run(args) => run::run(&args).map_err(|e| e.to_string()),
         Command::Eval(args) => eval::run(&args).map_err(|e| e.to_string()),
+        Command::Plot(args) => plot::run(&args).map_err(|e| e.to_string()),
     };
     match result {
         Ok(out) => {

@@ -18,7 +18,6 @@ pub mod gradient_error;
 pub mod grid;
 pub mod naming;
 pub mod pipeline;
-pub mod plots;
 pub mod progress;
 pub mod protocol;
 pub mod provenance;

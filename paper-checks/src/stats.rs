@@ -1,65 +1,13 @@
-//! Means with 95% confidence intervals over seeds — the Student-t interval ([`Summary`]), and
-//! the range-respecting [`Interval`] the appendix prints (a seeded percentile bootstrap for
-//! quantities bounded on both sides, a Student-t interval clamped to 0 for non-negative ones) —
-//! and the seed derivation.
+//! Means with 95% confidence intervals over seeds — the Student-t interval ([`Summary`], from
+//! `ilopt-plot`, which shades the same bands) and the range-respecting [`Interval`] the appendix
+//! prints (a seeded percentile bootstrap for quantities bounded on both sides, a Student-t
+//! interval clamped to 0 for non-negative ones) — and the seed derivation.
 
 use ilopt::seeding::splitmix64;
 use serde::Serialize;
 
-/// The 0.975 quantile of Student's t with `df` degrees of freedom (NaN for `df = 0`), from
-/// statrs' inverse CDF.
-pub fn t975(df: usize) -> f64 {
-    use statrs::distribution::{ContinuousCDF, StudentsT};
-    if df == 0 {
-        return f64::NAN;
-    }
-    StudentsT::new(0.0, 1.0, df as f64).map_or(f64::NAN, |t| t.inverse_cdf(0.975))
-}
-
-/// A sample summary: n, mean and the 95% Student-t interval `mean ± t_{0.975,n−1}·s/√n`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Summary {
-    /// Sample size.
-    pub n: usize,
-    /// Mean (NaN for n = 0).
-    pub mean: f64,
-    /// Half-width of the 95% t interval (NaN for n < 2).
-    pub half_width: f64,
-}
-
-impl Summary {
-    /// Summarise a sample.
-    pub fn of(xs: &[f64]) -> Self {
-        let n = xs.len();
-        if n == 0 {
-            return Summary {
-                n,
-                mean: f64::NAN,
-                half_width: f64::NAN,
-            };
-        }
-        let mean = xs.iter().sum::<f64>() / n as f64;
-        let half_width = if n < 2 {
-            f64::NAN
-        } else {
-            let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-            t975(n - 1) * (var / n as f64).sqrt()
-        };
-        Summary {
-            n,
-            mean,
-            half_width,
-        }
-    }
-    /// Lower end of the interval.
-    pub fn lo(&self) -> f64 {
-        self.mean - self.half_width
-    }
-    /// Upper end of the interval.
-    pub fn hi(&self) -> f64 {
-        self.mean + self.half_width
-    }
-}
+pub use ilopt::seeding::fnv1a;
+pub use ilopt_plot::band::{Summary, t975};
 
 /// The range a quantity can take, which decides its interval ([`Interval::of`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -213,16 +161,6 @@ pub fn bootstrap_mean(xs: &[f64], resamples: usize, seed: u64) -> Interval {
     }
 }
 
-/// FNV-1a (64 bit) of a string: the stable hash behind every derived seed.
-pub fn fnv1a(s: &str) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in s.as_bytes() {
-        h ^= u64::from(*b);
-        h = h.wrapping_mul(0x0100_0000_01b3);
-    }
-    h
-}
-
 /// A seed derived only from a key (the configuration's identity) and an index.
 pub fn derive_seed(key: &str, index: u64) -> u64 {
     splitmix64(fnv1a(key) ^ splitmix64(index))
@@ -231,32 +169,6 @@ pub fn derive_seed(key: &str, index: u64) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    #[test]
-    fn t_interval_of_a_known_sample() {
-        // df = 2 has the closed form t_p = (2p − 1)·√(2 / (4p(1 − p))); s = 1, n = 3.
-        let p = 0.975f64;
-        let t2 = (2.0 * p - 1.0) * (2.0 / (4.0 * p * (1.0 - p))).sqrt();
-        let s = Summary::of(&[1.0, 2.0, 3.0]);
-        assert_eq!(s.mean, 2.0);
-        assert!(
-            (s.half_width - t2 / 3f64.sqrt()).abs() < 1e-9,
-            "{}",
-            s.half_width
-        );
-    }
-
-    #[test]
-    fn t_quantiles_against_closed_forms_and_the_printed_table() {
-        // df = 1 is Cauchy: t_p = tan(π(p − 1/2)).
-        let t1 = (std::f64::consts::PI * 0.475).tan();
-        assert!((t975(1) - t1).abs() < 1e-9 * t1, "{}", t975(1));
-        // Printed tables (3 decimals): df 10, 30, 120.
-        for (df, printed) in [(10, 2.228), (30, 2.042), (120, 1.980)] {
-            assert!((t975(df) - printed).abs() < 5e-4, "df {df}: {}", t975(df));
-        }
-        assert!(t975(0).is_nan());
-    }
-
     /// n = 2: the resample mean is a, (a+b)/2 or b with probabilities ¼, ½, ¼, so the 2.5% and
     /// 97.5% percentiles are exactly a and b.
     #[test]

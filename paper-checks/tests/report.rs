@@ -1,10 +1,10 @@
 //! The appendix's rendering: the kit-vs-thesis speed-up table, the figures' clamping and tick
 //! labels, and the theorem-check section built from check records, on hand-made numbers.
 
+use ilopt_plot::{Figure, Marker, Scale, Series, Style, fmt_tick, style_for};
 use paper_checks::config::TheorySize;
 use paper_checks::experiment::{SeedTiming, TaskKind};
 use paper_checks::pipeline::TheoryCache;
-use paper_checks::plots::{Figure, Marker, Scale, Series, Style, fmt_tick, style_for};
 use paper_checks::report::blocks::{self, Block, Table};
 use paper_checks::report::speedup::{
     SpeedupRow, TimeBasis, kit_time, speedup_cells, speedup_row, speedup_total,
@@ -99,6 +99,8 @@ fn figure(range: Option<(f64, f64)>, log_y: bool) -> Figure {
         y_range: range,
         series: vec![s],
         panels: None,
+        show_title: false,
+        notes: vec![],
     }
 }
 
@@ -174,6 +176,8 @@ fn figure_of(labels: &[&str]) -> Figure {
             })
             .collect(),
         panels: None,
+        show_title: false,
+        notes: vec![],
     }
 }
 
@@ -521,6 +525,8 @@ fn capped_panels() -> Figure {
         y_range: Some((0.0, 100.0)),
         series,
         panels: Some(3),
+        show_title: false,
+        notes: vec![],
     }
 }
 
@@ -542,9 +548,11 @@ fn small_multiples_draw_one_titled_panel_per_algorithm() {
         .map_or_else(|| tmp.path().to_path_buf(), std::path::PathBuf::from);
     std::fs::create_dir_all(&dir).expect("figure dir");
     let svg_path = dir.join("small-multiples.svg");
-    capped_panels().write(&svg_path, true).expect("writes");
-    assert!(std::fs::metadata(dir.join("small-multiples.png")).is_ok_and(|m| m.len() > 0));
-    let svg = std::fs::read_to_string(&svg_path).expect("reads");
+    let svg = capped_panels().to_svg().expect("draws");
+    let png = ilopt_plot::render_png(&svg).expect("renders");
+    assert!(png.starts_with(b"\x89PNG"), "a PNG");
+    std::fs::write(&svg_path, &svg).expect("writes the SVG");
+    std::fs::write(dir.join("small-multiples.png"), &png).expect("writes the PNG");
     let texts = svg_texts(&svg);
     // One title per algorithm (titles may wrap: the words appear in order, once), the
     // reference line in the legend only, each axis described once.

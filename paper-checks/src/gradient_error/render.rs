@@ -3,8 +3,8 @@
 use super::{GradientError, GradientErrorResult, RmsePoint, RouteResult};
 
 /// Fig. 4.2's figures: (file stem, figure), (a) toy, (b) obstacle.
-pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figure)> {
-    use crate::plots::{Figure, Scale, Series};
+pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, ilopt_plot::Figure)> {
+    use ilopt_plot::{Figure, Scale, Series};
     let x = |route: &RouteResult| route.rmse.iter().map(|p| p.n as f64).collect::<Vec<_>>();
     let band = |route: &RouteResult, label: &str, corrected: bool| {
         let mut s = Series::new(label);
@@ -56,6 +56,8 @@ pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figu
             y_range: Some((0.0, f64::INFINITY)),
             series: vec![band(t, "RMSE (95% CI)", false), line(t, "σ/√N (exact σ)")],
             panels: None,
+            show_title: false,
+            notes: vec![],
         },
     )];
     let m = o.reference_trajectories.unwrap_or(0);
@@ -87,6 +89,8 @@ pub fn figures(r: &GradientErrorResult) -> Vec<(&'static str, crate::plots::Figu
             ],
             // The two estimates and σ̂/√N nearly coincide: one panel each, side by side.
             panels: Some(2),
+            show_title: false,
+            notes: vec![],
         },
     ));
     out

@@ -4,9 +4,9 @@
 use crate::config::Profile;
 use crate::error::Error;
 use crate::experiment::{Checkpoint, TaskKind};
-use crate::plots::{Figure, Scale, Series};
 use crate::results::{ConfigResult, Results};
 use crate::stats::{Interval, Range};
+use ilopt_plot::{Figure, Scale, Series, render_png};
 use std::path::Path;
 
 /// One figure: its file stem, the thesis figure it regenerates, and the figure.
@@ -173,6 +173,8 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             y_range: None,
             series: series.into_iter().chain(lines).collect(),
             panels: None,
+            show_title: false,
+            notes: vec![],
         }
         .clamped(range)
     };
@@ -288,6 +290,8 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             y_range: None,
             series: series.into_iter().chain(lines).collect(),
             panels: None,
+            show_title: false,
+            notes: vec![],
         }
         .clamped(range)
     };
@@ -347,6 +351,21 @@ fn with_divergence_key(title: &str) -> String {
     }
 }
 
+/// Write `f` as SVG to `svg_path` (and `.png` next to it if `png`), atomically.
+///
+/// # Errors
+/// [`Error::Experiment`] if drawing fails, [`Error::Io`] if writing fails.
+fn write_figure(f: &Figure, svg_path: &Path, png: bool) -> Result<(), Error> {
+    let plot_err = |e: String| Error::experiment(format!("plotting {}", svg_path.display()), e);
+    let svg = f.to_svg().map_err(plot_err)?;
+    crate::storage::write_atomic(svg_path, svg.as_bytes())?;
+    if png {
+        let png_bytes = render_png(&svg).map_err(plot_err)?;
+        crate::storage::write_atomic(&svg_path.with_extension("png"), &png_bytes)?;
+    }
+    Ok(())
+}
+
 /// Write every figure as `dir/<name>.svg` (and `.png` when `png`); returns whether the PNGs
 /// were written (a failed PNG rendering falls back to SVG only, with a warning).
 ///
@@ -355,12 +374,12 @@ fn with_divergence_key(title: &str) -> String {
 pub fn write_figures(figs: &[NamedFigure], dir: &Path, png: bool) -> Result<bool, Error> {
     let mut png_ok = png;
     for (name, _, f) in figs {
-        match f.write(&dir.join(format!("{name}.svg")), png_ok) {
+        match write_figure(f, &dir.join(format!("{name}.svg")), png_ok) {
             Ok(()) => {}
             Err(e) if png_ok => {
                 eprintln!("warning: PNG rendering failed ({e}); writing SVG only");
                 png_ok = false;
-                f.write(&dir.join(format!("{name}.svg")), false)?;
+                write_figure(f, &dir.join(format!("{name}.svg")), false)?;
             }
             Err(e) => return Err(e),
         }

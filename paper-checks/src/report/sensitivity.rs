@@ -6,9 +6,9 @@ use super::aggregate::num;
 use super::blocks::Block;
 use crate::error::Error;
 use crate::experiment::TaskKind;
-use crate::plots::render_png;
 use crate::protocol::{PointResult, TuningResult};
 use crate::results::Results;
+use ilopt_plot::render_png;
 use plotters::prelude::*;
 use std::path::Path;
 

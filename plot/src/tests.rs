@@ -56,6 +56,8 @@ fn counts_figure(x: Vec<f64>) -> Figure {
         y_range: None,
         series: vec![s],
         panels: None,
+        show_title: false,
+        notes: vec![],
     }
 }
 

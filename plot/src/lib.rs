@@ -1,15 +1,26 @@
-//! Figures: mean curves with shaded 95% confidence bands (plotters' SVG backend), optionally
-//! rendered to PNG with resvg (system fonts through fontdb).
+//! The kit's figures: mean curves with shaded 95% confidence bands (plotters' SVG backend),
+//! optionally rendered to PNG with resvg (system fonts through fontdb). The appendix's figures
+//! (paper-checks) and `ilopt plot` draw through it; [`band`] is the Student-t band over seeds.
+//!
+//! | module | what |
+//! |---|---|
+//! | [`band`] | the mean and 95% Student-t interval of a sample of seeds |
+//! | `axis` | the axes' scales, ticks and tick labels |
+//! | `style` | one fixed colour, marker and line pattern per label ([`style_for`]) |
+//! | `layout` | sizes, fonts, the legend, the notes and the grid of panels |
+//! | `draw` | drawing bands, lines, markers, crosses, frames and titles |
+//! | `png` | PNG rendering of the SVG ([`render_png`]) |
 
-use crate::error::Error;
+#![warn(missing_docs)]
+
 use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::ops::Range;
-use std::path::Path;
 
 mod axis;
+pub mod band;
 mod draw;
 mod layout;
 mod png;
@@ -52,6 +63,10 @@ pub struct Series {
     pub diverged: usize,
     /// Where each diverged run stopped, `(x, y)` of its last checkpoint: drawn as a cross.
     pub diverged_at: Vec<(f64, f64)>,
+    /// How the series is drawn; `None`: the style of its label ([`style_for`]).
+    pub style: Option<Style>,
+    /// Whether the band is shaded (`false`: a mean without an interval, e.g. over one seed).
+    pub shaded: bool,
 }
 
 impl Series {
@@ -69,6 +84,8 @@ impl Series {
             runs: 0,
             diverged: 0,
             diverged_at: vec![],
+            style: None,
+            shaded: true,
         }
     }
 
@@ -106,6 +123,12 @@ pub struct Figure {
     /// that many columns, every panel on the same axes and with the reference lines; `None`:
     /// every series on one plot.
     pub panels: Option<usize>,
+    /// Draw the title above the plot (`false`: the title is the caption of a document that
+    /// includes the figure, and the figure has none).
+    pub show_title: bool,
+    /// Notes drawn under the figure after the ones about points left out (e.g. how the bands
+    /// were computed).
+    pub notes: Vec<String>,
 }
 
 /// How an axis places values.
@@ -142,10 +165,6 @@ pub mod okabe_ito {
     pub const BLACK: RGBColor = RGBColor(0, 0, 0);
 }
 
-fn plot_err(path: &Path, e: impl std::fmt::Display) -> Error {
-    Error::experiment(format!("plotting {}", path.display()), e)
-}
-
 impl Figure {
     /// The figure with its y values clamped to the physical range `[min, max]`.
     #[must_use]
@@ -159,20 +178,6 @@ impl Figure {
     pub fn in_panels(mut self, columns: usize) -> Self {
         self.panels = Some(columns);
         self
-    }
-
-    /// Write the figure as SVG (and `.png` next to it if `png`).
-    ///
-    /// # Errors
-    /// [`Error::Experiment`] if drawing fails, [`Error::Io`] if writing fails.
-    pub fn write(&self, svg_path: &Path, png: bool) -> Result<(), Error> {
-        let svg = self.to_svg().map_err(|e| plot_err(svg_path, e))?;
-        crate::storage::write_atomic(svg_path, svg.as_bytes())?;
-        if png {
-            let png_bytes = render_png(&svg).map_err(|e| plot_err(svg_path, e))?;
-            crate::storage::write_atomic(&svg_path.with_extension("png"), &png_bytes)?;
-        }
-        Ok(())
     }
 
     /// The figure as SVG text.
@@ -195,8 +200,8 @@ impl Figure {
     }
 
     /// The drawn points of each series after clamping to [`Figure::y_range`] and the axes'
-    /// transforms (log10 on log axes, log10(1 + x) on a log(1 + x) axis), and the notes on what
-    /// was left out: per series `(x, mean, band low, band high)` in axis units (a band low of
+    /// transforms (log10 on log axes, log10(1 + x) on a log(1 + x) axis), and the notes: on what
+    /// was left out, then the figure's own ([`Figure::notes`]); per series `(x, mean, band low, band high)` in axis units (a band low of
     /// `None` runs to the bottom of a log axis).
     pub fn points(&self) -> (Vec<Vec<BandPoint>>, Vec<String>) {
         let mut all = Vec::new();
@@ -261,6 +266,7 @@ impl Figure {
                     .into(),
             );
         }
+        notes.extend(self.notes.iter().cloned());
         (all, notes)
     }
 
@@ -307,7 +313,11 @@ impl Figure {
 
     /// The styles of the series, and the indices of the series that have drawn points.
     fn styles_and_shown(&self, pts: &[Vec<BandPoint>]) -> (Vec<Style>, Vec<usize>) {
-        let styles = self.series.iter().map(|s| style_for(&s.label)).collect();
+        let styles = self
+            .series
+            .iter()
+            .map(|s| s.style.unwrap_or_else(|| style_for(&s.label)))
+            .collect();
         let shown = (0..self.series.len())
             .filter(|&i| !pts[i].is_empty())
             .collect();
@@ -328,12 +338,23 @@ impl Figure {
         let legend = LegendLayout::of(&entries);
         let note_lines = note_lines(&notes);
         let note_height = notes_height(&note_lines);
+        let heading = heading_lines(self);
+        let above = heading_height(&heading);
         {
-            let root =
-                SVGBackend::with_string(out, (WIDTH, PLOT_HEIGHT + legend.height + note_height))
-                    .into_drawing_area();
+            let root = SVGBackend::with_string(
+                out,
+                (WIDTH, above + PLOT_HEIGHT + legend.height + note_height),
+            )
+            .into_drawing_area();
             root.fill(&WHITE)?;
-            let (plot_area, rest) = root.split_vertically(PLOT_HEIGHT);
+            draw_heading(&root, &heading)?;
+            let (plot_area, rest) = root
+                .clone()
+                .shrink(
+                    (0, above),
+                    (WIDTH, PLOT_HEIGHT + legend.height + note_height),
+                )
+                .split_vertically(PLOT_HEIGHT);
             let (legend_area, note_area) = rest.split_vertically(legend.height);
             let mut chart = ChartBuilder::on(&plot_area)
                 .margin(10)
@@ -358,7 +379,7 @@ impl Figure {
                 .draw()?;
             // Bands first (light fill and thin edges), so no band covers another series' line.
             for (i, v) in pts.iter().enumerate() {
-                if !self.series[i].reference {
+                if !self.series[i].reference && self.series[i].shaded {
                     draw_band(&mut chart, v, &styles[i], y0, 0.10)?;
                 }
             }
@@ -391,6 +412,7 @@ impl Figure {
         let labels: Vec<String> = self.series.iter().map(Series::shown_label).collect();
         let (refs, algos): (Vec<usize>, Vec<usize>) =
             shown.iter().partition(|&&i| self.series[i].reference);
+        let heading = heading_lines(self);
         let grid = Grid::new(
             columns,
             &algos
@@ -398,6 +420,7 @@ impl Figure {
                 .map(|&i| labels[i].as_str())
                 .collect::<Vec<_>>(),
             text_width(&self.y_label, AXIS_FONT) as u32 + 12,
+            heading_height(&heading),
         );
         let ref_entries: Vec<(&str, Style)> = refs
             .iter()
@@ -414,6 +437,7 @@ impl Figure {
         {
             let root = SVGBackend::with_string(out, (WIDTH, height)).into_drawing_area();
             root.fill(&WHITE)?;
+            draw_heading(&root, &heading)?;
             let (sx_scale, ly) = (self.x_scale, self.log_y);
             let (sx, sy) = (x1 - x0, y1 - y0);
             let fx = |v: &f64| tick_label(*v, sx_scale, sx);
@@ -443,7 +467,9 @@ impl Figure {
                     .label_style(("sans-serif", TICK_FONT))
                     .draw()?;
                 draw_frame(&root, cell.plot)?;
-                draw_band(&mut chart, &pts[i], &styles[i], y0, 0.16)?;
+                if self.series[i].shaded {
+                    draw_band(&mut chart, &pts[i], &styles[i], y0, 0.16)?;
+                }
                 for &j in &refs {
                     draw_line(&mut chart, &root, &pts[j], &styles[j])?;
                 }

@@ -151,6 +151,19 @@ pub(super) fn draw_sample(
     draw_marker(root, (x + width / 2, y), st)
 }
 
+/// A drawn title's lines, from the top left of the canvas.
+pub(super) fn draw_heading(root: &Area<'_>, lines: &[String]) -> DrawResult {
+    let font = ("sans-serif", HEADING_FONT).into_font();
+    for (k, line) in lines.iter().enumerate() {
+        root.draw(&Text::new(
+            line.clone(),
+            (12, 6 + (HEADING_ROW * k as u32) as i32),
+            font.clone(),
+        ))?;
+    }
+    Ok(())
+}
+
 /// The note lines, top left of `area`.
 pub(super) fn draw_notes(area: &Area<'_>, lines: &[String]) -> DrawResult {
     for (k, n) in lines.iter().enumerate() {

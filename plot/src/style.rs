@@ -89,7 +89,7 @@ pub fn style_for(label: &str) -> Style {
                 Marker::Plus,
                 Marker::Cross,
             ];
-            let h = crate::stats::fnv1a(other);
+            let h = ilopt::seeding::fnv1a(other);
             s(
                 COLORS[(h % 7) as usize],
                 MARKERS[((h / 7) % 7) as usize],
@@ -97,5 +97,39 @@ pub fn style_for(label: &str) -> Style {
                 false,
             )
         }
+    }
+}
+
+/// The style of the `k`-th of several runs drawn together (counting from 0), fixed by its
+/// position alone so that a run keeps its colour when the runs after it change: the Okabe–Ito
+/// colours in a fixed order with a marker each; from the ninth on the colours repeat with the
+/// next marker and a dashed line.
+pub fn by_position(k: usize) -> Style {
+    use okabe_ito::*;
+    const COLORS: [RGBColor; 8] = [
+        BLUE,
+        VERMILLION,
+        BLUISH_GREEN,
+        ORANGE,
+        REDDISH_PURPLE,
+        SKY_BLUE,
+        DARK_YELLOW,
+        BLACK,
+    ];
+    const MARKERS: [Marker; 7] = [
+        Marker::Circle,
+        Marker::Square,
+        Marker::Triangle,
+        Marker::Diamond,
+        Marker::TriangleDown,
+        Marker::Cross,
+        Marker::Plus,
+    ];
+    let round = k / COLORS.len();
+    Style {
+        color: COLORS[k % COLORS.len()],
+        marker: MARKERS[(k + round) % MARKERS.len()],
+        filled: round.is_multiple_of(2),
+        dashed: round > 0,
     }
 }

@@ -31,6 +31,28 @@ pub(super) const PANEL_GAP: u32 = 44;
 pub(super) const PANEL_RIGHT: u32 = 22;
 pub(super) const PANEL_TOP: u32 = 6;
 pub(super) const X_DESC_HEIGHT: u32 = 30;
+/// A drawn title ([`Figure::show_title`]): its font size (plotters size) and line height, in
+/// pixels.
+pub(super) const HEADING_FONT: u32 = 22;
+pub(super) const HEADING_ROW: u32 = 26;
+
+/// The lines of a drawn title, wrapped to the canvas (none when the title is not drawn or
+/// empty).
+pub(super) fn heading_lines(fig: &Figure) -> Vec<String> {
+    if !fig.show_title || fig.title.is_empty() {
+        return vec![];
+    }
+    wrap_to_width(&fig.title, f64::from(WIDTH - 24), HEADING_FONT)
+}
+
+/// The height in pixels the title lines take (0 for none).
+pub(super) fn heading_height(lines: &[String]) -> u32 {
+    if lines.is_empty() {
+        0
+    } else {
+        HEADING_ROW * lines.len() as u32 + 8
+    }
+}
 
 /// Split `text` into lines of at most `width` characters at spaces.
 pub(super) fn wrap(text: &str, width: usize) -> Vec<String> {
@@ -171,6 +193,8 @@ pub(super) struct Cell {
 /// wrapped title, tick labels only on the left column and under the bottom panel of each column.
 pub(super) struct Grid {
     pub(super) columns: usize,
+    /// The top edge of the first row (pixels): the margin, below a drawn title.
+    pub(super) top: u32,
     pub(super) plot_width: u32,
     pub(super) plot_height: u32,
     /// Each panel's title lines.
@@ -181,8 +205,9 @@ pub(super) struct Grid {
 
 impl Grid {
     /// The grid for panels titled `labels`, `columns` to a row, its plots and titles spanning
-    /// at least `min_height` pixels from top to bottom (room for the rotated y description).
-    pub(super) fn new(columns: usize, labels: &[&str], min_height: u32) -> Self {
+    /// at least `min_height` pixels from top to bottom (room for the rotated y description),
+    /// starting `above` pixels further down than the margin (a drawn title).
+    pub(super) fn new(columns: usize, labels: &[&str], min_height: u32, above: u32) -> Self {
         let columns = columns.clamp(1, labels.len().max(1));
         let gaps = PANEL_GAP * (columns as u32 - 1);
         let plot_width =
@@ -201,13 +226,15 @@ impl Grid {
         let plot_height = (plot_width * 3 / 5)
             .clamp(110, 260)
             .max(min_height.saturating_sub(fixed).div_ceil(rows));
-        let mut row_tops = vec![PANEL_TOP];
+        let top = PANEL_TOP + above;
+        let mut row_tops = vec![top];
         for h in title_heights {
             let last = *row_tops.last().unwrap_or(&0);
             row_tops.push(last + h + plot_height + PANEL_X_TICKS);
         }
         Grid {
             columns,
+            top,
             plot_width,
             plot_height,
             titles,
@@ -217,12 +244,12 @@ impl Grid {
 
     /// The grid's height in pixels (to the bottom of the last row's tick labels).
     pub(super) fn height(&self) -> u32 {
-        *self.row_tops.last().unwrap_or(&PANEL_TOP)
+        *self.row_tops.last().unwrap_or(&self.top)
     }
 
     /// The top-left corner of the leftmost plots (pixels).
     pub(super) fn plots_origin(&self) -> (i32, i32) {
-        ((Y_DESC_WIDTH + PANEL_Y_TICKS) as i32, PANEL_TOP as i32)
+        ((Y_DESC_WIDTH + PANEL_Y_TICKS) as i32, self.top as i32)
     }
 
     /// The width and height spanned by the plots and the rows' titles (pixels).
@@ -230,7 +257,7 @@ impl Grid {
         let n = self.columns as u32;
         (
             n * self.plot_width + (n - 1) * PANEL_GAP,
-            self.height().saturating_sub(PANEL_TOP + PANEL_X_TICKS),
+            self.height().saturating_sub(self.top + PANEL_X_TICKS),
         )
     }
 
