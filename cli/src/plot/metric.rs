@@ -42,7 +42,7 @@ impl Metric {
     /// objective on a toy MDP.
     pub fn default_for(task: TaskName) -> Self {
         match task {
-            TaskName::Cartpole | TaskName::Obstacle => Metric::Score,
+            TaskName::Cartpole | TaskName::Obstacle | TaskName::Custom => Metric::Score,
             TaskName::Toy => Metric::Objective,
         }
     }
@@ -63,6 +63,7 @@ impl Metric {
     pub fn label(self, task: TaskName) -> &'static str {
         match (self, task) {
             (Metric::Score, TaskName::Cartpole) => "score (mean evaluation reward / 500)",
+            (Metric::Score, TaskName::Custom) => "score (mean evaluation episode return)",
             (Metric::Score, _) => "success rate (fraction of evaluation episodes)",
             (Metric::Reward, _) => "mean evaluation episode reward",
             (Metric::EvalLoss, _) => "evaluation loss (per decision, against the expert)",
@@ -75,9 +76,13 @@ impl Metric {
     /// The values the metric can take on `task`, `[min, max]` (either end may be infinite):
     /// the band is clamped to it. A score is a fraction; CartPole's reward counts at most 500
     /// steps; losses, the objective and norms are non-negative; the obstacle task's reward
-    /// (progress plus a crash penalty) has no bound.
+    /// (progress plus a crash penalty) and a plug-in task's score and reward (its mean episode
+    /// return) have no bound.
     pub fn range(self, task: TaskName) -> (f64, f64) {
         match (self, task) {
+            (Metric::Score | Metric::Reward, TaskName::Custom) => {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            }
             (Metric::Score, _) => (0.0, 1.0),
             (Metric::Reward, TaskName::Cartpole) => {
                 (0.0, ilopt::env::cartpole::MAX_EPISODE_STEPS as f64)
