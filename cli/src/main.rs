@@ -3,7 +3,7 @@
 //! go to stdout as JSON. See `ilopt --help` and the README.
 
 use clap::{Parser, Subcommand};
-use ilopt_cli::{eval, expert, replay, run, toy};
+use ilopt_cli::{estimate, eval, expert, replay, run, toy};
 use std::process::ExitCode;
 
 /// ilopt: imitation learning as stochastic optimisation, checked.
@@ -35,6 +35,8 @@ enum Command {
     Run(run::RunArgs),
     /// Evaluate a saved policy parameter (`theta-seed-<n>.json`) on a config's task.
     Eval(eval::EvalArgs),
+    /// One draw of the oracle's gradient estimate (eq. 3.15) at θ on a config's task.
+    Estimate(estimate::EstimateArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -85,6 +87,7 @@ fn main() -> ExitCode {
         }
         Command::Run(args) => run::run(&args).map_err(|e| e.to_string()),
         Command::Eval(args) => eval::run(&args).map_err(|e| e.to_string()),
+        Command::Estimate(args) => estimate::run(&args).map_err(|e| e.to_string()),
     };
     match result {
         Ok(out) => {

@@ -9,6 +9,7 @@
 use super::config::LoadedConfig;
 use super::error::RunError;
 use super::evaluation::evaluate;
+use super::oracle::{OnOracle, with_oracle};
 use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::task::TaskLearner;
 use ilopt::algo::{
@@ -16,7 +17,6 @@ use ilopt::algo::{
     Termination,
 };
 use ilopt::baseline::Baselined;
-use ilopt::batched::Batched;
 use ilopt::problem::{Cost, IlProblem, KitRng};
 use rand::SeedableRng;
 use std::time::Instant;
@@ -33,34 +33,27 @@ pub fn run_seed(
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(SeedRun, SeedTiming), RunError> {
+    /// [`drive`] on whichever oracle the config asks for.
+    struct Drive<'a> {
+        bench: &'a TaskLearner,
+        config: &'a LoadedConfig,
+        seed: u64,
+        progress: &'a (dyn Fn(u64) + Sync),
+    }
+    impl OnOracle for Drive<'_> {
+        type Output = (SeedRun, SeedTiming);
+        fn on<P: IlProblem<f64>>(self, oracle: &P) -> Result<Self::Output, RunError> {
+            drive(self.bench, oracle, self.config, self.seed, self.progress)
+        }
+    }
     let m = config.file.run.trajectories_per_gradient;
-    let baseline = config
-        .file
-        .run
-        .baseline
-        .as_ref()
-        .filter(|b| **b != ilopt::baseline::Baseline::None);
-    macro_rules! on {
-        ($p:expr) => {
-            if let Some(b) = baseline {
-                let b = Baselined::<_, f64>::new($p.clone(), m, b)
-                    .map_err(|e| config.invalid("run.baseline", baseline_message(e)))?;
-                drive(bench, &b, config, seed, progress)
-            } else if m > 1 {
-                let b = Batched::new($p.clone(), m)
-                    .map_err(|e| config.invalid("run.trajectories_per_gradient", e))?;
-                drive(bench, &b, config, seed, progress)
-            } else {
-                drive(bench, $p, config, seed, progress)
-            }
-        };
-    }
-    match bench {
-        TaskLearner::CartPoleSoftmax(p) => on!(p),
-        TaskLearner::CartPoleLogistic(p) => on!(p),
-        TaskLearner::Obstacle { problem, .. } => on!(problem),
-        TaskLearner::Toy(p) => on!(p),
-    }
+    let drive = Drive {
+        bench,
+        config,
+        seed,
+        progress,
+    };
+    with_oracle(bench, config, m, drive)
 }
 
 /// The runner ([`Runner`]) with a gradient budget, [`NormBound`], the progress callback and the
@@ -238,7 +231,7 @@ pub fn check_baseline(bench: &TaskLearner, config: &LoadedConfig) -> Result<(), 
 
 /// An oracle's error about its baseline without the "baseline: " its message starts with (the
 /// key `run.baseline` already says it); any other error as it is.
-fn baseline_message(e: ilopt::problem::OracleError) -> String {
+pub(super) fn baseline_message(e: ilopt::problem::OracleError) -> String {
     match e {
         ilopt::problem::OracleError::Baseline(m) => m,
         e => e.to_string(),

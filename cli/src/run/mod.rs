@@ -8,6 +8,7 @@
 //! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
 //! | [`task`] | the config's task, expert, policy and objective as an IL problem |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
+//! | [`oracle`] | the config's oracle (baseline, m trajectories) for any computation on it |
 //! | [`driver`] | one seed's run with its checkpoints |
 //! | [`parallel`] | the seeds on a thread pool, with a progress bar |
 //! | [`records`] | what is recorded: checkpoints, runs, timings, saved θ |
@@ -22,6 +23,7 @@ pub mod config;
 pub mod driver;
 pub mod error;
 pub mod evaluation;
+pub mod oracle;
 pub mod output;
 pub mod parallel;
 pub mod records;
@@ -34,7 +36,7 @@ pub use error::RunError;
 use clap::Args;
 use records::SeedRun;
 use serde_json::{Value, json};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use task::TaskLearner;
 
 /// The keys of a config file, for `ilopt run --help` (docs/run.md has the full reference).
@@ -85,33 +87,68 @@ pub struct RunArgs {
 /// [`RunError`] naming the file and key at fault, or the seed whose run failed.
 pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     let config = RunFile::load(&args.config)?;
-    let bench = TaskLearner::new(&config)?;
-    bench.theta0(&config)?;
-    driver::check_algorithm(&bench, &config)?;
-    driver::check_baseline(&bench, &config)?;
-    let out = output::OutputDir::create(&args.out)?;
-    let toml = config
-        .to_toml()
-        .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
-    out.write("config.toml", &toml)?;
-    let threads = args.threads.map_or_else(
-        || std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
-        |n| n as usize,
-    );
+    let threads = args.threads.map(|n| n as usize);
+    Ok(execute(&config, Some(&args.out), threads)?.summary)
+}
+
+/// What [`execute`] returns: the summary (`summary.json`) and every seed's run and wall times,
+/// in the config's seed order.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// The summary, as `summary.json` holds it.
+    pub summary: Value,
+    /// Each seed's run (what `seed-<n>.json` holds; its checkpoints are `seed-<n>.csv`'s rows).
+    pub runs: Vec<SeedRun>,
+    /// Each seed's wall times (what `timings.json` lists).
+    pub timings: Vec<records::SeedTiming>,
+}
+
+/// Run a loaded config, every seed on up to `threads` threads (default: the available
+/// parallelism; the results do not depend on it). With `out`, the directory receives the files
+/// of `ilopt run` (the module docs list them); without, nothing is written. The route of both
+/// `ilopt run` and the Python package.
+///
+/// # Errors
+/// [`RunError`] naming the key at fault (checked before anything is written), an output file
+/// that cannot be written, or the seed whose run failed.
+pub fn execute(
+    config: &LoadedConfig,
+    out: Option<&Path>,
+    threads: Option<usize>,
+) -> Result<RunOutcome, RunError> {
+    let bench = TaskLearner::new(config)?;
+    bench.theta0(config)?;
+    driver::check_algorithm(&bench, config)?;
+    driver::check_baseline(&bench, config)?;
+    let out = out.map(output::OutputDir::create).transpose()?;
+    if let Some(out) = &out {
+        let toml = config
+            .to_toml()
+            .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
+        out.write("config.toml", &toml)?;
+    }
+    let threads = threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
     let started = std::time::Instant::now();
-    let results = parallel::run_seeds(&bench, &config, &out, threads)?;
-    let runs: Vec<&SeedRun> = results.iter().map(|(r, _)| r).collect();
-    let summary = summary(&config, &bench, &runs);
-    out.write_json("summary.json", &summary)?;
-    out.write_json(
-        "timings.json",
-        &json!({
-            "threads": threads,
-            "total_seconds": started.elapsed().as_secs_f64(),
-            "seeds": results.iter().map(|(_, t)| t).collect::<Vec<_>>(),
-        }),
-    )?;
-    Ok(summary)
+    let results = parallel::run_seeds(&bench, config, out.as_ref(), threads)?;
+    let (runs, timings): (Vec<SeedRun>, Vec<records::SeedTiming>) = results.into_iter().unzip();
+    let summary = summary(config, &bench, &runs.iter().collect::<Vec<_>>());
+    if let Some(out) = &out {
+        out.write_json("summary.json", &summary)?;
+        out.write_json(
+            "timings.json",
+            &json!({
+                "threads": threads,
+                "total_seconds": started.elapsed().as_secs_f64(),
+                "seeds": timings,
+            }),
+        )?;
+    }
+    Ok(RunOutcome {
+        summary,
+        runs,
+        timings,
+    })
 }
 
 /// The summary: per seed its termination and final checkpoint, and the mean over seeds of the
