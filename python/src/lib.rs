@@ -20,6 +20,12 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
 
+/// mimalloc for the kit's allocations inside Python: with the system allocator, each run's worker
+/// threads meet the glibc arenas that earlier runs of the same process left behind, and the
+/// training of every run after the first of a process slowed down.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 pyo3::create_exception!(
     ilopt,
     IloptError,
