@@ -10,7 +10,8 @@
 use crate::run::RunError;
 use crate::run::config::{LoadedConfig, MAX_TRAJECTORIES, RunFile};
 use crate::run::oracle::{OnOracle, with_oracle};
-use crate::run::task::TaskLearner;
+use crate::run::runnable::RunTask;
+use crate::run::task::{TaskLearner, with_learner};
 use clap::Args;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use nalgebra::DVector;
@@ -61,16 +62,34 @@ pub fn run(args: &EstimateArgs) -> Result<Value, EstimateError> {
     let config = RunFile::load(&args.config)?;
     let theta: Vec<f64> =
         serde_json::from_str(&args.theta).map_err(|e| EstimateError::Theta(e.to_string()))?;
-    let bench = TaskLearner::new(&config)?;
-    let estimate = estimate(&bench, &config, &theta, args.trajectories, args.seed)?;
+    let learner = TaskLearner::new(&config)?;
+    let estimate =
+        with_learner!(&learner, t => estimate(t, &config, &theta, args.trajectories, args.seed))?;
+    let (task, policy, dim) =
+        with_learner!(&learner, t => (t.task_name(), t.policy_name(), t.dim()));
     Ok(json!({
-        "task": config.file.task.name.name(),
-        "policy": bench.policy_name(),
-        "dim": bench.dim(),
+        "task": task,
+        "policy": policy,
+        "dim": dim,
         "trajectories": args.trajectories,
         "seed": args.seed,
         "estimate": estimate,
     }))
+}
+
+/// [`estimate`] on the config's built-in task: the route of `ilopt estimate` and of the Python
+/// package's `ilopt.oracle_estimate`.
+///
+/// # Errors
+/// As [`estimate`], and [`RunError`] if the task cannot be built.
+pub fn estimate_config(
+    config: &LoadedConfig,
+    theta: &[f64],
+    trajectories: u64,
+    seed: u64,
+) -> Result<Vec<f64>, EstimateError> {
+    let learner = TaskLearner::new(config)?;
+    with_learner!(&learner, t => estimate(t, config, theta, trajectories, seed))
 }
 
 /// The oracle's estimate of ∇F(θ) (eq. 3.15, causal form, the config's baseline): the mean over
@@ -80,19 +99,19 @@ pub fn run(args: &EstimateArgs) -> Result<Value, EstimateError> {
 /// [`EstimateError::Theta`] for θ of the wrong length or with a non-finite entry,
 /// [`EstimateError::Trajectories`] out of 1..=[`MAX_TRAJECTORIES`], the oracle's construction
 /// error, or [`EstimateError::Oracle`] for a failing roll-out or estimate.
-pub fn estimate(
-    bench: &TaskLearner,
+pub fn estimate<T: RunTask + ?Sized>(
+    task: &T,
     config: &LoadedConfig,
     theta: &[f64],
     trajectories: u64,
     seed: u64,
 ) -> Result<Vec<f64>, EstimateError> {
-    let d = bench.dim();
+    let d = task.dim();
     if theta.len() != d {
         return Err(EstimateError::Theta(format!(
             "has {} entries, the {} policy has {d} parameters",
             theta.len(),
-            bench.policy_name()
+            task.policy_name()
         )));
     }
     if let Some(i) = theta.iter().position(|x| !x.is_finite()) {
@@ -126,5 +145,5 @@ pub fn estimate(
         theta: &theta,
         seed,
     };
-    with_oracle(bench, config, m, draw)?.map_err(EstimateError::Oracle)
+    with_oracle(task, config, m, draw)?.map_err(EstimateError::Oracle)
 }

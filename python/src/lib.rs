@@ -1,6 +1,6 @@
 //! The native half of the Python package `ilopt` (module `ilopt._native`): thin bindings over
 //! the routes of the `ilopt` command line — [`ilopt_cli::run::execute`] (`ilopt run`),
-//! [`ilopt_cli::estimate::estimate`] (`ilopt estimate`, eq. 3.15) and
+//! [`ilopt_cli::estimate::estimate_config`] (`ilopt estimate`, eq. 3.15) and
 //! [`ilopt_cli::toy::evaluate_entries`] (`ilopt toy eval`) — so that Python gets the numbers and
 //! the error messages of the CLI. The Python half (`python/ilopt/__init__.py`) turns configs
 //! into the text these functions read and their results into numpy arrays, dicts and
@@ -9,9 +9,8 @@
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
 
-use ilopt_cli::estimate::estimate;
+use ilopt_cli::estimate::estimate_config;
 use ilopt_cli::run::records::{Checkpoint, SeedRun};
-use ilopt_cli::run::task::TaskLearner;
 use ilopt_cli::run::{LoadedConfig, RunFile, execute};
 use ilopt_cli::toy::{ScalarChoice, evaluate_entries, load_mdp, parse_mdp};
 use numpy::IntoPyArray;
@@ -152,8 +151,7 @@ fn oracle_estimate<'py>(
     let g = py
         .allow_threads(|| {
             let config = load_config(kind, text)?;
-            let bench = TaskLearner::new(&config).map_err(|e| e.to_string())?;
-            estimate(&bench, &config, &theta, trajectories, seed).map_err(|e| e.to_string())
+            estimate_config(&config, &theta, trajectories, seed).map_err(|e| e.to_string())
         })
         .map_err(IloptError::new_err)?;
     Ok(g.into_pyarray(py))

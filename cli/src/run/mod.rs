@@ -6,7 +6,9 @@
 //! | [`config`] | the TOML schema and its loading |
 //! | `resolve` | defaults, absolute paths, range checks |
 //! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
-//! | [`task`] | the config's task, expert, policy and objective as an IL problem |
+//! | [`runnable`] | what a run needs of a task: [`RunTask`] (built-in or a program's own) |
+//! | [`task`] | the config's built-in task, expert, policy and objective as an IL problem |
+//! | [`plugin`] | a program's own environment and expert as a task ([`EnvRun`]) |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
 //! | [`oracle`] | the config's oracle (baseline, m trajectories) for any computation on it |
 //! | [`driver`] | one seed's run with its checkpoints |
@@ -26,18 +28,22 @@ pub mod evaluation;
 pub mod oracle;
 pub mod output;
 pub mod parallel;
+pub mod plugin;
 pub mod records;
 mod resolve;
+pub mod runnable;
 pub mod task;
 
 pub use config::{LoadedConfig, RunFile};
 pub use error::RunError;
+pub use plugin::EnvRun;
+pub use runnable::RunTask;
 
 use clap::Args;
 use records::SeedRun;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use task::TaskLearner;
+use task::{TaskLearner, with_learner};
 
 /// The keys of a config file, for `ilopt run --help` (docs/run.md has the full reference).
 pub const CONFIG_KEYS: &str = "\
@@ -91,8 +97,8 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     Ok(execute(&config, Some(&args.out), threads)?.summary)
 }
 
-/// What [`execute`] returns: the summary (`summary.json`) and every seed's run and wall times,
-/// in the config's seed order.
+/// What a run gives: the summary (`summary.json`) and every seed's run and wall times, in the
+/// config's seed order.
 #[derive(Debug, Clone)]
 pub struct RunOutcome {
     /// The summary, as `summary.json` holds it.
@@ -103,23 +109,50 @@ pub struct RunOutcome {
     pub timings: Vec<records::SeedTiming>,
 }
 
-/// Run a loaded config, every seed on up to `threads` threads (default: the available
-/// parallelism; the results do not depend on it). With `out`, the directory receives the files
-/// of `ilopt run` (the module docs list them); without, nothing is written. The route of both
-/// `ilopt run` and the Python package.
+/// Run a loaded config on its built-in task ([`TaskLearner`]) through [`execute_task`]: the
+/// route of `ilopt run` and of the Python package's `ilopt.run`.
 ///
 /// # Errors
-/// [`RunError`] naming the key at fault (checked before anything is written), an output file
-/// that cannot be written, or the seed whose run failed.
+/// As [`execute_task`], and [`RunError`] if the task cannot be built.
 pub fn execute(
     config: &LoadedConfig,
     out: Option<&Path>,
     threads: Option<usize>,
 ) -> Result<RunOutcome, RunError> {
-    let bench = TaskLearner::new(config)?;
-    bench.theta0(config)?;
-    driver::check_algorithm(&bench, config)?;
-    driver::check_baseline(&bench, config)?;
+    let learner = TaskLearner::new(config)?;
+    with_learner!(&learner, t => execute_task(t, config, out, threads))
+}
+
+/// Train on `task` as `config` says, for every seed, on up to `threads` threads (default: the
+/// available parallelism; capped by [`RunTask::max_threads`]), and write the outputs of
+/// `ilopt run` into `out`: the entry point for a built-in task and a program's own alike. The
+/// config's `[task]` and `[policy]` sections describe a built-in task; a plug-in task brings its
+/// own, and its config has `task.name = "custom"` (the default when `[task]` is left out).
+/// Returns the summary (also written to `summary.json`).
+///
+/// # Errors
+/// [`RunError`] naming the file and key at fault, or the seed whose run failed.
+pub fn run_task<T: RunTask + ?Sized>(
+    task: &T,
+    config: &LoadedConfig,
+    out: &Path,
+    threads: Option<usize>,
+) -> Result<Value, RunError> {
+    Ok(execute_task(task, config, Some(out), threads)?.summary)
+}
+
+/// [`run_task`] with the output directory optional (without one nothing is written) and every
+/// seed's run returned beside the summary.
+///
+/// # Errors
+/// As [`run_task`].
+pub fn execute_task<T: RunTask + ?Sized>(
+    task: &T,
+    config: &LoadedConfig,
+    out: Option<&Path>,
+    threads: Option<usize>,
+) -> Result<RunOutcome, RunError> {
+    driver::check_config(task, config)?;
     let out = out.map(output::OutputDir::create).transpose()?;
     if let Some(out) = &out {
         let toml = config
@@ -130,15 +163,15 @@ pub fn execute(
     let threads = threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
     let started = std::time::Instant::now();
-    let results = parallel::run_seeds(&bench, config, out.as_ref(), threads)?;
+    let results = parallel::run_seeds(task, config, out.as_ref(), threads)?;
     let (runs, timings): (Vec<SeedRun>, Vec<records::SeedTiming>) = results.into_iter().unzip();
-    let summary = summary(config, &bench, &runs.iter().collect::<Vec<_>>());
+    let summary = summary(config, task, &runs.iter().collect::<Vec<_>>());
     if let Some(out) = &out {
         out.write_json("summary.json", &summary)?;
         out.write_json(
             "timings.json",
             &json!({
-                "threads": threads,
+                "threads": threads.min(task.max_threads()),
                 "total_seconds": started.elapsed().as_secs_f64(),
                 "seeds": timings,
             }),
@@ -153,7 +186,7 @@ pub fn execute(
 
 /// The summary: per seed its termination and final checkpoint, and the mean over seeds of the
 /// final checkpoint's metrics.
-fn summary(config: &LoadedConfig, bench: &TaskLearner, runs: &[&SeedRun]) -> Value {
+fn summary<T: RunTask + ?Sized>(config: &LoadedConfig, task: &T, runs: &[&SeedRun]) -> Value {
     let f = &config.file;
     let mean = |get: &dyn Fn(&records::Checkpoint) -> Option<f64>| -> Option<f64> {
         let v: Vec<f64> = runs
@@ -163,12 +196,12 @@ fn summary(config: &LoadedConfig, bench: &TaskLearner, runs: &[&SeedRun]) -> Val
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
     json!({
-        "task": f.task.name.name(),
-        "policy": bench.policy_name(),
+        "task": task.task_name(),
+        "policy": task.policy_name(),
         "algorithm": runs.first().map(|r| r.algorithm.clone()),
         "budget_calls": f.run.budget_calls,
         "norm_bound": f.run.norm_bound,
-        "dim": bench.dim(),
+        "dim": task.dim(),
         "seeds": f.run.seeds,
         "final_mean": {
             "score": mean(&|c| c.score),
