@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
 
+pub mod estimate;
 pub mod eval;
 pub mod expert;
 pub mod plot;

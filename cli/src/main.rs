@@ -3,7 +3,7 @@
 //! go to stdout as JSON. See `ilopt --help` and the README.
 
 use clap::{Parser, Subcommand};
-use ilopt_cli::{eval, expert, plot, replay, run, toy};
+use ilopt_cli::{estimate, eval, expert, plot, replay, run, toy};
 use std::process::ExitCode;
 
 /// ilopt: imitation learning as stochastic optimisation, checked.
@@ -37,6 +37,8 @@ enum Command {
     Eval(eval::EvalArgs),
     /// Draw `ilopt run` output directories: mean and 95% band over seeds, to SVG or PNG.
     Plot(plot::PlotArgs),
+    /// One draw of the oracle's gradient estimate (eq. 3.15) at θ on a config's task.
+    Estimate(estimate::EstimateArgs),
 }
 
 #[derive(Debug, Subcommand)]
@@ -88,6 +90,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(&args).map_err(|e| e.to_string()),
         Command::Eval(args) => eval::run(&args).map_err(|e| e.to_string()),
         Command::Plot(args) => plot::run(&args).map_err(|e| e.to_string()),
+        Command::Estimate(args) => estimate::run(&args).map_err(|e| e.to_string()),
     };
     match result {
         Ok(out) => {

@@ -18,7 +18,7 @@
 
 use clap::{Args, Subcommand, ValueEnum};
 use ilopt::exact::evaluation::{EvaluationError, EvaluationOptions, evaluate};
-use ilopt::scalar::{BigRational, Interval, JsonScalar, parse_exact_list};
+use ilopt::scalar::{BigRational, Interval, JsonScalar, parse_exact};
 use ilopt::toy::{ToyError, ToyMdp};
 use serde_json::{Value, json};
 use std::path::PathBuf;
@@ -118,21 +118,75 @@ pub fn run(cmd: &ToyCommand) -> Result<Value, ToyCliError> {
 }
 
 fn eval(args: &EvalArgs) -> Result<Value, ToyCliError> {
-    let mdp = ToyMdp::load(&args.mdp).map_err(|source| ToyCliError::Mdp {
-        path: args.mdp.display().to_string(),
+    let mdp = load_mdp(&args.mdp)?;
+    let theta: Vec<&str> = args.theta.split(',').collect();
+    let baseline: Option<Vec<&str>> = args.baseline.as_ref().map(|b| b.split(',').collect());
+    evaluate_entries(
+        &mdp,
+        &theta,
+        baseline.as_deref(),
+        args.optimal_baseline,
+        args.scalar,
+    )
+}
+
+/// Read a toy-MDP file (docs/formats/toy-mdp.md).
+///
+/// # Errors
+/// [`ToyCliError::Mdp`] naming the file.
+pub fn load_mdp(path: &std::path::Path) -> Result<ToyMdp, ToyCliError> {
+    ToyMdp::load(path).map_err(|source| ToyCliError::Mdp {
+        path: path.display().to_string(),
         source,
-    })?;
-    let theta = parse_exact_list(&args.theta).map_err(|(index, e)| ToyCliError::Theta {
-        index,
-        message: e.to_string(),
-    })?;
-    let baseline = match &args.baseline {
-        None => None,
-        Some(text) => {
-            let b = parse_exact_list(text).map_err(|(index, e)| ToyCliError::Baseline {
+    })
+}
+
+/// Parse a toy MDP from JSON text, `name` naming it in the error.
+///
+/// # Errors
+/// [`ToyCliError::Mdp`] naming `name`.
+pub fn parse_mdp(text: &str, name: &str) -> Result<ToyMdp, ToyCliError> {
+    ToyMdp::from_json_str(text).map_err(|source| ToyCliError::Mdp {
+        path: name.into(),
+        source,
+    })
+}
+
+/// What `ilopt toy eval` prints for `mdp` at θ: θ and the baselines as exact-number texts, one
+/// entry each (`"1/3"`, `"-2"`, `"0.25"`).
+///
+/// # Errors
+/// [`ToyCliError`] naming the entry at fault, or the exact engine's error.
+pub fn evaluate_entries(
+    mdp: &ToyMdp,
+    theta: &[&str],
+    baseline: Option<&[&str]>,
+    optimal_baseline: bool,
+    scalar: ScalarChoice,
+) -> Result<Value, ToyCliError> {
+    let theta = theta
+        .iter()
+        .enumerate()
+        .map(|(index, t)| {
+            parse_exact(t).map_err(|e| ToyCliError::Theta {
                 index,
                 message: e.to_string(),
-            })?;
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let baseline = match baseline {
+        None => None,
+        Some(entries) => {
+            let b = entries
+                .iter()
+                .enumerate()
+                .map(|(index, t)| {
+                    parse_exact(t).map_err(|e| ToyCliError::Baseline {
+                        index,
+                        message: e.to_string(),
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
             let expected = mdp.horizon - 2;
             if b.len() != 1 && b.len() != expected {
                 return Err(ToyCliError::BaselineLength {
@@ -145,12 +199,12 @@ fn eval(args: &EvalArgs) -> Result<Value, ToyCliError> {
     };
     let options = EvaluationOptions {
         baseline: baseline.as_deref(),
-        optimal_baseline: args.optimal_baseline,
+        optimal_baseline,
     };
-    match args.scalar {
-        ScalarChoice::Exact => evaluate_with::<BigRational>(&mdp, &theta, &options),
-        ScalarChoice::F64 => evaluate_with::<f64>(&mdp, &theta, &options),
-        ScalarChoice::Interval => evaluate_with::<Interval>(&mdp, &theta, &options),
+    match scalar {
+        ScalarChoice::Exact => evaluate_with::<BigRational>(mdp, &theta, &options),
+        ScalarChoice::F64 => evaluate_with::<f64>(mdp, &theta, &options),
+        ScalarChoice::Interval => evaluate_with::<Interval>(mdp, &theta, &options),
     }
 }
 

@@ -315,6 +315,24 @@ impl RunFile {
     /// # Errors
     /// As [`RunFile::load`], without [`RunError::Io`].
     pub fn parse(text: &str, path: &Path) -> Result<LoadedConfig, RunError> {
+        let dir = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        Self::from_toml_str(text, path, &dir)
+    }
+
+    /// [`RunFile::parse`] with relative paths resolved against `base_dir` rather than the
+    /// directory of `path`, which only names the config in messages (a config built in memory,
+    /// e.g. from a Python dict, names itself and resolves against the current directory).
+    ///
+    /// # Errors
+    /// As [`RunFile::parse`].
+    pub fn from_toml_str(
+        text: &str,
+        path: &Path,
+        base_dir: &Path,
+    ) -> Result<LoadedConfig, RunError> {
         let parse_error = |message: String| RunError::Parse {
             path: path.to_path_buf(),
             message,
@@ -324,11 +342,7 @@ impl RunFile {
         if let Some(alg) = raw.get("algorithm") {
             check_known_keys(alg, &file.algorithm, path)?;
         }
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        file.resolve(&dir, path)?;
+        file.resolve(base_dir, path)?;
         Ok(LoadedConfig {
             file,
             path: path.to_path_buf(),

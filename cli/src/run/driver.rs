@@ -8,6 +8,7 @@
 
 use super::config::LoadedConfig;
 use super::error::RunError;
+use super::oracle::{OnOracle, with_oracle};
 use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::runnable::{RunTask, theta0};
 use ilopt::algo::{
@@ -15,7 +16,6 @@ use ilopt::algo::{
     Termination,
 };
 use ilopt::baseline::Baselined;
-use ilopt::batched::Batched;
 use ilopt::problem::{Cost, IlProblem, KitRng};
 use rand::SeedableRng;
 use std::time::Instant;
@@ -32,25 +32,27 @@ pub fn run_seed<T: RunTask + ?Sized>(
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(SeedRun, SeedTiming), RunError> {
-    let m = config.file.run.trajectories_per_gradient;
-    let baseline = config
-        .file
-        .run
-        .baseline
-        .as_ref()
-        .filter(|b| **b != ilopt::baseline::Baseline::None);
-    let p = task.problem();
-    if let Some(b) = baseline {
-        let b = Baselined::<_, f64>::new(p.clone(), m, b)
-            .map_err(|e| config.invalid("run.baseline", baseline_message(e)))?;
-        drive(task, &b, config, seed, progress)
-    } else if m > 1 {
-        let b = Batched::new(p.clone(), m)
-            .map_err(|e| config.invalid("run.trajectories_per_gradient", e))?;
-        drive(task, &b, config, seed, progress)
-    } else {
-        drive(task, p, config, seed, progress)
+    /// [`drive`] on whichever oracle the config asks for.
+    struct Drive<'a, T: ?Sized> {
+        task: &'a T,
+        config: &'a LoadedConfig,
+        seed: u64,
+        progress: &'a (dyn Fn(u64) + Sync),
     }
+    impl<T: RunTask + ?Sized> OnOracle for Drive<'_, T> {
+        type Output = (SeedRun, SeedTiming);
+        fn on<P: IlProblem<f64>>(self, oracle: &P) -> Result<Self::Output, RunError> {
+            drive(self.task, oracle, self.config, self.seed, self.progress)
+        }
+    }
+    let m = config.file.run.trajectories_per_gradient;
+    let drive = Drive {
+        task,
+        config,
+        seed,
+        progress,
+    };
+    with_oracle(task, config, m, drive)
 }
 
 /// The runner ([`Runner`]) with a gradient budget, [`NormBound`], the progress callback and the
@@ -231,7 +233,7 @@ pub fn check_baseline<T: RunTask + ?Sized>(
 
 /// An oracle's error about its baseline without the "baseline: " its message starts with (the
 /// key `run.baseline` already says it); any other error as it is.
-fn baseline_message(e: ilopt::problem::OracleError) -> String {
+pub(super) fn baseline_message(e: ilopt::problem::OracleError) -> String {
     match e {
         ilopt::problem::OracleError::Baseline(m) => m,
         e => e.to_string(),

@@ -10,6 +10,7 @@
 //! | [`task`] | the config's built-in task, expert, policy and objective as an IL problem |
 //! | [`plugin`] | a program's own environment and expert as a task ([`EnvRun`]) |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
+//! | [`oracle`] | the config's oracle (baseline, m trajectories) for any computation on it |
 //! | [`driver`] | one seed's run with its checkpoints |
 //! | [`parallel`] | the seeds on a thread pool, with a progress bar |
 //! | [`records`] | what is recorded: checkpoints, runs, timings, saved θ |
@@ -24,6 +25,7 @@ pub mod config;
 pub mod driver;
 pub mod error;
 pub mod evaluation;
+pub mod oracle;
 pub mod output;
 pub mod parallel;
 pub mod plugin;
@@ -91,9 +93,34 @@ pub struct RunArgs {
 /// [`RunError`] naming the file and key at fault, or the seed whose run failed.
 pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     let config = RunFile::load(&args.config)?;
-    let learner = TaskLearner::new(&config)?;
     let threads = args.threads.map(|n| n as usize);
-    with_learner!(&learner, t => run_task(t, &config, &args.out, threads))
+    Ok(execute(&config, Some(&args.out), threads)?.summary)
+}
+
+/// What a run gives: the summary (`summary.json`) and every seed's run and wall times, in the
+/// config's seed order.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// The summary, as `summary.json` holds it.
+    pub summary: Value,
+    /// Each seed's run (what `seed-<n>.json` holds; its checkpoints are `seed-<n>.csv`'s rows).
+    pub runs: Vec<SeedRun>,
+    /// Each seed's wall times (what `timings.json` lists).
+    pub timings: Vec<records::SeedTiming>,
+}
+
+/// Run a loaded config on its built-in task ([`TaskLearner`]) through [`execute_task`]: the
+/// route of `ilopt run` and of the Python package's `ilopt.run`.
+///
+/// # Errors
+/// As [`execute_task`], and [`RunError`] if the task cannot be built.
+pub fn execute(
+    config: &LoadedConfig,
+    out: Option<&Path>,
+    threads: Option<usize>,
+) -> Result<RunOutcome, RunError> {
+    let learner = TaskLearner::new(config)?;
+    with_learner!(&learner, t => execute_task(t, config, out, threads))
 }
 
 /// Train on `task` as `config` says, for every seed, on up to `threads` threads (default: the
@@ -111,28 +138,50 @@ pub fn run_task<T: RunTask + ?Sized>(
     out: &Path,
     threads: Option<usize>,
 ) -> Result<Value, RunError> {
+    Ok(execute_task(task, config, Some(out), threads)?.summary)
+}
+
+/// [`run_task`] with the output directory optional (without one nothing is written) and every
+/// seed's run returned beside the summary.
+///
+/// # Errors
+/// As [`run_task`].
+pub fn execute_task<T: RunTask + ?Sized>(
+    task: &T,
+    config: &LoadedConfig,
+    out: Option<&Path>,
+    threads: Option<usize>,
+) -> Result<RunOutcome, RunError> {
     driver::check_config(task, config)?;
-    let out = output::OutputDir::create(out)?;
-    let toml = config
-        .to_toml()
-        .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
-    out.write("config.toml", &toml)?;
+    let out = out.map(output::OutputDir::create).transpose()?;
+    if let Some(out) = &out {
+        let toml = config
+            .to_toml()
+            .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
+        out.write("config.toml", &toml)?;
+    }
     let threads = threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
     let started = std::time::Instant::now();
-    let results = parallel::run_seeds(task, config, &out, threads)?;
-    let runs: Vec<&SeedRun> = results.iter().map(|(r, _)| r).collect();
-    let summary = summary(config, task, &runs);
-    out.write_json("summary.json", &summary)?;
-    out.write_json(
-        "timings.json",
-        &json!({
-            "threads": threads.min(task.max_threads()),
-            "total_seconds": started.elapsed().as_secs_f64(),
-            "seeds": results.iter().map(|(_, t)| t).collect::<Vec<_>>(),
-        }),
-    )?;
-    Ok(summary)
+    let results = parallel::run_seeds(task, config, out.as_ref(), threads)?;
+    let (runs, timings): (Vec<SeedRun>, Vec<records::SeedTiming>) = results.into_iter().unzip();
+    let summary = summary(config, task, &runs.iter().collect::<Vec<_>>());
+    if let Some(out) = &out {
+        out.write_json("summary.json", &summary)?;
+        out.write_json(
+            "timings.json",
+            &json!({
+                "threads": threads.min(task.max_threads()),
+                "total_seconds": started.elapsed().as_secs_f64(),
+                "seeds": timings,
+            }),
+        )?;
+    }
+    Ok(RunOutcome {
+        summary,
+        runs,
+        timings,
+    })
 }
 
 /// The summary: per seed its termination and final checkpoint, and the mean over seeds of the

@@ -17,15 +17,15 @@ use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 /// One seed's result.
 pub type SeedResult = (SeedRun, SeedTiming);
 
-/// Run every seed of `config` on up to `threads` threads, writing each seed's files to `out` as
-/// it finishes; the results in the config's seed order.
+/// Run every seed of `config` on up to `threads` threads, writing each seed's files to `out` (if
+/// given) as it finishes; the results in the config's seed order.
 ///
 /// # Errors
 /// The first seed's error (in seed order); the seeds not yet started are then skipped.
 pub fn run_seeds<T: RunTask + ?Sized>(
     task: &T,
     config: &LoadedConfig,
-    out: &OutputDir,
+    out: Option<&OutputDir>,
     threads: usize,
 ) -> Result<Vec<SeedResult>, RunError> {
     let seeds = &config.file.run.seeds;
@@ -49,7 +49,9 @@ pub fn run_seeds<T: RunTask + ?Sized>(
                 bar.inc(calls.saturating_sub(prev));
             };
             let r = run_seed(task, config, seed, &report).and_then(|(run, timing)| {
-                out.write_seed(&run, name, policy)?;
+                if let Some(out) = out {
+                    out.write_seed(&run, name, policy)?;
+                }
                 Ok((run, timing))
             });
             bar.inc(budget.saturating_sub(last.load(Ordering::Relaxed)));
