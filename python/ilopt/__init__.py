@@ -3,7 +3,8 @@
 Each function goes through the same Rust route as the ``ilopt`` command line, so a seed gives
 the same numbers as the CLI and bad input raises :class:`IloptError` with the CLI's message.
 
-- :func:`run` — ``ilopt run``: train on a config (a dict of the TOML schema, or a path).
+- :func:`run` — ``ilopt run``: train on a config (a dict of the TOML schema, or a path), on a
+  built-in task or on any Gymnasium environment (:class:`GymTask`).
 - :func:`oracle_estimate` — ``ilopt estimate``: one draw of the eq. 3.15 gradient estimate.
 - :func:`toy_eval` — ``ilopt toy eval``: F, ∇F, E[g], E‖g‖² exactly, as ``Fraction``s.
 """
@@ -12,6 +13,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
@@ -21,7 +23,7 @@ import numpy as np
 from . import _native
 from ._native import IloptError
 
-__all__ = ["IloptError", "RunResult", "run", "oracle_estimate", "toy_eval"]
+__all__ = ["GymTask", "IloptError", "RunResult", "run", "oracle_estimate", "toy_eval"]
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -84,6 +86,84 @@ class RunResult:
         return pd.concat(frames, ignore_index=True)
 
 
+class GymTask:
+    """Any Gymnasium environment as a task of :func:`run`.
+
+    ``env`` is a ``gymnasium.Env`` or an id for ``gymnasium.make``. Its action space is
+    ``Discrete(n)`` (the learner is the softmax policy over the features) or a ``Box`` (the
+    linear-Gaussian policy with standard deviation ``sigma``, acting on the flattened action).
+    ``expert`` maps an observation to the expert's action, which is also the learner's label.
+    ``features`` maps an observation to a feature vector (default: the observation flattened to
+    float64, then a 1). ``steps`` is the thesis's fixed horizon: each trajectory is a stream of
+    ``steps`` decisions, a fresh episode after one ends (``after_end="reset"``); ``steps=None``
+    takes one episode per trajectory. Checkpoints evaluate the learner's deterministic action on
+    episodes of at most ``eval_steps`` decisions (default: the environment's time limit, else
+    ``steps``); their score is the mean episode return.
+
+    The environment steps in Python (one seed at a time); everything else — the algorithms, the
+    eq. 3.15 estimators and baselines, the checkpoints — is the kit's. Episode k of a run resets
+    the environment with a seed drawn from the run's seeded RNG, so a run is reproduced by its
+    seed.
+    """
+
+    def __init__(
+        self,
+        env: Any,
+        expert: Any,
+        features: Any = None,
+        steps: Optional[int] = 500,
+        after_end: str = "reset",
+        sigma: float = 0.1,
+        eval_steps: Optional[int] = None,
+        name: Optional[str] = None,
+    ):
+        try:
+            import gymnasium
+        except ImportError as e:  # pragma: no cover - depends on the installation
+            raise ImportError("ilopt.GymTask needs gymnasium: pip install gymnasium") from e
+        if isinstance(env, str):
+            env = gymnasium.make(env)
+        if name is None:
+            spec_id = getattr(getattr(env, "spec", None), "id", None) or type(env).__name__
+            name = "gym-" + re.sub(r"[^a-z0-9_-]+", "-", str(spec_id).lower()).strip("-")
+        if not callable(expert):
+            raise IloptError(f"expert must be callable (observation -> action), got {expert!r}")
+        if features is not None and not callable(features):
+            raise IloptError(f"features must be callable or None, got {features!r}")
+        space = env.action_space
+        if isinstance(space, gymnasium.spaces.Discrete):
+            if int(space.start) != 0:
+                raise IloptError(f"a Discrete action space must start at 0, got {space}")
+            self.space, self.size = "discrete", int(space.n)
+        elif isinstance(space, gymnasium.spaces.Box):
+            self.space, self.size = "box", int(np.prod(space.shape))
+        else:
+            raise IloptError(
+                f"the action space must be Discrete or Box, got {type(space).__name__}"
+            )
+        if steps is not None and (not isinstance(steps, (int, np.integer)) or steps < 1):
+            raise IloptError(f"steps must be an integer >= 1 or None, got {steps!r}")
+        if eval_steps is None:
+            spec = getattr(env, "spec", None)
+            eval_steps = getattr(spec, "max_episode_steps", None) or steps
+        if eval_steps is None or int(eval_steps) < 1:
+            raise IloptError(
+                "eval_steps: give the evaluation episodes' length (the environment has no "
+                "time limit and steps is None)"
+            )
+        obs, _ = env.reset(seed=0)
+        phi = features(obs) if features is not None else np.append(
+            np.asarray(obs, dtype=np.float64).ravel(), 1.0
+        )
+        self.feature_dim = int(np.asarray(phi, dtype=np.float64).size)
+        if self.feature_dim < 1:
+            raise IloptError("features(observation) is empty")
+        self.env, self.expert, self.features = env, expert, features
+        self.steps, self.after_end, self.sigma = steps, after_end, float(sigma)
+        self.eval_steps = int(eval_steps)
+        self.name = name
+
+
 def run(
     config: Union[Mapping[str, Any], PathLike],
     task: Any = None,
@@ -97,16 +177,33 @@ def run(
     directory) or the path of such a file (relative to the file's directory). With ``out``, the
     directory receives the files ``ilopt run --out`` writes; without, nothing is written.
     ``threads`` runs seeds in parallel (default: all cores; the numbers do not depend on it).
-    The GIL is released while Rust runs.
+    With ``task`` (a :class:`GymTask`), the config leaves out ``task`` and ``policy``, which the
+    task brings, and the seeds run one at a time. The GIL is released while Rust runs (and taken
+    for each step of a Gymnasium environment).
     """
-    if task is not None:
-        raise IloptError(
-            "task: only the config's built-in tasks (cartpole, obstacle, toy) are available in "
-            "this version; leave task=None"
-        )
     kind, text = _source(config, "config")
     out_path = None if out is None else os.fspath(out)
-    summary, checkpoints, theta = _native.run(kind, text, out_path, threads)
+    if task is None:
+        summary, checkpoints, theta = _native.run(kind, text, out_path, threads)
+    elif isinstance(task, GymTask):
+        summary, checkpoints, theta = _native.run_gym(
+            kind,
+            text,
+            out_path,
+            task.env,
+            task.expert,
+            task.features,
+            task.feature_dim,
+            task.space,
+            task.size,
+            task.steps,
+            task.after_end,
+            task.sigma,
+            task.eval_steps,
+            task.name,
+        )
+    else:
+        raise TypeError(f"task must be an ilopt.GymTask or None, got {type(task).__name__}")
     return RunResult(json.loads(summary), dict(checkpoints), dict(theta))
 
 

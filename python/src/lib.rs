@@ -9,6 +9,8 @@
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
 
+mod gym;
+
 use ilopt_cli::estimate::estimate_config;
 use ilopt_cli::run::records::{Checkpoint, SeedRun};
 use ilopt_cli::run::{LoadedConfig, RunFile, execute};
@@ -127,6 +129,58 @@ fn run<'py>(
             execute(&config, out.as_deref(), threads).map_err(|e| e.to_string())
         })
         .map_err(IloptError::new_err)?;
+    outcome_to_py(py, &outcome)
+}
+
+/// Run a config (`kind` "path" or "json") on a Gymnasium task (module [`gym`]), as [`run`] does
+/// on a built-in one.
+#[pyfunction]
+#[pyo3(signature = (kind, text, out, env, expert, features, feature_dim, space, size, steps, after_end, sigma, eval_steps, name))]
+#[allow(clippy::too_many_arguments)]
+fn run_gym<'py>(
+    py: Python<'py>,
+    kind: &str,
+    text: &str,
+    out: Option<PathBuf>,
+    env: Py<PyAny>,
+    expert: Py<PyAny>,
+    features: Option<Py<PyAny>>,
+    feature_dim: usize,
+    space: String,
+    size: usize,
+    steps: Option<usize>,
+    after_end: String,
+    sigma: f64,
+    eval_steps: usize,
+    name: String,
+) -> PyResult<(String, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
+    let spec = gym::GymSpec {
+        env,
+        expert,
+        features,
+        feature_dim,
+        space,
+        size,
+        steps,
+        after_end,
+        sigma,
+        eval_steps,
+        name,
+    };
+    let outcome = py
+        .allow_threads(|| {
+            let config = load_config(kind, text)?;
+            gym::run_gym(spec, &config, out.as_deref())
+        })
+        .map_err(IloptError::new_err)?;
+    outcome_to_py(py, &outcome)
+}
+
+/// (the summary as JSON text, {seed: {column: array}}, {seed: final θ}).
+fn outcome_to_py<'py>(
+    py: Python<'py>,
+    outcome: &ilopt_cli::run::RunOutcome,
+) -> PyResult<(String, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
     let summary = serde_json::to_string(&outcome.summary)
         .map_err(|e| IloptError::new_err(format!("the summary: {e}")))?;
     let checkpoints = PyDict::new(py);
@@ -197,6 +251,7 @@ fn toy_eval(
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("IloptError", m.py().get_type::<IloptError>())?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
+    m.add_function(wrap_pyfunction!(run_gym, m)?)?;
     m.add_function(wrap_pyfunction!(oracle_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(toy_eval, m)?)?;
     Ok(())

@@ -109,6 +109,6 @@ def test_a_missing_mdp_file_names_it(cli, repo, tmp_path):
     assert str(e.value) == expected and str(missing) in expected
 
 
-def test_a_python_task_is_refused_with_a_clear_message(repo):
-    with pytest.raises(ilopt.IloptError, match="^task: "):
+def test_a_task_that_is_not_a_gym_task_is_refused_with_a_clear_message(repo):
+    with pytest.raises(TypeError, match="task must be an ilopt.GymTask or None, got object"):
         ilopt.run(repo / "examples/run/toy-sgd.toml", task=object())

@@ -101,4 +101,7 @@ pub enum EnvError {
         /// Which component.
         what: &'static str,
     },
+    /// An environment outside the kit (a Gymnasium one driven from Python) failed; its message.
+    #[error("{0}")]
+    External(String),
 }

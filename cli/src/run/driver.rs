@@ -6,7 +6,7 @@
 //! step, before that iterate is evaluated, as the appendix's runs are judged) ends the run as
 //! *diverged*; that is data, not an error.
 
-use super::config::LoadedConfig;
+use super::config::{LoadedConfig, TaskName};
 use super::error::RunError;
 use super::oracle::{OnOracle, with_oracle};
 use super::records::{Checkpoint, SeedRun, SeedTiming};
@@ -173,6 +173,19 @@ impl<T: RunTask + ?Sized> CheckpointObserver<f64> for Evaluations<'_, T> {
 /// # Errors
 /// [`RunError::Invalid`] naming the key at fault.
 pub fn check_config<T: RunTask + ?Sized>(task: &T, config: &LoadedConfig) -> Result<(), RunError> {
+    let named = config.file.task.name;
+    if named != TaskName::Custom && named.name() != task.task_name() {
+        return Err(config.invalid(
+            "task.name",
+            format!(
+                "the config names the built-in task \"{}\", but the task passed with it is \
+                 \"{}\": a plug-in task's config leaves out [task] and [policy], which the task \
+                 brings",
+                named.name(),
+                task.task_name()
+            ),
+        ));
+    }
     theta0(task, config)?;
     check_algorithm(task, config)?;
     check_baseline(task, config)

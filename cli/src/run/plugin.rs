@@ -29,6 +29,7 @@ pub struct EnvRun<E: Env<f64>, F, X, P> {
     policy_name: String,
     problem: TaskProblem<EnvTask<E, F, X, f64>, P>,
     eval_steps: usize,
+    max_threads: usize,
 }
 
 impl<E: Env<f64>, F, X, P> Clone for EnvRun<E, F, X, P>
@@ -41,6 +42,7 @@ where
             policy_name: self.policy_name.clone(),
             problem: self.problem.clone(),
             eval_steps: self.eval_steps,
+            max_threads: self.max_threads,
         }
     }
 }
@@ -123,7 +125,16 @@ impl<E: Env<f64>, F, X, P> EnvRun<E, F, X, P> {
                 horizon,
             },
             eval_steps,
+            max_threads: usize::MAX,
         })
+    }
+
+    /// The same task, its seeds run one at a time (an environment that lives in one Python
+    /// interpreter, or is not safe to step from two threads).
+    #[must_use]
+    pub fn one_seed_at_a_time(mut self) -> Self {
+        self.max_threads = 1;
+        self
     }
 
     /// The IL problem.
@@ -154,6 +165,10 @@ where
 
     fn policy_name(&self) -> &str {
         &self.policy_name
+    }
+
+    fn max_threads(&self) -> usize {
+        self.max_threads
     }
 
     fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {

@@ -3,6 +3,7 @@
 //! last checkpoint, and the refusals (a built-in name, `task.name = "custom"` given to the binary,
 //! `[task]` keys a plug-in task does not take).
 
+use crate::ROOT;
 use ilopt::env::{Env, EnvError, Step};
 use ilopt::policy::Logistic;
 use ilopt::problem::KitRng;
@@ -168,6 +169,15 @@ fn bad_plugin_tasks_and_configs_are_refused_by_name() {
             "{key}: {e}"
         );
     }
+    let builtin =
+        format!("[task]\nname = \"toy\"\nmdp = \"{ROOT}/examples/toy/three-state.json\"\n{CONFIG}");
+    let config = RunFile::parse(&builtin, Path::new("c.toml")).expect("parses");
+    let e = run_task(&task, &config, &scratch("never"), Some(1)).expect_err("a built-in [task]");
+    assert!(
+        matches!(&e, RunError::Invalid { key, .. } if key == "task.name")
+            && e.to_string().contains("leaves out [task]"),
+        "{e}"
+    );
     let bad_theta = CONFIG.replace("[run]\n", "[run]\ntheta0 = [1.0, 2.0, 3.0]\n");
     let config = RunFile::parse(&bad_theta, Path::new("c.toml")).expect("parses");
     let e = run_task(&task, &config, &scratch("never"), Some(1)).expect_err("θ₀ of length 3");
