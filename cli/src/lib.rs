@@ -9,6 +9,7 @@
 
 pub mod eval;
 pub mod expert;
+pub mod provenance;
 pub mod replay;
 pub mod run;
 pub mod toy;

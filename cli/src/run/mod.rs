@@ -1,10 +1,12 @@
-//! `ilopt run --config FILE.toml --out DIR [--threads N]`: train a learner on a task as a config
-//! file says, for every seed, and write per-checkpoint CSV and JSON into `DIR`.
+//! `ilopt run --config FILE.toml --out DIR [--threads N] [--overwrite] [--quiet]`: train a learner
+//! on a task as a config file says, for every seed, and write per-checkpoint CSV and JSON into
+//! `DIR`.
 //!
 //! | module | what |
 //! |---|---|
 //! | [`config`] | the TOML schema and its loading |
 //! | `resolve` | defaults, absolute paths, range checks |
+//! | [`integer_keys`] | the integer keys' ranges, in the user's words |
 //! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
 //! | [`task`] | the config's task, expert, policy and objective as an IL problem |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
@@ -12,20 +14,25 @@
 //! | [`parallel`] | the seeds on a thread pool, with a progress bar |
 //! | [`records`] | what is recorded: checkpoints, runs, timings, saved θ |
 //! | [`output`] | the output directory, written atomically |
+//! | [`table`] | the summary as a table a person reads |
 //!
 //! The output directory holds `config.toml` (the resolved config), per seed `seed-<n>.csv`,
-//! `seed-<n>.json` and `theta-seed-<n>.json`, `summary.json`, and `timings.json`, the only file
-//! with wall times: every other file is byte-identical across reruns and thread counts.
+//! `seed-<n>.json` and `theta-seed-<n>.json`, `summary.json`, `summary.txt` (the table), and
+//! `timings.json`, the only file with wall times: every other file is byte-identical across
+//! reruns and thread counts. `config.toml`, `seed-<n>.json` and `summary.json` record the build
+//! that wrote them ([`crate::provenance`]).
 
 mod algorithm_keys;
 pub mod config;
 pub mod driver;
 pub mod error;
 pub mod evaluation;
+pub mod integer_keys;
 pub mod output;
 pub mod parallel;
 pub mod records;
 mod resolve;
+pub mod table;
 pub mod task;
 
 pub use config::{LoadedConfig, RunFile};
@@ -70,9 +77,19 @@ pub struct RunArgs {
     /// The config file (TOML; `--help` lists its keys, docs/run.md describes each one).
     #[arg(long, value_name = "FILE.toml")]
     pub config: PathBuf,
-    /// The output directory (created if needed; files in it are replaced).
+    /// The output directory: created if needed; one that holds files is refused unless
+    /// `--overwrite`.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Use a non-empty `--out`: first remove the files `ilopt run` writes there (config.toml,
+    /// seed-*.csv, seed-*.json, theta-seed-*.json, summary.json, summary.txt, timings.json) and
+    /// keep every other file.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Print nothing on stderr but errors: no progress bar, no per-checkpoint lines, no final
+    /// table (`summary.txt` is still written).
+    #[arg(long)]
+    pub quiet: bool,
     /// Threads running seeds in parallel (default: the available parallelism); the output does
     /// not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -89,11 +106,11 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     bench.theta0(&config)?;
     driver::check_algorithm(&bench, &config)?;
     driver::check_baseline(&bench, &config)?;
-    let out = output::OutputDir::create(&args.out)?;
+    let out = output::OutputDir::prepare(&args.out, args.overwrite)?;
     let toml = config
         .to_toml()
         .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
-    out.write("config.toml", &toml)?;
+    out.write_config(&toml)?;
     let threads = args.threads.map_or_else(
         || std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
         |n| n as usize,
@@ -103,6 +120,8 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     let runs: Vec<&SeedRun> = results.iter().map(|(r, _)| r).collect();
     let summary = summary(&config, &bench, &runs);
     out.write_json("summary.json", &summary)?;
+    let table = table::render(&summary);
+    out.write("summary.txt", &table)?;
     out.write_json(
         "timings.json",
         &json!({
@@ -111,6 +130,9 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
             "seeds": results.iter().map(|(_, t)| t).collect::<Vec<_>>(),
         }),
     )?;
+    if !args.quiet {
+        eprint!("{table}");
+    }
     Ok(summary)
 }
 
@@ -126,6 +148,7 @@ fn summary(config: &LoadedConfig, bench: &TaskLearner, runs: &[&SeedRun]) -> Val
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
     json!({
+        "ilopt": crate::provenance::BUILD,
         "task": f.task.name.name(),
         "policy": bench.policy_name(),
         "algorithm": runs.first().map(|r| r.algorithm.clone()),

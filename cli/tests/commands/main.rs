@@ -11,5 +11,6 @@ pub const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 mod env;
 mod expert;
 mod hostile;
+mod jobs;
 mod run;
 mod toy;
