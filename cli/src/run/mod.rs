@@ -10,6 +10,7 @@
 //! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
 //! | [`task`] | the config's task, expert, policy and objective as an IL problem |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
+//! | [`first_step`] | the least cost of the first step, against the budget |
 //! | [`driver`] | one seed's run with its checkpoints |
 //! | [`parallel`] | the seeds on a thread pool, with a progress bar |
 //! | [`records`] | what is recorded: checkpoints, runs, timings, saved θ |
@@ -27,6 +28,7 @@ pub mod config;
 pub mod driver;
 pub mod error;
 pub mod evaluation;
+pub mod first_step;
 pub mod integer_keys;
 pub mod output;
 pub mod parallel;
@@ -106,6 +108,7 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     bench.theta0(&config)?;
     driver::check_algorithm(&bench, &config)?;
     driver::check_baseline(&bench, &config)?;
+    first_step::check_first_step(&bench, &config)?;
     let out = output::OutputDir::prepare(&args.out, args.overwrite)?;
     let toml = config
         .to_toml()

@@ -485,3 +485,138 @@ fn integer_keys_out_of_range_are_named_in_the_users_words() {
         assert!(!out.exists(), "case {i}");
     }
 }
+
+/// A config whose first step alone costs more gradient calls than the budget is refused before
+/// anything is written, with the numbers; the bound counts only what is certain (an absorbing end
+/// or an episode may stop after one decision), and a first step of exactly the budget runs.
+#[test]
+fn a_first_step_beyond_the_budget_is_refused_with_the_numbers() {
+    use ilopt_cli::run::RunFile;
+    use ilopt_cli::run::first_step::first_step;
+    use ilopt_cli::run::task::TaskLearner;
+    let s = Scratch::new("first-step");
+    let sgd = "algorithm = \"sgd\"\nform = \"causal\"\nstep = { kind = \"constant\", eta = 1e-3 }";
+    let inner = |batch: &str| {
+        format!(
+            "trajectories_per_iteration = 2\nretrain = \"warm-start\"\ninner = {{ iterations = 5, {batch}rule = {{ rule = \"sgd\", step = {{ kind = \"constant\", eta = 0.1 }} }} }}"
+        )
+    };
+    let cartpole = |task: &str, alg: &str, run: &str| {
+        format!(
+            "[task]\nname = \"cartpole\"\nexpert = \"lqr\"\n{task}\n[algorithm]\n{alg}\n[run]\nbudget_calls = 1000\nseeds = [1]\n{run}\n"
+        )
+    };
+    // (config, the least first step, or none)
+    let cases: Vec<(String, Option<u128>)> = vec![
+        (
+            cartpole("", sgd, "trajectories_per_gradient = 100000"),
+            Some(50_000_000),
+        ),
+        (
+            cartpole("steps = 40", sgd, "trajectories_per_gradient = 3"),
+            Some(120),
+        ),
+        (
+            cartpole(
+                "steps = 40\nafter_end = \"absorb\"",
+                sgd,
+                "trajectories_per_gradient = 3",
+            ),
+            Some(3),
+        ),
+        (
+            cartpole(
+                "horizon = \"episodic\"",
+                sgd,
+                "trajectories_per_gradient = 3000",
+            ),
+            Some(3000),
+        ),
+        (
+            toy("[1]").replace("[run]", "[run]\ntrajectories_per_gradient = 400"),
+            Some(1200),
+        ),
+        (
+            cartpole(
+                "steps = 40",
+                &format!("algorithm = \"bc\"\n{}", inner("batch_size = 300, ")),
+                "",
+            ),
+            Some(1500),
+        ),
+        (
+            cartpole(
+                "steps = 40",
+                &format!(
+                    "algorithm = \"dagger\"\naggregate = true\nbeta = {{ kind = \"constant\", beta = 0.5 }}\n{}",
+                    inner("")
+                ),
+                "",
+            ),
+            Some(400),
+        ),
+        (
+            cartpole(
+                "steps = 40",
+                &format!("algorithm = \"forward-training\"\n{}", inner(""))
+                    .replace("retrain = \"warm-start\"\n", ""),
+                "",
+            ),
+            Some(10),
+        ),
+        (
+            cartpole(
+                "horizon = \"episodic\"",
+                &format!("algorithm = \"rrm\"\n{}", inner("")),
+                "",
+            ),
+            Some(10),
+        ),
+    ];
+    for (i, (text, least)) in cases.iter().enumerate() {
+        let cfg = s.write(&format!("c-{i}.toml"), text);
+        let c = RunFile::load(&cfg).unwrap_or_else(|e| panic!("case {i}: {e}"));
+        let bench = TaskLearner::new(&c).unwrap();
+        let got = first_step(&bench, &c).map(|f| f.calls);
+        assert_eq!(got, *least, "case {i}");
+        let over = least.is_some_and(|n| n > u128::from(c.file.run.budget_calls));
+        if over {
+            let out = s.path().join(format!("out-{i}"));
+            let (code, stdout, stderr) = ilopt(&run_args(&cfg, &out, &[]));
+            assert_eq!(code, 1, "case {i}: {stderr}");
+            assert!(stdout.is_empty());
+            assert!(
+                stderr.contains("above run.budget_calls = "),
+                "case {i}: {stderr}"
+            );
+            assert!(!out.exists(), "case {i}");
+        }
+    }
+    let (_, stderr) = {
+        let cfg = s.write("big.toml", &cases[0].0);
+        let (code, _, stderr) = ilopt(&run_args(&cfg, &s.path().join("big"), &[]));
+        (code, stderr)
+    };
+    assert!(
+        stderr.contains("the first step alone costs at least run.trajectories_per_gradient × task.steps = 100000 × 500 = 5·10⁷ gradient calls, above run.budget_calls = 1000"),
+        "{stderr}"
+    );
+    // A toy MDP with absorbing states: nothing certain, nothing refused.
+    let absorbing = toy("[1]")
+        .replace("three-state.json", "terminal-absorb.json")
+        .replace("theta0 = [1, 1, 1, 1, 1, 1]\n", "")
+        .replace("[run]", "[run]\ntrajectories_per_gradient = 100000");
+    let cfg = s.write("absorbing.toml", &absorbing);
+    let c = RunFile::load(&cfg).unwrap();
+    assert_eq!(first_step(&TaskLearner::new(&c).unwrap(), &c), None);
+    // Exactly the budget: 100 trajectories × 3 decisions = 300 calls, one step, and it runs.
+    let cfg = s.write(
+        "exact.toml",
+        &toy("[1]").replace("[run]", "[run]\ntrajectories_per_gradient = 100"),
+    );
+    let (code, stdout, stderr) = ilopt(&run_args(&cfg, &s.path().join("exact"), &["--quiet"]));
+    assert_eq!(code, 0, "{stderr}");
+    let v: Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["runs"][0]["iterations"], 1);
+    assert_eq!(v["runs"][0]["cost"]["gradient_evaluations"], 300);
+}
