@@ -8,13 +8,12 @@
 //! exact F(θ)).
 
 use super::run::RunError;
+use super::run::RunTask;
 use super::run::config::RunFile;
-use super::run::evaluation::evaluate;
 use super::run::records::SavedTheta;
-use super::run::task::TaskLearner;
+use super::run::task::{TaskLearner, with_learner};
 use clap::Args;
 use ilopt::evaluate::objective;
-use ilopt::problem::OracleError;
 use nalgebra::DVector;
 use serde_json::{Value, json};
 use std::path::PathBuf;
@@ -74,24 +73,38 @@ pub fn run(args: &EvalArgs) -> Result<Value, RunError> {
         .episodes
         .or(config.file.evaluation.episodes)
         .unwrap_or(super::run::config::DEFAULT_EPISODES);
-    let theta = DVector::from_vec(saved.theta.clone());
-    let n = episodes as usize;
-    let f = |r: Result<ilopt::evaluate::Objective, OracleError>| {
-        r.map_err(|e| RunError::Evaluation(e.to_string()))
-    };
-    let obj = match &bench {
-        TaskLearner::CartPoleSoftmax(p) => f(objective(p, &theta, n, args.seed))?,
-        TaskLearner::CartPoleLogistic(p) => f(objective(p, &theta, n, args.seed))?,
-        TaskLearner::Obstacle { problem, .. } => f(objective(problem, &theta, n, args.seed))?,
-        TaskLearner::Toy(p) => f(objective(p, &theta, n, args.seed))?,
-    };
-    let ev = evaluate(&bench, &saved.theta, episodes, args.seed).map_err(RunError::Evaluation)?;
+    let mut out = with_learner!(&bench, t => eval_task(t, &saved.theta, episodes, args.seed))?;
+    out["theta_seed"] = json!(saved.seed);
+    Ok(out)
+}
+
+/// `ilopt eval` on any task ([`RunTask`]: built in or a program's own): the objective F̂(θ)
+/// estimated from `episodes` roll-outs seeded by `seed`, and the deterministic evaluation of the
+/// run's checkpoints on `episodes` episodes.
+///
+/// # Errors
+/// [`RunError::Evaluation`] if a roll-out or an episode fails.
+pub fn eval_task<T: RunTask + ?Sized>(
+    task: &T,
+    theta: &[f64],
+    episodes: u32,
+    seed: u64,
+) -> Result<Value, RunError> {
+    let obj = objective(
+        task.problem(),
+        &DVector::from_column_slice(theta),
+        episodes as usize,
+        seed,
+    )
+    .map_err(|e| RunError::Evaluation(e.to_string()))?;
+    let ev = task
+        .evaluate(theta, episodes, seed)
+        .map_err(RunError::Evaluation)?;
     Ok(json!({
-        "task": task,
-        "policy": bench.policy_name(),
-        "dim": bench.dim(),
-        "theta_seed": saved.seed,
-        "seed": args.seed,
+        "task": task.task_name(),
+        "policy": task.policy_name(),
+        "dim": task.dim(),
+        "seed": seed,
         "episodes": episodes,
         "objective": {
             "mean": obj.mean,

@@ -21,12 +21,14 @@
 //! [`from_f64_exact`] (every finite `f64` is a dyadic rational). An `f64` run and an interval run
 //! with one seed therefore follow the same path, as long as interval comparisons stay decidable.
 
+mod greedy;
 mod linear_gaussian;
 pub(crate) mod logistic;
 mod mlp;
 pub(crate) mod softmax;
 mod speed_limited;
 
+pub use greedy::Greedy;
 pub use linear_gaussian::{ActionVector, LinearGaussian};
 pub use logistic::{Logistic, logistic_sigmoid, softplus};
 pub use mlp::{Forward, Mlp, MlpGaussian, MlpSoftmax, tanh};

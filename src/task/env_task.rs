@@ -5,7 +5,7 @@
 //! The episode is a copy of the template environment, reset with the run's seeded RNG, and its
 //! last observation: the features, the expert's label and the learner's action are functions of
 //! the observation, and [`Task::advance`] is one [`Env::step`] (the episode is over when the step
-//! is `terminated` or `truncated`). `examples/custom_env.rs` runs STORM and DAgger on a
+//! is `terminated` or `truncated`). `cli/examples/custom_env.rs` runs STORM and DAgger on a
 //! ten-line environment.
 
 use super::Task;
@@ -40,17 +40,36 @@ impl<E: Env<S>, F, X, S: Scalar> Debug for EnvTask<E, F, X, S> {
     }
 }
 
-/// One episode of an [`EnvTask`]: the environment and its last observation.
+/// One episode of an [`EnvTask`]: the environment, its last observation, and what the episode
+/// has earned so far (an evaluation reads the return and how the episode ended).
 #[derive(Debug, Clone)]
-pub struct EnvEpisode<E, O> {
+pub struct EnvEpisode<E, O, S> {
     env: E,
     observation: O,
+    total_reward: S,
+    steps: usize,
+    terminated: bool,
 }
 
-impl<E, O> EnvEpisode<E, O> {
+impl<E, O, S> EnvEpisode<E, O, S> {
     /// The last observation.
     pub fn observation(&self) -> &O {
         &self.observation
+    }
+
+    /// The sum of the rewards of the steps taken (the episode's return so far).
+    pub fn total_reward(&self) -> &S {
+        &self.total_reward
+    }
+
+    /// The steps taken.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// Whether the last step was `terminated` (a terminal state, not a time limit).
+    pub fn terminated(&self) -> bool {
+        self.terminated
     }
 }
 
@@ -99,14 +118,20 @@ where
     X: Fn(&E::Obs) -> Result<A, String>,
     A: Clone + Debug,
 {
-    type Episode = EnvEpisode<E, E::Obs>;
+    type Episode = EnvEpisode<E, E::Obs, S>;
     type Label = A;
     type Action = A;
 
     fn start(&self, rng: &mut KitRng) -> Result<Self::Episode, OracleError> {
         let mut env = self.env.clone();
         let observation = env.reset(rng);
-        Ok(EnvEpisode { env, observation })
+        Ok(EnvEpisode {
+            env,
+            observation,
+            total_reward: S::zero(),
+            steps: 0,
+            terminated: false,
+        })
     }
 
     fn features(&self, episode: &Self::Episode) -> Vec<S> {
@@ -129,6 +154,9 @@ where
     fn advance(&self, episode: &mut Self::Episode, action: &A) -> Result<bool, OracleError> {
         let step = episode.env.step(action.clone()).map_err(env_error)?;
         let done = step.done();
+        episode.total_reward += step.reward;
+        episode.steps += 1;
+        episode.terminated = step.terminated;
         episode.observation = step.observation;
         Ok(done)
     }

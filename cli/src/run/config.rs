@@ -32,7 +32,8 @@ pub const DEFAULT_NORM_BOUND: f64 = 1e4;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RunFile {
-    /// The task, its expert and the objective.
+    /// The task, its expert and the objective (left out: a plug-in task, `name = "custom"`).
+    #[serde(default)]
     pub task: TaskSection,
     /// The learner's policy class.
     #[serde(default)]
@@ -56,6 +57,9 @@ pub enum TaskName {
     Obstacle,
     /// A toy MDP file (docs/formats/toy-mdp.md).
     Toy,
+    /// A task a program passes with the config (`ilopt_cli::run::run_task`, Python's
+    /// `ilopt.run(config, task=...)`): it brings its own expert, policy and objective.
+    Custom,
 }
 
 impl TaskName {
@@ -65,6 +69,7 @@ impl TaskName {
             TaskName::Cartpole => "cartpole",
             TaskName::Obstacle => "obstacle",
             TaskName::Toy => "toy",
+            TaskName::Custom => "custom",
         }
     }
 }
@@ -94,7 +99,7 @@ pub enum HorizonKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TaskSection {
-    /// `cartpole`, `obstacle` or `toy`.
+    /// `cartpole`, `obstacle`, `toy`, or `custom` for a plug-in task.
     pub name: TaskName,
     /// CartPole: `ppo` (default) or `lqr`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -115,6 +120,21 @@ pub struct TaskSection {
     /// Fixed horizon: `reset` (CartPole's default) or `absorb` (the obstacle task's default).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub after_end: Option<AfterEnd>,
+}
+
+/// A config without `[task]`: a plug-in task's.
+impl Default for TaskSection {
+    fn default() -> Self {
+        TaskSection {
+            name: TaskName::Custom,
+            expert: None,
+            expert_file: None,
+            mdp: None,
+            horizon: None,
+            steps: None,
+            after_end: None,
+        }
+    }
 }
 
 /// The CartPole learner.

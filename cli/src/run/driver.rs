@@ -8,9 +8,9 @@
 
 use super::config::LoadedConfig;
 use super::error::RunError;
-use super::evaluation::evaluate;
+use super::first_step::check_first_step;
 use super::records::{Checkpoint, SeedRun, SeedTiming};
-use super::task::TaskLearner;
+use super::runnable::{RunTask, theta0};
 use ilopt::algo::{
     CheckpointObserver, IterationMetrics, NormBound, RunFailure, Runner, Schedule, StoppingRule,
     Termination,
@@ -21,14 +21,14 @@ use ilopt::problem::{Cost, IlProblem, KitRng};
 use rand::SeedableRng;
 use std::time::Instant;
 
-/// Run one seed of a config on its bench; `progress` receives the calls used so far (capped at
+/// Run one seed of a config on its task; `progress` receives the calls used so far (capped at
 /// the budget) after every step.
 ///
 /// # Errors
 /// [`RunError::Invalid`] for an algorithm or θ₀ the problem rejects; [`RunError::Run`] if an
 /// evaluation fails.
-pub fn run_seed(
-    bench: &TaskLearner,
+pub fn run_seed<T: RunTask + ?Sized>(
+    task: &T,
     config: &LoadedConfig,
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
@@ -40,33 +40,24 @@ pub fn run_seed(
         .baseline
         .as_ref()
         .filter(|b| **b != ilopt::baseline::Baseline::None);
-    macro_rules! on {
-        ($p:expr) => {
-            if let Some(b) = baseline {
-                let b = Baselined::<_, f64>::new($p.clone(), m, b)
-                    .map_err(|e| config.invalid("run.baseline", baseline_message(e)))?;
-                drive(bench, &b, config, seed, progress)
-            } else if m > 1 {
-                let b = Batched::new($p.clone(), m)
-                    .map_err(|e| config.invalid("run.trajectories_per_gradient", e))?;
-                drive(bench, &b, config, seed, progress)
-            } else {
-                drive(bench, $p, config, seed, progress)
-            }
-        };
-    }
-    match bench {
-        TaskLearner::CartPoleSoftmax(p) => on!(p),
-        TaskLearner::CartPoleLogistic(p) => on!(p),
-        TaskLearner::Obstacle { problem, .. } => on!(problem),
-        TaskLearner::Toy(p) => on!(p),
+    let p = task.problem();
+    if let Some(b) = baseline {
+        let b = Baselined::<_, f64>::new(p.clone(), m, b)
+            .map_err(|e| config.invalid("run.baseline", baseline_message(e)))?;
+        drive(task, &b, config, seed, progress)
+    } else if m > 1 {
+        let b = Batched::new(p.clone(), m)
+            .map_err(|e| config.invalid("run.trajectories_per_gradient", e))?;
+        drive(task, &b, config, seed, progress)
+    } else {
+        drive(task, p, config, seed, progress)
     }
 }
 
 /// The runner ([`Runner`]) with a gradient budget, [`NormBound`], the progress callback and the
 /// checkpoint evaluations ([`Evaluations`]).
-fn drive<P: IlProblem<f64>>(
-    bench: &TaskLearner,
+fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
+    task: &T,
     problem: &P,
     config: &LoadedConfig,
     seed: u64,
@@ -84,7 +75,7 @@ fn drive<P: IlProblem<f64>>(
         ..StoppingRule::default()
     };
     let mut evaluations = Evaluations {
-        bench,
+        task,
         episodes: f.evaluation.episodes.unwrap_or(1),
         seed,
         checkpoints: Vec::new(),
@@ -104,7 +95,7 @@ fn drive<P: IlProblem<f64>>(
         .run_with_checkpoints(
             algorithm.as_mut(),
             problem,
-            bench.theta0(config)?,
+            theta0(task, config)?,
             seed,
             Some(Schedule::every(
                 f.evaluation.every_calls.unwrap_or(budget),
@@ -135,17 +126,17 @@ fn drive<P: IlProblem<f64>>(
     ))
 }
 
-/// The checkpoint observer of `ilopt run`: [`evaluate`] at the iterate, one [`Checkpoint`] per
+/// The checkpoint observer of `ilopt run`: [`RunTask::evaluate`] at the iterate, one [`Checkpoint`] per
 /// call count it serves.
-struct Evaluations<'b> {
-    bench: &'b TaskLearner,
+struct Evaluations<'b, T: ?Sized> {
+    task: &'b T,
     episodes: u32,
     seed: u64,
     checkpoints: Vec<Checkpoint>,
     evaluation_seconds: f64,
 }
 
-impl CheckpointObserver<f64> for Evaluations<'_> {
+impl<T: RunTask + ?Sized> CheckpointObserver<f64> for Evaluations<'_, T> {
     type Error = RunError;
     fn checkpoint(
         &mut self,
@@ -154,7 +145,9 @@ impl CheckpointObserver<f64> for Evaluations<'_> {
     ) -> Result<Option<Termination>, RunError> {
         let started = Instant::now();
         let seed = self.seed;
-        let ev = evaluate(self.bench, m.theta.as_slice(), self.episodes, seed)
+        let ev = self
+            .task
+            .evaluate(m.theta.as_slice(), self.episodes, seed)
             .map_err(|message| RunError::Run { seed, message })?;
         self.evaluation_seconds += started.elapsed().as_secs_f64();
         let train_loss = m.loss.filter(|l| l.is_finite());
@@ -173,24 +166,34 @@ impl CheckpointObserver<f64> for Evaluations<'_> {
     }
 }
 
-/// Build the config's algorithm for the bench's problem once, so that invalid hyper-parameters
+/// Every check of a config against its task before anything is written: θ₀'s length
+/// ([`theta0`]), the algorithm ([`check_algorithm`]), the baseline ([`check_baseline`]) and the
+/// first step's least cost against the budget ([`check_first_step`]).
+///
+/// # Errors
+/// [`RunError::Invalid`] naming the key at fault; [`RunError::OverBudget`].
+pub fn check_config<T: RunTask + ?Sized>(task: &T, config: &LoadedConfig) -> Result<(), RunError> {
+    theta0(task, config)?;
+    check_algorithm(task, config)?;
+    check_baseline(task, config)?;
+    check_first_step(task, config)
+}
+
+/// Build the config's algorithm for the task's problem once, so that invalid hyper-parameters
 /// are reported before anything is written.
 ///
 /// # Errors
 /// [`RunError::Invalid`] naming `algorithm` with the algorithm's own message.
-pub fn check_algorithm(bench: &TaskLearner, config: &LoadedConfig) -> Result<(), RunError> {
-    let alg = &config.file.algorithm;
-    let r = match bench {
-        TaskLearner::CartPoleSoftmax(_) => {
-            alg.build::<f64, super::task::CartPoleSoftmax>().map(drop)
-        }
-        TaskLearner::CartPoleLogistic(_) => {
-            alg.build::<f64, super::task::CartPoleLogistic>().map(drop)
-        }
-        TaskLearner::Obstacle { .. } => alg.build::<f64, super::task::ObstacleProblem>().map(drop),
-        TaskLearner::Toy(_) => alg.build::<f64, ilopt::toy::ToyProblem<f64>>().map(drop),
-    };
-    r.map_err(|e| config.invalid("algorithm", e))
+pub fn check_algorithm<T: RunTask + ?Sized>(
+    _task: &T,
+    config: &LoadedConfig,
+) -> Result<(), RunError> {
+    config
+        .file
+        .algorithm
+        .build::<f64, T::Problem>()
+        .map(drop)
+        .map_err(|e| config.invalid("algorithm", e))
 }
 
 /// Check the config's baseline against the problem before anything is written: its parameters
@@ -200,7 +203,10 @@ pub fn check_algorithm(bench: &TaskLearner, config: &LoadedConfig) -> Result<(),
 ///
 /// # Errors
 /// [`RunError::Invalid`] naming `run.baseline`.
-pub fn check_baseline(bench: &TaskLearner, config: &LoadedConfig) -> Result<(), RunError> {
+pub fn check_baseline<T: RunTask + ?Sized>(
+    task: &T,
+    config: &LoadedConfig,
+) -> Result<(), RunError> {
     use ilopt::problem::{Behaviour, EstimatorForm, OracleError};
     let Some(b) = config
         .file
@@ -212,27 +218,17 @@ pub fn check_baseline(bench: &TaskLearner, config: &LoadedConfig) -> Result<(), 
         return Ok(());
     };
     let m = config.file.run.trajectories_per_gradient;
-    let theta = bench.theta0(config)?;
+    let theta = theta0(task, config)?;
     let bad = |e: OracleError| config.invalid("run.baseline", baseline_message(e));
-    macro_rules! on {
-        ($p:expr) => {{
-            let o = Baselined::<_, f64>::new($p.clone(), m, b).map_err(bad)?;
-            let mut rng = KitRng::seed_from_u64(0);
-            let mut cost = Cost::default();
-            let tried = o
-                .rollout(&Behaviour::Learner(&theta), &mut rng, &mut cost)
-                .and_then(|t| o.estimate(&theta, &t, EstimatorForm::Causal, &mut cost));
-            match tried {
-                Err(e @ OracleError::Baseline(_)) => Err(bad(e)),
-                _ => Ok(()),
-            }
-        }};
-    }
-    match bench {
-        TaskLearner::CartPoleSoftmax(p) => on!(p),
-        TaskLearner::CartPoleLogistic(p) => on!(p),
-        TaskLearner::Obstacle { problem, .. } => on!(problem),
-        TaskLearner::Toy(p) => on!(p),
+    let o = Baselined::<_, f64>::new(task.problem().clone(), m, b).map_err(bad)?;
+    let mut rng = KitRng::seed_from_u64(0);
+    let mut cost = Cost::default();
+    let tried = o
+        .rollout(&Behaviour::Learner(&theta), &mut rng, &mut cost)
+        .and_then(|t| o.estimate(&theta, &t, EstimatorForm::Causal, &mut cost));
+    match tried {
+        Err(e @ OracleError::Baseline(_)) => Err(bad(e)),
+        _ => Ok(()),
     }
 }
 

@@ -8,13 +8,15 @@
 //! Episode j of a seed's evaluation draws from an RNG seeded by (seed, j) only, so every
 //! checkpoint of a run meets the same episodes (common random numbers).
 
-use super::task::TaskLearner;
+use super::task::ObstacleLearner;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::{ObstacleEnv, Outcome};
-use ilopt::policy::PolicyExt;
+use ilopt::policy::{Greedy, PolicyExt};
 use ilopt::problem::KitRng;
 use ilopt::seeding::splitmix64;
-use ilopt::task::Task;
+use ilopt::task::cartpole::CartPoleTask;
+use ilopt::task::{Task, TaskProblem};
+use ilopt::toy::ToyProblem;
 use rand::SeedableRng;
 use serde::Serialize;
 
@@ -43,59 +45,33 @@ pub fn episode_seed(seed: u64, j: u64) -> u64 {
     splitmix64(splitmix64(seed ^ 0x6576_616c_7561_7465) ^ j)
 }
 
-/// Evaluate the learner at θ on `episodes` episodes keyed by `seed`.
+/// The toy MDP's evaluation: its exact objective F(θ) (no episodes).
+///
+/// # Errors
+/// A message if the forward pass fails.
+pub fn evaluate_toy(problem: &ToyProblem<f64>, theta: &[f64]) -> Result<Evaluation, String> {
+    let f = ilopt::exact::forward::forward(problem, theta).map_err(|e| e.to_string())?;
+    Ok(Evaluation {
+        objective: Some(f.objective),
+        ..Evaluation::default()
+    })
+}
+
+/// CartPole episodes with the learner's deterministic action ([`Greedy`]); an episode that
+/// completes 500 steps is a success.
 ///
 /// # Errors
 /// A message if an episode, the expert or the policy fails.
-pub fn evaluate(
-    bench: &TaskLearner,
+pub fn evaluate_cartpole<P>(
+    problem: &TaskProblem<CartPoleTask<f64>, P>,
     theta: &[f64],
     episodes: u32,
     seed: u64,
-) -> Result<Evaluation, String> {
-    match bench {
-        TaskLearner::CartPoleSoftmax(p) => cartpole(
-            &p.task,
-            &mut |phi, label| {
-                let (l, _) = PolicyExt::<f64>::loss(&p.policy, theta, phi, &label)
-                    .map_err(|e| e.to_string())?;
-                let z = p.policy.logits(theta, phi).map_err(|e| e.to_string())?;
-                Ok((usize::from(z[1] > z[0]), l))
-            },
-            episodes,
-            seed,
-        ),
-        TaskLearner::CartPoleLogistic(p) => cartpole(
-            &p.task,
-            &mut |phi, label| {
-                let (l, _) = PolicyExt::<f64>::loss(&p.policy, theta, phi, &label)
-                    .map_err(|e| e.to_string())?;
-                let z = p.policy.logit(theta, phi).map_err(|e| e.to_string())?;
-                Ok((usize::from(z > 0.0), l))
-            },
-            episodes,
-            seed,
-        ),
-        TaskLearner::Obstacle { .. } => obstacle(bench, theta, episodes, seed),
-        TaskLearner::Toy(p) => {
-            let f = ilopt::exact::forward::forward(p, theta).map_err(|e| e.to_string())?;
-            Ok(Evaluation {
-                objective: Some(f.objective),
-                ..Evaluation::default()
-            })
-        }
-    }
-}
-
-/// A CartPole learner for evaluation: (φ(s), the expert's action) ↦ (action, its loss).
-type CartPoleAct<'a> = dyn FnMut(&[f64], usize) -> Result<(usize, f64), String> + 'a;
-
-fn cartpole(
-    task: &ilopt::task::cartpole::CartPoleTask<f64>,
-    act: &mut CartPoleAct<'_>,
-    episodes: u32,
-    seed: u64,
-) -> Result<Evaluation, String> {
+) -> Result<Evaluation, String>
+where
+    P: Greedy<f64, Action = usize, Label = usize>,
+{
+    let (task, policy) = (&problem.task, &problem.policy);
     let (mut reward, mut loss, mut decisions, mut successes) = (0.0, 0.0, 0u64, 0u32);
     for j in 0..episodes {
         let mut rng = KitRng::seed_from_u64(episode_seed(seed, u64::from(j)));
@@ -103,7 +79,9 @@ fn cartpole(
         loop {
             let phi = task.features(&ep);
             let (label, _) = task.expert(&ep).map_err(|e| e.to_string())?;
-            let (a, l) = act(&phi, label)?;
+            let (l, _) =
+                PolicyExt::<f64>::loss(policy, theta, &phi, &label).map_err(|e| e.to_string())?;
+            let a = policy.greedy(theta, &phi).map_err(|e| e.to_string())?;
             loss += l;
             decisions += 1;
             if task.advance(&mut ep, &a).map_err(|e| e.to_string())? {
@@ -129,20 +107,20 @@ fn cartpole(
 
 /// Obstacle episodes with the executed mean velocity; a non-finite velocity is replaced by zero
 /// (the episode then times out) and counted in the loss as it is.
-fn obstacle(
-    bench: &TaskLearner,
+///
+/// # Errors
+/// A message if an episode, the expert or the policy fails.
+pub fn evaluate_obstacle(
+    learner: &ObstacleLearner,
     theta: &[f64],
     episodes: u32,
     seed: u64,
 ) -> Result<Evaluation, String> {
-    let TaskLearner::Obstacle {
+    let ObstacleLearner {
         problem,
         env,
         expert,
-    } = bench
-    else {
-        return Err("not the obstacle task".into());
-    };
+    } = learner;
     let (mut successes, mut crashes, mut timeouts) = (0u32, 0u32, 0u32);
     let (mut reward, mut loss, mut decisions) = (0.0, 0.0, 0u64);
     for j in 0..episodes {

@@ -4,10 +4,11 @@
 //!
 //! Only what is certain counts ([`Cost::gradient_evaluations`](ilopt::problem::Cost) counts one
 //! per decision whose ∇ is taken):
-//! - decisions per trajectory: exactly `task.steps` on a fixed horizon with `after_end = "reset"`,
-//!   exactly T − 1 on a toy MDP without absorbing states; otherwise at least 1 (an absorbing end or
-//!   an episode may stop after the first decision), and nothing for a toy MDP with absorbing
-//!   states (its first state may absorb);
+//! - decisions per trajectory, as the task states them ([`RunTask::least_decisions`]): exactly
+//!   `task.steps` on a fixed horizon with `after_end = "reset"`, exactly T − 1 on a toy MDP
+//!   without absorbing states; otherwise at least 1 (an absorbing end or an episode may stop after
+//!   the first decision), and nothing for a toy MDP with absorbing states (its first state may
+//!   absorb);
 //! - an oracle method (SGD, STORM, Adam, …) computes at least one estimate (eq. 3.15) before its
 //!   first iterate: `trajectories_per_gradient` trajectories, one call per decision;
 //! - a dataset learner (BC, DAgger, RRM, SMILe, forward training) trains once in its first step:
@@ -15,46 +16,25 @@
 //!   example, the examples being at least `trajectories_per_iteration` × the decisions per
 //!   trajectory (forward training keeps one state per trajectory).
 
-use super::config::{HorizonKind, LoadedConfig};
+use super::config::LoadedConfig;
 use super::error::RunError;
-use super::task::TaskLearner;
+use super::runnable::RunTask;
 use ilopt::algo::AlgorithmConfig;
 use ilopt::algo::dataset::InnerConfig;
-use ilopt::task::AfterEnd;
-use ilopt::toy::Termination;
 
 /// A certain lower bound on the first step's gradient calls, with how it is made up.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FirstStep {
     /// The bound.
     pub calls: u128,
-    /// Its factors in words, e.g. `trajectories_per_gradient × task.steps = 100000 × 500`.
+    /// Its factors in words, e.g. `run.trajectories_per_gradient × task.steps = 100000 × 500`.
     pub how: String,
 }
 
-/// Decisions per trajectory, certainly at least: (the count, its name in words).
-fn decisions(bench: &TaskLearner, config: &LoadedConfig) -> (u128, String) {
-    let t = &config.file.task;
-    match bench {
-        TaskLearner::Toy(p) => match p.mdp().termination {
-            Termination::Absorb { .. } => (0, "decisions per trajectory".into()),
-            _ => (
-                p.mdp().horizon.saturating_sub(1) as u128,
-                "(the MDP's horizon − 1)".into(),
-            ),
-        },
-        _ => match (t.horizon, t.steps, t.after_end) {
-            (Some(HorizonKind::Fixed), Some(steps), Some(AfterEnd::Reset)) => {
-                (steps as u128, "task.steps".into())
-            }
-            _ => (1, "(at least 1 decision per trajectory)".into()),
-        },
-    }
-}
-
 /// The least gradient calls of the config's first step; `None` when nothing certain can be said.
-pub fn first_step(bench: &TaskLearner, config: &LoadedConfig) -> Option<FirstStep> {
-    let (d, d_words) = decisions(bench, config);
+pub fn first_step<T: RunTask + ?Sized>(task: &T, config: &LoadedConfig) -> Option<FirstStep> {
+    let (d, d_words) = task.least_decisions()?;
+    let d = u128::from(d);
     let dataset = |n: u64, inner: &InnerConfig, per_trajectory: (u128, &str)| {
         let i = u128::from(inner.iterations);
         match inner.batch_size {
@@ -72,12 +52,10 @@ pub fn first_step(bench: &TaskLearner, config: &LoadedConfig) -> Option<FirstSte
         }
     };
     let bound = match &config.file.algorithm {
-        AlgorithmConfig::Bc(c) => dataset(c.trajectories_per_iteration, &c.inner, (d, &d_words)),
-        AlgorithmConfig::Dagger(c) => {
-            dataset(c.trajectories_per_iteration, &c.inner, (d, &d_words))
-        }
-        AlgorithmConfig::Rrm(c) => dataset(c.trajectories_per_iteration, &c.inner, (d, &d_words)),
-        AlgorithmConfig::Smile(c) => dataset(c.trajectories_per_iteration, &c.inner, (d, &d_words)),
+        AlgorithmConfig::Bc(c) => dataset(c.trajectories_per_iteration, &c.inner, (d, d_words)),
+        AlgorithmConfig::Dagger(c) => dataset(c.trajectories_per_iteration, &c.inner, (d, d_words)),
+        AlgorithmConfig::Rrm(c) => dataset(c.trajectories_per_iteration, &c.inner, (d, d_words)),
+        AlgorithmConfig::Smile(c) => dataset(c.trajectories_per_iteration, &c.inner, (d, d_words)),
         AlgorithmConfig::ForwardTraining(c) => dataset(
             c.trajectories_per_iteration,
             &c.inner,
@@ -134,9 +112,12 @@ fn amount(n: u128) -> String {
 ///
 /// # Errors
 /// [`RunError::OverBudget`] stating the first step's cost, its factors and the budget.
-pub fn check_first_step(bench: &TaskLearner, config: &LoadedConfig) -> Result<(), RunError> {
+pub fn check_first_step<T: RunTask + ?Sized>(
+    task: &T,
+    config: &LoadedConfig,
+) -> Result<(), RunError> {
     let budget = config.file.run.budget_calls;
-    match first_step(bench, config) {
+    match first_step(task, config) {
         Some(f) if f.calls > u128::from(budget) => Err(RunError::OverBudget {
             path: config.path.clone(),
             message: format!(

@@ -8,7 +8,9 @@
 //! | `resolve` | defaults, absolute paths, range checks |
 //! | [`integer_keys`] | the integer keys' ranges, in the user's words |
 //! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
-//! | [`task`] | the config's task, expert, policy and objective as an IL problem |
+//! | [`runnable`] | what a run needs of a task: [`RunTask`] (built-in or a program's own) |
+//! | [`task`] | the config's built-in task, expert, policy and objective as an IL problem |
+//! | [`plugin`] | a program's own environment and expert as a task ([`EnvRun`]) |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
 //! | [`first_step`] | the least cost of the first step, against the budget |
 //! | [`driver`] | one seed's run with its checkpoints |
@@ -32,19 +34,23 @@ pub mod first_step;
 pub mod integer_keys;
 pub mod output;
 pub mod parallel;
+pub mod plugin;
 pub mod records;
 mod resolve;
+pub mod runnable;
 pub mod table;
 pub mod task;
 
 pub use config::{LoadedConfig, RunFile};
 pub use error::RunError;
+pub use plugin::EnvRun;
+pub use runnable::RunTask;
 
 use clap::Args;
 use records::SeedRun;
 use serde_json::{Value, json};
-use std::path::PathBuf;
-use task::TaskLearner;
+use std::path::{Path, PathBuf};
+use task::{TaskLearner, with_learner};
 
 /// The keys of a config file, for `ilopt run --help` (docs/run.md has the full reference).
 pub const CONFIG_KEYS: &str = "\
@@ -104,36 +110,80 @@ pub struct RunArgs {
 /// [`RunError`] naming the file and key at fault, or the seed whose run failed.
 pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     let config = RunFile::load(&args.config)?;
-    let bench = TaskLearner::new(&config)?;
-    bench.theta0(&config)?;
-    driver::check_algorithm(&bench, &config)?;
-    driver::check_baseline(&bench, &config)?;
-    first_step::check_first_step(&bench, &config)?;
-    let out = output::OutputDir::prepare(&args.out, args.overwrite)?;
+    let learner = TaskLearner::new(&config)?;
+    let threads = args.threads.map(|n| n as usize);
+    let options = RunOptions {
+        overwrite: args.overwrite,
+        quiet: args.quiet,
+    };
+    with_learner!(&learner, t => run_task_with(t, &config, &args.out, threads, options))
+}
+
+/// How a run treats its output directory and stderr.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Use a non-empty output directory, first removing the kit's own files there
+    /// ([`output::OutputDir::prepare`]).
+    pub overwrite: bool,
+    /// Print nothing on stderr (no progress, no closing table).
+    pub quiet: bool,
+}
+
+/// Train on `task` as `config` says, for every seed, on up to `threads` threads (default: the
+/// available parallelism; capped by [`RunTask::max_threads`]), and write the outputs of
+/// `ilopt run` into `out`: the entry point for a built-in task and a program's own alike. The
+/// config's `[task]` and `[policy]` sections describe a built-in task; a plug-in task brings its
+/// own, and its config has `task.name = "custom"` (the default when `[task]` is left out).
+/// Returns the summary (also written to `summary.json`). With the default [`RunOptions`]: `out`
+/// must be new or empty, and progress and the closing table go to stderr.
+///
+/// # Errors
+/// [`RunError`] naming the file and key at fault, or the seed whose run failed.
+pub fn run_task<T: RunTask + ?Sized>(
+    task: &T,
+    config: &LoadedConfig,
+    out: &Path,
+    threads: Option<usize>,
+) -> Result<Value, RunError> {
+    run_task_with(task, config, out, threads, RunOptions::default())
+}
+
+/// [`run_task`] with [`RunOptions`].
+///
+/// # Errors
+/// As [`run_task`]; [`RunError::OutputNotEmpty`] for a non-empty `out` without
+/// `options.overwrite`.
+pub fn run_task_with<T: RunTask + ?Sized>(
+    task: &T,
+    config: &LoadedConfig,
+    out: &Path,
+    threads: Option<usize>,
+    options: RunOptions,
+) -> Result<Value, RunError> {
+    driver::check_config(task, config)?;
+    let out = output::OutputDir::prepare(out, options.overwrite)?;
     let toml = config
         .to_toml()
         .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
     out.write_config(&toml)?;
-    let threads = args.threads.map_or_else(
-        || std::thread::available_parallelism().map_or(1, std::num::NonZero::get),
-        |n| n as usize,
-    );
+    let threads = threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
     let started = std::time::Instant::now();
-    let results = parallel::run_seeds(&bench, &config, &out, threads)?;
+    let results = parallel::run_seeds(task, config, &out, threads)?;
     let runs: Vec<&SeedRun> = results.iter().map(|(r, _)| r).collect();
-    let summary = summary(&config, &bench, &runs);
+    let summary = summary(config, task, &runs);
     out.write_json("summary.json", &summary)?;
     let table = table::render(&summary);
     out.write("summary.txt", &table)?;
     out.write_json(
         "timings.json",
         &json!({
-            "threads": threads,
+            "threads": threads.min(task.max_threads()),
             "total_seconds": started.elapsed().as_secs_f64(),
             "seeds": results.iter().map(|(_, t)| t).collect::<Vec<_>>(),
         }),
     )?;
-    if !args.quiet {
+    if !options.quiet {
         eprint!("{table}");
     }
     Ok(summary)
@@ -141,7 +191,7 @@ pub fn run(args: &RunArgs) -> Result<Value, RunError> {
 
 /// The summary: per seed its termination and final checkpoint, and the mean over seeds of the
 /// final checkpoint's metrics.
-fn summary(config: &LoadedConfig, bench: &TaskLearner, runs: &[&SeedRun]) -> Value {
+fn summary<T: RunTask + ?Sized>(config: &LoadedConfig, task: &T, runs: &[&SeedRun]) -> Value {
     let f = &config.file;
     let mean = |get: &dyn Fn(&records::Checkpoint) -> Option<f64>| -> Option<f64> {
         let v: Vec<f64> = runs
@@ -152,12 +202,12 @@ fn summary(config: &LoadedConfig, bench: &TaskLearner, runs: &[&SeedRun]) -> Val
     };
     json!({
         "ilopt": crate::provenance::BUILD,
-        "task": f.task.name.name(),
-        "policy": bench.policy_name(),
+        "task": task.task_name(),
+        "policy": task.policy_name(),
         "algorithm": runs.first().map(|r| r.algorithm.clone()),
         "budget_calls": f.run.budget_calls,
         "norm_bound": f.run.norm_bound,
-        "dim": bench.dim(),
+        "dim": task.dim(),
         "seeds": f.run.seeds,
         "final_mean": {
             "score": mean(&|c| c.score),

@@ -8,7 +8,7 @@ use super::driver::run_seed;
 use super::error::RunError;
 use super::output::OutputDir;
 use super::records::{SeedRun, SeedTiming};
-use super::task::TaskLearner;
+use super::runnable::RunTask;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::sync::Mutex;
@@ -22,8 +22,8 @@ pub type SeedResult = (SeedRun, SeedTiming);
 ///
 /// # Errors
 /// The first seed's error (in seed order); the seeds not yet started are then skipped.
-pub fn run_seeds(
-    bench: &TaskLearner,
+pub fn run_seeds<T: RunTask + ?Sized>(
+    task: &T,
     config: &LoadedConfig,
     out: &OutputDir,
     threads: usize,
@@ -35,8 +35,7 @@ pub fn run_seeds(
     let failed = AtomicBool::new(false);
     let results: Mutex<Vec<Option<Result<SeedResult, RunError>>>> =
         Mutex::new((0..seeds.len()).map(|_| None).collect());
-    let task = config.file.task.name.name();
-    let policy = bench.policy_name();
+    let (name, policy) = (task.task_name(), task.policy_name());
     let worker = || {
         loop {
             let i = next.fetch_add(1, Ordering::SeqCst);
@@ -49,8 +48,8 @@ pub fn run_seeds(
                 let prev = last.swap(calls, Ordering::Relaxed);
                 bar.inc(calls.saturating_sub(prev));
             };
-            let r = run_seed(bench, config, seed, &report).and_then(|(run, timing)| {
-                out.write_seed(&run, task, policy)?;
+            let r = run_seed(task, config, seed, &report).and_then(|(run, timing)| {
+                out.write_seed(&run, name, policy)?;
                 Ok((run, timing))
             });
             bar.inc(budget.saturating_sub(last.load(Ordering::Relaxed)));
@@ -63,7 +62,7 @@ pub fn run_seeds(
         }
     };
     std::thread::scope(|s| {
-        for _ in 0..threads.clamp(1, seeds.len()) {
+        for _ in 0..threads.min(task.max_threads()).clamp(1, seeds.len()) {
             s.spawn(worker);
         }
     });

@@ -77,8 +77,28 @@ impl RunFile {
                     return Err(bad("task.mdp", &"required for the toy task"));
                 }
             }
+            TaskName::Custom => {
+                for (key, set) in [
+                    ("task.expert", t.expert.is_some()),
+                    ("task.expert_file", t.expert_file.is_some()),
+                    ("task.mdp", t.mdp.is_some()),
+                    ("task.horizon", t.horizon.is_some()),
+                    ("task.steps", t.steps.is_some()),
+                    ("task.after_end", t.after_end.is_some()),
+                    ("policy.kind", p.kind.is_some()),
+                    ("policy.sigma", p.sigma.is_some()),
+                    ("policy.features", p.features.is_some()),
+                ] {
+                    if set {
+                        return Err(bad(
+                            key,
+                            &"not a key of a plug-in task (the task passed with the config brings its expert, policy and horizon)",
+                        ));
+                    }
+                }
+            }
         }
-        if t.name != TaskName::Toy {
+        if !matches!(t.name, TaskName::Toy | TaskName::Custom) {
             match *t.horizon.get_or_insert(HorizonKind::Fixed) {
                 HorizonKind::Fixed => {
                     let (steps, after) = match t.name {

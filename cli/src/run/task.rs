@@ -4,15 +4,16 @@
 //! task with the linear-Gaussian learner, the loss of the executed (speed-clipped) velocity and
 //! velocities stored inline, T = 200 with an absorbing end; a toy MDP as its file gives it.
 
-use super::config::{
-    ExpertChoice, HorizonKind, LoadedConfig, PolicyKind, RunFile, TaskName, Theta0,
-};
+use super::config::{ExpertChoice, HorizonKind, LoadedConfig, PolicyKind, RunFile, TaskName};
 use super::error::RunError;
+use super::evaluation::{Evaluation, evaluate_cartpole, evaluate_obstacle, evaluate_toy};
+use super::runnable::{RunTask, horizon_decisions};
+use ilopt::baseline::PerDecisionTerms;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::ObstacleConfig;
 use ilopt::expert::ppo::{PpoExpert, PpoExpertFile};
 use ilopt::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
-use ilopt::policy::{LinearGaussian, Logistic, Softmax, SpeedLimitedGaussian};
+use ilopt::policy::{Greedy, LinearGaussian, Logistic, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::IlProblem;
 use ilopt::task::cartpole::{self, CartPoleExpert, CartPoleTask};
 use ilopt::task::obstacle::ObstacleTask;
@@ -27,40 +28,68 @@ pub const PPO_EXPERT: &str = include_str!("../../../experts/cartpole-ppo.json");
 /// the loss of the executed (speed-clipped) velocity; velocities stored inline as `[f64; 2]`.
 pub type ObstacleProblem = TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGaussian<f64, [f64; 2]>>;
 
-/// CartPole's IL problem with the softmax learner.
-pub type CartPoleSoftmax = TaskProblem<CartPoleTask<f64>, Softmax>;
+/// CartPole with a softmax or logistic learner ([`RunTask`]; its evaluation in
+/// [`super::evaluation`]).
+#[derive(Debug, Clone)]
+pub struct CartPoleLearner<P> {
+    /// The IL problem.
+    pub problem: TaskProblem<CartPoleTask<f64>, P>,
+    /// `"softmax"` or `"logistic"`.
+    pub policy_name: &'static str,
+}
 
-/// CartPole's IL problem with the logistic learner.
-pub type CartPoleLogistic = TaskProblem<CartPoleTask<f64>, Logistic>;
+/// The obstacle task ([`RunTask`]): the IL problem, and the environment and expert its evaluation
+/// episodes need.
+#[derive(Debug, Clone)]
+pub struct ObstacleLearner {
+    /// The IL problem.
+    pub problem: ObstacleProblem,
+    /// The environment's configuration (evaluation episodes).
+    pub env: ObstacleConfig,
+    /// The velocity-obstacle expert (evaluation loss).
+    pub expert: VoExpertPolicy,
+}
 
-/// A config's task as an IL problem, with what its evaluation needs.
+/// A toy MDP ([`RunTask`]; evaluated by its exact objective).
+#[derive(Debug, Clone)]
+pub struct ToyLearner(pub ToyProblem<f64>);
+
+/// A config's built-in task as an IL problem, with what its evaluation needs.
 // One instance per run: the size difference between the variants costs nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub enum TaskLearner {
     /// CartPole with the softmax learner.
-    CartPoleSoftmax(CartPoleSoftmax),
+    CartPoleSoftmax(CartPoleLearner<Softmax>),
     /// CartPole with the logistic learner.
-    CartPoleLogistic(CartPoleLogistic),
+    CartPoleLogistic(CartPoleLearner<Logistic>),
     /// The obstacle task.
-    Obstacle {
-        /// The IL problem.
-        problem: ObstacleProblem,
-        /// The environment's configuration (evaluation episodes).
-        env: ObstacleConfig,
-        /// The velocity-obstacle expert (evaluation loss).
-        expert: VoExpertPolicy,
-    },
+    Obstacle(ObstacleLearner),
     /// A toy MDP.
-    Toy(ToyProblem<f64>),
+    Toy(ToyLearner),
 }
+
+/// `$body` with `$t` bound to the [`RunTask`] inside a [`TaskLearner`] (one generic code path
+/// for every built-in task).
+macro_rules! with_learner {
+    ($learner:expr, $t:ident => $body:expr) => {
+        match $learner {
+            $crate::run::task::TaskLearner::CartPoleSoftmax($t) => $body,
+            $crate::run::task::TaskLearner::CartPoleLogistic($t) => $body,
+            $crate::run::task::TaskLearner::Obstacle($t) => $body,
+            $crate::run::task::TaskLearner::Toy($t) => $body,
+        }
+    };
+}
+pub(crate) use with_learner;
 
 impl TaskLearner {
     /// Build the config's task.
     ///
     /// # Errors
     /// [`RunError::Task`] or [`RunError::Invalid`] if a file cannot be read or the task, expert
-    /// or policy cannot be built.
+    /// or policy cannot be built; [`RunError::Invalid`] for `task.name = "custom"`, which only a
+    /// program passing its own task can run.
     pub fn new(config: &LoadedConfig) -> Result<Self, RunError> {
         let f = &config.file;
         let task_err = |e: &dyn std::fmt::Display| RunError::Task(e.to_string());
@@ -81,15 +110,22 @@ impl TaskLearner {
                 }
                 .map_err(|e| task_err(&e))?;
                 match f.policy.kind.unwrap_or(PolicyKind::Softmax) {
-                    PolicyKind::Softmax => TaskLearner::CartPoleSoftmax(TaskProblem {
-                        task: expert,
-                        policy: Softmax::new(2, cartpole::FEATURES).map_err(|e| task_err(&e))?,
-                        horizon,
+                    PolicyKind::Softmax => TaskLearner::CartPoleSoftmax(CartPoleLearner {
+                        problem: TaskProblem {
+                            task: expert,
+                            policy: Softmax::new(2, cartpole::FEATURES)
+                                .map_err(|e| task_err(&e))?,
+                            horizon,
+                        },
+                        policy_name: "softmax",
                     }),
-                    PolicyKind::Logistic => TaskLearner::CartPoleLogistic(TaskProblem {
-                        task: expert,
-                        policy: Logistic::new(cartpole::FEATURES).map_err(|e| task_err(&e))?,
-                        horizon,
+                    PolicyKind::Logistic => TaskLearner::CartPoleLogistic(CartPoleLearner {
+                        problem: TaskProblem {
+                            task: expert,
+                            policy: Logistic::new(cartpole::FEATURES).map_err(|e| task_err(&e))?,
+                            horizon,
+                        },
+                        policy_name: "logistic",
                     }),
                 }
             }
@@ -104,7 +140,7 @@ impl TaskLearner {
                 let inner = LinearGaussian::new(2, task.feature_dim(), sigma)
                     .and_then(LinearGaussian::with_actions::<[f64; 2]>)
                     .map_err(|e| config.invalid("policy.sigma", e))?;
-                TaskLearner::Obstacle {
+                TaskLearner::Obstacle(ObstacleLearner {
                     problem: TaskProblem {
                         policy: SpeedLimitedGaussian::new(inner, env.agent_max_speed)
                             .map_err(|e| task_err(&e))?,
@@ -113,7 +149,7 @@ impl TaskLearner {
                     },
                     expert: VoExpertPolicy::new(&env, params).map_err(|e| task_err(&e))?,
                     env,
-                }
+                })
             }
             TaskName::Toy => {
                 let path = f
@@ -123,30 +159,29 @@ impl TaskLearner {
                     .ok_or_else(|| config.invalid("task.mdp", "required for the toy task"))?;
                 let mdp = ToyMdp::load(path)
                     .map_err(|e| config.invalid("task.mdp", format!("{}: {e}", path.display())))?;
-                TaskLearner::Toy(ToyProblem::new(&mdp))
+                TaskLearner::Toy(ToyLearner(ToyProblem::new(&mdp)))
             }
+            TaskName::Custom => return Err(config.invalid("task.name", CUSTOM_NEEDS_A_TASK)),
         })
     }
 
     /// The number of policy parameters.
     pub fn dim(&self) -> usize {
-        match self {
-            TaskLearner::CartPoleSoftmax(p) => IlProblem::<f64>::dim(p),
-            TaskLearner::CartPoleLogistic(p) => IlProblem::<f64>::dim(p),
-            TaskLearner::Obstacle { problem, .. } => IlProblem::<f64>::dim(problem),
-            TaskLearner::Toy(p) => IlProblem::<f64>::dim(p),
-        }
+        with_learner!(self, t => t.dim())
     }
 
     /// A short description of the policy (`"softmax"`, `"logistic"`, `"linear-gaussian"`,
     /// `"toy"`), recorded with a saved θ.
-    pub fn policy_name(&self) -> &'static str {
-        match self {
-            TaskLearner::CartPoleSoftmax(_) => "softmax",
-            TaskLearner::CartPoleLogistic(_) => "logistic",
-            TaskLearner::Obstacle { .. } => "linear-gaussian",
-            TaskLearner::Toy(_) => "toy",
-        }
+    pub fn policy_name(&self) -> &str {
+        with_learner!(self, t => t.policy_name())
+    }
+
+    /// The checks of the config against the task ([`super::driver::check_config`]).
+    ///
+    /// # Errors
+    /// [`RunError::Invalid`] naming the key at fault.
+    pub fn check(&self, config: &LoadedConfig) -> Result<(), RunError> {
+        with_learner!(self, t => super::driver::check_config(t, config))
     }
 
     /// θ₀ of the config, checked against the policy's dimension.
@@ -154,21 +189,85 @@ impl TaskLearner {
     /// # Errors
     /// [`RunError::Invalid`] for `run.theta0` of the wrong length.
     pub fn theta0(&self, config: &LoadedConfig) -> Result<DVector<f64>, RunError> {
-        let d = self.dim();
-        match &config.file.run.theta0 {
-            Theta0::Zero => Ok(DVector::zeros(d)),
-            Theta0::Values(v) if v.len() == d => Ok(DVector::from_column_slice(v)),
-            Theta0::Values(v) => Err(config.invalid(
-                "run.theta0",
-                format!(
-                    "has {} entries, the {} policy has {d} parameters",
-                    v.len(),
-                    self.policy_name()
-                ),
+        with_learner!(self, t => super::runnable::theta0(t, config))
+    }
+}
+
+impl<P> RunTask for CartPoleLearner<P>
+where
+    P: Greedy<f64, Action = usize, Label = usize> + Clone + Sync,
+    TaskProblem<CartPoleTask<f64>, P>: IlProblem<f64> + PerDecisionTerms<f64>,
+{
+    type Problem = TaskProblem<CartPoleTask<f64>, P>;
+    fn problem(&self) -> &Self::Problem {
+        &self.problem
+    }
+    fn task_name(&self) -> &str {
+        "cartpole"
+    }
+    fn policy_name(&self) -> &str {
+        self.policy_name
+    }
+    fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
+        evaluate_cartpole(&self.problem, theta, episodes, seed)
+    }
+    fn least_decisions(&self) -> Option<(u64, &'static str)> {
+        Some(horizon_decisions(&self.problem.horizon, "task.steps"))
+    }
+}
+
+impl RunTask for ObstacleLearner {
+    type Problem = ObstacleProblem;
+    fn problem(&self) -> &ObstacleProblem {
+        &self.problem
+    }
+    fn task_name(&self) -> &str {
+        "obstacle"
+    }
+    fn policy_name(&self) -> &str {
+        "linear-gaussian"
+    }
+    fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
+        evaluate_obstacle(self, theta, episodes, seed)
+    }
+    fn least_decisions(&self) -> Option<(u64, &'static str)> {
+        Some(horizon_decisions(&self.problem.horizon, "task.steps"))
+    }
+}
+
+impl RunTask for ToyLearner {
+    type Problem = ToyProblem<f64>;
+    fn problem(&self) -> &ToyProblem<f64> {
+        &self.0
+    }
+    fn task_name(&self) -> &str {
+        "toy"
+    }
+    fn policy_name(&self) -> &str {
+        "toy"
+    }
+    fn evaluate(&self, theta: &[f64], _episodes: u32, _seed: u64) -> Result<Evaluation, String> {
+        evaluate_toy(&self.0, theta)
+    }
+    /// T − 1 decisions without absorbing states; none certain with them (the first state may
+    /// absorb).
+    fn least_decisions(&self) -> Option<(u64, &'static str)> {
+        let mdp = self.0.mdp();
+        match mdp.termination {
+            ilopt::toy::Termination::Absorb { .. } => None,
+            _ => Some((
+                mdp.horizon.saturating_sub(1) as u64,
+                "(the MDP's horizon − 1)",
             )),
         }
     }
 }
+
+/// Why `ilopt run` refuses `task.name = "custom"`.
+pub const CUSTOM_NEEDS_A_TASK: &str = "names no built-in task (cartpole, obstacle or toy): a \
+     config without [task], or with name = \"custom\", is for a plug-in task, which only a program \
+     passing its own task runs (Rust: ilopt_cli::run::run_task with an EnvRun; Python: \
+     ilopt.run(config, task=ilopt.GymTask(...)))";
 
 /// The config's objective (toy MDPs: their file's; the value here is unused).
 pub fn horizon(f: &RunFile) -> Horizon {

@@ -491,9 +491,17 @@ fn integer_keys_out_of_range_are_named_in_the_users_words() {
 /// or an episode may stop after one decision), and a first step of exactly the budget runs.
 #[test]
 fn a_first_step_beyond_the_budget_is_refused_with_the_numbers() {
-    use ilopt_cli::run::RunFile;
-    use ilopt_cli::run::first_step::first_step;
+    use ilopt_cli::run::first_step::{FirstStep, first_step};
     use ilopt_cli::run::task::TaskLearner;
+    use ilopt_cli::run::{LoadedConfig, RunFile};
+    fn least_of(t: &TaskLearner, c: &LoadedConfig) -> Option<FirstStep> {
+        match t {
+            TaskLearner::CartPoleSoftmax(t) => first_step(t, c),
+            TaskLearner::CartPoleLogistic(t) => first_step(t, c),
+            TaskLearner::Obstacle(t) => first_step(t, c),
+            TaskLearner::Toy(t) => first_step(t, c),
+        }
+    }
     let s = Scratch::new("first-step");
     let sgd = "algorithm = \"sgd\"\nform = \"causal\"\nstep = { kind = \"constant\", eta = 1e-3 }";
     let inner = |batch: &str| {
@@ -577,7 +585,7 @@ fn a_first_step_beyond_the_budget_is_refused_with_the_numbers() {
         let cfg = s.write(&format!("c-{i}.toml"), text);
         let c = RunFile::load(&cfg).unwrap_or_else(|e| panic!("case {i}: {e}"));
         let bench = TaskLearner::new(&c).unwrap();
-        let got = first_step(&bench, &c).map(|f| f.calls);
+        let got = least_of(&bench, &c).map(|f| f.calls);
         assert_eq!(got, *least, "case {i}");
         let over = least.is_some_and(|n| n > u128::from(c.file.run.budget_calls));
         if over {
@@ -608,7 +616,7 @@ fn a_first_step_beyond_the_budget_is_refused_with_the_numbers() {
         .replace("[run]", "[run]\ntrajectories_per_gradient = 100000");
     let cfg = s.write("absorbing.toml", &absorbing);
     let c = RunFile::load(&cfg).unwrap();
-    assert_eq!(first_step(&TaskLearner::new(&c).unwrap(), &c), None);
+    assert_eq!(least_of(&TaskLearner::new(&c).unwrap(), &c), None);
     // Exactly the budget: 100 trajectories × 3 decisions = 300 calls, one step, and it runs.
     let cfg = s.write(
         "exact.toml",

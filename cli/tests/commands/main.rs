@@ -12,5 +12,6 @@ mod env;
 mod expert;
 mod hostile;
 mod jobs;
+mod plugin;
 mod run;
 mod toy;
