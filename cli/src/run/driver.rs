@@ -22,7 +22,9 @@ use rand::SeedableRng;
 use std::time::Instant;
 
 /// Run one seed of a config on its task; `progress` receives the calls used so far (capped at
-/// the budget) after every step.
+/// the budget) after every step, and `reached` each checkpoint as soon as it is evaluated (a step
+/// that crosses several checkpoint call counts gives one per count), in order; an error of
+/// `reached` (e.g. the CSV cannot be written) ends the run with it.
 ///
 /// # Errors
 /// [`RunError::Invalid`] for an algorithm or θ₀ the problem rejects; [`RunError::Run`] if an
@@ -32,6 +34,7 @@ pub fn run_seed<T: RunTask + ?Sized>(
     config: &LoadedConfig,
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
+    reached: &mut dyn FnMut(&[Checkpoint]) -> Result<(), RunError>,
 ) -> Result<(SeedRun, SeedTiming), RunError> {
     let m = config.file.run.trajectories_per_gradient;
     let baseline = config
@@ -44,13 +47,13 @@ pub fn run_seed<T: RunTask + ?Sized>(
     if let Some(b) = baseline {
         let b = Baselined::<_, f64>::new(p.clone(), m, b)
             .map_err(|e| config.invalid("run.baseline", baseline_message(e)))?;
-        drive(task, &b, config, seed, progress)
+        drive(task, &b, config, seed, progress, reached)
     } else if m > 1 {
         let b = Batched::new(p.clone(), m)
             .map_err(|e| config.invalid("run.trajectories_per_gradient", e))?;
-        drive(task, &b, config, seed, progress)
+        drive(task, &b, config, seed, progress, reached)
     } else {
-        drive(task, p, config, seed, progress)
+        drive(task, p, config, seed, progress, reached)
     }
 }
 
@@ -62,6 +65,7 @@ fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
     config: &LoadedConfig,
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
+    reached: &mut dyn FnMut(&[Checkpoint]) -> Result<(), RunError>,
 ) -> Result<(SeedRun, SeedTiming), RunError> {
     let f = &config.file;
     let budget = f.run.budget_calls;
@@ -80,6 +84,7 @@ fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
         seed,
         checkpoints: Vec::new(),
         evaluation_seconds: 0.0,
+        reached,
     };
     let rec = Runner::new(stop)
         .map_err(|e| config.invalid("run.budget_calls", e))?
@@ -127,13 +132,14 @@ fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
 }
 
 /// The checkpoint observer of `ilopt run`: [`RunTask::evaluate`] at the iterate, one [`Checkpoint`] per
-/// call count it serves.
+/// call count it serves, each passed on to `reached` at once.
 struct Evaluations<'b, T: ?Sized> {
     task: &'b T,
     episodes: u32,
     seed: u64,
     checkpoints: Vec<Checkpoint>,
     evaluation_seconds: f64,
+    reached: &'b mut dyn FnMut(&[Checkpoint]) -> Result<(), RunError>,
 }
 
 impl<T: RunTask + ?Sized> CheckpointObserver<f64> for Evaluations<'_, T> {
@@ -157,11 +163,13 @@ impl<T: RunTask + ?Sized> CheckpointObserver<f64> for Evaluations<'_, T> {
             .map(|d| d.norm())
             .filter(|n| n.is_finite());
         let c = Checkpoint::new(0, m.iteration, &m.cost, train_loss, gradient_norm, &ev);
+        let before = self.checkpoints.len();
         self.checkpoints
             .extend(at_calls.iter().map(|&at_calls| Checkpoint {
                 at_calls,
                 ..c.clone()
             }));
+        (self.reached)(&self.checkpoints[before..])?;
         Ok(None)
     }
 }

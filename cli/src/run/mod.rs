@@ -169,7 +169,7 @@ pub fn run_task_with<T: RunTask + ?Sized>(
     let threads = threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
     let started = std::time::Instant::now();
-    let results = parallel::run_seeds(task, config, &out, threads)?;
+    let results = parallel::run_seeds(task, config, &out, threads, options.quiet)?;
     let runs: Vec<&SeedRun> = results.iter().map(|(r, _)| r).collect();
     let summary = summary(config, task, &runs);
     out.write_json("summary.json", &summary)?;

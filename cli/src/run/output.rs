@@ -134,28 +134,105 @@ impl OutputDir {
         )
     }
 
-    /// A seed's files: `seed-<n>.csv`, `seed-<n>.json` (with the build) and
-    /// `theta-seed-<n>.json`.
+    /// Start a seed's files: `seed-<n>.csv` with its header, to which [`SeedWriter::append`]
+    /// adds each checkpoint as it is reached.
     ///
     /// # Errors
-    /// As [`OutputDir::write`].
-    pub fn write_seed(&self, run: &SeedRun, task: &str, policy: &str) -> Result<(), RunError> {
-        let n = run.seed;
-        let mut csv = String::from(Checkpoint::CSV_HEADER);
-        csv.push('\n');
-        for c in &run.checkpoints {
-            csv.push_str(&c.csv_row());
-            csv.push('\n');
+    /// [`RunError::Io`] if the file cannot be created.
+    pub fn seed_writer(&self, seed: u64) -> Result<SeedWriter, RunError> {
+        let path = self.dir.join(format!("seed-{seed}.csv"));
+        let mut csv = std::fs::File::create(&path).map_err(|e| RunError::io(&path, e))?;
+        writeln!(csv, "{}", Checkpoint::CSV_HEADER).map_err(|e| RunError::io(&path, e))?;
+        Ok(SeedWriter {
+            out: self.clone(),
+            seed,
+            csv,
+            csv_path: path,
+            checkpoints: Vec::new(),
+            json_written: None,
+        })
+    }
+}
+
+/// How often, at most, `seed-<n>.json` is rewritten while a run goes on (the CSV gets every
+/// checkpoint at once); a run with many checkpoints a second then costs no more than one
+/// rewrite a second.
+pub const PARTIAL_JSON_EVERY: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// A seed's `seed-<n>.json` while its run goes on: the build, the seed, `"termination":
+/// "running"` and the checkpoints so far.
+#[derive(Serialize)]
+struct PartialSeedFile<'a> {
+    ilopt: Provenance,
+    seed: u64,
+    termination: &'static str,
+    checkpoints: &'a [Checkpoint],
+}
+
+/// One seed's files as its run goes on: each checkpoint appended to `seed-<n>.csv` and flushed
+/// when it is reached, `seed-<n>.json` rewritten (atomically, at most every
+/// [`PARTIAL_JSON_EVERY`]) with the checkpoints so far, and at the end ([`SeedWriter::finish`])
+/// the full `seed-<n>.json` and `theta-seed-<n>.json`. A killed run keeps every checkpoint it
+/// reached in the CSV, as complete rows.
+#[derive(Debug)]
+pub struct SeedWriter {
+    out: OutputDir,
+    seed: u64,
+    csv: std::fs::File,
+    csv_path: PathBuf,
+    checkpoints: Vec<Checkpoint>,
+    json_written: Option<std::time::Instant>,
+}
+
+impl SeedWriter {
+    /// Append checkpoints: one CSV row each, written and flushed together; then the partial
+    /// `seed-<n>.json` if it was last written [`PARTIAL_JSON_EVERY`] ago or never.
+    ///
+    /// # Errors
+    /// [`RunError::Io`] if a file cannot be written.
+    pub fn append(&mut self, new: &[Checkpoint]) -> Result<(), RunError> {
+        let rows: String = new.iter().map(|c| c.csv_row() + "\n").collect();
+        self.csv
+            .write_all(rows.as_bytes())
+            .and_then(|()| self.csv.flush())
+            .map_err(|e| RunError::io(&self.csv_path, e))?;
+        self.checkpoints.extend_from_slice(new);
+        if self
+            .json_written
+            .is_none_or(|t| t.elapsed() >= PARTIAL_JSON_EVERY)
+        {
+            self.out.write_json(
+                &format!("seed-{}.json", self.seed),
+                &PartialSeedFile {
+                    ilopt: provenance::BUILD,
+                    seed: self.seed,
+                    termination: "running",
+                    checkpoints: &self.checkpoints,
+                },
+            )?;
+            self.json_written = Some(std::time::Instant::now());
         }
-        self.write(&format!("seed-{n}.csv"), &csv)?;
-        self.write_json(
+        Ok(())
+    }
+
+    /// The run has ended: the CSV synced to disk, `seed-<n>.json` (the build, then the run) and
+    /// `theta-seed-<n>.json` written. The run's checkpoints are those appended.
+    ///
+    /// # Errors
+    /// [`RunError::Io`] if a file cannot be written.
+    pub fn finish(self, run: &SeedRun, task: &str, policy: &str) -> Result<(), RunError> {
+        self.csv
+            .sync_all()
+            .map_err(|e| RunError::io(&self.csv_path, e))?;
+        let n = run.seed;
+        self.out.write_json(
             &format!("seed-{n}.json"),
             &SeedFile {
                 ilopt: provenance::BUILD,
                 run,
             },
         )?;
-        self.write_json(
+        self.out.write_json(
             &format!("theta-seed-{n}.json"),
             &SavedTheta {
                 task: task.into(),

@@ -13,18 +13,21 @@ const METRICS: [(&str, &str); 4] = [
     ("train_loss", "train loss"),
 ];
 
-/// A metric to four significant digits: in decimal form in [1e-3, 1e5), else in exponent form;
-/// `-` for none.
-fn number(x: Option<f64>) -> String {
-    match x {
-        None => "-".into(),
-        Some(0.0) => "0".into(),
-        Some(v) if (1e-3..1e5).contains(&v.abs()) => {
-            let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
-            format!("{v:.decimals$}")
-        }
-        Some(v) => format!("{v:.3e}"),
+/// A metric to four significant digits: in decimal form in [1e-3, 1e5), else in exponent form.
+pub fn metric(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else if (1e-3..1e5).contains(&v.abs()) {
+        let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.3e}")
     }
+}
+
+/// [`metric`], or `-` for none.
+fn number(x: Option<f64>) -> String {
+    x.map_or_else(|| "-".into(), metric)
 }
 
 /// The summary table of a `summary.json` value: a header line (task, policy, algorithm, budget),

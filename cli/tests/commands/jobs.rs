@@ -628,3 +628,122 @@ fn a_first_step_beyond_the_budget_is_refused_with_the_numbers() {
     assert_eq!(v["runs"][0]["iterations"], 1);
     assert_eq!(v["runs"][0]["cost"]["gradient_evaluations"], 300);
 }
+
+/// Kills the child process when dropped, so that a failing test leaves no run behind.
+struct Child(std::process::Child);
+
+impl Drop for Child {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// A run killed (SIGKILL) after its first checkpoints keeps them: `seed-1.csv` holds the header
+/// and one complete row per checkpoint reached, the same ones the per-checkpoint lines on a
+/// non-terminal stderr announced, and `seed-1.json` the checkpoints written so far under
+/// `"termination": "running"`.
+#[test]
+fn a_killed_run_keeps_its_checkpoints_and_logged_them() {
+    use std::io::{BufRead, BufReader};
+    let s = Scratch::new("killed");
+    let cfg = s.write(
+        "long.toml",
+        "[task]\nname = \"cartpole\"\nexpert = \"lqr\"\nsteps = 100\n\n[algorithm]\nalgorithm = \"sgd\"\nform = \"causal\"\nstep = { kind = \"constant\", eta = 1e-3 }\n\n[run]\nbudget_calls = 100_000_000\nseeds = [1]\n\n[evaluation]\nevery_calls = 100\nepisodes = 1\n",
+    );
+    let out = s.path().join("out");
+    let mut child = Child(
+        Command::new(env!("CARGO_BIN_EXE_ilopt"))
+            .args(run_args(&cfg, &out, &[]))
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap(),
+    );
+    let stderr = child.0.stderr.take().unwrap();
+    let mut lines = Vec::new();
+    for line in BufReader::new(stderr).lines() {
+        let line = line.unwrap();
+        assert!(line.starts_with("seed 1: "), "{line}");
+        lines.push(line);
+        if lines.len() == 3 {
+            break;
+        }
+    }
+    child.0.kill().unwrap();
+    child.0.wait().unwrap();
+    assert_eq!(lines.len(), 3, "{lines:?}");
+    assert!(
+        lines[0].starts_with("seed 1: 0/100000000 calls (0 used), iteration 0, score "),
+        "{}",
+        lines[0]
+    );
+    assert!(
+        lines[1].starts_with("seed 1: 100/100000000 calls (100 used), iteration 1, score "),
+        "{}",
+        lines[1]
+    );
+    assert!(lines[1].contains(", eval loss ") && lines[1].contains(", train loss "));
+    assert!(!out.join("summary.json").exists());
+
+    let csv = std::fs::read_to_string(out.join("seed-1.csv")).unwrap();
+    assert!(csv.ends_with('\n'), "a partial row: {csv}");
+    let rows: Vec<&str> = csv.lines().collect();
+    assert!(rows[0].starts_with("at_calls,iteration,"));
+    assert!(rows.len() > 3, "{csv}");
+    let fields = rows[0].split(',').count();
+    for (k, row) in rows[1..].iter().enumerate() {
+        let cells: Vec<&str> = row.split(',').collect();
+        assert_eq!(cells.len(), fields, "{row}");
+        assert_eq!(cells[0], (100 * k).to_string(), "{row}");
+        assert_eq!(cells[1], k.to_string(), "{row}");
+    }
+    let json: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("seed-1.json")).unwrap()).unwrap();
+    assert_eq!(json["termination"], "running");
+    assert_eq!(json["seed"], 1);
+    let kept = json["checkpoints"].as_array().unwrap();
+    assert!(
+        !kept.is_empty() && kept.len() < rows.len(),
+        "{}",
+        kept.len()
+    );
+    assert_eq!(kept[0]["at_calls"], 0);
+}
+
+/// A completed run's CSV, written a row at a time, is its checkpoints as `seed-<n>.json` records
+/// them, and its `seed-<n>.json` is the full record.
+#[test]
+fn the_appended_csv_is_the_completed_runs_checkpoints() {
+    let s = Scratch::new("appended");
+    let cfg = s.write("c.toml", &toy("[3, 8]"));
+    let out = s.path().join("out");
+    let (code, _, stderr) = ilopt(&run_args(&cfg, &out, &[]));
+    assert_eq!(code, 0, "{stderr}");
+    for seed in [3, 8] {
+        let json: Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(format!("seed-{seed}.json"))).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(json["termination"], "gradient-budget");
+        let checkpoints: Vec<ilopt_cli::run::records::Checkpoint> =
+            serde_json::from_value(json["checkpoints"].clone()).unwrap();
+        assert_eq!(checkpoints.len(), 4);
+        let mut expected = format!("{}\n", ilopt_cli::run::records::Checkpoint::CSV_HEADER);
+        for c in &checkpoints {
+            expected.push_str(&c.csv_row());
+            expected.push('\n');
+        }
+        let csv = std::fs::read_to_string(out.join(format!("seed-{seed}.csv"))).unwrap();
+        assert_eq!(csv, expected);
+        // The log lines of this non-terminal stderr: one per checkpoint and seed.
+        assert_eq!(
+            stderr
+                .lines()
+                .filter(|l| l.starts_with(&format!("seed {seed}: ")))
+                .count(),
+            4,
+            "{stderr}"
+        );
+    }
+}
