@@ -18,7 +18,7 @@
 use ilopt::env::{Env, EnvError, Step};
 use ilopt::task::{AfterEnd, EnvTask, Horizon};
 use ilopt::{policy::Logistic, problem::KitRng};
-use ilopt_cli::run::{EnvRun, RunFile, run_task};
+use ilopt_cli::run::{EnvRun, RunFile, RunOptions, run_task};
 use rand::Rng;
 use std::path::Path;
 
@@ -51,7 +51,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (name, config) in [("is-storm", IS_STORM), ("dagger", DAGGER)] {
         let config = RunFile::parse(config, Path::new(name))?;
         let out = Path::new("target/custom-env").join(name);
-        let summary = run_task(&task, &config, &out, None)?;
+        // A rerun replaces the example's own earlier outputs.
+        let options = RunOptions {
+            overwrite: true,
+            quiet: true,
+        };
+        let summary = run_task(&task, &config, &out, None, options)?;
         let score = &summary["final_mean"]["score"];
         println!("{name}: final mean score {score} of 50 ({})", out.display());
     }

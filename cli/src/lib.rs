@@ -11,6 +11,7 @@ pub mod estimate;
 pub mod eval;
 pub mod expert;
 pub mod plot;
+pub mod provenance;
 pub mod replay;
 pub mod run;
 pub mod toy;

@@ -169,6 +169,8 @@ def run(
     task: Any = None,
     out: Optional[PathLike] = None,
     threads: Optional[int] = None,
+    overwrite: bool = False,
+    quiet: bool = False,
 ) -> RunResult:
     """Train as ``ilopt run`` does and return the results in memory.
 
@@ -177,19 +179,25 @@ def run(
     directory) or the path of such a file (relative to the file's directory). With ``out``, the
     directory receives the files ``ilopt run --out`` writes; without, nothing is written.
     ``threads`` runs seeds in parallel (default: all cores; the numbers do not depend on it).
-    With ``task`` (a :class:`GymTask`), the config leaves out ``task`` and ``policy``, which the
+    A non-empty ``out`` is refused unless ``overwrite``, which first removes the kit's own files
+    there. Unless ``quiet``, a line per checkpoint and the closing table go to stderr, as
+    ``ilopt run`` writes them. With ``task`` (a :class:`GymTask`), the config leaves out ``task`` and ``policy``, which the
     task brings, and the seeds run one at a time. The GIL is released while Rust runs (and taken
     for each step of a Gymnasium environment).
     """
     kind, text = _source(config, "config")
     out_path = None if out is None else os.fspath(out)
     if task is None:
-        summary, checkpoints, theta = _native.run(kind, text, out_path, threads)
+        summary, checkpoints, theta = _native.run(
+            kind, text, out_path, threads, bool(overwrite), bool(quiet)
+        )
     elif isinstance(task, GymTask):
         summary, checkpoints, theta = _native.run_gym(
             kind,
             text,
             out_path,
+            bool(overwrite),
+            bool(quiet),
             task.env,
             task.expert,
             task.features,

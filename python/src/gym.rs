@@ -14,7 +14,7 @@ use ilopt::env::{Env, EnvError, Step};
 use ilopt::policy::{LinearGaussian, Softmax};
 use ilopt::problem::KitRng;
 use ilopt::task::{AfterEnd, EnvTask, Horizon};
-use ilopt_cli::run::{EnvRun, LoadedConfig, RunOutcome, execute_task};
+use ilopt_cli::run::{EnvRun, LoadedConfig, RunOptions, RunOutcome, execute_task};
 use pyo3::prelude::*;
 use rand::RngCore;
 use std::path::Path;
@@ -293,6 +293,7 @@ pub fn run_gym(
     spec: GymSpec,
     config: &LoadedConfig,
     out: Option<&Path>,
+    options: RunOptions,
 ) -> Result<RunOutcome, String> {
     let horizon = match (spec.steps, spec.after_end.as_str()) {
         (None, _) => Horizon::Episodic,
@@ -329,7 +330,7 @@ pub fn run_gym(
             )
             .map_err(|e| e.to_string())?
             .one_seed_at_a_time();
-            run(&|| execute_task(&task, config, out, Some(1)))
+            run(&|| execute_task(&task, config, out, Some(1), options))
         }
         "box" => {
             let policy = LinearGaussian::new(spec.size, spec.feature_dim, spec.sigma)
@@ -345,7 +346,7 @@ pub fn run_gym(
             )
             .map_err(|e| e.to_string())?
             .one_seed_at_a_time();
-            run(&|| execute_task(&task, config, out, Some(1)))
+            run(&|| execute_task(&task, config, out, Some(1), options))
         }
         other => Err(format!(
             "the action space must be Discrete or Box, got {other:?}"

@@ -13,7 +13,7 @@ mod gym;
 
 use ilopt_cli::estimate::estimate_config;
 use ilopt_cli::run::records::{Checkpoint, SeedRun};
-use ilopt_cli::run::{LoadedConfig, RunFile, execute};
+use ilopt_cli::run::{LoadedConfig, RunFile, RunOptions, execute};
 use ilopt_cli::toy::{ScalarChoice, evaluate_entries, load_mdp, parse_mdp};
 use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
@@ -112,13 +112,15 @@ fn columns<'py>(py: Python<'py>, run: &SeedRun) -> PyResult<Bound<'py, PyDict>> 
 /// run's files to `out` if given. Returns (the summary as JSON text, {seed: {column: array}},
 /// {seed: final θ}).
 #[pyfunction]
-#[pyo3(signature = (kind, text, out=None, threads=None))]
+#[pyo3(signature = (kind, text, out=None, threads=None, overwrite=false, quiet=false))]
 fn run<'py>(
     py: Python<'py>,
     kind: &str,
     text: &str,
     out: Option<PathBuf>,
     threads: Option<usize>,
+    overwrite: bool,
+    quiet: bool,
 ) -> PyResult<(String, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
     if threads == Some(0) {
         return Err(IloptError::new_err("threads must be at least 1"));
@@ -126,7 +128,13 @@ fn run<'py>(
     let outcome = py
         .allow_threads(|| {
             let config = load_config(kind, text)?;
-            execute(&config, out.as_deref(), threads).map_err(|e| e.to_string())
+            execute(
+                &config,
+                out.as_deref(),
+                threads,
+                RunOptions { overwrite, quiet },
+            )
+            .map_err(|e| e.to_string())
         })
         .map_err(IloptError::new_err)?;
     outcome_to_py(py, &outcome)
@@ -135,13 +143,15 @@ fn run<'py>(
 /// Run a config (`kind` "path" or "json") on a Gymnasium task (module [`gym`]), as [`run`] does
 /// on a built-in one.
 #[pyfunction]
-#[pyo3(signature = (kind, text, out, env, expert, features, feature_dim, space, size, steps, after_end, sigma, eval_steps, name))]
+#[pyo3(signature = (kind, text, out, overwrite, quiet, env, expert, features, feature_dim, space, size, steps, after_end, sigma, eval_steps, name))]
 #[allow(clippy::too_many_arguments)]
 fn run_gym<'py>(
     py: Python<'py>,
     kind: &str,
     text: &str,
     out: Option<PathBuf>,
+    overwrite: bool,
+    quiet: bool,
     env: Py<PyAny>,
     expert: Py<PyAny>,
     features: Option<Py<PyAny>>,
@@ -170,7 +180,12 @@ fn run_gym<'py>(
     let outcome = py
         .allow_threads(|| {
             let config = load_config(kind, text)?;
-            gym::run_gym(spec, &config, out.as_deref())
+            gym::run_gym(
+                spec,
+                &config,
+                out.as_deref(),
+                RunOptions { overwrite, quiet },
+            )
         })
         .map_err(IloptError::new_err)?;
     outcome_to_py(py, &outcome)

@@ -5,6 +5,7 @@
 
 use super::algorithm_keys::{check_known_keys, overlay};
 use super::error::{RunError, invalid};
+use super::integer_keys::{check_schema_integers, integer_error};
 use ilopt::algo::AlgorithmConfig;
 use ilopt::task::AfterEnd;
 use ilopt::task::obstacle::ObstacleFeatures;
@@ -304,7 +305,8 @@ impl RunFile {
     ///
     /// # Errors
     /// [`RunError::Io`], [`RunError::Parse`] (syntax, unknown key, wrong type) or
-    /// [`RunError::Invalid`] (a value out of range or not allowed for the task).
+    /// [`RunError::Invalid`] (a value out of range, an integer key included, or not allowed for
+    /// the task).
     pub fn load(path: &Path) -> Result<LoadedConfig, RunError> {
         let text = std::fs::read_to_string(path).map_err(|e| RunError::io(path, e))?;
         Self::parse(&text, path)
@@ -338,7 +340,10 @@ impl RunFile {
             message,
         };
         let raw: toml::Table = toml::from_str(text).map_err(|e| parse_error(e.to_string()))?;
-        let mut file: RunFile = toml::from_str(text).map_err(|e| parse_error(e.to_string()))?;
+        check_schema_integers(&raw, path)?;
+        let mut file: RunFile = toml::from_str(text).map_err(|e| {
+            integer_error(text, &e, path).unwrap_or_else(|| parse_error(e.to_string()))
+        })?;
         if let Some(alg) = raw.get("algorithm") {
             check_known_keys(alg, &file.algorithm, path)?;
         }

@@ -8,6 +8,7 @@
 
 use super::config::{LoadedConfig, TaskName};
 use super::error::RunError;
+use super::first_step::check_first_step;
 use super::oracle::{OnOracle, with_oracle};
 use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::runnable::{RunTask, theta0};
@@ -21,7 +22,9 @@ use rand::SeedableRng;
 use std::time::Instant;
 
 /// Run one seed of a config on its task; `progress` receives the calls used so far (capped at
-/// the budget) after every step.
+/// the budget) after every step, and `reached` each checkpoint as soon as it is evaluated (a step
+/// that crosses several checkpoint call counts gives one per count), in order; an error of
+/// `reached` (e.g. the CSV cannot be written) ends the run with it.
 ///
 /// # Errors
 /// [`RunError::Invalid`] for an algorithm or θ₀ the problem rejects; [`RunError::Run`] if an
@@ -31,18 +34,27 @@ pub fn run_seed<T: RunTask + ?Sized>(
     config: &LoadedConfig,
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
+    reached: &mut dyn FnMut(&[Checkpoint]) -> Result<(), RunError>,
 ) -> Result<(SeedRun, SeedTiming), RunError> {
     /// [`drive`] on whichever oracle the config asks for.
-    struct Drive<'a, T: ?Sized> {
+    struct Drive<'a, 'r, T: ?Sized> {
         task: &'a T,
         config: &'a LoadedConfig,
         seed: u64,
         progress: &'a (dyn Fn(u64) + Sync),
+        reached: &'a mut (dyn FnMut(&[Checkpoint]) -> Result<(), RunError> + 'r),
     }
-    impl<T: RunTask + ?Sized> OnOracle for Drive<'_, T> {
+    impl<T: RunTask + ?Sized> OnOracle for Drive<'_, '_, T> {
         type Output = (SeedRun, SeedTiming);
         fn on<P: IlProblem<f64>>(self, oracle: &P) -> Result<Self::Output, RunError> {
-            drive(self.task, oracle, self.config, self.seed, self.progress)
+            drive(
+                self.task,
+                oracle,
+                self.config,
+                self.seed,
+                self.progress,
+                self.reached,
+            )
         }
     }
     let m = config.file.run.trajectories_per_gradient;
@@ -51,6 +63,7 @@ pub fn run_seed<T: RunTask + ?Sized>(
         config,
         seed,
         progress,
+        reached,
     };
     with_oracle(task, config, m, drive)
 }
@@ -63,6 +76,7 @@ fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
     config: &LoadedConfig,
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
+    reached: &mut dyn FnMut(&[Checkpoint]) -> Result<(), RunError>,
 ) -> Result<(SeedRun, SeedTiming), RunError> {
     let f = &config.file;
     let budget = f.run.budget_calls;
@@ -81,6 +95,7 @@ fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
         seed,
         checkpoints: Vec::new(),
         evaluation_seconds: 0.0,
+        reached,
     };
     let rec = Runner::new(stop)
         .map_err(|e| config.invalid("run.budget_calls", e))?
@@ -128,13 +143,14 @@ fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
 }
 
 /// The checkpoint observer of `ilopt run`: [`RunTask::evaluate`] at the iterate, one [`Checkpoint`] per
-/// call count it serves.
+/// call count it serves, each passed on to `reached` at once.
 struct Evaluations<'b, T: ?Sized> {
     task: &'b T,
     episodes: u32,
     seed: u64,
     checkpoints: Vec<Checkpoint>,
     evaluation_seconds: f64,
+    reached: &'b mut dyn FnMut(&[Checkpoint]) -> Result<(), RunError>,
 }
 
 impl<T: RunTask + ?Sized> CheckpointObserver<f64> for Evaluations<'_, T> {
@@ -158,20 +174,23 @@ impl<T: RunTask + ?Sized> CheckpointObserver<f64> for Evaluations<'_, T> {
             .map(|d| d.norm())
             .filter(|n| n.is_finite());
         let c = Checkpoint::new(0, m.iteration, &m.cost, train_loss, gradient_norm, &ev);
+        let before = self.checkpoints.len();
         self.checkpoints
             .extend(at_calls.iter().map(|&at_calls| Checkpoint {
                 at_calls,
                 ..c.clone()
             }));
+        (self.reached)(&self.checkpoints[before..])?;
         Ok(None)
     }
 }
 
 /// Every check of a config against its task before anything is written: θ₀'s length
-/// ([`theta0`]), the algorithm ([`check_algorithm`]) and the baseline ([`check_baseline`]).
+/// ([`theta0`]), the algorithm ([`check_algorithm`]), the baseline ([`check_baseline`]) and the
+/// first step's least cost against the budget ([`check_first_step`]).
 ///
 /// # Errors
-/// [`RunError::Invalid`] naming the key at fault.
+/// [`RunError::Invalid`] naming the key at fault; [`RunError::OverBudget`].
 pub fn check_config<T: RunTask + ?Sized>(task: &T, config: &LoadedConfig) -> Result<(), RunError> {
     let named = config.file.task.name;
     if named != TaskName::Custom && named.name() != task.task_name() {
@@ -188,7 +207,8 @@ pub fn check_config<T: RunTask + ?Sized>(task: &T, config: &LoadedConfig) -> Res
     }
     theta0(task, config)?;
     check_algorithm(task, config)?;
-    check_baseline(task, config)
+    check_baseline(task, config)?;
+    check_first_step(task, config)
 }
 
 /// Build the config's algorithm for the task's problem once, so that invalid hyper-parameters

@@ -33,6 +33,25 @@ pub enum RunError {
         /// What is wrong.
         message: String,
     },
+    /// `--out` names a directory that already holds files, and `--overwrite` was not given.
+    #[error(
+        "{dir}: the output directory is not empty (it holds {}); pass --overwrite to remove the files ilopt run writes (config.toml, seed-*.csv, seed-*.json, theta-seed-*.json, summary.json, summary.txt, timings.json; other files are kept), or choose another --out",
+        listing(holds)
+    )]
+    OutputNotEmpty {
+        /// The directory.
+        dir: PathBuf,
+        /// The names it holds, sorted.
+        holds: Vec<String>,
+    },
+    /// The config's first step alone would spend more gradient calls than its budget.
+    #[error("{path}: {message}")]
+    OverBudget {
+        /// The config file.
+        path: PathBuf,
+        /// The first step's cost, how it is made up, and the budget.
+        message: String,
+    },
     /// The task, expert or policy could not be built.
     #[error("building the task: {0}")]
     Task(String),
@@ -65,6 +84,15 @@ impl RunError {
             source,
         }
     }
+}
+
+/// Up to three names, then how many more.
+fn listing(names: &[String]) -> String {
+    let mut s = names.iter().take(3).cloned().collect::<Vec<_>>().join(", ");
+    if names.len() > 3 {
+        s.push_str(&format!(" and {} more", names.len() - 3));
+    }
+    s
 }
 
 /// [`RunError::Invalid`] for `key` of the config file at `path`.

@@ -1,30 +1,38 @@
-//! `ilopt run --config FILE.toml --out DIR [--threads N]`: train a learner on a task as a config
-//! file says, for every seed, and write per-checkpoint CSV and JSON into `DIR`.
+//! `ilopt run --config FILE.toml --out DIR [--threads N] [--overwrite] [--quiet]`: train a learner
+//! on a task as a config file says, for every seed, and write per-checkpoint CSV and JSON into
+//! `DIR`.
 //!
 //! | module | what |
 //! |---|---|
 //! | [`config`] | the TOML schema and its loading |
 //! | `resolve` | defaults, absolute paths, range checks |
+//! | [`integer_keys`] | the integer keys' ranges, in the user's words |
 //! | `algorithm_keys` | unknown keys of `[algorithm]`; its numbers as written |
 //! | [`runnable`] | what a run needs of a task: [`RunTask`] (built-in or a program's own) |
 //! | [`task`] | the config's built-in task, expert, policy and objective as an IL problem |
 //! | [`plugin`] | a program's own environment and expert as a task ([`EnvRun`]) |
 //! | [`evaluation`] | the deterministic evaluation of θ (reward, success, loss; toy: exact F) |
 //! | [`oracle`] | the config's oracle (baseline, m trajectories) for any computation on it |
+//! | [`first_step`] | the least cost of the first step, against the budget |
 //! | [`driver`] | one seed's run with its checkpoints |
 //! | [`parallel`] | the seeds on a thread pool, with a progress bar |
 //! | [`records`] | what is recorded: checkpoints, runs, timings, saved θ |
 //! | [`output`] | the output directory, written atomically |
+//! | [`table`] | the summary as a table a person reads |
 //!
 //! The output directory holds `config.toml` (the resolved config), per seed `seed-<n>.csv`,
-//! `seed-<n>.json` and `theta-seed-<n>.json`, `summary.json`, and `timings.json`, the only file
-//! with wall times: every other file is byte-identical across reruns and thread counts.
+//! `seed-<n>.json` and `theta-seed-<n>.json`, `summary.json`, `summary.txt` (the table), and
+//! `timings.json`, the only file with wall times: every other file is byte-identical across
+//! reruns and thread counts. `config.toml`, `seed-<n>.json` and `summary.json` record the build
+//! that wrote them ([`crate::provenance`]).
 
 mod algorithm_keys;
 pub mod config;
 pub mod driver;
 pub mod error;
 pub mod evaluation;
+pub mod first_step;
+pub mod integer_keys;
 pub mod oracle;
 pub mod output;
 pub mod parallel;
@@ -32,6 +40,7 @@ pub mod plugin;
 pub mod records;
 mod resolve;
 pub mod runnable;
+pub mod table;
 pub mod task;
 
 pub use config::{LoadedConfig, RunFile};
@@ -78,9 +87,19 @@ pub struct RunArgs {
     /// The config file (TOML; `--help` lists its keys, docs/run.md describes each one).
     #[arg(long, value_name = "FILE.toml")]
     pub config: PathBuf,
-    /// The output directory (created if needed; files in it are replaced).
+    /// The output directory: created if needed; one that holds files is refused unless
+    /// `--overwrite`.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Use a non-empty `--out`: first remove the files `ilopt run` writes there (config.toml,
+    /// seed-*.csv, seed-*.json, theta-seed-*.json, summary.json, summary.txt, timings.json) and
+    /// keep every other file.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Print nothing on stderr but errors: no progress bar, no per-checkpoint lines, no final
+    /// table (`summary.txt` is still written).
+    #[arg(long)]
+    pub quiet: bool,
     /// Threads running seeds in parallel (default: the available parallelism); the output does
     /// not depend on it.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -94,7 +113,21 @@ pub struct RunArgs {
 pub fn run(args: &RunArgs) -> Result<Value, RunError> {
     let config = RunFile::load(&args.config)?;
     let threads = args.threads.map(|n| n as usize);
-    Ok(execute(&config, Some(&args.out), threads)?.summary)
+    let options = RunOptions {
+        overwrite: args.overwrite,
+        quiet: args.quiet,
+    };
+    Ok(execute(&config, Some(&args.out), threads, options)?.summary)
+}
+
+/// How a run treats its output directory and stderr.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Use a non-empty output directory, first removing the kit's own files there
+    /// ([`output::OutputDir::prepare`]).
+    pub overwrite: bool,
+    /// Print nothing on stderr (no progress, no closing table).
+    pub quiet: bool,
 }
 
 /// What a run gives: the summary (`summary.json`) and every seed's run and wall times, in the
@@ -118,9 +151,10 @@ pub fn execute(
     config: &LoadedConfig,
     out: Option<&Path>,
     threads: Option<usize>,
+    options: RunOptions,
 ) -> Result<RunOutcome, RunError> {
     let learner = TaskLearner::new(config)?;
-    with_learner!(&learner, t => execute_task(t, config, out, threads))
+    with_learner!(&learner, t => execute_task(t, config, out, threads, options))
 }
 
 /// Train on `task` as `config` says, for every seed, on up to `threads` threads (default: the
@@ -131,18 +165,20 @@ pub fn execute(
 /// Returns the summary (also written to `summary.json`).
 ///
 /// # Errors
-/// [`RunError`] naming the file and key at fault, or the seed whose run failed.
+/// [`RunError`] naming the file and key at fault, or the seed whose run failed;
+/// [`RunError::OutputNotEmpty`] for a non-empty `out` without `options.overwrite`.
 pub fn run_task<T: RunTask + ?Sized>(
     task: &T,
     config: &LoadedConfig,
     out: &Path,
     threads: Option<usize>,
+    options: RunOptions,
 ) -> Result<Value, RunError> {
-    Ok(execute_task(task, config, Some(out), threads)?.summary)
+    Ok(execute_task(task, config, Some(out), threads, options)?.summary)
 }
 
-/// [`run_task`] with the output directory optional (without one nothing is written) and every
-/// seed's run returned beside the summary.
+/// [`run_task`] with the output directory optional (without one nothing is written and nothing
+/// is printed but the progress) and every seed's run returned beside the summary.
 ///
 /// # Errors
 /// As [`run_task`].
@@ -151,23 +187,28 @@ pub fn execute_task<T: RunTask + ?Sized>(
     config: &LoadedConfig,
     out: Option<&Path>,
     threads: Option<usize>,
+    options: RunOptions,
 ) -> Result<RunOutcome, RunError> {
     driver::check_config(task, config)?;
-    let out = out.map(output::OutputDir::create).transpose()?;
+    let out = out
+        .map(|o| output::OutputDir::prepare(o, options.overwrite))
+        .transpose()?;
     if let Some(out) = &out {
         let toml = config
             .to_toml()
             .map_err(|message| RunError::Evaluation(format!("writing config.toml: {message}")))?;
-        out.write("config.toml", &toml)?;
+        out.write_config(&toml)?;
     }
     let threads = threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, std::num::NonZero::get));
     let started = std::time::Instant::now();
-    let results = parallel::run_seeds(task, config, out.as_ref(), threads)?;
+    let results = parallel::run_seeds(task, config, out.as_ref(), threads, options.quiet)?;
     let (runs, timings): (Vec<SeedRun>, Vec<records::SeedTiming>) = results.into_iter().unzip();
     let summary = summary(config, task, &runs.iter().collect::<Vec<_>>());
+    let table = table::render(&summary);
     if let Some(out) = &out {
         out.write_json("summary.json", &summary)?;
+        out.write("summary.txt", &table)?;
         out.write_json(
             "timings.json",
             &json!({
@@ -176,6 +217,9 @@ pub fn execute_task<T: RunTask + ?Sized>(
                 "seeds": timings,
             }),
         )?;
+    }
+    if !options.quiet {
+        eprint!("{table}");
     }
     Ok(RunOutcome {
         summary,
@@ -196,6 +240,7 @@ fn summary<T: RunTask + ?Sized>(config: &LoadedConfig, task: &T, runs: &[&SeedRu
         (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
     };
     json!({
+        "ilopt": crate::provenance::BUILD,
         "task": task.task_name(),
         "policy": task.policy_name(),
         "algorithm": runs.first().map(|r| r.algorithm.clone()),

@@ -1,14 +1,17 @@
 //! Running a config's seeds on a pool of scoped threads. Each seed's run depends on its seed
 //! alone and writes its own files, and the results are gathered in the config's seed order, so
-//! the output is the same whatever the thread count and the order in which seeds finish. A
-//! progress bar over the total budget is drawn on stderr when it is a terminal.
+//! the output is the same whatever the thread count and the order in which seeds finish. Each
+//! checkpoint is written as it is reached ([`super::output::SeedWriter`]). On stderr, unless
+//! quiet: a progress bar over the total budget, with the last checkpoint's metrics, when stderr is
+//! a terminal; otherwise (a log file, Slurm) one line per checkpoint ([`checkpoint_line`]).
 
 use super::config::LoadedConfig;
 use super::driver::run_seed;
 use super::error::RunError;
 use super::output::OutputDir;
-use super::records::{SeedRun, SeedTiming};
+use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::runnable::RunTask;
+use super::table::metric;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::sync::Mutex;
@@ -18,7 +21,8 @@ use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 pub type SeedResult = (SeedRun, SeedTiming);
 
 /// Run every seed of `config` on up to `threads` threads, writing each seed's files to `out` (if
-/// given) as it finishes; the results in the config's seed order.
+/// given) as its checkpoints are reached, and reporting on stderr unless `quiet`; the results in
+/// the config's seed order.
 ///
 /// # Errors
 /// The first seed's error (in seed order); the seeds not yet started are then skipped.
@@ -27,10 +31,17 @@ pub fn run_seeds<T: RunTask + ?Sized>(
     config: &LoadedConfig,
     out: Option<&OutputDir>,
     threads: usize,
+    quiet: bool,
 ) -> Result<Vec<SeedResult>, RunError> {
     let seeds = &config.file.run.seeds;
     let budget = config.file.run.budget_calls;
-    let bar = progress_bar(budget.saturating_mul(seeds.len() as u64));
+    let terminal = !quiet && std::io::stderr().is_terminal();
+    let lines = !quiet && !terminal;
+    let bar = if terminal {
+        progress_bar(budget.saturating_mul(seeds.len() as u64))
+    } else {
+        ProgressBar::hidden()
+    };
     let next = AtomicUsize::new(0);
     let failed = AtomicBool::new(false);
     let results: Mutex<Vec<Option<Result<SeedResult, RunError>>>> =
@@ -48,9 +59,24 @@ pub fn run_seeds<T: RunTask + ?Sized>(
                 let prev = last.swap(calls, Ordering::Relaxed);
                 bar.inc(calls.saturating_sub(prev));
             };
-            let r = run_seed(task, config, seed, &report).and_then(|(run, timing)| {
-                if let Some(out) = out {
-                    out.write_seed(&run, name, policy)?;
+            let writer = out.map(|o| o.seed_writer(seed)).transpose();
+            let r = writer.and_then(|mut writer| {
+                let (run, timing) = run_seed(task, config, seed, &report, &mut |new| {
+                    if let Some(w) = writer.as_mut() {
+                        w.append(new)?;
+                    }
+                    for c in new {
+                        let line = checkpoint_line(seed, budget, c);
+                        if lines {
+                            eprintln!("{line}");
+                        } else {
+                            bar.set_message(line);
+                        }
+                    }
+                    Ok(())
+                })?;
+                if let Some(w) = writer {
+                    w.finish(&run, name, policy)?;
                 }
                 Ok((run, timing))
             });
@@ -89,14 +115,32 @@ pub fn run_seeds<T: RunTask + ?Sized>(
     Ok(done)
 }
 
-/// A bar over `total` gradient calls on stderr, hidden unless stderr is a terminal.
-fn progress_bar(total: u64) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
+/// One checkpoint for a log: `seed 3: 2000/10000 calls (2045 used), iteration 21, score 0.45`,
+/// then the objective and the evaluation and training losses the task records (four significant
+/// digits).
+pub fn checkpoint_line(seed: u64, budget: u64, c: &Checkpoint) -> String {
+    let mut line = format!(
+        "seed {seed}: {}/{budget} calls ({} used), iteration {}",
+        c.at_calls, c.gradient_evaluations, c.iteration
+    );
+    for (name, value) in [
+        ("score", c.score),
+        ("objective", c.objective),
+        ("eval loss", c.eval_loss),
+        ("train loss", c.train_loss),
+    ] {
+        if let Some(v) = value {
+            line.push_str(&format!(", {name} {}", metric(v)));
+        }
     }
+    line
+}
+
+/// A bar over `total` gradient calls on stderr, with the last checkpoint's line as its message.
+fn progress_bar(total: u64) -> ProgressBar {
     let bar = ProgressBar::new(total);
     if let Ok(style) = ProgressStyle::with_template(
-        "{elapsed_precise} [{wide_bar}] {human_pos}/{human_len} gradient calls, eta {eta}",
+        "{elapsed_precise} [{wide_bar}] {human_pos}/{human_len} gradient calls, eta {eta}\n{msg}",
     ) {
         bar.set_style(style.progress_chars("=> "));
     }

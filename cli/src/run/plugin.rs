@@ -13,7 +13,7 @@
 //! the visited states.
 
 use super::evaluation::{Evaluation, episode_seed};
-use super::runnable::RunTask;
+use super::runnable::{RunTask, horizon_decisions};
 use ilopt::baseline::PerDecisionTerms;
 use ilopt::env::Env;
 use ilopt::evaluate::episodes::task_episodes;
@@ -161,6 +161,13 @@ where
 
     fn task_name(&self) -> &str {
         &self.name
+    }
+
+    fn least_decisions(&self) -> Option<(u64, &'static str)> {
+        Some(horizon_decisions(
+            &self.problem.horizon,
+            "(the task's steps)",
+        ))
     }
 
     fn policy_name(&self) -> &str {

@@ -9,6 +9,7 @@ use super::error::RunError;
 use super::evaluation::Evaluation;
 use ilopt::baseline::PerDecisionTerms;
 use ilopt::problem::IlProblem;
+use ilopt::task::{AfterEnd, Horizon};
 use nalgebra::DVector;
 
 /// A task `ilopt run` can train and evaluate on.
@@ -42,6 +43,28 @@ pub trait RunTask: Sync {
     /// The number of policy parameters.
     fn dim(&self) -> usize {
         IlProblem::<f64>::dim(self.problem())
+    }
+
+    /// The decisions every trajectory of the problem certainly has (one gradient call each in
+    /// eq. 3.15), with what fixes that count in words, for the first step's least cost
+    /// ([`super::first_step`]); `None` when a trajectory may have none. The default: at least one.
+    fn least_decisions(&self) -> Option<(u64, &'static str)> {
+        Some(AT_LEAST_ONE)
+    }
+}
+
+/// A trajectory of at least one decision (an episode or an absorbing end may stop after it).
+pub const AT_LEAST_ONE: (u64, &str) = (1, "(at least 1 decision per trajectory)");
+
+/// [`RunTask::least_decisions`] of a [`Horizon`]: exactly `steps` on a fixed horizon with a reset
+/// after an early end (named `steps_key`), else [`AT_LEAST_ONE`].
+pub fn horizon_decisions(horizon: &Horizon, steps_key: &'static str) -> (u64, &'static str) {
+    match *horizon {
+        Horizon::Fixed {
+            steps,
+            after_end: AfterEnd::Reset,
+        } => (steps as u64, steps_key),
+        _ => AT_LEAST_ONE,
     }
 }
 

@@ -7,7 +7,7 @@
 use super::config::{ExpertChoice, HorizonKind, LoadedConfig, PolicyKind, RunFile, TaskName};
 use super::error::RunError;
 use super::evaluation::{Evaluation, evaluate_cartpole, evaluate_obstacle, evaluate_toy};
-use super::runnable::RunTask;
+use super::runnable::{RunTask, horizon_decisions};
 use ilopt::baseline::PerDecisionTerms;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::ObstacleConfig;
@@ -211,6 +211,9 @@ where
     fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
         evaluate_cartpole(&self.problem, theta, episodes, seed)
     }
+    fn least_decisions(&self) -> Option<(u64, &'static str)> {
+        Some(horizon_decisions(&self.problem.horizon, "task.steps"))
+    }
 }
 
 impl RunTask for ObstacleLearner {
@@ -227,6 +230,9 @@ impl RunTask for ObstacleLearner {
     fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
         evaluate_obstacle(self, theta, episodes, seed)
     }
+    fn least_decisions(&self) -> Option<(u64, &'static str)> {
+        Some(horizon_decisions(&self.problem.horizon, "task.steps"))
+    }
 }
 
 impl RunTask for ToyLearner {
@@ -242,6 +248,18 @@ impl RunTask for ToyLearner {
     }
     fn evaluate(&self, theta: &[f64], _episodes: u32, _seed: u64) -> Result<Evaluation, String> {
         evaluate_toy(&self.0, theta)
+    }
+    /// T − 1 decisions without absorbing states; none certain with them (the first state may
+    /// absorb).
+    fn least_decisions(&self) -> Option<(u64, &'static str)> {
+        let mdp = self.0.mdp();
+        match mdp.termination {
+            ilopt::toy::Termination::Absorb { .. } => None,
+            _ => Some((
+                mdp.horizon.saturating_sub(1) as u64,
+                "(the MDP's horizon − 1)",
+            )),
+        }
     }
 }
 

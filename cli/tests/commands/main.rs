@@ -11,6 +11,7 @@ pub const ROOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
 mod env;
 mod expert;
 mod hostile;
+mod jobs;
 mod plot;
 mod plugin;
 mod run;

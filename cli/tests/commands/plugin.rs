@@ -10,7 +10,7 @@ use ilopt::problem::KitRng;
 use ilopt::task::{AfterEnd, EnvTask, Horizon};
 use ilopt_cli::eval::eval_task;
 use ilopt_cli::run::plugin::PluginError;
-use ilopt_cli::run::{EnvRun, RunError, RunFile, run_task};
+use ilopt_cli::run::{EnvRun, RunError, RunFile, RunOptions, run_task};
 use rand::Rng;
 use std::path::{Path, PathBuf};
 
@@ -29,6 +29,12 @@ impl Env<f64> for Corridor {
         Ok(Step::new(self.0, 1.0, self.0.abs() > 2.0, false))
     }
 }
+
+/// Runs of these tests print nothing on stderr.
+const QUIET: RunOptions = RunOptions {
+    overwrite: false,
+    quiet: true,
+};
 
 type Features = fn(&f64) -> Vec<f64>;
 type Expert = fn(&f64) -> Result<usize, String>;
@@ -77,8 +83,8 @@ fn a_plugin_task_writes_the_files_of_ilopt_run_whatever_the_thread_count() {
     let task = corridor("corridor", 30).expect("a valid task");
     let config = RunFile::parse(CONFIG, Path::new("corridor.toml")).expect("a valid config");
     let (one, two) = (scratch("one"), scratch("two"));
-    let summary = run_task(&task, &config, &one, Some(1)).expect("the run");
-    run_task(&task, &config, &two, Some(2)).expect("the run");
+    let summary = run_task(&task, &config, &one, Some(1), QUIET).expect("the run");
+    run_task(&task, &config, &two, Some(2), QUIET).expect("the run");
     assert_eq!(summary["task"], "corridor");
     assert_eq!(summary["policy"], "logistic");
     assert_eq!(summary["dim"], 2);
@@ -123,7 +129,7 @@ fn eval_task_of_the_saved_theta_reproduces_the_last_checkpoint() {
     let task = corridor("corridor", 30).expect("a valid task");
     let config = RunFile::parse(CONFIG, Path::new("corridor.toml")).expect("a valid config");
     let dir = scratch("eval");
-    run_task(&task, &config, &dir, Some(1)).expect("the run");
+    run_task(&task, &config, &dir, Some(1), QUIET).expect("the run");
     let seed_json: serde_json::Value =
         serde_json::from_str(&read(&dir, "seed-2.json")).expect("JSON");
     let saved: serde_json::Value =
@@ -172,7 +178,8 @@ fn bad_plugin_tasks_and_configs_are_refused_by_name() {
     let builtin =
         format!("[task]\nname = \"toy\"\nmdp = \"{ROOT}/examples/toy/three-state.json\"\n{CONFIG}");
     let config = RunFile::parse(&builtin, Path::new("c.toml")).expect("parses");
-    let e = run_task(&task, &config, &scratch("never"), Some(1)).expect_err("a built-in [task]");
+    let e =
+        run_task(&task, &config, &scratch("never"), Some(1), QUIET).expect_err("a built-in [task]");
     assert!(
         matches!(&e, RunError::Invalid { key, .. } if key == "task.name")
             && e.to_string().contains("leaves out [task]"),
@@ -180,7 +187,8 @@ fn bad_plugin_tasks_and_configs_are_refused_by_name() {
     );
     let bad_theta = CONFIG.replace("[run]\n", "[run]\ntheta0 = [1.0, 2.0, 3.0]\n");
     let config = RunFile::parse(&bad_theta, Path::new("c.toml")).expect("parses");
-    let e = run_task(&task, &config, &scratch("never"), Some(1)).expect_err("θ₀ of length 3");
+    let e =
+        run_task(&task, &config, &scratch("never"), Some(1), QUIET).expect_err("θ₀ of length 3");
     assert!(e.to_string().contains("run.theta0"), "{e}");
     assert!(
         !scratch("never").exists(),

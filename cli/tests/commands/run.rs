@@ -399,7 +399,7 @@ fn reruns_are_byte_identical_whatever_the_thread_count() {
         let (fa, fb, fc) = (data_files(&a), data_files(&b), data_files(&c));
         assert_eq!(
             fa.len(),
-            3 * 3 + 2,
+            3 * 3 + 3,
             "{name}: {:?}",
             fa.iter().map(|f| &f.0).collect::<Vec<_>>()
         );
