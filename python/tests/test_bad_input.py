@@ -40,7 +40,7 @@ def configs(repo, tmp_path, text):
     [
         (lambda t: t.replace("[run]\nbudget_calls = 300\nseeds = [1]\n", ""), "missing field `run`"),
         (lambda t: t.replace("budget_calls = 300", "budget_calls = -5"), "-5"),
-        (lambda t: t.replace("budget_calls = 300", "budget_calls = 0"), "must be at least 1"),
+        (lambda t: t.replace("budget_calls = 300", "budget_calls = 0"), "must be an integer ≥ 1, got 0"),
         (lambda t: t.replace("seeds = [1]", "seeds = [1, 1]"), "seed 1 is repeated"),
         (lambda t: t.replace("eta = 0.2", "eta = 0.2, etta = 1"), "unknown key"),
         (lambda t: t + "theta0 = [1, 2]\n", "has 2 entries"),

@@ -85,7 +85,7 @@ def test_adam_with_a_baseline_learns_to_balance_gymnasium_cartpole():
 
 def test_a_box_action_space_trains_the_linear_gaussian_learner():
     task = ilopt.GymTask("Pendulum-v1", expert=pendulum_pd, steps=100, sigma=0.5)
-    r = ilopt.run(config(DAGGER, 2000, every=500), task=task)
+    r = ilopt.run(config(DAGGER, 20_000, every=5000), task=task)
     assert r.summary["policy"] == "linear-gaussian"
     assert r.summary["dim"] == 1 * 4
     loss = r.checkpoints[1]["eval_loss"]
@@ -110,18 +110,18 @@ def test_runs_are_reproduced_by_their_seeds_and_write_the_files_of_ilopt_run(tmp
 
 def test_bad_gym_tasks_raise_with_a_message():
     with pytest.raises(ilopt.IloptError, match="Discrete\\(2\\)"):
-        ilopt.run(config(DAGGER, 500), task=ilopt.GymTask("CartPole-v1", expert=lambda o: 7))
+        ilopt.run(config(DAGGER, 30_000), task=ilopt.GymTask("CartPole-v1", expert=lambda o: 7))
     with pytest.raises(ilopt.IloptError, match="expert\\(observation\\)"):
         ilopt.run(
-            config(DAGGER, 500),
+            config(DAGGER, 30_000),
             task=ilopt.GymTask("CartPole-v1", expert=lambda o: 1 / 0 if o[0] > -10 else 0),
         )
     with pytest.raises(ilopt.IloptError, match="Box action space 1"):
-        ilopt.run(config(DAGGER, 500), task=ilopt.GymTask("Pendulum-v1", expert=lambda o: [0.0, 0.0]))
+        ilopt.run(config(DAGGER, 30_000), task=ilopt.GymTask("Pendulum-v1", expert=lambda o: [0.0, 0.0]))
     with pytest.raises(ilopt.IloptError, match="features\\(observation\\) has 2 entries"):
         counter = iter(range(10**9))
         ilopt.run(
-            config(DAGGER, 500),
+            config(DAGGER, 30_000),
             task=ilopt.GymTask(
                 "CartPole-v1", expert=balance, features=lambda o: [1.0] * (3 if next(counter) == 0 else 2)
             ),
@@ -131,15 +131,17 @@ def test_bad_gym_tasks_raise_with_a_message():
             gymnasium.wrappers.TimeLimit(MultiDiscreteEnv(), 10), expert=lambda o: [0, 0]
         )
     with pytest.raises(ilopt.IloptError, match="after_end"):
-        ilopt.run(config(DAGGER, 500), task=ilopt.GymTask("CartPole-v1", expert=balance, after_end="absorb"))
+        ilopt.run(config(DAGGER, 30_000), task=ilopt.GymTask("CartPole-v1", expert=balance, after_end="absorb"))
     with pytest.raises(ilopt.IloptError, match="leaves out \\[task\\]"):
-        c = config(DAGGER, 500)
+        c = config(DAGGER, 30_000)
         c["task"] = {"name": "cartpole"}
         ilopt.run(c, task=ilopt.GymTask("CartPole-v1", expert=balance))
     with pytest.raises(ilopt.IloptError, match="steps"):
         ilopt.GymTask("CartPole-v1", expert=balance, steps=0)
+    with pytest.raises(ilopt.IloptError, match="the first step alone costs at least"):
+        ilopt.run(config(DAGGER, 500), task=ilopt.GymTask("CartPole-v1", expert=balance))
     with pytest.raises(TypeError, match="GymTask"):
-        ilopt.run(config(DAGGER, 500), task="CartPole-v1")
+        ilopt.run(config(DAGGER, 30_000), task="CartPole-v1")
 
 
 class MultiDiscreteEnv(gymnasium.Env):
