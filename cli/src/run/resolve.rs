@@ -15,8 +15,25 @@ impl RunFile {
     /// Fill the defaults, make the paths absolute and check every range.
     pub(super) fn resolve(&mut self, dir: &Path, path: &Path) -> Result<(), RunError> {
         let bad = |key: &str, m: &dyn std::fmt::Display| invalid(path, key, m);
+        // The first key of `keys` that is set, refused with `why`.
+        let refuse = |keys: &[(&str, bool)], why: &str| match keys.iter().find(|(_, set)| *set) {
+            Some((key, _)) => Err(bad(key, &why)),
+            None => Ok(()),
+        };
         let t = &mut self.task;
         let p = &mut self.policy;
+        // The keys of a task built from `[task]` and `[policy]` (all but `task.mdp`), and which
+        // of them the config sets.
+        let not_toy = [
+            ("task.expert", t.expert.is_some()),
+            ("task.expert_file", t.expert_file.is_some()),
+            ("task.horizon", t.horizon.is_some()),
+            ("task.steps", t.steps.is_some()),
+            ("task.after_end", t.after_end.is_some()),
+            ("policy.kind", p.kind.is_some()),
+            ("policy.sigma", p.sigma.is_some()),
+            ("policy.features", p.features.is_some()),
+        ];
         let not_for = |key: &str, set: bool| -> Result<(), RunError> {
             if set {
                 Err(bad(
@@ -56,47 +73,18 @@ impl RunFile {
                     .map_err(|e| bad("policy.features", &e))?;
             }
             TaskName::Toy => {
-                for (key, set) in [
-                    ("task.expert", t.expert.is_some()),
-                    ("task.expert_file", t.expert_file.is_some()),
-                    ("task.horizon", t.horizon.is_some()),
-                    ("task.steps", t.steps.is_some()),
-                    ("task.after_end", t.after_end.is_some()),
-                    ("policy.kind", p.kind.is_some()),
-                    ("policy.sigma", p.sigma.is_some()),
-                    ("policy.features", p.features.is_some()),
-                ] {
-                    if set {
-                        return Err(bad(
-                            key,
-                            &"not a key of the toy task (the MDP file fixes the horizon, the expert and the policy)",
-                        ));
-                    }
-                }
+                refuse(
+                    &not_toy,
+                    "not a key of the toy task (the MDP file fixes the horizon, the expert and the policy)",
+                )?;
                 if t.mdp.is_none() {
                     return Err(bad("task.mdp", &"required for the toy task"));
                 }
             }
-            TaskName::Custom => {
-                for (key, set) in [
-                    ("task.expert", t.expert.is_some()),
-                    ("task.expert_file", t.expert_file.is_some()),
-                    ("task.mdp", t.mdp.is_some()),
-                    ("task.horizon", t.horizon.is_some()),
-                    ("task.steps", t.steps.is_some()),
-                    ("task.after_end", t.after_end.is_some()),
-                    ("policy.kind", p.kind.is_some()),
-                    ("policy.sigma", p.sigma.is_some()),
-                    ("policy.features", p.features.is_some()),
-                ] {
-                    if set {
-                        return Err(bad(
-                            key,
-                            &"not a key of a plug-in task (the task passed with the config brings its expert, policy and horizon)",
-                        ));
-                    }
-                }
-            }
+            TaskName::Custom => refuse(
+                &[[("task.mdp", t.mdp.is_some())].as_slice(), &not_toy].concat(),
+                "not a key of a plug-in task (the task passed with the config brings its expert, policy and horizon)",
+            )?,
         }
         if !matches!(t.name, TaskName::Toy | TaskName::Custom) {
             match *t.horizon.get_or_insert(HorizonKind::Fixed) {

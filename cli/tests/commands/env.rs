@@ -1,22 +1,11 @@
 //! `ilopt replay cartpole` and `ilopt expert vo` through the binary: the output contracts, both
 //! forms of negative numbers, and clear errors (exit status 1 or 2, a message, never a panic).
 
+use crate::support::ilopt;
 use approx::abs_diff_eq;
 use serde_json::Value;
 use std::io::Write;
 use std::process::Command;
-
-fn ilopt(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_ilopt"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
 
 #[test]
 fn replay_prints_round_trip_states_and_flags() {

@@ -2,23 +2,10 @@
 //! status 1 (a failure) or 2 (a usage error) — never 101, a panic — print a message on stderr that
 //! names the bad argument, print nothing on stdout, and never print `NaN`/`inf` as a result.
 
+use crate::support::ilopt;
 use std::io::Write;
-use std::process::Command;
 
 const M1: &str = "examples/toy/m1-tied.json";
-
-fn ilopt(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_ilopt"))
-        .current_dir(crate::ROOT)
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 /// A temporary file with `content`, removed on drop.
 struct TempFile(std::path::PathBuf);

@@ -15,4 +15,5 @@ mod jobs;
 mod plot;
 mod plugin;
 mod run;
+mod support;
 mod toy;

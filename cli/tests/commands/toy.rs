@@ -1,21 +1,8 @@
 //! `ilopt toy eval`: the output contract, exact values, negative θ in both forms, and clear errors
 //! (non-zero exit, a message naming the input, never a panic) for bad input.
 
+use crate::support::ilopt;
 use serde_json::{Value, json};
-use std::process::Command;
-
-fn ilopt(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_ilopt"))
-        .args(args)
-        .current_dir(crate::ROOT)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
 
 const M1: &str = "examples/toy/m1-tied.json";
 
