@@ -13,14 +13,7 @@ use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
 use std::path::{Path, PathBuf};
 
-/// Largest fixed horizon accepted (decisions per trajectory).
-pub const MAX_STEPS: usize = 100_000;
-/// Largest number of seeds in one config.
-pub const MAX_SEEDS: usize = 10_000;
-/// Largest number of evaluation episodes per checkpoint.
-pub const MAX_EPISODES: u32 = 1_000_000;
-/// Largest number of trajectories per gradient.
-pub const MAX_TRAJECTORIES: usize = 100_000;
+pub use super::integer_keys::{MAX_EPISODES, MAX_SEEDS, MAX_STEPS, MAX_TRAJECTORIES};
 /// Default standard deviation of the obstacle task's linear-Gaussian learner.
 pub const DEFAULT_SIGMA: f64 = 0.1;
 /// Default number of evaluation episodes per checkpoint.

@@ -9,9 +9,10 @@
 use super::config::{LoadedConfig, TaskName};
 use super::error::RunError;
 use super::first_step::check_first_step;
-use super::oracle::{OnOracle, with_oracle};
+use super::oracle::{OnOracle, baseline_message, with_oracle};
 use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::runnable::{RunTask, theta0};
+use super::task::{TaskLearner, with_learner};
 use ilopt::algo::{
     CheckpointObserver, IterationMetrics, NormBound, RunFailure, Runner, Schedule, StoppingRule,
     Termination,
@@ -211,6 +212,14 @@ pub fn check_config<T: RunTask + ?Sized>(task: &T, config: &LoadedConfig) -> Res
     check_first_step(task, config)
 }
 
+/// [`check_config`] on a config's built-in task.
+///
+/// # Errors
+/// As [`check_config`].
+pub fn check_builtin(learner: &TaskLearner, config: &LoadedConfig) -> Result<(), RunError> {
+    with_learner!(learner, t => check_config(t, config))
+}
+
 /// Build the config's algorithm for the task's problem once, so that invalid hyper-parameters
 /// are reported before anything is written.
 ///
@@ -261,14 +270,5 @@ pub fn check_baseline<T: RunTask + ?Sized>(
     match tried {
         Err(e @ OracleError::Baseline(_)) => Err(bad(e)),
         _ => Ok(()),
-    }
-}
-
-/// An oracle's error about its baseline without the "baseline: " its message starts with (the
-/// key `run.baseline` already says it); any other error as it is.
-pub(super) fn baseline_message(e: ilopt::problem::OracleError) -> String {
-    match e {
-        ilopt::problem::OracleError::Baseline(m) => m,
-        e => e.to_string(),
     }
 }

@@ -8,13 +8,16 @@
 //! Episode j of a seed's evaluation draws from an RNG seeded by (seed, j) only, so every
 //! checkpoint of a run meets the same episodes (common random numbers).
 
-use super::task::ObstacleLearner;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
+use ilopt::env::obstacle::ObstacleConfig;
 use ilopt::evaluate::episodes::{obstacle_episodes, task_episodes};
+use ilopt::expert::vo_policy::VoExpertPolicy;
+use ilopt::policy::SpeedLimitedGaussian;
 use ilopt::policy::{Greedy, PolicyExt};
 use ilopt::seeding::splitmix64;
 use ilopt::task::TaskProblem;
 use ilopt::task::cartpole::CartPoleTask;
+use ilopt::task::obstacle::ObstacleTask;
 use ilopt::toy::ToyProblem;
 use serde::Serialize;
 
@@ -105,16 +108,13 @@ where
 /// # Errors
 /// A message if an episode, the expert or the policy fails.
 pub fn evaluate_obstacle(
-    learner: &ObstacleLearner,
+    problem: &TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGaussian<f64, [f64; 2]>>,
+    env: &ObstacleConfig,
+    expert: &VoExpertPolicy,
     theta: &[f64],
     episodes: u32,
     seed: u64,
 ) -> Result<Evaluation, String> {
-    let ObstacleLearner {
-        problem,
-        env,
-        expert,
-    } = learner;
     let s = obstacle_episodes(
         env,
         &|obs| problem.task.observation_features(obs),

@@ -4,10 +4,18 @@
 //! integer out of its type's range anywhere else (the `[algorithm]` table, `policy.features`,
 //! `run.baseline`) is named from the deserialiser's error.
 
-use super::config::{MAX_EPISODES, MAX_STEPS, MAX_TRAJECTORIES};
 use super::error::{RunError, invalid};
 use std::path::Path;
 use toml::de::{DeTable, DeValue};
+
+/// Largest fixed horizon accepted (decisions per trajectory).
+pub const MAX_STEPS: usize = 100_000;
+/// Largest number of seeds in one config.
+pub const MAX_SEEDS: usize = 10_000;
+/// Largest number of evaluation episodes per checkpoint.
+pub const MAX_EPISODES: u32 = 1_000_000;
+/// Largest number of trajectories per gradient.
+pub const MAX_TRAJECTORIES: usize = 100_000;
 
 /// An integer key of the schema and its range (inclusive).
 #[derive(Debug, Clone, Copy)]

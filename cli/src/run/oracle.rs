@@ -5,7 +5,6 @@
 //! sample the same oracle.
 
 use super::config::LoadedConfig;
-use super::driver::baseline_message;
 use super::error::RunError;
 use super::runnable::RunTask;
 use ilopt::baseline::{Baseline, Baselined};
@@ -53,5 +52,14 @@ pub fn with_oracle<T: RunTask + ?Sized, C: OnOracle>(
         computation.on(&b)
     } else {
         computation.on(p)
+    }
+}
+
+/// An oracle's error about its baseline without the "baseline: " its message starts with (the
+/// key `run.baseline` already says it); any other error as it is.
+pub(super) fn baseline_message(e: ilopt::problem::OracleError) -> String {
+    match e {
+        ilopt::problem::OracleError::Baseline(m) => m,
+        e => e.to_string(),
     }
 }

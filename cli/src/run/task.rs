@@ -176,14 +176,6 @@ impl TaskLearner {
         with_learner!(self, t => t.policy_name())
     }
 
-    /// The checks of the config against the task ([`super::driver::check_config`]).
-    ///
-    /// # Errors
-    /// [`RunError::Invalid`] naming the key at fault.
-    pub fn check(&self, config: &LoadedConfig) -> Result<(), RunError> {
-        with_learner!(self, t => super::driver::check_config(t, config))
-    }
-
     /// θ₀ of the config, checked against the policy's dimension.
     ///
     /// # Errors
@@ -228,7 +220,14 @@ impl RunTask for ObstacleLearner {
         "linear-gaussian"
     }
     fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
-        evaluate_obstacle(self, theta, episodes, seed)
+        evaluate_obstacle(
+            &self.problem,
+            &self.env,
+            &self.expert,
+            theta,
+            episodes,
+            seed,
+        )
     }
     fn least_decisions(&self) -> Option<(u64, &'static str)> {
         Some(horizon_decisions(&self.problem.horizon, "task.steps"))

@@ -720,7 +720,8 @@ fn the_example_configs_are_valid() {
         if p.extension().is_some_and(|x| x == "toml") {
             let c = RunFile::load(&p).unwrap_or_else(|e| panic!("{p:?}: {e}"));
             let bench = ilopt_cli::run::task::TaskLearner::new(&c).unwrap();
-            bench.check(&c).unwrap_or_else(|e| panic!("{p:?}: {e}"));
+            ilopt_cli::run::driver::check_builtin(&bench, &c)
+                .unwrap_or_else(|e| panic!("{p:?}: {e}"));
             n += 1;
         }
     }
