@@ -86,8 +86,21 @@ impl PyAction for Vec<f64> {
     }
 }
 
-/// `numpy.asarray(value, dtype=float64).ravel()` as a vector.
+/// `numpy.asarray(value, dtype=float64).ravel()` as a vector; a float64 or float32 numpy array
+/// (what Gymnasium's Box spaces hold) is read from its buffer without a call into Python.
 fn flatten(value: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    use numpy::{PyArrayDyn, PyArrayMethods};
+    if let Ok(a) = value.downcast::<PyArrayDyn<f64>>() {
+        return Ok(a.readonly().as_array().iter().copied().collect());
+    }
+    if let Ok(a) = value.downcast::<PyArrayDyn<f32>>() {
+        return Ok(a
+            .readonly()
+            .as_array()
+            .iter()
+            .map(|&x| f64::from(x))
+            .collect());
+    }
     let np = value.py().import("numpy")?;
     let kwargs = pyo3::types::PyDict::new(value.py());
     kwargs.set_item("dtype", "float64")?;
