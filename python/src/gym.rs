@@ -326,9 +326,6 @@ pub fn run_gym(
         size: spec.size,
     });
     let features: Features = stored_features;
-    let run = |t: &dyn Fn() -> Result<RunOutcome, ilopt_cli::run::RunError>| {
-        t().map_err(|e| e.to_string())
-    };
     match spec.space.as_str() {
         "discrete" => {
             let policy = Softmax::new(spec.size, spec.feature_dim).map_err(|e| e.to_string())?;
@@ -343,7 +340,7 @@ pub fn run_gym(
             )
             .map_err(|e| e.to_string())?
             .one_seed_at_a_time();
-            run(&|| execute_task(&task, config, out, Some(1), options))
+            execute_task(&task, config, out, Some(1), options).map_err(|e| e.to_string())
         }
         "box" => {
             let policy = LinearGaussian::new(spec.size, spec.feature_dim, spec.sigma)
@@ -359,7 +356,7 @@ pub fn run_gym(
             )
             .map_err(|e| e.to_string())?
             .one_seed_at_a_time();
-            run(&|| execute_task(&task, config, out, Some(1), options))
+            execute_task(&task, config, out, Some(1), options).map_err(|e| e.to_string())
         }
         other => Err(format!(
             "the action space must be Discrete or Box, got {other:?}"
