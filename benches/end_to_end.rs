@@ -40,26 +40,26 @@ fn storm(eta: &str, dim: usize, iterations: u64) -> RunConfig {
     .unwrap()
 }
 
-fn record<P: IlProblem<f64>>(config: &RunConfig, problem: &P) -> RunRecord<f64> {
+fn record<P: IlProblem<f64>>(config: &RunConfig, problem: &mut P) -> RunRecord<f64> {
     let mut runner = Runner::<f64>::new(config.stop.clone())
         .unwrap()
         .keep_history(false);
     runner.run_config(config, problem).unwrap()
 }
 
-fn run<P: IlProblem<f64>>(config: &RunConfig, problem: &P) -> u64 {
+fn run<P: IlProblem<f64>>(config: &RunConfig, problem: &mut P) -> u64 {
     record(config, problem).cost.env_steps
 }
 
 fn end_to_end(c: &mut Criterion) {
     let mut g = c.benchmark_group("end to end");
     g.sample_size(10);
-    let obstacle_vec = TaskProblem {
+    let mut obstacle_vec = TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,
     };
-    let obstacle_inline = TaskProblem {
+    let mut obstacle_inline = TaskProblem {
         task: ObstacleTask::thesis().unwrap().with_actions::<[f64; 2]>(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02)
             .unwrap()
@@ -68,9 +68,9 @@ fn end_to_end(c: &mut Criterion) {
         horizon: ilopt::task::Horizon::Episodic,
     };
     let cfg = storm("1e-8", obstacle_vec.dim(), 40);
-    let rec = record(&cfg, &obstacle_vec);
+    let rec = record(&cfg, &mut obstacle_vec);
     let steps = rec.cost.env_steps;
-    assert!(rec.same_run(&record(&cfg, &obstacle_inline)));
+    assert!(rec.same_run(&record(&cfg, &mut obstacle_inline)));
     assert_eq!(rec.termination, Termination::MaxIterations);
     eprintln!(
         "Table 4.1-like STORM run: {} iterations ({:?}), {steps} environment steps",
@@ -78,27 +78,27 @@ fn end_to_end(c: &mut Criterion) {
     );
     g.bench_function(
         "Table 4.1-like: STORM, linear-Gaussian, obstacle, 40 it. (Vec actions)",
-        |b| b.iter(|| run(&cfg, &obstacle_vec)),
+        |b| b.iter(|| run(&cfg, &mut obstacle_vec)),
     );
     g.bench_function(
         "Table 4.1-like: STORM, linear-Gaussian, obstacle, 40 it. (inline actions)",
-        |b| b.iter(|| run(&cfg, &obstacle_inline)),
+        |b| b.iter(|| run(&cfg, &mut obstacle_inline)),
     );
 
-    let cartpole = TaskProblem {
+    let mut cartpole = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,
     };
     let cfg = storm("0.01", cartpole.dim(), 200);
-    let rec = record(&cfg, &cartpole);
+    let rec = record(&cfg, &mut cartpole);
     assert_eq!(rec.termination, Termination::MaxIterations);
     eprintln!(
         "Table 4.3-like STORM run: {} iterations ({:?}), {} environment steps",
         rec.iterations, rec.termination, rec.cost.env_steps
     );
     g.bench_function("Table 4.3-like: STORM, logistic, CartPole, 200 it.", |b| {
-        b.iter(|| run(&cfg, &cartpole))
+        b.iter(|| run(&cfg, &mut cartpole))
     });
     g.finish();
 }

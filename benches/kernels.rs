@@ -69,7 +69,7 @@ fn vo(c: &mut Criterion) {
 
 fn toy_oracle(c: &mut Criterion) {
     let mdp = example("three-state.json");
-    let p = ToyProblem::<f64>::new(&mdp);
+    let mut p = ToyProblem::<f64>::new(&mdp);
     let theta = DVector::from_vec(vec![0.5, -1.0, 0.1, 3.0, 0.6, -1.2]);
     let mut g = c.benchmark_group("toy oracle");
     g.throughput(Throughput::Elements((mdp.horizon - 1) as u64));
@@ -109,7 +109,7 @@ fn exact_engine(c: &mut Criterion) {
 }
 
 fn cartpole_oracle(c: &mut Criterion) {
-    let p = TaskProblem {
+    let mut p = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,

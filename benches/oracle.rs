@@ -48,7 +48,7 @@ const SEEDS: u64 = 16;
 /// up to the 500-step limit).
 const CARTPOLE_THETA: [f64; D] = [0.3, 1.0, 8.0, 2.0, 0.1];
 
-fn steps_of<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>) -> u64 {
+fn steps_of<P: IlProblem<f64>>(p: &mut P, theta: &DVector<f64>) -> u64 {
     let mut cost = Cost::default();
     for seed in 0..SEEDS {
         let mut rng = KitRng::seed_from_u64(seed);
@@ -60,7 +60,7 @@ fn steps_of<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>) -> u64 {
 
 /// Roll out and estimate (causal) on every seed; returns a sum so nothing is optimised away (each
 /// gradient goes through `black_box` whole, so that no entry's arithmetic can be dropped).
-fn oracle_pass<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>) -> f64 {
+fn oracle_pass<P: IlProblem<f64>>(p: &mut P, theta: &DVector<f64>) -> f64 {
     let mut cost = Cost::default();
     let mut acc = 0.0;
     for seed in 0..SEEDS {
@@ -94,15 +94,15 @@ fn cartpole(c: &mut Criterion) {
         })
     });
 
-    let generic = TaskProblem {
+    let mut generic = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,
     };
     let theta = DVector::from_column_slice(&CARTPOLE_THETA);
-    g.throughput(Throughput::Elements(steps_of(&generic, &theta)));
+    g.throughput(Throughput::Elements(steps_of(&mut generic, &theta)));
     g.bench_function("roll-out + causal estimate, generic (f64)", |b| {
-        b.iter(|| oracle_pass(&generic, black_box(&theta)))
+        b.iter(|| oracle_pass(&mut generic, black_box(&theta)))
     });
     g.bench_function("roll-out only, generic (f64)", |b| {
         b.iter(|| {
@@ -140,7 +140,7 @@ fn cartpole(c: &mut Criterion) {
 
     let singles: Vec<Vec<_>> = trajectories.iter().map(|t| vec![t.clone()]).collect();
     let pairs: Vec<Vec<_>> = trajectories.chunks(2).map(<[_]>::to_vec).collect();
-    let constant = Baselined::new(
+    let mut constant = Baselined::new(
         generic.clone(),
         1,
         &Baseline::Constant {
@@ -151,7 +151,7 @@ fn cartpole(c: &mut Criterion) {
     // The variance-minimising per-decision constants estimated from earlier trajectories (decay
     // 0.99), with statistics from every trajectory of the set committed first, so that the
     // estimate subtracts real baselines.
-    let estimated = Baselined::new(
+    let mut estimated = Baselined::new(
         generic.clone(),
         1,
         &Baseline::Estimated {
@@ -175,11 +175,11 @@ fn cartpole(c: &mut Criterion) {
         .unwrap();
     // The state-dependent baseline with the default share of trajectories' statistics, and with
     // every trajectory's.
-    let state = fitted_state(&generic, &theta, &singles, None, SEEDS);
-    let state_all = fitted_state(&generic, &theta, &singles, Some(1), SEEDS);
-    let loo = Baselined::new(generic.clone(), 2, &Baseline::LeaveOneOut).unwrap();
-    let plain_pairs = Baselined::new(generic.clone(), 2, &Baseline::None).unwrap();
-    let estimate_all = |p: &Baselined<_, f64>, batches: &[Vec<_>]| {
+    let mut state = fitted_state(&generic, &theta, &singles, None, SEEDS);
+    let mut state_all = fitted_state(&generic, &theta, &singles, Some(1), SEEDS);
+    let mut loo = Baselined::new(generic.clone(), 2, &Baseline::LeaveOneOut).unwrap();
+    let mut plain_pairs = Baselined::new(generic.clone(), 2, &Baseline::None).unwrap();
+    let estimate_all = |p: &mut Baselined<_, f64>, batches: &[Vec<_>]| {
         let mut cost = Cost::default();
         for t in batches {
             black_box(
@@ -190,47 +190,47 @@ fn cartpole(c: &mut Criterion) {
     };
     g.bench_function(
         "causal estimate only, constant baseline, generic (f64)",
-        |b| b.iter(|| estimate_all(&constant, &singles)),
+        |b| b.iter(|| estimate_all(&mut constant, &singles)),
     );
     g.bench_function(
         "causal estimate only, estimated per-decision baselines, generic (f64)",
-        |b| b.iter(|| estimate_all(&estimated, &singles)),
+        |b| b.iter(|| estimate_all(&mut estimated, &singles)),
     );
     g.bench_function(
         "causal estimate only, pairs, no baseline, generic (f64)",
-        |b| b.iter(|| estimate_all(&plain_pairs, &pairs)),
+        |b| b.iter(|| estimate_all(&mut plain_pairs, &pairs)),
     );
     g.bench_function(
         "causal estimate only, pairs, leave-one-out baseline, generic (f64)",
-        |b| b.iter(|| estimate_all(&loo, &pairs)),
+        |b| b.iter(|| estimate_all(&mut loo, &pairs)),
     );
     g.bench_function(
         "roll-out + causal estimate, constant baseline, generic (f64)",
-        |b| b.iter(|| oracle_pass(&constant, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut constant, black_box(&theta))),
     );
     g.bench_function(
         "roll-out + causal estimate, estimated per-decision baselines, generic (f64)",
-        |b| b.iter(|| oracle_pass(&estimated, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut estimated, black_box(&theta))),
     );
     g.bench_function(
         "roll-out + causal estimate, state-dependent baseline (statistics from every 8th trajectory), generic (f64)",
-        |b| b.iter(|| oracle_pass(&state, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut state, black_box(&theta))),
     );
     g.bench_function(
         "roll-out + causal estimate, state-dependent baseline (statistics from every trajectory), generic (f64)",
-        |b| b.iter(|| oracle_pass(&state_all, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut state_all, black_box(&theta))),
     );
     // Pairs rolled out per seed: the whole oracle call with leave-one-out against the plain mean.
-    g.throughput(Throughput::Elements(steps_of(&loo, &theta)));
+    g.throughput(Throughput::Elements(steps_of(&mut loo, &theta)));
     g.bench_function(
         "roll-out + causal estimate, pairs, no baseline, generic (f64)",
-        |b| b.iter(|| oracle_pass(&plain_pairs, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut plain_pairs, black_box(&theta))),
     );
     g.bench_function(
         "roll-out + causal estimate, pairs, leave-one-out baseline, generic (f64)",
-        |b| b.iter(|| oracle_pass(&loo, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut loo, black_box(&theta))),
     );
-    g.throughput(Throughput::Elements(steps_of(&generic, &theta)));
+    g.throughput(Throughput::Elements(steps_of(&mut generic, &theta)));
 
     let gain = *LqrExpert::cartpole().unwrap().gain();
     let fast = Specialised {
@@ -259,19 +259,19 @@ fn cartpole(c: &mut Criterion) {
     // exactly 500 decisions, reset after a crash or absorbing (the same policy, so the episodic
     // rows above are the yardstick per step).
     for (name, after_end) in [("reset", AfterEnd::Reset), ("absorb", AfterEnd::Absorb)] {
-        let fixed = TaskProblem {
+        let mut fixed = TaskProblem {
             horizon: Horizon::fixed(ilopt::env::cartpole::MAX_EPISODE_STEPS, after_end),
             ..generic.clone()
         };
-        g.throughput(Throughput::Elements(steps_of(&fixed, &theta)));
+        g.throughput(Throughput::Elements(steps_of(&mut fixed, &theta)));
         g.bench_function(
             format!("roll-out + causal estimate, generic, fixed 500 {name} (f64)"),
-            |b| b.iter(|| oracle_pass(&fixed, black_box(&theta))),
+            |b| b.iter(|| oracle_pass(&mut fixed, black_box(&theta))),
         );
     }
     // What the chapter-4 experiments run: the PPO expert's labels, the softmax learner, 500
     // decisions with resets (θ = 0: the learner crashes often, so resets are frequent).
-    let ppo = TaskProblem {
+    let mut ppo = TaskProblem {
         task: CartPoleTask::<f64>::with_ppo(
             &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json"),
         )
@@ -280,10 +280,10 @@ fn cartpole(c: &mut Criterion) {
         horizon: Horizon::fixed(ilopt::env::cartpole::MAX_EPISODE_STEPS, AfterEnd::Reset),
     };
     let zero = DVector::zeros(2 * cartpole::FEATURES);
-    g.throughput(Throughput::Elements(steps_of(&ppo, &zero)));
+    g.throughput(Throughput::Elements(steps_of(&mut ppo, &zero)));
     g.bench_function(
         "roll-out + causal estimate, PPO labels + softmax, fixed 500 reset (f64)",
-        |b| b.iter(|| oracle_pass(&ppo, black_box(&zero))),
+        |b| b.iter(|| oracle_pass(&mut ppo, black_box(&zero))),
     );
     g.finish();
 }
@@ -299,34 +299,34 @@ fn obstacle_theta() -> DVector<f64> {
 fn obstacle_task(c: &mut Criterion) {
     let mut g = c.benchmark_group("obstacle");
     let theta = obstacle_theta();
-    let p = TaskProblem {
+    let mut p = TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,
     };
-    g.throughput(Throughput::Elements(steps_of(&p, &theta)));
+    g.throughput(Throughput::Elements(steps_of(&mut p, &theta)));
     g.bench_function(
         "roll-out + VO labels + linear-Gaussian + causal estimate (f64, Vec actions)",
-        |b| b.iter(|| oracle_pass(&p, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut p, black_box(&theta))),
     );
-    let inline = TaskProblem {
+    let mut inline = TaskProblem {
         task: p.task.clone().with_actions::<[f64; 2]>(),
         policy: p.policy.clone().with_actions::<[f64; 2]>().unwrap(),
         horizon: ilopt::task::Horizon::Episodic,
     };
     g.bench_function(
         "roll-out + VO labels + linear-Gaussian + causal estimate (f64, inline actions)",
-        |b| b.iter(|| oracle_pass(&inline, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut inline, black_box(&theta))),
     );
     // The fixed-horizon objective of the experiments: 200 decisions, absorbing ends.
-    let absorb = TaskProblem {
+    let mut absorb = TaskProblem {
         horizon: Horizon::fixed(200, AfterEnd::Absorb),
         ..inline.clone()
     };
-    g.throughput(Throughput::Elements(steps_of(&absorb, &theta)));
+    g.throughput(Throughput::Elements(steps_of(&mut absorb, &theta)));
     g.bench_function(
         "roll-out + VO labels + linear-Gaussian + causal estimate (f64, inline actions, fixed 200 absorb)",
-        |b| b.iter(|| oracle_pass(&absorb, black_box(&theta))),
+        |b| b.iter(|| oracle_pass(&mut absorb, black_box(&theta))),
     );
     g.finish();
 }

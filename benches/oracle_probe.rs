@@ -62,7 +62,7 @@ const THETA: [f64; D] = [0.3, 1.0, 8.0, 2.0, 0.1];
 /// One roll-out of the learner θ and its causal estimate: the steps taken and the gradient's first
 /// entry (so that nothing is optimised away).
 fn oracle_once<P: IlProblem<f64>>(
-    p: &P,
+    p: &mut P,
     theta: &DVector<f64>,
     rng: &mut KitRng,
     cost: &mut Cost,
@@ -133,20 +133,20 @@ fn main() {
         ));
     }
 
-    let p = TaskProblem {
+    let mut p = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().expect("LQR design"),
         policy: Logistic::new(cartpole::FEATURES).expect("policy"),
         horizon: ilopt::task::Horizon::Episodic,
     };
     let theta = DVector::from_column_slice(&THETA);
     let theta_old = theta.map(|x| x + 0.01);
-    let soft = TaskProblem {
+    let mut soft = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().expect("LQR design"),
         policy: Softmax::new(2, cartpole::FEATURES).expect("policy"),
         horizon: ilopt::task::Horizon::Episodic,
     };
     // The chapter-4 experiments' CartPole labeller: the committed PPO expert's greedy action.
-    let soft_ppo = TaskProblem {
+    let mut soft_ppo = TaskProblem {
         task: CartPoleTask::<f64>::with_ppo(
             &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json"),
         )
@@ -181,8 +181,8 @@ fn main() {
         })
         .collect();
 
-    let plain_pairs = Baselined::new(p.clone(), 2, &Baseline::None).expect("pairs");
-    let loo_pairs = Baselined::new(p.clone(), 2, &Baseline::LeaveOneOut).expect("pairs");
+    let mut plain_pairs = Baselined::new(p.clone(), 2, &Baseline::None).expect("pairs");
+    let mut loo_pairs = Baselined::new(p.clone(), 2, &Baseline::LeaveOneOut).expect("pairs");
     let pair_of = |seed: u64| {
         let next = (seed + 1) % SEEDS;
         vec![
@@ -195,8 +195,8 @@ fn main() {
         .iter()
         .map(|t| vec![t.clone()])
         .collect();
-    let single = Baselined::new(p.clone(), 1, &Baseline::None).expect("single");
-    let constant = Baselined::new(
+    let mut single = Baselined::new(p.clone(), 1, &Baseline::None).expect("single");
+    let mut constant = Baselined::new(
         p.clone(),
         1,
         &Baseline::Constant {
@@ -204,7 +204,7 @@ fn main() {
         },
     )
     .expect("constant");
-    let estimated = Baselined::new(
+    let mut estimated = Baselined::new(
         p.clone(),
         1,
         &Baseline::Estimated {
@@ -219,11 +219,12 @@ fn main() {
     // every trajectory), the default share for mode `oracle-state` and every one for
     // `oracle-state-all`.
     let fit = |fit_every| fitted_state(&p, &theta, &singles, fit_every, SEEDS);
-    let (state, oracle_state, oracle_state_all) = (fit(Some(1)), fit(None), fit(Some(1)));
-    let oracle_estimated = estimated.clone();
+    let (mut state, mut oracle_state, mut oracle_state_all) =
+        (fit(Some(1)), fit(None), fit(Some(1)));
+    let mut oracle_estimated = estimated.clone();
     // The weighted estimates use the committed baselines: statistics from every probe trajectory,
     // committed by one roll-out, as in training.
-    let weighted_estimated = estimated.clone();
+    let mut weighted_estimated = estimated.clone();
     let mut warm = Cost::default();
     for one in &singles {
         weighted_estimated
@@ -256,19 +257,19 @@ fn main() {
                     let start = Instant::now();
                     let steps = match mode {
                         "generic" => {
-                            let (n, x) = oracle_once(&p, th, &mut rng, &mut cost);
+                            let (n, x) = oracle_once(&mut p, th, &mut rng, &mut cost);
                             acc += x;
                             n
                         }
                         "softmax" => {
                             let th = black_box(&soft_theta);
-                            let (n, x) = oracle_once(&soft, th, &mut rng, &mut cost);
+                            let (n, x) = oracle_once(&mut soft, th, &mut rng, &mut cost);
                             acc += x;
                             n
                         }
                         "ppo" => {
                             let th = black_box(&soft_theta);
-                            let (n, x) = oracle_once(&soft_ppo, th, &mut rng, &mut cost);
+                            let (n, x) = oracle_once(&mut soft_ppo, th, &mut rng, &mut cost);
                             acc += x;
                             n
                         }
@@ -287,9 +288,9 @@ fn main() {
                         "pairs" | "loo" => {
                             let pair = &pairs[seed as usize];
                             let o = if mode == "loo" {
-                                &loo_pairs
+                                &mut loo_pairs
                             } else {
-                                &plain_pairs
+                                &mut plain_pairs
                             };
                             acc += black_box(
                                 o.estimate(th, pair, EstimatorForm::Causal, &mut cost)
@@ -298,20 +299,21 @@ fn main() {
                             pair.iter().map(|tr| tr.len() as u64).sum()
                         }
                         "oracle" => {
-                            let (n, x) = oracle_once(&single, th, &mut rng, &mut cost);
+                            let (n, x) = oracle_once(&mut single, th, &mut rng, &mut cost);
                             acc += x;
                             n
                         }
                         "oracle-estimated" => {
-                            let (n, x) = oracle_once(&oracle_estimated, th, &mut rng, &mut cost);
+                            let (n, x) =
+                                oracle_once(&mut oracle_estimated, th, &mut rng, &mut cost);
                             acc += x;
                             n
                         }
                         "oracle-state" | "oracle-state-all" => {
                             let o = if mode == "oracle-state" {
-                                &oracle_state
+                                &mut oracle_state
                             } else {
-                                &oracle_state_all
+                                &mut oracle_state_all
                             };
                             let (n, x) = oracle_once(o, th, &mut rng, &mut cost);
                             acc += x;
@@ -319,12 +321,12 @@ fn main() {
                         }
                         "weighted" | "weighted-estimated" | "weighted-pairs" | "weighted-loo" => {
                             let (o, batch) = match mode {
-                                "weighted" => (&single, &singles[seed as usize]),
+                                "weighted" => (&mut single, &singles[seed as usize]),
                                 "weighted-estimated" => {
-                                    (&weighted_estimated, &singles[seed as usize])
+                                    (&mut weighted_estimated, &singles[seed as usize])
                                 }
-                                "weighted-pairs" => (&plain_pairs, &pairs[seed as usize]),
-                                _ => (&loo_pairs, &pairs[seed as usize]),
+                                "weighted-pairs" => (&mut plain_pairs, &pairs[seed as usize]),
+                                _ => (&mut loo_pairs, &pairs[seed as usize]),
                             };
                             let old = black_box(&theta_old);
                             let w = Weighting::PerDecision;
@@ -337,10 +339,10 @@ fn main() {
                         "single" | "constant" | "estimated" | "state" => {
                             let one = &singles[seed as usize];
                             let o = match mode {
-                                "constant" => &constant,
-                                "estimated" => &estimated,
-                                "state" => &state,
-                                _ => &single,
+                                "constant" => &mut constant,
+                                "estimated" => &mut estimated,
+                                "state" => &mut state,
+                                _ => &mut single,
                             };
                             acc += black_box(
                                 o.estimate(th, one, EstimatorForm::Causal, &mut cost)

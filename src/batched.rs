@@ -72,7 +72,7 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Batched<P> {
 
     /// `m` roll-outs in turn from the one RNG.
     fn rollout(
-        &self,
+        &mut self,
         behaviour: &Behaviour<'_, S>,
         rng: &mut KitRng,
         cost: &mut Cost,
@@ -83,7 +83,7 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Batched<P> {
     }
 
     fn estimate(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
         form: EstimatorForm,
@@ -96,7 +96,7 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Batched<P> {
     /// [`IlProblem::estimate_with_loss`], then the two means as [`IlProblem::estimate`] and
     /// [`IlProblem::trajectory_loss`] form them (the same values).
     fn estimate_with_loss(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
         form: EstimatorForm,
@@ -113,7 +113,7 @@ impl<S: Scalar, P: IlProblem<S>> IlProblem<S> for Batched<P> {
     }
 
     fn weighted_estimate(
-        &self,
+        &mut self,
         theta_old: &DVector<S>,
         theta_new: &DVector<S>,
         trajectory: &Self::Trajectory,

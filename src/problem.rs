@@ -142,7 +142,7 @@ pub enum OracleError {
 /// # Errors
 /// As [`IlProblem::estimate`], then [`IlProblem::trajectory_loss`].
 pub(crate) fn estimate_then_loss<S: Scalar, P: IlProblem<S> + ?Sized>(
-    problem: &P,
+    problem: &mut P,
     theta: &DVector<S>,
     trajectory: &P::Trajectory,
     form: EstimatorForm,
@@ -157,6 +157,14 @@ pub(crate) fn estimate_then_loss<S: Scalar, P: IlProblem<S> + ?Sized>(
 ///
 /// Generic over the scalar `S` of θ and of the returned gradients. Sampling uses an RNG owned by
 /// the caller (the runner), so runs are reproducible.
+///
+/// The oracle's calls ([`IlProblem::rollout`], [`IlProblem::estimate`],
+/// [`IlProblem::estimate_with_loss`], [`IlProblem::weighted_estimate`]) take `&mut self`: an
+/// oracle may carry state from one call to the next, in plain fields (a baseline learned from
+/// earlier trajectories, [`crate::baseline::Baselined`]), and the signature says so. Whoever
+/// drives a run owns the oracle for it (the runner lends it to the algorithm), so two runs never
+/// share that state by accident. The tasks and the toy MDPs keep none: a copy of one gives the
+/// same estimates, which is how code that samples on several threads gives each thread its own.
 pub trait IlProblem<S: Scalar> {
     /// A sampled trajectory with its expert labels.
     type Trajectory: Clone + std::fmt::Debug;
@@ -172,7 +180,7 @@ pub trait IlProblem<S: Scalar> {
     /// [`OracleError`] for a θ of the wrong length or outside the policy's domain, an invalid
     /// behaviour, or a sampling decision that interval arithmetic cannot make.
     fn rollout(
-        &self,
+        &mut self,
         behaviour: &Behaviour<'_, S>,
         rng: &mut KitRng,
         cost: &mut Cost,
@@ -183,7 +191,7 @@ pub trait IlProblem<S: Scalar> {
     /// # Errors
     /// As [`IlProblem::rollout`], plus [`OracleError::Trajectory`] for a foreign trajectory.
     fn estimate(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
         form: EstimatorForm,
@@ -198,7 +206,7 @@ pub trait IlProblem<S: Scalar> {
     /// # Errors
     /// As [`IlProblem::estimate`], then [`IlProblem::trajectory_loss`].
     fn estimate_with_loss(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
         form: EstimatorForm,
@@ -214,7 +222,7 @@ pub trait IlProblem<S: Scalar> {
     /// # Errors
     /// As [`IlProblem::estimate`], plus [`OracleError::ZeroProbability`] if π_new vanishes on τ.
     fn weighted_estimate(
-        &self,
+        &mut self,
         theta_old: &DVector<S>,
         theta_new: &DVector<S>,
         trajectory: &Self::Trajectory,

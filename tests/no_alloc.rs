@@ -177,7 +177,7 @@ fn softmax_loss_and_score_allocate() {
 
 /// Roll-outs and estimates of many lengths with policy `P`: the allocation count of each call is
 /// one constant.
-fn cartpole_per_call<P>(p: &TaskProblem<CartPoleTask<f64>, P>, thetas: &[DVector<f64>; 3])
+fn cartpole_per_call<P>(p: &mut TaskProblem<CartPoleTask<f64>, P>, thetas: &[DVector<f64>; 3])
 where
     P: LikelihoodRatio<f64, Action = usize, Label = usize> + EstimatorKernel<f64>,
 {
@@ -238,8 +238,8 @@ fn cartpole_rollout_and_oracle_allocate_per_call_not_per_step() {
         DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
         DVector::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.0]),
     ];
-    cartpole_per_call(&cartpole(), &thetas);
-    cartpole_per_call(&cartpole_softmax(), &thetas.map(|t| as_softmax(&t)));
+    cartpole_per_call(&mut cartpole(), &thetas);
+    cartpole_per_call(&mut cartpole_softmax(), &thetas.map(|t| as_softmax(&t)));
 }
 
 /// The obstacle task with inline actions and labels (`[f64; 2]`; the default `Vec<f64>` allocates
@@ -322,7 +322,7 @@ fn pull_n(n: usize) -> DVector<f64> {
 
 /// Roll-outs, causal and per-decision-weighted estimates: allocation counts equal for every
 /// episode length and at most 3 (roll-out) / 2 (estimate).
-fn obstacle_per_call<P>(p: &TaskProblem<ObstacleTask<[f64; 2]>, P>, n: usize)
+fn obstacle_per_call<P>(p: &mut TaskProblem<ObstacleTask<[f64; 2]>, P>, n: usize)
 where
     P: LikelihoodRatio<f64, Action = [f64; 2], Label = [f64]> + EstimatorKernel<f64>,
 {
@@ -366,21 +366,21 @@ where
 
 #[test]
 fn obstacle_rollout_and_oracle_allocate_per_call_not_per_step() {
-    obstacle_per_call(&obstacle_inline(), obstacle::FEATURES);
+    obstacle_per_call(&mut obstacle_inline(), obstacle::FEATURES);
 }
 
 #[test]
 fn rbf_speed_limited_obstacle_allocates_per_call_not_per_step() {
-    let p = obstacle_rbf();
+    let mut p = obstacle_rbf();
     let n = p.task.feature_dim();
-    obstacle_per_call(&p, n);
+    obstacle_per_call(&mut p, n);
 }
 
 /// The default `Vec<f64>` actions do allocate per step: the counter sees it (so the tests above
 /// could fail).
 #[test]
 fn vec_actions_allocate_per_step() {
-    let p = TaskProblem {
+    let mut p = TaskProblem {
         task: ObstacleTask::thesis().unwrap(),
         policy: LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,
@@ -447,7 +447,7 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
             },
         ),
     ] {
-        let p = Baselined::<_, f64>::new(cartpole(), m, &kind).unwrap();
+        let mut p = Baselined::<_, f64>::new(cartpole(), m, &kind).unwrap();
         let mut rng = KitRng::seed_from_u64(5);
         let mut cost = Cost::default();
         let mut batches = vec![];
@@ -531,7 +531,7 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
             // Each roll-out commits the statistics of the estimate before it: once the sums have
             // seen the longest trajectory, a commit allocates nothing, whatever the lengths — the
             // roll-out allocates what the same roll-out without a baseline does.
-            let plain = Baselined::<_, f64>::new(cartpole(), m, &Baseline::None).unwrap();
+            let mut plain = Baselined::<_, f64>::new(cartpole(), m, &Baseline::None).unwrap();
             p.estimate(theta, &warm, EstimatorForm::Causal, &mut cost)
                 .unwrap();
             p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
@@ -564,7 +564,11 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
 /// The fixed-horizon objective (streams of T decisions): roll-outs with resets after a crash, and
 /// with an absorbing end, allocate a constant per call whatever the number of resets or the
 /// decision at which the stream absorbed; so do the causal, full and weighted estimates on them.
-fn fixed_per_call<T, P>(p: &TaskProblem<T, P>, thetas: &[DVector<f64>], seed: u64) -> (usize, usize)
+fn fixed_per_call<T, P>(
+    p: &mut TaskProblem<T, P>,
+    thetas: &[DVector<f64>],
+    seed: u64,
+) -> (usize, usize)
 where
     T: ilopt::task::Task<f64>,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
@@ -630,13 +634,14 @@ fn fixed_horizon_reset_allocates_per_call_not_per_step() {
         balancing(),
         DVector::zeros(5),
     ];
-    let p = TaskProblem::fixed(cartpole().task, cartpole().policy, 500, AfterEnd::Reset).unwrap();
-    let (lengths, resets) = fixed_per_call(&p, &thetas, 11);
+    let mut p =
+        TaskProblem::fixed(cartpole().task, cartpole().policy, 500, AfterEnd::Reset).unwrap();
+    let (lengths, resets) = fixed_per_call(&mut p, &thetas, 11);
     assert_eq!(lengths, 1, "every stream has 500 decisions");
     assert!(resets >= 5, "{resets} different reset counts");
     let s = cartpole_softmax();
-    let p = TaskProblem::fixed(s.task, s.policy, 500, AfterEnd::Reset).unwrap();
-    let (_, resets) = fixed_per_call(&p, &thetas.clone().map(|t| as_softmax(&t)), 12);
+    let mut p = TaskProblem::fixed(s.task, s.policy, 500, AfterEnd::Reset).unwrap();
+    let (_, resets) = fixed_per_call(&mut p, &thetas.clone().map(|t| as_softmax(&t)), 12);
     assert!(resets >= 5, "{resets} different reset counts");
     // The experiments' CartPole: the PPO expert labels every state (its network evaluated
     // without storing the hidden layer).
@@ -644,8 +649,8 @@ fn fixed_horizon_reset_allocates_per_call_not_per_step() {
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json"),
     )
     .unwrap();
-    let p = TaskProblem::fixed(ppo, Softmax::new(2, 5).unwrap(), 500, AfterEnd::Reset).unwrap();
-    let (_, resets) = fixed_per_call(&p, &thetas.map(|t| as_softmax(&t)), 15);
+    let mut p = TaskProblem::fixed(ppo, Softmax::new(2, 5).unwrap(), 500, AfterEnd::Reset).unwrap();
+    let (_, resets) = fixed_per_call(&mut p, &thetas.map(|t| as_softmax(&t)), 15);
     assert!(resets >= 5, "{resets} different reset counts");
 }
 
@@ -653,17 +658,17 @@ fn fixed_horizon_reset_allocates_per_call_not_per_step() {
 fn fixed_horizon_absorb_allocates_per_call_not_per_step() {
     use ilopt::task::AfterEnd;
     let c = cartpole();
-    let p = TaskProblem::fixed(c.task, c.policy, 500, AfterEnd::Absorb).unwrap();
+    let mut p = TaskProblem::fixed(c.task, c.policy, 500, AfterEnd::Absorb).unwrap();
     let thetas = [
         DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
         balancing(),
         DVector::zeros(5),
     ];
-    let (lengths, _) = fixed_per_call(&p, &thetas, 13);
+    let (lengths, _) = fixed_per_call(&mut p, &thetas, 13);
     assert!(lengths >= 10, "{lengths} different decision counts");
     let o = obstacle_rbf();
     let n = o.task.feature_dim();
-    let p = TaskProblem::fixed(o.task, o.policy, 200, AfterEnd::Absorb).unwrap();
-    let (lengths, _) = fixed_per_call(&p, &[DVector::zeros(2 * n), pull_n(n)], 14);
+    let mut p = TaskProblem::fixed(o.task, o.policy, 200, AfterEnd::Absorb).unwrap();
+    let (lengths, _) = fixed_per_call(&mut p, &[DVector::zeros(2 * n), pull_n(n)], 14);
     assert!(lengths >= 5, "{lengths} different decision counts");
 }

@@ -20,7 +20,7 @@ pub fn fitted_state<P>(
 where
     P: PerDecisionTerms<f64> + Clone,
 {
-    let o = Baselined::new(
+    let mut o = Baselined::new(
         problem.clone(),
         1,
         &Baseline::StateDependent {

@@ -130,7 +130,7 @@ pub fn estimate<T: RunTask + ?Sized>(
     }
     impl OnOracle for Draw<'_> {
         type Output = Result<Vec<f64>, String>;
-        fn on<P: IlProblem<f64>>(self, oracle: &P) -> Result<Self::Output, RunError> {
+        fn on<P: IlProblem<f64>>(self, oracle: &mut P) -> Result<Self::Output, RunError> {
             let mut rng = KitRng::seed_from_u64(self.seed);
             let mut cost = Cost::default();
             Ok(oracle

@@ -91,7 +91,7 @@ pub fn eval_task<T: RunTask + ?Sized>(
     seed: u64,
 ) -> Result<Value, RunError> {
     let obj = objective(
-        task.problem(),
+        &mut task.problem().clone(),
         &DVector::from_column_slice(theta),
         episodes as usize,
         seed,

@@ -197,7 +197,7 @@ fn add_column(m: &mut DMatrix<f64>, j: usize, x: &DVector<f64>, y: &DVector<f64>
 /// [`Error::Experiment`] for invalid options (N not a positive multiple of B, B < 2, a step or
 /// momentum out of range), a failing roll-out or estimate, or a non-finite mean.
 pub fn measure<P: IlProblem<f64>>(
-    problem: &P,
+    problem: &mut P,
     theta: &DVector<f64>,
     opts: &Options,
 ) -> Result<Measurement, Error> {
@@ -390,8 +390,8 @@ pub fn measure_bench(
     opts: &Options,
 ) -> Result<Measurement, Error> {
     match bench {
-        TaskLearner::Obstacle { problem, .. } => measure(problem, theta, opts),
-        TaskLearner::Cartpole { problem, .. } => measure(problem, theta, opts),
+        TaskLearner::Obstacle { problem, .. } => measure(&mut problem.clone(), theta, opts),
+        TaskLearner::Cartpole { problem, .. } => measure(&mut problem.clone(), theta, opts),
     }
 }
 
@@ -433,13 +433,17 @@ pub fn dagger_solution(
         .find(|a| matches!(a.config, AlgorithmConfig::Dagger(_)))
         .ok_or_else(|| Error::experiment(kind.name(), "the profile has no DAgger row"))?;
     match bench {
-        TaskLearner::Obstacle { problem, .. } => train(problem, &entry.config, task.budget, seed),
-        TaskLearner::Cartpole { problem, .. } => train(problem, &entry.config, task.budget, seed),
+        TaskLearner::Obstacle { problem, .. } => {
+            train(&mut problem.clone(), &entry.config, task.budget, seed)
+        }
+        TaskLearner::Cartpole { problem, .. } => {
+            train(&mut problem.clone(), &entry.config, task.budget, seed)
+        }
     }
 }
 
 fn train<P: IlProblem<f64>>(
-    problem: &P,
+    problem: &mut P,
     config: &AlgorithmConfig,
     budget: u64,
     seed: u64,
@@ -520,7 +524,7 @@ mod tests {
                 ..Options::default()
             };
             let m = measure(
-                &ToyProblem::<f64>::new(&mdp),
+                &mut ToyProblem::<f64>::new(&mdp),
                 &DVector::from_element(1, x as f64),
                 &opts,
             )

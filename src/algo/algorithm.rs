@@ -66,7 +66,7 @@ pub trait Algorithm<S: Scalar, P: IlProblem<S> + ?Sized> {
     /// [`AlgoError::Dimension`] for a θ of the wrong length; oracle failures.
     fn init(
         &mut self,
-        problem: &P,
+        problem: &mut P,
         theta0: DVector<S>,
         ctx: &mut StepContext<'_>,
     ) -> Result<(), AlgoError>;
@@ -75,7 +75,11 @@ pub trait Algorithm<S: Scalar, P: IlProblem<S> + ?Sized> {
     ///
     /// # Errors
     /// Oracle failures, undecidable interval branches, non-finite values.
-    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError>;
+    fn step(
+        &mut self,
+        problem: &mut P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError>;
 
     /// The current iterate (what the runner reports and returns).
     fn theta(&self) -> &DVector<S>;
@@ -89,7 +93,7 @@ pub trait Algorithm<S: Scalar, P: IlProblem<S> + ?Sized> {
 
 /// One oracle draw at `theta`: roll out π_θ, evaluate eq. 3.15 and the trajectory loss.
 pub(crate) fn oracle_draw<S: Scalar, P: IlProblem<S> + ?Sized>(
-    problem: &P,
+    problem: &mut P,
     theta: &DVector<S>,
     form: EstimatorForm,
     ctx: &mut StepContext<'_>,

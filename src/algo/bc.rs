@@ -49,7 +49,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for ExpertData {
     fn step(
         &mut self,
         state: &mut LearnerState<S, P>,
-        problem: &P,
+        problem: &mut P,
         ctx: &mut StepContext<'_>,
     ) -> Result<StepReport<S>, AlgoError> {
         collect(

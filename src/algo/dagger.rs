@@ -153,7 +153,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for BetaMixing {
     fn step(
         &mut self,
         state: &mut LearnerState<S, P>,
-        problem: &P,
+        problem: &mut P,
         ctx: &mut StepContext<'_>,
     ) -> Result<StepReport<S>, AlgoError> {
         self.i += 1;

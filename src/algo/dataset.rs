@@ -106,7 +106,7 @@ impl<S: Scalar> InnerOptimiser<S> {
     /// [`AlgoError::EmptyDataset`]; oracle failures; non-finite iterates.
     pub fn train<P: IlProblem<S> + ?Sized>(
         &mut self,
-        problem: &P,
+        problem: &mut P,
         start: &DVector<S>,
         data: &[P::Labelled],
         ctx: &mut StepContext<'_>,
@@ -150,7 +150,7 @@ impl<S: Scalar> InnerOptimiser<S> {
 
 /// Roll out `behaviour` `n` times and append the labelled states to `data`.
 pub(crate) fn collect<S: Scalar, P: IlProblem<S> + ?Sized>(
-    problem: &P,
+    problem: &mut P,
     behaviour: &Behaviour<'_, S>,
     n: u64,
     data: &mut Vec<P::Labelled>,

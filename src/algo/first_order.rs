@@ -55,7 +55,7 @@ impl<S: Scalar, R: UpdateRule<S>, P: IlProblem<S> + ?Sized> Algorithm<S, P> for 
     }
     fn init(
         &mut self,
-        problem: &P,
+        problem: &mut P,
         theta0: DVector<S>,
         _: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
@@ -65,7 +65,11 @@ impl<S: Scalar, R: UpdateRule<S>, P: IlProblem<S> + ?Sized> Algorithm<S, P> for 
         Ok(())
     }
     /// Sample τ ∼ p(·; θ), estimate g(θ, τ) (eq. 3.15), update θ with the rule.
-    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(
+        &mut self,
+        problem: &mut P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
         let (_, g, loss) = oracle_draw(problem, &self.theta, self.form, ctx)?;
         self.rule.apply(&mut self.theta, &g)?;
         check_finite(&self.theta, "θ")?;

@@ -63,7 +63,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for PerStepPolicies
     fn step(
         &mut self,
         state: &mut LearnerState<S, P>,
-        problem: &P,
+        problem: &mut P,
         ctx: &mut StepContext<'_>,
     ) -> Result<StepReport<S>, AlgoError> {
         let t = self.policies.len(); // 0-based index of the step being trained

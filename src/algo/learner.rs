@@ -63,7 +63,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> LearnerState<S, P> {
     /// As [`InnerOptimiser::train`].
     pub(crate) fn retrain_on_dataset(
         &mut self,
-        problem: &P,
+        problem: &mut P,
         ctx: &mut StepContext<'_>,
     ) -> Result<StepReport<S>, AlgoError> {
         let start = match self.retrain {
@@ -89,7 +89,7 @@ pub trait DataSchedule<S: Scalar, P: IlProblem<S> + ?Sized>: std::fmt::Debug {
     fn step(
         &mut self,
         state: &mut LearnerState<S, P>,
-        problem: &P,
+        problem: &mut P,
         ctx: &mut StepContext<'_>,
     ) -> Result<StepReport<S>, AlgoError>;
     /// Further outputs (SMILe's components, forward training's per-step policies).
@@ -124,7 +124,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized, D: DataSchedule<S, P>> Algorithm<S, P>
     }
     fn init(
         &mut self,
-        problem: &P,
+        problem: &mut P,
         theta0: DVector<S>,
         _: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
@@ -135,7 +135,11 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized, D: DataSchedule<S, P>> Algorithm<S, P>
         self.state.theta = theta0;
         Ok(())
     }
-    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(
+        &mut self,
+        problem: &mut P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
         self.schedule.step(&mut self.state, problem, ctx)
     }
     fn theta(&self) -> &DVector<S> {

@@ -218,7 +218,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
 
     fn init(
         &mut self,
-        problem: &P,
+        problem: &mut P,
         theta0: DVector<S>,
         _: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
@@ -233,7 +233,11 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for O2nc<S> {
         Ok(())
     }
 
-    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(
+        &mut self,
+        problem: &mut P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
         if self.n >= self.params.m {
             return Err(AlgoError::State("O2NC has used its M = KT steps"));
         }

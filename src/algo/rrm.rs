@@ -59,7 +59,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for OnPolicyData {
     fn step(
         &mut self,
         state: &mut LearnerState<S, P>,
-        problem: &P,
+        problem: &mut P,
         ctx: &mut StepContext<'_>,
     ) -> Result<StepReport<S>, AlgoError> {
         state.data.clear();
@@ -113,7 +113,7 @@ where
     }
     fn init(
         &mut self,
-        problem: &P,
+        problem: &mut P,
         theta0: DVector<S>,
         _: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
@@ -121,7 +121,7 @@ where
         self.theta = theta0;
         Ok(())
     }
-    fn step(&mut self, _: &P, _: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(&mut self, _: &mut P, _: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
         let next = (self.map)(&self.theta)?;
         check_finite(&next, "θ")?;
         self.theta = next;

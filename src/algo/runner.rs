@@ -283,7 +283,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
     pub fn run_config<P: IlProblem<S> + ?Sized>(
         &mut self,
         config: &RunConfig,
-        problem: &P,
+        problem: &mut P,
     ) -> Result<RunRecord<S>, AlgoError> {
         let mut algorithm = config.algorithm.build::<S, P>()?;
         let mut rec = self.run(algorithm.as_mut(), problem, config.theta0()?, config.seed)?;
@@ -298,7 +298,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
     pub fn run<P: IlProblem<S> + ?Sized>(
         &mut self,
         algorithm: &mut dyn Algorithm<S, P>,
-        problem: &P,
+        problem: &mut P,
         theta0: DVector<S>,
         seed: u64,
     ) -> Result<RunRecord<S>, AlgoError> {
@@ -318,7 +318,7 @@ impl<'a, S: Scalar> Runner<'a, S> {
     pub fn run_with_checkpoints<P, C>(
         &mut self,
         algorithm: &mut dyn Algorithm<S, P>,
-        problem: &P,
+        problem: &mut P,
         theta0: DVector<S>,
         seed: u64,
         mut schedule: Option<Schedule>,
@@ -547,7 +547,7 @@ impl<S> CheckpointObserver<S> for NoCheckpoints {
 /// As [`Runner::run_config`].
 pub fn replay<S: Scalar, P: IlProblem<S> + ?Sized>(
     config: &RunConfig,
-    problem: &P,
+    problem: &mut P,
 ) -> Result<RunRecord<S>, AlgoError> {
     Runner::new(config.stop.clone())?.run_config(config, problem)
 }

@@ -85,7 +85,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> DataSchedule<S, P> for SmileMixture<S>
     fn step(
         &mut self,
         state: &mut LearnerState<S, P>,
-        problem: &P,
+        problem: &mut P,
         ctx: &mut StepContext<'_>,
     ) -> Result<StepReport<S>, AlgoError> {
         let i = self.components.len(); // components so far = i − 1 in 1-based terms

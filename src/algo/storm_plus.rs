@@ -153,7 +153,7 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
 
     fn init(
         &mut self,
-        problem: &P,
+        problem: &mut P,
         theta0: DVector<S>,
         ctx: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
@@ -167,7 +167,11 @@ impl<S: Scalar, P: IlProblem<S> + ?Sized> Algorithm<S, P> for StormPlus<S> {
         Ok(())
     }
 
-    fn step(&mut self, problem: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<S>, AlgoError> {
+    fn step(
+        &mut self,
+        problem: &mut P,
+        ctx: &mut StepContext<'_>,
+    ) -> Result<StepReport<S>, AlgoError> {
         let d = self
             .d
             .take()

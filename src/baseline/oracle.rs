@@ -6,24 +6,34 @@ use crate::oracle::{DecisionTerms, Given, LinearBaseline, RecordedPass, ScorePro
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::Scalar;
 use nalgebra::DVector;
-use std::cell::RefCell;
 
-/// A baseline resolved in the scalar `S`.
+/// A baseline resolved in the scalar `S`: the kinds known before a pass carry their values, the
+/// learned kinds their own state type.
 #[derive(Debug, Clone)]
 enum Kind<S> {
     None,
     Constant(S),
     TimeIndexed(Vec<S>),
-    Estimated {
-        time_indexed: bool,
-        running: RefCell<RunningOptimum<S>>,
-    },
+    Estimated(Estimated<S>),
     LeaveOneOut,
-    StateDependent {
-        leading: Option<usize>,
-        time: bool,
-        running: RefCell<RunningRegression<S>>,
-    },
+    StateDependent(StateDependent<S>),
+}
+
+/// The estimated variance-minimising baseline's state: its running statistics
+/// ([`RunningOptimum`]), per decision index or one constant.
+#[derive(Debug, Clone)]
+struct Estimated<S> {
+    time_indexed: bool,
+    running: RunningOptimum<S>,
+}
+
+/// The state-dependent baseline's state: which state features it reads, whether it adds the
+/// decision index, and its running regression ([`RunningRegression`]).
+#[derive(Debug, Clone)]
+struct StateDependent<S> {
+    leading: Option<usize>,
+    time: bool,
+    running: RunningRegression<S>,
 }
 
 /// Reused storage of one oracle call: per trajectory its [`DecisionTerms`] or its
@@ -67,14 +77,24 @@ struct Buffers<S> {
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
 /// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines from
 /// earlier roll-outs only. The state-dependent baseline `b_i = w·φ_b(s_i)` works the same way,
-/// its weights from [`RunningRegression`] and φ_b from [`PerDecisionTerms::state_features`]. This assumes, as every algorithm of the kit does, that a trajectory is
-/// estimated before the next one is rolled out.
+/// its weights from [`RunningRegression`] and φ_b from [`PerDecisionTerms::state_features`]. This
+/// assumes, as every algorithm of the kit does, that a trajectory is estimated before the next one
+/// is rolled out. That state is the oracle's own, one type per learned kind, changed only through
+/// `&mut self` ([`IlProblem`]'s oracle calls): a clone continues from the same statistics, and a
+/// new oracle starts from none.
 #[derive(Debug, Clone)]
 pub struct Baselined<P, S> {
     batch: Batched<P>,
     kind: Kind<S>,
-    buffers: RefCell<Buffers<S>>,
+    buffers: Buffers<S>,
 }
+
+// The baseline's state lives in plain fields behind `&mut self`: a `Baselined` oracle can be sent
+// to and shared between threads like the problem it wraps.
+const _: () = {
+    const fn send_and_sync<T: Send + Sync>() {}
+    send_and_sync::<Baselined<crate::toy::ToyProblem<f64>, f64>>();
+};
 
 /// The error of a baseline that cannot be used.
 fn invalid(msg: impl Into<String>) -> OracleError {
@@ -123,10 +143,10 @@ impl<P, S: Scalar> Baselined<P, S> {
             Baseline::Estimated {
                 time_indexed,
                 decay,
-            } => Kind::Estimated {
+            } => Kind::Estimated(Estimated {
                 time_indexed: *time_indexed,
-                running: RefCell::new(RunningOptimum::new(decay_of(decay.as_ref())?)),
-            },
+                running: RunningOptimum::new(decay_of(decay.as_ref())?),
+            }),
             Baseline::StateDependent {
                 features,
                 time,
@@ -157,14 +177,12 @@ impl<P, S: Scalar> Baselined<P, S> {
                         S::from_rational(&q)
                     }
                 };
-                Kind::StateDependent {
+                Kind::StateDependent(StateDependent {
                     leading: *features,
                     time: *time,
-                    running: RefCell::new(
-                        RunningRegression::new(decay_of(decay.as_ref())?, ridge)
-                            .taking_every(every),
-                    ),
-                }
+                    running: RunningRegression::new(decay_of(decay.as_ref())?, ridge)
+                        .taking_every(every),
+                })
             }
             Baseline::LeaveOneOut => {
                 if m < 2 {
@@ -178,7 +196,7 @@ impl<P, S: Scalar> Baselined<P, S> {
         Ok(Self {
             batch,
             kind,
-            buffers: RefCell::new(Buffers {
+            buffers: Buffers {
                 terms: Vec::new(),
                 features: Vec::new(),
                 products: (Vec::new(), Vec::new()),
@@ -187,7 +205,7 @@ impl<P, S: Scalar> Baselined<P, S> {
                 losses: Vec::new(),
                 plain: Vec::new(),
                 g: Vec::new(),
-            }),
+            },
         })
     }
 
@@ -205,7 +223,7 @@ impl<P, S: Scalar> Baselined<P, S> {
     /// any statistics were committed).
     pub fn state_weights(&self) -> Option<Vec<S>> {
         match &self.kind {
-            Kind::StateDependent { running, .. } => Some(running.borrow().weights().to_vec()),
+            Kind::StateDependent(state) => Some(state.running.weights().to_vec()),
             _ => None,
         }
     }
@@ -213,7 +231,7 @@ impl<P, S: Scalar> Baselined<P, S> {
     /// The committed running estimates of an [`Baseline::Estimated`] baseline (a copy).
     pub fn running(&self) -> Option<RunningOptimum<S>> {
         match &self.kind {
-            Kind::Estimated { running, .. } => Some(running.borrow().clone()),
+            Kind::Estimated(state) => Some(state.running.clone()),
             _ => None,
         }
     }
@@ -286,6 +304,21 @@ fn leave_one_out_losses<S: Scalar>(totals: &[S], own: &[S], others: &S, shifted:
         let after = totals[own.len()..].iter().fold(S::zero(), |a, s| a + s);
         *last -= after / others;
     }
+}
+
+/// The mean over `batch` of the problem's own baselined pass with baselines known before it
+/// ([`PerDecisionTerms::baselined_estimate`]).
+///
+/// # Errors
+/// As [`mean_of`], and the pass's.
+fn given_estimate<S: Scalar, P: PerDecisionTerms<S>>(
+    inner: &P,
+    theta: &DVector<S>,
+    batch: &[P::Trajectory],
+    given: Given<'_, S>,
+    cost: &mut Cost,
+) -> Result<DVector<S>, OracleError> {
+    mean_of(batch, |t| inner.baselined_estimate(theta, t, given, cost))
 }
 
 /// The mean of one baselined estimate per trajectory of `batch` ([`crate::batched`]'s mean),
@@ -363,349 +396,339 @@ impl<S: Scalar, P: PerDecisionTerms<S>> Baselined<P, S> {
     /// # Errors
     /// As [`IlProblem::estimate`].
     pub fn estimate_by_terms(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         batch: &[P::Trajectory],
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
-        let inner = self.inner();
-        self.baselined(batch, true, |t, out| {
-            inner.decision_terms(theta, t, None, out, cost)
-        })
+        let inner = self.batch.inner();
+        baselined(
+            inner,
+            &mut self.kind,
+            &mut self.buffers,
+            batch,
+            true,
+            |t, out| inner.decision_terms(theta, t, None, out, cost),
+        )
     }
+}
 
-    /// The mean leave-one-out estimate over `batch`, `(1/m) Σ_j [g_j − Σ_i b_i^{(j)} ψ_i^{(j)}]`
-    /// with `b_i^{(j)} = (1/(m − 1)) Σ_{k≠j} L_i^{(k)}`: every trajectory's decisions recorded
-    /// ([`PerDecisionTerms::record_decisions`]), the step totals `S_t = Σ_k l_t^{(k)}`, then each
-    /// trajectory's estimate summed once with the baseline folded into its per-step losses
-    /// (`leave_one_out_losses`, [`PerDecisionTerms::estimate_recorded`]). No allocation per step.
-    fn leave_one_out(
-        &self,
-        theta: &DVector<S>,
-        batch: &[P::Trajectory],
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        let m = batch.len();
-        if m == 0 {
-            return Err(OracleError::Trajectory("an empty minibatch".into()));
-        }
-        if m < 2 {
-            return Err(too_few_for_leave_one_out(m));
-        }
-        let inner = self.inner();
-        let mut buffers = self.buffers.borrow_mut();
-        let Buffers {
-            records,
-            totals,
-            losses,
+/// The mean leave-one-out estimate over `batch`, `(1/m) Σ_j [g_j − Σ_i b_i^{(j)} ψ_i^{(j)}]`
+/// with `b_i^{(j)} = (1/(m − 1)) Σ_{k≠j} L_i^{(k)}`: every trajectory's decisions recorded
+/// ([`PerDecisionTerms::record_decisions`]), the step totals `S_t = Σ_k l_t^{(k)}`, then each
+/// trajectory's estimate summed once with the baseline folded into its per-step losses
+/// (`leave_one_out_losses`, [`PerDecisionTerms::estimate_recorded`]). No allocation per step.
+fn leave_one_out<S: Scalar, P: PerDecisionTerms<S>>(
+    inner: &P,
+    buffers: &mut Buffers<S>,
+    theta: &DVector<S>,
+    batch: &[P::Trajectory],
+    cost: &mut Cost,
+) -> Result<DVector<S>, OracleError> {
+    let m = batch.len();
+    if m == 0 {
+        return Err(OracleError::Trajectory("an empty minibatch".into()));
+    }
+    if m < 2 {
+        return Err(too_few_for_leave_one_out(m));
+    }
+    let Buffers {
+        records,
+        totals,
+        losses,
+        g,
+        ..
+    } = buffers;
+    let records = record_batch(inner, theta, batch, records, cost)?;
+    step_totals(records.iter().map(RecordedPass::losses), totals);
+    let (others, m) = (S::from_i64(m as i64 - 1), S::from_i64(m as i64));
+    g.clear();
+    g.resize(inner.dim(), S::zero());
+    for (t, r) in batch.iter().zip(records.iter_mut()) {
+        leave_one_out_losses(totals, r.losses(), &others, losses);
+        inner.estimate_recorded(t, r, Some(losses), g);
+    }
+    checked_mean(g, &m)
+}
+
+/// The mean estimate over `batch` with the committed variance-minimising baselines of
+/// [`RunningOptimum`], which then observes the batch: every trajectory's decisions recorded
+/// ([`PerDecisionTerms::record_decisions`]), its plain estimate g summed once
+/// ([`PerDecisionTerms::estimate_recorded`] with its own losses, read in place), then one more read of its
+/// scores for both the statistics `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
+/// ([`PerDecisionTerms::recorded_score_products`]). No allocation per step.
+fn estimated<S: Scalar, P: PerDecisionTerms<S>>(
+    inner: &P,
+    state: &mut Estimated<S>,
+    buffers: &mut Buffers<S>,
+    theta: &DVector<S>,
+    batch: &[P::Trajectory],
+    cost: &mut Cost,
+) -> Result<DVector<S>, OracleError> {
+    let Estimated {
+        time_indexed,
+        running,
+    } = state;
+    let m = batch.len();
+    if m == 0 {
+        return Err(OracleError::Trajectory("an empty minibatch".into()));
+    }
+    let Buffers {
+        records,
+        totals: baseline,
+        plain,
+        g,
+        ..
+    } = buffers;
+    let records = record_batch(inner, theta, batch, records, cost)?;
+    let d = inner.dim();
+    g.clear();
+    g.resize(d, S::zero());
+    // The committed b_i of every decision the batch scored, before the batch's statistics.
+    let n = records
+        .iter()
+        .map(RecordedPass::decisions)
+        .max()
+        .unwrap_or(0);
+    baseline.clear();
+    if *time_indexed {
+        running.time_indexed_into(n, baseline);
+    } else {
+        baseline.resize(n, running.constant().unwrap_or_else(S::zero));
+    }
+    running.clear_pending();
+    for (t, r) in batch.iter().zip(records.iter_mut()) {
+        add_plain(inner, t, r, plain, g);
+        let n = r.decisions();
+        let (cross, moment) = running.pending_mut(n);
+        let out = ScoreProducts {
+            v: plain,
+            baseline: &baseline[..n],
+            cross,
+            moment,
             g,
-            ..
-        } = &mut *buffers;
-        let records = record_batch(inner, theta, batch, records, cost)?;
-        step_totals(records.iter().map(RecordedPass::losses), totals);
-        let (others, m) = (S::from_i64(m as i64 - 1), S::from_i64(m as i64));
-        g.clear();
-        g.resize(inner.dim(), S::zero());
-        for (t, r) in batch.iter().zip(records.iter_mut()) {
-            leave_one_out_losses(totals, r.losses(), &others, losses);
-            inner.estimate_recorded(t, r, Some(losses), g);
-        }
-        checked_mean(g, &m)
-    }
-
-    /// The mean estimate over `batch` with the committed variance-minimising baselines of
-    /// [`RunningOptimum`], which then observes the batch: every trajectory's decisions recorded
-    /// ([`PerDecisionTerms::record_decisions`]), its plain estimate g summed once
-    /// ([`PerDecisionTerms::estimate_recorded`] with its own losses, read in place), then one more read of its
-    /// scores for both the statistics `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
-    /// ([`PerDecisionTerms::recorded_score_products`]). No allocation per step.
-    fn estimated(
-        &self,
-        theta: &DVector<S>,
-        batch: &[P::Trajectory],
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        let Kind::Estimated {
-            time_indexed,
-            running,
-        } = &self.kind
-        else {
-            unreachable!("the estimated kind")
         };
-        let m = batch.len();
-        if m == 0 {
-            return Err(OracleError::Trajectory("an empty minibatch".into()));
-        }
-        let inner = self.inner();
-        let mut running = running.borrow_mut();
-        let mut buffers = self.buffers.borrow_mut();
-        let Buffers {
-            records,
-            totals: baseline,
-            plain,
-            g,
-            ..
-        } = &mut *buffers;
-        let records = record_batch(inner, theta, batch, records, cost)?;
-        let d = inner.dim();
-        g.clear();
-        g.resize(d, S::zero());
-        // The committed b_i of every decision the batch scored, before the batch's statistics.
-        let n = records
-            .iter()
-            .map(RecordedPass::decisions)
-            .max()
-            .unwrap_or(0);
-        baseline.clear();
-        if *time_indexed {
-            running.time_indexed_into(n, baseline);
-        } else {
-            baseline.resize(n, running.constant().unwrap_or_else(S::zero));
-        }
-        running.clear_pending();
-        for (t, r) in batch.iter().zip(records.iter_mut()) {
-            add_plain(inner, t, r, plain, g);
-            let n = r.decisions();
-            let (cross, moment) = running.pending_mut(n);
-            let out = ScoreProducts {
-                v: plain,
-                baseline: &baseline[..n],
-                cross,
-                moment,
-                g,
-            };
-            inner.recorded_score_products(t, r, out);
-        }
-        checked_mean(g, &S::from_i64(m as i64))
+        inner.recorded_score_products(t, r, out);
     }
+    checked_mean(g, &S::from_i64(m as i64))
+}
 
-    /// The mean estimate over `batch` with the committed state-dependent baseline of
-    /// [`RunningRegression`], which then observes the batch, on the estimated kind's route:
-    /// every trajectory's decisions recorded ([`PerDecisionTerms::record_decisions`]), its
-    /// baselines `b_i = w·φ_i` from its state features, its plain estimate g summed once
-    /// ([`PerDecisionTerms::estimate_recorded`]), then one more read of its scores for the
-    /// products `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
-    /// ([`PerDecisionTerms::recorded_score_products`]), from which the statistics are summed
-    /// ([`RunningRegression::observe_products`]). A trajectory whose statistics are not taken
-    /// ([`RunningRegression::takes_next`]) needs the correction alone: the problem's one pass
-    /// that forms each `b_i` off the stored feature rows as it reads ψ_i
-    /// ([`PerDecisionTerms::recorded_state_correction`]), else its baselines read off those rows
-    /// ([`RunningRegression::baselines_from_rows`]) or, without rows, from the columns, then the
-    /// products pass without statistics. Every route gives the same estimate, bit for bit. No
-    /// allocation per step.
-    fn state_dependent(
-        &self,
-        theta: &DVector<S>,
-        batch: &[P::Trajectory],
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        let Kind::StateDependent {
-            leading,
-            time,
-            running,
-        } = &self.kind
-        else {
-            unreachable!("the state-dependent kind")
-        };
-        let m = batch.len();
-        if m == 0 {
-            return Err(OracleError::Trajectory("an empty minibatch".into()));
-        }
-        let inner = self.inner();
-        let mut running = running.borrow_mut();
-        let mut buffers = self.buffers.borrow_mut();
-        let Buffers {
-            records,
-            features,
-            products: (cross, moment),
-            totals: baseline,
-            plain,
-            g,
-            ..
-        } = &mut *buffers;
-        let records = record_batch(inner, theta, batch, records, cost)?;
-        if features.is_empty() {
-            features.push((Vec::new(), 0));
-        }
-        let (phi, _) = &mut features[0];
-        let d = inner.dim();
-        g.clear();
-        g.resize(d, S::zero());
-        running.clear_pending();
-        for (t, r) in batch.iter().zip(records.iter_mut()) {
-            let n = r.decisions();
-            let take = running.takes_next();
-            add_plain(inner, t, r, plain, g);
-            // A trajectory whose statistics are not taken, when the problem stores its feature
-            // rows: its correction in one pass that forms the baselines off them, when the
-            // problem has one, else its baselines read off them. The statistics need the
-            // features by columns.
-            let mut from_rows = false;
-            if !take
-                && let Some(rows) = inner.state_feature_rows(t, n)
-                && let Ok(k) = leading_features(rows.1, *leading)
+/// The mean estimate over `batch` with the committed state-dependent baseline of
+/// [`RunningRegression`], which then observes the batch, on the estimated kind's route:
+/// every trajectory's decisions recorded ([`PerDecisionTerms::record_decisions`]), its
+/// baselines `b_i = w·φ_i` from its state features, its plain estimate g summed once
+/// ([`PerDecisionTerms::estimate_recorded`]), then one more read of its scores for the
+/// products `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
+/// ([`PerDecisionTerms::recorded_score_products`]), from which the statistics are summed
+/// ([`RunningRegression::observe_products`]). A trajectory whose statistics are not taken
+/// ([`RunningRegression::takes_next`]) needs the correction alone: the problem's one pass
+/// that forms each `b_i` off the stored feature rows as it reads ψ_i
+/// ([`PerDecisionTerms::recorded_state_correction`]), else its baselines read off those rows
+/// ([`RunningRegression::baselines_from_rows`]) or, without rows, from the columns, then the
+/// products pass without statistics. Every route gives the same estimate, bit for bit. No
+/// allocation per step.
+fn state_dependent<S: Scalar, P: PerDecisionTerms<S>>(
+    inner: &P,
+    state: &mut StateDependent<S>,
+    buffers: &mut Buffers<S>,
+    theta: &DVector<S>,
+    batch: &[P::Trajectory],
+    cost: &mut Cost,
+) -> Result<DVector<S>, OracleError> {
+    let StateDependent {
+        leading,
+        time,
+        running,
+    } = state;
+    let m = batch.len();
+    if m == 0 {
+        return Err(OracleError::Trajectory("an empty minibatch".into()));
+    }
+    let Buffers {
+        records,
+        features,
+        products: (cross, moment),
+        totals: baseline,
+        plain,
+        g,
+        ..
+    } = buffers;
+    let records = record_batch(inner, theta, batch, records, cost)?;
+    if features.is_empty() {
+        features.push((Vec::new(), 0));
+    }
+    let (phi, _) = &mut features[0];
+    let d = inner.dim();
+    g.clear();
+    g.resize(d, S::zero());
+    running.clear_pending();
+    for (t, r) in batch.iter().zip(records.iter_mut()) {
+        let n = r.decisions();
+        let take = running.takes_next();
+        add_plain(inner, t, r, plain, g);
+        // A trajectory whose statistics are not taken, when the problem stores its feature
+        // rows: its correction in one pass that forms the baselines off them, when the
+        // problem has one, else its baselines read off them. The statistics need the
+        // features by columns.
+        let mut from_rows = false;
+        if !take
+            && let Some(rows) = inner.state_feature_rows(t, n)
+            && let Ok(k) = leading_features(rows.1, *leading)
+        {
+            if LinearBaseline::new(running.weights(), k, *time)
+                .is_some_and(|b| inner.recorded_state_correction(t, r, &b, g))
             {
-                if LinearBaseline::new(running.weights(), k, *time)
-                    .is_some_and(|b| inner.recorded_state_correction(t, r, &b, g))
-                {
-                    continue;
-                }
-                from_rows = running.baselines_from_rows(rows, k, *time, n, baseline);
+                continue;
             }
-            let k = if from_rows {
-                0
-            } else {
-                let k = state_columns(inner, t, n, *leading, *time, phi)?;
-                running.baselines_into(phi, n, baseline);
-                k
-            };
-            // Without statistics, the products pass makes the correction alone.
-            for v in [&mut *cross, &mut *moment] {
-                v.clear();
-                if take {
-                    v.resize(n, S::zero());
-                }
-            }
-            let out = ScoreProducts {
-                v: plain,
-                baseline,
-                cross,
-                moment,
-                g,
-            };
-            inner.recorded_score_products(t, r, out);
+            from_rows = running.baselines_from_rows(rows, k, *time, n, baseline);
+        }
+        let k = if from_rows {
+            0
+        } else {
+            let k = state_columns(inner, t, n, *leading, *time, phi)?;
+            running.baselines_into(phi, n, baseline);
+            k
+        };
+        // Without statistics, the products pass makes the correction alone.
+        for v in [&mut *cross, &mut *moment] {
+            v.clear();
             if take {
-                running.observe_products(phi, k, cross, moment);
+                v.resize(n, S::zero());
             }
         }
-        checked_mean(g, &S::from_i64(m as i64))
-    }
-
-    /// The mean baselined estimate over `batch`, each trajectory's terms from `fill`.
-    fn baselined(
-        &self,
-        batch: &[P::Trajectory],
-        observe: bool,
-        mut fill: impl FnMut(&P::Trajectory, &mut DecisionTerms<S>) -> Result<(), OracleError>,
-    ) -> Result<DVector<S>, OracleError> {
-        let m = batch.len();
-        if m == 0 {
-            return Err(OracleError::Trajectory("an empty minibatch".into()));
-        }
-        if m < 2 && matches!(self.kind, Kind::LeaveOneOut) {
-            return Err(too_few_for_leave_one_out(m));
-        }
-        let mut buffers = self.buffers.borrow_mut();
-        let Buffers {
-            terms,
-            features,
-            totals,
+        let out = ScoreProducts {
+            v: plain,
+            baseline,
+            cross,
+            moment,
             g,
-            ..
-        } = &mut *buffers;
-        if terms.len() < m {
-            terms.resize_with(m, DecisionTerms::new);
-        }
-        for (t, out) in batch.iter().zip(terms.iter_mut()) {
-            fill(t, out)?;
-            out.finish();
-        }
-        if let Kind::StateDependent { leading, time, .. } = &self.kind {
-            if features.len() < m {
-                features.resize_with(m, || (Vec::new(), 0));
-            }
-            for ((t, out), (phi, k)) in batch.iter().zip(terms.iter()).zip(features.iter_mut()) {
-                *k = state_columns(self.inner(), t, out.decisions(), *leading, *time, phi)?;
-            }
-        }
-        let d = self.inner().dim();
-        g.clear();
-        g.resize(d, S::zero());
-        let mut sum = DVector::from_element(d, S::zero());
-        let mut running = match &self.kind {
-            Kind::Estimated { running, .. } => Some(running.borrow_mut()),
-            _ => None,
         };
-        let mut regression = match &self.kind {
-            Kind::StateDependent { running, .. } => Some(running.borrow_mut()),
-            _ => None,
-        };
-        if let Some(r) = running.as_mut()
-            && observe
-        {
-            r.clear_pending();
+        inner.recorded_score_products(t, r, out);
+        if take {
+            running.observe_products(phi, k, cross, moment);
         }
-        if let Some(r) = regression.as_mut()
-            && observe
-        {
-            r.clear_pending();
-        }
-        if matches!(self.kind, Kind::LeaveOneOut) {
-            let n = terms[..m].iter().map(DecisionTerms::decisions).max();
-            totals.clear();
-            totals.resize(n.unwrap_or(0), S::zero());
-            for t in &terms[..m] {
-                for (i, x) in totals.iter_mut().enumerate().take(t.decisions()) {
-                    *x += t.loss_to_go(i);
-                }
-            }
-        }
-        let others = S::from_i64(m as i64 - 1);
-        for (j, t) in terms[..m].iter().enumerate() {
-            match &self.kind {
-                Kind::None => t.estimate_into(|_| None, g),
-                Kind::Constant(b) => t.estimate_into(|_| Some(b.clone()), g),
-                Kind::TimeIndexed(bs) => {
-                    if t.decisions() > bs.len() {
-                        return Err(super::decisions::too_few_baselines(t.decisions()));
-                    }
-                    t.estimate_into(|i| Some(bs[i].clone()), g);
-                }
-                Kind::Estimated { time_indexed, .. } => {
-                    let r = running.as_ref().expect("estimated kind");
-                    if *time_indexed {
-                        t.estimate_into(|i| r.time_indexed(i), g);
-                    } else {
-                        let b = r.constant();
-                        t.estimate_into(|_| b.clone(), g);
-                    }
-                }
-                Kind::LeaveOneOut => {
-                    t.estimate_into(|i| Some((totals[i].clone() - t.loss_to_go(i)) / &others), g)
-                }
-                Kind::StateDependent { .. } => {
-                    let r = regression.as_ref().expect("state-dependent kind");
-                    r.baselines_into(&features[j].0, t.decisions(), totals);
-                    t.estimate_into(|i| totals.get(i).cloned(), g);
-                }
-            }
-            for (s, x) in sum.iter_mut().zip(g.iter()) {
-                *s += x;
-            }
-        }
-        if let Some(r) = running.as_mut()
-            && observe
-        {
-            for t in &terms[..m] {
-                r.observe(t);
-            }
-        }
-        if let Some(r) = regression.as_mut()
-            && observe
-        {
-            for (t, (phi, k)) in terms[..m].iter().zip(features.iter()) {
-                if r.takes_next() {
-                    r.observe(t, phi, *k);
-                }
-            }
-        }
-        let m = S::from_i64(m as i64);
-        let g = sum.map(|x| x / &m);
-        if !g.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the baselined gradient estimate"));
-        }
-        Ok(g)
     }
+    checked_mean(g, &S::from_i64(m as i64))
+}
+
+/// The mean baselined estimate over `batch` for the baseline `kind`, each trajectory's terms
+/// from `fill`; with `observe`, a learned baseline then takes in the batch's statistics.
+fn baselined<S: Scalar, P: PerDecisionTerms<S>>(
+    inner: &P,
+    kind: &mut Kind<S>,
+    buffers: &mut Buffers<S>,
+    batch: &[P::Trajectory],
+    observe: bool,
+    mut fill: impl FnMut(&P::Trajectory, &mut DecisionTerms<S>) -> Result<(), OracleError>,
+) -> Result<DVector<S>, OracleError> {
+    let m = batch.len();
+    if m == 0 {
+        return Err(OracleError::Trajectory("an empty minibatch".into()));
+    }
+    if m < 2 && matches!(kind, Kind::LeaveOneOut) {
+        return Err(too_few_for_leave_one_out(m));
+    }
+    let Buffers {
+        terms,
+        features,
+        totals,
+        g,
+        ..
+    } = buffers;
+    if terms.len() < m {
+        terms.resize_with(m, DecisionTerms::new);
+    }
+    for (t, out) in batch.iter().zip(terms.iter_mut()) {
+        fill(t, out)?;
+        out.finish();
+    }
+    let terms = &terms[..m];
+    if let Kind::StateDependent(state) = kind {
+        if features.len() < m {
+            features.resize_with(m, || (Vec::new(), 0));
+        }
+        for ((t, out), (phi, k)) in batch.iter().zip(terms).zip(features.iter_mut()) {
+            *k = state_columns(inner, t, out.decisions(), state.leading, state.time, phi)?;
+        }
+    }
+    if observe {
+        match kind {
+            Kind::Estimated(state) => state.running.clear_pending(),
+            Kind::StateDependent(state) => state.running.clear_pending(),
+            _ => {}
+        }
+    }
+    let d = inner.dim();
+    g.clear();
+    g.resize(d, S::zero());
+    let mut sum = DVector::from_element(d, S::zero());
+    if matches!(kind, Kind::LeaveOneOut) {
+        let n = terms.iter().map(DecisionTerms::decisions).max();
+        totals.clear();
+        totals.resize(n.unwrap_or(0), S::zero());
+        for t in terms {
+            for (i, x) in totals.iter_mut().enumerate().take(t.decisions()) {
+                *x += t.loss_to_go(i);
+            }
+        }
+    }
+    let others = S::from_i64(m as i64 - 1);
+    for (j, t) in terms.iter().enumerate() {
+        match &*kind {
+            Kind::None => t.estimate_into(|_| None, g),
+            Kind::Constant(b) => t.estimate_into(|_| Some(b.clone()), g),
+            Kind::TimeIndexed(bs) => {
+                if t.decisions() > bs.len() {
+                    return Err(super::decisions::too_few_baselines(t.decisions()));
+                }
+                t.estimate_into(|i| Some(bs[i].clone()), g);
+            }
+            Kind::Estimated(state) => {
+                let r = &state.running;
+                if state.time_indexed {
+                    t.estimate_into(|i| r.time_indexed(i), g);
+                } else {
+                    let b = r.constant();
+                    t.estimate_into(|_| b.clone(), g);
+                }
+            }
+            Kind::LeaveOneOut => {
+                t.estimate_into(|i| Some((totals[i].clone() - t.loss_to_go(i)) / &others), g)
+            }
+            Kind::StateDependent(state) => {
+                state
+                    .running
+                    .baselines_into(&features[j].0, t.decisions(), totals);
+                t.estimate_into(|i| totals.get(i).cloned(), g);
+            }
+        }
+        for (s, x) in sum.iter_mut().zip(g.iter()) {
+            *s += x;
+        }
+    }
+    if observe {
+        match kind {
+            Kind::Estimated(state) => {
+                for t in terms {
+                    state.running.observe(t);
+                }
+            }
+            Kind::StateDependent(state) => {
+                for (t, (phi, k)) in terms.iter().zip(features.iter()) {
+                    if state.running.takes_next() {
+                        state.running.observe(t, phi, *k);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    let m = S::from_i64(m as i64);
+    let g = sum.map(|x| x / &m);
+    if !g.iter().all(Scalar::is_finite) {
+        return Err(OracleError::NonFinite("the baselined gradient estimate"));
+    }
+    Ok(g)
 }
 
 impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
@@ -719,54 +742,54 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
     /// `m` roll-outs in turn from the one RNG; an estimated baseline first takes in the
     /// statistics of the previous call's trajectories.
     fn rollout(
-        &self,
+        &mut self,
         behaviour: &Behaviour<'_, S>,
         rng: &mut KitRng,
         cost: &mut Cost,
     ) -> Result<Self::Trajectory, OracleError> {
-        match &self.kind {
-            Kind::Estimated { running, .. } => running.borrow_mut().commit(),
-            Kind::StateDependent { running, .. } => running.borrow_mut().commit(),
+        match &mut self.kind {
+            Kind::Estimated(state) => state.running.commit(),
+            Kind::StateDependent(state) => state.running.commit(),
             _ => {}
         }
         self.batch.rollout(behaviour, rng, cost)
     }
 
     fn estimate(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
         form: EstimatorForm,
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
-        if matches!(self.kind, Kind::None) {
-            return self.batch.estimate(theta, trajectory, form, cost);
+        let Self {
+            batch,
+            kind,
+            buffers,
+        } = self;
+        match kind {
+            Kind::None => batch.estimate(theta, trajectory, form, cost),
+            _ if form == EstimatorForm::Full => {
+                Err(invalid("baselines apply to the causal form of eq. 3.15"))
+            }
+            Kind::Constant(b) => {
+                given_estimate(batch.inner(), theta, trajectory, Given::Constant(b), cost)
+            }
+            Kind::TimeIndexed(bs) => given_estimate(
+                batch.inner(),
+                theta,
+                trajectory,
+                Given::TimeIndexed(bs),
+                cost,
+            ),
+            Kind::LeaveOneOut => leave_one_out(batch.inner(), buffers, theta, trajectory, cost),
+            Kind::Estimated(state) => {
+                estimated(batch.inner(), state, buffers, theta, trajectory, cost)
+            }
+            Kind::StateDependent(state) => {
+                state_dependent(batch.inner(), state, buffers, theta, trajectory, cost)
+            }
         }
-        if form == EstimatorForm::Full {
-            return Err(invalid("baselines apply to the causal form of eq. 3.15"));
-        }
-        let inner = self.inner();
-        if matches!(self.kind, Kind::LeaveOneOut) {
-            return self.leave_one_out(theta, trajectory, cost);
-        }
-        if matches!(self.kind, Kind::Estimated { .. }) {
-            return self.estimated(theta, trajectory, cost);
-        }
-        if matches!(self.kind, Kind::StateDependent { .. }) {
-            return self.state_dependent(theta, trajectory, cost);
-        }
-        let given = match &self.kind {
-            Kind::Constant(b) => Some(Given::Constant(b)),
-            Kind::TimeIndexed(bs) => Some(Given::TimeIndexed(bs)),
-            _ => None,
-        };
-        if let Some(given) = given {
-            // Baselines known before the pass: the problem's own (possibly fused) pass.
-            return mean_of(trajectory, |t| {
-                inner.baselined_estimate(theta, t, given, cost)
-            });
-        }
-        self.estimate_by_terms(theta, trajectory, cost)
     }
 
     /// Without a baseline, the minibatch's own (one pass per trajectory). With a baseline the
@@ -774,7 +797,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
     /// (estimated, leave-one-out, state-dependent) read off the records where the problem can
     /// ([`PerDecisionTerms::recorded_trajectory_loss`]; the same value), else computed again.
     fn estimate_with_loss(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
         form: EstimatorForm,
@@ -791,8 +814,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         }
         let g = self.estimate(theta, trajectory, form, cost)?;
         let inner = self.inner();
-        let buffers = self.buffers.borrow();
-        let mut records = buffers.records.iter();
+        let mut records = self.buffers.records.iter();
         // `Batched::trajectory_loss`'s mean, over the same per-trajectory losses.
         let loss = crate::batched::mean(trajectory, |t| {
             let recorded = records
@@ -808,44 +830,44 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
     }
 
     fn weighted_estimate(
-        &self,
+        &mut self,
         theta_old: &DVector<S>,
         theta_new: &DVector<S>,
         trajectory: &Self::Trajectory,
         weighting: Weighting,
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
-        if matches!(self.kind, Kind::None) {
-            return self
-                .batch
-                .weighted_estimate(theta_old, theta_new, trajectory, weighting, cost);
-        }
-        let inner = self.inner();
-        let weighted = |t: &P::Trajectory, given: Given<'_, S>, cost: &mut Cost| {
+        let Self {
+            batch,
+            kind,
+            buffers,
+        } = self;
+        let weighted = |inner: &P, t: &P::Trajectory, given: Given<'_, S>, cost: &mut Cost| {
             inner.weighted_baselined_estimate(theta_old, theta_new, t, weighting, given, cost)
         };
-        match &self.kind {
-            Kind::Constant(b) => mean_of(trajectory, |t| weighted(t, Given::Constant(b), cost)),
-            Kind::TimeIndexed(bs) => {
-                mean_of(trajectory, |t| weighted(t, Given::TimeIndexed(bs), cost))
+        match kind {
+            Kind::None => {
+                batch.weighted_estimate(theta_old, theta_new, trajectory, weighting, cost)
             }
-            Kind::Estimated {
-                time_indexed,
-                running,
-            } => {
-                // The committed baselines, in a buffer lent for the call.
-                let mut committed = std::mem::take(&mut self.buffers.borrow_mut().totals);
-                running.borrow().committed(*time_indexed, &mut committed);
-                let given = match (*time_indexed, committed.first()) {
+            Kind::Constant(b) => mean_of(trajectory, |t| {
+                weighted(batch.inner(), t, Given::Constant(b), cost)
+            }),
+            Kind::TimeIndexed(bs) => mean_of(trajectory, |t| {
+                weighted(batch.inner(), t, Given::TimeIndexed(bs), cost)
+            }),
+            Kind::Estimated(state) => {
+                // The committed baselines, in the buffer of the step totals.
+                let committed = &mut buffers.totals;
+                state.running.committed(state.time_indexed, committed);
+                let given = match (state.time_indexed, committed.first()) {
                     (false, Some(b)) => Given::Constant(b),
-                    _ => Given::Leading(&committed),
+                    _ => Given::Leading(committed),
                 };
-                let g = mean_of(trajectory, |t| weighted(t, given, cost));
-                self.buffers.borrow_mut().totals = committed;
-                g
+                mean_of(trajectory, |t| weighted(batch.inner(), t, given, cost))
             }
-            Kind::None | Kind::LeaveOneOut | Kind::StateDependent { .. } => {
-                self.baselined(trajectory, false, |t, out| {
+            Kind::LeaveOneOut | Kind::StateDependent(_) => {
+                let inner = batch.inner();
+                baselined(inner, kind, buffers, trajectory, false, |t, out| {
                     inner.decision_terms(theta_old, t, Some((theta_new, weighting)), out, cost)
                 })
             }

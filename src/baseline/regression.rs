@@ -537,7 +537,7 @@ mod tests {
     fn one_constant_feature_is_the_estimated_constant() {
         let mdp = ToyMdp::from_json_str(include_str!("../../examples/toy/three-state.json"))
             .expect("valid toy file");
-        let p = ToyProblem::<BigRational>::new(&mdp);
+        let mut p = ToyProblem::<BigRational>::new(&mdp);
         let theta =
             DVector::from_vec(crate::scalar::parse_exact_list("-1/2,3,1/4,-7/2,1/3,1").expect("θ"));
         let decay = Some(BigRational::new(9.into(), 10.into()));

@@ -34,12 +34,14 @@ pub fn weighted_expectation<S: Scalar>(
     let mut acc = vec![S::zero(); table_new.dim];
     let mut failure = None;
     let mut cost = Cost::default();
+    // The oracle is stateless; a copy is the `&mut` receiver while the enumeration reads `problem`.
+    let mut oracle = problem.clone();
     for_each_prefix(problem, &table_new, |states, actions, p| {
         if failure.is_some() {
             return;
         }
         let traj = prefix_trajectory(problem, states, actions);
-        match problem.weighted_estimate(&old, &new, &traj, weighting, &mut cost) {
+        match oracle.weighted_estimate(&old, &new, &traj, weighting, &mut cost) {
             Ok(g) => {
                 for (a, x) in acc.iter_mut().zip(g.iter()) {
                     *a += p.clone() * x;

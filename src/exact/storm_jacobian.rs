@@ -136,12 +136,14 @@ pub fn weighted<S: Scalar>(
     let mut mean = zeros(d, d);
     let mut failure = None;
     let mut cost = Cost::default();
+    // The oracle is stateless; a copy is the `&mut` receiver while the enumeration reads `dual`.
+    let mut oracle = dual.clone();
     for_each_prefix(&dual, &table, |states, actions, p| {
         if failure.is_some() {
             return;
         }
         let traj = trajectory_of(expert, states, actions);
-        match dual.weighted_estimate(&old, &new, &traj, weighting, &mut cost) {
+        match oracle.weighted_estimate(&old, &new, &traj, weighting, &mut cost) {
             Ok(g) => {
                 let p = p.value();
                 let (_, jac) = split(g.iter().cloned().collect(), d);

@@ -185,12 +185,12 @@ mod tests {
         )
         .with_max_steps(500);
         let policy = || crate::policy::Logistic::new(5).expect("policy");
-        let a = TaskProblem {
+        let mut a = TaskProblem {
             task: native,
             policy: policy(),
             horizon: Horizon::Episodic,
         };
-        let b = TaskProblem {
+        let mut b = TaskProblem {
             task: adapted,
             policy: policy(),
             horizon: Horizon::Episodic,

@@ -470,7 +470,7 @@ mod tests {
             .unwrap();
         let d = task.feature_dim();
         assert_eq!(d, 9 + 2 + 3 * 81);
-        let p = TaskProblem {
+        let mut p = TaskProblem {
             task,
             policy: LinearGaussian::new(2, d, 0.02).unwrap(),
             horizon: crate::task::Horizon::Episodic,

@@ -161,7 +161,7 @@ where
     }
 
     fn rollout(
-        &self,
+        &mut self,
         behaviour: &Behaviour<'_, S>,
         rng: &mut KitRng,
         cost: &mut Cost,
@@ -237,7 +237,7 @@ where
     }
 
     fn estimate(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
         form: EstimatorForm,
@@ -249,7 +249,7 @@ where
     /// The causal form: the trajectory loss summed in the estimate's own pass (the same per-step
     /// losses, added in [`IlProblem::trajectory_loss`]'s order, so the same value).
     fn estimate_with_loss(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
         form: EstimatorForm,
@@ -264,7 +264,7 @@ where
     }
 
     fn weighted_estimate(
-        &self,
+        &mut self,
         theta_old: &DVector<S>,
         theta_new: &DVector<S>,
         trajectory: &Self::Trajectory,

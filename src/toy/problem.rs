@@ -396,7 +396,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
     }
 
     fn rollout(
-        &self,
+        &mut self,
         behaviour: &Behaviour<'_, S>,
         rng: &mut KitRng,
         cost: &mut Cost,
@@ -450,7 +450,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
     }
 
     fn estimate(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &ToyTrajectory,
         form: EstimatorForm,
@@ -468,7 +468,7 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
     }
 
     fn weighted_estimate(
-        &self,
+        &mut self,
         theta_old: &DVector<S>,
         theta_new: &DVector<S>,
         trajectory: &ToyTrajectory,

@@ -89,7 +89,12 @@ fn exact_rrm_contracts_with_ratio_exactly_one_quarter() {
     let mut alg = ExactRrm::new(map);
     let rec = Runner::new(StoppingRule::iterations(10))
         .unwrap()
-        .run(&mut alg, &problem, DVector::from_element(1, q(9, 10)), 0)
+        .run(
+            &mut alg,
+            &mut problem.clone(),
+            DVector::from_element(1, q(9, 10)),
+            0,
+        )
         .unwrap();
     assert_eq!(rec.termination, Termination::MaxIterations);
     let theta_ps = q(1, 3);
@@ -123,7 +128,7 @@ fn exact_rrm_contracts_with_ratio_exactly_one_quarter() {
 }
 
 fn tail_means(algorithm: &AlgorithmConfig, seeds: u64, k: u64) -> Vec<f64> {
-    let problem = ToyProblem::<f64>::new(&m1());
+    let mut problem = ToyProblem::<f64>::new(&m1());
     (0..seeds)
         .map(|seed| {
             let cfg = RunConfig {
@@ -132,7 +137,7 @@ fn tail_means(algorithm: &AlgorithmConfig, seeds: u64, k: u64) -> Vec<f64> {
                 seed,
                 stop: StoppingRule::iterations(k),
             };
-            let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+            let rec: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
             assert_eq!(rec.termination, Termination::MaxIterations, "seed {seed}");
             let tail = &rec.history[(k / 2) as usize..];
             tail.iter().map(|m| m.theta[0]).sum::<f64>() / tail.len() as f64
@@ -189,7 +194,7 @@ fn is_storm_approaches_the_performative_optimum() {
 }
 
 fn finals(algorithm: &AlgorithmConfig, seeds: u64, iterations: u64) -> Vec<f64> {
-    let problem = ToyProblem::<f64>::new(&m1());
+    let mut problem = ToyProblem::<f64>::new(&m1());
     (0..seeds)
         .map(|seed| {
             let cfg = RunConfig {
@@ -198,7 +203,7 @@ fn finals(algorithm: &AlgorithmConfig, seeds: u64, iterations: u64) -> Vec<f64> 
                 seed,
                 stop: StoppingRule::iterations(iterations),
             };
-            let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+            let rec: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
             assert_eq!(rec.termination, Termination::MaxIterations, "seed {seed}");
             rec.theta[0]
         })
@@ -257,18 +262,18 @@ fn f64_and_rational_rrm_iterates_agree() {
 fn directions(mut alg: ilopt::algo::storm::Storm<f64>, steps: usize, seed: u64) -> Vec<f64> {
     use ilopt::algo::{Algorithm, StepContext};
     use rand::SeedableRng;
-    let problem = ToyProblem::<f64>::new(&m1());
+    let mut problem = ToyProblem::<f64>::new(&m1());
     let mut rng = ilopt::problem::KitRng::seed_from_u64(seed);
     let mut cost = ilopt::problem::Cost::default();
     let mut ctx = StepContext {
         rng: &mut rng,
         cost: &mut cost,
     };
-    alg.init(&problem, DVector::from_element(1, 0.5), &mut ctx)
+    alg.init(&mut problem, DVector::from_element(1, 0.5), &mut ctx)
         .unwrap();
     (0..steps)
         .map(|_| {
-            alg.step(&problem, &mut ctx).unwrap();
+            alg.step(&mut problem, &mut ctx).unwrap();
             alg.direction().unwrap()[0]
         })
         .collect()
@@ -398,7 +403,7 @@ fn measure_every_algorithm_on_m1() {
             }),
         ),
     ];
-    let problem = ToyProblem::<f64>::new(&m1());
+    let mut problem = ToyProblem::<f64>::new(&m1());
     for (name, a) in &optimisers {
         // Runs that leave the open simplex (the direct parameterisation's score 1/θ is
         // unbounded) end with a domain error; they are counted, not averaged.
@@ -411,7 +416,7 @@ fn measure_every_algorithm_on_m1() {
                 seed,
                 stop: StoppingRule::iterations(K),
             };
-            let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+            let rec: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
             if matches!(rec.termination, Termination::Diverged(_)) {
                 failed += 1;
                 continue;
@@ -476,7 +481,7 @@ fn measure_every_algorithm_on_m1() {
         trajectories_per_iteration: 2000,
         inner: argmin(),
     });
-    let problem = ToyProblem::<f64>::new(&m1());
+    let mut problem = ToyProblem::<f64>::new(&m1());
     let mut per_step = [Vec::new(), Vec::new()];
     for seed in 0..SEEDS {
         let cfg = RunConfig {
@@ -485,7 +490,7 @@ fn measure_every_algorithm_on_m1() {
             seed,
             stop: StoppingRule::iterations(10),
         };
-        let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+        let rec: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
         for (t, o) in rec.outputs.iter().enumerate() {
             per_step[t].push(1.0 - o[0]);
         }

@@ -207,7 +207,7 @@ fn ok_end(t: &Termination) -> bool {
 #[test]
 fn every_algorithm_runs_on_m1_in_f64() {
     for file in ["m1-direct.json", "m1-softmax.json"] {
-        let problem = ToyProblem::<f64>::new(&mdp(file));
+        let mut problem = ToyProblem::<f64>::new(&mdp(file));
         let dim = ilopt::problem::IlProblem::<f64>::dim(&problem);
         let theta0 = if file == "m1-direct.json" {
             ConfigNumber::ratio(1, 2)
@@ -219,7 +219,7 @@ fn every_algorithm_runs_on_m1_in_f64() {
                 theta0: vec![theta0.clone(); dim],
                 ..run_config(algorithm, 11, 40)
             };
-            let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+            let rec: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
             assert!(
                 ok_end(&rec.termination),
                 "{file} {}: {}",
@@ -246,11 +246,11 @@ fn every_algorithm_runs_on_m1_in_f64() {
 
 #[test]
 fn seeded_runs_are_bit_for_bit_reproducible() {
-    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     for algorithm in field_configs().into_iter().chain(root_configs()) {
         let cfg = run_config(algorithm, 2024, 30);
-        let a: RunRecord<f64> = replay(&cfg, &problem).unwrap();
-        let b: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+        let a: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
+        let b: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
         assert!(a.same_run(&b), "{}", a.algorithm);
         let bits = |r: &RunRecord<f64>| {
             r.history
@@ -260,21 +260,21 @@ fn seeded_runs_are_bit_for_bit_reproducible() {
         };
         assert_eq!(bits(&a), bits(&b), "{}", a.algorithm);
         // A different seed gives a different run (all these algorithms sample).
-        let c: RunRecord<f64> = replay(&RunConfig { seed: 2025, ..cfg }, &problem).unwrap();
+        let c: RunRecord<f64> = replay(&RunConfig { seed: 2025, ..cfg }, &mut problem).unwrap();
         assert_ne!(bits(&a), bits(&c), "{}", a.algorithm);
     }
 }
 
 #[test]
 fn a_recorded_config_replays_to_the_same_result() {
-    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     for algorithm in field_configs().into_iter().chain(root_configs()) {
         let cfg = run_config(algorithm, 99, 25);
         let mut seen = 0u64;
         let original = Runner::new(cfg.stop.clone())
             .unwrap()
             .with_observer(|_: &IterationMetrics<f64>| seen += 1)
-            .run_config(&cfg, &problem)
+            .run_config(&cfg, &mut problem)
             .unwrap();
         assert_eq!(seen, original.iterations + 1);
         let h = original.history_json();
@@ -287,7 +287,7 @@ fn a_recorded_config_replays_to_the_same_result() {
         let text = serde_json::to_string(&original.summary_json()["config"]).unwrap();
         let recorded = RunConfig::from_json(&text).unwrap();
         assert_eq!(recorded, cfg);
-        let again: RunRecord<f64> = replay(&recorded, &problem).unwrap();
+        let again: RunRecord<f64> = replay(&recorded, &mut problem).unwrap();
         assert!(again.same_run(&original), "{}", original.algorithm);
     }
 }
@@ -302,8 +302,8 @@ fn encloses(i: &IterationMetrics<Interval>, f: &IterationMetrics<f64>) -> bool {
 
 #[test]
 fn interval_runs_follow_and_enclose_the_f64_runs() {
-    let pf = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
-    let pi = ToyProblem::<Interval>::new(&mdp("m1-direct.json"));
+    let mut pf = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut pi = ToyProblem::<Interval>::new(&mdp("m1-direct.json"));
     // The last root config (DAgger with an Adam inner optimiser, 5 inner steps per iteration) is
     // left out: as the inner gradients vanish, Adam's m̂/√v̂ in interval arithmetic widens by a
     // factor ≈ 100 per outer iteration (the wrapping effect), and after 6 iterations the enclosure
@@ -313,8 +313,8 @@ fn interval_runs_follow_and_enclose_the_f64_runs() {
     configs.pop();
     for algorithm in configs {
         let cfg = run_config(algorithm, 5, 12);
-        let f: RunRecord<f64> = replay(&cfg, &pf).unwrap();
-        let i: RunRecord<Interval> = replay(&cfg, &pi).unwrap();
+        let f: RunRecord<f64> = replay(&cfg, &mut pf).unwrap();
+        let i: RunRecord<Interval> = replay(&cfg, &mut pi).unwrap();
         assert!(ok_end(&i.termination), "{}: {}", i.algorithm, i.termination);
         assert_eq!(f.history.len(), i.history.len(), "{}", f.algorithm);
         for (a, b) in i.history.iter().zip(&f.history) {
@@ -339,14 +339,14 @@ fn interval_runs_follow_and_enclose_the_f64_runs() {
 
 #[test]
 fn rational_runs_are_exact_and_enclosed_by_interval_runs() {
-    let pq = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
-    let pi = ToyProblem::<Interval>::new(&mdp("m1-direct.json"));
-    let pf = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut pq = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
+    let mut pi = ToyProblem::<Interval>::new(&mdp("m1-direct.json"));
+    let mut pf = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     for algorithm in field_configs() {
         let cfg = run_config(algorithm, 3, 4);
-        let q: RunRecord<BigRational> = replay(&cfg, &pq).unwrap();
-        let i: RunRecord<Interval> = replay(&cfg, &pi).unwrap();
-        let f: RunRecord<f64> = replay(&cfg, &pf).unwrap();
+        let q: RunRecord<BigRational> = replay(&cfg, &mut pq).unwrap();
+        let i: RunRecord<Interval> = replay(&cfg, &mut pi).unwrap();
+        let f: RunRecord<f64> = replay(&cfg, &mut pf).unwrap();
         assert!(ok_end(&q.termination), "{}: {}", q.algorithm, q.termination);
         assert_eq!(q.history.len(), i.history.len());
         for ((mq, mi), mf) in q.history.iter().zip(&i.history).zip(&f.history) {
@@ -365,22 +365,22 @@ fn rational_runs_are_exact_and_enclosed_by_interval_runs() {
 
 #[test]
 fn field_builds_work_through_the_same_config_and_refuse_roots() {
-    let pq = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
+    let mut pq = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
     for algorithm in root_configs() {
         let cfg = run_config(algorithm, 3, 2);
-        assert!(replay::<BigRational, _>(&cfg, &pq).is_err());
+        assert!(replay::<BigRational, _>(&cfg, &mut pq).is_err());
     }
 }
 
 #[test]
 fn costs_are_accounted_in_the_same_units() {
-    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     // One SGD step = one trajectory and one eq. 3.15 estimate; one STORM step = one trajectory
     // and two estimates (new point and old point), so twice the gradient evaluations.
     let sgd: RunRecord<f64> =
-        replay(&run_config(field_configs()[0].clone(), 1, 10), &problem).unwrap();
+        replay(&run_config(field_configs()[0].clone(), 1, 10), &mut problem).unwrap();
     let st: RunRecord<f64> =
-        replay(&run_config(field_configs()[2].clone(), 1, 10), &problem).unwrap();
+        replay(&run_config(field_configs()[2].clone(), 1, 10), &mut problem).unwrap();
     let per_sgd = sgd.cost.gradient_evaluations / 10;
     assert!(per_sgd > 0);
     assert_eq!(sgd.cost.gradient_evaluations, 10 * per_sgd);
@@ -392,7 +392,7 @@ fn costs_are_accounted_in_the_same_units() {
     // trains on all 2·n·i labelled states (T − 1 = 2 per trajectory), one ∇l each.
     let n = 10u64;
     let dg: RunRecord<f64> =
-        replay(&run_config(field_configs()[7].clone(), 1, 5), &problem).unwrap();
+        replay(&run_config(field_configs()[7].clone(), 1, 5), &mut problem).unwrap();
     assert_eq!(dg.cost.trajectories, 5 * n);
     assert_eq!(dg.cost.expert_queries, 5 * n * 2);
     assert_eq!(
@@ -403,10 +403,10 @@ fn costs_are_accounted_in_the_same_units() {
 
 #[test]
 fn the_gradient_budget_and_target_loss_stop_the_run() {
-    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     let mut cfg = run_config(field_configs()[2].clone(), 8, 1);
     cfg.stop = StoppingRule::gradient_budget(100);
-    let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+    let rec: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
     assert_eq!(rec.termination, Termination::GradientBudget);
     let last = rec.history[rec.history.len() - 2].cost.gradient_evaluations;
     assert!(rec.cost.gradient_evaluations >= 100 && last < 100);
@@ -420,7 +420,7 @@ fn the_gradient_budget_and_target_loss_stop_the_run() {
                 .ok()
                 .map(|f| f.objective)
         })
-        .run_config(&cfg, &problem)
+        .run_config(&cfg, &mut problem.clone())
         .unwrap();
     assert_eq!(rec.termination, Termination::TargetLoss);
     let f = rec.history.last().unwrap().objective.unwrap();
@@ -434,7 +434,7 @@ fn the_gradient_budget_and_target_loss_stop_the_run() {
 
 #[test]
 fn o2nc_blocks_stay_within_delta_and_output_block_means() {
-    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     let cfg = o2nc_config();
     let mut alg = O2nc::<f64>::new(&cfg).unwrap();
     let prm = alg.parameters().clone();
@@ -445,12 +445,12 @@ fn o2nc_blocks_stay_within_delta_and_output_block_means() {
         rng: &mut rng,
         cost: &mut cost,
     };
-    alg.init(&problem, DVector::from_element(1, 0.5), &mut ctx)
+    alg.init(&mut problem, DVector::from_element(1, 0.5), &mut ctx)
         .unwrap();
     let mut ws = Vec::new();
     let mut finished = false;
     for _ in 0..prm.m {
-        let r = alg.step(&problem, &mut ctx).unwrap();
+        let r = alg.step(&mut problem, &mut ctx).unwrap();
         ws.push(alg.last_w().unwrap()[0]);
         finished = r.finished;
     }
@@ -490,9 +490,9 @@ fn scalar_choice_does_not_change_the_interval_of_a_rational_hyper_parameter() {
 
 #[test]
 fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly() {
-    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     let ft = field_configs().pop().unwrap();
-    let rec: RunRecord<f64> = replay(&run_config(ft, 1, 100), &problem).unwrap();
+    let rec: RunRecord<f64> = replay(&run_config(ft, 1, 100), &mut problem).unwrap();
     // M1 has T = 3: losses at t = 1, 2, so two policies.
     assert_eq!(rec.termination, Termination::Finished);
     assert_eq!(rec.iterations, 2);
@@ -515,10 +515,10 @@ fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly()
         cost: &mut cost,
     };
     smile
-        .init(&problem, DVector::from_element(1, 0.5), &mut ctx)
+        .init(&mut problem, DVector::from_element(1, 0.5), &mut ctx)
         .unwrap();
     for _ in 0..4 {
-        smile.step(&problem, &mut ctx).unwrap();
+        smile.step(&mut problem, &mut ctx).unwrap();
     }
     let w = smile.mixture_weights();
     let q = |n: i64, d: i64| BigRational::new(n.into(), d.into());
@@ -529,7 +529,7 @@ fn forward_training_finishes_after_one_policy_per_step_and_smile_mixes_exactly()
 
 #[test]
 fn a_time_limit_ends_the_run() {
-    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     // A step (10⁻⁹) so small that θ stays near 1/2, inside the open simplex, however many
     // iterations fit in the time limit: the limit is then the only way the run can end (with
     // a larger step the walk may leave the simplex first, on a fast machine).
@@ -547,7 +547,7 @@ fn a_time_limit_ends_the_run() {
         .unwrap()
         .with_observer(ilopt::algo::Progress { every: u64::MAX })
         .with_observer(|m: &IterationMetrics<f64>| seen_progress |= m.wall_time > 0.0)
-        .run_config(&cfg, &problem)
+        .run_config(&cfg, &mut problem)
         .unwrap();
     assert_eq!(rec.termination, Termination::TimeOut);
     assert!(rec.wall_time >= 0.005 && rec.iterations > 0);
@@ -560,7 +560,7 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
     // the exact minimiser of the mean Brier loss 2θ²·#A + 2(1−θ)²·#B.
     use ilopt::algo::bc::Bc;
     use ilopt::algo::dagger::Dagger;
-    let problem = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<BigRational>::new(&mdp("m1-direct.json"));
     let q = |n: usize, d: usize| BigRational::new((n as i64).into(), (d as i64).into());
     let frac_b = |data: &[ilopt::toy::ToyExample]| {
         q(data.iter().filter(|e| e.label == 0).count(), data.len())
@@ -579,9 +579,9 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
         retrain: Retrain::FromScratch,
     })
     .unwrap();
-    bc.init(&problem, theta0.clone(), &mut ctx).unwrap();
+    bc.init(&mut problem, theta0.clone(), &mut ctx).unwrap();
     for i in 1..=2 {
-        bc.step(&problem, &mut ctx).unwrap();
+        bc.step(&mut problem, &mut ctx).unwrap();
         // 25 trajectories × (T − 1 = 2) labelled states per step, aggregated.
         assert_eq!(bc.dataset().len(), 50 * i);
         assert_eq!(
@@ -598,12 +598,12 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
         inner: argmin_inner(),
     })
     .unwrap();
-    dagger.init(&problem, theta0, &mut ctx).unwrap();
+    dagger.init(&mut problem, theta0, &mut ctx).unwrap();
     // β₁ = 1 (expert only), β₂ = 1/2, β₃ = 0 = β₄.
     let mut betas = Vec::new();
     for i in 1..=4 {
         betas.push(dagger.next_beta());
-        dagger.step(&problem, &mut ctx).unwrap();
+        dagger.step(&mut problem, &mut ctx).unwrap();
         assert_eq!(dagger.dataset().len(), 50 * i);
         assert_eq!(
             Algorithm::<BigRational, ToyProblem<BigRational>>::theta(&dagger)[0],
@@ -615,9 +615,9 @@ fn dataset_learners_train_to_the_exact_argmin_in_rationals() {
 
 #[test]
 fn the_runner_records_where_o2nc_evaluated_its_gradients() {
-    let problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
+    let mut problem = ToyProblem::<f64>::new(&mdp("m1-direct.json"));
     let cfg = run_config(AlgorithmConfig::O2nc(o2nc_config()), 21, 1000);
-    let rec: RunRecord<f64> = replay(&cfg, &problem).unwrap();
+    let rec: RunRecord<f64> = replay(&cfg, &mut problem).unwrap();
     let prm = o2nc_config().parameters().unwrap();
     assert_eq!(rec.termination, Termination::Finished);
     assert_eq!(rec.iterations, prm.m);
@@ -633,7 +633,7 @@ fn the_runner_records_where_o2nc_evaluated_its_gradients() {
     }
     // The SGD-type algorithms evaluate at θ and leave it empty.
     let sgd: RunRecord<f64> =
-        replay(&run_config(field_configs()[0].clone(), 1, 3), &problem).unwrap();
+        replay(&run_config(field_configs()[0].clone(), 1, 3), &mut problem).unwrap();
     assert!(sgd.history.iter().all(|m| m.evaluated_at.is_none()));
 }
 
@@ -664,11 +664,11 @@ fn every_algorithm_runs_with_every_baseline() {
             theta0: vec![ConfigNumber::ratio(0, 1); dim],
             ..run_config(algorithm, 5, 20)
         };
-        let batched = ilopt::batched::Batched::new(problem.clone(), 2).unwrap();
-        let plain: RunRecord<f64> = replay(&cfg, &batched).unwrap();
+        let mut batched = ilopt::batched::Batched::new(problem.clone(), 2).unwrap();
+        let plain: RunRecord<f64> = replay(&cfg, &mut batched).unwrap();
         for kind in &kinds {
-            let oracle = Baselined::<_, f64>::new(problem.clone(), 2, kind).unwrap();
-            let rec: RunRecord<f64> = replay(&cfg, &oracle).unwrap();
+            let mut oracle = Baselined::<_, f64>::new(problem.clone(), 2, kind).unwrap();
+            let rec: RunRecord<f64> = replay(&cfg, &mut oracle).unwrap();
             if *kind != Baseline::None
                 && rec
                     .termination

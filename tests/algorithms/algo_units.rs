@@ -48,7 +48,7 @@ impl<S: Scalar> IlProblem<S> for Scripted {
         1
     }
     fn rollout(
-        &self,
+        &mut self,
         _: &Behaviour<'_, S>,
         _: &mut KitRng,
         cost: &mut Cost,
@@ -59,7 +59,7 @@ impl<S: Scalar> IlProblem<S> for Scripted {
         Ok(i % self.script.len())
     }
     fn estimate(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         tau: &usize,
         _: EstimatorForm,
@@ -70,7 +70,7 @@ impl<S: Scalar> IlProblem<S> for Scripted {
         Ok(theta.map(|t| S::from_i64(a) * t + S::from_i64(b)))
     }
     fn weighted_estimate(
-        &self,
+        &mut self,
         old: &DVector<S>,
         new: &DVector<S>,
         tau: &usize,
@@ -118,7 +118,7 @@ fn v<S: Scalar>(x: S) -> DVector<S> {
 /// Drive an algorithm by hand: init then `steps` steps; returns the iterates θ₁, θ₂, ….
 fn drive<S: Scalar, A: Algorithm<S, Scripted>>(
     alg: &mut A,
-    p: &Scripted,
+    p: &mut Scripted,
     theta0: S,
     steps: usize,
 ) -> Vec<S> {
@@ -153,9 +153,9 @@ fn script() -> Scripted {
 
 #[test]
 fn one_storm_step_in_rationals() {
-    let p = script();
+    let mut p = script();
     let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::Unweighted)).unwrap();
-    let th = drive(&mut s, &p, q(1, 1), 1);
+    let th = drive(&mut s, &mut p, q(1, 1), 1);
     assert_eq!(th[1], q(3, 4));
     // d₂ = 13/4 + (1/2)(1 − 4) = 7/4.
     assert_eq!(s.direction().unwrap()[0], q(7, 4));
@@ -164,7 +164,7 @@ fn one_storm_step_in_rationals() {
     let mut rng = KitRng::seed_from_u64(0);
     let mut cost = Cost::default();
     s.step(
-        &p,
+        &mut p,
         &mut StepContext {
             rng: &mut rng,
             cost: &mut cost,
@@ -178,15 +178,15 @@ fn one_storm_step_in_rationals() {
 fn one_is_storm_step_in_rationals() {
     // Whole-trajectory weight (2 + 1)/(2 + 3/4) = 12/11: g̃ = 48/11,
     // d₂ = 13/4 + (1/2)(1 − 48/11) = 69/44.
-    let p = script();
+    let mut p = script();
     let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::Trajectory)).unwrap();
-    drive(&mut s, &p, q(1, 1), 1);
+    drive(&mut s, &mut p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(69, 44));
     // Per-decision weight (3 + 1)/(3 + 3/4) = 16/15: g̃ = 64/15,
     // d₂ = 13/4 + (1/2)(1 − 64/15) = 13/4 − 49/30 = 97/60.
-    let p = script();
+    let mut p = script();
     let mut s = Storm::<BigRational>::new(&storm_cfg(Correction::PerDecision)).unwrap();
-    drive(&mut s, &p, q(1, 1), 1);
+    drive(&mut s, &mut p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(97, 60));
     assert_eq!(Algorithm::<BigRational, Scripted>::name(&s), "is-storm");
 }
@@ -194,13 +194,13 @@ fn one_is_storm_step_in_rationals() {
 #[test]
 fn printed_algorithm_4_uses_the_e9_update() {
     // d₂ = 13/4 + (1/2)·4 = 21/4: no d₁, and the correction enters with a plus sign.
-    let p = script();
+    let mut p = script();
     let cfg = PrintedAlgorithm4Config {
         schedule: StormSchedule::constant(ConfigNumber::ratio(1, 4), ConfigNumber::ratio(1, 2)),
         form: EstimatorForm::Causal,
     };
     let mut s = printed_algorithm_4::<BigRational>(&cfg).unwrap();
-    drive(&mut s, &p, q(1, 1), 1);
+    drive(&mut s, &mut p, q(1, 1), 1);
     assert_eq!(s.direction().unwrap()[0], q(21, 4));
     assert_eq!(
         Algorithm::<BigRational, Scripted>::name(&s),
@@ -213,7 +213,7 @@ fn explicit_storm_schedule_is_followed_and_repeats_its_last_entry() {
     // η = (1/2, 1/4), a = (1): with a = 1 the direction is the fresh estimate.
     // θ₁ = 1, d₁ = 1 → θ₂ = 1/2; d₂ = g(1/2, τ₂) = 5/2 → θ₃ = 1/2 − (1/4)(5/2) = −1/8;
     // d₃ = g(−1/8, τ₁) = −5/4 → θ₄ = −1/8 + 5/16 = 3/16.
-    let p = script();
+    let mut p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Explicit {
             eta: vec![ConfigNumber::ratio(1, 2), ConfigNumber::ratio(1, 4)],
@@ -223,14 +223,14 @@ fn explicit_storm_schedule_is_followed_and_repeats_its_last_entry() {
         form: EstimatorForm::Causal,
     };
     let mut s = Storm::<BigRational>::new(&cfg).unwrap();
-    let th = drive(&mut s, &p, q(1, 1), 3);
+    let th = drive(&mut s, &mut p, q(1, 1), 3);
     assert_eq!(th, vec![q(1, 1), q(1, 2), q(-1, 8), q(3, 16)]);
 }
 
 #[test]
 fn thesis_schedule_matches_eq_3_43() {
     // L = 2: η₁ = (1/8)(7/8)^{1/3}, a₂ = (7/8)^{2/3}.
-    let p = script();
+    let mut p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Thesis {
             l: ConfigNumber::ratio(2, 1),
@@ -239,7 +239,7 @@ fn thesis_schedule_matches_eq_3_43() {
         form: EstimatorForm::Causal,
     };
     let mut s = Storm::<f64>::new(&cfg).unwrap();
-    drive(&mut s, &p, 1.0, 1);
+    drive(&mut s, &mut p, 1.0, 1);
     let (eta, a) = *s.last_schedule().unwrap();
     let r = (7.0f64 / 8.0).cbrt();
     assert_abs_diff_eq!(eta, r / 8.0, epsilon = 1e-16);
@@ -256,7 +256,7 @@ fn thesis_schedule_matches_eq_3_43() {
 #[test]
 fn adaptive_schedule_matches_algorithm_4() {
     // k' = 1, w = 7, c = 1/2. G₁² = 1 (d₁ = 1): η₁ = 1/(7 + 1)^{1/3} = 1/2, a₂ = (1/2)(1/4) = 1/8.
-    let p = script();
+    let mut p = script();
     let cfg = StormConfig {
         schedule: StormSchedule::Adaptive {
             k: ConfigNumber::ratio(1, 1),
@@ -267,7 +267,7 @@ fn adaptive_schedule_matches_algorithm_4() {
         form: EstimatorForm::Causal,
     };
     let mut s = Storm::<f64>::new(&cfg).unwrap();
-    let th = drive(&mut s, &p, 1.0, 1);
+    let th = drive(&mut s, &mut p, 1.0, 1);
     assert_eq!(*s.last_schedule().unwrap(), (0.5, 0.125));
     assert_eq!(th[1], 0.5);
     // g(1/2, τ₂) = 5/2, g(1, τ₂) = 4: d₂ = 5/2 + (7/8)(1 − 4) = −1/8. G₂² = 25/4:
@@ -276,7 +276,7 @@ fn adaptive_schedule_matches_algorithm_4() {
     let mut rng = KitRng::seed_from_u64(0);
     let mut cost = Cost::default();
     s.step(
-        &p,
+        &mut p,
         &mut StepContext {
             rng: &mut rng,
             cost: &mut cost,
@@ -290,7 +290,7 @@ fn adaptive_schedule_matches_algorithm_4() {
 #[test]
 fn one_sgd_step_in_rationals_and_inverse_time_schedule() {
     // θ₂ = 1 − (1/3)·1 = 2/3; then η₂ = (1/3)·2/(2 + 1) = 2/9, g(2/3, τ₂) = 3 → θ₃ = 0.
-    let p = script();
+    let mut p = script();
     let cfg = SgdConfig {
         step: SgdStep::InverseTime {
             eta0: ConfigNumber::ratio(1, 3),
@@ -299,7 +299,7 @@ fn one_sgd_step_in_rationals_and_inverse_time_schedule() {
         form: EstimatorForm::Causal,
     };
     let mut s = Sgd::<BigRational>::new(&cfg).unwrap();
-    let th = drive(&mut s, &p, q(1, 1), 2);
+    let th = drive(&mut s, &mut p, q(1, 1), 2);
     assert_eq!(th, vec![q(1, 1), q(2, 3), q(0, 1)]);
 }
 
@@ -308,7 +308,7 @@ fn one_adam_step_in_f64_from_kingma_ba() {
     // Constant gradient g = 1/2 (a = 0, b = 1/2 is not an integer: use a = 0, b = 1 and read
     // α accordingly). First step: m = (1−β₁)g, v = (1−β₂)g², m̂ = g, v̂ = g²,
     // θ₁ = θ₀ − α g/(|g| + ε) with g = 1.
-    let p = Scripted::new(vec![(0, 1), (0, -2)]);
+    let mut p = Scripted::new(vec![(0, 1), (0, -2)]);
     let cfg = AdamOptimizerConfig {
         adam: AdamConfig {
             alpha: ConfigNumber::ratio(1, 10),
@@ -319,7 +319,7 @@ fn one_adam_step_in_f64_from_kingma_ba() {
         form: EstimatorForm::Causal,
     };
     let mut s = Adam::<f64>::new(&cfg).unwrap();
-    let th = drive(&mut s, &p, 1.0, 2);
+    let th = drive(&mut s, &mut p, 1.0, 2);
     let expect1 = 1.0 - 0.1 * 1.0 / (1.0 + 1e-8);
     assert_abs_diff_eq!(th[1], expect1, epsilon = 1e-15);
     // Second step, g = −2: m = 0.9·0.1 + 0.1·(−2) = −0.11, v = 0.999·0.001 + 0.001·4 = 0.004999,
@@ -334,7 +334,7 @@ fn one_adam_step_in_f64_from_kingma_ba() {
 fn rmsprop_follows_eqs_2_14_and_2_15() {
     // β = 3/4, η = 1/8, ε = 0 (eq. 2.15 as printed). g = 3: v = (1/4)·9, √v = 3/2,
     // θ₁ = 1 − (1/8)·3/(3/2) = 3/4 exactly. Then g = 1: v = (3/4)(9/4) + 1/4 = 31/16.
-    let p = Scripted::new(vec![(0, 3), (0, 1)]);
+    let mut p = Scripted::new(vec![(0, 3), (0, 1)]);
     let cfg = RmsPropOptimizerConfig {
         rmsprop: RmsPropConfig {
             eta: ConfigNumber::ratio(1, 8),
@@ -344,7 +344,7 @@ fn rmsprop_follows_eqs_2_14_and_2_15() {
         form: EstimatorForm::Causal,
     };
     let mut s = RmsProp::<f64>::new(&cfg).unwrap();
-    let th = drive(&mut s, &p, 1.0, 2);
+    let th = drive(&mut s, &mut p, 1.0, 2);
     assert_eq!(th[1], 0.75);
     let expect = 0.75 - 0.125 / (31.0f64 / 16.0).sqrt();
     assert_abs_diff_eq!(th[2], expect, epsilon = 1e-15);
@@ -352,7 +352,7 @@ fn rmsprop_follows_eqs_2_14_and_2_15() {
 
 #[test]
 fn rmsprop_without_epsilon_stops_on_a_zero_denominator() {
-    let p = Scripted::new(vec![(0, 0)]);
+    let mut p = Scripted::new(vec![(0, 0)]);
     let cfg = RmsPropOptimizerConfig {
         rmsprop: RmsPropConfig {
             eta: ConfigNumber::ratio(1, 8),
@@ -364,7 +364,7 @@ fn rmsprop_without_epsilon_stops_on_a_zero_denominator() {
     let mut s = RmsProp::<f64>::new(&cfg).unwrap();
     let rec = Runner::new(StoppingRule::iterations(3))
         .unwrap()
-        .run(&mut s, &p, v(1.0), 1)
+        .run(&mut s, &mut p, v(1.0), 1)
         .unwrap();
     assert!(matches!(
         rec.termination,
@@ -375,10 +375,10 @@ fn rmsprop_without_epsilon_stops_on_a_zero_denominator() {
 #[test]
 fn storm_plus_first_step_matches_the_paper_form() {
     // a₀ = 1, b₀ = 0, c = 1: g₁ = d₁ = 1; a₂ = (1 + 1)^{−2/3}; η₁ = (1/a₂)^{−1/3} = 2^{−2/9}.
-    let p = script();
+    let mut p = script();
     let cfg = StormPlusConfig::paper(Correction::Unweighted, EstimatorForm::Causal);
     let mut s = StormPlus::<f64>::new(&cfg).unwrap();
-    let th = drive(&mut s, &p, 1.0, 1);
+    let th = drive(&mut s, &mut p, 1.0, 1);
     let expect = 1.0 - 2f64.powf(-2.0 / 9.0);
     assert_abs_diff_eq!(th[1], expect, epsilon = 1e-15);
 }
@@ -599,7 +599,7 @@ fn field_builds_refuse_what_needs_roots() {
 #[test]
 fn a_non_finite_iterate_stops_the_run() {
     // g ≈ 9.2·10¹⁸ and η = 10³⁰⁰: the first step overflows to −∞.
-    let p = Scripted::new(vec![(0, i64::MAX)]);
+    let mut p = Scripted::new(vec![(0, i64::MAX)]);
     let mut s = Sgd::<f64>::new(&SgdConfig {
         step: SgdStep::constant(1e300),
         form: EstimatorForm::Causal,
@@ -607,7 +607,7 @@ fn a_non_finite_iterate_stops_the_run() {
     .unwrap();
     let rec = Runner::new(StoppingRule::iterations(5))
         .unwrap()
-        .run(&mut s, &p, v(0.0), 3)
+        .run(&mut s, &mut p, v(0.0), 3)
         .unwrap();
     assert_eq!(
         rec.termination,
@@ -669,7 +669,7 @@ impl IlProblem<f64> for Recording {
         1
     }
     fn rollout(
-        &self,
+        &mut self,
         b: &Behaviour<'_, f64>,
         rng: &mut KitRng,
         cost: &mut Cost,
@@ -680,7 +680,7 @@ impl IlProblem<f64> for Recording {
         self.inner.rollout(b, rng, cost)
     }
     fn estimate(
-        &self,
+        &mut self,
         th: &DVector<f64>,
         t: &usize,
         f: EstimatorForm,
@@ -689,7 +689,7 @@ impl IlProblem<f64> for Recording {
         self.inner.estimate(th, t, f, c)
     }
     fn weighted_estimate(
-        &self,
+        &mut self,
         o: &DVector<f64>,
         n: &DVector<f64>,
         t: &usize,
@@ -727,7 +727,7 @@ fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
         form: EstimatorForm::Causal,
     };
     for printed in [false, true] {
-        let p = Recording {
+        let mut p = Recording {
             inner: Scripted::new(vec![(1, -1), (2, 1), (-1, 3)]),
             sampled_at: Default::default(),
         };
@@ -742,12 +742,12 @@ fn o2nc_samples_at_w_n_and_the_printed_algorithm_5_at_theta_n() {
             rng: &mut rng,
             cost: &mut cost,
         };
-        alg.init(&p, v(0.0), &mut ctx).unwrap();
+        alg.init(&mut p, v(0.0), &mut ctx).unwrap();
         let m = alg.parameters().m;
         let mut moved = 0;
         for _ in 0..m {
             let before = alg.theta()[0];
-            alg.step(&p, &mut ctx).unwrap();
+            alg.step(&mut p, &mut ctx).unwrap();
             let at = *p.sampled_at.borrow().last().unwrap();
             let (w, th) = (alg.last_w().unwrap()[0], alg.theta()[0]);
             // w_n = θ_{n−1} + s_n Δ_n lies between θ_{n−1} and θ_n.
@@ -777,7 +777,7 @@ fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
     // (At p = 1/2 the old-point estimate happens to be unbiased even without weights, since
     // l(A) = l(B) there, so p = 3/10 is used.)
     use crate::fixture::AliasedTwoState;
-    let fx = AliasedTwoState::m1();
+    let mut fx = AliasedTwoState::m1();
     assert_eq!(fx.derivative(&q(3, 10)), q(-9, 5));
     let target = -1.8;
     let p = v(0.3);
@@ -792,7 +792,8 @@ fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
             .rollout(&Behaviour::Learner(&p), &mut rng, &mut cost)
             .unwrap();
         samples[0].push(
-            IlProblem::<f64>::estimate(&fx, &p, &tau, EstimatorForm::Causal, &mut cost).unwrap()[0],
+            IlProblem::<f64>::estimate(&mut fx, &p, &tau, EstimatorForm::Causal, &mut cost)
+                .unwrap()[0],
         );
         let tau = fx
             .rollout(&Behaviour::Learner(&p_new), &mut rng, &mut cost)
@@ -807,7 +808,8 @@ fn the_fixture_oracle_is_unbiased_for_its_closed_form_gradient() {
             );
         }
         unweighted.push(
-            IlProblem::<f64>::estimate(&fx, &p, &tau, EstimatorForm::Causal, &mut cost).unwrap()[0],
+            IlProblem::<f64>::estimate(&mut fx, &p, &tau, EstimatorForm::Causal, &mut cost)
+                .unwrap()[0],
         );
     }
     // Negative control (E10): without the weight the old-point estimate is biased, and the test

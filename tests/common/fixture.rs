@@ -291,7 +291,7 @@ impl<S: Scalar> IlProblem<S> for AliasedTwoState {
     }
 
     fn rollout(
-        &self,
+        &mut self,
         behaviour: &Behaviour<'_, S>,
         rng: &mut KitRng,
         cost: &mut Cost,
@@ -388,7 +388,7 @@ impl<S: Scalar> IlProblem<S> for AliasedTwoState {
     }
 
     fn estimate(
-        &self,
+        &mut self,
         theta: &DVector<S>,
         trajectory: &TwoStateTrajectory,
         form: EstimatorForm,
@@ -402,7 +402,7 @@ impl<S: Scalar> IlProblem<S> for AliasedTwoState {
     }
 
     fn weighted_estimate(
-        &self,
+        &mut self,
         theta_old: &DVector<S>,
         theta_new: &DVector<S>,
         trajectory: &TwoStateTrajectory,

@@ -127,9 +127,9 @@ fn check(mdp: &ToyMdp, theta: &[Q], theta_prime: &[Q], seed: &[(i64, i64)]) -> R
         kinds.push(Baseline::TimeIndexed { values: nums(&bs) });
     }
     for kind in &kinds {
-        let oracle = Baselined::<_, Q>::new(p.clone(), 1, kind).map_err(|e| e.to_string())?;
+        let mut oracle = Baselined::<_, Q>::new(p.clone(), 1, kind).map_err(|e| e.to_string())?;
         oracle_is_unbiased(
-            &oracle,
+            &mut oracle,
             (&th, &all_at),
             (&th_prime, &all_at_prime),
             &grad,
@@ -143,7 +143,7 @@ fn check(mdp: &ToyMdp, theta: &[Q], theta_prime: &[Q], seed: &[(i64, i64)]) -> R
 /// `all_at` (the prefixes at θ), and `Σ_τ p(τ; θ′) w g_b(θ, τ) = ∇F(θ)` over `all_at_prime` with
 /// both weightings. The oracle is not rolled out in between, so its baselines stay fixed.
 fn oracle_is_unbiased(
-    oracle: &Baselined<ToyProblem<Q>, Q>,
+    oracle: &mut Baselined<ToyProblem<Q>, Q>,
     (th, all_at): (&DVector<Q>, &[(ToyTrajectory, Q)]),
     (th_prime, all_at_prime): (&DVector<Q>, &[(ToyTrajectory, Q)]),
     grad: &[Q],
@@ -217,7 +217,7 @@ fn check_state_dependent(
     }
     // The oracle, with the weights of one earlier trajectory (the last prefix at θ).
     for time in [false, true] {
-        check_state_oracle(p, theta, theta_prime, grad, time)?;
+        check_state_oracle(&mut p.clone(), theta, theta_prime, grad, time)?;
     }
     Ok(())
 }
@@ -227,7 +227,7 @@ fn check_state_dependent(
 /// trajectory's `c_s/A_ss`; either way its estimates (plain, and importance-weighted both ways)
 /// have mean ∇F exactly.
 fn check_state_oracle(
-    p: &ToyProblem<Q>,
+    p: &mut ToyProblem<Q>,
     theta: &[Q],
     theta_prime: &[Q],
     grad: &[Q],
@@ -245,7 +245,7 @@ fn check_state_oracle(
         ridge: None,
         fit_every: None,
     };
-    let oracle = Baselined::<_, Q>::new(p.clone(), 1, &kind).map_err(|e| e.to_string())?;
+    let mut oracle = Baselined::<_, Q>::new(p.clone(), 1, &kind).map_err(|e| e.to_string())?;
     let mut cost = Cost::default();
     let (earlier, _) = all_at.last().ok_or("no prefix")?;
     let first = oracle
@@ -296,7 +296,7 @@ fn check_state_oracle(
         ));
     }
     oracle_is_unbiased(
-        &oracle,
+        &mut oracle,
         (&th, &all_at),
         (&th_prime, &all_at_prime),
         grad,
@@ -325,7 +325,7 @@ fn check_leave_one_out(mdp: &ToyMdp, theta: &[Q], theta_prime: &[Q]) -> Result<(
     let mdp = &mdp;
     let p = ToyProblem::<Q>::new(mdp);
     let grad = forward(&p, theta).map_err(|e| e.to_string())?.gradient;
-    let oracle =
+    let mut oracle =
         Baselined::<_, Q>::new(p.clone(), 2, &Baseline::LeaveOneOut).map_err(|e| e.to_string())?;
     let th = DVector::from_column_slice(theta);
     let th_prime = DVector::from_column_slice(theta_prime);
@@ -509,7 +509,11 @@ type ToyOracle<S> = Baselined<ToyProblem<S>, S>;
 /// inside the interval run of the same code and the exact value inside both (the kit's tolerance
 /// policy); the exact estimate is returned.
 fn estimates_agree(
-    (of, ox, oi): (&ToyOracle<f64>, &ToyOracle<Q>, &ToyOracle<Interval>),
+    (of, ox, oi): (
+        &mut ToyOracle<f64>,
+        &mut ToyOracle<Q>,
+        &mut ToyOracle<Interval>,
+    ),
     (theta_f, theta_x, theta_i): (&DVector<f64>, &DVector<Q>, &DVector<Interval>),
     batch: &Vec<ToyTrajectory>,
     what: &str,
@@ -550,10 +554,11 @@ fn f64_state_dependent_oracle_agrees_with_the_exact_one() {
         fit_every: None,
     };
     let pf = ToyProblem::<f64>::new(&mdp);
-    let px = ToyProblem::<Q>::new(&mdp);
-    let of = Baselined::<_, f64>::new(pf.clone(), 1, &kind).unwrap();
-    let ox = Baselined::<_, Q>::new(px.clone(), 1, &kind).unwrap();
-    let oi = Baselined::<_, Interval>::new(ToyProblem::<Interval>::new(&mdp), 1, &kind).unwrap();
+    let mut px = ToyProblem::<Q>::new(&mdp);
+    let mut of = Baselined::<_, f64>::new(pf.clone(), 1, &kind).unwrap();
+    let mut ox = Baselined::<_, Q>::new(px.clone(), 1, &kind).unwrap();
+    let mut oi =
+        Baselined::<_, Interval>::new(ToyProblem::<Interval>::new(&mdp), 1, &kind).unwrap();
     let mut rng = KitRng::seed_from_u64(3);
     let mut cost = Cost::default();
     let mut changed = 0;
@@ -567,7 +572,7 @@ fn f64_state_dependent_oracle_agrees_with_the_exact_one() {
         oi.rollout(&Behaviour::Learner(&theta_i), &mut r2, &mut cost)
             .unwrap();
         let x = estimates_agree(
-            (&of, &ox, &oi),
+            (&mut of, &mut ox, &mut oi),
             (&theta_f, &theta_x, &theta_i),
             &batch,
             "state-dependent",
@@ -610,7 +615,7 @@ fn invalid_state_baselines_are_clear_errors() {
     let e = make(None, None, Some(ConfigNumber::ratio(-1, 2))).unwrap_err();
     assert!(e.to_string().contains("ridge"), "{e}");
     // More features than the problem has: refused at the first estimate.
-    let o = make(Some(7), None, None).unwrap();
+    let mut o = make(Some(7), None, None).unwrap();
     let theta = DVector::from_vec(vec![0.0]);
     let mut rng = KitRng::seed_from_u64(1);
     let mut cost = Cost::default();
@@ -647,12 +652,12 @@ fn the_reference_values_on_m1() {
 #[test]
 fn the_estimated_baseline_uses_earlier_trajectories_only() {
     let mdp = example("three-state.json");
-    let p = ToyProblem::<Q>::new(&mdp);
+    let mut p = ToyProblem::<Q>::new(&mdp);
     let theta =
         DVector::from_vec(ilopt::scalar::parse_exact_list("-1/2,3,1/4,-7/2,1/3,1").unwrap());
     let grad = forward(&p, theta.as_slice()).unwrap().gradient;
     for time_indexed in [true, false] {
-        let oracle = Baselined::<_, Q>::new(
+        let mut oracle = Baselined::<_, Q>::new(
             p.clone(),
             1,
             &Baseline::Estimated {
@@ -727,7 +732,7 @@ fn f64_baselined_oracle_agrees_with_the_exact_one() {
     let theta_x: DVector<Q> = DVector::from_vec(theta_q.clone());
     let theta_i: DVector<Interval> =
         DVector::from_iterator(6, theta_q.iter().map(<Interval as Scalar>::from_rational));
-    let pf = ToyProblem::<f64>::new(&mdp);
+    let mut pf = ToyProblem::<f64>::new(&mdp);
     let mut rng = KitRng::seed_from_u64(3);
     let mut cost = Cost::default();
     let batch: Vec<ToyTrajectory> = (0..4)
@@ -755,14 +760,14 @@ fn f64_baselined_oracle_agrees_with_the_exact_one() {
         (4, Baseline::LeaveOneOut),
     ];
     for (m, kind) in kinds {
-        let of = Baselined::<_, f64>::new(pf.clone(), m, &kind).unwrap();
-        let ox = Baselined::<_, Q>::new(ToyProblem::<Q>::new(&mdp), m, &kind).unwrap();
-        let oi =
+        let mut of = Baselined::<_, f64>::new(pf.clone(), m, &kind).unwrap();
+        let mut ox = Baselined::<_, Q>::new(ToyProblem::<Q>::new(&mdp), m, &kind).unwrap();
+        let mut oi =
             Baselined::<_, Interval>::new(ToyProblem::<Interval>::new(&mdp), m, &kind).unwrap();
         for chunk in batch.chunks(m) {
             let chunk = chunk.to_vec();
             let x = estimates_agree(
-                (&of, &ox, &oi),
+                (&mut of, &mut ox, &mut oi),
                 (&theta_f, &theta_x, &theta_i),
                 &chunk,
                 &format!("{kind:?}"),
@@ -806,7 +811,7 @@ fn invalid_baselines_are_clear_errors() {
     )
     .unwrap_err();
     assert!(e.to_string().contains("decay"), "{e}");
-    let o = Baselined::<_, f64>::new(
+    let mut o = Baselined::<_, f64>::new(
         p.clone(),
         1,
         &Baseline::Constant {
@@ -824,7 +829,8 @@ fn invalid_baselines_are_clear_errors() {
         o.estimate(&theta, &t, EstimatorForm::Full, &mut cost),
         Err(OracleError::Baseline(_))
     ));
-    let short = Baselined::<_, f64>::new(p, 1, &Baseline::TimeIndexed { values: vec![] }).unwrap();
+    let mut short =
+        Baselined::<_, f64>::new(p, 1, &Baseline::TimeIndexed { values: vec![] }).unwrap();
     let e = short
         .estimate(&theta, &t, EstimatorForm::Causal, &mut cost)
         .unwrap_err();
@@ -835,8 +841,8 @@ fn invalid_baselines_are_clear_errors() {
 fn no_baseline_is_bit_identical_to_the_plain_minibatch() {
     let p = ToyProblem::<f64>::new(&example("three-state.json"));
     let theta = DVector::from_vec(vec![-0.5, 3.0, 0.25, -3.5, 0.1, 1.0]);
-    let plain = ilopt::batched::Batched::new(p.clone(), 3).unwrap();
-    let none = Baselined::<_, f64>::new(p, 3, &Baseline::None).unwrap();
+    let mut plain = ilopt::batched::Batched::new(p.clone(), 3).unwrap();
+    let mut none = Baselined::<_, f64>::new(p, 3, &Baseline::None).unwrap();
     let (mut r1, mut r2) = (KitRng::seed_from_u64(9), KitRng::seed_from_u64(9));
     let (mut c1, mut c2) = (Cost::default(), Cost::default());
     for _ in 0..5 {
@@ -929,7 +935,7 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
     use ilopt::task::{AfterEnd, TaskProblem};
     use ilopt::tolerance::derivative_f64_agrees;
 
-    fn check<P>(p: &TaskProblem<CartPoleTask<f64>, P>, theta: &DVector<f64>)
+    fn check<P>(p: &mut TaskProblem<CartPoleTask<f64>, P>, theta: &DVector<f64>)
     where
         P: ilopt::policy::LikelihoodRatio<f64, Action = usize, Label = usize>
             + EstimatorKernel<f64>,
@@ -970,15 +976,18 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
             }
         }
     }
-    let logistic = TaskProblem::fixed(
+    let mut logistic = TaskProblem::fixed(
         CartPoleTask::<f64>::with_lqr().unwrap(),
         Logistic::new(cartpole::FEATURES).unwrap(),
         120,
         AfterEnd::Reset,
     )
     .unwrap();
-    check(&logistic, &DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1]));
-    let softmax = TaskProblem::fixed(
+    check(
+        &mut logistic,
+        &DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1]),
+    );
+    let mut softmax = TaskProblem::fixed(
         CartPoleTask::<f64>::with_lqr().unwrap(),
         Softmax::new(2, cartpole::FEATURES).unwrap(),
         120,
@@ -986,7 +995,7 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
     )
     .unwrap();
     check(
-        &softmax,
+        &mut softmax,
         &DVector::from_vec(vec![0.1, -0.2, 0.3, 0.5, 0.0, 0.2, 0.1, -0.4, 0.3, 0.1]),
     );
 }
@@ -1006,7 +1015,7 @@ fn task_decision_terms_reproduce_the_task_estimators() {
     use ilopt::tolerance::derivative_f64_agrees;
 
     fn check<P: PerDecisionTerms<f64>>(
-        p: &P,
+        p: &mut P,
         theta: &DVector<f64>,
         theta_new: &DVector<f64>,
         what: &str,
@@ -1063,7 +1072,7 @@ fn task_decision_terms_reproduce_the_task_estimators() {
             }
         }
     }
-    let cartpole = TaskProblem::fixed(
+    let mut cartpole = TaskProblem::fixed(
         CartPoleTask::<f64>::with_lqr().unwrap(),
         Logistic::new(cartpole::FEATURES).unwrap(),
         150,
@@ -1071,15 +1080,15 @@ fn task_decision_terms_reproduce_the_task_estimators() {
     )
     .unwrap();
     check(
-        &cartpole,
+        &mut cartpole,
         &DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1]),
         &DVector::from_vec(vec![0.25, 1.1, 7.5, 2.0, 0.15]),
         "cartpole",
     );
-    let (obstacle, w) = crate::common::absorbing_obstacle_problem();
+    let (mut obstacle, w) = crate::common::absorbing_obstacle_problem();
     let mut w_new = w.clone();
     w_new[1] = 0.05;
-    check(&obstacle, &w, &w_new, "obstacle");
+    check(&mut obstacle, &w, &w_new, "obstacle");
     // The same roll-outs (same seed) include absorbing tails.
     let mut rng = KitRng::seed_from_u64(4);
     let absorbed = (0..5)
@@ -1137,7 +1146,7 @@ fn fit_every_takes_every_eth_trajectory_and_leaves_the_estimates_unchanged() {
         };
         // `every1` is shown trajectories 0, 3, 6, … only; its clones estimate every trajectory
         // with its weights and are dropped with their statistics.
-        let (every3, every1) = (make(3), make(1));
+        let (mut every3, mut every1) = (make(3), make(1));
         let mut rng = KitRng::seed_from_u64(17);
         let mut other = KitRng::seed_from_u64(0);
         let mut cost = Cost::default();
@@ -1163,7 +1172,7 @@ fn fit_every_takes_every_eth_trajectory_and_leaves_the_estimates_unchanged() {
                     .unwrap();
             }
         }
-        for o in [&every3, &every1] {
+        for o in [&mut every3, &mut every1] {
             o.rollout(&Behaviour::Learner(theta), &mut other, &mut cost)
                 .unwrap();
         }

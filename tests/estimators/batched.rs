@@ -21,8 +21,8 @@ fn cartpole() -> TaskProblem<CartPoleTask<f64>, Softmax> {
 
 #[test]
 fn a_batch_is_m_independent_rollouts_and_the_mean_of_their_estimates() {
-    let p = cartpole();
-    let b = Batched::new(p.clone(), 3).unwrap();
+    let mut p = cartpole();
+    let mut b = Batched::new(p.clone(), 3).unwrap();
     assert_eq!((b.size(), IlProblem::<f64>::dim(&b)), (3, p.dim()));
     let theta = DVector::from_fn(p.dim(), |i, _| 0.1 * i as f64 - 0.2);
     let new = DVector::from_fn(p.dim(), |i, _| 0.1 * i as f64 - 0.25);
@@ -61,6 +61,7 @@ fn a_batch_is_m_independent_rollouts_and_the_mean_of_their_estimates() {
     let w = b
         .weighted_estimate(&theta, &new, &batch, Weighting::PerDecision, &mut c)
         .unwrap();
+    let d = p.dim();
     let wm: DVector<f64> = singles
         .iter()
         .map(|t| {
@@ -73,7 +74,7 @@ fn a_batch_is_m_independent_rollouts_and_the_mean_of_their_estimates() {
             )
             .unwrap()
         })
-        .fold(DVector::zeros(p.dim()), |a, x| a + x)
+        .fold(DVector::zeros(d), |a, x| a + x)
         / 3.0;
     assert!((w - &wm).norm() <= 1e-12 * wm.norm());
 
@@ -91,7 +92,7 @@ fn a_batch_is_m_independent_rollouts_and_the_mean_of_their_estimates() {
 fn an_empty_batch_is_an_error() {
     let err = Batched::new(cartpole(), 0).unwrap_err();
     assert!(err.to_string().contains("at least 1 trajectory"), "{err}");
-    let b = Batched::new(cartpole(), 2).unwrap();
+    let mut b = Batched::new(cartpole(), 2).unwrap();
     let theta = DVector::zeros(5);
     let err = b
         .estimate(

@@ -32,8 +32,8 @@ where
                 time_indexed,
                 decay: Some(ConfigNumber::ratio(9, 10)),
             };
-            let fast = Baselined::<_, S>::new(p.clone(), m, &kind).unwrap();
-            let reference = Baselined::<_, S>::new(p.clone(), m, &kind).unwrap();
+            let mut fast = Baselined::<_, S>::new(p.clone(), m, &kind).unwrap();
+            let mut reference = Baselined::<_, S>::new(p.clone(), m, &kind).unwrap();
             let (mut r1, mut r2) = (KitRng::seed_from_u64(5), KitRng::seed_from_u64(5));
             for call in 0..6 {
                 let (mut c1, mut c2) = (Cost::default(), Cost::default());

@@ -23,7 +23,7 @@ fn cartpole(steps: usize, after_end: AfterEnd) -> CartPole {
     .unwrap()
 }
 
-fn learner_rollout<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>, seed: u64) -> P::Trajectory {
+fn learner_rollout<P: IlProblem<f64>>(p: &mut P, theta: &DVector<f64>, seed: u64) -> P::Trajectory {
     let mut rng = KitRng::seed_from_u64(seed);
     p.rollout(&Behaviour::Learner(theta), &mut rng, &mut Cost::default())
         .unwrap()
@@ -89,14 +89,14 @@ fn assert_close(a: &[f64], b: &[f64]) {
 
 #[test]
 fn a_reset_stream_has_exactly_the_horizon_across_resets() {
-    let p = cartpole(500, AfterEnd::Reset);
+    let mut p = cartpole(500, AfterEnd::Reset);
     // θ = 0 pushes at random: the pole falls within a few dozen steps, so the stream resets.
     let theta = DVector::zeros(p.dim());
-    let t = learner_rollout(&p, &theta, 7);
+    let t = learner_rollout(&mut p, &theta, 7);
     assert_eq!(t.len(), 500);
     assert!(t.resets >= 3, "resets {}", t.resets);
     assert_eq!(t.absorbed, None);
-    assert_eq!(t, learner_rollout(&p, &theta, 7));
+    assert_eq!(t, learner_rollout(&mut p, &theta, 7));
     // The estimator runs over the whole stream: one gradient evaluation per decision, and the
     // score sum crosses the resets (the definition with every i < T).
     let mut cost = Cost::default();
@@ -113,9 +113,9 @@ fn a_reset_stream_has_exactly_the_horizon_across_resets() {
 
 #[test]
 fn an_absorbing_stream_charges_the_remaining_steps_and_no_gradient_evaluations() {
-    let p = cartpole(500, AfterEnd::Absorb);
+    let mut p = cartpole(500, AfterEnd::Absorb);
     let theta = DVector::from_fn(p.dim(), |i, _| 0.3 * (i as f64 - 2.0));
-    let t = learner_rollout(&p, &theta, 3);
+    let t = learner_rollout(&mut p, &theta, 3);
     let n = t.len();
     assert!(n < 500, "the learner balanced for {n} steps");
     assert_eq!(t.absorbed, Some(2.0 * (500 - n) as f64));
@@ -151,10 +151,10 @@ fn an_absorbing_stream_charges_the_remaining_steps_and_no_gradient_evaluations()
 
 #[test]
 fn weighted_estimates_of_an_absorbed_stream_weigh_the_tail_by_every_decision() {
-    let p = cartpole(500, AfterEnd::Absorb);
+    let mut p = cartpole(500, AfterEnd::Absorb);
     let old = DVector::from_fn(p.dim(), |i, _| 0.3 * (i as f64 - 2.0));
     let new = DVector::from_fn(p.dim(), |i, _| 0.25 * (i as f64 - 1.5));
-    let t = learner_rollout(&p, &new, 11);
+    let t = learner_rollout(&mut p, &new, 11);
     let n = t.len();
     assert!(n < 500);
     // Prefix weights w_{1:k} = Π_{i≤k} π_old(a_i|s_i)/π_new(a_i|s_i), k = 0..n.
@@ -190,7 +190,7 @@ fn weighted_estimates_of_an_absorbed_stream_weigh_the_tail_by_every_decision() {
 #[test]
 fn the_obstacle_task_absorbs_at_zero_loss_after_success_and_at_the_supremum_after_a_crash() {
     let task = ObstacleTask::thesis().unwrap();
-    let p = TaskProblem::fixed(
+    let mut p = TaskProblem::fixed(
         task,
         LinearGaussian::new(2, obstacle::FEATURES, 0.02).unwrap(),
         200,
@@ -209,7 +209,7 @@ fn the_obstacle_task_absorbs_at_zero_loss_after_success_and_at_the_supremum_afte
     let theta = DVector::from_fn(p.dim(), |i, _| if i == 0 || i == 10 { 0.05 } else { 0.0 });
     let mut crashed = 0;
     for seed in 0..40 {
-        let t = learner_rollout(&p, &theta, seed);
+        let t = learner_rollout(&mut p, &theta, seed);
         match t.absorbed {
             Some(0.0) => {}
             Some(x) => {
@@ -245,7 +245,7 @@ fn a_task_without_an_absorbing_loss_cannot_absorb_and_a_horizon_needs_a_decision
         }
     }
     let policy = Softmax::new(2, 1).unwrap();
-    let p = TaskProblem::fixed(EndsAtOnce, policy, 5, AfterEnd::Absorb).unwrap();
+    let mut p = TaskProblem::fixed(EndsAtOnce, policy, 5, AfterEnd::Absorb).unwrap();
     let err = p
         .rollout(
             &Behaviour::Expert,
@@ -258,7 +258,7 @@ fn a_task_without_an_absorbing_loss_cannot_absorb_and_a_horizon_needs_a_decision
         "{err}"
     );
     // With resets the same task gives 5 one-step episodes.
-    let p = TaskProblem::fixed(EndsAtOnce, policy, 5, AfterEnd::Reset).unwrap();
+    let mut p = TaskProblem::fixed(EndsAtOnce, policy, 5, AfterEnd::Reset).unwrap();
     let t = p
         .rollout(
             &Behaviour::Expert,

@@ -50,7 +50,7 @@ fn compare_routes<S, P>(
     P: PerDecisionTerms<S> + Clone,
 {
     for m in [2, 3, 4] {
-        let o = Baselined::<_, S>::new(p.clone(), m, &Baseline::LeaveOneOut).unwrap();
+        let mut o = Baselined::<_, S>::new(p.clone(), m, &Baseline::LeaveOneOut).unwrap();
         for chunk in batch.chunks_exact(m) {
             let (mut c1, mut c2) = (Cost::default(), Cost::default());
             let fast = o
@@ -98,7 +98,7 @@ macro_rules! toy_leave_one_out_matches_terms {
                     exact.len(),
                     exact.iter().map(<$s as Scalar>::from_rational),
                 );
-                let pf = ToyProblem::<f64>::new(&mdp);
+                let mut pf = ToyProblem::<f64>::new(&mdp);
                 let mut rng = KitRng::seed_from_u64(21);
                 let batch: Vec<ToyTrajectory> = (0..24)
                     .map(|_| {
@@ -130,7 +130,7 @@ toy_leave_one_out_matches_terms!(
 
 /// `n` roll-outs of `p` at θ.
 fn rollouts<P: IlProblem<f64>>(
-    p: &P,
+    p: &mut P,
     theta: &DVector<f64>,
     n: usize,
     seed: u64,
@@ -155,7 +155,7 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
     use ilopt::task::cartpole::{self, CartPoleTask};
     use ilopt::task::{AfterEnd, Horizon, TaskProblem};
 
-    fn check<T, P>(p: &TaskProblem<T, P>, theta: &DVector<f64>, what: &str)
+    fn check<T, P>(p: &mut TaskProblem<T, P>, theta: &DVector<f64>, what: &str)
     where
         TaskProblem<T, P>: PerDecisionTerms<
                 f64,
@@ -190,7 +190,7 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
     let logistic = || Logistic::new(cartpole::FEATURES).unwrap();
     let balancing = DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1]);
     check(
-        &TaskProblem::episodic(lqr(), logistic()),
+        &mut TaskProblem::episodic(lqr(), logistic()),
         &balancing,
         "logistic, episodic",
     );
@@ -198,27 +198,31 @@ fn task_leave_one_out_fast_route_agrees_with_terms() {
         (AfterEnd::Reset, "logistic, reset"),
         (AfterEnd::Absorb, "logistic, absorb"),
     ] {
-        let p = TaskProblem::fixed(lqr(), logistic(), 150, after_end).unwrap();
-        check(&p, &DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]), what);
+        let mut p = TaskProblem::fixed(lqr(), logistic(), 150, after_end).unwrap();
+        check(
+            &mut p,
+            &DVector::from_vec(vec![0.0, 0.2, 1.0, 0.1, 0.0]),
+            what,
+        );
     }
-    let softmax = TaskProblem {
+    let mut softmax = TaskProblem {
         task: lqr(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
         horizon: Horizon::Episodic,
     };
     check(
-        &softmax,
+        &mut softmax,
         &DVector::from_vec(vec![0.1, -0.2, 0.3, 0.5, 0.0, 0.2, 0.1, -0.4, 0.3, 0.1]),
         "softmax, episodic",
     );
-    let (obstacle, w) = crate::common::absorbing_obstacle_problem();
+    let (mut obstacle, w) = crate::common::absorbing_obstacle_problem();
     assert!(
-        rollouts(&obstacle, &w, 12, 8)
+        rollouts(&mut obstacle, &w, 12, 8)
             .iter()
             .any(|t| t.absorbed.is_some()),
         "an absorbing tail among the obstacle trajectories"
     );
-    check(&obstacle, &w, "linear-Gaussian, obstacle, absorb");
+    check(&mut obstacle, &w, "linear-Gaussian, obstacle, absorb");
 }
 
 /// Invalid θ: the fast route reports the reference route's error.
@@ -227,13 +231,13 @@ fn task_leave_one_out_errors_as_the_terms_route() {
     use ilopt::policy::Logistic;
     use ilopt::task::TaskProblem;
     use ilopt::task::cartpole::{self, CartPoleTask};
-    let p = TaskProblem::episodic(
+    let mut p = TaskProblem::episodic(
         CartPoleTask::<f64>::with_lqr().unwrap(),
         Logistic::new(cartpole::FEATURES).unwrap(),
     );
     let theta = DVector::from_vec(vec![0.3, 1.0, 8.0, 2.0, 0.1]);
-    let batch = rollouts(&p, &theta, 2, 3);
-    let o = Baselined::<_, f64>::new(p, 2, &Baseline::LeaveOneOut).unwrap();
+    let batch = rollouts(&mut p, &theta, 2, 3);
+    let mut o = Baselined::<_, f64>::new(p, 2, &Baseline::LeaveOneOut).unwrap();
     for bad in [
         DVector::from_vec(vec![0.3, 1.0]),
         DVector::from_vec(vec![0.3, f64::NAN, 8.0, 2.0, 0.1]),

@@ -55,7 +55,12 @@ fn exact(mdp: &ToyMdp, theta: &[BigRational]) -> Exact {
 }
 
 /// Mean of N oracle estimates at θ (f64, fresh trajectories from `rng`).
-fn sample_mean(p: &ToyProblem<f64>, theta: &DVector<f64>, n: usize, rng: &mut KitRng) -> Vec<f64> {
+fn sample_mean(
+    p: &mut ToyProblem<f64>,
+    theta: &DVector<f64>,
+    n: usize,
+    rng: &mut KitRng,
+) -> Vec<f64> {
     let mut cost = Cost::default();
     let mut acc = vec![0.0; theta.len()];
     for _ in 0..n {
@@ -84,12 +89,12 @@ fn check(name: &str, theta: &[&str], seed: u64) {
     let mdp = example(name);
     let th: Vec<BigRational> = theta.iter().map(|x| q(x)).collect();
     let ex = exact(&mdp, &th);
-    let p = ToyProblem::<f64>::new(&mdp);
+    let mut p = ToyProblem::<f64>::new(&mdp);
     let theta = DVector::from_iterator(th.len(), th.iter().map(Scalar::to_f64));
     let mut rng = KitRng::seed_from_u64(seed);
     for n in [100usize, 1_000, 10_000] {
         // (1) one run, rigorous envelope per coordinate.
-        let m = sample_mean(&p, &theta, n, &mut rng);
+        let m = sample_mean(&mut p, &theta, n, &mut rng);
         for (j, mj) in m.iter().enumerate() {
             let eps = bernstein(n as f64, ex.var[j], ex.range[j], 1e-6);
             let err = (mj - ex.mean[j]).abs();
@@ -102,7 +107,7 @@ fn check(name: &str, theta: &[&str], seed: u64) {
         let reps = 200;
         let mut mse = 0.0;
         for _ in 0..reps {
-            let m = sample_mean(&p, &theta, n, &mut rng);
+            let m = sample_mean(&mut p, &theta, n, &mut rng);
             mse += m
                 .iter()
                 .zip(&ex.mean)

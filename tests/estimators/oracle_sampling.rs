@@ -15,7 +15,7 @@ fn theta<S: Scalar>(xs: &[&str]) -> DVector<S> {
 }
 
 fn trajectories<S: Scalar>(mdp: &ToyMdp, th: &[&str], seed: u64, n: usize) -> Vec<ToyTrajectory> {
-    let p = ToyProblem::<S>::new(mdp);
+    let mut p = ToyProblem::<S>::new(mdp);
     let t = theta::<S>(th);
     let mut rng = KitRng::seed_from_u64(seed);
     let mut cost = Cost::default();
@@ -46,7 +46,7 @@ fn same_seed_same_trajectories_in_every_scalar() {
 #[test]
 fn interval_estimates_enclose_exact_and_f64_estimates_on_the_same_trajectory() {
     let mdp = example("three-state.json");
-    let (pf, pq, pi) = (
+    let (mut pf, mut pq, mut pi) = (
         ToyProblem::<f64>::new(&mdp),
         ToyProblem::<BigRational>::new(&mdp),
         ToyProblem::<Interval>::new(&mdp),
@@ -78,7 +78,7 @@ fn interval_estimates_enclose_exact_and_f64_estimates_on_the_same_trajectory() {
 #[test]
 fn cost_accounting() {
     let mdp = example("three-state.json"); // T = 4
-    let p = ToyProblem::<f64>::new(&mdp);
+    let mut p = ToyProblem::<f64>::new(&mdp);
     let t = theta::<f64>(&TH3);
     let mut rng = KitRng::seed_from_u64(1);
     let mut cost = Cost::default();
@@ -114,7 +114,7 @@ fn cost_accounting() {
 #[test]
 fn labels_are_the_experts_and_expert_rollouts_follow_it() {
     let mdp = example("three-state.json");
-    let p = ToyProblem::<f64>::new(&mdp);
+    let mut p = ToyProblem::<f64>::new(&mdp);
     let mut rng = KitRng::seed_from_u64(5);
     let mut cost = Cost::default();
     for _ in 0..200 {
@@ -131,7 +131,7 @@ fn mixture_frequencies_match_their_weights() {
     // M1: the learner with θ = 1 (p = 3/4 for action 1); the expert plays 1 in A, 0 in B.
     // With β = 1/2 the probability of action 1 at s_1 is ½·[μ_A·1 + μ_B·0] + ½·¾ = 5/8.
     let mdp = example("m1-tied.json");
-    let p = ToyProblem::<f64>::new(&mdp);
+    let mut p = ToyProblem::<f64>::new(&mdp);
     let t = theta::<f64>(&["1"]);
     let mut rng = KitRng::seed_from_u64(11);
     let mut cost = Cost::default();
@@ -151,7 +151,7 @@ fn mixture_frequencies_match_their_weights() {
 #[test]
 fn invalid_inputs_are_errors() {
     let mdp = example("three-state.json");
-    let p = ToyProblem::<f64>::new(&mdp);
+    let mut p = ToyProblem::<f64>::new(&mdp);
     let mut rng = KitRng::seed_from_u64(1);
     let mut c = Cost::default();
     let short = DVector::from_vec(vec![0.0; 5]);
@@ -195,7 +195,7 @@ fn invalid_inputs_are_errors() {
         Err(OracleError::Trajectory(_))
     ));
     // Off the open simplex in the direct parameterisation.
-    let d = ToyProblem::<f64>::new(&example("m1-direct.json"));
+    let mut d = ToyProblem::<f64>::new(&example("m1-direct.json"));
     let out = DVector::from_vec(vec![1.0]);
     assert!(matches!(
         d.rollout(&Behaviour::Learner(&out), &mut rng, &mut c),

@@ -223,7 +223,7 @@ fn mean(gs: &[Vec<f64>]) -> Vec<f64> {
 
 /// Every route of one problem on its learner's trajectories at `thetas[0]` (the softmax policy's
 /// noted probabilities usable), estimated at both θ, with both weightings towards the other θ.
-fn check_routes<T, P>(p: &TaskProblem<T, P>, thetas: &[DVector<f64>; 2])
+fn check_routes<T, P>(p: &mut TaskProblem<T, P>, thetas: &[DVector<f64>; 2])
 where
     T: Task<f64> + Clone,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64> + Clone,
@@ -496,7 +496,7 @@ where
     let theta = &thetas[0];
     let th = theta.as_slice();
     for kind in &kinds {
-        let b = Baselined::new(p.clone(), M, kind).unwrap();
+        let mut b = Baselined::new(p.clone(), M, kind).unwrap();
         let mut rng = KitRng::seed_from_u64(7);
         let mut cost = Cost::default();
         for batch in 0..BATCHES {
@@ -615,33 +615,33 @@ fn cartpole_task() -> CartPoleTask<f64> {
 }
 
 fn logistic(horizon: Option<AfterEnd>) {
-    let p = with_horizon(
+    let mut p = with_horizon(
         cartpole_task(),
         Logistic::new(cartpole::FEATURES).unwrap(),
         horizon,
     );
-    check_routes(&p, &cartpole_theta(cartpole::FEATURES));
+    check_routes(&mut p, &cartpole_theta(cartpole::FEATURES));
 }
 
 fn softmax(horizon: Option<AfterEnd>) {
-    let p = with_horizon(
+    let mut p = with_horizon(
         cartpole_task(),
         Softmax::new(2, cartpole::FEATURES).unwrap(),
         horizon,
     );
-    check_routes(&p, &cartpole_theta(2 * cartpole::FEATURES));
+    check_routes(&mut p, &cartpole_theta(2 * cartpole::FEATURES));
 }
 
 fn mlp_softmax(horizon: Option<AfterEnd>) {
     let policy = MlpSoftmax::new(cartpole::FEATURES, 4, 2).unwrap();
     let thetas = mlp_theta(policy.net());
-    check_routes(&with_horizon(cartpole_task(), policy, horizon), &thetas);
+    check_routes(&mut with_horizon(cartpole_task(), policy, horizon), &thetas);
 }
 
 fn linear_gaussian(horizon: Option<AfterEnd>) {
     let policy = LinearGaussian::new(2, obstacle::FEATURES, 0.05).unwrap();
-    let p = with_horizon(ObstacleTask::thesis().unwrap(), policy, horizon);
-    check_routes(&p, &obstacle_theta(obstacle::FEATURES));
+    let mut p = with_horizon(ObstacleTask::thesis().unwrap(), policy, horizon);
+    check_routes(&mut p, &obstacle_theta(obstacle::FEATURES));
 }
 
 fn linear_gaussian_inline(horizon: Option<AfterEnd>) {
@@ -651,7 +651,7 @@ fn linear_gaussian_inline(horizon: Option<AfterEnd>) {
         .unwrap();
     let task = ObstacleTask::thesis().unwrap().with_actions::<[f64; 2]>();
     check_routes(
-        &with_horizon(task, policy, horizon),
+        &mut with_horizon(task, policy, horizon),
         &obstacle_theta(obstacle::FEATURES),
     );
 }
@@ -665,7 +665,7 @@ fn speed_limited(horizon: Option<AfterEnd>) {
     let policy = SpeedLimitedGaussian::new(inner, 0.1).unwrap();
     let task = ObstacleTask::thesis().unwrap().with_actions::<[f64; 2]>();
     check_routes(
-        &with_horizon(task, policy, horizon),
+        &mut with_horizon(task, policy, horizon),
         &obstacle_theta(obstacle::FEATURES),
     );
 }
@@ -689,7 +689,7 @@ fn mlp_gaussian(horizon: Option<AfterEnd>) {
     if let Some(after_end) = horizon {
         p.horizon = Horizon::fixed(LONG_STEPS, after_end);
     }
-    check_routes(&p, &thetas);
+    check_routes(&mut p, &thetas);
 }
 
 /// One test per policy × horizon kind: episodic; a fixed horizon whose early ends absorb; one

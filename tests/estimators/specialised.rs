@@ -17,7 +17,7 @@ use yardstick::{D, Specialised, Trajectory};
 
 #[test]
 fn specialised_and_generic_agree_bit_for_bit() {
-    let generic = TaskProblem {
+    let mut generic = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,

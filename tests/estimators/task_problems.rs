@@ -29,9 +29,9 @@ fn obstacle_problem() -> TaskProblem<ObstacleTask, LinearGaussian<f64>> {
 
 #[test]
 fn cartpole_rollouts_are_seeded_and_labelled() {
-    let p = cartpole_problem();
+    let mut p = cartpole_problem();
     let theta = DVector::from_fn(p.dim(), |i, _| 0.1 * (i as f64 - 4.0));
-    let run = |seed| {
+    let mut run = |seed| {
         let mut rng = KitRng::seed_from_u64(seed);
         let mut c = Cost::default();
         (
@@ -58,7 +58,7 @@ fn cartpole_rollouts_are_seeded_and_labelled() {
 #[test]
 fn cartpole_with_the_ppo_expert_balances() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("experts/cartpole-ppo.json");
-    let p = TaskProblem {
+    let mut p = TaskProblem {
         task: CartPoleTask::<f64>::with_ppo(&path).unwrap(),
         policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,
@@ -73,7 +73,7 @@ fn cartpole_with_the_ppo_expert_balances() {
 
 #[test]
 fn weighted_estimate_at_the_same_point_is_the_plain_estimate() {
-    let p = cartpole_problem();
+    let mut p = cartpole_problem();
     let theta = DVector::from_fn(p.dim(), |i, _| 0.05 * i as f64);
     let mut rng = KitRng::seed_from_u64(9);
     let mut c = Cost::default();
@@ -110,7 +110,7 @@ fn weighted_estimate_at_the_same_point_is_the_plain_estimate() {
 
 #[test]
 fn obstacle_expert_episodes_succeed_and_learner_rollouts_work() {
-    let p = obstacle_problem();
+    let mut p = obstacle_problem();
     let mut rng = KitRng::seed_from_u64(4);
     let mut c = Cost::default();
     let e = p.rollout(&Behaviour::Expert, &mut rng, &mut c).unwrap();
@@ -134,7 +134,7 @@ fn obstacle_expert_episodes_succeed_and_learner_rollouts_work() {
 
 #[test]
 fn bad_input_is_an_error() {
-    let p = cartpole_problem();
+    let mut p = cartpole_problem();
     let mut rng = KitRng::seed_from_u64(1);
     let mut c = Cost::default();
     let short = DVector::from_element(3, 0.0);
@@ -170,7 +170,7 @@ fn bad_input_is_an_error() {
 fn learner_rollouts_skip_the_feature_check_with_the_same_results() {
     use ilopt::policy::Logistic;
     use ilopt::task::TaskTrajectory;
-    let p = TaskProblem {
+    let mut p = TaskProblem {
         task: CartPoleTask::<f64>::with_lqr().unwrap(),
         policy: Logistic::new(cartpole::FEATURES).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,
@@ -189,7 +189,7 @@ fn learner_rollouts_skip_the_feature_check_with_the_same_results() {
             TaskTrajectory::from_parts(t.features(), t.actions.clone(), t.labels.clone()).unwrap();
         assert_eq!(rebuilt, t);
         for form in [EstimatorForm::Causal, EstimatorForm::Full] {
-            let bits = |t: &TaskTrajectory<f64, usize, usize>| {
+            let mut bits = |t: &TaskTrajectory<f64, usize, usize>| {
                 p.estimate(&theta, t, form, &mut Cost::default())
                     .map(|g| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>())
             };
@@ -238,7 +238,7 @@ fn features_that_change_length_are_an_error() {
             Ok(*step == 5)
         }
     }
-    let p = TaskProblem {
+    let mut p = TaskProblem {
         task: Growing,
         policy: Logistic::new(1).unwrap(),
         horizon: ilopt::task::Horizon::Episodic,

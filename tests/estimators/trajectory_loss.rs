@@ -29,7 +29,7 @@ fn trajectory_loss_is_the_sum_of_the_per_decision_losses() {
     let mut rng = KitRng::seed_from_u64(3);
     let mut clipped = 0;
     for horizon in [Horizon::Episodic, Horizon::fixed(200, AfterEnd::Absorb)] {
-        let p = TaskProblem {
+        let mut p = TaskProblem {
             task: task.clone(),
             policy: policy.clone(),
             horizon,
@@ -68,7 +68,7 @@ fn trajectory_loss_is_the_sum_of_the_per_decision_losses() {
 
 /// `estimate_with_loss` returns the estimate and the trajectory loss of `estimate` then
 /// `trajectory_loss`, bit for bit, on `p`'s learner roll-outs at each θ of `thetas`.
-fn assert_estimate_with_loss<P: IlProblem<f64>>(p: &P, thetas: &[DVector<f64>], what: &str) {
+fn assert_estimate_with_loss<P: IlProblem<f64>>(p: &mut P, thetas: &[DVector<f64>], what: &str) {
     let mut rng = KitRng::seed_from_u64(11);
     for (k, theta) in thetas.iter().enumerate() {
         for _ in 0..3 {
@@ -132,7 +132,7 @@ fn the_estimate_pass_gives_the_trajectory_loss_bit_for_bit() {
         .collect();
     let mut absorbed = 0;
     for horizon in [Horizon::Episodic, Horizon::fixed(200, AfterEnd::Absorb)] {
-        let p = TaskProblem {
+        let mut p = TaskProblem {
             task: obstacle.clone(),
             policy: policy.clone(),
             horizon,
@@ -143,15 +143,15 @@ fn the_estimate_pass_gives_the_trajectory_loss_bit_for_bit() {
                 .unwrap();
             absorbed += usize::from(t.absorbed.is_some_and(|l| l > 0.0));
         }
-        assert_estimate_with_loss(&p, &thetas, &format!("obstacle, {horizon:?}"));
-        let batched = Batched::new(p.clone(), 3).unwrap();
-        assert_estimate_with_loss(&batched, &thetas, "obstacle, m = 3");
+        assert_estimate_with_loss(&mut p, &thetas, &format!("obstacle, {horizon:?}"));
+        let mut batched = Batched::new(p.clone(), 3).unwrap();
+        assert_estimate_with_loss(&mut batched, &thetas, "obstacle, m = 3");
         for b in recorded_baselines() {
-            let wrapped = Baselined::new(p.clone(), 3, &b).unwrap();
-            assert_estimate_with_loss(&wrapped, &thetas, &format!("obstacle, m = 3, {b:?}"));
+            let mut wrapped = Baselined::new(p.clone(), 3, &b).unwrap();
+            assert_estimate_with_loss(&mut wrapped, &thetas, &format!("obstacle, m = 3, {b:?}"));
         }
-        let wrapped = Baselined::new(p, 3, &Baseline::None).unwrap();
-        assert_estimate_with_loss(&wrapped, &thetas, "obstacle, m = 3, no baseline");
+        let mut wrapped = Baselined::new(p, 3, &Baseline::None).unwrap();
+        assert_estimate_with_loss(&mut wrapped, &thetas, "obstacle, m = 3, no baseline");
     }
     assert!(absorbed > 0, "no roll-out ended in a costly absorbing tail");
 
@@ -162,25 +162,33 @@ fn the_estimate_pass_gives_the_trajectory_loss_bit_for_bit() {
             .collect()
     };
     for horizon in [Horizon::Episodic, Horizon::fixed(500, AfterEnd::Reset)] {
-        let softmax = TaskProblem {
+        let mut softmax = TaskProblem {
             task: CartPoleTask::with_lqr().unwrap(),
             policy: Softmax::new(2, cartpole::FEATURES).unwrap(),
             horizon,
         };
         let th = cartpole_thetas(2 * cartpole::FEATURES, &mut rng);
-        assert_estimate_with_loss(&softmax, &th, &format!("CartPole softmax, {horizon:?}"));
+        assert_estimate_with_loss(&mut softmax, &th, &format!("CartPole softmax, {horizon:?}"));
         for b in recorded_baselines() {
-            let wrapped = Baselined::new(softmax.clone(), 3, &b).unwrap();
-            assert_estimate_with_loss(&wrapped, &th, &format!("CartPole softmax, m = 3, {b:?}"));
+            let mut wrapped = Baselined::new(softmax.clone(), 3, &b).unwrap();
+            assert_estimate_with_loss(
+                &mut wrapped,
+                &th,
+                &format!("CartPole softmax, m = 3, {b:?}"),
+            );
         }
-        let batched = Batched::new(softmax, 3).unwrap();
-        assert_estimate_with_loss(&batched, &th, "CartPole softmax, m = 3");
-        let logistic = TaskProblem {
+        let mut batched = Batched::new(softmax, 3).unwrap();
+        assert_estimate_with_loss(&mut batched, &th, "CartPole softmax, m = 3");
+        let mut logistic = TaskProblem {
             task: CartPoleTask::with_lqr().unwrap(),
             policy: Logistic::new(cartpole::FEATURES).unwrap(),
             horizon,
         };
         let th = cartpole_thetas(cartpole::FEATURES, &mut rng);
-        assert_estimate_with_loss(&logistic, &th, &format!("CartPole logistic, {horizon:?}"));
+        assert_estimate_with_loss(
+            &mut logistic,
+            &th,
+            &format!("CartPole logistic, {horizon:?}"),
+        );
     }
 }

@@ -354,7 +354,7 @@ proptest! {
 }
 
 fn rollouts(mdp: &ToyMdp, theta: &str, seed: u64, n: usize) -> (Vec<ToyTrajectory>, Cost) {
-    let p = ToyProblem::<f64>::new(mdp);
+    let mut p = ToyProblem::<f64>::new(mdp);
     let th = DVector::from_vec(vec![q(theta).to_f64()]);
     let mut rng = KitRng::seed_from_u64(seed);
     let mut cost = Cost::default();
@@ -398,7 +398,7 @@ fn the_sampler_follows_the_exact_law() {
                 "{file}: prefix {key:?} seen {got} times, expected {mean} ± {sd}"
             );
         }
-        let sampled = ToyProblem::<f64>::new(&mdp);
+        let mut sampled = ToyProblem::<f64>::new(&mdp);
         let th = DVector::from_vec(vec![1.0 / 3.0]);
         let mut cost = Cost::default();
         let mean = taus
@@ -438,7 +438,7 @@ fn trajectories_and_costs_under_termination() {
     assert_eq!(cost.expert_queries, 500 * 5);
 
     let absorb = with_horizon("terminal-absorb.json", 6);
-    let p = ToyProblem::<f64>::new(&absorb);
+    let mut p = ToyProblem::<f64>::new(&absorb);
     let (taus, cost) = rollouts(&absorb, "1/2", 3, 500);
     let mut decisions = 0u64;
     let mut absorbed = 0;
@@ -488,7 +488,7 @@ fn trajectories_and_costs_under_termination() {
 fn foreign_trajectories_are_rejected() {
     let th = DVector::from_vec(vec![q("1/2")]);
     let mut cost = Cost::default();
-    let reset = ToyProblem::<Q>::new(&example("terminal-reset.json"));
+    let mut reset = ToyProblem::<Q>::new(&example("terminal-reset.json"));
     let tau = ToyTrajectory {
         states: vec![0, 2, 1],
         actions: vec![0, 0],
@@ -538,7 +538,7 @@ fn no_terminal_state_changes_nothing() {
         assert_eq!(moments(&a, &theta).unwrap(), moments(&b, &theta).unwrap());
         assert_eq!(forward(&a, &theta).unwrap(), forward(&b, &theta).unwrap());
         let th: DVector<f64> = DVector::from_iterator(6, theta.iter().map(Scalar::to_f64));
-        let (fa, fb) = (
+        let (mut fa, mut fb) = (
             ToyProblem::<f64>::new(&plain),
             ToyProblem::<f64>::new(&flagged),
         );
@@ -572,7 +572,7 @@ fn seeded_rollouts<S: Scalar>(
     theta: &[Q],
     seed: u64,
 ) -> Result<Vec<ToyTrajectory>, OracleError> {
-    let p = ToyProblem::<S>::new(mdp);
+    let mut p = ToyProblem::<S>::new(mdp);
     let th = DVector::from_iterator(theta.len(), theta.iter().map(S::from_rational));
     let mut rng = KitRng::seed_from_u64(seed);
     let mut cost = Cost::default();
@@ -598,7 +598,7 @@ proptest! {
             Ok(paths) => prop_assert_eq!(&paths, &exact),
             Err(e) => prop_assert!(matches!(e, OracleError::Undecidable(_)), "{}", e),
         }
-        let (pq, pi) = (ToyProblem::<Q>::new(&mdp), ToyProblem::<Interval>::new(&mdp));
+        let (mut pq, mut pi) = (ToyProblem::<Q>::new(&mdp), ToyProblem::<Interval>::new(&mdp));
         let tq = DVector::from_vec(theta.clone());
         let ti = DVector::from_iterator(theta.len(), theta.iter().map(Interval::from_rational));
         let mut cost = Cost::default();

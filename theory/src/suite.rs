@@ -248,8 +248,8 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
     use ilopt::task::{AfterEnd, Horizon};
     use nalgebra::DVector;
     let full = profile == Profile::Full;
-    let cp = cartpole_fixed()?;
-    let ob = obstacle_problem(REAL_SIGMA, Horizon::fixed(200, AfterEnd::Absorb))?;
+    let mut cp = cartpole_fixed()?;
+    let mut ob = obstacle_problem(REAL_SIGMA, Horizon::fixed(200, AfterEnd::Absorb))?;
     let ob_episodic = obstacle_problem(REAL_SIGMA, Horizon::Episodic)?;
     let (cs, os) = real_sizes(profile);
     let mut rows = vec![];
@@ -267,7 +267,7 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         sgd_row(
             "7a",
             "CartPole, fixed-500-reset, softmax learner",
-            &cp,
+            &mut cp,
             &cartpole_theta(),
             es(0.1, 0.5, 0.01),
         )
@@ -276,7 +276,7 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         sgd_row(
             "7b",
             "obstacle, fixed-200-absorb, linear-Gaussian learner",
-            &ob,
+            &mut ob,
             &obstacle_theta(),
             es(0.005, 0.01, 0.01),
         )
@@ -330,7 +330,7 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         ]
     };
     rows.extend(timed("rows 6a.b.var", || {
-        let cp_dagger = dagger_solution(&cp, rounds, 1)?;
+        let cp_dagger = dagger_solution(&mut cp, rounds, 1)?;
         variance_rows(
             "a",
             "CartPole, fixed-500-reset",
@@ -342,7 +342,7 @@ pub fn real_environments(profile: Profile) -> Result<Vec<Check>, String> {
         )
     })?);
     rows.extend(timed("rows 6b.b.var", || {
-        let ob_dagger = dagger_solution(&ob, rounds, 1)?;
+        let ob_dagger = dagger_solution(&mut ob, rounds, 1)?;
         variance_rows(
             "b",
             "obstacle, fixed-200-absorb",

@@ -47,7 +47,7 @@ pub fn run_seed<T: RunTask + ?Sized>(
     }
     impl<T: RunTask + ?Sized> OnOracle for Drive<'_, '_, T> {
         type Output = (SeedRun, SeedTiming);
-        fn on<P: IlProblem<f64>>(self, oracle: &P) -> Result<Self::Output, RunError> {
+        fn on<P: IlProblem<f64>>(self, oracle: &mut P) -> Result<Self::Output, RunError> {
             drive(
                 self.task,
                 oracle,
@@ -73,7 +73,7 @@ pub fn run_seed<T: RunTask + ?Sized>(
 /// checkpoint evaluations ([`Evaluations`]).
 fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
     task: &T,
-    problem: &P,
+    problem: &mut P,
     config: &LoadedConfig,
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
@@ -261,7 +261,7 @@ pub fn check_baseline<T: RunTask + ?Sized>(
     let m = config.file.run.trajectories_per_gradient;
     let theta = theta0(task, config)?;
     let bad = |e: OracleError| config.invalid("run.baseline", baseline_message(e));
-    let o = Baselined::<_, f64>::new(task.problem().clone(), m, b).map_err(bad)?;
+    let mut o = Baselined::<_, f64>::new(task.problem().clone(), m, b).map_err(bad)?;
     let mut rng = KitRng::seed_from_u64(0);
     let mut cost = Cost::default();
     let tried = o

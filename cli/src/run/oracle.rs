@@ -19,7 +19,7 @@ pub trait OnOracle {
     ///
     /// # Errors
     /// The computation's own.
-    fn on<P: IlProblem<f64>>(self, oracle: &P) -> Result<Self::Output, RunError>;
+    fn on<P: IlProblem<f64>>(self, oracle: &mut P) -> Result<Self::Output, RunError>;
 }
 
 /// Run `computation` on the task's oracle with `m` trajectories per call and the config's
@@ -43,15 +43,15 @@ pub fn with_oracle<T: RunTask + ?Sized, C: OnOracle>(
         .filter(|b| **b != Baseline::None);
     let p = task.problem();
     if let Some(b) = baseline {
-        let b = Baselined::<_, f64>::new(p.clone(), m, b)
+        let mut b = Baselined::<_, f64>::new(p.clone(), m, b)
             .map_err(|e| config.invalid("run.baseline", baseline_message(e)))?;
-        computation.on(&b)
+        computation.on(&mut b)
     } else if m > 1 {
-        let b = Batched::new(p.clone(), m)
+        let mut b = Batched::new(p.clone(), m)
             .map_err(|e| config.invalid("run.trajectories_per_gradient", e))?;
-        computation.on(&b)
+        computation.on(&mut b)
     } else {
-        computation.on(p)
+        computation.on(&mut p.clone())
     }
 }
 

@@ -99,7 +99,7 @@ pub fn run_oracle<S: Scalar>(
     seed: u64,
     expert_weight: f64,
 ) -> OracleOutputs<S> {
-    let p = ToyProblem::<S>::new(mdp);
+    let mut p = ToyProblem::<S>::new(mdp);
     let cast = |v: &[BigRational]| DVector::from_iterator(v.len(), v.iter().map(S::from_rational));
     let (th, th_new) = (cast(theta), cast(theta_new));
     let mut cost = Cost::default();

@@ -159,15 +159,15 @@ fn drive_with<P: PerDecisionTerms<f64> + Clone>(
     spec: &RunSpec<'_>,
 ) -> Result<(SeedRun, SeedTiming), Error> {
     if spec.baseline != OracleBaseline::None {
-        let b = Baselined::<P, f64>::new(problem.clone(), spec.m, &spec.baseline)
+        let mut b = Baselined::<P, f64>::new(problem.clone(), spec.m, &spec.baseline)
             .map_err(|e| Error::experiment("baseline", e))?;
-        drive(bench, &b, spec)
+        drive(bench, &mut b, spec)
     } else if spec.m > 1 {
-        let b =
+        let mut b =
             Batched::new(problem.clone(), spec.m).map_err(|e| Error::experiment("minibatch", e))?;
-        drive(bench, &b, spec)
+        drive(bench, &mut b, spec)
     } else {
-        drive(bench, problem, spec)
+        drive(bench, &mut problem.clone(), spec)
     }
 }
 
@@ -176,7 +176,7 @@ fn drive_with<P: PerDecisionTerms<f64> + Clone>(
 /// training time without the evaluations.
 fn drive<P: IlProblem<f64>>(
     bench: &TaskLearner,
-    problem: &P,
+    problem: &mut P,
     spec: &RunSpec<'_>,
 ) -> Result<(SeedRun, SeedTiming), Error> {
     let task = spec.task;

@@ -342,7 +342,7 @@ impl TaskLearner {
         if n == 0 {
             return Ok(None);
         }
-        let g = mean_estimate(problem, theta, u64::from(n), seed)?;
+        let g = mean_estimate(&mut problem.clone(), theta, u64::from(n), seed)?;
         Ok(Some(row_norms(&g)))
     }
 }
@@ -356,7 +356,7 @@ fn row_norms(g: &DVector<f64>) -> (f64, f64) {
 
 /// The mean of `n` eq. 3.15 estimates (causal form) at θ, roll-outs from one seeded RNG.
 fn mean_estimate<P: IlProblem<f64>>(
-    problem: &P,
+    problem: &mut P,
     theta: &DVector<f64>,
     n: u64,
     seed: u64,

@@ -31,26 +31,30 @@ pub fn loglog_slope(x: &[f64], y: &[f64]) -> f64 {
 }
 
 /// The nested-mean errors of `repetitions` streams: for repetition r (seed derived from `key`
-/// and r), the squared error of each block of (mean of the first N draws of `sample`) −
-/// `reference`, for every N of `ns`. Blocks are `(start, len)` ranges of the gradient.
+/// and r), the squared error of each block of (mean of the first N draws) − `reference`, for
+/// every N of `ns`. Each repetition draws from its own sampler made by `sampler` (an oracle of
+/// its own: the `&mut` receiver stays in one stream). Blocks are `(start, len)` ranges of the
+/// gradient.
 ///
 /// # Errors
 /// The first failing draw.
-pub fn repetition_errors<F>(
+pub fn repetition_errors<F, G>(
     ns: &[u64],
     repetitions: u32,
     key: &str,
     blocks: &[(usize, usize)],
     reference: &[f64],
-    sample: F,
+    sampler: F,
 ) -> Result<Vec<Vec<Vec<f64>>>, Error>
 where
-    F: Fn(&mut KitRng) -> Result<DVector<f64>, Error> + Sync,
+    F: Fn() -> G + Sync,
+    G: FnMut(&mut KitRng) -> Result<DVector<f64>, Error>,
 {
     (0..repetitions)
         .into_par_iter()
         .map(|r| {
             let mut rng = KitRng::seed_from_u64(derive_seed(key, u64::from(r)));
+            let mut sample = sampler();
             let mut sum = DVector::<f64>::zeros(reference.len());
             let mut k = 0u64;
             let mut out = Vec::with_capacity(ns.len());
@@ -202,7 +206,7 @@ pub fn squared_error_sd(
 /// # Errors
 /// If the oracle fails.
 pub fn draw<P: IlProblem<f64>>(
-    p: &P,
+    p: &mut P,
     theta: &DVector<f64>,
     rng: &mut KitRng,
     what: &str,

@@ -67,26 +67,28 @@ impl Moments {
     }
 }
 
-/// The moments of `m` draws of `sample`, in chunks of `chunk` with seeds derived from `key` and
-/// the chunk index.
+/// The moments of `m` draws, in chunks of `chunk` with seeds derived from `key` and the chunk
+/// index, each chunk from its own sampler made by `sampler`.
 ///
 /// # Errors
 /// The first failing draw.
-pub fn reference_moments<F>(
+pub fn reference_moments<F, G>(
     m: u64,
     dim: usize,
     chunk: u64,
     key: &str,
-    sample: F,
+    sampler: F,
 ) -> Result<Moments, Error>
 where
-    F: Fn(&mut KitRng) -> Result<DVector<f64>, Error> + Sync,
+    F: Fn() -> G + Sync,
+    G: FnMut(&mut KitRng) -> Result<DVector<f64>, Error>,
 {
     let parts = (0..m.div_ceil(chunk))
         .into_par_iter()
         .map(|c| {
             let n = chunk.min(m - chunk * c);
             let mut rng = KitRng::seed_from_u64(derive_seed(key, c));
+            let mut sample = sampler();
             let draws = (0..n)
                 .map(|_| sample(&mut rng))
                 .collect::<Result<Vec<_>, Error>>()?;
@@ -134,7 +136,10 @@ pub fn obstacle_route(g: &GradientError) -> Result<RouteResult, Error> {
         d,
         1024,
         &format!("{key}|reference"),
-        |rng| draw(&p, &theta, rng, "Fig. 4.2"),
+        || {
+            let (mut p, theta) = (p.clone(), &theta);
+            move |rng: &mut KitRng| draw(&mut p, theta, rng, "Fig. 4.2")
+        },
     )?;
     let reference: Vec<f64> = mom.mean.iter().copied().collect();
     let sigma2 = mom.variance(0..d);
@@ -146,7 +151,10 @@ pub fn obstacle_route(g: &GradientError) -> Result<RouteResult, Error> {
         &key,
         &[(0, h), (h, h)],
         &reference,
-        |rng| draw(&p, &theta, rng, "Fig. 4.2"),
+        || {
+            let (mut p, theta) = (p.clone(), &theta);
+            move |rng: &mut KitRng| draw(&mut p, theta, rng, "Fig. 4.2")
+        },
     )?;
     let (rmse, slope) = summarise(&o.ns, &sq, sigma2, reference_variance, g.bootstrap, &key);
     let block_slopes = [("x-row", 0..h), ("y-row", h..d)]

@@ -95,8 +95,9 @@ fn biased_oracle_is_caught_by_the_slope_test() {
     let b = DVector::from_element(d, (sigma2 / 100.0 / d as f64).sqrt());
     let key = "biased";
     let blocks = [(0, d)];
-    let sq = repetition_errors(&g.toy.ns, 200, key, &blocks, &reference, |rng| {
-        toy_draw(&p, &theta, rng).map(|x| x + &b)
+    let sq = repetition_errors(&g.toy.ns, 200, key, &blocks, &reference, || {
+        let (mut p, theta, b) = (p.clone(), &theta, &b);
+        move |rng: &mut KitRng| toy_draw(&mut p, theta, rng).map(|x| x + b)
     })
     .unwrap();
     let (pts, slope) = summarise(&g.toy.ns, &sq, sigma2, 0.0, 400, key);
@@ -105,8 +106,9 @@ fn biased_oracle_is_caught_by_the_slope_test() {
     let last = pts.last().unwrap();
     assert!(last.raw_lo > 2.0 * last.line, "{last:?}");
     // The same streams without the bias pass.
-    let sq = repetition_errors(&g.toy.ns, 200, key, &blocks, &reference, |rng| {
-        toy_draw(&p, &theta, rng)
+    let sq = repetition_errors(&g.toy.ns, 200, key, &blocks, &reference, || {
+        let (mut p, theta) = (p.clone(), &theta);
+        move |rng: &mut KitRng| toy_draw(&mut p, theta, rng)
     })
     .unwrap();
     let (_, slope) = summarise(&g.toy.ns, &sq, sigma2, 0.0, 400, key);
@@ -118,7 +120,7 @@ fn biased_oracle_is_caught_by_the_slope_test() {
 #[test]
 fn streams_and_reference_are_thread_count_independent() {
     let g = toy_section(vec![1, 3, 9], 6);
-    let (p, theta, reference, _) = toy_sampler(&g);
+    let (mut p, theta, reference, _) = toy_sampler(&g);
     let d = reference.len();
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -126,16 +128,17 @@ fn streams_and_reference_are_thread_count_independent() {
             .build()
             .unwrap();
         pool.install(|| {
-            let sq = repetition_errors(
-                &g.toy.ns,
-                6,
-                "t",
-                &[(0, 2), (2, d - 2)],
-                &reference,
-                |rng| toy_draw(&p, &theta, rng),
-            )
+            let sq =
+                repetition_errors(&g.toy.ns, 6, "t", &[(0, 2), (2, d - 2)], &reference, || {
+                    let (mut p, theta) = (p.clone(), &theta);
+                    move |rng: &mut KitRng| toy_draw(&mut p, theta, rng)
+                })
+                .unwrap();
+            let m = reference_moments(1000, d, 64, "r", || {
+                let (mut p, theta) = (p.clone(), &theta);
+                move |rng: &mut KitRng| toy_draw(&mut p, theta, rng)
+            })
             .unwrap();
-            let m = reference_moments(1000, d, 64, "r", |rng| toy_draw(&p, &theta, rng)).unwrap();
             (sq, m.mean, m.m2)
         })
     };
@@ -146,7 +149,7 @@ fn streams_and_reference_are_thread_count_independent() {
     for c in 0..1000u64.div_ceil(64) {
         let mut rng = KitRng::seed_from_u64(derive_seed("r", c));
         for _ in 0..64.min(1000 - 64 * c) {
-            draws.push(toy_draw(&p, &theta, &mut rng).unwrap());
+            draws.push(toy_draw(&mut p, &theta, &mut rng).unwrap());
         }
     }
     let mean = draws.iter().fold(DVector::zeros(d), |s, x| s + x) / 1000.0;

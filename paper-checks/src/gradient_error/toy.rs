@@ -64,7 +64,10 @@ pub fn toy_route(g: &GradientError) -> Result<RouteResult, Error> {
         &key,
         &[(0, reference.len())],
         &reference,
-        |rng| toy_draw(&p, &theta, rng),
+        || {
+            let (mut p, theta) = (p.clone(), &theta);
+            move |rng: &mut KitRng| toy_draw(&mut p, theta, rng)
+        },
     )?;
     let s2 = sigma2.to_f64();
     let (rmse, slope) = summarise(&g.toy.ns, &sq, s2, 0.0, g.bootstrap, &key);
@@ -90,7 +93,7 @@ pub fn toy_route(g: &GradientError) -> Result<RouteResult, Error> {
 /// # Errors
 /// If the oracle fails.
 pub fn toy_draw(
-    p: &ToyProblem<f64>,
+    p: &mut ToyProblem<f64>,
     theta: &DVector<f64>,
     rng: &mut KitRng,
 ) -> Result<DVector<f64>, Error> {

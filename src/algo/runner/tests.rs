@@ -48,7 +48,7 @@ impl<P: IlProblem<f64> + ?Sized> Algorithm<f64, P> for Walk {
     }
     fn init(
         &mut self,
-        _: &P,
+        _: &mut P,
         theta0: DVector<f64>,
         ctx: &mut StepContext<'_>,
     ) -> Result<(), AlgoError> {
@@ -56,7 +56,7 @@ impl<P: IlProblem<f64> + ?Sized> Algorithm<f64, P> for Walk {
         ctx.cost.gradient_evaluations += self.init_calls;
         Ok(())
     }
-    fn step(&mut self, _: &P, ctx: &mut StepContext<'_>) -> Result<StepReport<f64>, AlgoError> {
+    fn step(&mut self, _: &mut P, ctx: &mut StepContext<'_>) -> Result<StepReport<f64>, AlgoError> {
         let m = self.script[self.at % self.script.len()].clone();
         self.at += 1;
         match m {
@@ -96,7 +96,7 @@ fn problem() -> ToyProblem<f64> {
 fn run(stop: StoppingRule, alg: &mut Walk) -> RunRecord<f64> {
     Runner::new(stop)
         .unwrap()
-        .run(alg, &problem(), DVector::zeros(1), 1)
+        .run(alg, &mut problem(), DVector::zeros(1), 1)
         .unwrap()
 }
 
@@ -242,7 +242,7 @@ fn the_norm_bound_observer_ends_the_run_once_the_norm_exceeds_it() {
         .with_observer(NormBound { bound: 15.0 })
         .run(
             &mut walk(vec![go(10.0, 1)]),
-            &problem(),
+            &mut problem(),
             DVector::zeros(1),
             1,
         )
@@ -265,7 +265,7 @@ fn the_norm_bound_observer_ends_the_run_once_the_norm_exceeds_it() {
         .with_observer(NormBound { bound: 1.0 })
         .run(
             &mut walk(vec![go(0.0, 1)]),
-            &problem(),
+            &mut problem(),
             DVector::from_element(1, 2.0),
             1,
         )
@@ -295,7 +295,7 @@ fn closure_and_progress_observers_see_every_iterate_and_never_stop_the_run() {
         .with_observer(|m: &IterationMetrics<f64>| seen.push((m.iteration, m.theta[0])))
         .run(
             &mut walk(vec![go(1.0, 1)]),
-            &problem(),
+            &mut problem(),
             DVector::zeros(1),
             1,
         )
@@ -347,7 +347,7 @@ fn scheduled(rec: &mut Recorder, script: Vec<Move>) -> Result<RunRecord<f64>, Ru
         .keep_history(false)
         .run_with_checkpoints(
             &mut walk(script),
-            &problem(),
+            &mut problem(),
             DVector::zeros(1),
             1,
             Some(Schedule::every(4, 10)),

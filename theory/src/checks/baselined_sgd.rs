@@ -120,9 +120,9 @@ fn try_rows(
     let baseline = Baseline::TimeIndexed {
         values: vec![ConfigNumber::ratio(num, den)],
     };
-    let oracle =
+    let mut oracle =
         Baselined::new(ToyProblem::<f64>::new(mdp), 1, &baseline).map_err(|e| e.to_string())?;
-    let sims = sgd_sample_on(mdp, &oracle, 0.0, SGD_ETA, s.k, mc.runs);
+    let sims = sgd_sample_on(mdp, &mut oracle, 0.0, SGD_ETA, s.k, mc.runs);
     let with_b = ToyConstants {
         sigma2: sigma2_b.clone(),
         ..k.clone()

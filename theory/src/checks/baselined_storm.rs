@@ -160,7 +160,7 @@ fn try_rows(
         ..g.clone()
     };
     let l_b = with_b.l(Weighting::Trajectory);
-    let oracle = Baselined::new(
+    let mut oracle = Baselined::new(
         ToyProblem::<f64>::new(mdp),
         1,
         &Baseline::Constant {
@@ -168,7 +168,7 @@ fn try_rows(
         },
     )
     .map_err(|e| e.to_string())?;
-    let sims = storm::fixed_schedule_sample_on(mdp, &oracle, l_b, 0.0, k, mc.runs);
+    let sims = storm::fixed_schedule_sample_on(mdp, &mut oracle, l_b, 0.0, k, mc.runs);
     let l_plain = g.l(Weighting::Trajectory);
     let plain_bound = storm_fixed(l_plain, g.sigma2.value, g.b_f.value, k);
     let bound = storm_fixed(l_b, c.sigma2.value, g.b_f.value, k);

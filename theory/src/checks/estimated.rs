@@ -50,7 +50,7 @@ pub struct EstimateSizes {
 
 /// (ḡ_M, tr Var̂) at θ from M trajectories with seeds seed0..seed0+M.
 fn mean_and_trace<P: IlProblem<f64>>(
-    p: &P,
+    p: &mut P,
     theta: &DVector<f64>,
     m: usize,
     seed0: u64,
@@ -82,7 +82,7 @@ fn mean_and_trace<P: IlProblem<f64>>(
 pub fn sgd_row<P: IlProblem<f64>>(
     id: &str,
     name: &str,
-    p: &P,
+    p: &mut P,
     theta1: &DVector<f64>,
     s: EstimateSizes,
 ) -> Check {

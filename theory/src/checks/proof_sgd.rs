@@ -174,7 +174,7 @@ fn run(mdp: &ToyMdp, dim: usize, decreasing: bool, k: u64, seed: u64) -> Result<
         stop: StoppingRule::iterations(k),
     };
     let rec = Runner::<f64>::new(cfg.stop.clone())
-        .and_then(|mut r| r.run_config(&cfg, &ToyProblem::<f64>::new(mdp)))
+        .and_then(|mut r| r.run_config(&cfg, &mut ToyProblem::<f64>::new(mdp)))
         .map_err(|e| format!("SGD run (seed {seed}): {e}"))?;
     if let Termination::Diverged(e) = &rec.termination {
         return Err(format!("SGD run (seed {seed}) failed: {e}"));

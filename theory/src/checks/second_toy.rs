@@ -83,7 +83,7 @@ pub fn sgd_sample(
     s: SgdSizes,
 ) -> Result<SgdSample, String> {
     let cells = RefCell::new(GradientCells::new(mdp));
-    let pf = ToyProblem::<f64>::new(mdp);
+    let mut pf = ToyProblem::<f64>::new(mdp);
     let cfg = |seed: u64| RunConfig {
         algorithm: AlgorithmConfig::Sgd(SgdConfig {
             step: SgdStep::constant(ConfigNumber::ratio(s.eta.0, s.eta.1)),
@@ -124,7 +124,7 @@ pub fn sgd_sample(
             runner
                 .keep_history(false)
                 .with_observer(observer)
-                .run_config(&cfg(r as u64), &pf)
+                .run_config(&cfg(r as u64), &mut pf)
         });
         let (lo, mid, seen, left, err, far) = acc.into_inner();
         out.farthest = out.farthest.max(far);

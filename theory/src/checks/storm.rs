@@ -41,7 +41,7 @@ enum Statistic {
 #[allow(clippy::too_many_arguments)]
 fn simulate<P: IlProblem<f64>>(
     mdp: &ToyMdp,
-    pf: &P,
+    pf: &mut P,
     algorithm: &AlgorithmConfig,
     theta1: f64,
     k: u64,
@@ -268,7 +268,7 @@ pub fn fixed_schedule_samples(
     };
     let runs = simulate(
         mdp,
-        &ToyProblem::<f64>::new(mdp),
+        &mut ToyProblem::<f64>::new(mdp),
         &algorithm,
         theta1,
         iterations,
@@ -286,7 +286,7 @@ pub fn fixed_schedule_samples(
 /// As [`fixed_schedule_sample`].
 pub fn fixed_schedule_sample_on<P: IlProblem<f64>>(
     mdp: &ToyMdp,
-    oracle: &P,
+    oracle: &mut P,
     l: f64,
     theta1: f64,
     iterations: u64,
@@ -336,7 +336,7 @@ pub fn tracking_sample(
     ));
     simulate(
         mdp,
-        &ToyProblem::<f64>::new(mdp),
+        &mut ToyProblem::<f64>::new(mdp),
         algorithm,
         theta1,
         iterations,
@@ -484,7 +484,7 @@ pub fn adaptive_schedule(
             });
             simulate(
                 mdp,
-                &ToyProblem::<f64>::new(mdp),
+                &mut ToyProblem::<f64>::new(mdp),
                 &algorithm,
                 theta1,
                 iterations,

@@ -421,7 +421,7 @@ pub fn dagger_row(m: &Instance, s: DaggerSizes) -> Check {
             return row;
         }
     };
-    let problem = ToyProblem::<f64>::new(&mdp);
+    let mut problem = ToyProblem::<f64>::new(&mdp);
     let config = |seed: u64| RunConfig {
         algorithm: AlgorithmConfig::Dagger(DaggerConfig {
             trajectories_per_iteration: s.trajectories,
@@ -440,7 +440,7 @@ pub fn dagger_row(m: &Instance, s: DaggerSizes) -> Check {
     for r in 0..s.runs {
         let cfg = config(r as u64);
         match Runner::new(cfg.stop.clone())
-            .and_then(|runner| runner.keep_history(false).run_config(&cfg, &problem))
+            .and_then(|runner| runner.keep_history(false).run_config(&cfg, &mut problem))
         {
             Ok(rec) if !matches!(rec.termination, Termination::Diverged(_)) => {
                 // θ = π(0|·), p = π(1|·) = 1 − θ.

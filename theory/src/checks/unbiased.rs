@@ -274,7 +274,7 @@ pub fn printed_algorithm_4_visited(
         AlgorithmConfig, ConfigNumber, IterationMetrics, RunConfig, Runner, StoppingRule,
     };
     use ilopt::problem::EstimatorForm;
-    let p = ToyProblem::<Q>::new(mdp);
+    let mut p = ToyProblem::<Q>::new(mdp);
     let schedule = StormSchedule::constant(
         ConfigNumber::ratio(eta.0, eta.1),
         ConfigNumber::ratio(a.0, a.1),
@@ -285,7 +285,7 @@ pub fn printed_algorithm_4_visited(
     );
     let one_minus_a = Q::one() - &a_q;
     // (max |E[d_{k+1} | F_k] − ∇F(θ_{k+1}) − (1 − a)(d_k − ∇F(θ_k))|, pairs checked)
-    let worst = |algorithm: AlgorithmConfig, weighted: bool| -> Result<(Q, usize), String> {
+    let mut worst = |algorithm: AlgorithmConfig, weighted: bool| -> Result<(Q, usize), String> {
         let cfg = RunConfig {
             algorithm,
             theta0: vec![ConfigNumber::Exact(theta1.clone())],
@@ -298,7 +298,7 @@ pub fn printed_algorithm_4_visited(
             .and_then(|r| {
                 r.keep_history(false)
                     .with_observer(observer)
-                    .run_config(&cfg, &p)
+                    .run_config(&cfg, &mut p)
             })
             .map_err(|e| e.to_string())?;
         let th = visited.into_inner();
@@ -428,12 +428,12 @@ pub fn printed_algorithm_5_visited(
                 pairs.borrow_mut().push((w[0], m.theta[0]));
             }
         };
-        let pf = ToyProblem::<f64>::new(mdp);
+        let mut pf = ToyProblem::<f64>::new(mdp);
         Runner::new(cfg.stop.clone())
             .and_then(|r| {
                 r.keep_history(false)
                     .with_observer(observer)
-                    .run_config(&cfg, &pf)
+                    .run_config(&cfg, &mut pf)
             })
             .map_err(|e| e.to_string())?;
         let p = ToyProblem::<Q>::new(mdp);

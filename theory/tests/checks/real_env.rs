@@ -20,7 +20,7 @@ use rand::SeedableRng;
 #[test]
 fn the_reimplemented_estimator_is_the_librarys() {
     fn check<P>(
-        p: &P,
+        p: &mut P,
         theta: &DVector<f64>,
         mine: impl Fn(&P::Trajectory, &[usize], Mutation) -> DVector<f64>,
         roll: impl Fn(u64) -> (P::Trajectory, Vec<usize>),
@@ -71,7 +71,7 @@ fn the_reimplemented_estimator_is_the_librarys() {
     let cp = cartpole_fixed().unwrap();
     let th = cartpole_theta();
     check(
-        &cp,
+        &mut cp.clone(),
         &th,
         |t, s, m| mutated_estimate(&cp, &th, t, s, m).unwrap(),
         |seed| rollout_marking_resets(&cp, &th, &mut KitRng::seed_from_u64(seed)).unwrap(),
@@ -79,7 +79,7 @@ fn the_reimplemented_estimator_is_the_librarys() {
     let ob = obstacle_problem(REAL_SIGMA, Horizon::fixed(200, AfterEnd::Absorb)).unwrap();
     let th = obstacle_theta();
     check(
-        &ob,
+        &mut ob.clone(),
         &th,
         |t, s, m| mutated_estimate(&ob, &th, t, s, m).unwrap(),
         |seed| rollout_marking_resets(&ob, &th, &mut KitRng::seed_from_u64(seed)).unwrap(),
@@ -171,7 +171,7 @@ fn check7_estimated_constants_are_labelled() {
     use ilopt_theory::check::Method;
     use ilopt_theory::checks::estimated::{EstimateSizes, sgd_row};
     use ilopt_theory::constants::Provenance;
-    let p = cartpole_fixed().unwrap();
+    let mut p = cartpole_fixed().unwrap();
     let s = EstimateSizes {
         m: 10,
         probes: 2,
@@ -182,7 +182,13 @@ fn check7_estimated_constants_are_labelled() {
         stride: 10,
         eta0: 0.01,
     };
-    let r = sgd_row("7a", "CartPole, fixed-500-reset", &p, &cartpole_theta(), s);
+    let r = sgd_row(
+        "7a",
+        "CartPole, fixed-500-reset",
+        &mut p,
+        &cartpole_theta(),
+        s,
+    );
     assert_eq!(r.method, Method::Estimate);
     assert!(
         r.constants

@@ -145,7 +145,7 @@ pub fn o2nc_sample_tracked(
     };
     let (t, kb) = (params.t as usize, params.k as usize);
     let mut cells = GradientCells::new(mdp);
-    let pf = ToyProblem::<f64>::new(mdp);
+    let mut pf = ToyProblem::<f64>::new(mdp);
     let (mut lows, mut mids) = (vec![], vec![]);
     let mut worst_spread = 0.0f64;
     for r in 0..runs {
@@ -166,7 +166,7 @@ pub fn o2nc_sample_tracked(
             runner
                 .keep_history(false)
                 .with_observer(observer)
-                .run_config(&cfg, &pf)
+                .run_config(&cfg, &mut pf)
         });
         match rec {
             Err(e) => return Err(format!("run {r}: {e}")),

@@ -25,7 +25,7 @@ pub fn sgd_sample(
     k: u64,
     runs: usize,
 ) -> Result<Runs, String> {
-    sgd_sample_on(mdp, &ToyProblem::<f64>::new(mdp), theta1, eta, k, runs)
+    sgd_sample_on(mdp, &mut ToyProblem::<f64>::new(mdp), theta1, eta, k, runs)
 }
 
 /// [`sgd_sample`] with the kit's SGD run on `oracle`, a gradient oracle for F of `mdp` (the plain
@@ -35,7 +35,7 @@ pub fn sgd_sample(
 /// As [`sgd_sample`].
 pub fn sgd_sample_on<P: IlProblem<f64>>(
     mdp: &ToyMdp,
-    oracle: &P,
+    oracle: &mut P,
     theta1: f64,
     eta: (i64, i64),
     k: u64,

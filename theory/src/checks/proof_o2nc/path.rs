@@ -110,7 +110,7 @@ pub fn record(
     let exact = |x: f64| Q::from_binary64(x).ok_or_else(|| format!("non-finite value {x}"));
     let eta = exact(*algo.ogd_step())?;
     let radius = exact(<f64 as Scalar>::from_rational(&params.d))?;
-    let pf = ToyProblem::<f64>::new(mdp);
+    let mut pf = ToyProblem::<f64>::new(mdp);
     let [lo, hi] = domain[0];
     let mut paths = Vec::with_capacity(sizes.runs);
     for seed in 0..sizes.runs as u64 {
@@ -133,7 +133,7 @@ pub fn record(
                 runner
                     .keep_history(false)
                     .with_observer(observer)
-                    .run_config(&cfg, &pf)
+                    .run_config(&cfg, &mut pf)
             })
             .map_err(|e| format!("run {seed}: {e}"))?;
         if let Termination::Diverged(_) = rec.termination {

@@ -105,7 +105,7 @@ pub fn run(
             weighting_name(weighting)
         )
     };
-    let problem = ToyProblem::<f64>::new(mdp);
+    let mut problem = ToyProblem::<f64>::new(mdp);
     let mut storm = Storm::<f64>::new(&StormConfig {
         schedule: StormSchedule::Thesis {
             l: ConfigNumber::Float(l),
@@ -122,7 +122,7 @@ pub fn run(
     let dim = mdp.policy.dim();
     Algorithm::<f64, ToyProblem<f64>>::init(
         &mut storm,
-        &problem,
+        &mut problem,
         DVector::from_element(dim, theta1),
         &mut StepContext {
             rng: &mut rng,
@@ -145,7 +145,7 @@ pub fn run(
             .to_vec();
         Algorithm::<f64, ToyProblem<f64>>::step(
             &mut storm,
-            &problem,
+            &mut problem,
             &mut StepContext {
                 rng: &mut rng,
                 cost: &mut cost,
@@ -236,7 +236,7 @@ mod tests {
             .unwrap()
             .keep_history(false)
             .with_observer(observer)
-            .run_config(&cfg, &ToyProblem::<f64>::new(&m1))
+            .run_config(&cfg, &mut ToyProblem::<f64>::new(&m1))
             .unwrap();
         let seen = seen.into_inner();
         for (s, t) in states.iter().zip(&seen) {

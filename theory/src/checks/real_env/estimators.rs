@@ -238,7 +238,7 @@ where
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
-    let q =
+    let mut q =
         ilopt::baseline::Baselined::<_, f64>::new(p.clone(), 1, b).map_err(|e| e.to_string())?;
     let mut c = Cost::default();
     for j in 0..=fit {
@@ -281,14 +281,12 @@ where
         _ => theta,
     };
     let fitted = match e {
-        // Behind a lock only to be copied from (the oracle keeps its buffers in cells).
-        Estimator::Fitted(b, fit) => {
-            Some(std::sync::Mutex::new(fitted_oracle(p, theta, b, *fit, k)?))
-        }
+        Estimator::Fitted(b, fit) => Some(fitted_oracle(p, theta, b, *fit, k)?),
         _ => None,
     };
     // One roll-out of a baselined oracle and its estimate at θ.
-    let baselined = |q: &ilopt::baseline::Baselined<TaskProblem<T, P>, f64>, rng: &mut KitRng| {
+    let baselined = |q: &mut ilopt::baseline::Baselined<TaskProblem<T, P>, f64>,
+                     rng: &mut KitRng| {
         let mut c = Cost::default();
         let t = q
             .rollout(&Behaviour::Learner(theta), rng, &mut c)
@@ -296,18 +294,18 @@ where
         q.estimate(theta, &t, EstimatorForm::Causal, &mut c)
             .map_err(|e| e.to_string())
     };
-    par_map(n, |i| {
+    par_map(p, n, |p, i| {
         let mut rng = KitRng::seed_from_u64(estimator_seed(k, i));
         if let Some(q) = &fitted {
-            let q = q.lock().map_err(|e| e.to_string())?.clone();
-            return baselined(&q, &mut rng);
+            // Each sample from the fitted oracle as it stands: its own copy.
+            return baselined(&mut q.clone(), &mut rng);
         }
         if let Estimator::Baselined(b, m) = e {
             // A fresh oracle per sample: an estimated baseline then learns only from earlier
             // trajectories of the same sample, and samples stay independent.
-            let q = ilopt::baseline::Baselined::<_, f64>::new(p.clone(), *m, b)
+            let mut q = ilopt::baseline::Baselined::<_, f64>::new(p.clone(), *m, b)
                 .map_err(|e| e.to_string())?;
-            return baselined(&q, &mut rng);
+            return baselined(&mut q, &mut rng);
         }
         if let Estimator::Mutated(m) = e {
             let (t, starts) = rollout_marking_resets(p, theta, &mut rng)?;
@@ -345,12 +343,12 @@ pub fn effective_sample_size<T, P>(
     k: u64,
 ) -> Result<f64, String>
 where
-    TaskProblem<T, P>: Sync,
+    TaskProblem<T, P>: Sync + Send + Clone,
     T: Task<f64>,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
-    let logs = par_map(n, |i| {
+    let logs = par_map(p, n, |p, i| {
         let mut rng = KitRng::seed_from_u64(estimator_seed(k, i));
         let mut c = Cost::default();
         let t = p

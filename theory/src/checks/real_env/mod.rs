@@ -70,22 +70,33 @@ fn mean_var(xs: &[f64]) -> (f64, f64) {
     )
 }
 
-/// `f(i)` for `i` in `0..n`, on up to two threads (the machine's budget), in order.
-fn par_map<T: Send>(
+/// `f(oracle, i)` for `i` in `0..n`, on up to two threads (the machine's budget), in order, each
+/// thread with its own copy of `oracle` (the oracles here are stateless: a copy gives the same
+/// estimates, and the `&mut` receiver stays with one thread).
+fn par_map<P: Clone + Send, T: Send>(
+    oracle: &P,
     n: usize,
-    f: impl Fn(usize) -> Result<T, String> + Sync,
+    f: impl Fn(&mut P, usize) -> Result<T, String> + Sync,
 ) -> Result<Vec<T>, String> {
     let threads = std::thread::available_parallelism()
         .map_or(1, usize::from)
         .clamp(1, 2);
+    let mut own = oracle.clone();
     if threads == 1 || n < 8 {
-        return (0..n).map(f).collect();
+        return (0..n).map(|i| f(&mut own, i)).collect();
     }
     let mid = n / 2;
     let f = &f;
+    let mut other = oracle.clone();
     let (a, b) = std::thread::scope(|s| {
-        let h = s.spawn(move || (mid..n).map(f).collect::<Result<Vec<T>, String>>());
-        let a = (0..mid).map(f).collect::<Result<Vec<T>, String>>();
+        let h = s.spawn(move || {
+            (mid..n)
+                .map(|i| f(&mut other, i))
+                .collect::<Result<Vec<T>, String>>()
+        });
+        let a = (0..mid)
+            .map(|i| f(&mut own, i))
+            .collect::<Result<Vec<T>, String>>();
         (a, h.join().expect("worker thread"))
     });
     let mut a = a?;

@@ -24,7 +24,7 @@ pub struct Reference {
     pub h2_se: Vec<f64>,
 }
 
-fn loss_at<P: IlProblem<f64>>(p: &P, theta: &DVector<f64>, seed: u64) -> Result<f64, String> {
+fn loss_at<P: IlProblem<f64>>(p: &mut P, theta: &DVector<f64>, seed: u64) -> Result<f64, String> {
     let mut rng = KitRng::seed_from_u64(seed);
     let mut c = Cost::default();
     let t = p
@@ -41,20 +41,20 @@ const REFERENCE_SEEDS: u64 = 1_000_000_000;
 ///
 /// # Errors
 /// A roll-out's error.
-pub fn reference<P: IlProblem<f64> + Sync>(
+pub fn reference<P: IlProblem<f64> + Clone + Send + Sync>(
     p: &P,
     theta: &DVector<f64>,
     n_fd: usize,
     h: f64,
 ) -> Result<Reference, String> {
     let d = theta.len();
-    let per_coord = par_map(d, |j| {
+    let per_coord = par_map(p, d, |p, j| {
         let seed0 = REFERENCE_SEEDS + (j as u64) * 10_000_000;
         let mut rich = Vec::with_capacity(n_fd);
         let mut h2 = Vec::with_capacity(n_fd);
         for i in 0..n_fd {
             let s = seed0 + i as u64;
-            let fd = |step: f64| -> Result<f64, String> {
+            let mut fd = |step: f64| -> Result<f64, String> {
                 let mut up = theta.clone();
                 up[j] += step;
                 let mut down = theta.clone();

@@ -153,7 +153,7 @@ pub fn reduction_verdict(r: &Reduction) -> Verdict {
 /// # Errors
 /// If the run fails.
 pub fn dagger_solution<P: IlProblem<f64>>(
-    p: &P,
+    p: &mut P,
     rounds: u64,
     seed: u64,
 ) -> Result<DVector<f64>, String> {
@@ -183,12 +183,14 @@ pub fn dagger_solution<P: IlProblem<f64>>(
 /// baseline).
 fn mean_loss<T, P>(p: &TaskProblem<T, P>, theta: &DVector<f64>, n: usize) -> Result<f64, String>
 where
+    TaskProblem<T, P>: Clone,
     T: Task<f64>,
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
     T::Label: Borrow<P::Label>,
 {
     let mut rng = KitRng::seed_from_u64(0x7661_7269_616e_6365);
     let mut total = 0.0;
+    let mut p = p.clone();
     for _ in 0..n {
         let mut c = Cost::default();
         let t = p

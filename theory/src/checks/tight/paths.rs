@@ -164,7 +164,7 @@ pub fn storm_mean<S: Enclose + Roots>(
     inputs: &TableInputs,
     max_paths: u64,
 ) -> Result<PathMean<S>, String> {
-    let problem = ToyProblem::<S>::new(mdp);
+    let mut problem = ToyProblem::<S>::new(mdp);
     let paths = path_count(&problem, theta1, k, max_paths)?;
     let schedule = storm_schedule(l, k)?;
     let eta_sum = schedule.iter().fold(S::zero(), |a, (e, _)| a + e);
