@@ -107,9 +107,19 @@ fn check5_theorem_3_1_on_the_m_family() {
 #[test]
 fn check2_schedule_rows() {
     let rows = schedule::rows(100);
+    let ids: Vec<&str> = rows.iter().map(|r| r.id.as_str()).collect();
+    assert_eq!(ids, ["2a", "2a.ctl", "2b"]);
     assert_eq!(rows[0].verdict, Verdict::Holds);
-    assert_eq!(rows[1].verdict, Verdict::Fails);
-    assert!(rows[1].details.contains("1..23"), "{}", rows[1].details);
+    // The (C1) control (the step without its 1/4 factor) is refuted at k = 1..48 and detected.
+    assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
+    assert!(!rows[1].undetected_control());
+    assert!(
+        rows[1].details.contains("false at k = 1..48;"),
+        "{}",
+        rows[1].details
+    );
+    assert_eq!(rows[2].verdict, Verdict::Fails);
+    assert!(rows[2].details.contains("1..23"), "{}", rows[2].details);
     assert_eq!(schedule::compress(&[1, 2, 3, 7, 9, 10]), "1..3, 7, 9..10");
 }
 
