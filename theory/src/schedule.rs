@@ -117,14 +117,41 @@ pub fn thesis_route(k: u64) -> Verdict {
     })
 }
 
-/// (C1) at step k: Lη_k = y_k/4 ≤ 1/2 (y_k ≤ 1 always; proved from the upper enclosure).
+/// (C1) at step k for the schedule (3.43): Lη_k = y_k/4 ≤ 1/2 ([`c1_scaled`] with s = 1/4).
 pub fn c1(k: u64) -> Verdict {
-    let (_, yhi) = cbrt_enclosure(&ratio(7, k + 7), 24);
-    if yhi / ratio(4, 1) <= ratio(1, 2) {
-        Verdict::Holds
-    } else {
-        Verdict::Undecided
+    c1_scaled(k, &ratio(1, 4))
+}
+
+/// (C1) at step k for a step Lη_k = s·y_k, y_k = (7/(k+7))^{1/3}: proved to hold when
+/// s·hi ≤ 1/2 and to fail when s·lo > 1/2, for the cube-root enclosure [lo, hi] ∋ y_k, refined
+/// as in (C2). With s = 1 (the schedule without its 1/4 factor) (C1) is false exactly for
+/// 7/(k+7) > 1/8, i.e. k ≤ 48 (at k = 49, y_k = 1/2 and it holds with equality).
+pub fn c1_scaled(k: u64, s: &BigRational) -> Verdict {
+    let half = ratio(1, 2);
+    for bits in [24u32, 48, 96] {
+        let (ylo, yhi) = cbrt_enclosure(&ratio(7, k + 7), bits);
+        if yhi * s <= half {
+            return Verdict::Holds;
+        }
+        if ylo * s > half {
+            return Verdict::Fails;
+        }
     }
+    Verdict::Undecided
+}
+
+/// Every k ≤ k_max where (C1) is proved false for the step Lη_k = s·y_k ([`c1_scaled`]), and
+/// every k where it is undecided.
+pub fn c1_scaled_failures(k_max: u64, s: &BigRational) -> (Vec<u64>, Vec<u64>) {
+    let (mut fails, mut undecided) = (vec![], vec![]);
+    for k in 1..=k_max {
+        match c1_scaled(k, s) {
+            Verdict::Fails => fails.push(k),
+            Verdict::Undecided => undecided.push(k),
+            Verdict::Holds => {}
+        }
+    }
+    (fails, undecided)
 }
 
 /// What the schedule checks found for k = 1..=k_max.
@@ -238,6 +265,18 @@ mod tests {
         assert_eq!(r.thesis_route_fails, (1..=23).collect::<Vec<_>>());
         assert!(r.thesis_route_undecided.is_empty());
         assert!(r.c1_not_proved.is_empty() && r.c2_not_proved.is_empty());
+    }
+
+    /// The (C1) check can report failure: for the step without its 1/4 factor
+    /// (Lη_k = (7/(k+7))^{1/3}) it proves (C1) false exactly for k = 1..48; k = 49 (Lη_k = 1/2
+    /// exactly, a perfect cube) is left undecided, and from k = 50 on (C1) is proved.
+    #[test]
+    fn c1_is_refuted_for_the_step_without_its_quarter() {
+        let (fails, undecided) = c1_scaled_failures(400, &ratio(1, 1));
+        assert_eq!(fails, (1..=48).collect::<Vec<_>>());
+        assert_eq!(undecided, vec![49]);
+        assert_eq!(c1(1), Verdict::Holds);
+        assert_eq!(c1_scaled(1, &ratio(1, 1)), Verdict::Fails);
     }
 
     /// The decision procedure can report failure: the thesis route is proved false at k = 1

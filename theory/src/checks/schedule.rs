@@ -1,13 +1,19 @@
 //! Check 2 (part): the STORM schedule (3.43) satisfies the corrected conditions (C1), (C2) of
 //! Theorem S, and the thesis's own route fails for k = 1..23 (erratum E7). Proved with rational
-//! cube-root enclosures ([`crate::schedule`]).
+//! cube-root enclosures ([`crate::schedule`]). Control **2a.ctl**: the same (C1) check on the
+//! step without its 1/4 factor, where (C1) is false for k ≤ 48.
 
 use crate::record::check::{Check, Method, Role, Verdict};
-use crate::schedule::check_schedule;
+use crate::schedule::{c1_scaled_failures, check_schedule};
+use num_bigint::BigInt;
+use num_rational::BigRational;
 
-/// The two rows: corrected conditions (holds) and the thesis route (fails for k ≤ 23).
+/// The three rows: corrected conditions (holds), the (C1) control (must be refuted) and the
+/// thesis route (fails for k ≤ 23).
 pub fn rows(k_max: u64) -> Vec<Check> {
     let r = check_schedule(k_max);
+    let (ctl_fails, ctl_undecided) =
+        c1_scaled_failures(k_max, &BigRational::from_integer(BigInt::from(1)));
     let corrected_ok = r.c1_not_proved.is_empty() && r.c2_not_proved.is_empty();
     let base = |id: &str, claim: String, role, details: String| {
         Check::builder(id, "STORM, eq. 3.60 (schedule 3.43)", claim, role)
@@ -19,7 +25,7 @@ pub fn rows(k_max: u64) -> Vec<Check> {
         base(
             "2a",
             format!(
-                "(C1) Lη_k ≤ 1/2 (true by the schedule's form, Lη_k = (7/(k+7))^{{1/3}}/4 ≤ 1/4: this half cannot fail) and (C2) 4L²η_k² + (1−a_{{k+1}})² ≤ η_k/η_{{k−1}} for k = 1..{k_max}"
+                "(C1) Lη_k ≤ 1/2, proved per k from the cube-root enclosure of Lη_k = (7/(k+7))^{{1/3}}/4 (the same check refutes (C1) for the step without its 1/4 factor: row 2a.ctl), and (C2) 4L²η_k² + (1−a_{{k+1}})² ≤ η_k/η_{{k−1}} for k = 1..{k_max}"
             ),
             Role::Corrected,
             format!(
@@ -29,6 +35,21 @@ pub fn rows(k_max: u64) -> Vec<Check> {
             ),
         )
         .decided(Method::Rigorous, Verdict::from_bool(corrected_ok)),
+        Check::builder(
+            "2a.ctl",
+            "STORM, eq. 3.60 (schedule 3.43)",
+            format!(
+                "(C1) Lη_k ≤ 1/2 for the step without its 1/4 factor, Lη_k = (7/(k+7))^{{1/3}}, k = 1..{k_max} (false for k ≤ 48: the check of row 2a must refute it)"
+            ),
+            Role::NegativeControl,
+        )
+        .assumptions(["η_k = (1/L)(7/(k+7))^{1/3}: schedule (3.43) with its 1/4 dropped"])
+        .details(format!(
+            "C1 proved false at k = {}; undecided at k = {}",
+            list_or_none(&ctl_fails),
+            list_or_none(&ctl_undecided)
+        ))
+        .decided(Method::Rigorous, Verdict::from_bool(ctl_fails.is_empty())),
         base(
             "2b",
             format!("the thesis's e_k coefficient after (3.58)/(3.59) is ≤ 0 for k = 1..{k_max}"),

@@ -5,6 +5,13 @@
 //!
 //! Every quantity is computed by the kit's engine (F and ∇F by X2, G by the exact RRM map), and
 //! compared with math.md's closed forms (A₂, A₁, A₀, p_PS, κ), an independent route.
+//!
+//! Rows 5b–5d hold for every k, not only at the iterates computed: G is a rational function of p
+//! whose numerator and denominator have a derived degree bound ([`g_degree_bound`]), so
+//! G(p) = κp + c checked exactly at more points than that bound proves the identity on all of
+//! (0, 1) ([`affine_identity`]). RRM and DAgger then are the linear recursions e_{k+1} = κe_k and
+//! e_{k+1} = (κ/k) Σ_{i≤k} e_i for every k. The iterates computed corroborate it. Control
+//! **5c.ctl**: the same identity check on G + p(1 − p)/8 must report "not affine".
 
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use ilopt::exact::forward::forward;
@@ -62,6 +69,13 @@ pub struct Findings {
     pub eq_3_37_violated_at: Option<u32>,
     /// The tightest ratio (left side / right side) of (3.38) over k (1 means equality).
     pub eq_3_38_max_ratio: Q,
+    /// The identity G(p) = κp + c on all of (0, 1), checked exactly ([`affine_identity`]).
+    pub g_identity: AffineIdentity,
+    /// The identity check on the perturbed map G(p) + p(1 − p)/8 (control 5c.ctl).
+    pub perturbed_identity: AffineIdentity,
+    /// Whether DAgger's partial sums S_k = Σ_{i≤k} e_i from p₁ = 1/2 equal the closed-form
+    /// product e₁ Π_{j<k} (1 + κ/j) that the identity implies, at every k ≤ [`DAGGER_STEPS`].
+    pub dagger_product_agrees: bool,
     /// Whether the engine's F agrees with math.md's closed form A₂p² + A₁p + A₀ at 7 points.
     pub closed_form_agrees: bool,
     /// Whether p_PS, κ agree with math.md's closed forms.
@@ -77,6 +91,108 @@ fn q(n: i64, d: i64) -> Q {
 
 fn abs(x: Q) -> Q {
     if x < Q::zero() { -x } else { x }
+}
+
+/// The degree bound of the identity G(p) = κp + c under P1 with one parameter (one group, two
+/// actions), or `None` for other policies. G = N/D with N = Σ_t Σ_s d_t(s)·1[a*(s) = 0] and
+/// D = Σ_t Σ_s d_t(s) over the T − 1 visitation layers t = 1..T−1 (non-absorbing states,
+/// [`rrm_map`]); each table entry is affine in θ = 1 − p (π(0|·) = θ, π(1|·) = 1 − θ) and the
+/// transitions do not depend on θ, so d_t has degree ≤ t − 1 and N, D degree ≤ T − 2. Hence
+/// D·(G − κp − c) = N − (κp + c)D is a polynomial of degree ≤ T − 1: vanishing at T distinct
+/// points (where D ≠ 0) it is identically zero.
+pub fn g_degree_bound(mdp: &ToyMdp) -> Option<usize> {
+    (mdp.policy.kind == PolicyKind::Direct && mdp.policy.dim() == 1 && mdp.actions == 2)
+        .then(|| mdp.horizon.saturating_sub(1))
+}
+
+/// The exact check that a map G of p is affine on all of (0, 1): G(p) = κp + c, with κ and c
+/// from G(1/4) and G(3/4), at the points p = j/(n + 1), j = 1..n, n = degree bound + 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AffineIdentity {
+    /// The slope κ.
+    pub kappa: Q,
+    /// The intercept c.
+    pub intercept: Q,
+    /// The degree bound of D·(G − κp − c) ([`g_degree_bound`]), if one is derived.
+    pub degree_bound: Option<usize>,
+    /// Distinct points at which G(p) = κp + c was checked.
+    pub points: usize,
+    /// The first point where G(p) ≠ κp + c, if any.
+    pub first_miss: Option<Q>,
+    /// Whether D > 0 on all of [0, 1] (so the identity holds wherever G is defined there): D is
+    /// a sum of the visitation layers' masses, each ≥ 0, the first being μ's mass on the
+    /// non-absorbing states, which does not depend on p.
+    pub denominator_positive: bool,
+    /// Whether the affine map sends [0, 1] into (0, 1) (c and κ + c in (0, 1)), so that RRM's
+    /// and DAgger's iterates (averages of values of G) stay where the identity holds.
+    pub maps_into: bool,
+}
+
+impl AffineIdentity {
+    /// Whether the identity is proved on (0, 1): no miss, more points than the degree bound, a
+    /// positive denominator and iterates kept inside.
+    pub fn proved(&self) -> bool {
+        self.first_miss.is_none()
+            && self.degree_bound.is_some_and(|d| self.points > d)
+            && self.denominator_positive
+            && self.maps_into
+    }
+
+    /// What the check found, as the rows print it.
+    pub fn describe(&self) -> String {
+        let bound = self
+            .degree_bound
+            .map_or_else(|| "none derived".into(), |d| d.to_string());
+        let verdict = match &self.first_miss {
+            Some(p) => format!("not affine: G({p}) ≠ κ·{p} + c"),
+            None if self.proved() => "proved".into(),
+            None => "not proved".into(),
+        };
+        format!(
+            "G(p) = κp + c with κ = {}, c = {} at {} points p = j/{} (degree bound of D·(G − κp − c): {bound}; D > 0 on [0, 1]: {}; κ·[0, 1] + c ⊂ (0, 1): {}): {verdict}",
+            self.kappa,
+            self.intercept,
+            self.points,
+            self.points + 1,
+            self.denominator_positive,
+            self.maps_into
+        )
+    }
+}
+
+/// Check G(p) = κp + c exactly ([`AffineIdentity`]) for a map `g` with the degree bound `bound`
+/// and the facts `denominator_positive` about its denominator.
+///
+/// # Errors
+/// If `g` fails at a point.
+pub fn affine_identity(
+    g: impl Fn(&Q) -> Result<Q, String>,
+    bound: Option<usize>,
+    denominator_positive: bool,
+) -> Result<AffineIdentity, String> {
+    let (g1, g3) = (g(&q(1, 4))?, g(&q(3, 4))?);
+    let kappa = (g3 - &g1) / q(1, 2);
+    let intercept = g1 - kappa.clone() * q(1, 4);
+    let n = bound.unwrap_or(1) + 1;
+    let mut first_miss = None;
+    for j in 1..=n {
+        let p = q(j as i64, n as i64 + 1);
+        if g(&p)? != kappa.clone() * &p + &intercept {
+            first_miss = Some(p);
+            break;
+        }
+    }
+    let inside = |x: &Q| *x > Q::zero() && *x < Q::one();
+    let maps_into = inside(&intercept) && inside(&(kappa.clone() + &intercept));
+    Ok(AffineIdentity {
+        kappa,
+        intercept,
+        degree_bound: bound,
+        points: n,
+        first_miss,
+        denominator_positive,
+        maps_into,
+    })
 }
 
 /// Run the engine on an instance.
@@ -125,6 +241,21 @@ pub fn analyse(m: &Instance) -> Result<Findings, String> {
     let icpt = g1 - kappa.clone() * q(1, 4);
     let icpt_g = icpt.clone();
     let p_ps = icpt / (one.clone() - &kappa);
+    // D ≥ μ(non-absorbing states) on [0, 1] ([`AffineIdentity::denominator_positive`]).
+    let initial_mass = prob
+        .initial()
+        .iter()
+        .enumerate()
+        .filter(|(s, _)| !prob.is_absorbing(*s))
+        .fold(Q::zero(), |a, (_, w)| a + w);
+    let bound = g_degree_bound(&mdp);
+    let positive = initial_mass > Q::zero();
+    let g_identity = affine_identity(g, bound, positive)?;
+    let perturbed_identity = affine_identity(
+        |p: &Q| Ok(g(p)? + p.clone() * (one.clone() - p) / q(8, 1)),
+        bound,
+        positive,
+    )?;
     let (f_po, df_po) = f(&p_po)?;
     let (f_ps, df_ps) = f(&p_ps)?;
     let fixed_point_residual = g(&p_ps)? - &p_ps;
@@ -174,6 +305,14 @@ pub fn analyse(m: &Instance) -> Result<Findings, String> {
     };
     let (ps, _) = run(q(1, 2))?;
     let (ps2, _) = run(q(1, 10))?;
+    // S_k = e₁ Π_{j<k} (1 + κ/j), the closed form the identity gives for every k.
+    let mut dagger_product_agrees = true;
+    let (mut sum, mut product) = (Q::zero(), ps[0].clone() - &p_ps);
+    for (k, p) in ps.iter().take(DAGGER_STEPS as usize).enumerate() {
+        sum += p.clone() - &p_ps;
+        dagger_product_agrees &= sum == product;
+        product *= one.clone() + kappa.clone() / Q::from_i64(k as i64 + 1);
+    }
     let abs_kappa = abs(kappa.clone());
     let mut eq_3_38_violated_at = None;
     let mut eq_3_37_violated_at = None;
@@ -221,6 +360,9 @@ pub fn analyse(m: &Instance) -> Result<Findings, String> {
         eq_3_38_violated_at,
         eq_3_37_violated_at,
         eq_3_38_max_ratio,
+        g_identity,
+        perturbed_identity,
+        dagger_product_agrees,
         closed_form_agrees,
         ps_closed_form_agrees,
     })
@@ -263,6 +405,9 @@ pub fn rows(m: &Instance) -> Vec<Check> {
     let rrm_exact = fd.rrm_ratios.iter().all(|r| *r == fd.kappa);
     let closed_forms = fd.closed_form_agrees && fd.ps_closed_form_agrees;
     let contraction = abs(fd.kappa.clone()) < Q::one();
+    // Rows 5b–5d claim every k only when the identity is proved on (0, 1).
+    let all_k = fd.g_identity.proved();
+    let identity_text = format!("; identity: {}", fd.g_identity.describe());
     vec![
         base(
             "5a",
@@ -281,52 +426,102 @@ pub fn rows(m: &Instance) -> Vec<Check> {
         ),
         base(
             "5b",
-            format!(
-                "{name}: RRM contracts to p_PS with modulus exactly κ = (T−2)Δ/(T−1) (exact on this instance over 10 RRM steps from p₁ = 1/2)"
-            ),
+            if all_k {
+                format!(
+                    "{name}: RRM contracts to p_PS with modulus exactly κ = (T−2)Δ/(T−1), for all k: |p_{{k+1}} − p_PS| = |κ|·|p_k − p_PS| from every p₁ ∈ (0, 1), by the identity G(p) = κp + c on (0, 1), checked exactly (corroborated over 10 RRM steps from p₁ = 1/2)"
+                )
+            } else {
+                format!(
+                    "{name}: RRM contracts to p_PS with modulus exactly κ = (T−2)Δ/(T−1) (exact on this instance over 10 RRM steps from p₁ = 1/2)"
+                )
+            },
             rrm_exact && fd.fixed_point_residual == Q::zero() && fd.ps_closed_form_agrees,
             Role::Corrected,
             format!(
-                "κ = {}; ratios |p_{{k+1}} − p_PS|/|p_k − p_PS| over 10 steps all = κ: {rrm_exact}",
-                fd.kappa
+                "κ = {}; ratios |p_{{k+1}} − p_PS|/|p_k − p_PS| over 10 steps all = κ: {rrm_exact}{}",
+                fd.kappa, identity_text
             ),
             Some(Measured::exact(Scalar::to_f64(&fd.kappa))),
         ),
         base(
             "5c",
-            format!(
-                "{name}: DAgger's averaged recursion (3.30) converges to p_PS: G affine on the iterates, |κ| < 1 (G's affinity checked exactly on the first {DAGGER_STEPS} iterates from two starts, on this instance)"
-            ),
-            contraction && fd.g_affine_on_iterates,
+            if all_k {
+                format!(
+                    "{name}: DAgger's averaged recursion (3.30) converges to p_PS from every p₁ ∈ (0, 1): for all k, e_{{k+1}} = (κ/k) Σ_{{i≤k}} e_i by the identity G(p) = κp + c on (0, 1), checked exactly, and |κ| < 1 (corroborated on the first {DAGGER_STEPS} iterates from two starts)"
+                )
+            } else {
+                format!(
+                    "{name}: DAgger's averaged recursion (3.30) converges to p_PS: G affine on the iterates, |κ| < 1 (G's affinity checked exactly on the first {DAGGER_STEPS} iterates from two starts, on this instance)"
+                )
+            },
+            contraction && fd.g_affine_on_iterates && (!all_k || fd.dagger_product_agrees),
             Role::Corrected,
             format!(
-                "proof: G(p_i) = κp_i + G(0) exactly at every iterate (k ≤ {DAGGER_STEPS}, two starts): {}, so e_{{k+1}} = (κ/k) Σ_{{i≤k}} e_i, Σ_{{i≤k+1}} e_i = (1 + κ/k) Σ_{{i≤k}} e_i = O(k^κ) and e_k = O(k^{{κ−1}}) → 0 iff κ < 1; κ = {} (|κ| < 1: {contraction}); |p_k − p_PS| at k = 10, 30, 100: {}",
+                "proof: G(p_i) = κp_i + G(0) exactly at every iterate (k ≤ {DAGGER_STEPS}, two starts): {}, so e_{{k+1}} = (κ/k) Σ_{{i≤k}} e_i, Σ_{{i≤k+1}} e_i = (1 + κ/k) Σ_{{i≤k}} e_i = O(k^κ) and e_k = O(k^{{κ−1}}) → 0 iff κ < 1; κ = {} (|κ| < 1: {contraction}); |p_k − p_PS| at k = 10, 30, 100: {}{}",
                 fd.g_affine_on_iterates,
                 fd.kappa,
                 fd.dagger_errors
                     .iter()
                     .map(|e| format!("{:.3e}", Scalar::to_f64(e)))
                     .collect::<Vec<_>>()
-                    .join(", ")
+                    .join(", "),
+                if all_k {
+                    format!(
+                        "{identity_text}; for all k: S_k = e₁ Π_{{j<k}} (1 + κ/j) (equal to the iterates' partial sums at k ≤ {DAGGER_STEPS}: {}), Π_{{j<k}} (1 + |κ|/j) ≤ e^{{|κ|}} k^{{|κ|}}, so |e_{{k+1}}| ≤ |κ| e^{{|κ|}} |e₁| k^{{|κ|−1}} → 0",
+                        fd.dagger_product_agrees
+                    )
+                } else {
+                    String::new()
+                }
             ),
             Some(Measured::exact(Scalar::to_f64(&abs(fd.kappa.clone())))),
         ),
         base(
             "5d",
-            format!(
-                "{name}: (3.37) and (3.38) with εβ/γ = |κ|, along DAgger's exact iterates, k = 1..{DAGGER_STEPS} (exact at these k on this instance, not for all k)"
-            ),
+            if all_k {
+                format!(
+                    "{name}: (3.37) and (3.38) with εβ/γ = |κ|, for all k: |e_{{k+1}}| = (|κ|/k)·|Σ_{{i≤k}} e_i| ≤ (|κ|/k) Σ_{{i≤k}} |e_i| by the identity G(p) = κp + c on (0, 1), checked exactly (corroborated along DAgger's exact iterates, k = 1..{DAGGER_STEPS})"
+                )
+            } else {
+                format!(
+                    "{name}: (3.37) and (3.38) with εβ/γ = |κ|, along DAgger's exact iterates, k = 1..{DAGGER_STEPS} (exact at these k on this instance, not for all k)"
+                )
+            },
             fd.eq_3_37_violated_at.is_none() && fd.eq_3_38_violated_at.is_none(),
             Role::Corrected,
             format!(
-                "(3.38): |p_{{k+1}} − p_PS| ≤ (|κ|/k) Σ_{{i≤k}} |p_i − p_PS| from p₁ = 1/2, first violation at k = {}, largest left/right ratio {:.6}; (3.37): |G_DA({{p_i}}) − G_DA({{p′_i}})| ≤ (|κ|/k) Σ_{{i≤k}} |p_i − p′_i| for p₁ = 1/2, p′₁ = 1/10, first violation at k = {} (exact rationals; the thesis prints θ′_i on the right of (3.38) where θ_PS is meant, E15)",
+                "(3.38): |p_{{k+1}} − p_PS| ≤ (|κ|/k) Σ_{{i≤k}} |p_i − p_PS| from p₁ = 1/2, first violation at k = {}, largest left/right ratio {:.6}; (3.37): |G_DA({{p_i}}) − G_DA({{p′_i}})| ≤ (|κ|/k) Σ_{{i≤k}} |p_i − p′_i| for p₁ = 1/2, p′₁ = 1/10, first violation at k = {} (exact rationals; the thesis prints θ′_i on the right of (3.38) where θ_PS is meant, E15){}",
                 fd.eq_3_38_violated_at
                     .map_or("none".into(), |k| k.to_string()),
                 Scalar::to_f64(&fd.eq_3_38_max_ratio),
                 fd.eq_3_37_violated_at
-                    .map_or("none".into(), |k| k.to_string())
+                    .map_or("none".into(), |k| k.to_string()),
+                if all_k {
+                    format!(
+                        "{identity_text}; for all k both sides follow from the linear recursion: (3.38) with e_i = p_i − p_PS and (3.37) with e_i = p_i − p′_i, by the triangle inequality (equality when κ ≥ 0: the e_i share e₁'s sign)"
+                    )
+                } else {
+                    String::new()
+                }
             ),
             None,
+        ),
+        Check::builder(
+            "5c.ctl",
+            "Theorem 3.1 (DAgger → stable point)",
+            format!(
+                "{name}: the perturbed map G(p) + p(1 − p)/8 is affine on (0, 1) (the identity check of rows 5b–5d must refute it)"
+            ),
+            Role::NegativeControl,
+        )
+        .assumptions([format!(
+            "{name}, direct parameterisation P1, Brier loss, aliased states; G perturbed by p(1 − p)/8"
+        )])
+        .erratum("E15")
+        .details(fd.perturbed_identity.describe())
+        .decided(
+            Method::Exact,
+            Verdict::from_bool(fd.perturbed_identity.first_miss.is_none()),
         ),
     ]
 }
@@ -507,4 +702,28 @@ pub fn instances() -> Vec<Instance> {
             t: 5,
         },
     ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The identity check proves an affine map, reports a p² term, and proves nothing without a
+    /// derived degree bound or with a denominator not shown positive.
+    #[test]
+    fn the_identity_check_proves_affine_maps_and_refutes_others() {
+        let affine = |p: &Q| Ok(q(1, 2) + p.clone() / q(4, 1));
+        let ok = affine_identity(affine, Some(2), true).unwrap();
+        assert!(ok.proved(), "{}", ok.describe());
+        assert_eq!((ok.kappa.clone(), ok.intercept.clone()), (q(1, 4), q(1, 2)));
+        let squared = affine_identity(|p: &Q| Ok(p.clone() * p), Some(2), true).unwrap();
+        // κ = 1, c = −3/16 from p = 1/4, 3/4; at p = 1/2, p² = 1/4 ≠ 5/16.
+        assert_eq!(squared.first_miss, Some(q(1, 2)));
+        assert!(squared.describe().contains("not affine"));
+        assert!(!affine_identity(affine, None, true).unwrap().proved());
+        assert!(!affine_identity(affine, Some(2), false).unwrap().proved());
+        // κ + c = 5/4 leaves (0, 1): the iterates would leave the identity's domain.
+        let out = affine_identity(|p: &Q| Ok(q(3, 4) + p.clone() / q(2, 1)), Some(2), true);
+        assert!(!out.unwrap().proved());
+    }
 }

@@ -78,14 +78,26 @@ fn check5_theorem_3_1_on_the_m_family() {
             (q(po), q(ps), q(kappa))
         );
         assert!(f.closed_form_agrees && f.ps_closed_form_agrees);
-        for row in thm31::rows(inst) {
-            assert_eq!(
-                row.verdict,
-                Verdict::Holds,
-                "{}: {}",
-                row.claim,
-                row.details
-            );
+        // G is affine on all of (0, 1), proved from T points, so rows 5b–5d claim every k.
+        assert!(f.g_identity.proved(), "{}", f.g_identity.describe());
+        assert_eq!(f.g_identity.points, inst.t);
+        assert!(f.dagger_product_agrees);
+        // The perturbed map G + p(1 − p)/8 is reported not affine.
+        assert!(f.perturbed_identity.first_miss.is_some());
+        assert!(!f.perturbed_identity.proved());
+        let rows = thm31::rows(inst);
+        let ids: Vec<&str> = rows.iter().map(|r| r.id.as_str()).collect();
+        assert_eq!(ids, ["5a", "5b", "5c", "5d", "5c.ctl"]);
+        for row in &rows {
+            let want = if row.role == Role::NegativeControl {
+                Verdict::Fails
+            } else {
+                Verdict::Holds
+            };
+            assert_eq!(row.verdict, want, "{}: {}", row.claim, row.details);
+        }
+        for row in &rows[1..4] {
+            assert!(row.claim.contains("for all k"), "{}", row.claim);
         }
     }
     let m1 = thm31::analyse(&thm31::instances()[0]).unwrap();
@@ -107,9 +119,19 @@ fn check5_theorem_3_1_on_the_m_family() {
 #[test]
 fn check2_schedule_rows() {
     let rows = schedule::rows(100);
+    let ids: Vec<&str> = rows.iter().map(|r| r.id.as_str()).collect();
+    assert_eq!(ids, ["2a", "2a.ctl", "2b"]);
     assert_eq!(rows[0].verdict, Verdict::Holds);
-    assert_eq!(rows[1].verdict, Verdict::Fails);
-    assert!(rows[1].details.contains("1..23"), "{}", rows[1].details);
+    // The (C1) control (the step without its 1/4 factor) is refuted at k = 1..48 and detected.
+    assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
+    assert!(!rows[1].undetected_control());
+    assert!(
+        rows[1].details.contains("false at k = 1..48;"),
+        "{}",
+        rows[1].details
+    );
+    assert_eq!(rows[2].verdict, Verdict::Fails);
+    assert!(rows[2].details.contains("1..23"), "{}", rows[2].details);
     assert_eq!(schedule::compress(&[1, 2, 3, 7, 9, 10]), "1..3, 7, 9..10");
 }
 

@@ -15,6 +15,10 @@
 //! * the bound is evaluated through the [`TableInputs`] the rows are given (formulas and
 //!   constants), and every gradient estimate of the runs is read through it too.
 //!
+//! Row 1.b's baselined estimator g_b = g − bψ (b = 1/8, [`search::baseline`]) gets the noisy search
+//! too: `1.b.tight.noisy` and its control, with σ²_b certified on the hull. Rows 1b (the second
+//! toy, two parameters) and 2.b (IS-STORM with a baseline) have no tight instance yet.
+//!
 //! Rows: `1.tight`, `1.tight.ctl` ([`sgd`]) and `2c.tight`, `2c.tight.ctl` ([`storm`]) over every
 //! instance of the family, where the largest X̄/B is reached by noiseless instances (T = 2 and a
 //! deterministic start: the estimate is ∇F itself and Var g ≡ 0, the certified σ² being only the
@@ -94,7 +98,7 @@ impl Sizes {
     /// The search budget of `algorithm`.
     pub fn budget(&self, algorithm: Algorithm) -> Budget {
         match algorithm {
-            Algorithm::Sgd => self.sgd,
+            Algorithm::Sgd | Algorithm::SgdBaselined => self.sgd,
             Algorithm::Storm => self.storm,
         }
     }
@@ -192,6 +196,8 @@ const NOISES: [Noise; 2] = [Noise::Any, Noise::Required];
 pub struct PreparedAll {
     sgd: Vec<(Noise, Vec<Estimate>, sgd::Prepared)>,
     storm: Vec<(Noise, Vec<Estimate>, storm::Prepared)>,
+    /// Row 1.b's estimator (g_b), noisy instances only: with Var g ≡ 0 a baseline changes nothing.
+    sgd_baselined: (Vec<Estimate>, sgd::Prepared),
 }
 
 impl PreparedAll {
@@ -202,7 +208,13 @@ impl PreparedAll {
             sgd: self
                 .sgd
                 .iter()
-                .map(|(n, found, _)| (*n, found.clone(), sgd::prepare_from(found, inputs, &sizes)))
+                .map(|(n, found, _)| {
+                    (
+                        *n,
+                        found.clone(),
+                        sgd::prepare_from(found, inputs, &sizes, Algorithm::Sgd),
+                    )
+                })
                 .collect(),
             storm: self
                 .storm
@@ -215,18 +227,28 @@ impl PreparedAll {
                     )
                 })
                 .collect(),
+            sgd_baselined: (
+                self.sgd_baselined.0.clone(),
+                sgd::prepare_from(
+                    &self.sgd_baselined.0,
+                    inputs,
+                    &sizes,
+                    Algorithm::SgdBaselined,
+                ),
+            ),
         }
     }
 }
 
-/// Search and certify for both algorithms and both noise settings.
+/// Search and certify for both algorithms and both noise settings, and for row 1.b's baselined
+/// estimator on the noisy instances.
 pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
     PreparedAll {
         sgd: NOISES
             .iter()
             .map(|&n| {
-                let found = sgd::candidates(&sizes, n);
-                let p = sgd::prepare_from(&found, inputs, &sizes);
+                let found = sgd::candidates(&sizes, n, Algorithm::Sgd);
+                let p = sgd::prepare_from(&found, inputs, &sizes, Algorithm::Sgd);
                 (n, found, p)
             })
             .collect(),
@@ -238,6 +260,11 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
                 (n, found, p)
             })
             .collect(),
+        sgd_baselined: {
+            let found = sgd::candidates(&sizes, Noise::Required, Algorithm::SgdBaselined);
+            let p = sgd::prepare_from(&found, inputs, &sizes, Algorithm::SgdBaselined);
+            (found, p)
+        },
     }
 }
 
@@ -245,9 +272,16 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
 pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Check> {
     let mut rows = vec![];
     for ((noise, _, s), (_, _, t)) in p.sgd.iter().zip(&p.storm) {
-        rows.extend(sgd::rows_from(inputs, &sizes, *noise, s));
+        rows.extend(sgd::rows_from(inputs, &sizes, *noise, Algorithm::Sgd, s));
         rows.extend(storm::rows_from(inputs, &sizes, *noise, t));
     }
+    rows.extend(sgd::rows_from(
+        inputs,
+        &sizes,
+        Noise::Required,
+        Algorithm::SgdBaselined,
+        &p.sgd_baselined.1,
+    ));
     rows
 }
 
@@ -263,7 +297,8 @@ mod tests {
     }
 
     /// At the quick size every stated claim holds and every control is refuted; with eq. 3.27's
-    /// formula halved both SGD rows (the noiseless and the noisy instance) fail.
+    /// formula halved the SGD rows (the noiseless and the noisy instance, and the baselined
+    /// estimator's, X̄/B ≈ 0.68) fail.
     #[test]
     fn the_quick_rows_hold_their_controls_are_refuted_and_a_halved_sgd_bound_turns_both() {
         let s = Sizes::quick();
@@ -287,6 +322,7 @@ mod tests {
             ]),
             "{ids:?}"
         );
+        assert!(ids.contains(&"1.b.tight.noisy"), "{ids:?}");
         for r in &all {
             let want = if r.role == Role::NegativeControl {
                 Verdict::Fails
@@ -303,7 +339,7 @@ mod tests {
             ..TableInputs::thesis()
         };
         let turned = rows(&wrong, s);
-        for id in ["1.tight", "1.tight.noisy"] {
+        for id in ["1.tight", "1.tight.noisy", "1.b.tight.noisy"] {
             let r = turned.iter().find(|r| r.id == id).expect("the row");
             assert_eq!(r.verdict, Verdict::Fails, "{id}: {}", r.details);
         }
@@ -344,7 +380,7 @@ mod tests {
             ..TableInputs::thesis()
         };
         let s = Sizes::quick();
-        let turned = sgd::rows(&wrong, &s, Noise::Any)
+        let turned = sgd::rows(&wrong, &s, Noise::Any, Algorithm::Sgd)
             .into_iter()
             .chain(storm::rows(&wrong, &s, Noise::Any));
         for r in turned.filter(|r| r.role != Role::NegativeControl) {

@@ -13,6 +13,7 @@
 //! The same walk records the hull of every iterate θ₁, …, θ_{K+1} any path reaches: a convex set
 //! that holds every iterate almost surely, on which the rows' box constants are valid.
 
+use crate::certify::charts::prefix_terms_baselined;
 use crate::inputs::TableInputs;
 use ilopt::exact::enumerate::prefixes;
 use ilopt::exact::forward::forward;
@@ -90,7 +91,9 @@ fn grad_norm_sq<S: Scalar>(problem: &ToyProblem<S>, theta: &[S]) -> Result<S, St
 
 /// SGD with constant step η from θ₁ (Algorithm 3, eqs. 3.23–3.27): E X over every path, where
 /// `X = (1/K) Σ_{k=1}^K ‖∇F(θ_k)‖²` is the statistic of eq. 3.27 and θ_{k+1} = θ_k − η ĝ_k,
-/// ĝ_k = `inputs.estimate(g(θ_k, τ̄_k))`.
+/// ĝ_k = `inputs.estimate(g(θ_k, τ̄_k))`; with `baseline` = Some(b) the estimate is the baselined
+/// g_b = g − b Σ_i ψ_i of one parameter (docs/math.md §9, the engine's own baselined terms,
+/// `certify::charts::prefix_terms_baselined`).
 ///
 /// # Errors
 /// If there are more than `max_paths` paths, or a table cannot be built at an iterate.
@@ -101,6 +104,7 @@ pub fn sgd_mean<S: Enclose>(
     k: u64,
     inputs: &TableInputs,
     max_paths: u64,
+    baseline: Option<&S>,
 ) -> Result<PathMean<S>, String> {
     let problem = ToyProblem::<S>::new(mdp);
     let paths = path_count(&problem, theta1, k, max_paths)?;
@@ -115,14 +119,28 @@ pub fn sgd_mean<S: Enclose>(
             continue;
         }
         let acc = acc + grad_norm_sq(&problem, &theta)?;
-        for pre in prefixes(&problem, &theta).map_err(|e| e.to_string())? {
-            let g = inputs.estimate(pre.estimate);
+        let draws: Vec<(S, Vec<S>)> = match baseline {
+            None => prefixes(&problem, &theta)
+                .map_err(|e| e.to_string())?
+                .into_iter()
+                .map(|pre| (pre.prob, pre.estimate))
+                .collect(),
+            Some(b) => {
+                let table = problem.table(&theta).map_err(|e| e.to_string())?;
+                prefix_terms_baselined(&problem, &table, b)?
+                    .into_iter()
+                    .map(|pre| (pre.prob, vec![pre.estimate]))
+                    .collect()
+            }
+        };
+        for (pre_prob, estimate) in draws {
+            let g = inputs.estimate(estimate);
             let next: Vec<S> = theta
                 .iter()
                 .zip(&g)
                 .map(|(t, gi)| t.clone() - eta.clone() * gi)
                 .collect();
-            stack.push((i + 1, next, prob.clone() * &pre.prob, acc.clone()));
+            stack.push((i + 1, next, prob.clone() * &pre_prob, acc.clone()));
         }
     }
     Ok(PathMean {
@@ -259,6 +277,7 @@ mod tests {
             1,
             &TableInputs::thesis(),
             100,
+            None,
         )
         .unwrap();
         assert_eq!((m.mean, m.paths), (q("1/4"), 6));
@@ -279,15 +298,39 @@ mod tests {
             second += pre.prob * &g[0] * &g[0];
         }
         let want = (q("1/4") + second) / q("2");
-        let got = sgd_mean(&mdp, &[q("0")], &eta, 2, &TableInputs::thesis(), 100).unwrap();
+        let got = sgd_mean(&mdp, &[q("0")], &eta, 2, &TableInputs::thesis(), 100, None).unwrap();
         assert_eq!((got.mean.clone(), got.paths), (want, 36));
         let biased = TableInputs {
             oracle_bias: Some(q("1/100")),
             ..TableInputs::thesis()
         };
-        let b = sgd_mean(&mdp, &[q("0")], &eta, 2, &biased, 100).unwrap();
+        let b = sgd_mean(&mdp, &[q("0")], &eta, 2, &biased, 100, None).unwrap();
         assert_ne!(b.mean, got.mean);
-        assert!(sgd_mean(&mdp, &[q("0")], &eta, 3, &TableInputs::thesis(), 100).is_err());
+        assert!(sgd_mean(&mdp, &[q("0")], &eta, 3, &TableInputs::thesis(), 100, None).is_err());
+        // With a baseline b the second step draws g_b = g − bψ₁ instead: a different X̄, and
+        // with b = 0 the same.
+        let zero = q("0");
+        let b0 = sgd_mean(
+            &mdp,
+            &[q("0")],
+            &eta,
+            2,
+            &TableInputs::thesis(),
+            100,
+            Some(&zero),
+        );
+        assert_eq!(b0.unwrap().mean, got.mean);
+        let eighth = q("1/8");
+        let b8 = sgd_mean(
+            &mdp,
+            &[q("0")],
+            &eta,
+            2,
+            &TableInputs::thesis(),
+            100,
+            Some(&eighth),
+        );
+        assert_ne!(b8.unwrap().mean, got.mean);
     }
 
     /// With a deterministic start and T = 2 the estimate is ∇F itself (no score term, one

@@ -18,9 +18,10 @@ use super::instance::{Instance, exact};
 use super::paths::{PathMean, sgd_mean, storm_mean};
 use crate::bounds::{sgd_constant, storm_fixed};
 use crate::inputs::TableInputs;
+use ilopt::exact::baseline::baselined_moments;
 use ilopt::exact::enumerate::{moments, prefixes};
 use ilopt::exact::forward::forward;
-use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
+use ilopt::scalar::{BigRational, Dual, Interval, Scalar, norm_sq};
 use ilopt::toy::{ToyMdp, ToyProblem};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -49,6 +50,15 @@ pub enum Algorithm {
     Sgd,
     /// IS-STORM with schedule (3.43), eq. (3.60\*); the step parameter is the schedule's L.
     Storm,
+    /// SGD with constant η on the baselined estimator g_b = g − bψ (one constant b =
+    /// [`baseline`] for every decision, docs/math.md §9), eq. 3.27 with σ²_b: row 1.b's estimator.
+    SgdBaselined,
+}
+
+/// The constant baseline of [`Algorithm::SgdBaselined`], fixed before the search: b = 1/8, the
+/// constant row 1.b's rule picks on M1.
+pub fn baseline() -> BigRational {
+    BigRational::from_ratio(1, 8)
 }
 
 /// Which instances a search admits.
@@ -135,12 +145,19 @@ fn l_f_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
     Ok(m)
 }
 
-/// max Var g on the grid (X1).
-fn variance_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+/// max Var g (or, with `baseline` = Some(b), Var g_b) on the grid (X1).
+fn variance_estimate(mdp: &ToyMdp, pts: &[f64], baseline: Option<f64>) -> Result<f64, String> {
     let p = ToyProblem::<f64>::new(mdp);
     let mut m = 0.0f64;
     for &x in pts {
-        m = m.max(moments(&p, &[x]).map_err(|e| e.to_string())?.variance);
+        let v = match baseline {
+            None => moments(&p, &[x]).map_err(|e| e.to_string())?.variance,
+            Some(b) => {
+                let bm = baselined_moments(&p, &[x], &[b]).map_err(|e| e.to_string())?;
+                bm.second_moment - norm_sq(&bm.expected_estimate)
+            }
+        };
+        m = m.max(v);
     }
     Ok(m)
 }
@@ -185,8 +202,18 @@ pub fn evaluate(
     let mdp = inst.mdp().ok()?;
     let theta1 = [Scalar::to_f64(&inst.theta1)];
     let inputs = TableInputs::thesis();
+    let b = (algorithm == Algorithm::SgdBaselined).then(|| Scalar::to_f64(&baseline()));
     let run = match algorithm {
-        Algorithm::Sgd => sgd_mean(&mdp, &theta1, &c.step, inst.k, &inputs, max_paths).ok()?,
+        Algorithm::Sgd | Algorithm::SgdBaselined => sgd_mean(
+            &mdp,
+            &theta1,
+            &c.step,
+            inst.k,
+            &inputs,
+            max_paths,
+            b.as_ref(),
+        )
+        .ok()?,
         Algorithm::Storm => {
             // In intervals, as the row will run it: a long run whose enclosure grows useless
             // (interval arithmetic's wrapping) is passed over here rather than at certification.
@@ -217,13 +244,13 @@ pub fn evaluate(
     }
     let pts = grid(run.hull[0], GRID, SPACING);
     let l_f = l_f_estimate(&mdp, &pts).ok()?;
-    let sigma2 = variance_estimate(&mdp, &pts).ok()?;
+    let sigma2 = variance_estimate(&mdp, &pts, b).ok()?;
     let b_f = forward(&ToyProblem::<f64>::new(&mdp), &theta1)
         .ok()?
         .objective;
     // B, and B with σ² = 0 (the step condition checked first).
     let (bound, noiseless) = match algorithm {
-        Algorithm::Sgd => {
+        Algorithm::Sgd | Algorithm::SgdBaselined => {
             if c.step * l_f * MARGIN > 1.0 {
                 return None;
             }
@@ -276,7 +303,7 @@ fn dyadic(x: f64) -> f64 {
 /// the schedule's L = sL̂ with s ∈ [1, 5/2] for STORM.
 fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate> {
     let k = match algorithm {
-        Algorithm::Sgd => SGD_KS[rng.random_range(0..SGD_KS.len())],
+        Algorithm::Sgd | Algorithm::SgdBaselined => SGD_KS[rng.random_range(0..SGD_KS.len())],
         Algorithm::Storm => STORM_KS[rng.random_range(0..STORM_KS.len())],
     };
     let instance = Instance {
@@ -295,7 +322,7 @@ fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate>
     )
     .ok()?;
     let step = match algorithm {
-        Algorithm::Sgd => dyadic(rng.random_range(0.2..1.0) / l),
+        Algorithm::Sgd | Algorithm::SgdBaselined => dyadic(rng.random_range(0.2..1.0) / l),
         Algorithm::Storm => dyadic(rng.random_range(1.0..2.5) * l),
     };
     Some(Candidate { instance, step })
@@ -329,7 +356,7 @@ fn moves(algorithm: Algorithm, c: &Candidate, h: f64) -> Vec<Candidate> {
         out.push(n);
     }
     let ks: &[u64] = match algorithm {
-        Algorithm::Sgd => &SGD_KS,
+        Algorithm::Sgd | Algorithm::SgdBaselined => &SGD_KS,
         Algorithm::Storm => &STORM_KS,
     };
     if let Some(i) = ks.iter().position(|k| *k == c.instance.k) {

@@ -1,18 +1,29 @@
 //! Rows 1.tight and 1.tight.ctl: the SGD bound (eq. 3.27) at the instance of largest X̄/B found
-//! by [`super::search`], with E X exact in ℚ over every path ([`super::paths::sgd_mean`]).
+//! by [`super::search`], with E X exact in ℚ over every path ([`super::paths::sgd_mean`]); rows
+//! 1.b.tight.noisy and its control the same for the baselined estimator g_b of row 1.b
+//! ([`Algorithm::SgdBaselined`]), with σ²_b certified on the hull.
 
 use super::Sizes;
 use super::instance::exact;
 use super::paths::sgd_mean;
-use super::search::{Algorithm, Estimate, Noise, search};
+use super::search::{Algorithm, Estimate, Noise, baseline, search};
 use crate::bounds::{sgd_step_admissible, upper};
-use crate::certify::box_constants::{b_f, l_f, sigma2};
+use crate::certify::box_constants::{b_f, l_f, sigma2, sigma2_baselined};
 use crate::inputs::{ConstantKind, TableInputs};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::record::constant::Constant;
 use ilopt::scalar::{BigRational, Scalar};
 
 const RESULT: &str = "SGD, eq. 3.27 (tight instance)";
+const RESULT_BASELINED: &str = "SGD, eq. 3.27, with a baseline (tight instance, beyond the thesis)";
+
+/// The row id's stem and the result of `algorithm`'s rows: "1" (plain) or "1.b" (baselined).
+fn stem(algorithm: Algorithm) -> (&'static str, &'static str) {
+    match algorithm {
+        Algorithm::SgdBaselined => ("1.b", RESULT_BASELINED),
+        Algorithm::Sgd | Algorithm::Storm => ("1", RESULT),
+    }
+}
 
 /// What one certified candidate gives: the exact X̄, the constants on the hull, and the context.
 #[derive(Debug, Clone)]
@@ -25,8 +36,10 @@ pub struct Certified {
     pub hull: Vec<[f64; 2]>,
     /// Number of paths.
     pub paths: u64,
-    /// B_F (exact), L_F and σ² (rigorous on the hull).
+    /// B_F (exact), L_F and σ² (σ²_b for the baselined estimator; rigorous on the hull).
     pub constants: [Constant; 3],
+    /// The baseline b of the estimator g_b = g − bψ, or `None` for the plain estimator.
+    pub baseline: Option<BigRational>,
 }
 
 /// Certify one candidate: X̄ exactly over every path under `inputs`' oracle, the constants on the
@@ -35,10 +48,16 @@ pub struct Certified {
 ///
 /// # Errors
 /// A message saying why the candidate was passed over.
-pub fn certify(e: &Estimate, inputs: &TableInputs, s: &Sizes) -> Result<Certified, String> {
+pub fn certify(
+    e: &Estimate,
+    inputs: &TableInputs,
+    s: &Sizes,
+    algorithm: Algorithm,
+) -> Result<Certified, String> {
     let inst = &e.candidate.instance;
     let mdp = inst.mdp()?;
     let eta = exact(e.candidate.step);
+    let b = (algorithm == Algorithm::SgdBaselined).then(baseline);
     let run = sgd_mean(
         &mdp,
         &inst.theta1_in::<BigRational>(),
@@ -46,10 +65,15 @@ pub fn certify(e: &Estimate, inputs: &TableInputs, s: &Sizes) -> Result<Certifie
         inst.k,
         inputs,
         s.sgd.max_paths,
+        b.as_ref(),
     )?;
     let one = BigRational::from_integer(1.into());
     let l = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-    let v = sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
+    let v = match &b {
+        None => sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes),
+        Some(b) => sigma2_baselined(&mdp, b, &run.hull, s.tol, s.max_boxes),
+    }
+    .map_err(|e| e.to_string())?;
     let bf = b_f(&mdp, std::slice::from_ref(&inst.theta1), None)?;
     if !sgd_step_admissible(l.value, 1.0, e.candidate.step) {
         return Err(format!(
@@ -65,6 +89,7 @@ pub fn certify(e: &Estimate, inputs: &TableInputs, s: &Sizes) -> Result<Certifie
         hull: run.hull,
         paths: run.paths,
         constants: [bf, l, v],
+        baseline: b,
     })
 }
 
@@ -77,25 +102,38 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
     let b_f = inputs.constant_f64(ConstantKind::BF, bf.value);
     let l_f = inputs.constant_f64(ConstantKind::LF, l.value);
     let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
+    let algorithm = if c.baseline.is_some() {
+        Algorithm::SgdBaselined
+    } else {
+        Algorithm::Sgd
+    };
+    let (stem, result) = stem(algorithm);
     let (id, role, prefix) = if scale == 1.0 {
         (
-            format!("1.tight{}", noise.suffix()),
-            Role::Thesis,
+            format!("{stem}.tight{}", noise.suffix()),
+            if c.baseline.is_some() {
+                Role::Corrected
+            } else {
+                Role::Thesis
+            },
             String::new(),
         )
     } else {
         (
-            format!("1.tight{}.ctl", noise.suffix()),
+            format!("{stem}.tight{}.ctl", noise.suffix()),
             Role::NegativeControl,
             format!("{scale}·"),
         )
     };
+    let estimator = c.baseline.as_ref().map_or_else(String::new, |b| {
+        format!(" for g_b = g − bψ, b = {b}, with σ²_b")
+    });
     let claim = format!(
-        "(1/K) Σ_k E‖∇F(θ_k)‖² ≤ {prefix}(Lησ² + 2B_F/(ηK)) on the instance of largest X̄/B found: {}, η = {}",
+        "(1/K) Σ_k E‖∇F(θ_k)‖² ≤ {prefix}(Lησ² + 2B_F/(ηK)){estimator} on the instance of largest X̄/B found: {}, η = {}",
         inst.describe(),
         exact(eta)
     );
-    let builder = Check::builder(id, RESULT, claim, role)
+    let builder = Check::builder(id, result, claim, role)
         .assumptions([
             format!(
                 "(S1) F L-smooth on the hull {:?} of every iterate θ₁..θ_{{K+1}} of every path",
@@ -151,24 +189,37 @@ pub(super) fn search_text(b: &super::search::Budget) -> String {
 /// The search's candidates and the first one certified under an oracle ([`super::Prepared`]).
 pub type Prepared = super::Prepared<Certified>;
 
-/// The seeded search's candidates ([`search`]); it reads no input of the table.
-pub fn candidates(s: &Sizes, noise: Noise) -> Vec<Estimate> {
-    search(Algorithm::Sgd, noise, s.sgd)
+/// The seeded search's candidates ([`search`]) for `algorithm` ([`Algorithm::Sgd`] or
+/// [`Algorithm::SgdBaselined`]); it reads no input of the table.
+pub fn candidates(s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Estimate> {
+    search(algorithm, noise, s.sgd)
 }
 
 /// Certify the best of the [`candidates`] in order until one passes, under `inputs`' oracle.
-pub fn prepare_from(found: &[Estimate], inputs: &TableInputs, s: &Sizes) -> Prepared {
-    super::first_certified(found, s.tries, |e| certify(e, inputs, s))
+pub fn prepare_from(
+    found: &[Estimate],
+    inputs: &TableInputs,
+    s: &Sizes,
+    algorithm: Algorithm,
+) -> Prepared {
+    super::first_certified(found, s.tries, |e| certify(e, inputs, s, algorithm))
 }
 
 /// Search (seeded, [`search`]) and certify the best candidates in order until one passes.
-pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Prepared {
-    prepare_from(&candidates(s, noise), inputs, s)
+pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise, algorithm: Algorithm) -> Prepared {
+    prepare_from(&candidates(s, noise, algorithm), inputs, s, algorithm)
 }
 
 /// Rows 1.tight and 1.tight.ctl (module docs) from [`prepare`]d candidates (made with the same
 /// oracle, sizes and noise), or one inconclusive row saying why no candidate could be certified.
-pub fn rows_from(inputs: &TableInputs, s: &Sizes, noise: Noise, p: &Prepared) -> Vec<Check> {
+pub fn rows_from(
+    inputs: &TableInputs,
+    s: &Sizes,
+    noise: Noise,
+    algorithm: Algorithm,
+    p: &Prepared,
+) -> Vec<Check> {
+    let (stem, result) = stem(algorithm);
     match &p.certified {
         Some(c) => super::with_control(
             |scale| row(c, inputs, scale, s, noise),
@@ -177,10 +228,14 @@ pub fn rows_from(inputs: &TableInputs, s: &Sizes, noise: Noise, p: &Prepared) ->
         ),
         None => vec![p.none_certified(
             Check::builder(
-                format!("1.tight{}", noise.suffix()),
-                RESULT,
+                format!("{stem}.tight{}", noise.suffix()),
+                result,
                 "a tight instance of eq. 3.27",
-                Role::Thesis,
+                if algorithm == Algorithm::SgdBaselined {
+                    Role::Corrected
+                } else {
+                    Role::Thesis
+                },
             ),
             &s.sgd,
             Method::Exact,
@@ -189,8 +244,14 @@ pub fn rows_from(inputs: &TableInputs, s: &Sizes, noise: Noise, p: &Prepared) ->
 }
 
 /// [`prepare`], then [`rows_from`].
-pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Vec<Check> {
-    rows_from(inputs, s, noise, &prepare(inputs, s, noise))
+pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Check> {
+    rows_from(
+        inputs,
+        s,
+        noise,
+        algorithm,
+        &prepare(inputs, s, noise, algorithm),
+    )
 }
 
 #[cfg(test)]
@@ -208,7 +269,7 @@ mod tests {
     #[test]
     fn the_tight_row_holds_and_a_halved_bound_turns_it() {
         let s = Sizes::quick();
-        let rows = rows(&TableInputs::thesis(), &s, Noise::Any);
+        let rows = rows(&TableInputs::thesis(), &s, Noise::Any, Algorithm::Sgd);
         for r in &rows {
             println!(
                 "{} {:?} {:?}: {}\n  {}",
@@ -228,7 +289,7 @@ mod tests {
             },
             ..TableInputs::thesis()
         };
-        let turned = super::rows(&wrong, &s, Noise::Any);
+        let turned = super::rows(&wrong, &s, Noise::Any, Algorithm::Sgd);
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 }
