@@ -1,11 +1,12 @@
 //! A Gymnasium environment as a task of `ilopt run` (Python's `ilopt.GymTask`): [`PyEnv`] is an
-//! [`Env`] whose reset and step call the Python environment's bound methods (looked up once), on
-//! the thread that holds the GIL for the whole run (the seeds run one at a time on it); the features φ(o) are computed as the observation arrives (a Python callable, or the
-//! observation flattened to float64 with a trailing 1), and the expert is a Python callable from
-//! the observation to the action, which is also the label. [`EnvRun`] makes it a task of
+//! [`Env`] whose reset and step call the Python environment's bound methods (looked up once); the
+//! features φ(o) are computed as the observation arrives (a Python callable, or the observation
+//! flattened to float64 with a trailing 1), and the expert is a Python callable from the
+//! observation to the action, which is also the label. [`EnvRun`] makes it a task of
 //! [`execute_task`](ilopt_cli::run::execute_task): a softmax learner for a `Discrete` action
 //! space, a linear-Gaussian learner for a `Box` one. The environment lives in one interpreter, so
-//! the seeds run one at a time.
+//! the seeds run one at a time, on the calling thread, which holds the GIL for the whole run:
+//! each call into Python re-enters the lock this thread already has.
 //!
 //! **Seeding.** Episode k of a run resets the environment with `seed` = the next draw of the
 //! run's RNG (63 bits), so a run is reproduced by its seed, as a built-in task's is.
