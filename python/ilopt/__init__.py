@@ -182,8 +182,8 @@ def run(
     A non-empty ``out`` is refused unless ``overwrite``, which first removes the kit's own files
     there. Unless ``quiet``, a line per checkpoint and the closing table go to stderr, as
     ``ilopt run`` writes them. With ``task`` (a :class:`GymTask`), the config leaves out ``task`` and ``policy``, which the
-    task brings, and the seeds run one at a time. The GIL is released while Rust runs (and taken
-    for each step of a Gymnasium environment).
+    task brings, and the seeds run one at a time on this thread, which keeps the GIL; without it
+    the GIL is released while Rust runs.
     """
     kind, text = _source(config, "config")
     out_path = None if out is None else os.fspath(out)

@@ -1,11 +1,12 @@
 //! A Gymnasium environment as a task of `ilopt run` (Python's `ilopt.GymTask`): [`PyEnv`] is an
-//! [`Env`] whose reset and step call the Python environment, with the GIL taken for each call;
-//! the features φ(o) are computed as the observation arrives (a Python callable, or the
-//! observation flattened to float64 with a trailing 1), and the expert is a Python callable from
-//! the observation to the action, which is also the label. [`EnvRun`] makes it a task of
+//! [`Env`] whose reset and step call the Python environment's bound methods (looked up once); the
+//! features φ(o) are computed as the observation arrives (a Python callable, or the observation
+//! flattened to float64 with a trailing 1), and the expert is a Python callable from the
+//! observation to the action, which is also the label. [`EnvRun`] makes it a task of
 //! [`execute_task`](ilopt_cli::run::execute_task): a softmax learner for a `Discrete` action
 //! space, a linear-Gaussian learner for a `Box` one. The environment lives in one interpreter, so
-//! the seeds run one at a time.
+//! the seeds run one at a time, on the calling thread, which holds the GIL for the whole run:
+//! each call into Python re-enters the lock this thread already has.
 //!
 //! **Seeding.** Episode k of a run resets the environment with `seed` = the next draw of the
 //! run's RNG (63 bits), so a run is reproduced by its seed, as a built-in task's is.
@@ -55,10 +56,13 @@ impl PyAction for usize {
         Ok(self.into_pyobject(py)?.into_any())
     }
     fn from_py(value: &Bound<'_, PyAny>, size: usize) -> Result<Self, String> {
-        let a: i64 = value
-            .call_method0("__index__")
-            .and_then(|i| i.extract())
-            .map_err(|e| format!("the expert's action {value}: not an integer ({e})"))?;
+        let a: i64 = match value.downcast::<pyo3::types::PyInt>() {
+            Ok(int) => int.extract(),
+            Err(_) => value
+                .call_method0(pyo3::intern!(value.py(), "__index__"))
+                .and_then(|i| i.extract()),
+        }
+        .map_err(|e| format!("the expert's action {value}: not an integer ({e})"))?;
         usize::try_from(a)
             .ok()
             .filter(|a| *a < size)
@@ -72,7 +76,8 @@ impl PyAction for Vec<f64> {
         Ok(self.clone().into_pyarray(py).into_any())
     }
     fn from_py(value: &Bound<'_, PyAny>, size: usize) -> Result<Self, String> {
-        let v = flatten(value).map_err(|e| format!("the expert's action: {e}"))?;
+        let mut v = Vec::with_capacity(size);
+        flatten_into(value, &mut v).map_err(|e| format!("the expert's action: {e}"))?;
         if v.len() != size {
             return Err(format!(
                 "the expert's action has {} entries, the Box action space {size}",
@@ -86,33 +91,35 @@ impl PyAction for Vec<f64> {
     }
 }
 
-/// `numpy.asarray(value, dtype=float64).ravel()` as a vector; a float64 or float32 numpy array
-/// (what Gymnasium's Box spaces hold) is read from its buffer without a call into Python.
-fn flatten(value: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+/// `numpy.asarray(value, dtype=float64).ravel()` appended to `out`; a float32 or float64 numpy
+/// array (what Gymnasium's Box spaces hold) is copied from its buffer without a call into Python.
+fn flatten_into(value: &Bound<'_, PyAny>, out: &mut Vec<f64>) -> PyResult<()> {
     use numpy::{PyArrayDyn, PyArrayMethods};
-    if let Ok(a) = value.downcast::<PyArrayDyn<f64>>() {
-        return Ok(a.readonly().as_array().iter().copied().collect());
-    }
     if let Ok(a) = value.downcast::<PyArrayDyn<f32>>() {
-        return Ok(a
-            .readonly()
-            .as_array()
-            .iter()
-            .map(|&x| f64::from(x))
-            .collect());
+        out.extend(a.to_owned_array().iter().map(|&x| f64::from(x)));
+        return Ok(());
+    }
+    if let Ok(a) = value.downcast::<PyArrayDyn<f64>>() {
+        out.extend(a.to_owned_array().iter());
+        return Ok(());
     }
     let np = value.py().import("numpy")?;
     let kwargs = pyo3::types::PyDict::new(value.py());
     kwargs.set_item("dtype", "float64")?;
-    np.call_method("asarray", (value,), Some(&kwargs))?
+    let v: Vec<f64> = np
+        .call_method("asarray", (value,), Some(&kwargs))?
         .call_method0("ravel")?
         .call_method0("tolist")?
-        .extract()
+        .extract()?;
+    out.extend(v);
+    Ok(())
 }
 
-/// The Python side of a Gymnasium task: the environment, the expert and the feature map.
+/// The Python side of a Gymnasium task: the environment's bound `reset` and `step`, the expert
+/// and the feature map.
 struct PySide {
-    env: Py<PyAny>,
+    reset: Py<PyAny>,
+    step: Py<PyAny>,
     expert: Py<PyAny>,
     features: Option<Py<PyAny>>,
     feature_dim: usize,
@@ -123,18 +130,18 @@ impl PySide {
     /// φ(o), checked: the feature callable's output (or o flattened, then 1) of `feature_dim`
     /// finite entries.
     fn features(&self, py: Python<'_>, obs: &Bound<'_, PyAny>) -> Result<Vec<f64>, String> {
-        let phi = match &self.features {
+        let mut phi = Vec::with_capacity(self.feature_dim);
+        match &self.features {
             Some(f) => f
                 .bind(py)
                 .call1((obs,))
-                .and_then(|v| flatten(&v))
+                .and_then(|v| flatten_into(&v, &mut phi))
                 .map_err(|e| format!("features(observation): {e}"))?,
             None => {
-                let mut v = flatten(obs).map_err(|e| format!("the observation: {e}"))?;
-                v.push(1.0);
-                v
+                flatten_into(obs, &mut phi).map_err(|e| format!("the observation: {e}"))?;
+                phi.push(1.0);
             }
-        };
+        }
         if phi.len() != self.feature_dim {
             return Err(format!(
                 "features(observation) has {} entries, the first observation's had {}",
@@ -194,10 +201,7 @@ impl<A: PyAction> Env<f64> for PyEnv<A> {
             let obs = (|| {
                 let kwargs = pyo3::types::PyDict::new(py);
                 kwargs.set_item("seed", seed)?;
-                side.env
-                    .bind(py)
-                    .call_method("reset", (), Some(&kwargs))?
-                    .get_item(0)
+                side.reset.bind(py).call((), Some(&kwargs))?.get_item(0)
             })()
             .map_err(|e| format!("env.reset(seed={seed}): {e}"))?;
             side.observe(py, obs)
@@ -216,11 +220,13 @@ impl<A: PyAction> Env<f64> for PyEnv<A> {
                 .to_py(py)
                 .map_err(|e| format!("the action {action:?}: {e}"))?;
             let out = side
-                .env
+                .step
                 .bind(py)
-                .call_method1("step", (a,))
+                .call1((a,))
                 .map_err(|e| format!("env.step({action:?}): {e}"))?;
             let parsed = || -> PyResult<(Bound<'_, PyAny>, f64, bool, bool)> {
+                use pyo3::types::{PySequence, PySequenceMethods};
+                let out = out.downcast::<PySequence>()?;
                 Ok((
                     out.get_item(0)?,
                     out.get_item(1)?.extract()?,
@@ -318,8 +324,17 @@ pub fn run_gym(
             ));
         }
     };
+    let (reset, step) = Python::with_gil(|py| -> PyResult<_> {
+        let env = spec.env.bind(py);
+        Ok((
+            env.getattr("reset")?.unbind(),
+            env.getattr("step")?.unbind(),
+        ))
+    })
+    .map_err(|e| format!("env.reset and env.step: {e}"))?;
     let side = std::sync::Arc::new(PySide {
-        env: spec.env,
+        reset,
+        step,
         expert: spec.expert,
         features: spec.features,
         feature_dim: spec.feature_dim,

@@ -4,7 +4,8 @@
 //! [`ilopt_cli::toy::evaluate_entries`] (`ilopt toy eval`) — so that Python gets the numbers and
 //! the error messages of the CLI. The Python half (`python/ilopt/__init__.py`) turns configs
 //! into the text these functions read and their results into numpy arrays, dicts and
-//! `fractions.Fraction`s. Rust runs with the GIL released.
+//! `fractions.Fraction`s. Rust runs with the GIL released, but for a Gymnasium task, whose
+//! environment steps in Python.
 
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
@@ -141,7 +142,8 @@ fn run<'py>(
 }
 
 /// Run a config (`kind` "path" or "json") on a Gymnasium task (module [`gym`]), as [`run`] does
-/// on a built-in one.
+/// on a built-in one, but with the GIL held: the seeds run one at a time on this thread, and every
+/// step of the environment is a call into Python.
 #[pyfunction]
 #[pyo3(signature = (kind, text, out, overwrite, quiet, env, expert, features, feature_dim, space, size, steps, after_end, sigma, eval_steps, name))]
 #[allow(clippy::too_many_arguments)]
@@ -177,17 +179,14 @@ fn run_gym<'py>(
         eval_steps,
         name,
     };
-    let outcome = py
-        .allow_threads(|| {
-            let config = load_config(kind, text)?;
-            gym::run_gym(
-                spec,
-                &config,
-                out.as_deref(),
-                RunOptions { overwrite, quiet },
-            )
-        })
-        .map_err(IloptError::new_err)?;
+    let config = load_config(kind, text).map_err(IloptError::new_err)?;
+    let outcome = gym::run_gym(
+        spec,
+        &config,
+        out.as_deref(),
+        RunOptions { overwrite, quiet },
+    )
+    .map_err(IloptError::new_err)?;
     outcome_to_py(py, &outcome)
 }
 

@@ -2,6 +2,7 @@
 checkpoints on an environment that steps in Python, with an expert written in Python."""
 
 import math
+import threading
 
 import gymnasium
 import numpy as np
@@ -156,3 +157,72 @@ class MultiDiscreteEnv(gymnasium.Env):
 
     def step(self, action):
         return np.zeros(2, dtype=np.float32), 0.0, False, False, {}
+
+
+class ScriptedCartPole(gymnasium.Wrapper):
+    """CartPole-v1 whose step or reset misbehaves after a number of calls, and which records the
+    thread of every call."""
+
+    def __init__(self, bad_step=None, bad_reset=None, after=50):
+        super().__init__(gymnasium.make("CartPole-v1"))
+        self.bad_step, self.bad_reset, self.after = bad_step, bad_reset, after
+        self.steps, self.resets, self.threads = 0, 0, set()
+
+    def reset(self, *, seed=None, options=None):
+        self.threads.add(threading.get_ident())
+        self.resets += 1
+        if self.bad_reset is not None and self.resets > 1:
+            return self.bad_reset()
+        return self.env.reset(seed=seed, options=options)
+
+    def step(self, action):
+        self.threads.add(threading.get_ident())
+        self.steps += 1
+        if self.bad_step is not None and self.steps > self.after:
+            return self.bad_step()
+        return self.env.step(action)
+
+
+def raise_value_error():
+    raise ValueError("the simulator diverged")
+
+
+def test_a_gym_run_calls_python_on_the_calling_thread_once_per_decision():
+    env = ScriptedCartPole()
+    calls = []
+
+    def expert(obs):
+        calls.append(threading.get_ident())
+        return balance(obs)
+
+    task = ilopt.GymTask(env, expert=expert, steps=50)
+    calls.clear()
+    r = ilopt.run(config(ADAM, 2000, every=1000, episodes=2), task=task)
+    assert env.threads == {threading.get_ident()}
+    assert set(calls) == {threading.get_ident()}
+    # one expert call per training decision and per evaluation decision
+    eval_steps = len(calls) - int(final(r, 1, "expert_queries"))
+    assert final(r, 1, "env_steps") == 2000 and final(r, 1, "expert_queries") == 2000
+    assert env.steps == 2000 + eval_steps
+
+
+def test_a_failing_environment_raises_with_its_message():
+    """Failures at the first checkpoint's evaluation raise; a failure during training ends the seed's
+    run with the message as its termination."""
+    with pytest.raises(ilopt.IloptError, match="env.step\\(.*the simulator diverged"):
+        task = ilopt.GymTask(ScriptedCartPole(bad_step=raise_value_error, after=0), expert=balance)
+        ilopt.run(config(DAGGER, 30_000), task=task)
+    with pytest.raises(ilopt.IloptError, match="env.reset\\(seed=\\d+\\): .*the simulator diverged"):
+        task = ilopt.GymTask(ScriptedCartPole(bad_reset=raise_value_error), expert=balance)
+        ilopt.run(config(DAGGER, 30_000), task=task)
+    with pytest.raises(ilopt.IloptError, match="not \\(observation, reward, terminated, truncated, info\\)"):
+        task = ilopt.GymTask(ScriptedCartPole(bad_step=lambda: None, after=0), expert=balance)
+        ilopt.run(config(DAGGER, 30_000), task=task)
+    with pytest.raises(ilopt.IloptError, match="returned the reward NaN"):
+        nan = (np.zeros(4, dtype=np.float32), float("nan"), False, False, {})
+        task = ilopt.GymTask(ScriptedCartPole(bad_step=lambda: nan, after=0), expert=balance)
+        ilopt.run(config(DAGGER, 30_000), task=task)
+    env = ScriptedCartPole(bad_step=raise_value_error, after=1000)
+    r = ilopt.run(config(ADAM, 3000, episodes=1), task=ilopt.GymTask(env, expert=balance, steps=100))
+    termination = r.summary["runs"][0]["termination"]
+    assert "env.step(" in termination and "the simulator diverged" in termination, termination

@@ -1,9 +1,11 @@
-//! Running a config's seeds on a pool of scoped threads. Each seed's run depends on its seed
-//! alone and writes its own files, and the results are gathered in the config's seed order, so
-//! the output is the same whatever the thread count and the order in which seeds finish. Each
-//! checkpoint is written as it is reached ([`super::output::SeedWriter`]). On stderr, unless
-//! quiet: a progress bar over the total budget, with the last checkpoint's metrics, when stderr is
-//! a terminal; otherwise (a log file, Slurm) one line per checkpoint ([`checkpoint_line`]).
+//! Running a config's seeds on a pool of scoped threads, or on the calling thread when the pool
+//! would have one (`ilopt.GymTask` then steps its environment on the thread that holds Python's
+//! lock). Each seed's run depends on its seed alone and writes its own files, and the results are
+//! gathered in the config's seed order, so the output is the same whatever the thread count and
+//! the order in which seeds finish. Each checkpoint is written as it is reached
+//! ([`super::output::SeedWriter`]). On stderr, unless quiet: a progress bar over the total budget,
+//! with the last checkpoint's metrics, when stderr is a terminal; otherwise (a log file, Slurm)
+//! one line per checkpoint ([`checkpoint_line`]).
 
 use super::config::LoadedConfig;
 use super::driver::run_seed;
@@ -89,11 +91,16 @@ pub fn run_seeds<T: RunTask + ?Sized>(
             }
         }
     };
-    std::thread::scope(|s| {
-        for _ in 0..threads.min(task.max_threads()).clamp(1, seeds.len()) {
-            s.spawn(worker);
-        }
-    });
+    let workers = threads.min(task.max_threads()).clamp(1, seeds.len());
+    if workers == 1 {
+        worker();
+    } else {
+        std::thread::scope(|s| {
+            for _ in 0..workers {
+                s.spawn(worker);
+            }
+        });
+    }
     bar.finish_and_clear();
     let slots = results
         .into_inner()

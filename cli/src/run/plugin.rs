@@ -129,8 +129,8 @@ impl<E: Env<f64>, F, X, P> EnvRun<E, F, X, P> {
         })
     }
 
-    /// The same task, its seeds run one at a time (an environment that lives in one Python
-    /// interpreter, or is not safe to step from two threads).
+    /// The same task, its seeds run one at a time on the calling thread (an environment that
+    /// lives in one Python interpreter, or is not safe to step from two threads).
     #[must_use]
     pub fn one_seed_at_a_time(mut self) -> Self {
         self.max_threads = 1;

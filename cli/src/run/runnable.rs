@@ -35,7 +35,7 @@ pub trait RunTask: Sync {
     fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String>;
 
     /// The most threads the seeds may run on (a task whose environment lives in a Python
-    /// interpreter steps one seed at a time).
+    /// interpreter steps one seed at a time; with one thread the seeds run on the calling one).
     fn max_threads(&self) -> usize {
         usize::MAX
     }
