@@ -69,8 +69,8 @@
 //!     seed: 7,
 //!     stop: StoppingRule::iterations(25),
 //! };
-//! let fast: RunRecord<f64> = replay(&config, &ToyProblem::<f64>::new(&mdp))?;
-//! let rigorous: RunRecord<Interval> = replay(&config, &ToyProblem::<Interval>::new(&mdp))?;
+//! let fast: RunRecord<f64> = replay(&config, &mut ToyProblem::<f64>::new(&mdp))?;
+//! let rigorous: RunRecord<Interval> = replay(&config, &mut ToyProblem::<Interval>::new(&mdp))?;
 //! let (x, enclosure) = (fast.theta[0], rigorous.theta[0]);
 //! assert!(enclosure.inf() <= x && x <= enclosure.sup());
 //! # Ok::<(), Box<dyn std::error::Error>>(())

@@ -33,13 +33,13 @@ use std::borrow::Borrow;
 /// let task = CartPoleTask::with_lqr()?; // the LQR expert labels every visited state
 /// let policy = Logistic::new(cartpole::FEATURES)?;
 /// let problem = TaskProblem::fixed(task, policy, 500, AfterEnd::Reset)?;
-/// let oracle = Baselined::<_, f64>::new(problem, 4, &Baseline::LeaveOneOut)?;
+/// let mut oracle = Baselined::<_, f64>::new(problem, 4, &Baseline::LeaveOneOut)?;
 /// let config: RunConfig = serde_json::from_str(
 ///     r#"{"theta0": [0, 0, 0, 0, 0], "seed": 1, "stop": {"max_iterations": 10},
 ///         "algorithm": {"algorithm": "adam", "form": "causal", "alpha": 0.005,
 ///                       "beta1": 0.9, "beta2": 0.999, "epsilon": 1e-8}}"#,
 /// )?;
-/// let run = Runner::new(config.stop.clone())?.run_config(&config, &oracle)?;
+/// let run = Runner::new(config.stop.clone())?.run_config(&config, &mut oracle)?;
 /// // Every iteration estimated the gradient on 4 trajectories of exactly 500 decisions.
 /// assert_eq!(run.cost.gradient_evaluations, 10 * 4 * 500);
 /// assert!(run.theta.iter().all(|x| x.is_finite()));

@@ -1020,6 +1020,23 @@ mod tests {
         // The thesis's STORM figure on this task is 2764 calls: a budget of 10 000 is enough.
         let q = qualify_with(base(), &[&never], &[tuned(false)], 10_000);
         assert_eq!((q.verdict, q.caveat), (Verdict::NotReproduced, None));
+        // Only the compared row's own tuning counts: a weak pick of another row of the task, or
+        // of the same label on the other task, listed first, leaves the verdict alone.
+        let other_row = TuningResult {
+            label: "SGD".into(),
+            ..tuned(true)
+        };
+        let other_task = TuningResult {
+            task: TaskKind::Cartpole,
+            ..tuned(true)
+        };
+        let q = qualify_with(
+            base(),
+            &[&never],
+            &[other_row, other_task, tuned(false)],
+            10_000,
+        );
+        assert_eq!((q.verdict, q.caveat), (Verdict::NotReproduced, None));
         let q = qualify_with(base(), &[&never], &[tuned(true)], 10_000);
         assert_eq!(q.verdict, Verdict::Inconclusive);
         assert_eq!(q.verdict_short(), "inconclusive (tuning)");
@@ -1049,6 +1066,18 @@ mod tests {
             qualify_with(none, &[&never], &[tuned(true)], 5_000).verdict,
             Verdict::NotReproduced
         );
+    }
+
+    /// The figures are Tables 4.1 and 4.3's gradient calls, found by task and label together.
+    #[test]
+    fn thesis_calls_are_looked_up_by_task_and_label() {
+        assert_eq!(thesis_calls(TaskKind::Obstacle, "Adam"), Some(10785.0));
+        assert_eq!(thesis_calls(TaskKind::Cartpole, "Adam"), Some(2467044.0));
+        assert_eq!(thesis_calls(TaskKind::Cartpole, "DAgger"), Some(31905600.0));
+        // SGD is in Table 4.1 only; BC in neither.
+        assert_eq!(thesis_calls(TaskKind::Obstacle, "SGD"), Some(9450.0));
+        assert_eq!(thesis_calls(TaskKind::Cartpole, "SGD"), None);
+        assert_eq!(thesis_calls(TaskKind::Obstacle, "BC"), None);
     }
 
     #[test]
