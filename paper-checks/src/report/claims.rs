@@ -1051,6 +1051,11 @@ mod tests {
         assert!(q.caveat.unwrap().contains("STORM 2/2"));
         let q = qualify_with(base(), &[&all], &[tuned(false)], 5_000);
         assert_eq!(q.verdict, Verdict::NotReproduced);
+        // Exactly twice the thesis's figure is enough ("at least twice").
+        let q = qualify_with(base(), &[&never], &[tuned(false)], 2 * 2764);
+        assert_eq!((q.verdict, q.caveat), (Verdict::NotReproduced, None));
+        let q = qualify_with(base(), &[&never], &[tuned(false)], 2 * 2764 - 1);
+        assert_eq!(q.verdict_short(), "inconclusive (budget)");
         let q = qualify_with(base(), &[&never], &[tuned(true)], 5_000);
         assert_eq!(q.verdict_short(), "inconclusive (tuning, budget)");
         // Other verdicts, and claims comparing no rows, stand.
@@ -1066,6 +1071,28 @@ mod tests {
             qualify_with(none, &[&never], &[tuned(true)], 5_000).verdict,
             Verdict::NotReproduced
         );
+    }
+
+    /// A claim reads the row of its label that the thesis printed, not an extra or control row of
+    /// the same label; a label with no thesis row is skipped.
+    #[test]
+    fn thesis_rows_are_found_by_label_among_the_thesis_rows() {
+        let storm = timed(&[RunStatus::NotConverged]).0;
+        let mut extra = timed(&[
+            RunStatus::NotConverged,
+            RunStatus::NotConverged,
+            RunStatus::NotConverged,
+        ])
+        .0;
+        extra.entry.role = crate::config::Role::Extra;
+        let rows = vec![(extra, None), (storm, None)];
+        let found = thesis(&rows, "STORM").expect("the thesis row");
+        assert_eq!(found.entry.role, crate::config::Role::Thesis);
+        assert_eq!(found.runs.len(), 1);
+        assert!(thesis(&rows, "Adam").is_none());
+        let ordered = in_order(&rows, &["Adam", "STORM"]);
+        assert_eq!(ordered.len(), 1);
+        assert_eq!(ordered[0].runs.len(), 1);
     }
 
     /// The figures are Tables 4.1 and 4.3's gradient calls, found by task and label together.
