@@ -1095,6 +1095,47 @@ mod tests {
         assert_eq!(ordered[0].runs.len(), 1);
     }
 
+    /// Interval ends inside the quantity's range are printed as they are (an end exactly at the
+    /// range's end too); ends beyond it at the range's end, marked †; without a finite interval,
+    /// the mean alone.
+    #[test]
+    fn interval_text_clamps_only_the_ends_beyond_the_range() {
+        let s = |mean, half_width| Summary {
+            n: 4,
+            mean,
+            half_width,
+        };
+        assert_eq!(ci_text(&s(2.0, 1.0)), "2.000 [1.000, 3.000] (n = 4)");
+        assert_eq!(ci_text(&s(1.0, 1.0)), "1.000 [0, 2.000] (n = 4)");
+        assert_eq!(ci_text(&s(1.0, 2.0)), "1.000 [0†, 3.000] (n = 4)");
+        assert_eq!(signed_text(&s(1.0, 2.0)), "1.000 [-1.000, 3.000] (n = 4)");
+        assert_eq!(percent_text(&s(0.5, 0.5)), "50.00% [0%, 100.0%] (n = 4)");
+        assert_eq!(
+            percent_text(&s(0.9, 0.2)),
+            "90.00% [70.00%, 100.0%†] (n = 4)"
+        );
+        let one = Summary {
+            n: 1,
+            mean: 5.0,
+            half_width: f64::NAN,
+        };
+        assert_eq!(ci_text(&one), "5.000 (n = 1)");
+    }
+
+    /// A claim's evidence names each row, its value and how its runs ended.
+    #[test]
+    fn evidence_names_each_row_with_its_tally() {
+        let conv = RunStatus::Converged {
+            checkpoint: 1,
+            gradient_evaluations: 10,
+        };
+        let storm = timed(&[conv, RunStatus::NotConverged]).0;
+        assert_eq!(
+            evidence([(&storm, "12 calls".to_string())]),
+            "STORM 12 calls — converged 1/2, 1 never"
+        );
+    }
+
     /// The figures are Tables 4.1 and 4.3's gradient calls, found by task and label together.
     #[test]
     fn thesis_calls_are_looked_up_by_task_and_label() {
