@@ -1241,5 +1241,20 @@ mod tests {
         assert_eq!(slope_verdict(&s(-0.55, -0.45)), Verdict::Reproduced);
         assert_eq!(slope_verdict(&s(-0.3, -0.1)), Verdict::NotReproduced);
         assert_eq!(slope_verdict(&s(-0.7, 0.1)), Verdict::Inconclusive);
+        // An interval wholly below −1/2 excludes it too.
+        assert_eq!(slope_verdict(&s(-0.9, -0.6)), Verdict::NotReproduced);
+        // −1/2 on the interval's end is inside it; with 0 inside too, nothing is decided.
+        assert_eq!(slope_verdict(&s(-0.5, 0.1)), Verdict::Inconclusive);
+        assert_eq!(slope_verdict(&s(-0.5, -0.1)), Verdict::Reproduced);
+        // A bootstrap that failed at either end decides nothing.
+        assert_eq!(
+            slope_verdict(&s(-0.6, f64::INFINITY)),
+            Verdict::Inconclusive
+        );
+        assert_eq!(slope_verdict(&s(f64::NAN, -0.1)), Verdict::Inconclusive);
+        assert_eq!(
+            slope_verdict(&s(f64::NEG_INFINITY, -0.1)),
+            Verdict::Inconclusive
+        );
     }
 }
