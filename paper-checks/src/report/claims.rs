@@ -1136,6 +1136,32 @@ mod tests {
         );
     }
 
+    /// The F test divides each sum of squares by its own n − 1: with 3 against 21 values, a
+    /// variance ratio of 2 lies between the 2.5 % and 97.5 % points of F(20, 2) and F(2, 20)
+    /// (≈ 39.4 and ≈ 4.46), so nothing is decided; a ratio of 100 is decided.
+    #[test]
+    fn the_variance_test_uses_each_sample_s_own_degrees_of_freedom() {
+        let xa = [0.0, 1.0, 2.0];
+        let c = 2f64.sqrt();
+        let xb: Vec<f64> = (0..21)
+            .map(|i| {
+                if i == 20 {
+                    0.0
+                } else if i % 2 == 0 {
+                    c
+                } else {
+                    -c
+                }
+            })
+            .collect();
+        let (a, b) = (Summary::of(&xa), Summary::of(&xb));
+        assert_eq!(lower_variance(&a, &b, &xa, &xb), Verdict::Inconclusive);
+        let wide: Vec<f64> = xb.iter().map(|x| 10.0 * x).collect();
+        let w = Summary::of(&wide);
+        assert_eq!(lower_variance(&a, &w, &xa, &wide), Verdict::Reproduced);
+        assert_eq!(lower_variance(&w, &a, &wide, &xa), Verdict::NotReproduced);
+    }
+
     /// The figures are Tables 4.1 and 4.3's gradient calls, found by task and label together.
     #[test]
     fn thesis_calls_are_looked_up_by_task_and_label() {
