@@ -1156,6 +1156,10 @@ mod tests {
             .collect();
         let (a, b) = (Summary::of(&xa), Summary::of(&xb));
         assert_eq!(lower_variance(&a, &b, &xa, &xb), Verdict::Inconclusive);
+        // Ratio 38, just below F(20, 2)'s 97.5 % point (≈ 39.45): still undecided.
+        let near: Vec<f64> = xb.iter().map(|x| x * 19f64.sqrt()).collect();
+        let n = Summary::of(&near);
+        assert_eq!(lower_variance(&a, &n, &xa, &near), Verdict::Inconclusive);
         let wide: Vec<f64> = xb.iter().map(|x| 10.0 * x).collect();
         let w = Summary::of(&wide);
         assert_eq!(lower_variance(&a, &w, &xa, &wide), Verdict::Reproduced);
