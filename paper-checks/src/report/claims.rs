@@ -1164,6 +1164,11 @@ mod tests {
         let w = Summary::of(&wide);
         assert_eq!(lower_variance(&a, &w, &xa, &wide), Verdict::Reproduced);
         assert_eq!(lower_variance(&w, &a, &wide, &xa), Verdict::NotReproduced);
+        // Two values are enough for a variance (F(20, 1)'s 97.5 % point is ≈ 993).
+        let two = [0.0, 1.0];
+        let huge: Vec<f64> = xb.iter().map(|x| 100.0 * x).collect();
+        let (t, h) = (Summary::of(&two), Summary::of(&huge));
+        assert_eq!(lower_variance(&t, &h, &two, &huge), Verdict::Reproduced);
     }
 
     /// The figures are Tables 4.1 and 4.3's gradient calls, found by task and label together.
