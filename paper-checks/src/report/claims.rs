@@ -1169,6 +1169,7 @@ mod tests {
         let huge: Vec<f64> = xb.iter().map(|x| 100.0 * x).collect();
         let (t, h) = (Summary::of(&two), Summary::of(&huge));
         assert_eq!(lower_variance(&t, &h, &two, &huge), Verdict::Reproduced);
+        assert_eq!(lower_variance(&h, &t, &huge, &two), Verdict::NotReproduced);
     }
 
     /// The figures are Tables 4.1 and 4.3's gradient calls, found by task and label together.
