@@ -264,6 +264,17 @@ fn state_columns<S: Scalar, P: PerDecisionTerms<S>>(
     Ok(k + 2)
 }
 
+/// The number of trajectories of `batch`.
+///
+/// # Errors
+/// [`OracleError::Trajectory`] for an empty minibatch.
+fn batch_size<T>(batch: &[T]) -> Result<usize, OracleError> {
+    if batch.is_empty() {
+        return Err(OracleError::Trajectory("an empty minibatch".into()));
+    }
+    Ok(batch.len())
+}
+
 /// The error of a leave-one-out minibatch with fewer than two trajectories.
 fn too_few_for_leave_one_out(m: usize) -> OracleError {
     invalid(format!(
@@ -425,10 +436,7 @@ fn leave_one_out<S: Scalar, P: PerDecisionTerms<S>>(
     batch: &[P::Trajectory],
     cost: &mut Cost,
 ) -> Result<DVector<S>, OracleError> {
-    let m = batch.len();
-    if m == 0 {
-        return Err(OracleError::Trajectory("an empty minibatch".into()));
-    }
+    let m = batch_size(batch)?;
     if m < 2 {
         return Err(too_few_for_leave_one_out(m));
     }
@@ -469,10 +477,7 @@ fn estimated<S: Scalar, P: PerDecisionTerms<S>>(
         time_indexed,
         running,
     } = state;
-    let m = batch.len();
-    if m == 0 {
-        return Err(OracleError::Trajectory("an empty minibatch".into()));
-    }
+    let m = batch_size(batch)?;
     let Buffers {
         records,
         totals: baseline,
@@ -540,10 +545,7 @@ fn state_dependent<S: Scalar, P: PerDecisionTerms<S>>(
         time,
         running,
     } = state;
-    let m = batch.len();
-    if m == 0 {
-        return Err(OracleError::Trajectory("an empty minibatch".into()));
-    }
+    let m = batch_size(batch)?;
     let Buffers {
         records,
         features,
@@ -621,10 +623,7 @@ fn baselined<S: Scalar, P: PerDecisionTerms<S>>(
     observe: bool,
     mut fill: impl FnMut(&P::Trajectory, &mut DecisionTerms<S>) -> Result<(), OracleError>,
 ) -> Result<DVector<S>, OracleError> {
-    let m = batch.len();
-    if m == 0 {
-        return Err(OracleError::Trajectory("an empty minibatch".into()));
-    }
+    let m = batch_size(batch)?;
     if m < 2 && matches!(kind, Kind::LeaveOneOut) {
         return Err(too_few_for_leave_one_out(m));
     }

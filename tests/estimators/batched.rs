@@ -104,3 +104,53 @@ fn an_empty_batch_is_an_error() {
         .unwrap_err();
     assert!(err.to_string().contains("empty minibatch"), "{err}");
 }
+
+/// Every kind of baseline refuses an empty minibatch by name, in the plain estimate and in the
+/// importance-weighted one.
+#[test]
+fn every_baseline_refuses_an_empty_batch() {
+    use ilopt::algo::ConfigNumber;
+    use ilopt::baseline::{Baseline, Baselined};
+    let kinds = [
+        Baseline::Constant {
+            value: ConfigNumber::Float(0.5),
+        },
+        Baseline::LeaveOneOut,
+        Baseline::Estimated {
+            time_indexed: true,
+            decay: None,
+        },
+        Baseline::StateDependent {
+            features: None,
+            time: true,
+            decay: None,
+            ridge: None,
+            fit_every: None,
+        },
+    ];
+    let theta = DVector::zeros(5);
+    let mut cost = Cost::default();
+    for kind in &kinds {
+        let mut b = Baselined::<_, f64>::new(cartpole(), 2, kind).unwrap();
+        let err = b
+            .estimate(&theta, &Vec::new(), EstimatorForm::Causal, &mut cost)
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("empty minibatch"),
+            "{kind:?}: {err}"
+        );
+        let err = b
+            .weighted_estimate(
+                &theta,
+                &theta,
+                &Vec::new(),
+                Weighting::PerDecision,
+                &mut cost,
+            )
+            .unwrap_err();
+        assert!(
+            err.to_string().contains("empty minibatch"),
+            "{kind:?}: {err}"
+        );
+    }
+}
