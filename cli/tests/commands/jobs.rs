@@ -134,7 +134,9 @@ fn overwrite_recognises_only_the_kits_files() {
     }
 }
 
-/// `summary.json`, each `seed-<n>.json` and `config.toml` name the kit's version and commit.
+/// `summary.json`, each `seed-<n>.json` and `config.toml` name the kit's version and commit, and
+/// whether the build had uncommitted changes (a boolean, or null when unknown, as the comment
+/// line says).
 #[test]
 fn every_output_names_the_build() {
     let s = Scratch::new("provenance");
@@ -151,7 +153,17 @@ fn every_output_names_the_build() {
                 || (commit.len() == 40 && commit.bytes().all(|b| b.is_ascii_hexdigit())),
             "{what}: {commit}"
         );
-        commit.to_string()
+        let changes = &v["ilopt"]["uncommitted_changes"];
+        assert!(
+            changes.is_boolean() || changes.is_null(),
+            "{what}: {changes}"
+        );
+        let marked = if changes == &Value::Bool(true) {
+            ", with uncommitted changes"
+        } else {
+            ""
+        };
+        format!("{commit}{marked}")
     };
     let printed: Value = serde_json::from_str(&stdout).unwrap();
     let commit = check(&printed, "stdout");
