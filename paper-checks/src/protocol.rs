@@ -654,6 +654,20 @@ mod tests {
     }
 
     #[test]
+    fn the_median_takes_the_middle_value_or_the_mean_of_the_middle_two() {
+        assert!(median(vec![]).is_nan());
+        assert_eq!(median(vec![7.0]), 7.0);
+        // Unsorted input, odd and even counts.
+        assert_eq!(median(vec![5.0, 1.0, 3.0]), 3.0);
+        assert_eq!(median(vec![8.0, 2.0, 4.0, 6.0]), 5.0);
+        assert_eq!(median(vec![10.0, 1.0, 4.0, 2.0, 30.0, 6.0]), 5.0);
+        // +∞ entries (runs that did not converge) sort last.
+        assert_eq!(median(vec![f64::INFINITY, 100.0, 300.0]), 300.0);
+        assert_eq!(median(vec![f64::INFINITY, 100.0, 300.0, 200.0]), 250.0);
+        assert!(median(vec![f64::INFINITY, 100.0, f64::INFINITY, 200.0]).is_infinite());
+    }
+
+    #[test]
     fn the_score_is_lexicographic_median_then_area_then_step_then_m() {
         let p = point(1e-3, 1);
         // Median calls over three seeds; a diverged or unconverged run counts +∞.
