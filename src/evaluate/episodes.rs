@@ -2,8 +2,8 @@
 //! policy acts on its output (no sampling) from seeded starts, and each episode's reward, outcome
 //! and per-decision supervised loss against the expert are tallied. One loop for every task: a
 //! [`Task`] (a program's own environment) through [`task_episodes`], CartPole through
-//! [`cartpole_episodes`], the obstacle
-//! environment, whose outcome is one of four, through [`obstacle_episodes`]. The caller chooses
+//! [`cartpole_episodes`], the obstacle environment, whose outcome is one of four, through
+//! [`obstacle_episodes`]. The caller chooses
 //! the action (a learner's deterministic action or a reference policy's) and the seed of episode j
 //! (`seed_of(j)`), so that every checkpoint of a run can meet the same episodes.
 
