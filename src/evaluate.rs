@@ -5,6 +5,9 @@
 //! rewards chapter 4 reports.
 
 pub mod episodes;
+mod evaluation;
+
+pub use evaluation::Evaluation;
 
 use crate::problem::{Behaviour, Cost, IlProblem, KitRng, OracleError};
 use nalgebra::DVector;

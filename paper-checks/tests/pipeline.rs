@@ -185,7 +185,12 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
     let sgd_runs: paper_checks::results::ConfigResult =
         serde_json::from_slice(&std::fs::read(a.join("runs/obstacle-sgd.json")).expect("SGD runs"))
             .expect("SGD runs parse");
-    assert!(sgd_runs.runs.iter().all(|r| r.hyper_parameters == chosen));
+    assert!(
+        sgd_runs
+            .runs
+            .iter()
+            .all(|r| r.hyper_parameters.as_ref() == Some(&chosen))
+    );
     // The baselines are evaluated on the learners' episodes: the experts succeed on every one
     // (the VO expert reaches the goal, PPO balances 500 steps) with zero loss against
     // themselves, and ignoring the obstacle does not beat the expert.
@@ -197,13 +202,18 @@ fn reruns_and_thread_counts_give_byte_identical_data() {
         assert_eq!(b.runs.len(), 2, "{}: one evaluation per seed", b.label);
         if b.label.starts_with("Expert") {
             assert!(
-                b.runs.iter().all(|c| c.score == 1.0 && c.loss == 0.0),
+                b.runs
+                    .iter()
+                    .all(|c| c.score == Some(1.0) && c.eval_loss == Some(0.0)),
                 "{}",
                 b.label
             );
         } else {
             assert!(
-                b.runs.iter().all(|c| c.score <= 1.0 && c.loss > 0.0),
+                b.runs
+                    .iter()
+                    .all(|c| c.score.is_some_and(|s| s <= 1.0)
+                        && c.eval_loss.is_some_and(|l| l > 0.0)),
                 "{}",
                 b.label
             );

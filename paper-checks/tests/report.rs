@@ -23,8 +23,10 @@ fn timing(train: &[f64], converge: &[Option<f64>]) -> ConfigTiming {
             .zip(converge)
             .enumerate()
             .map(|(i, (t, c))| SeedTiming {
-                seed_index: i as u32,
+                seed: i as u64,
+                seed_index: Some(i as u32),
                 train_seconds: *t,
+                evaluation_seconds: 0.0,
                 checkpoint_seconds: vec![],
                 converge_seconds: *c,
             })

@@ -67,6 +67,7 @@ pub mod o2nc;
 pub mod observer;
 mod parameter_range;
 mod prefetch;
+pub mod records;
 pub mod rmsprop;
 mod roots;
 pub mod rrm;

@@ -1,15 +1,18 @@
 //! Deterministic evaluation episodes, as the thesis's chapter 4 scores a learned policy: the
 //! policy acts on its output (no sampling) from seeded starts, and each episode's reward, outcome
 //! and per-decision supervised loss against the expert are tallied. One loop for every task: a
-//! [`Task`] (CartPole, a program's own environment) through [`task_episodes`], the obstacle
-//! environment, whose outcome is one of four, through [`obstacle_episodes`]. The caller chooses
+//! [`Task`] (a program's own environment) through [`task_episodes`], CartPole through
+//! [`cartpole_episodes`], the obstacle environment, whose outcome is one of four, through
+//! [`obstacle_episodes`]. The caller chooses
 //! the action (a learner's deterministic action or a reference policy's) and the seed of episode j
 //! (`seed_of(j)`), so that every checkpoint of a run can meet the same episodes.
 
+use crate::env::cartpole::MAX_EPISODE_STEPS;
 use crate::env::obstacle::{ObstacleConfig, ObstacleEnv, ObstacleObs, Outcome};
 use crate::expert::vo_policy::VoExpertPolicy;
 use crate::problem::KitRng;
 use crate::task::Task;
+use crate::task::cartpole::CartPoleTask;
 use rand::SeedableRng;
 
 /// A policy acting in a [`Task`]'s evaluation: (episode, φ(s), the expert's label) ↦ (action, its
@@ -81,6 +84,28 @@ pub fn task_episodes<T: Task<f64>>(
     stats.loss /= decisions.max(1) as f64;
     stats.reward /= f64::from(episodes.max(1));
     Ok(stats)
+}
+
+/// CartPole's evaluation episodes: [`task_episodes`] on the CartPole task, each episode's reward
+/// its steps, an episode that completes [`MAX_EPISODE_STEPS`] a success and any shorter one a
+/// crash.
+///
+/// # Errors
+/// As [`task_episodes`].
+pub fn cartpole_episodes(
+    task: &CartPoleTask<f64>,
+    act: &mut TaskAct<'_, CartPoleTask<f64>>,
+    episodes: u32,
+    seed_of: &dyn Fn(u64) -> u64,
+) -> Result<EpisodeStats, String> {
+    task_episodes(task, act, episodes, seed_of, None, &mut |_, steps, s| {
+        s.reward += steps as f64;
+        if steps >= MAX_EPISODE_STEPS {
+            s.successes += 1;
+        } else {
+            s.crashes += 1;
+        }
+    })
 }
 
 /// `episodes` episodes of the obstacle environment `env`, episode j started from an RNG seeded

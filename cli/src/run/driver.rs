@@ -127,18 +127,23 @@ fn drive<T: RunTask + ?Sized, P: IlProblem<f64>>(
     Ok((
         SeedRun {
             seed,
+            seed_index: None,
             algorithm: rec.algorithm.to_string(),
-            termination: rec.termination.to_string(),
+            termination: (&rec.termination).into(),
             iterations: rec.iterations,
             cost: rec.cost,
             theta: rec.theta.iter().copied().collect(),
             checkpoints: evaluations.checkpoints,
+            status: None,
+            hyper_parameters: None,
         },
         SeedTiming {
             seed,
+            seed_index: None,
             train_seconds: rec.train_seconds,
             evaluation_seconds: evaluations.evaluation_seconds,
             checkpoint_seconds: rec.seconds_at_checkpoints,
+            converge_seconds: None,
         },
     ))
 }

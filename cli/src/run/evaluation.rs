@@ -8,9 +8,9 @@
 //! Episode j of a seed's evaluation draws from an RNG seeded by (seed, j) only, so every
 //! checkpoint of a run meets the same episodes (common random numbers).
 
-use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::ObstacleConfig;
-use ilopt::evaluate::episodes::{obstacle_episodes, task_episodes};
+pub use ilopt::evaluate::Evaluation;
+use ilopt::evaluate::episodes::{cartpole_episodes, obstacle_episodes};
 use ilopt::expert::vo_policy::VoExpertPolicy;
 use ilopt::policy::SpeedLimitedGaussian;
 use ilopt::policy::{Greedy, PolicyExt};
@@ -19,26 +19,6 @@ use ilopt::task::TaskProblem;
 use ilopt::task::cartpole::CartPoleTask;
 use ilopt::task::obstacle::ObstacleTask;
 use ilopt::toy::ToyProblem;
-use serde::Serialize;
-
-/// What one evaluation gives.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct Evaluation {
-    /// CartPole: mean reward / 500; obstacle: success rate; toy: none.
-    pub score: Option<f64>,
-    /// Mean episode reward (CartPole, obstacle).
-    pub reward: Option<f64>,
-    /// Episodes that reached the goal (obstacle) or completed 500 steps (CartPole).
-    pub successes: Option<u32>,
-    /// Crashed episodes (CartPole: ended before 500 steps).
-    pub crashes: Option<u32>,
-    /// Timed-out episodes (obstacle).
-    pub timeouts: Option<u32>,
-    /// Mean per-decision supervised loss against the expert on the visited states.
-    pub loss: Option<f64>,
-    /// Toy: the exact objective F(θ).
-    pub objective: Option<f64>,
-}
 
 /// The RNG seed of evaluation episode `j` of `seed` (SplitMix64 of both, with a tag that keeps
 /// it apart from the run's own seed).
@@ -59,7 +39,7 @@ pub fn evaluate_toy(problem: &ToyProblem<f64>, theta: &[f64]) -> Result<Evaluati
 }
 
 /// CartPole episodes with the learner's deterministic action ([`Greedy`]); an episode that
-/// completes 500 steps is a success ([`task_episodes`]).
+/// completes 500 steps is a success ([`cartpole_episodes`]).
 ///
 /// # Errors
 /// A message if an episode, the expert or the policy fails.
@@ -73,7 +53,7 @@ where
     P: Greedy<f64, Action = usize, Label = usize>,
 {
     let policy = &problem.policy;
-    let s = task_episodes(
+    let s = cartpole_episodes(
         &problem.task,
         &mut |_, phi, label| {
             let (l, _) =
@@ -82,25 +62,8 @@ where
         },
         episodes,
         &|j| episode_seed(seed, j),
-        None,
-        &mut |_, steps, s| {
-            s.reward += steps as f64;
-            if steps >= MAX_EPISODE_STEPS {
-                s.successes += 1;
-            } else {
-                s.crashes += 1;
-            }
-        },
     )?;
-    Ok(Evaluation {
-        score: Some(s.reward / MAX_EPISODE_STEPS as f64),
-        reward: Some(s.reward),
-        successes: Some(s.successes),
-        crashes: Some(s.crashes),
-        timeouts: None,
-        loss: Some(s.loss),
-        objective: None,
-    })
+    Ok(Evaluation::cartpole(&s))
 }
 
 /// Obstacle episodes with the executed mean velocity ([`obstacle_episodes`]).
@@ -129,13 +92,5 @@ pub fn evaluate_obstacle(
         episodes,
         &|j| episode_seed(seed, j),
     )?;
-    Ok(Evaluation {
-        score: Some(f64::from(s.successes) / f64::from(episodes)),
-        reward: Some(s.reward),
-        successes: Some(s.successes),
-        crashes: Some(s.crashes),
-        timeouts: Some(s.timeouts),
-        loss: Some(s.loss),
-        objective: None,
-    })
+    Ok(Evaluation::obstacle(&s, episodes))
 }

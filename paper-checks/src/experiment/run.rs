@@ -2,7 +2,8 @@
 //! checkpoints ([`run_spec`]), and the reference policies' seeds.
 
 use super::{
-    Checkpoint, ReferencePolicy, SeedRun, SeedTiming, TaskKind, TaskLearner, status_of, sustained,
+    Checkpoint, Evaluated, ReferencePolicy, SeedRun, SeedTiming, TaskKind, TaskLearner, status_of,
+    sustained,
 };
 use crate::config::{AlgorithmEntry, TaskSection, Theta1};
 use crate::error::Error;
@@ -199,6 +200,7 @@ fn drive<P: IlProblem<f64>>(
         bench,
         spec,
         checkpoints: Vec::new(),
+        seconds: 0.0,
     };
     let rec = Runner::new(stop)
         .map_err(|e| Error::experiment(&what, e))?
@@ -218,7 +220,7 @@ fn drive<P: IlProblem<f64>>(
             RunFailure::Start(e) => Error::experiment(&what, e),
             RunFailure::Checkpoint(e) => e,
         })?;
-    let checkpoints = evaluations.checkpoints;
+    let (checkpoints, evaluation_seconds) = (evaluations.checkpoints, evaluations.seconds);
     let diverged = rec
         .termination
         .divergence()
@@ -228,18 +230,22 @@ fn drive<P: IlProblem<f64>>(
     let seconds = rec.seconds_at_checkpoints;
     Ok((
         SeedRun {
-            seed_index: spec.seed_index,
             seed: spec.seed,
-            termination: rec.termination.to_string(),
+            seed_index: Some(spec.seed_index),
+            algorithm: rec.algorithm.to_string(),
+            termination: (&rec.termination).into(),
+            iterations: rec.iterations,
+            cost: rec.cost,
             theta: rec.theta.iter().copied().collect(),
             checkpoints,
-            converged,
-            status,
-            hyper_parameters: spec.hyper_parameters.clone(),
+            status: Some(status),
+            hyper_parameters: Some(spec.hyper_parameters.clone()),
         },
         SeedTiming {
-            seed_index: spec.seed_index,
+            seed: spec.seed,
+            seed_index: Some(spec.seed_index),
             train_seconds: rec.train_seconds,
+            evaluation_seconds,
             converge_seconds: converged.map(|i| seconds[i]),
             checkpoint_seconds: seconds,
         },
@@ -253,6 +259,7 @@ struct Evaluations<'b, 's> {
     bench: &'b TaskLearner,
     spec: &'b RunSpec<'s>,
     checkpoints: Vec<Checkpoint>,
+    seconds: f64,
 }
 
 impl CheckpointObserver<f64> for Evaluations<'_, '_> {
@@ -262,6 +269,7 @@ impl CheckpointObserver<f64> for Evaluations<'_, '_> {
         m: &IterationMetrics<f64>,
         at_calls: &[u64],
     ) -> Result<Option<Termination>, Error> {
+        let started = std::time::Instant::now();
         let (spec, task) = (self.spec, self.spec.task);
         let theta = &m.theta;
         let ev = self
@@ -280,15 +288,21 @@ impl CheckpointObserver<f64> for Evaluations<'_, '_> {
             task.full_episode_cap,
             &spec.eval_key,
         )?;
-        let mut c = Checkpoint::from_eval(
-            &ev,
-            spec.kind,
-            task.eval_episodes,
-            m.iteration,
-            &m.cost,
-            grad,
-        );
-        c.resets_to_full_episode = full;
+        self.seconds += started.elapsed().as_secs_f64();
+        let train_loss = m.loss.filter(|l| l.is_finite());
+        let gradient_norm = m
+            .estimate
+            .as_ref()
+            .map(|d| d.norm())
+            .filter(|n| n.is_finite());
+        let c = Checkpoint {
+            loss_x: ev.loss_xy.map(|l| l.0),
+            loss_y: ev.loss_xy.map(|l| l.1),
+            grad_x: grad.map(|g| g.0),
+            grad_y: grad.map(|g| g.1),
+            resets_to_full_episode: full,
+            ..Checkpoint::new(0, m.iteration, &m.cost, train_loss, gradient_norm, &ev)
+        };
         self.checkpoints
             .extend(at_calls.iter().map(|&at_calls| Checkpoint {
                 at_calls,
@@ -296,7 +310,7 @@ impl CheckpointObserver<f64> for Evaluations<'_, '_> {
             }));
         // At the budget the run ends anyway, as `gradient-budget`.
         if spec.stop_at_convergence && m.cost.gradient_evaluations < task.budget {
-            let scores: Vec<f64> = self.checkpoints.iter().map(|c| c.score).collect();
+            let scores: Vec<f64> = self.checkpoints.iter().map(Evaluated::score).collect();
             if sustained(&scores, task.converge_score, task.sustain).is_some() {
                 return Ok(Some(Termination::Stopped(SUSTAINED_CONVERGENCE)));
             }
@@ -326,12 +340,9 @@ pub fn baseline_seed(
     seed_index: u32,
 ) -> Result<Checkpoint, Error> {
     let ev = bench.evaluate_baseline(baseline, task.eval_episodes, &eval_key(kind, seed_index))?;
-    Ok(Checkpoint::from_eval(
-        &ev,
-        kind,
-        task.eval_episodes,
-        0,
-        &Cost::default(),
-        None,
-    ))
+    Ok(Checkpoint {
+        loss_x: ev.loss_xy.map(|l| l.0),
+        loss_y: ev.loss_xy.map(|l| l.1),
+        ..Checkpoint::new(0, 0, &Cost::default(), None, None, &ev)
+    })
 }

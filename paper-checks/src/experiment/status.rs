@@ -1,6 +1,6 @@
 //! How a run ended ([`RunStatus`]) and sustained convergence ([`sustained`], [`status_of`]).
 
-use super::Checkpoint;
+use super::{Checkpoint, Evaluated};
 use serde::{Deserialize, Serialize};
 
 /// How a run ended (serialised with a `status` tag: `converged`, `not-converged`, `diverged`).
@@ -70,7 +70,7 @@ pub fn status_of(
             gradient_evaluations,
         };
     }
-    let scores: Vec<f64> = checkpoints.iter().map(|c| c.score).collect();
+    let scores: Vec<f64> = checkpoints.iter().map(|c| c.score()).collect();
     match sustained(&scores, threshold, sustain) {
         Some(i) => RunStatus::Converged {
             checkpoint: i,
@@ -85,24 +85,20 @@ mod tests {
     use super::*;
 
     fn cp(score: f64, calls: u64) -> Checkpoint {
-        Checkpoint {
-            at_calls: calls,
-            iteration: 0,
-            trajectories: 0,
-            gradient_evaluations: calls,
-            expert_queries: 0,
-            score,
-            successes: 0,
-            crashes: 0,
-            timeouts: 0,
-            reward: 0.0,
-            loss: 0.0,
-            loss_x: None,
-            loss_y: None,
-            grad_x: None,
-            grad_y: None,
-            resets_to_full_episode: None,
-        }
+        Checkpoint::new(
+            calls,
+            0,
+            &ilopt::problem::Cost {
+                gradient_evaluations: calls,
+                ..Default::default()
+            },
+            None,
+            None,
+            &ilopt::evaluate::Evaluation {
+                score: Some(score),
+                ..Default::default()
+            },
+        )
     }
 
     #[test]

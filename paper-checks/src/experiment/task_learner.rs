@@ -7,9 +7,8 @@ use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::env::cartpole::MAX_EPISODE_STEPS;
 use ilopt::env::obstacle::ObstacleConfig;
-use ilopt::evaluate::episodes::{
-    EpisodeStats, ObstacleAct, TaskAct, obstacle_episodes, task_episodes,
-};
+use ilopt::evaluate::Evaluation;
+use ilopt::evaluate::episodes::{ObstacleAct, TaskAct, cartpole_episodes, obstacle_episodes};
 use ilopt::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
 use ilopt::policy::{Greedy, LinearGaussian, PolicyExt, Softmax, SpeedLimitedGaussian};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
@@ -203,7 +202,7 @@ impl TaskLearner {
         theta: &[f64],
         episodes: u32,
         key: &str,
-    ) -> Result<EpisodeStats, Error> {
+    ) -> Result<Evaluation, Error> {
         let err = |x: &dyn std::fmt::Display| x.to_string();
         match self {
             TaskLearner::Obstacle { problem, .. } => self.evaluate_obstacle(
@@ -236,7 +235,7 @@ impl TaskLearner {
         b: ReferencePolicy,
         episodes: u32,
         key: &str,
-    ) -> Result<EpisodeStats, Error> {
+    ) -> Result<Evaluation, Error> {
         let err = |x: &dyn std::fmt::Display| x.to_string();
         match (self, b) {
             (TaskLearner::Obstacle { expert, .. }, ReferencePolicy::Expert) => self
@@ -278,7 +277,7 @@ impl TaskLearner {
         act: &mut ObstacleAct<'_>,
         episodes: u32,
         key: &str,
-    ) -> Result<EpisodeStats, Error> {
+    ) -> Result<Evaluation, Error> {
         let TaskLearner::Obstacle {
             env,
             expert,
@@ -295,37 +294,25 @@ impl TaskLearner {
             episodes,
             &|j| derive_seed(key, j),
         )
+        .map(|s| Evaluation::obstacle(&s, episodes))
         .map_err(|x| Error::experiment(format!("evaluation ({key})"), x))
     }
 
     /// CartPole episodes driven by `act(episode, φ(s), expert's action) = (action, loss)`
-    /// ([`task_episodes`]); the loss is the learner's per-decision supervised loss (the expert's
+    /// ([`cartpole_episodes`]); the loss is the learner's per-decision supervised loss (the expert's
     /// own is 0).
     fn evaluate_cartpole(
         &self,
         act: &mut CartPoleAct<'_>,
         episodes: u32,
         key: &str,
-    ) -> Result<EpisodeStats, Error> {
+    ) -> Result<Evaluation, Error> {
         let TaskLearner::Cartpole { problem, .. } = self else {
             return Err(Error::experiment(key, "not CartPole"));
         };
-        task_episodes(
-            &problem.task,
-            act,
-            episodes,
-            &|j| derive_seed(key, j),
-            None,
-            &mut |_, steps, ev| {
-                ev.reward += steps as f64;
-                if steps >= cartpole_max_steps() {
-                    ev.successes += 1;
-                } else {
-                    ev.crashes += 1;
-                }
-            },
-        )
-        .map_err(|x| Error::experiment(format!("evaluation ({key})"), x))
+        cartpole_episodes(&problem.task, act, episodes, &|j| derive_seed(key, j))
+            .map(|s| Evaluation::cartpole(&s))
+            .map_err(|x| Error::experiment(format!("evaluation ({key})"), x))
     }
 
     /// Norms of the x and y rows of the mean eq. 3.15 estimate over `n` learner roll-outs

@@ -6,6 +6,7 @@ use super::keys::tuning_key;
 use super::task_learners::TaskLearners;
 use crate::config::{AlgorithmEntry, Profile, TaskSection};
 use crate::error::Error;
+use crate::experiment::{AppendixRun, Evaluated};
 use crate::experiment::{RunSpec, TaskKind, run_key_of, run_spec};
 use crate::grid::GridPoint;
 use crate::naming::slug;
@@ -419,13 +420,13 @@ impl Row<'_> {
                 seed,
                 budget: b,
                 gradient_evaluations: run.checkpoints.last().map_or(0, |c| c.gradient_evaluations),
-                scores: run.checkpoints.iter().map(|c| c.score).collect(),
+                scores: run.checkpoints.iter().map(|c| c.score()).collect(),
                 calls: run
                     .checkpoints
                     .iter()
                     .map(|c| c.gradient_evaluations)
                     .collect(),
-                status: run.status,
+                status: run.status().clone(),
             })
         })?;
         Ok(got.map(|run| (run, Some(ukey))))

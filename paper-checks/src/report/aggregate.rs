@@ -1,6 +1,7 @@
 //! Per-configuration aggregates over seeds (95% intervals that respect each quantity's range,
 //! [`Interval`]) and their printed form.
 
+use crate::experiment::{AppendixRun, Evaluated};
 use crate::experiment::{Checkpoint, RunStatus, SeedRun, TaskKind};
 use crate::results::{ConfigResult, ConfigTiming};
 use crate::stats::{Interval, Range};
@@ -49,7 +50,7 @@ pub(crate) fn summarise(
     let xs: Vec<f64> = c
         .runs
         .iter()
-        .filter(|r| !r.status.is_diverged())
+        .filter(|r| !r.status().is_diverged())
         .filter_map(last)
         .map(f)
         .collect();
@@ -71,7 +72,7 @@ pub(crate) fn out_of(n: f64) -> Range {
 
 /// The gradient calls a run spent: when it diverged, or at its last checkpoint.
 fn spent(r: &SeedRun) -> Option<f64> {
-    match &r.status {
+    match r.status() {
         RunStatus::Diverged {
             gradient_evaluations,
             ..
@@ -86,7 +87,7 @@ pub(crate) fn episodes(c: &ConfigResult) -> f64 {
     c.runs
         .iter()
         .flat_map(|r| &r.checkpoints)
-        .map(|k| f64::from(k.successes + k.crashes + k.timeouts))
+        .map(|k| f64::from(k.successes() + k.crashes() + k.timeouts()))
         .fold(0.0, f64::max)
 }
 
@@ -106,7 +107,7 @@ pub fn convergence_row(c: &ConfigResult) -> ConvergenceRow {
         .runs
         .iter()
         .filter_map(|r| {
-            r.converged
+            r.converged()
                 .map(|i| r.checkpoints[i].gradient_evaluations as f64)
         })
         .collect();
@@ -120,11 +121,11 @@ pub fn convergence_row(c: &ConfigResult) -> ConvergenceRow {
             Range::NonNegative,
             &key(c, "total-calls"),
         ),
-        final_score: summarise(c, "score", FRACTION, |k| k.score),
-        final_crashes: summarise(c, "crashes", out_of(episodes), |k| f64::from(k.crashes)),
-        final_reward: summarise(c, "reward", reward_range(c.task), |k| k.reward),
-        final_loss: summarise(c, "loss", Range::NonNegative, |k| k.loss),
-        failed_runs: c.runs.iter().filter(|r| r.status.is_diverged()).count(),
+        final_score: summarise(c, "score", FRACTION, |k| k.score()),
+        final_crashes: summarise(c, "crashes", out_of(episodes), |k| f64::from(k.crashes())),
+        final_reward: summarise(c, "reward", reward_range(c.task), |k| k.reward()),
+        final_loss: summarise(c, "loss", Range::NonNegative, |k| k.loss()),
+        failed_runs: c.runs.iter().filter(|r| r.status().is_diverged()).count(),
     }
 }
 
@@ -190,9 +191,9 @@ mod tests {
 
     fn checkpoint(calls: u64, score: f64) -> Checkpoint {
         serde_json::from_value(serde_json::json!({
-            "at_calls": calls, "iteration": 0, "trajectories": 0,
+            "at_calls": calls, "iteration": 0, "trajectories": 0, "env_steps": 0,
             "gradient_evaluations": calls, "expert_queries": 0, "score": score,
-            "successes": 0, "crashes": 3, "timeouts": 0, "reward": 0.0, "loss": 0.5,
+            "successes": 0, "crashes": 3, "timeouts": 0, "reward": 0.0, "eval_loss": 0.5,
             "loss_x": null, "loss_y": null, "grad_x": null, "grad_y": null
         }))
         .expect("a checkpoint")
@@ -200,14 +201,16 @@ mod tests {
 
     fn run(i: u32, checkpoints: Vec<Checkpoint>, status: RunStatus) -> SeedRun {
         SeedRun {
-            seed_index: i,
             seed: u64::from(i),
-            termination: String::new(),
+            seed_index: Some(i),
+            algorithm: "sgd".into(),
+            termination: ilopt::algo::records::RecordedTermination::GradientBudget,
+            iterations: 0,
+            cost: ilopt::problem::Cost::default(),
             theta: vec![],
             checkpoints,
-            converged: None,
-            status,
-            hyper_parameters: String::new(),
+            status: Some(status),
+            hyper_parameters: None,
         }
     }
 
@@ -268,7 +271,10 @@ mod tests {
         // Converged runs with very different costs: the t interval of their calls runs below 0.
         for (r, calls) in runs.iter_mut().zip([500u64, 600, 90_000]) {
             r.checkpoints.push(checkpoint(calls, 1.0));
-            r.converged = Some(2);
+            r.status = Some(RunStatus::Converged {
+                checkpoint: 2,
+                gradient_evaluations: calls,
+            });
         }
         let c = crate::results::storm_config_for_tests(runs);
         let row = convergence_row(&c);

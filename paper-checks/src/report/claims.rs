@@ -7,6 +7,7 @@
 
 use super::aggregate::num;
 use crate::config::Profile;
+use crate::experiment::{AppendixRun, Evaluated};
 use crate::experiment::{Checkpoint, RunStatus, SeedRun, TaskKind};
 use crate::gradient_error::SlopeCi;
 use crate::results::{ConfigResult, ConfigTiming, ConfigWithTiming, Results};
@@ -144,7 +145,11 @@ fn qualify_with(
     let censored: Vec<String> = rows
         .iter()
         .filter_map(|row| {
-            let n = row.runs.iter().filter(|x| !x.status.is_converged()).count();
+            let n = row
+                .runs
+                .iter()
+                .filter(|x| !x.status().is_converged())
+                .count();
             (n > 0).then(|| format!("{} {n}/{}", row.label, row.runs.len()))
         })
         .collect();
@@ -173,7 +178,7 @@ const LEVEL: f64 = 0.95;
 
 /// A run's outcome for the verdict rules.
 pub(crate) fn outcome(r: &SeedRun) -> Outcome {
-    match &r.status {
+    match r.status() {
         RunStatus::Converged {
             gradient_evaluations,
             ..
@@ -216,7 +221,7 @@ fn last_value(
         .runs
         .iter()
         .filter_map(|r| {
-            if r.status.is_diverged() {
+            if r.status().is_diverged() {
                 diverged
             } else {
                 r.checkpoints.last().and_then(&f)
@@ -410,7 +415,7 @@ fn gradient_error_claim(r: &Results) -> Claim {
 /// O2–O5: the obstacle task's final success rates (Fig. 4.3).
 fn obstacle_success_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
     let mut out = Vec::new();
-    let success = |c: &ConfigResult| last_value(c, |k| Some(k.score), Some(0.0));
+    let success = |c: &ConfigResult| last_value(c, |k| Some(k.score()), Some(0.0));
     // A thesis row's final success rate lies in [lo, hi].
     let level = |id: &str, label: &str, text: &str, lo: f64, hi: f64| {
         let rule = format!(
@@ -434,7 +439,7 @@ fn obstacle_success_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
         let change: Vec<f64> = bc
             .runs
             .iter()
-            .filter_map(|r| Some(r.checkpoints.last()?.score - r.checkpoints.get(1)?.score))
+            .filter_map(|r| Some(r.checkpoints.last()?.score() - r.checkpoints.get(1)?.score()))
             .collect();
         let d = Summary::of(&change);
         out.push(
@@ -525,7 +530,7 @@ fn obstacle_extreme_claims(o: &[ConfigWithTiming]) -> Vec<Claim> {
         }
         (evidence(set.iter().map(|c| (*c, ci_text(&f(c))))), v)
     };
-    let crashes = |c: &ConfigResult| last_value(c, |k| Some(f64::from(k.crashes)), None);
+    let crashes = |c: &ConfigResult| last_value(c, |k| Some(f64::from(k.crashes())), None);
     let (ev, v) = extreme_claim("BC", &printed, &crashes, true);
     out.push(
         claim(
@@ -567,8 +572,8 @@ fn loss_at(c: &ConfigResult, k: usize) -> Summary {
     let xs: Vec<f64> = c
         .runs
         .iter()
-        .filter(|r| !r.status.is_diverged())
-        .filter_map(|r| r.checkpoints.get(k).map(|x| x.loss))
+        .filter(|r| !r.status().is_diverged())
+        .filter_map(|r| r.checkpoints.get(k).map(|x| x.loss()))
         .collect();
     Summary::of(&xs)
 }
@@ -748,7 +753,7 @@ fn cartpole_claims(c: &[ConfigWithTiming], reset_cap: u32) -> Vec<Claim> {
         .map(|r| &r.0)
         .filter(|x| x.entry.role == crate::config::Role::Thesis)
         .collect();
-    let reward = |x: &ConfigResult| last_value(x, |k| Some(k.reward), Some(0.0));
+    let reward = |x: &ConfigResult| last_value(x, |k| Some(k.reward()), Some(0.0));
     out.push(claim(
         "C3",
         "§4.2.2, Fig. 4.10",
@@ -771,7 +776,7 @@ fn cartpole_claims(c: &[ConfigWithTiming], reset_cap: u32) -> Vec<Claim> {
     let resets = |x: &ConfigResult| -> Vec<f64> {
         x.runs
             .iter()
-            .filter(|r| !r.status.is_diverged())
+            .filter(|r| !r.status().is_diverged())
             .filter_map(|r| r.checkpoints.last()?.resets_to_full_episode.map(f64::from))
             .collect()
     };
@@ -910,7 +915,7 @@ fn time_to_converge(c: &ConfigResult, t: &ConfigTiming) -> Vec<f64> {
                 .iter()
                 .find(|x| x.seed_index == r.seed_index)
                 .and_then(|x| x.converge_seconds)
-                .filter(|_| r.status.is_converged())
+                .filter(|_| r.status().is_converged())
                 .unwrap_or(f64::INFINITY)
         })
         .collect()
@@ -922,18 +927,22 @@ mod tests {
 
     fn timed(statuses: &[RunStatus]) -> (ConfigResult, ConfigTiming) {
         let runs = statuses.iter().enumerate().map(|(i, status)| SeedRun {
-            seed_index: i as u32,
             seed: i as u64,
-            termination: String::new(),
+            seed_index: Some(i as u32),
+            algorithm: "storm".into(),
+            termination: ilopt::algo::records::RecordedTermination::GradientBudget,
+            iterations: 0,
+            cost: ilopt::problem::Cost::default(),
             theta: vec![],
             checkpoints: vec![],
-            converged: None,
-            status: status.clone(),
-            hyper_parameters: Default::default(),
+            status: Some(status.clone()),
+            hyper_parameters: None,
         });
         let timing = (0..statuses.len()).map(|i| crate::experiment::SeedTiming {
-            seed_index: i as u32,
+            seed: i as u64,
+            seed_index: Some(i as u32),
             train_seconds: 1.0 + i as f64,
+            evaluation_seconds: 0.0,
             checkpoint_seconds: vec![],
             converge_seconds: None,
         });

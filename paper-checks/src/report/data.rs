@@ -5,6 +5,7 @@
 use super::aggregate::ConvergenceRow;
 use super::claims::Claim;
 use crate::error::Error;
+use crate::experiment::{AppendixRun, Evaluated};
 use crate::results::Results;
 use crate::storage::{to_json, write_atomic};
 use std::fmt::Write as _;
@@ -28,27 +29,27 @@ pub fn write_per_seed(r: &Results, out: &Path) -> Result<(), Error> {
                     "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                     c.task.name(),
                     c.label,
-                    run.seed_index,
+                    run.seed_index(),
                     run.seed,
                     k.iteration,
                     k.trajectories,
                     k.gradient_evaluations,
                     k.expert_queries,
-                    k.score,
-                    k.successes,
-                    k.crashes,
-                    k.timeouts,
-                    k.reward,
-                    k.loss,
+                    k.score(),
+                    k.successes(),
+                    k.crashes(),
+                    k.timeouts(),
+                    k.reward(),
+                    k.loss(),
                     opt(k.loss_x),
                     opt(k.loss_y),
                     opt(k.grad_x),
                     opt(k.grad_y),
-                    run.converged == Some(i),
+                    run.converged() == Some(i),
                     k.at_calls,
                     k.resets_to_full_episode
                         .map_or(String::new(), |x| x.to_string()),
-                    match &run.status {
+                    match run.status() {
                         crate::experiment::RunStatus::Converged { .. } => "converged",
                         crate::experiment::RunStatus::NotConverged => "not-converged",
                         crate::experiment::RunStatus::Diverged { .. } => "diverged",
@@ -69,7 +70,7 @@ pub fn write_per_seed(r: &Results, out: &Path) -> Result<(), Error> {
                     "{},{},{},{},{}",
                     c.task.name(),
                     c.label,
-                    s.seed_index,
+                    s.seed_index.unwrap_or(0),
                     s.train_seconds,
                     opt(s.converge_seconds)
                 );

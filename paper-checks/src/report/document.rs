@@ -12,6 +12,7 @@ use super::thesis::{ERRATA, THESIS_T41, THESIS_T42, THESIS_T43, THESIS_T44};
 use super::{protocol_section, speedup, theory};
 use crate::config::Profile;
 use crate::error::Error;
+use crate::experiment::Evaluated;
 use crate::experiment::{Checkpoint, SeedRun, TaskKind};
 use crate::results::{ConfigResult, ConfigWithTiming, Results};
 use crate::stats::{Interval, Range};
@@ -31,17 +32,17 @@ fn baseline_rows(r: &Results, task: TaskKind) -> Vec<Vec<String>> {
             let episodes = b
                 .runs
                 .iter()
-                .map(|k| f64::from(k.successes + k.crashes + k.timeouts))
+                .map(|k| f64::from(k.successes() + k.crashes() + k.timeouts()))
                 .fold(0.0, f64::max);
             vec![
                 format!("*{}* (reference, no training)", b.label),
                 if task == TaskKind::Obstacle {
-                    ci(&percent(&s("score", FRACTION, &|c| c.score)))
+                    ci(&percent(&s("score", FRACTION, &|c| c.score())))
                 } else {
-                    ci(&s("reward", reward_range(task), &|c| c.reward))
+                    ci(&s("reward", reward_range(task), &|c| c.reward()))
                 },
-                ci(&s("crashes", out_of(episodes), &|c| f64::from(c.crashes))),
-                ci(&s("loss", Range::NonNegative, &|c| c.loss)),
+                ci(&s("crashes", out_of(episodes), &|c| f64::from(c.crashes()))),
+                ci(&s("loss", Range::NonNegative, &|c| c.loss())),
                 "—".into(),
             ]
         })
@@ -180,10 +181,10 @@ fn episode_length_note(r: &Results) -> String {
             format!(
                 "{}: loss {} → {}, reward {} → {}",
                 c.label,
-                num(mean_at(c, |s| s.checkpoints.first(), |k| k.loss)),
-                num(mean_at(c, last, |k| k.loss)),
-                num(mean_at(c, |s| s.checkpoints.first(), |k| k.reward)),
-                num(mean_at(c, last, |k| k.reward)),
+                num(mean_at(c, |s| s.checkpoints.first(), |k| k.loss())),
+                num(mean_at(c, last, |k| k.loss())),
+                num(mean_at(c, |s| s.checkpoints.first(), |k| k.reward())),
+                num(mean_at(c, last, |k| k.reward())),
             )
         })
         .collect();

@@ -3,6 +3,7 @@
 
 use crate::config::Profile;
 use crate::error::Error;
+use crate::experiment::{AppendixRun, Evaluated};
 use crate::experiment::{Checkpoint, TaskKind};
 use crate::results::{ConfigResult, Results};
 use crate::stats::{Interval, Range};
@@ -40,7 +41,7 @@ fn band(
         .unwrap_or_default();
     let mut s = Series::new(c.label.clone());
     s.runs = c.runs.len();
-    for r in c.runs.iter().filter(|r| r.status.is_diverged()) {
+    for r in c.runs.iter().filter(|r| r.status().is_diverged()) {
         s.diverged += 1;
         if let Some(k) = r.checkpoints.last()
             && let Some(y) = yf(k).filter(|y| y.is_finite())
@@ -186,7 +187,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             "Fig. 4.3: obstacle task, success rate of the deterministic policy (mean over seeds, 95% interval band; dashed: reference policies; one panel per algorithm)",
             "success rate (fraction of episodes)",
             false,
-            &|c| Some(c.score),
+            &|c| Some(c.score()),
             false,
             by_trajectories,
             (0.0, 1.0),
@@ -201,7 +202,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             &format!("Fig. 4.4: obstacle task, crashes in {n_obs} evaluation episodes (mean over seeds, 95% interval band; dashed: reference policies; one panel per algorithm)"),
             &format!("crashes (episodes out of {n_obs})"),
             false,
-            &|c| Some(f64::from(c.crashes)),
+            &|c| Some(f64::from(c.crashes())),
             false,
             by_trajectories,
             (0.0, n_obs),
@@ -302,7 +303,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             "Fig. 4.8: CartPole, Brier loss per decision against the expert's action (mean over seeds, 95% interval band; dashed: reference policy; one panel per algorithm)",
             "Brier loss per decision",
             false,
-            &|c| Some(c.loss),
+            &|c| Some(c.loss()),
             (0.0, f64::INFINITY),
         )
         .in_panels(3),
@@ -330,7 +331,7 @@ pub fn figures(profile: &Profile, r: &Results) -> Vec<NamedFigure> {
             "Fig. 4.10: CartPole, mean episode reward of the deterministic policy (mean over seeds, 95% interval band; dashed: reference policy; one panel per algorithm)",
             "episode reward (steps, max. 500)",
             false,
-            &|c| Some(c.reward),
+            &|c| Some(c.reward()),
             (0.0, 500.0),
         )
         .in_panels(3),

@@ -5,6 +5,7 @@
 use super::aggregate::num;
 use super::blocks::{Block, Table};
 use crate::config::{Profile, Role, TaskSection};
+use crate::experiment::AppendixRun;
 use crate::experiment::{RunStatus, TaskKind};
 use crate::protocol::{Score, TuningResult};
 use crate::results::Results;
@@ -189,7 +190,7 @@ fn selected_table(profile: &Profile, r: &Results) -> Table {
             .iter()
             .chain(&r.cartpole)
             .filter(|(c, _)| c.task == t.task && c.label == t.label)
-            .flat_map(|(c, _)| c.runs.iter().map(|s| &s.status))
+            .flat_map(|(c, _)| c.runs.iter().map(|s| s.status()))
             .collect();
         let how = match entry.and_then(|e| e.hyper_parameters_of.clone()) {
             Some(of) => format!("as selected for {of}"),
