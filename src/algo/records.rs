@@ -185,7 +185,7 @@ impl From<&Termination> for RecordedTermination {
 }
 
 impl std::fmt::Display for RecordedTermination {
-    /// [`Termination`]'s text.
+    /// The text of every file that records a run (also [`Termination`]'s `Display`).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             RecordedTermination::MaxIterations => write!(f, "max-iterations"),

@@ -3,6 +3,7 @@
 //! results (`gradient-budget`, `finished`, `diverged: non-finite θ`, …).
 
 use super::AlgoError;
+use super::records::RecordedTermination;
 
 /// Why a run ended.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,16 +28,9 @@ pub enum Termination {
 }
 
 impl std::fmt::Display for Termination {
+    /// The text the records store ([`RecordedTermination`]'s, which reads it back).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Termination::MaxIterations => write!(f, "max-iterations"),
-            Termination::GradientBudget => write!(f, "gradient-budget"),
-            Termination::TargetLoss => write!(f, "target-loss"),
-            Termination::TimeOut => write!(f, "time-out"),
-            Termination::Finished => write!(f, "finished"),
-            Termination::Diverged(d) => write!(f, "diverged: {d}"),
-            Termination::Stopped(reason) => write!(f, "{reason}"),
-        }
+        RecordedTermination::from(self).fmt(f)
     }
 }
 
