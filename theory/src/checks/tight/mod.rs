@@ -66,7 +66,7 @@ pub struct Sizes {
 
 impl Sizes {
     /// The quick profile: 400 random candidates and 400 pattern-search evaluations per algorithm (seed 1), at
-    /// most 1,296 paths (6⁴) per candidate.
+    /// most 1,296 paths (6⁴) per candidate; the second toy's family: 400 and 400, at most 64 paths.
     pub fn quick() -> Self {
         let b = Budget {
             random: 400,
@@ -84,7 +84,8 @@ impl Sizes {
         }
     }
 
-    /// The full profile: 1,000 random candidates and 500 pattern-search evaluations per algorithm (seed 1).
+    /// The full profile: 1,000 random candidates and 500 pattern-search evaluations per algorithm (seed 1);
+    /// the second toy's family as in the quick profile (its exact X̄ limits the paths, not the budget).
     pub fn full() -> Self {
         let b = Budget {
             random: 1000,
