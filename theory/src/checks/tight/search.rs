@@ -1,11 +1,12 @@
 //! The search for tight instances: a seeded random search over the M family with P2' (the
 //! MDP's μ_A, p₀, p₁, T, the softmax's c, the start θ₁, the horizon K and the step), followed by
-//! a pattern search from the best points, maximising X̄/B.
+//! a pattern search from the best points, maximising X̄/B. [`Algorithm::SgdPerState`] searches the
+//! second toy's family instead: the same MDPs with one parameter per state, θ₁ ∈ ℚ².
 //!
 //! Each candidate is evaluated in `f64` (STORM's in intervals, as its row runs it, so that a run
 //! whose enclosure blows up is passed over): X̄ = E X over every path of the run ([`super::paths`]),
 //! and B from constants **estimated** on the hull of the iterates (the largest value on a grid of
-//! [`GRID`] points, pairs of points for L̃), with B_F = F(θ₁) (F ≥ 0). The estimates only rank
+//! [`GRID`] points, [`GRID_2D`]² in 2-D, pairs of points for L̃), with B_F = F(θ₁) (F ≥ 0). The estimates only rank
 //! candidates: the rows certify the constants of the instance they report
 //! ([`crate::certify::box_constants`]) and recompute X̄ exactly, so a candidate whose certified
 //! constants break its step condition is passed over for the next one.
@@ -31,6 +32,11 @@ pub const GRID: usize = 33;
 /// Largest spacing of the grid on which L_F and σ² are estimated (finer on wide hulls, so that
 /// a narrow peak of |F″| is not stepped over).
 pub const SPACING: f64 = 1.0 / 64.0;
+/// Fewest grid points per coordinate of a 2-D hull (θ₁ ∈ ℚ²).
+pub const GRID_2D: usize = 9;
+/// Largest spacing of a 2-D hull's grid: coarser than [`SPACING`], since the grid has the square
+/// of its points; the certified constants are exact suprema on the hull, whatever the grid missed.
+pub const SPACING_2D: f64 = 1.0 / 4.0;
 /// Largest spacing of the grid of pairs on which L̃ is estimated.
 pub const PAIR_SPACING: f64 = 1.0 / 8.0;
 /// Widest hull a candidate may have: tight instances move little, and a wide hull would need a
@@ -53,6 +59,17 @@ pub enum Algorithm {
     /// SGD with constant η on the baselined estimator g_b = g − bψ (one constant b =
     /// [`baseline`] for every decision, docs/math.md §9), eq. 3.27 with σ²_b: row 1.b's estimator.
     SgdBaselined,
+    /// SGD with constant η, eq. 3.27, on the second toy's family: the M family with one parameter
+    /// per state (θ₁ ∈ ℚ², [`Instance`]), row 1b's setting. Only instances on which both
+    /// parameters move are admitted (otherwise the instance is a one-parameter one of row 1.tight).
+    SgdPerState,
+}
+
+impl Algorithm {
+    /// Whether the algorithm is SGD with constant η (eq. 3.27), whatever its estimator.
+    pub fn is_sgd(self) -> bool {
+        self != Algorithm::Storm
+    }
 }
 
 /// The constant baseline of [`Algorithm::SgdBaselined`], fixed before the search: b = 1/8, the
@@ -133,27 +150,65 @@ fn grid(h: [f64; 2], n: usize, spacing: f64) -> Vec<f64> {
         .collect()
 }
 
-/// max |F″| on the grid (X2 in second-order duals).
-fn l_f_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+/// The grid points of a hull: [`grid`] with [`GRID`] and [`SPACING`] in 1-D, the product of
+/// [`grid`]s with [`GRID_2D`] and [`SPACING_2D`] in 2-D.
+fn points(hull: &[[f64; 2]]) -> Vec<Vec<f64>> {
+    match hull {
+        [h] => grid(*h, GRID, SPACING)
+            .into_iter()
+            .map(|x| vec![x])
+            .collect(),
+        _ => hull.iter().fold(vec![vec![]], |acc, h| {
+            let axis = grid(*h, GRID_2D, SPACING_2D);
+            acc.iter()
+                .flat_map(|p| {
+                    axis.iter().map(move |x| {
+                        let mut q = p.clone();
+                        q.push(*x);
+                        q
+                    })
+                })
+                .collect()
+        }),
+    }
+}
+
+/// max ‖∇²F‖ on the grid (X2 in second-order duals): |F″| in 1-D, ‖mag ∇²F‖_F in 2-D (the norm
+/// [`crate::certify::box_constants::l_f`] bounds).
+fn l_f_estimate(mdp: &ToyMdp, pts: &[Vec<f64>]) -> Result<f64, String> {
     let p = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
     let mut m = 0.0f64;
-    for &x in pts {
-        let v = Dual::variable(Dual::variable(x, 0, 1), 0, 1);
-        let obj = forward(&p, &[v]).map_err(|e| e.to_string())?.objective;
-        m = m.max(obj.gradient_padded(1)[0].gradient_padded(1)[0].abs());
+    for x in pts {
+        let d = x.len();
+        let v: Vec<Dual<Dual<f64>>> = x
+            .iter()
+            .enumerate()
+            .map(|(i, xi)| Dual::variable(Dual::variable(*xi, i, d), i, d))
+            .collect();
+        let obj = forward(&p, &v).map_err(|e| e.to_string())?.objective;
+        let h: Vec<Vec<f64>> = obj
+            .gradient_padded(d)
+            .iter()
+            .map(|gi| gi.gradient_padded(d))
+            .collect();
+        m = m.max(if d == 1 {
+            h[0][0].abs()
+        } else {
+            h.iter().flatten().map(|x| x * x).sum::<f64>().sqrt()
+        });
     }
     Ok(m)
 }
 
 /// max Var g (or, with `baseline` = Some(b), Var g_b) on the grid (X1).
-fn variance_estimate(mdp: &ToyMdp, pts: &[f64], baseline: Option<f64>) -> Result<f64, String> {
+fn variance_estimate(mdp: &ToyMdp, pts: &[Vec<f64>], baseline: Option<f64>) -> Result<f64, String> {
     let p = ToyProblem::<f64>::new(mdp);
     let mut m = 0.0f64;
-    for &x in pts {
+    for x in pts {
         let v = match baseline {
-            None => moments(&p, &[x]).map_err(|e| e.to_string())?.variance,
+            None => moments(&p, x).map_err(|e| e.to_string())?.variance,
             Some(b) => {
-                let bm = baselined_moments(&p, &[x], &[b]).map_err(|e| e.to_string())?;
+                let bm = baselined_moments(&p, x, &[b]).map_err(|e| e.to_string())?;
                 bm.second_moment - norm_sq(&bm.expected_estimate)
             }
         };
@@ -200,11 +255,11 @@ pub fn evaluate(
         return None;
     }
     let mdp = inst.mdp().ok()?;
-    let theta1 = [Scalar::to_f64(&inst.theta1)];
+    let theta1: Vec<f64> = inst.theta1.iter().map(Scalar::to_f64).collect();
     let inputs = TableInputs::thesis();
     let b = (algorithm == Algorithm::SgdBaselined).then(|| Scalar::to_f64(&baseline()));
     let run = match algorithm {
-        Algorithm::Sgd | Algorithm::SgdBaselined => sgd_mean(
+        Algorithm::Sgd | Algorithm::SgdBaselined | Algorithm::SgdPerState => sgd_mean(
             &mdp,
             &theta1,
             &c.step,
@@ -238,11 +293,16 @@ pub fn evaluate(
             }
         }
     };
-    let width = run.hull[0][1] - run.hull[0][0];
-    if width.is_nan() || width > MAX_WIDTH {
-        return None;
+    for h in &run.hull {
+        let width = h[1] - h[0];
+        if width.is_nan() || width > MAX_WIDTH {
+            return None;
+        }
+        if algorithm == Algorithm::SgdPerState && width <= 0.0 {
+            return None;
+        }
     }
-    let pts = grid(run.hull[0], GRID, SPACING);
+    let pts = points(&run.hull);
     let l_f = l_f_estimate(&mdp, &pts).ok()?;
     let sigma2 = variance_estimate(&mdp, &pts, b).ok()?;
     let b_f = forward(&ToyProblem::<f64>::new(&mdp), &theta1)
@@ -250,7 +310,7 @@ pub fn evaluate(
         .objective;
     // B, and B with σ² = 0 (the step condition checked first).
     let (bound, noiseless) = match algorithm {
-        Algorithm::Sgd | Algorithm::SgdBaselined => {
+        Algorithm::Sgd | Algorithm::SgdBaselined | Algorithm::SgdPerState => {
             if c.step * l_f * MARGIN > 1.0 {
                 return None;
             }
@@ -286,7 +346,19 @@ pub fn evaluate(
 const PROBS: [(i64, i64); 5] = [(0, 1), (1, 4), (1, 2), (3, 4), (1, 1)];
 const CS: [(i64, i64); 7] = [(1, 100), (1, 50), (1, 20), (1, 10), (1, 5), (1, 2), (1, 1)];
 const SGD_KS: [u64; 4] = [1, 2, 3, 4];
+/// K ≤ 3 on the second toy's family: the exact iterates in ℚ² grow in size with every step, and
+/// the rows' exact X̄ over every path at K = 4 costs seconds per candidate.
+const PER_STATE_KS: [u64; 3] = [1, 2, 3];
 const STORM_KS: [u64; 8] = [1, 2, 4, 8, 16, 24, 40, 64];
+
+/// The horizons K a search draws from and moves between.
+fn ks(algorithm: Algorithm) -> &'static [u64] {
+    match algorithm {
+        Algorithm::Storm => &STORM_KS,
+        Algorithm::SgdPerState => &PER_STATE_KS,
+        Algorithm::Sgd | Algorithm::SgdBaselined => &SGD_KS,
+    }
+}
 
 fn ratio(rng: &mut StdRng, set: &[(i64, i64)]) -> BigRational {
     let (n, d) = set[rng.random_range(0..set.len())];
@@ -299,31 +371,41 @@ fn dyadic(x: f64) -> f64 {
 }
 
 /// A random candidate. The step is drawn relative to max |F″| on [θ₁ − 1, θ₁ + 1] (estimated on
-/// the grid), so that most draws satisfy their step condition: η = s/L̂ with s ∈ [1/5, 1] for SGD,
-/// the schedule's L = sL̂ with s ∈ [1, 5/2] for STORM.
+/// the grid, on the square [θ₁ − 1, θ₁ + 1]² in 2-D), so that most draws satisfy their step
+/// condition: η = s/L̂ with s ∈ [1/5, 1] for SGD, the schedule's L = sL̂ with s ∈ [1, 5/2] for
+/// STORM. [`Algorithm::SgdPerState`] draws T up to 4 (the second toy's horizon), θ₁ ∈ ℚ² and
+/// K ≤ 3.
 fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate> {
-    let k = match algorithm {
-        Algorithm::Sgd | Algorithm::SgdBaselined => SGD_KS[rng.random_range(0..SGD_KS.len())],
-        Algorithm::Storm => STORM_KS[rng.random_range(0..STORM_KS.len())],
+    let ks = ks(algorithm);
+    let k = ks[rng.random_range(0..ks.len())];
+    let (horizons, dims) = match algorithm {
+        Algorithm::SgdPerState => (2..=4, 2),
+        _ => (2..=3, 1),
     };
-    let instance = Instance {
+    let mut instance = Instance {
         mu_a: ratio(rng, &PROBS),
         p0: ratio(rng, &PROBS),
         p1: ratio(rng, &PROBS),
-        horizon: rng.random_range(2..=3),
+        horizon: rng.random_range(horizons),
         c: ratio(rng, &CS),
-        theta1: exact((rng.random_range(-64..=64) as f64) / 16.0),
+        theta1: vec![],
         k,
     };
-    let t = Scalar::to_f64(&instance.theta1);
-    let l = l_f_estimate(
-        &instance.mdp().ok()?,
-        &grid([t - 1.0, t + 1.0], GRID, SPACING),
-    )
-    .ok()?;
+    instance.theta1 = (0..dims)
+        .map(|_| exact((rng.random_range(-64..=64) as f64) / 16.0))
+        .collect();
+    let square: Vec<[f64; 2]> = instance
+        .theta1
+        .iter()
+        .map(|t| {
+            let t = Scalar::to_f64(t);
+            [t - 1.0, t + 1.0]
+        })
+        .collect();
+    let l = l_f_estimate(&instance.mdp().ok()?, &points(&square)).ok()?;
     let step = match algorithm {
-        Algorithm::Sgd | Algorithm::SgdBaselined => dyadic(rng.random_range(0.2..1.0) / l),
         Algorithm::Storm => dyadic(rng.random_range(1.0..2.5) * l),
+        _ => dyadic(rng.random_range(0.2..1.0) / l),
     };
     Some(Candidate { instance, step })
 }
@@ -339,26 +421,25 @@ fn position(set: &[(i64, i64)], x: &BigRational) -> usize {
         .unwrap_or(0)
 }
 
-/// The moves of the pattern search from `c` at scale `h`: θ₁ ± h, the step × (1 ± h/4), and the
-/// adjacent K and c of their lists.
+/// The moves of the pattern search from `c` at scale `h`: each coordinate of θ₁ ± h, the step ×
+/// (1 ± h/4), and the adjacent K and c of their lists.
 fn moves(algorithm: Algorithm, c: &Candidate, h: f64) -> Vec<Candidate> {
     let mut out = vec![];
-    let t = Scalar::to_f64(&c.instance.theta1);
-    for dt in [-h, h] {
-        let mut n = c.clone();
-        let x = t + dt;
-        n.instance.theta1 = exact(dyadic(x.abs()) * x.signum());
-        out.push(n);
+    for (i, t) in c.instance.theta1.iter().enumerate() {
+        let t = Scalar::to_f64(t);
+        for dt in [-h, h] {
+            let mut n = c.clone();
+            let x = t + dt;
+            n.instance.theta1[i] = exact(dyadic(x.abs()) * x.signum());
+            out.push(n);
+        }
     }
     for f in [1.0 - h / 4.0, 1.0 + h / 4.0] {
         let mut n = c.clone();
         n.step = dyadic(c.step * f);
         out.push(n);
     }
-    let ks: &[u64] = match algorithm {
-        Algorithm::Sgd | Algorithm::SgdBaselined => &SGD_KS,
-        Algorithm::Storm => &STORM_KS,
-    };
+    let ks = ks(algorithm);
     if let Some(i) = ks.iter().position(|k| *k == c.instance.k) {
         for j in [i.wrapping_sub(1), i + 1] {
             if let Some(k) = ks.get(j) {
@@ -438,6 +519,7 @@ mod tests {
             (Algorithm::Storm, Noise::Any),
             (Algorithm::Sgd, Noise::Required),
             (Algorithm::Storm, Noise::Required),
+            (Algorithm::SgdPerState, Noise::Any),
         ] {
             let b = super::super::Sizes::quick().budget(algorithm);
             let found = search(algorithm, noise, b);
@@ -454,7 +536,7 @@ mod tests {
                     e.hull
                 );
             }
-            if noise == Noise::Any {
+            if noise == Noise::Any && algorithm != Algorithm::SgdPerState {
                 assert!(found[0].ratio > 0.5, "{algorithm:?}: {}", found[0].ratio);
             }
         }

@@ -1,7 +1,9 @@
 //! Rows 1.tight and 1.tight.ctl: the SGD bound (eq. 3.27) at the instance of largest X̄/B found
 //! by [`super::search`], with E X exact in ℚ over every path ([`super::paths::sgd_mean`]); rows
 //! 1.b.tight.noisy and its control the same for the baselined estimator g_b of row 1.b
-//! ([`Algorithm::SgdBaselined`]), with σ²_b certified on the hull.
+//! ([`Algorithm::SgdBaselined`]), with σ²_b certified on the hull; row 1b.tight the same on the
+//! second toy's family, one parameter per state ([`Algorithm::SgdPerState`]), with L_F ≥
+//! sup ‖mag ∇²F‖_F and σ² certified on the 2-D hull.
 
 use super::Sizes;
 use super::instance::exact;
@@ -16,12 +18,24 @@ use ilopt::scalar::{BigRational, Scalar};
 
 const RESULT: &str = "SGD, eq. 3.27 (tight instance)";
 const RESULT_BASELINED: &str = "SGD, eq. 3.27, with a baseline (tight instance, beyond the thesis)";
+const RESULT_PER_STATE: &str = "SGD, eq. 3.27 (second toy's family, tight instance)";
 
-/// The row id's stem and the result of `algorithm`'s rows: "1" (plain) or "1.b" (baselined).
+/// The row id's stem and the result of `algorithm`'s rows: "1" (plain), "1.b" (baselined) or
+/// "1b" (one parameter per state, as row 1b).
 fn stem(algorithm: Algorithm) -> (&'static str, &'static str) {
     match algorithm {
         Algorithm::SgdBaselined => ("1.b", RESULT_BASELINED),
+        Algorithm::SgdPerState => ("1b", RESULT_PER_STATE),
         Algorithm::Sgd | Algorithm::Storm => ("1", RESULT),
+    }
+}
+
+/// The role of `algorithm`'s main row: the baselined estimator is beyond the thesis.
+fn role(algorithm: Algorithm) -> Role {
+    if algorithm == Algorithm::SgdBaselined {
+        Role::Corrected
+    } else {
+        Role::Thesis
     }
 }
 
@@ -30,6 +44,8 @@ fn stem(algorithm: Algorithm) -> (&'static str, &'static str) {
 pub struct Certified {
     /// The search's estimate for the candidate (instance, step, estimated ratio).
     pub estimate: Estimate,
+    /// The estimator and family the candidate was searched and certified for.
+    pub algorithm: Algorithm,
     /// X̄ = E[(1/K) Σ_k ‖∇F(θ_k)‖²] exactly.
     pub x_bar: BigRational,
     /// The hull of the iterates the constants hold on.
@@ -64,7 +80,7 @@ pub fn certify(
         &eta,
         inst.k,
         inputs,
-        s.sgd.max_paths,
+        s.budget(algorithm).max_paths,
         b.as_ref(),
     )?;
     let one = BigRational::from_integer(1.into());
@@ -74,7 +90,7 @@ pub fn certify(
         Some(b) => sigma2_baselined(&mdp, b, &run.hull, s.tol, s.max_boxes),
     }
     .map_err(|e| e.to_string())?;
-    let bf = b_f(&mdp, std::slice::from_ref(&inst.theta1), None)?;
+    let bf = b_f(&mdp, &inst.theta1, None)?;
     if !sgd_step_admissible(l.value, 1.0, e.candidate.step) {
         return Err(format!(
             "{}, η = {}: certified L_F = {:.5} breaks η ≤ 1/L",
@@ -85,6 +101,7 @@ pub fn certify(
     }
     Ok(Certified {
         estimate: e.clone(),
+        algorithm,
         x_bar: run.mean,
         hull: run.hull,
         paths: run.paths,
@@ -102,20 +119,11 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
     let b_f = inputs.constant_f64(ConstantKind::BF, bf.value);
     let l_f = inputs.constant_f64(ConstantKind::LF, l.value);
     let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
-    let algorithm = if c.baseline.is_some() {
-        Algorithm::SgdBaselined
-    } else {
-        Algorithm::Sgd
-    };
-    let (stem, result) = stem(algorithm);
+    let (stem, result) = stem(c.algorithm);
     let (id, role, prefix) = if scale == 1.0 {
         (
             format!("{stem}.tight{}", noise.suffix()),
-            if c.baseline.is_some() {
-                Role::Corrected
-            } else {
-                Role::Thesis
-            },
+            role(c.algorithm),
             String::new(),
         )
     } else {
@@ -167,7 +175,7 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
             c.paths,
             100.0 * l_f * eta * s2 / bound,
             x / bound,
-            search_text(&s.sgd),
+            search_text(&s.budget(c.algorithm)),
             c.estimate.ratio,
             l_f * eta
         ))
@@ -192,7 +200,7 @@ pub type Prepared = super::Prepared<Certified>;
 /// The seeded search's candidates ([`search`]) for `algorithm` ([`Algorithm::Sgd`] or
 /// [`Algorithm::SgdBaselined`]); it reads no input of the table.
 pub fn candidates(s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Estimate> {
-    search(algorithm, noise, s.sgd)
+    search(algorithm, noise, s.budget(algorithm))
 }
 
 /// Certify the best of the [`candidates`] in order until one passes, under `inputs`' oracle.
@@ -223,7 +231,7 @@ pub fn rows_from(
     match &p.certified {
         Some(c) => super::with_control(
             |scale| row(c, inputs, scale, s, noise),
-            noise,
+            super::control_always(noise, algorithm),
             &p.passed_over,
         ),
         None => vec![p.none_certified(
@@ -231,13 +239,9 @@ pub fn rows_from(
                 format!("{stem}.tight{}", noise.suffix()),
                 result,
                 "a tight instance of eq. 3.27",
-                if algorithm == Algorithm::SgdBaselined {
-                    Role::Corrected
-                } else {
-                    Role::Thesis
-                },
+                role(algorithm),
             ),
-            &s.sgd,
+            &s.budget(algorithm),
             Method::Exact,
         )],
     }
@@ -262,6 +266,11 @@ mod tests {
 
     fn half(l: f64, eta: f64, s2: f64, b_f: f64, k: u64) -> f64 {
         0.5 * sgd_constant(l, eta, s2, b_f, k)
+    }
+
+    /// Eq. 3.27 with the 2 of 2B_F/(ηK) dropped.
+    fn without_2(l: f64, eta: f64, s2: f64, b_f: f64, k: u64) -> f64 {
+        l * eta * s2 + b_f / (eta * k as f64)
     }
 
     /// At the quick size: the tight row holds with X̄/B ≥ ½, its B ÷ 2 control is refuted, and the
@@ -290,6 +299,44 @@ mod tests {
             ..TableInputs::thesis()
         };
         let turned = super::rows(&wrong, &s, Noise::Any, Algorithm::Sgd);
+        assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
+    }
+
+    /// Row 1b.tight at the quick size: on the second toy's family (one parameter per state, both
+    /// moving) the row holds with X̄/B ≥ ½ and its B ÷ 2 control is refuted; eq. 3.27 with its 2
+    /// of 2B_F/(ηK) dropped (a smaller B) refutes the row.
+    #[test]
+    fn the_second_toys_tight_row_holds_and_a_dropped_factor_turns_it() {
+        let s = Sizes::quick();
+        let start = std::time::Instant::now();
+        let rows = rows(
+            &TableInputs::thesis(),
+            &s,
+            Noise::Any,
+            Algorithm::SgdPerState,
+        );
+        println!("{:.1} s", start.elapsed().as_secs_f64());
+        for r in &rows {
+            println!(
+                "{} {:?} {:?}: {}\n  {}",
+                r.id, r.verdict, r.tightness, r.claim, r.details
+            );
+        }
+        let ids: Vec<&str> = rows.iter().map(|r| r.id.as_str()).collect();
+        assert_eq!(ids, ["1b.tight", "1b.tight.ctl"], "{rows:#?}");
+        assert_eq!(rows[0].role, Role::Thesis);
+        assert_eq!(rows[0].verdict, Verdict::Holds, "{}", rows[0].details);
+        assert!(rows[0].tightness.unwrap() >= 0.5, "{}", rows[0].details);
+        assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
+        assert!(rows[0].claim.contains("P2′ per state"), "{}", rows[0].claim);
+        let wrong = TableInputs {
+            formulas: Formulas {
+                sgd_constant: without_2,
+                ..Formulas::THESIS
+            },
+            ..TableInputs::thesis()
+        };
+        let turned = super::rows(&wrong, &s, Noise::Any, Algorithm::SgdPerState);
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 }

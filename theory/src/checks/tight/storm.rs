@@ -78,7 +78,7 @@ pub fn certify(e: &Estimate, inputs: &TableInputs, s: &Sizes) -> Result<Certifie
             continue;
         }
         let v = sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-        let bf = b_f(&mdp, std::slice::from_ref(&inst.theta1), None)?;
+        let bf = b_f(&mdp, &inst.theta1, None)?;
         return Ok(Certified {
             estimate: e.clone(),
             l: l_s,
@@ -195,7 +195,7 @@ pub fn rows_from(inputs: &TableInputs, s: &Sizes, noise: Noise, p: &Prepared) ->
     match &p.certified {
         Some(c) => super::with_control(
             |scale| row(c, inputs, scale, s, noise),
-            noise,
+            super::control_always(noise, Algorithm::Storm),
             &p.passed_over,
         ),
         None => vec![p.none_certified(
