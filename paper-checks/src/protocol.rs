@@ -654,6 +654,41 @@ mod tests {
     }
 
     #[test]
+    fn the_scores_area_is_the_mean_of_its_runs_areas() {
+        let p = point(1e-3, 1);
+        // Areas over checkpoints 0, 100, …, 400: 0.2 and 0.6 (not-converged runs to the budget).
+        let low = run(RunStatus::NotConverged, &[0.2; 5]);
+        let high = run(RunStatus::NotConverged, &[0.6; 5]);
+        let s = Score::of(&p, &[low, high], 400, 100);
+        assert!((s.auc - 0.4).abs() < 1e-12, "{}", s.auc);
+        assert_eq!(Score::of(&p, &[], 400, 100).auc, 0.0);
+    }
+
+    #[test]
+    fn a_score_survives_json_with_its_infinite_entries_as_null() {
+        let s = Score {
+            budget: 400,
+            median_calls: f64::INFINITY,
+            auc: 0.25,
+            step: 1e-3,
+            m: 16,
+            converged: 0,
+            diverged: 1,
+        };
+        let text = serde_json::to_string(&s).unwrap();
+        assert!(text.contains(r#""median_calls":null"#), "{text}");
+        assert_eq!(serde_json::from_str::<Score>(&text).unwrap(), s);
+        let finite = Score {
+            median_calls: 300.0,
+            step: f64::INFINITY,
+            ..s
+        };
+        let text = serde_json::to_string(&finite).unwrap();
+        assert!(text.contains(r#""step":null"#), "{text}");
+        assert_eq!(serde_json::from_str::<Score>(&text).unwrap(), finite);
+    }
+
+    #[test]
     fn the_median_takes_the_middle_value_or_the_mean_of_the_middle_two() {
         assert!(median(vec![]).is_nan());
         assert_eq!(median(vec![7.0]), 7.0);
