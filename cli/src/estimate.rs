@@ -11,7 +11,7 @@ use crate::run::RunError;
 use crate::run::config::{LoadedConfig, MAX_TRAJECTORIES, RunFile};
 use crate::run::oracle::{OnOracle, with_oracle};
 use crate::run::runnable::RunTask;
-use crate::run::task::{TaskLearner, with_learner};
+use crate::run::task::{task_learner, with_learner};
 use clap::Args;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use nalgebra::DVector;
@@ -62,7 +62,7 @@ pub fn run(args: &EstimateArgs) -> Result<Value, EstimateError> {
     let config = RunFile::load(&args.config)?;
     let theta: Vec<f64> =
         serde_json::from_str(&args.theta).map_err(|e| EstimateError::Theta(e.to_string()))?;
-    let learner = TaskLearner::new(&config)?;
+    let learner = task_learner(&config)?;
     let estimate =
         with_learner!(&learner, t => estimate(t, &config, &theta, args.trajectories, args.seed))?;
     let (task, policy, dim) =
@@ -88,7 +88,7 @@ pub fn estimate_config(
     trajectories: u64,
     seed: u64,
 ) -> Result<Vec<f64>, EstimateError> {
-    let learner = TaskLearner::new(config)?;
+    let learner = task_learner(config)?;
     with_learner!(&learner, t => estimate(t, config, theta, trajectories, seed))
 }
 
