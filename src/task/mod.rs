@@ -29,7 +29,6 @@
 //!   cheap, so its minimisers include policies that end the episode at once (a labelled control,
 //!   not the thesis's objective).
 
-pub mod builtin;
 pub mod cartpole;
 mod env_task;
 mod horizon;

@@ -2,7 +2,7 @@
 //! RNG seeded by (seed, j) only ([`episode_seed`]), so every checkpoint of a run meets the same
 //! episodes (common random numbers). The evaluation itself (the policy's deterministic action on
 //! those episodes, a toy MDP's exact objective) is the kit's
-//! [`TaskLearner::evaluate`](ilopt::task::builtin::TaskLearner::evaluate).
+//! [`TaskLearner::evaluate`](ilopt::evaluate::builtin::TaskLearner::evaluate).
 
 pub use ilopt::evaluate::Evaluation;
 use ilopt::seeding::splitmix64;

@@ -9,14 +9,14 @@ use super::error::RunError;
 use super::evaluation::{Evaluation, episode_seed};
 use super::runnable::{RunTask, horizon_decisions};
 use ilopt::baseline::PerDecisionTerms;
+pub use ilopt::evaluate::builtin::TaskLearner;
+use ilopt::evaluate::builtin::{
+    BuildError, CartPoleLearner, CartPolePolicy, ObstacleLearner, ObstacleProblem, ToyLearner,
+};
 use ilopt::expert::lqr::LqrExpert;
 use ilopt::expert::ppo::{PpoExpert, PpoExpertFile};
 use ilopt::policy::Greedy;
 use ilopt::problem::{IlProblem, OracleError};
-pub use ilopt::task::builtin::TaskLearner;
-use ilopt::task::builtin::{
-    BuildError, CartPoleLearner, CartPolePolicy, ObstacleLearner, ObstacleProblem, ToyLearner,
-};
 use ilopt::task::cartpole::{CartPoleExpert, CartPoleTask};
 use ilopt::task::{Horizon, TaskProblem};
 use ilopt::toy::{ToyMdp, ToyProblem};

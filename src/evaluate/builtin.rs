@@ -18,10 +18,10 @@
 //! `seed_of(j)`, a function the caller passes, so that every checkpoint of a run meets the same
 //! episodes (common random numbers) under the caller's own seed derivation.
 
+use super::Evaluation;
+use super::episodes::{ObstacleAct, TaskAct, cartpole_episodes, obstacle_episodes};
 use crate::env::cartpole::MAX_EPISODE_STEPS;
 use crate::env::obstacle::ObstacleConfig;
-use crate::evaluate::Evaluation;
-use crate::evaluate::episodes::{ObstacleAct, TaskAct, cartpole_episodes, obstacle_episodes};
 use crate::expert::vo_policy::{VoExpertParams, VoExpertPolicy};
 use crate::policy::{Greedy, LinearGaussian, Logistic, PolicyExt, Softmax, SpeedLimitedGaussian};
 use crate::problem::IlProblem;
@@ -109,10 +109,10 @@ pub enum TaskLearner {
 macro_rules! with_task_learner {
     ($learner:expr, $t:ident => $body:expr) => {
         match $learner {
-            $crate::task::builtin::TaskLearner::CartPoleSoftmax($t) => $body,
-            $crate::task::builtin::TaskLearner::CartPoleLogistic($t) => $body,
-            $crate::task::builtin::TaskLearner::Obstacle($t) => $body,
-            $crate::task::builtin::TaskLearner::Toy($t) => $body,
+            $crate::evaluate::builtin::TaskLearner::CartPoleSoftmax($t) => $body,
+            $crate::evaluate::builtin::TaskLearner::CartPoleLogistic($t) => $body,
+            $crate::evaluate::builtin::TaskLearner::Obstacle($t) => $body,
+            $crate::evaluate::builtin::TaskLearner::Toy($t) => $body,
         }
     };
 }
