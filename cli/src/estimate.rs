@@ -11,7 +11,7 @@ use crate::run::RunError;
 use crate::run::config::{LoadedConfig, MAX_TRAJECTORIES, RunFile};
 use crate::run::oracle::{OnOracle, with_oracle};
 use crate::run::runnable::RunTask;
-use crate::run::task::{task_learner, with_learner};
+use crate::run::task::task_learner;
 use clap::Args;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use nalgebra::DVector;
@@ -63,10 +63,9 @@ pub fn run(args: &EstimateArgs) -> Result<Value, EstimateError> {
     let theta: Vec<f64> =
         serde_json::from_str(&args.theta).map_err(|e| EstimateError::Theta(e.to_string()))?;
     let learner = task_learner(&config)?;
-    let estimate =
-        with_learner!(&learner, t => estimate(t, &config, &theta, args.trajectories, args.seed))?;
+    let estimate = ilopt::with_task_learner!(&learner, t => estimate(t, &config, &theta, args.trajectories, args.seed))?;
     let (task, policy, dim) =
-        with_learner!(&learner, t => (t.task_name(), t.policy_name(), t.dim()));
+        ilopt::with_task_learner!(&learner, t => (t.task_name(), t.policy_name(), t.dim()));
     Ok(json!({
         "task": task,
         "policy": policy,
@@ -89,7 +88,7 @@ pub fn estimate_config(
     seed: u64,
 ) -> Result<Vec<f64>, EstimateError> {
     let learner = task_learner(config)?;
-    with_learner!(&learner, t => estimate(t, config, theta, trajectories, seed))
+    ilopt::with_task_learner!(&learner, t => estimate(t, config, theta, trajectories, seed))
 }
 
 /// The oracle's estimate of ∇F(θ) (eq. 3.15, causal form, the config's baseline): the mean over

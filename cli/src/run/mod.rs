@@ -52,7 +52,7 @@ use clap::Args;
 use records::SeedRun;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use task::{task_learner, with_learner};
+use task::task_learner;
 
 /// The keys of a config file, for `ilopt run --help` (docs/run.md has the full reference).
 pub const CONFIG_KEYS: &str = "\
@@ -154,7 +154,7 @@ pub fn execute(
     options: RunOptions,
 ) -> Result<RunOutcome, RunError> {
     let learner = task_learner(config)?;
-    with_learner!(&learner, t => execute_task(t, config, out, threads, options))
+    ilopt::with_task_learner!(&learner, t => execute_task(t, config, out, threads, options))
 }
 
 /// Train on `task` as `config` says, for every seed, on up to `threads` threads (default: the

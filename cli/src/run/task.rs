@@ -79,15 +79,6 @@ pub fn task_learner(config: &LoadedConfig) -> Result<TaskLearner, RunError> {
     }
 }
 
-/// `$body` with `$t` bound to the [`RunTask`] inside a [`TaskLearner`] (one generic code path
-/// for every built-in task).
-macro_rules! with_learner {
-    ($learner:expr, $t:ident => $body:expr) => {
-        ilopt::with_task_learner!($learner, $t => $body)
-    };
-}
-pub(crate) use with_learner;
-
 impl<P> RunTask for CartPoleLearner<P>
 where
     P: Greedy<f64, Action = usize, Label = usize> + Clone + Sync,
