@@ -1,9 +1,12 @@
 //! Evaluating a learned θ: the Monte-Carlo objective `F̂(θ) = (1/n) Σ_j L(θ, τ_j)` over `n`
 //! seeded roll-outs of the learner, `L` the problem's trajectory loss (for a task problem: the
 //! summed imitation loss of one stream or episode, the absorbing tail included), with its
-//! standard error; and deterministic evaluation episodes ([`episodes`]), the success rates and
-//! rewards chapter 4 reports.
+//! standard error; deterministic evaluation episodes ([`episodes`]), the success rates and
+//! rewards chapter 4 reports; and the kit's built-in tasks paired with the thesis's learners,
+//! their IL problems and their evaluation of θ ([`builtin`]), shared by `ilopt run` and the
+//! appendix.
 
+pub mod builtin;
 pub mod episodes;
 mod evaluation;
 

@@ -11,7 +11,7 @@ use crate::run::RunError;
 use crate::run::config::{LoadedConfig, MAX_TRAJECTORIES, RunFile};
 use crate::run::oracle::{OnOracle, with_oracle};
 use crate::run::runnable::RunTask;
-use crate::run::task::{TaskLearner, with_learner};
+use crate::run::task::task_learner;
 use clap::Args;
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use nalgebra::DVector;
@@ -62,11 +62,10 @@ pub fn run(args: &EstimateArgs) -> Result<Value, EstimateError> {
     let config = RunFile::load(&args.config)?;
     let theta: Vec<f64> =
         serde_json::from_str(&args.theta).map_err(|e| EstimateError::Theta(e.to_string()))?;
-    let learner = TaskLearner::new(&config)?;
-    let estimate =
-        with_learner!(&learner, t => estimate(t, &config, &theta, args.trajectories, args.seed))?;
+    let learner = task_learner(&config)?;
+    let estimate = ilopt::with_task_learner!(&learner, t => estimate(t, &config, &theta, args.trajectories, args.seed))?;
     let (task, policy, dim) =
-        with_learner!(&learner, t => (t.task_name(), t.policy_name(), t.dim()));
+        ilopt::with_task_learner!(&learner, t => (t.task_name(), t.policy_name(), t.dim()));
     Ok(json!({
         "task": task,
         "policy": policy,
@@ -88,8 +87,8 @@ pub fn estimate_config(
     trajectories: u64,
     seed: u64,
 ) -> Result<Vec<f64>, EstimateError> {
-    let learner = TaskLearner::new(config)?;
-    with_learner!(&learner, t => estimate(t, config, theta, trajectories, seed))
+    let learner = task_learner(config)?;
+    ilopt::with_task_learner!(&learner, t => estimate(t, config, theta, trajectories, seed))
 }
 
 /// The oracle's estimate of ∇F(θ) (eq. 3.15, causal form, the config's baseline): the mean over

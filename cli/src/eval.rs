@@ -11,7 +11,7 @@ use super::run::RunError;
 use super::run::RunTask;
 use super::run::config::RunFile;
 use super::run::records::SavedTheta;
-use super::run::task::{TaskLearner, with_learner};
+use super::run::task::task_learner;
 use clap::Args;
 use ilopt::evaluate::objective;
 use nalgebra::DVector;
@@ -42,7 +42,7 @@ pub struct EvalArgs {
 /// policy, or a failing roll-out.
 pub fn run(args: &EvalArgs) -> Result<Value, RunError> {
     let config = RunFile::load(&args.config)?;
-    let bench = TaskLearner::new(&config)?;
+    let bench = task_learner(&config)?;
     let text = std::fs::read_to_string(&args.theta).map_err(|e| RunError::io(&args.theta, e))?;
     let bad = |message: String| RunError::Theta {
         path: args.theta.clone(),
@@ -73,7 +73,8 @@ pub fn run(args: &EvalArgs) -> Result<Value, RunError> {
         .episodes
         .or(config.file.evaluation.episodes)
         .unwrap_or(super::run::config::DEFAULT_EPISODES);
-    let mut out = with_learner!(&bench, t => eval_task(t, &saved.theta, episodes, args.seed))?;
+    let mut out =
+        ilopt::with_task_learner!(&bench, t => eval_task(t, &saved.theta, episodes, args.seed))?;
     out["theta_seed"] = json!(saved.seed);
     Ok(out)
 }

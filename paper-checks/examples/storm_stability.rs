@@ -188,7 +188,9 @@ fn task(kind: TaskKind, opts: &Options) -> Result<(), String> {
     println!(
         "# {} (quick profile, objective {}, d = {}, N = {}, B = {}, IS weighting {:?})\n",
         kind.name(),
-        bench.horizon().label(),
+        bench
+            .horizon()
+            .map_or_else(|| "of the MDP's file".into(), |h| h.label()),
         bench.dim(),
         opts.trajectories,
         opts.batches,

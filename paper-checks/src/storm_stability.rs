@@ -19,7 +19,7 @@
 use crate::config::{Profile, TaskSection};
 use crate::error::Error;
 use crate::experiment::TaskKind;
-use crate::experiment::TaskLearner;
+use crate::experiment::{TaskLearner, task_learner};
 use ilopt::algo::storm_stability::{eigenvalues, mean_radius, threshold};
 use ilopt::algo::{AlgorithmConfig, Runner, StoppingRule};
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
@@ -389,22 +389,19 @@ pub fn measure_bench(
     theta: &DVector<f64>,
     opts: &Options,
 ) -> Result<Measurement, Error> {
-    match bench {
-        TaskLearner::Obstacle { problem, .. } => measure(&mut problem.clone(), theta, opts),
-        TaskLearner::Cartpole { problem, .. } => measure(&mut problem.clone(), theta, opts),
-    }
+    ilopt::with_task_learner!(bench, l => measure(&mut l.problem.clone(), theta, opts))
 }
 
 /// A task's bench as the profile sets it up (learner, expert, objective).
 ///
 /// # Errors
-/// As [`TaskLearner::new`].
+/// As [`task_learner`].
 pub fn bench_of(profile: &Profile, kind: TaskKind) -> Result<TaskLearner, Error> {
     let task = task_of(profile, kind);
     let horizon = task
         .horizon
         .unwrap_or_else(|| crate::config::default_horizon(kind));
-    TaskLearner::new(kind, task, horizon)
+    task_learner(kind, task, horizon)
 }
 
 fn task_of(profile: &Profile, kind: TaskKind) -> &TaskSection {
@@ -432,14 +429,7 @@ pub fn dagger_solution(
         .iter()
         .find(|a| matches!(a.config, AlgorithmConfig::Dagger(_)))
         .ok_or_else(|| Error::experiment(kind.name(), "the profile has no DAgger row"))?;
-    match bench {
-        TaskLearner::Obstacle { problem, .. } => {
-            train(&mut problem.clone(), &entry.config, task.budget, seed)
-        }
-        TaskLearner::Cartpole { problem, .. } => {
-            train(&mut problem.clone(), &entry.config, task.budget, seed)
-        }
-    }
+    ilopt::with_task_learner!(bench, l => train(&mut l.problem.clone(), &entry.config, task.budget, seed))
 }
 
 fn train<P: IlProblem<f64>>(
@@ -473,7 +463,8 @@ mod tests {
     /// Bad options are errors, not panics.
     #[test]
     fn bad_options_are_refused() {
-        let bench = TaskLearner::obstacle(0.1, Default::default()).unwrap();
+        let bench =
+            TaskLearner::obstacle(0.1, Default::default(), ilopt::task::Horizon::Episodic).unwrap();
         let theta = DVector::zeros(bench.dim());
         for opts in [
             Options {

@@ -12,7 +12,7 @@ use super::first_step::check_first_step;
 use super::oracle::{OnOracle, baseline_message, with_oracle};
 use super::records::{Checkpoint, SeedRun, SeedTiming};
 use super::runnable::{RunTask, theta0};
-use super::task::{TaskLearner, with_learner};
+use super::task::TaskLearner;
 use ilopt::algo::{
     CheckpointObserver, IterationMetrics, NormBound, RunFailure, Runner, Schedule, StoppingRule,
     Termination,
@@ -222,7 +222,7 @@ pub fn check_config<T: RunTask + ?Sized>(task: &T, config: &LoadedConfig) -> Res
 /// # Errors
 /// As [`check_config`].
 pub fn check_builtin(learner: &TaskLearner, config: &LoadedConfig) -> Result<(), RunError> {
-    with_learner!(learner, t => check_config(t, config))
+    ilopt::with_task_learner!(learner, t => check_config(t, config))
 }
 
 /// Build the config's algorithm for the task's problem once, so that invalid hyper-parameters

@@ -52,7 +52,7 @@ use clap::Args;
 use records::SeedRun;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
-use task::{TaskLearner, with_learner};
+use task::task_learner;
 
 /// The keys of a config file, for `ilopt run --help` (docs/run.md has the full reference).
 pub const CONFIG_KEYS: &str = "\
@@ -142,7 +142,7 @@ pub struct RunOutcome {
     pub timings: Vec<records::SeedTiming>,
 }
 
-/// Run a loaded config on its built-in task ([`TaskLearner`]) through [`execute_task`]: the
+/// Run a loaded config on its built-in task ([`TaskLearner`](task::TaskLearner)) through [`execute_task`]: the
 /// route of `ilopt run` and of the Python package's `ilopt.run`.
 ///
 /// # Errors
@@ -153,8 +153,8 @@ pub fn execute(
     threads: Option<usize>,
     options: RunOptions,
 ) -> Result<RunOutcome, RunError> {
-    let learner = TaskLearner::new(config)?;
-    with_learner!(&learner, t => execute_task(t, config, out, threads, options))
+    let learner = task_learner(config)?;
+    ilopt::with_task_learner!(&learner, t => execute_task(t, config, out, threads, options))
 }
 
 /// Train on `task` as `config` says, for every seed, on up to `threads` threads (default: the

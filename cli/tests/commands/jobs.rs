@@ -557,7 +557,7 @@ fn a_first_step_beyond_the_budget_is_refused_with_the_numbers() {
     for (i, (text, least)) in cases.iter().enumerate() {
         let cfg = s.write(&format!("c-{i}.toml"), text);
         let c = RunFile::load(&cfg).unwrap_or_else(|e| panic!("case {i}: {e}"));
-        let bench = TaskLearner::new(&c).unwrap();
+        let bench = ilopt_cli::run::task::task_learner(&c).unwrap();
         let got = least_of(&bench, &c).map(|f| f.calls);
         assert_eq!(got, *least, "case {i}");
         let over = least.is_some_and(|n| n > u128::from(c.file.run.budget_calls));
@@ -589,7 +589,10 @@ fn a_first_step_beyond_the_budget_is_refused_with_the_numbers() {
         .replace("[run]", "[run]\ntrajectories_per_gradient = 100000");
     let cfg = s.write("absorbing.toml", &absorbing);
     let c = RunFile::load(&cfg).unwrap();
-    assert_eq!(least_of(&TaskLearner::new(&c).unwrap(), &c), None);
+    assert_eq!(
+        least_of(&ilopt_cli::run::task::task_learner(&c).unwrap(), &c),
+        None
+    );
     // Exactly the budget: 100 trajectories × 3 decisions = 300 calls, one step, and it runs.
     let cfg = s.write(
         "exact.toml",

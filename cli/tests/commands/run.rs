@@ -719,7 +719,7 @@ fn the_example_configs_are_valid() {
         let p = e.unwrap().path();
         if p.extension().is_some_and(|x| x == "toml") {
             let c = RunFile::load(&p).unwrap_or_else(|e| panic!("{p:?}: {e}"));
-            let bench = ilopt_cli::run::task::TaskLearner::new(&c).unwrap();
+            let bench = ilopt_cli::run::task::task_learner(&c).unwrap();
             ilopt_cli::run::driver::check_builtin(&bench, &c)
                 .unwrap_or_else(|e| panic!("{p:?}: {e}"));
             n += 1;

@@ -1,6 +1,9 @@
 //! One seeded run: its key and seed, θ₁, the driver that trains and evaluates at the
 //! checkpoints ([`run_spec`]), and the reference policies' seeds.
 
+use super::task_learner::{
+    evaluate_learner, evaluate_reference, gradient_xy, resets_to_full_episode,
+};
 use super::{
     Checkpoint, Evaluated, ReferencePolicy, SeedRun, SeedTiming, TaskKind, TaskLearner, status_of,
     sustained,
@@ -146,10 +149,7 @@ pub fn run_seed(
 /// mid-way (a non-finite iterate, a failing step, ‖θ‖ beyond the bound) is *not* an error: its
 /// status is [`RunStatus::Diverged`](super::RunStatus::Diverged) and it keeps the checkpoints reached.
 pub fn run_spec(bench: &TaskLearner, spec: &RunSpec<'_>) -> Result<(SeedRun, SeedTiming), Error> {
-    match bench {
-        TaskLearner::Obstacle { problem, .. } => drive_with(bench, problem, spec),
-        TaskLearner::Cartpole { problem, .. } => drive_with(bench, problem, spec),
-    }
+    ilopt::with_task_learner!(bench, l => drive_with(bench, &l.problem, spec))
 }
 
 /// [`drive`] on `problem` as the spec wants it: with its baseline ([`Baselined`], m
@@ -272,10 +272,14 @@ impl CheckpointObserver<f64> for Evaluations<'_, '_> {
         let started = std::time::Instant::now();
         let (spec, task) = (self.spec, self.spec.task);
         let theta = &m.theta;
-        let ev = self
-            .bench
-            .evaluate(theta.as_slice(), task.eval_episodes, &spec.eval_key)?;
-        let grad = self.bench.gradient_xy(
+        let ev = evaluate_learner(
+            self.bench,
+            theta.as_slice(),
+            task.eval_episodes,
+            &spec.eval_key,
+        )?;
+        let grad = gradient_xy(
+            self.bench,
             theta,
             task.grad_trajectories,
             derive_seed(
@@ -283,7 +287,8 @@ impl CheckpointObserver<f64> for Evaluations<'_, '_> {
                 m.iteration * 1000 + u64::from(spec.seed_index),
             ),
         )?;
-        let full = self.bench.resets_to_full_episode(
+        let full = resets_to_full_episode(
+            self.bench,
             theta.as_slice(),
             task.full_episode_cap,
             &spec.eval_key,
@@ -339,7 +344,12 @@ pub fn baseline_seed(
     baseline: ReferencePolicy,
     seed_index: u32,
 ) -> Result<Checkpoint, Error> {
-    let ev = bench.evaluate_baseline(baseline, task.eval_episodes, &eval_key(kind, seed_index))?;
+    let ev = evaluate_reference(
+        bench,
+        baseline,
+        task.eval_episodes,
+        &eval_key(kind, seed_index),
+    )?;
     Ok(Checkpoint {
         loss_x: ev.loss_xy.map(|l| l.0),
         loss_y: ev.loss_xy.map(|l| l.1),

@@ -3,7 +3,7 @@
 
 use crate::config::Profile;
 use crate::error::Error;
-use crate::experiment::{ReferencePolicy, TaskKind, TaskLearner, baseline_seed};
+use crate::experiment::{ReferencePolicy, TaskKind, TaskLearner, baseline_seed, task_learner};
 use crate::results::BaselineResult;
 use ilopt::task::Horizon;
 use rayon::prelude::*;
@@ -21,7 +21,7 @@ impl TaskLearners {
             for e in &t.algorithms {
                 let h = e.horizon(t, kind);
                 if !v.iter().any(|(k, hh, _)| *k == kind && *hh == h) {
-                    v.push((kind, h, TaskLearner::new(kind, t, h)?));
+                    v.push((kind, h, task_learner(kind, t, h)?));
                 }
             }
         }
@@ -65,7 +65,7 @@ pub(super) fn baselines_job(
             out.push(BaselineResult {
                 task: kind,
                 baseline: b,
-                label: b.label(bench),
+                label: b.label(kind, t),
                 runs,
             });
         }
