@@ -8,6 +8,7 @@
 //! absent, so `ilopt run`'s files carry only what it records.
 
 use super::Termination;
+use super::observer::IterationMetrics;
 use crate::evaluate::Evaluation;
 use crate::problem::Cost;
 use serde::{Deserialize, Serialize};
@@ -103,6 +104,19 @@ impl Checkpoint {
             grad_y: None,
             resets_to_full_episode: None,
         }
+    }
+
+    /// The checkpoint of the iterate an observer is shown ([`IterationMetrics`]): its iteration
+    /// and cumulative cost, the step's loss estimate and ‖direction‖ where they are finite, and
+    /// `ev`, the evaluation of its θ; `at_calls` 0 (the caller sets the nominal call counts).
+    pub fn of_iterate(m: &IterationMetrics<f64>, ev: &Evaluation) -> Self {
+        let train_loss = m.loss.filter(|l| l.is_finite());
+        let gradient_norm = m
+            .estimate
+            .as_ref()
+            .map(|d| d.norm())
+            .filter(|n| n.is_finite());
+        Checkpoint::new(0, m.iteration, &m.cost, train_loss, gradient_norm, ev)
     }
 
     /// The CSV header of [`Checkpoint::csv_row`] (`ilopt run`'s `seed-<n>.csv`).

@@ -173,13 +173,7 @@ impl<T: RunTask + ?Sized> CheckpointObserver<f64> for Evaluations<'_, T> {
             .evaluate(m.theta.as_slice(), self.episodes, seed)
             .map_err(|message| RunError::Run { seed, message })?;
         self.evaluation_seconds += started.elapsed().as_secs_f64();
-        let train_loss = m.loss.filter(|l| l.is_finite());
-        let gradient_norm = m
-            .estimate
-            .as_ref()
-            .map(|d| d.norm())
-            .filter(|n| n.is_finite());
-        let c = Checkpoint::new(0, m.iteration, &m.cost, train_loss, gradient_norm, &ev);
+        let c = Checkpoint::of_iterate(m, &ev);
         let before = self.checkpoints.len();
         self.checkpoints
             .extend(at_calls.iter().map(|&at_calls| Checkpoint {

@@ -294,19 +294,13 @@ impl CheckpointObserver<f64> for Evaluations<'_, '_> {
             &spec.eval_key,
         )?;
         self.seconds += started.elapsed().as_secs_f64();
-        let train_loss = m.loss.filter(|l| l.is_finite());
-        let gradient_norm = m
-            .estimate
-            .as_ref()
-            .map(|d| d.norm())
-            .filter(|n| n.is_finite());
         let c = Checkpoint {
             loss_x: ev.loss_xy.map(|l| l.0),
             loss_y: ev.loss_xy.map(|l| l.1),
             grad_x: grad.map(|g| g.0),
             grad_y: grad.map(|g| g.1),
             resets_to_full_episode: full,
-            ..Checkpoint::new(0, m.iteration, &m.cost, train_loss, gradient_norm, &ev)
+            ..Checkpoint::of_iterate(m, &ev)
         };
         self.checkpoints
             .extend(at_calls.iter().map(|&at_calls| Checkpoint {
