@@ -90,7 +90,7 @@ pub use observer::{
     CheckpointObserver, IterationMetrics, NormBound, Observer, Progress, Schedule, norm_of,
 };
 pub use runner::{MAX_FREE_STEPS, RunFailure, RunRecord, Runner, StoppingRule, replay};
-pub use termination::{Divergence, Termination};
+pub use termination::{Divergence, RecordedTermination, Termination};
 
 pub(crate) use algorithm::oracle_draw;
 pub(crate) use error::{check_dim, check_finite, invalid, min_one};

@@ -3,7 +3,8 @@
 //! reruns) — the library's record types, which paper-checks shares — and its final θ
 //! ([`SavedTheta`], what `ilopt eval` loads).
 
-pub use ilopt::algo::records::{Checkpoint, RecordedTermination, SeedRun, SeedTiming};
+pub use ilopt::algo::RecordedTermination;
+pub use ilopt::algo::records::{Checkpoint, SeedRun, SeedTiming};
 use serde::{Deserialize, Serialize};
 
 /// A saved policy parameter: `theta-seed-<n>.json`.

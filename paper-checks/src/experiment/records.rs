@@ -4,7 +4,8 @@
 //! ([`AppendixRun`]).
 
 use super::RunStatus;
-pub use ilopt::algo::records::{Checkpoint, RecordedTermination, SeedTiming};
+pub use ilopt::algo::RecordedTermination;
+pub use ilopt::algo::records::{Checkpoint, SeedTiming};
 
 /// One seeded run of the appendix: its seed index, status and hyper-parameters are set.
 pub type SeedRun = ilopt::algo::records::SeedRun<RunStatus>;

@@ -204,7 +204,7 @@ mod tests {
             seed: u64::from(i),
             seed_index: Some(i),
             algorithm: "sgd".into(),
-            termination: ilopt::algo::records::RecordedTermination::GradientBudget,
+            termination: ilopt::algo::RecordedTermination::GradientBudget,
             iterations: 0,
             cost: ilopt::problem::Cost::default(),
             theta: vec![],

@@ -930,7 +930,7 @@ mod tests {
             seed: i as u64,
             seed_index: Some(i as u32),
             algorithm: "storm".into(),
-            termination: ilopt::algo::records::RecordedTermination::GradientBudget,
+            termination: ilopt::algo::RecordedTermination::GradientBudget,
             iterations: 0,
             cost: ilopt::problem::Cost::default(),
             theta: vec![],
