@@ -101,7 +101,7 @@ pub enum RecordedTermination {
     TimeOut,
     /// `finished`: the algorithm completed its own schedule.
     Finished,
-    /// `diverged: <reason>` ([`Divergence`](super::Divergence)'s text).
+    /// `diverged: <reason>` ([`Divergence`]'s text).
     Diverged(String),
     /// A checkpoint observer's reason (e.g. paper-checks' `sustained-convergence`), or any other
     /// text read back.
