@@ -209,16 +209,12 @@ pub enum CartPoleExpertChoice {
 }
 
 impl CartPoleExpertChoice {
-    /// The committed PPO expert (`experts/cartpole-ppo.json`), embedded when the binary is built,
-    /// so that an installed `paper-checks` runs from any directory.
-    pub const PPO_EXPERT: &'static str = include_str!("../../experts/cartpole-ppo.json");
-
     /// The embedded PPO expert, validated.
     ///
     /// # Errors
     /// A message if the embedded file does not validate (it is checked by the kit's tests).
     pub fn ppo_expert() -> Result<ilopt::expert::ppo::PpoExpert, String> {
-        ilopt::expert::ppo::PpoExpertFile::parse(Self::PPO_EXPERT, "experts/cartpole-ppo.json")
+        ilopt::expert::ppo::PpoExpertFile::committed_cartpole()
             .and_then(|f| f.expert())
             .map_err(|e| e.to_string())
     }
@@ -237,7 +233,10 @@ impl CartPoleExpertChoice {
         match self {
             CartPoleExpertChoice::Lqr => "lqr".into(),
             CartPoleExpertChoice::Ppo => {
-                format!("ppo:{:016x}", crate::stats::fnv1a(Self::PPO_EXPERT))
+                format!(
+                    "ppo:{:016x}",
+                    crate::stats::fnv1a(ilopt::expert::ppo::COMMITTED_CARTPOLE_EXPERT)
+                )
             }
         }
     }

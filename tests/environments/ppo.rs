@@ -26,6 +26,19 @@ fn committed_text() -> String {
     std::fs::read_to_string(committed_path()).expect("experts/cartpole-ppo.json is committed")
 }
 
+/// The copy built into the kit (what `ilopt run` and paper-checks use) is the committed file, and
+/// it validates.
+#[test]
+fn the_embedded_expert_is_the_committed_file_and_validates() {
+    assert_eq!(
+        ilopt::expert::ppo::COMMITTED_CARTPOLE_EXPERT,
+        committed_text()
+    );
+    PpoExpertFile::committed_cartpole()
+        .and_then(|f| f.expert())
+        .unwrap();
+}
+
 #[test]
 fn committed_expert_reaches_495_on_100_seeded_episodes() {
     let expert = PpoExpert::load(committed_path()).unwrap();

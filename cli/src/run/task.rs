@@ -21,9 +21,6 @@ use ilopt::task::cartpole::{CartPoleExpert, CartPoleTask};
 use ilopt::task::{Horizon, TaskProblem};
 use ilopt::toy::{ToyMdp, ToyProblem};
 
-/// The committed PPO expert, built into the binary so that a run works from any directory.
-pub const PPO_EXPERT: &str = include_str!("../../../experts/cartpole-ppo.json");
-
 /// Build the config's built-in task with its learner ([`TaskLearner`]).
 ///
 /// # Errors
@@ -48,7 +45,7 @@ pub fn task_learner(config: &LoadedConfig) -> Result<TaskLearner, RunError> {
                 (_, Some(path)) => PpoExpert::load(path)
                     .map(CartPoleExpert::Ppo)
                     .map_err(|e| config.invalid("task.expert_file", e))?,
-                (_, None) => PpoExpertFile::parse(PPO_EXPERT, "experts/cartpole-ppo.json")
+                (_, None) => PpoExpertFile::committed_cartpole()
                     .and_then(|f| f.expert())
                     .map(CartPoleExpert::Ppo)
                     .map_err(|e| task_err(&e))?,

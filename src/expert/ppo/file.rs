@@ -43,7 +43,22 @@ pub(super) struct RawFile {
     pub(super) critic: Vec<serde_json::Value>,
 }
 
+/// The committed CartPole expert (`experts/cartpole-ppo.json`, written by the `train_ppo`
+/// example), embedded when the kit is built so that a binary runs from any directory.
+pub const COMMITTED_CARTPOLE_EXPERT: &str = include_str!("../../../experts/cartpole-ppo.json");
+
+/// The path [`COMMITTED_CARTPOLE_EXPERT`] was read from, relative to the repository (for messages).
+pub const COMMITTED_CARTPOLE_EXPERT_PATH: &str = "experts/cartpole-ppo.json";
+
 impl PpoExpertFile {
+    /// The committed CartPole expert ([`COMMITTED_CARTPOLE_EXPERT`]), validated.
+    ///
+    /// # Errors
+    /// As [`PpoExpertFile::parse`] (the kit's tests check that the committed file validates).
+    pub fn committed_cartpole() -> Result<Self, PpoError> {
+        Self::parse(COMMITTED_CARTPOLE_EXPERT, COMMITTED_CARTPOLE_EXPERT_PATH)
+    }
+
     /// The file record of a trained expert.
     pub fn new(
         command: String,

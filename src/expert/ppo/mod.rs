@@ -371,7 +371,7 @@ mod tests;
 use crate::algo::adam::AdamRule;
 use adam::{adam, adam_step, clip_global_norm};
 use batch::BatchMlp;
-pub use file::PpoExpertFile;
+pub use file::{COMMITTED_CARTPOLE_EXPERT, COMMITTED_CARTPOLE_EXPERT_PATH, PpoExpertFile};
 pub use greedy::{FAST_TANH_F32_ERROR, PpoGreedy, fast_tanh_f32};
 pub use network::{Evaluation, PpoExpert, evaluate_cartpole};
 use trainer::networks;

@@ -30,7 +30,7 @@ pub fn cartpole_theta() -> DVector<f64> {
 }
 
 /// The obstacle task's problem (the experiments' types).
-pub type ObstacleProblem = TaskProblem<ObstacleTask<[f64; 2]>, SpeedLimitedGaussian<f64, [f64; 2]>>;
+pub use ilopt::evaluate::builtin::ObstacleProblem;
 
 /// The obstacle problem of the checks: the experiments' learner (linear-Gaussian over the basic
 /// features, σ = `sigma`, loss of the executed speed-clipped velocity), the velocity-obstacle
