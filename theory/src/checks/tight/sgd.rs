@@ -308,14 +308,12 @@ mod tests {
     #[test]
     fn the_second_toys_tight_row_holds_and_a_dropped_factor_turns_it() {
         let s = Sizes::quick();
-        let start = std::time::Instant::now();
         let rows = rows(
             &TableInputs::thesis(),
             &s,
             Noise::Any,
             Algorithm::SgdPerState,
         );
-        println!("{:.1} s", start.elapsed().as_secs_f64());
         for r in &rows {
             println!(
                 "{} {:?} {:?}: {}\n  {}",
