@@ -1237,6 +1237,65 @@ mod tests {
         );
     }
 
+    /// The F test compares the ratio of the variances with F(n_b − 1, n_a − 1)'s 97.5 % point:
+    /// 3 values against 21 read F(2, 20), ≈ 4.46 (F(3, 20) ≈ 3.86, F(4, 20) ≈ 3.51). Variances
+    /// 10 and 42 (ratio 4.2) are undecided although they differ by far more than the quantile;
+    /// 10 and 50 (ratio 5) are decided.
+    #[test]
+    fn the_variance_test_compares_a_ratio_with_the_quantile_of_the_right_degrees() {
+        let c = 10f64.sqrt();
+        let xa: Vec<f64> = (0..21)
+            .map(|i| match i {
+                20 => 0.0,
+                _ if i % 2 == 0 => c,
+                _ => -c,
+            })
+            .collect();
+        let spread = |v: f64| [-v.sqrt(), 0.0, v.sqrt()];
+        let a = Summary::of(&xa);
+        let undecided = spread(42.0);
+        let b = Summary::of(&undecided);
+        assert_eq!(
+            lower_variance(&a, &b, &xa, &undecided),
+            Verdict::Inconclusive
+        );
+        assert_eq!(
+            lower_variance(&b, &a, &undecided, &xa),
+            Verdict::Inconclusive
+        );
+        let decided = spread(50.0);
+        let d = Summary::of(&decided);
+        assert_eq!(lower_variance(&a, &d, &xa, &decided), Verdict::Reproduced);
+        assert_eq!(
+            lower_variance(&d, &a, &decided, &xa),
+            Verdict::NotReproduced
+        );
+    }
+
+    /// A spread sample against one of equal values: the constant one has the lower variance,
+    /// whichever side it is on; a sample of fewer than 2 values (none or one) decides nothing.
+    #[test]
+    fn a_zero_variance_is_lower_and_a_sample_too_small_decides_nothing() {
+        let (spread, flat) = ([1.0, 4.0, 9.0], [5.0, 5.0, 5.0]);
+        let (s, f) = (Summary::of(&spread), Summary::of(&flat));
+        assert_eq!(lower_variance(&f, &s, &flat, &spread), Verdict::Reproduced);
+        assert_eq!(
+            lower_variance(&s, &f, &spread, &flat),
+            Verdict::NotReproduced
+        );
+        for small in [&[][..], &[2.0][..]] {
+            let m = Summary::of(small);
+            assert_eq!(
+                lower_variance(&m, &s, small, &spread),
+                Verdict::Inconclusive
+            );
+            assert_eq!(
+                lower_variance(&s, &m, &spread, small),
+                Verdict::Inconclusive
+            );
+        }
+    }
+
     #[test]
     fn a_variance_of_censored_counts_is_never_a_lower_variance() {
         let (a, b) = ([100.0; 5], [10.0, 90.0, 40.0, 60.0, 100.0]);
