@@ -957,6 +957,223 @@ mod tests {
         )
     }
 
+    /// One run's evaluation at a checkpoint: success rate, crashes, loss, ‖x-row of ∇‖.
+    type At = (f64, u32, f64, f64);
+
+    /// An obstacle thesis row `label` with one run per entry of `runs`: its status and its
+    /// checkpoints' evaluations.
+    fn row(label: &str, runs: &[(RunStatus, Vec<At>)]) -> ConfigWithTiming {
+        let runs = runs
+            .iter()
+            .enumerate()
+            .map(|(i, (status, points))| SeedRun {
+                seed: i as u64,
+                seed_index: Some(i as u32),
+                algorithm: "adam".into(),
+                termination: ilopt::algo::RecordedTermination::GradientBudget,
+                iterations: 0,
+                cost: ilopt::problem::Cost::default(),
+                theta: vec![],
+                checkpoints: points
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &(score, crashes, loss, grad_x))| {
+                        serde_json::from_value(serde_json::json!({
+                            "at_calls": 1000 * k, "iteration": k, "gradient_evaluations": 1000 * k,
+                            "trajectories": k, "env_steps": k, "expert_queries": k,
+                            "score": score, "crashes": crashes, "eval_loss": loss,
+                            "grad_x": grad_x
+                        }))
+                        .expect("a checkpoint")
+                    })
+                    .collect(),
+                status: Some(status.clone()),
+                hyper_parameters: None,
+            })
+            .collect();
+        let mut c = crate::results::storm_config_for_tests(runs);
+        c.label = label.into();
+        (c, None)
+    }
+
+    fn diverged() -> RunStatus {
+        RunStatus::Diverged {
+            reason: "‖θ‖ > 1e4".into(),
+            gradient_evaluations: 1,
+        }
+    }
+
+    /// `n` runs that did not converge, each with the same checkpoints.
+    fn same(n: usize, points: &[At]) -> Vec<(RunStatus, Vec<At>)> {
+        vec![(RunStatus::NotConverged, points.to_vec()); n]
+    }
+
+    fn verdict_of(claims: &[Claim], id: &str) -> Verdict {
+        claims
+            .iter()
+            .find(|c| c.id == id)
+            .expect("the claim")
+            .verdict
+    }
+
+    /// O2: BC's final success inside [60 %, 80 %] and its change from the second checkpoint to
+    /// the last inside [−10, +10] pp; a BC that keeps improving is not "constant".
+    #[test]
+    fn bc_is_constant_when_its_change_after_the_second_checkpoint_is_small() {
+        let runs = |late: [f64; 4]| -> Vec<(RunStatus, Vec<At>)> {
+            [
+                (0.65, late[0]),
+                (0.7, late[1]),
+                (0.75, late[2]),
+                (0.7, late[3]),
+            ]
+            .iter()
+            .map(|&(second, last)| {
+                let p = vec![
+                    (0.0, 5, 1.0, 1.0),
+                    (second, 5, 1.0, 1.0),
+                    (last, 5, 1.0, 1.0),
+                ];
+                (RunStatus::NotConverged, p)
+            })
+            .collect()
+        };
+        let flat = [row("BC", &runs([0.7, 0.7, 0.7, 0.72]))];
+        assert_eq!(
+            verdict_of(&obstacle_success_claims(&flat), "O2"),
+            Verdict::Reproduced
+        );
+        let mut rising = runs([0.7, 0.7, 0.7, 0.72]);
+        for (r, first) in rising.iter_mut().zip([0.1, 0.2, 0.1, 0.2]) {
+            r.1[1].0 = first;
+        }
+        assert_eq!(
+            verdict_of(&obstacle_success_claims(&[row("BC", &rising)]), "O2"),
+            Verdict::NotReproduced
+        );
+    }
+
+    /// The six rows the thesis compared on the obstacle task, BC's runs given, every other row
+    /// with 4 runs of 1–2 crashes.
+    fn with_bc(bc: &[(RunStatus, Vec<At>)]) -> Vec<ConfigWithTiming> {
+        let mut rows = vec![row("BC", bc)];
+        for label in ["DAgger", "SGD", "Adam", "RMSProp", "STORM"] {
+            let mut runs = same(2, &[(0.0, 1, 1.0, 1.0)]);
+            runs.extend(same(2, &[(0.0, 2, 1.0, 1.0)]));
+            rows.push(row(label, &runs));
+        }
+        rows
+    }
+
+    /// O6 compares BC's crashes (diverged runs left out) with every other row's; a diverged BC run
+    /// does not cap a "most crashes" verdict, a majority of diverged runs makes it not
+    /// reproduced (exactly half is no majority).
+    #[test]
+    fn bc_has_the_most_crashes_against_every_other_row_and_not_with_most_runs_diverged() {
+        let high = |n: usize| same(n, &[(0.0, 9, 1.0, 1.0)]);
+        let o6 = |bc: Vec<(RunStatus, Vec<At>)>| {
+            verdict_of(&obstacle_extreme_claims(&with_bc(&bc)), "O6")
+        };
+        assert_eq!(o6(high(4)), Verdict::Reproduced);
+        let mut one = high(4);
+        one.push((diverged(), vec![]));
+        assert_eq!(o6(one), Verdict::Reproduced);
+        let mut half = high(2);
+        half.extend([(diverged(), vec![]), (diverged(), vec![])]);
+        assert_eq!(o6(half), Verdict::Reproduced);
+        let mut most = high(2);
+        most.extend([
+            (diverged(), vec![]),
+            (diverged(), vec![]),
+            (diverged(), vec![]),
+        ]);
+        assert_eq!(o6(most), Verdict::NotReproduced);
+        // Fewer crashes than the others: some other's interval lies wholly above BC's.
+        assert_eq!(o6(same(4, &[(0.0, 0, 1.0, 1.0)])), Verdict::NotReproduced);
+    }
+
+    /// O7: STORM's lowest gradient norm is capped at inconclusive by one diverged STORM run.
+    #[test]
+    fn a_diverged_storm_run_caps_its_lowest_gradient_norm() {
+        let mut rows: Vec<ConfigWithTiming> = ["SGD", "Adam", "RMSProp"]
+            .iter()
+            .map(|l| row(l, &same(4, &[(0.0, 1, 1.0, 5.0)])))
+            .collect();
+        let low = same(4, &[(0.0, 1, 1.0, 0.1)]);
+        rows.push(row("STORM", &low));
+        assert_eq!(
+            verdict_of(&obstacle_extreme_claims(&rows), "O7"),
+            Verdict::Reproduced
+        );
+        let mut capped = low;
+        capped.push((diverged(), vec![]));
+        rows.pop();
+        rows.push(row("STORM", &capped));
+        assert_eq!(
+            verdict_of(&obstacle_extreme_claims(&rows), "O7"),
+            Verdict::Inconclusive
+        );
+    }
+
+    /// O8 reads DAgger's loss (runs that did not diverge) at every checkpoint after θ₁ against
+    /// every other row's, and names the first checkpoint where DAgger is not the lowest.
+    #[test]
+    fn dagger_s_loss_is_compared_at_every_checkpoint_and_the_first_exception_is_named() {
+        let others = |rows: &mut Vec<ConfigWithTiming>| {
+            for label in ["BC", "SGD", "Adam", "RMSProp", "STORM"] {
+                let mut runs = same(
+                    2,
+                    &[(0.0, 1, 5.0, 1.0), (0.0, 1, 5.0, 1.0), (0.0, 1, 3.0, 1.0)],
+                );
+                runs.extend(same(
+                    2,
+                    &[(0.0, 1, 6.0, 1.0), (0.0, 1, 6.0, 1.0), (0.0, 1, 4.0, 1.0)],
+                ));
+                rows.push(row(label, &runs));
+            }
+        };
+        let o8 = |dagger: [f64; 3], failed: bool| {
+            let points: Vec<At> = dagger.iter().map(|&l| (0.0, 1, l, 1.0)).collect();
+            let mut runs = same(3, &points);
+            if failed {
+                runs.push((diverged(), vec![(0.0, 1, 100.0, 1.0); 3]));
+            }
+            let mut rows = vec![row("DAgger", &runs)];
+            others(&mut rows);
+            let set: Vec<&ConfigResult> = rows.iter().map(|r| &r.0).collect();
+            dagger_loss_claim(&set)
+        };
+        let below = o8([5.0, 1.0, 1.0], false);
+        assert_eq!(below.verdict, Verdict::Reproduced);
+        assert!(
+            below.evidence.contains(
+                "2 checkpoints after θ₁; DAgger below every other at 2 of them; at the last"
+            ),
+            "{}",
+            below.evidence
+        );
+        // A diverged run caps the verdict; its loss is left out of DAgger's.
+        let capped = o8([5.0, 1.0, 1.0], true);
+        assert_eq!(capped.verdict, Verdict::Inconclusive);
+        assert!(
+            capped.evidence.contains("at 2 of them;"),
+            "{}",
+            capped.evidence
+        );
+        let later = o8([5.0, 1.0, 3.5], false);
+        assert_eq!(later.verdict, Verdict::Inconclusive);
+        assert!(
+            later
+                .evidence
+                .contains("at 1 of them (first exception: checkpoint 2, DAgger 3.5"),
+            "{}",
+            later.evidence
+        );
+        let above = o8([5.0, 9.0, 1.0], false);
+        assert_eq!(above.verdict, Verdict::NotReproduced);
+        assert!(above.evidence.contains("(first exception: checkpoint 1,"));
+    }
+
     #[test]
     fn time_to_converge_counts_unconverged_and_diverged_runs_as_infinite() {
         let diverged = RunStatus::Diverged {
