@@ -1174,6 +1174,129 @@ mod tests {
         assert!(above.evidence.contains("(first exception: checkpoint 1,"));
     }
 
+    /// A row `label` whose runs end as the statuses given, each with one checkpoint of that mean
+    /// reward and resets before a full episode (CartPole's quantities).
+    fn cartpole_row(label: &str, runs: &[(RunStatus, f64, u32)]) -> ConfigWithTiming {
+        let mut r = row(label, &[]);
+        r.0.runs = runs
+            .iter()
+            .enumerate()
+            .map(|(i, (status, reward, resets))| {
+                let mut run = row(label, &[(status.clone(), vec![(0.0, 0, 0.0, 0.0)])])
+                    .0
+                    .runs
+                    .remove(0);
+                run.seed = i as u64;
+                let k = &mut run.checkpoints[0];
+                k.reward = Some(*reward);
+                k.resets_to_full_episode = Some(*resets);
+                run
+            })
+            .collect();
+        r
+    }
+
+    fn converged_at(calls: u64) -> RunStatus {
+        RunStatus::Converged {
+            checkpoint: 1,
+            gradient_evaluations: calls,
+        }
+    }
+
+    /// O9, O10 and C1 compare the medians of the named rows: STORM's against every other row's,
+    /// DAgger's against every other row's.
+    #[test]
+    fn the_call_claims_compare_one_row_with_every_other_row() {
+        let rows = |storm: u64, dagger: u64| -> Vec<ConfigWithTiming> {
+            [
+                ("STORM", storm),
+                ("SGD", 1000),
+                ("RMSProp", 1000),
+                ("DAgger", dagger),
+                ("Adam", 1000),
+            ]
+            .iter()
+            .map(|&(l, calls)| cartpole_row(l, &vec![(converged_at(calls), 500.0, 0); 10]))
+            .collect()
+        };
+        let verdicts = |rows: &[ConfigWithTiming]| {
+            let o = obstacle_calls_claims(rows);
+            let c = cartpole_claims(rows, 100);
+            (
+                verdict_of(&o, "O9"),
+                verdict_of(&o, "O10"),
+                verdict_of(&c, "C1"),
+            )
+        };
+        let r = Verdict::Reproduced;
+        let n = Verdict::NotReproduced;
+        assert_eq!(verdicts(&rows(100, 10_000)), (r, r, r));
+        assert_eq!(verdicts(&rows(5000, 10)), (n, n, n));
+    }
+
+    /// C3 reads every thesis row's final reward, and only the thesis rows'.
+    #[test]
+    fn rewards_reach_500_on_every_thesis_row_and_extra_rows_do_not_count() {
+        let mut rows: Vec<ConfigWithTiming> = ["DAgger", "Adam", "RMSProp", "STORM"]
+            .iter()
+            .map(|l| cartpole_row(l, &vec![(RunStatus::NotConverged, 500.0, 0); 10]))
+            .collect();
+        let mut extra = cartpole_row("SGD", &vec![(RunStatus::NotConverged, 20.0, 0); 10]);
+        extra.0.entry.role = crate::config::Role::Extra;
+        rows.push(extra);
+        assert_eq!(
+            verdict_of(&cartpole_claims(&rows, 100), "C3"),
+            Verdict::Reproduced
+        );
+        rows[1] = cartpole_row("Adam", &vec![(RunStatus::NotConverged, 20.0, 0); 10]);
+        assert_eq!(
+            verdict_of(&cartpole_claims(&rows, 100), "C3"),
+            Verdict::NotReproduced
+        );
+    }
+
+    /// C4 compares the resets of the runs that did not diverge (a diverged run's value at the
+    /// cap is left out, not read as censoring); a row with fewer than 2 such runs prints no sd.
+    #[test]
+    fn the_crash_variance_reads_the_runs_that_did_not_diverge() {
+        let spread = |label: &str, failed: bool| {
+            let mut runs: Vec<(RunStatus, f64, u32)> = [1, 10, 20, 5, 30, 2, 15, 25, 8, 12]
+                .iter()
+                .map(|&k| (RunStatus::NotConverged, 100.0, k))
+                .collect();
+            if failed {
+                runs.push((diverged(), 0.0, 100));
+            }
+            cartpole_row(label, &runs)
+        };
+        let storm = cartpole_row(
+            "STORM",
+            &[3, 3, 3, 3, 4, 4, 4, 4, 3, 4].map(|k| (RunStatus::NotConverged, 100.0, k)),
+        );
+        let rows = vec![
+            storm.clone(),
+            spread("Adam", true),
+            spread("RMSProp", false),
+        ];
+        let c4 = cartpole_claims(&rows, 100)
+            .into_iter()
+            .find(|c| c.id == "C4")
+            .expect("C4");
+        assert_eq!(c4.verdict, Verdict::Reproduced);
+        assert!(c4.evidence.contains("Adam sd "), "{}", c4.evidence);
+        let lone = cartpole_row("RMSProp", &[(diverged(), 0.0, 100)]);
+        let rows = vec![storm, spread("Adam", false), lone];
+        let c4 = cartpole_claims(&rows, 100)
+            .into_iter()
+            .find(|c| c.id == "C4")
+            .expect("C4");
+        assert!(
+            c4.evidence.contains("RMSProp sd — (mean"),
+            "{}",
+            c4.evidence
+        );
+    }
+
     #[test]
     fn time_to_converge_counts_unconverged_and_diverged_runs_as_infinite() {
         let diverged = RunStatus::Diverged {
