@@ -1283,7 +1283,27 @@ mod tests {
             .find(|c| c.id == "C4")
             .expect("C4");
         assert_eq!(c4.verdict, Verdict::Reproduced);
-        assert!(c4.evidence.contains("Adam sd "), "{}", c4.evidence);
+        // STORM: mean 3.5, sample variance 10 · 0.25 / 9; two values 0 and 2: sd √2.
+        assert!(
+            c4.evidence
+                .starts_with("STORM sd 0.5270 (mean 3.500, n = 10)"),
+            "{}",
+            c4.evidence
+        );
+        let two = cartpole_row(
+            "STORM",
+            &[0, 2].map(|k| (RunStatus::NotConverged, 100.0, k)),
+        );
+        let c4 = cartpole_claims(&[two, spread("Adam", false), spread("RMSProp", false)], 100)
+            .into_iter()
+            .find(|c| c.id == "C4")
+            .expect("C4");
+        assert!(
+            c4.evidence
+                .starts_with("STORM sd 1.414 (mean 1.000, n = 2)"),
+            "{}",
+            c4.evidence
+        );
         let lone = cartpole_row("RMSProp", &[(diverged(), 0.0, 100)]);
         let rows = vec![storm, spread("Adam", false), lone];
         let c4 = cartpole_claims(&rows, 100)
