@@ -845,64 +845,78 @@ fn cartpole_claims(c: &[ConfigWithTiming], reset_cap: u32) -> Vec<Claim> {
 /// aggregated so far), so the claims compare the training wall time **to sustained
 /// convergence**, where that cost accrues, not the time of equal call budgets.
 pub fn timing_claims(r: &Results, profile: &Profile) -> Vec<Claim> {
-    let mut out = Vec::new();
-    for (id, table, kind, set, labels) in [
+    [
         ("T1", "Table 4.2", TaskKind::Obstacle, &r.obstacle, &T41[..]),
         ("T2", "Table 4.4", TaskKind::Cartpole, &r.cartpole, &T43[..]),
-    ] {
-        let times: Vec<(String, MedianCi)> = labels
-            .iter()
-            .filter_map(|l| {
-                let (c, t) = set
-                    .iter()
-                    .find(|x| x.0.label == *l && x.0.entry.role == crate::config::Role::Thesis)?;
-                Some((
-                    (*l).to_string(),
-                    MedianCi::of(&time_to_converge(c, t.as_ref()?), LEVEL),
-                ))
-            })
-            .collect();
-        let verdict = match times.iter().find(|t| t.0 == "DAgger") {
-            Some((_, d)) => most(
-                d,
-                &times
-                    .iter()
-                    .filter(|t| t.0 != "DAgger")
-                    .map(|t| &t.1)
-                    .collect::<Vec<_>>(),
-            ),
-            None => Verdict::Inconclusive,
-        };
-        let c = Claim {
-            id: id.into(),
-            source: table.into(),
-            claim: "DAgger's runtime is much higher than the other algorithms'".into(),
-            rule: format!(
-                "the median training wall time to sustained convergence (seconds; +∞ for a run \
-                 that did not converge or diverged) with its distribution-free 95% interval: \
-                 DAgger's wholly above that of every other row of the thesis's {table} ({}): \
-                 reproduced; another's wholly above DAgger's: not reproduced; else inconclusive",
-                labels
-                    .iter()
-                    .filter(|l| **l != "DAgger")
-                    .copied()
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-            evidence: times
+    ]
+    .into_iter()
+    .map(|(id, table, kind, set, labels)| {
+        qualify(runtime_claim(id, table, kind, set, labels), r, |t| {
+            budget_of(profile, t)
+        })
+    })
+    .collect()
+}
+
+/// One runtime claim on the thesis rows `labels` of `set` (the table `table` of task `kind`),
+/// before [`qualify`]: DAgger's median time to converge against every other row's.
+fn runtime_claim(
+    id: &str,
+    table: &str,
+    kind: TaskKind,
+    set: &[ConfigWithTiming],
+    labels: &[&str],
+) -> Claim {
+    let times: Vec<(String, MedianCi)> = labels
+        .iter()
+        .filter_map(|l| {
+            let (c, t) = set
                 .iter()
-                .map(|(l, m)| format!("{l} median {} s", m.text(num)))
+                .find(|x| x.0.label == *l && x.0.entry.role == crate::config::Role::Thesis)?;
+            Some((
+                (*l).to_string(),
+                MedianCi::of(&time_to_converge(c, t.as_ref()?), LEVEL),
+            ))
+        })
+        .collect();
+    let verdict = match times.iter().find(|t| t.0 == "DAgger") {
+        Some((_, d)) => most(
+            d,
+            &times
+                .iter()
+                .filter(|t| t.0 != "DAgger")
+                .map(|t| &t.1)
+                .collect::<Vec<_>>(),
+        ),
+        None => Verdict::Inconclusive,
+    };
+    Claim {
+        id: id.into(),
+        source: table.into(),
+        claim: "DAgger's runtime is much higher than the other algorithms'".into(),
+        rule: format!(
+            "the median training wall time to sustained convergence (seconds; +∞ for a run \
+             that did not converge or diverged) with its distribution-free 95% interval: \
+             DAgger's wholly above that of every other row of the thesis's {table} ({}): \
+             reproduced; another's wholly above DAgger's: not reproduced; else inconclusive",
+            labels
+                .iter()
+                .filter(|l| **l != "DAgger")
+                .copied()
                 .collect::<Vec<_>>()
-                .join("; "),
-            verdict,
-            caveat: None,
-            task: None,
-            compared: Vec::new(),
-        }
-        .on(kind, labels);
-        out.push(qualify(c, r, |t| budget_of(profile, t)));
+                .join(", ")
+        ),
+        evidence: times
+            .iter()
+            .map(|(l, m)| format!("{l} median {} s", m.text(num)))
+            .collect::<Vec<_>>()
+            .join("; "),
+        verdict,
+        caveat: None,
+        task: None,
+        compared: Vec::new(),
     }
-    out
+    .on(kind, labels)
 }
 
 /// Each run's training wall time to sustained convergence, +∞ for a run that did not converge
@@ -1315,6 +1329,55 @@ mod tests {
             "{}",
             c4.evidence
         );
+    }
+
+    /// T1/T2 compare DAgger's median time to converge (its thesis row's, not an extra row of the
+    /// same label) with every other thesis row's.
+    #[test]
+    fn dagger_s_runtime_is_compared_with_every_other_thesis_row() {
+        let timed_row = |label: &str, seconds: f64, role: crate::config::Role| {
+            let (mut c, _) = cartpole_row(label, &vec![(converged_at(10), 500.0, 0); 10]);
+            c.entry.role = role;
+            let runs = c
+                .runs
+                .iter()
+                .map(|r| crate::experiment::SeedTiming {
+                    seed: r.seed,
+                    seed_index: r.seed_index,
+                    train_seconds: 2.0 * seconds,
+                    evaluation_seconds: 0.0,
+                    checkpoint_seconds: vec![],
+                    converge_seconds: Some(seconds),
+                })
+                .collect();
+            let t = ConfigTiming {
+                task: TaskKind::Cartpole,
+                label: label.into(),
+                runs,
+                wall_seconds: 0.0,
+            };
+            (c, Some(t))
+        };
+        use crate::config::Role::{Extra, Thesis};
+        let set = |dagger: f64| {
+            vec![
+                timed_row("STORM", 1.0, Thesis),
+                timed_row("DAgger", 0.5, Extra),
+                timed_row("DAgger", dagger, Thesis),
+                timed_row("Adam", 1.0, Thesis),
+                timed_row("RMSProp", 2.0, Thesis),
+            ]
+        };
+        let t2 =
+            |dagger: f64| runtime_claim("T2", "Table 4.4", TaskKind::Cartpole, &set(dagger), &T43);
+        let slow = t2(100.0);
+        assert_eq!(slow.verdict, Verdict::Reproduced);
+        assert!(
+            slow.evidence.contains("DAgger median 100"),
+            "{}",
+            slow.evidence
+        );
+        assert_eq!(t2(0.1).verdict, Verdict::NotReproduced);
     }
 
     #[test]
