@@ -1,5 +1,5 @@
 //! What a seeded run records, for `ilopt run` and paper-checks alike: its checkpoints
-//! ([`Checkpoint`]), its deterministic result ([`SeedRun`], with how it ended as a
+//! ([`Checkpoint`], each with the [`Evaluation`] of its iterate), its deterministic result ([`SeedRun`], with how it ended as a
 //! [`RecordedTermination`]) and its wall times ([`SeedTiming`], kept apart so that every other
 //! file is byte-identical across reruns).
 //!
@@ -9,9 +9,31 @@
 
 use super::observer::IterationMetrics;
 use super::termination::RecordedTermination;
-use crate::evaluate::Evaluation;
 use crate::problem::Cost;
 use serde::{Deserialize, Serialize};
+
+/// What one evaluation of an iterate gives (formed from a task's evaluation episodes in
+/// [`crate::evaluate`]; a toy MDP's is its exact objective).
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Evaluation {
+    /// CartPole: mean reward / 500; obstacle: success rate; toy: none.
+    pub score: Option<f64>,
+    /// Mean episode reward (CartPole, obstacle).
+    pub reward: Option<f64>,
+    /// Episodes that reached the goal (obstacle) or completed 500 steps (CartPole).
+    pub successes: Option<u32>,
+    /// Crashed episodes (CartPole: ended before 500 steps).
+    pub crashes: Option<u32>,
+    /// Timed-out episodes (obstacle).
+    pub timeouts: Option<u32>,
+    /// Mean per-decision supervised loss against the expert on the visited states.
+    pub loss: Option<f64>,
+    /// The obstacle task: the loss's x and y parts (their sum is `loss`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub loss_xy: Option<(f64, f64)>,
+    /// Toy: the exact objective F(θ).
+    pub objective: Option<f64>,
+}
 
 /// One checkpoint of a run: the run's state at the first iterate whose cumulative gradient calls
 /// reach the nominal call count `at_calls`, and the evaluation of that iterate.

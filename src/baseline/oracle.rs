@@ -89,13 +89,6 @@ pub struct Baselined<P, S> {
     buffers: Buffers<S>,
 }
 
-// The baseline's state lives in plain fields behind `&mut self`: a `Baselined` oracle can be sent
-// to and shared between threads like the problem it wraps.
-const _: () = {
-    const fn send_and_sync<T: Send + Sync>() {}
-    send_and_sync::<Baselined<crate::toy::ToyProblem<f64>, f64>>();
-};
-
 /// The error of a baseline that cannot be used.
 fn invalid(msg: impl Into<String>) -> OracleError {
     OracleError::Baseline(msg.into())

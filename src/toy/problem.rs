@@ -535,6 +535,13 @@ impl<S: Scalar> IlProblem<S> for ToyProblem<S> {
     }
 }
 
+// A baseline's state lives in plain fields behind `&mut self`: a baselined oracle can be sent to
+// and shared between threads like the problem it wraps.
+const _: () = {
+    const fn send_and_sync<T: Send + Sync>() {}
+    send_and_sync::<crate::baseline::Baselined<ToyProblem<f64>, f64>>();
+};
+
 impl<S: Scalar> PerDecisionTerms<S> for ToyProblem<S> {
     fn decision_terms(
         &self,
