@@ -65,7 +65,48 @@ impl std::fmt::Display for TheorySize {
         f.write_str(self.name())
     }
 }
-pub use crate::protocol::TuningProtocol;
+
+/// The profile's successive-halving schedule and edge-extension limit (`[tuning]`), which the
+/// tuning protocol ([`crate::protocol`]) reads and checks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TuningProtocol {
+    /// The rungs' budgets as fractions of the task's budget, increasing, the last 1; each is
+    /// rounded up to a whole number of checkpoint intervals ([`TuningProtocol::rung_budgets`]).
+    /// Default `[1]`: every point runs to the whole budget (exhaustive tuning).
+    #[serde(default = "default_rungs")]
+    pub rungs: Vec<f64>,
+    /// At each rung the best ⌈n / `halving`⌉ points go on (default 3; at least 2).
+    #[serde(default = "default_halving")]
+    pub halving: u32,
+    /// How many rounds of edge extension a row may take (default 0).
+    #[serde(default)]
+    pub extensions: u32,
+    /// A grid of fewer points than this runs every point to the whole budget (successive
+    /// halving saves little on a small grid, and its early rungs can drop a slow starter);
+    /// default 0: every grid is halved.
+    #[serde(default)]
+    pub exhaustive_below: u32,
+}
+
+fn default_rungs() -> Vec<f64> {
+    vec![1.0]
+}
+
+fn default_halving() -> u32 {
+    3
+}
+
+impl Default for TuningProtocol {
+    fn default() -> Self {
+        TuningProtocol {
+            rungs: default_rungs(),
+            halving: default_halving(),
+            extensions: 0,
+            exhaustive_below: 0,
+        }
+    }
+}
 
 /// One task's experiment: the learner, the evaluation, the convergence criterion, the algorithms.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -38,6 +38,7 @@
 //! curve of a converged run is carried at its last score). The thesis's numbers never enter: the
 //! rule reads only the tuning runs.
 
+pub use crate::config::TuningProtocol;
 use crate::experiment::{RunStatus, TaskKind};
 use crate::grid::GridPoint;
 use crate::stats::derive_seed;
@@ -53,47 +54,6 @@ pub fn tuning_seed(run_key: &str, index: u32) -> u64 {
 /// The key of the tuning runs' evaluation episodes (the report runs use `"<task>-eval"`).
 pub fn tuning_eval_key(kind: TaskKind, seed_index: u32) -> String {
     format!("{}-tuning-eval|{seed_index}", kind.name())
-}
-
-/// The profile's successive-halving schedule and edge-extension limit (`[tuning]`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TuningProtocol {
-    /// The rungs' budgets as fractions of the task's budget, increasing, the last 1; each is
-    /// rounded up to a whole number of checkpoint intervals ([`TuningProtocol::rung_budgets`]).
-    /// Default `[1]`: every point runs to the whole budget (exhaustive tuning).
-    #[serde(default = "default_rungs")]
-    pub rungs: Vec<f64>,
-    /// At each rung the best ⌈n / `halving`⌉ points go on (default 3; at least 2).
-    #[serde(default = "default_halving")]
-    pub halving: u32,
-    /// How many rounds of edge extension a row may take (default 0).
-    #[serde(default)]
-    pub extensions: u32,
-    /// A grid of fewer points than this runs every point to the whole budget (successive
-    /// halving saves little on a small grid, and its early rungs can drop a slow starter);
-    /// default 0: every grid is halved.
-    #[serde(default)]
-    pub exhaustive_below: u32,
-}
-
-fn default_rungs() -> Vec<f64> {
-    vec![1.0]
-}
-
-fn default_halving() -> u32 {
-    3
-}
-
-impl Default for TuningProtocol {
-    fn default() -> Self {
-        TuningProtocol {
-            rungs: default_rungs(),
-            halving: default_halving(),
-            extensions: 0,
-            exhaustive_below: 0,
-        }
-    }
 }
 
 impl TuningProtocol {
