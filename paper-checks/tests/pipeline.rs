@@ -732,3 +732,101 @@ fn the_theory_flag_overrides_the_profile_s_size() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The selected hyper-parameters of row `label` of `task`, as `provenance.json` records them:
+/// the configuration and m.
+fn selected(out: &Path, task: &str, label: &str) -> (serde_json::Value, serde_json::Value) {
+    let p: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("provenance.json")).expect("provenance"))
+            .expect("parses");
+    let row = p["selected_hyper_parameters"]
+        .as_array()
+        .expect("a list")
+        .iter()
+        .find(|r| r["task"] == task && r["algorithm"] == label)
+        .unwrap_or_else(|| panic!("no row {task} / {label}"))
+        .clone();
+    (row["config"].clone(), row["m"].clone())
+}
+
+/// A control row takes the pick of the row it names, on its own task: not its own default,
+/// not another row's pick, not the pick of a row of that label on the other task; and the rows
+/// it does not name keep their own picks.
+#[test]
+fn a_control_row_borrows_the_pick_of_the_row_it_names_on_its_task() {
+    let d = temp_dir("borrowed");
+    // CartPole's STORM tunes η over values its default (0.01) is not among, after an Adam row
+    // of the same task; the obstacle task gets a STORM row of its own.
+    let text = TINY
+        .replace(
+            "[[cartpole.algorithms]]\nlabel = \"STORM\"\n",
+            "[[cartpole.algorithms]]\nlabel = \"Adam\"\nconfig = { algorithm = \"adam\", form = \"causal\", alpha = 0.005, beta1 = 0.9, beta2 = 0.999, epsilon = 1e-8 }\ngrid = [{ path = \"alpha\", values = [0.001, 0.002] }]\n\n[[cartpole.algorithms]]\nlabel = \"STORM\"\ngrid = [{ path = \"schedule.eta\", values = [0.001, 0.003] }]\n",
+        )
+        .replace(
+            "[cartpole]\n",
+            "[[obstacle.algorithms]]\nlabel = \"STORM\"\nconfig = { algorithm = \"storm\", form = \"causal\", correction = \"unweighted\", schedule = { kind = \"constant\", eta = 0.02, a = 0.5 } }\n\n[cartpole]\n",
+        );
+    let profile = Profile::from_toml(&text, Path::new("tiny.toml")).expect("valid");
+    let opts = Options {
+        progress: false,
+        ..Options::new(&d)
+    };
+    paper_checks::regenerate(&profile, Path::new("tiny.toml"), &text, &opts, false).expect("runs");
+    let (storm, storm_m) = selected(&d, "cartpole", "STORM");
+    // η as the profile's exact rational of its f64: a grid value, not the default 0.01.
+    let eta = storm["schedule"]["eta"]
+        .as_str()
+        .expect("an exact η")
+        .to_string();
+    let (num, den) = eta.split_once('/').expect("a fraction");
+    let eta = num.parse::<f64>().expect("digits") / den.parse::<f64>().expect("digits");
+    assert!(
+        [0.001, 0.003].iter().any(|v| (eta - v).abs() < 1e-15),
+        "{storm}"
+    );
+    let (control, control_m) = selected(&d, "cartpole", "STORM (episodic objective)");
+    assert_eq!((&control, &control_m), (&storm, &storm_m));
+    let (adam, _) = selected(&d, "cartpole", "Adam");
+    assert_eq!(adam["algorithm"], "adam", "{adam}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// A row's tuning file is reused while its key holds (a rerun does not rewrite it) and
+/// recomputed when the row's grid changes.
+#[test]
+fn a_tuning_is_reused_while_its_key_holds_and_redone_when_its_grid_changes() {
+    let d = temp_dir("tuning-cache");
+    regenerate_in(&d, 2, false);
+    let file = d.join("runs/tuning-obstacle-sgd.json");
+    let written = std::fs::metadata(&file)
+        .expect("a tuning file")
+        .modified()
+        .expect("mtime");
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    regenerate_in(&d, 2, false);
+    let again = std::fs::metadata(&file)
+        .expect("a tuning file")
+        .modified()
+        .expect("mtime");
+    assert_eq!(
+        written, again,
+        "an unchanged row's tuning file was rewritten"
+    );
+    let text = TINY.replace("from = 1e-5, to = 3e-5", "from = 1e-5, to = 1e-4");
+    let profile = Profile::from_toml(&text, Path::new("tiny.toml")).expect("valid");
+    let opts = Options {
+        progress: false,
+        ..Options::new(&d)
+    };
+    paper_checks::regenerate(&profile, Path::new("tiny.toml"), &text, &opts, false).expect("runs");
+    let t: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&file).expect("a tuning file")).expect("parses");
+    let etas: Vec<String> = t["points"]
+        .as_array()
+        .expect("points")
+        .iter()
+        .map(|p| p["point"]["values"][0][1].to_string())
+        .collect();
+    assert!(etas.iter().any(|e| e.contains("0.0001")), "{etas:?}");
+    let _ = std::fs::remove_dir_all(&d);
+}
