@@ -830,3 +830,29 @@ fn a_tuning_is_reused_while_its_key_holds_and_redone_when_its_grid_changes() {
     assert!(etas.iter().any(|e| e.contains("0.0001")), "{etas:?}");
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// Successive halving as the profile states it: every rung but the last keeps at least
+/// ⌈n / halving⌉ of its n points (more when points tie on what their runs read), the last
+/// keeps the pick alone.
+#[test]
+fn every_rung_but_the_last_keeps_the_best_share_and_the_last_keeps_one() {
+    let d = temp_dir("rungs");
+    regenerate_in(&d, 2, false);
+    let t: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(d.join("runs/tuning-obstacle-sgd.json")).expect("a tuning file"),
+    )
+    .expect("parses");
+    let rounds = t["rounds"].as_array().expect("rounds");
+    assert!(!rounds.is_empty());
+    for round in rounds {
+        let rungs = round["rungs"].as_array().expect("rungs");
+        assert_eq!(rungs.len(), 2, "{round}");
+        let (first, last) = (&rungs[0], &rungs[1]);
+        let n = first["points"].as_u64().expect("points");
+        let kept = first["kept"].as_u64().expect("kept");
+        assert!(kept >= n.div_ceil(2) && kept <= n, "{round}");
+        assert_eq!(last["points"].as_u64(), Some(kept), "{round}");
+        assert_eq!(last["kept"].as_u64(), Some(1), "{round}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
