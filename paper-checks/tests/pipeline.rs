@@ -833,7 +833,7 @@ fn a_tuning_is_reused_while_its_key_holds_and_redone_when_its_grid_changes() {
 
 /// Successive halving as the profile states it: every rung but the last keeps at least
 /// ⌈n / halving⌉ of its n points (more when points tie on what their runs read), the last
-/// keeps the pick alone.
+/// keeps the pick alone; a pick on an end of a log range extends it.
 #[test]
 fn every_rung_but_the_last_keeps_the_best_share_and_the_last_keeps_one() {
     let d = temp_dir("rungs");
@@ -843,7 +843,18 @@ fn every_rung_but_the_last_keeps_the_best_share_and_the_last_keeps_one() {
     )
     .expect("parses");
     let rounds = t["rounds"].as_array().expect("rounds");
-    assert!(!rounds.is_empty());
+    // The first pick, η = 10⁻⁵ with m = 1, lies on the lower end of η's range [10⁻⁵, 3·10⁻⁵]:
+    // the range grows by the next value down and the selection is made again.
+    assert_eq!(
+        rounds[0]["pick"], "step.eta=0.00001, m=1",
+        "{}",
+        t["rounds"]
+    );
+    assert_eq!(
+        rounds[0]["extended"],
+        serde_json::json!(["step.eta down to 0.000003"])
+    );
+    assert_eq!(rounds.len(), 2, "{}", t["rounds"]);
     for round in rounds {
         let rungs = round["rungs"].as_array().expect("rungs");
         assert_eq!(rungs.len(), 2, "{round}");
