@@ -833,7 +833,8 @@ fn a_tuning_is_reused_while_its_key_holds_and_redone_when_its_grid_changes() {
 
 /// Successive halving as the profile states it: every rung but the last keeps at least
 /// ⌈n / halving⌉ of its n points (more when points tie on what their runs read), the last
-/// keeps the pick alone; a pick on an end of a log range extends it.
+/// keeps the pick alone; a pick on an end of a log range extends it; points that tie with the
+/// pick are named.
 #[test]
 fn every_rung_but_the_last_keeps_the_best_share_and_the_last_keeps_one() {
     let d = temp_dir("rungs");
@@ -855,6 +856,24 @@ fn every_rung_but_the_last_keeps_the_best_share_and_the_last_keeps_one() {
         serde_json::json!(["step.eta down to 0.000003"])
     );
     assert_eq!(rounds.len(), 2, "{}", t["rounds"]);
+    // The final pick, the smaller step among points whose tuning runs all read alike, is the
+    // selected point; every other point of the last rung is reported as tied with it.
+    assert_eq!(rounds[1]["pick"], "step.eta=3e-6, m=1");
+    let selected = t["selected"].as_u64().expect("an index") as usize;
+    assert_eq!(
+        t["points"][selected]["point"]["values"],
+        serde_json::json!([["step.eta", 3e-6], ["m", 1]])
+    );
+    assert_eq!(
+        t["tied_with"],
+        serde_json::json!([
+            "step.eta=3e-6, m=2",
+            "step.eta=0.00001, m=1",
+            "step.eta=0.00001, m=2",
+            "step.eta=0.00003, m=1",
+            "step.eta=0.00003, m=2"
+        ])
+    );
     for round in rounds {
         let rungs = round["rungs"].as_array().expect("rungs");
         assert_eq!(rungs.len(), 2, "{round}");
