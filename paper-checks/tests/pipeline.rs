@@ -886,3 +886,29 @@ fn every_rung_but_the_last_keeps_the_best_share_and_the_last_keeps_one() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The appendix judges the claims of chapter 4 whose rows the profile has (the tiny profile:
+/// every claim but O2 (no BC row), O9 (no obstacle STORM row), C2 and C4 (no CartPole Adam or
+/// RMSProp row); the others as inconclusive where rows are missing), and `results.md` lists them.
+#[test]
+fn the_appendix_judges_the_claims_whose_rows_the_profile_has() {
+    let d = temp_dir("claims");
+    regenerate_in(&d, 2, false);
+    let results = std::fs::read_to_string(d.join("results.md")).expect("results.md");
+    assert!(results.starts_with("12 claims of chapter 4: "), "{results}");
+    let listed: Vec<&str> = results
+        .lines()
+        .filter_map(|l| l.strip_prefix("| ")?.split_once(" |").map(|x| x.0))
+        .filter(|id| {
+            id.len() >= 2 && id.len() <= 3 && id.chars().skip(1).all(|c| c.is_ascii_digit())
+        })
+        .collect();
+    assert_eq!(
+        listed,
+        [
+            "O1", "O3", "O4", "O5", "O6", "O7", "O8", "O10", "C1", "C3", "T1", "T2"
+        ],
+        "{results}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
