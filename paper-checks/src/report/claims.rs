@@ -1245,6 +1245,13 @@ mod tests {
         let r = Verdict::Reproduced;
         let n = Verdict::NotReproduced;
         assert_eq!(verdicts(&rows(100, 10_000)), (r, r, r));
+        let o9 = obstacle_calls_claims(&rows(100, 10_000)).remove(0);
+        assert!(
+            o9.evidence.starts_with("STORM median calls 100")
+                && o9.evidence.contains("SGD median calls 1000"),
+            "{}",
+            o9.evidence
+        );
         assert_eq!(verdicts(&rows(5000, 10)), (n, n, n));
     }
 
@@ -1602,6 +1609,16 @@ mod tests {
         let (t, h) = (Summary::of(&two), Summary::of(&huge));
         assert_eq!(lower_variance(&t, &h, &two, &huge), Verdict::Reproduced);
         assert_eq!(lower_variance(&h, &t, &huge, &two), Verdict::NotReproduced);
+    }
+
+    /// A claim's budget is its task's, as the profile states it.
+    #[test]
+    fn a_claim_s_budget_is_its_task_s() {
+        let text = crate::config::committed_text("quick").expect("the quick profile");
+        let p = Profile::from_toml(text, std::path::Path::new("quick.toml")).expect("valid");
+        assert_eq!(budget_of(&p, TaskKind::Obstacle), p.obstacle.budget);
+        assert_eq!(budget_of(&p, TaskKind::Cartpole), p.cartpole.budget);
+        assert_ne!(p.obstacle.budget, p.cartpole.budget);
     }
 
     /// The figures are Tables 4.1 and 4.3's gradient calls, found by task and label together.
