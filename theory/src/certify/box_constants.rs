@@ -11,12 +11,15 @@
 //! gives one from an a.s. bound on the estimator.
 
 use crate::certify::bnb::{BnbError, sup_bound};
+use crate::certify::charts::SecondOrder;
 use crate::certify::recheck::{Coverage, Quantity, Recheck, recheck};
+use crate::certify::v_is::{Curvature, ThirdOrder};
 use crate::record::certificate::Chart;
 use crate::record::constant::Constant;
 use ilopt::exact::baseline::baselined_moments;
 use ilopt::exact::enumerate::{moments, prefixes};
 use ilopt::exact::forward::forward;
+use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
 use ilopt::toy::{ToyMdp, ToyProblem};
 
@@ -281,17 +284,22 @@ pub fn tied_softmax_g_inf_closed_form(horizon: usize, c: f64) -> f64 {
     (2f64.sqrt() * ((t - 1.0) * 4.0 / (n * c).sqrt() + (t - 1.0) * (t - 2.0) * psi)) * (1.0 + 1e-12)
 }
 
-/// L̃ of assumption (A4) for IS-STORM with per-decision or trajectory weights (math.md §7.1):
-/// `V_IS(θ, θ′) = Σ_τ̄ [p(τ̄;θ′)‖g(θ′)‖² − 2p(τ̄;θ)⟨g(θ′), g(θ)⟩ + p(τ̄;θ)²/p(τ̄;θ′)‖g(θ)‖²]`
-/// vanishes with zero gradient at θ′ = θ, so by Taylor `L̃² ≤ ½ sup_{θ,ϑ ∈ box} ‖∇²_{θ′}V_IS(θ, ϑ)‖`.
-/// The supremum is enclosed by 2-D branch-and-bound (1-D θ), with θ′ in `Dual<Dual<Interval>>`.
-/// (This is the whole-trajectory form of (A4), the one of math.md §3.2.) It holds on the box
-/// only; the STORM checks use [`crate::certify::global::l_tilde`], which bounds L̃ over all of ℝ².
+/// L̃ of (A4) for IS-STORM with the trajectory weight, over the box `domain`²:
+/// `V(θ, θ′) = E_{τ∼θ′}(g(θ′, τ) − w g(θ, τ))²` with w = p(τ̄;θ)/p(τ̄;θ′) vanishes with zero
+/// θ′-derivative at θ′ = θ, so by Taylor `L̃² ≤ ½ sup_{θ,ϑ ∈ box} |∂²V/∂θ′²(θ, ϑ)|`, enclosed box by
+/// box by 2-D branch-and-bound with the mean-value form of [`crate::certify::v_is`] in the core
+/// chart (θ itself). With `baseline` = Some(b) the estimator is the baselined
+/// `g_b = g − b Σ_i ψ_i` (one constant b for every decision, the weight on `g_b(θ, τ̄)`,
+/// docs/math.md §9) and the constant is L̃_b. (This is the whole-trajectory form of (A4), the one
+/// of math.md §3.2.) It holds on the box only; the STORM rows use
+/// [`crate::certify::global::l_tilde`] and
+/// [`crate::certify::global_baselined::l_tilde_baselined`], which bound it over all of ℝ².
 ///
 /// # Errors
 /// [`BnbError`] if the engine fails on a box, or for a policy with more than one parameter.
 pub fn l_tilde(
     mdp: &ToyMdp,
+    baseline: Option<&BigRational>,
     domain: [f64; 2],
     tol: f64,
     max_boxes: usize,
@@ -302,37 +310,24 @@ pub fn l_tilde(
             message: "L̃ is implemented for one parameter".into(),
         });
     }
-    let pi = ToyProblem::<Interval>::new(mdp);
-    let pd = ToyProblem::<Dual<Dual<Interval>>>::new(mdp);
-    let f = |b: &[Interval]| -> Result<Interval, String> {
-        let at_theta = prefixes(&pi, &b[..1]).map_err(|e| e.to_string())?;
-        let v = Dual::variable(Dual::variable(b[1], 0, 1), 0, 1);
-        let at_prime = prefixes(&pd, std::slice::from_ref(&v)).map_err(|e| e.to_string())?;
-        if at_theta.len() != at_prime.len() {
-            return Err("prefix sets differ".into());
-        }
-        let lift = |x: &Interval| Dual::constant(Dual::constant(*x));
-        let mut total = Dual::<Dual<Interval>>::zero();
-        for (a, b) in at_theta.iter().zip(&at_prime) {
-            if a.states != b.states || a.actions != b.actions {
-                return Err("prefix order differs".into());
-            }
-            let (p, g) = (lift(&a.prob), lift(&a.estimate[0]));
-            let (pp, gp) = (&b.prob, &b.estimate[0]);
-            total += pp.clone() * gp * gp - Dual::from_i64(2) * &p * gp * &g
-                + p.clone() * &p / pp * &g * &g;
-        }
-        Ok(total.gradient_padded(1)[0].gradient_padded(1)[0].abs())
+    let pd = ToyProblem::<SecondOrder>::new(mdp);
+    let p3 = ToyProblem::<ThirdOrder>::new(mdp);
+    let curvature = Curvature::new(mdp, &pd, &p3, Weighting::Trajectory, baseline);
+    let f = |x: &[Interval]| -> Result<Interval, String> {
+        Ok(curvature.mean_value(&[Chart::Core, Chart::Core], x)?.abs())
     };
     let r = sup_bound(f, &[domain, domain], tol, max_boxes)?;
     let v = sqrt_up(r.upper / 2.0 * (1.0 + 1e-15));
+    let (name, estimator) = match baseline {
+        None => ("L̃", String::new()),
+        Some(b) => ("L̃_b", format!(" (trajectory weight on g_b, b = {b})")),
+    };
     let how = format!(
-        "√(½ sup |∂²V_IS/∂θ′²|) over {:?}² by 2-D interval branch-and-bound ({} boxes)",
-        domain,
+        "√(½ sup |∂²V/∂θ′²|){estimator} over {domain:?}² by 2-D interval branch-and-bound, mean-value form ({} boxes)",
         r.certificate.len()
     );
     Ok(Constant::rigorous(
-        "L̃",
+        name,
         r,
         v,
         |s| attained_sqrt(s / 2.0),

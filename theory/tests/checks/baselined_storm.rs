@@ -7,9 +7,9 @@
 //! * the importance-weighted baselined old-point estimate is exactly unbiased in ℚ with a constant
 //!   baseline, and biased with one that looks at the scored action.
 
-use crate::common::{q, quick_global_constants, table_alpha};
+use crate::common::{q, quick_global_constants, table_alpha, v_b};
 use ilopt::exact::baseline::baselined_moments;
-use ilopt::exact::enumerate::{for_each_prefix, prefixes};
+use ilopt::exact::enumerate::for_each_prefix;
 use ilopt::exact::forward::forward;
 use ilopt::oracle::DecisionTerms;
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar};
@@ -44,31 +44,6 @@ fn quick_choice() -> &'static Choice {
 fn var_b(p: &ToyProblem<Q>, b: &Q, theta: &Q) -> Q {
     let m = baselined_moments(p, std::slice::from_ref(theta), std::slice::from_ref(b)).unwrap();
     m.second_moment - m.expected_estimate[0].clone() * &m.expected_estimate[0]
-}
-
-/// V_b(θ, θ′) = Σ_τ̄ p(τ̄; θ′) (g_b(θ′, τ̄) − w g_b(θ, τ̄))², w = p(τ̄; θ)/p(τ̄; θ′), exactly: g from
-/// the prefix enumeration and `g_b = g − b Σ_i ψ(a_i|s_i)` with the scores read off the tables.
-fn v_b(p: &ToyProblem<Q>, b: &Q, theta: &Q, prime: &Q) -> Q {
-    let (t_old, t_new) = (
-        p.table(std::slice::from_ref(theta)).unwrap(),
-        p.table(std::slice::from_ref(prime)).unwrap(),
-    );
-    let at = prefixes(p, std::slice::from_ref(theta)).unwrap();
-    let pr = prefixes(p, std::slice::from_ref(prime)).unwrap();
-    let score_sum = |t: &ilopt::toy::PolicyTable<Q>, states: &[usize], actions: &[usize]| {
-        states
-            .iter()
-            .zip(actions)
-            .fold(Q::zero(), |a, (&s, &act)| a + &t.score(s, act)[0])
-    };
-    at.iter().zip(&pr).fold(Q::zero(), |acc, (x, y)| {
-        assert_eq!((&x.states, &x.actions), (&y.states, &y.actions));
-        let w = x.prob.clone() / &y.prob;
-        let old = x.estimate[0].clone() - b.clone() * score_sum(&t_old, &x.states, &x.actions);
-        let new = y.estimate[0].clone() - b.clone() * score_sum(&t_new, &y.states, &y.actions);
-        let d = new - w * old;
-        acc + y.prob.clone() * &d * &d
-    })
 }
 
 /// The rows at the quick size: 2.b holds, its control (the bound × 1/200, as 2c.ctl) is flagged,

@@ -57,3 +57,34 @@ pub fn v_is_trajectory(
         acc + y.prob.clone() * &d * &d
     })
 }
+
+/// V_b(θ, θ′) = Σ_τ̄ p(τ̄; θ′) (g_b(θ′, τ̄) − w g_b(θ, τ̄))², w = p(τ̄; θ)/p(τ̄; θ′), exactly: g from
+/// the prefix enumeration and `g_b = g − b Σ_i ψ(a_i|s_i)` with the scores read off the tables.
+pub fn v_b(
+    p: &ToyProblem<BigRational>,
+    b: &BigRational,
+    theta: &BigRational,
+    prime: &BigRational,
+) -> BigRational {
+    let (t_old, t_new) = (
+        p.table(std::slice::from_ref(theta)).unwrap(),
+        p.table(std::slice::from_ref(prime)).unwrap(),
+    );
+    let at = prefixes(p, std::slice::from_ref(theta)).unwrap();
+    let pr = prefixes(p, std::slice::from_ref(prime)).unwrap();
+    let score_sum =
+        |t: &ilopt::toy::PolicyTable<BigRational>, states: &[usize], actions: &[usize]| {
+            states
+                .iter()
+                .zip(actions)
+                .fold(BigRational::zero(), |a, (&s, &act)| a + &t.score(s, act)[0])
+        };
+    at.iter().zip(&pr).fold(BigRational::zero(), |acc, (x, y)| {
+        assert_eq!((&x.states, &x.actions), (&y.states, &y.actions));
+        let w = x.prob.clone() / &y.prob;
+        let old = x.estimate[0].clone() - b.clone() * score_sum(&t_old, &x.states, &x.actions);
+        let new = y.estimate[0].clone() - b.clone() * score_sum(&t_new, &y.states, &y.actions);
+        let d = new - w * old;
+        acc + y.prob.clone() * &d * &d
+    })
+}

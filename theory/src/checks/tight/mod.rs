@@ -20,7 +20,10 @@
 //! second toy: the M family with one parameter per state, θ ∈ ℝ²) gets its own search,
 //! `1b.tight` ([`Algorithm::SgdPerState`]): 2-D iterates, every instance on which both
 //! parameters move, L_F and σ² certified on the 2-D hull; its B ÷ 2 control is stated where
-//! X̄/B ≥ ½ was reached. Row 2.b (IS-STORM with a baseline) has no tight instance yet.
+//! X̄/B ≥ ½ was reached. Row 2.b's estimator (IS-STORM on g_b, the trajectory weight on the old
+//! point's g_b, [`Algorithm::StormBaselined`]) gets the noisy STORM search: `2.b.tight.noisy` and
+//! its control, with σ²_b and L̃_b certified on the hull
+//! ([`crate::certify::box_constants::l_tilde_baselined`]).
 //!
 //! Rows: `1.tight`, `1.tight.ctl` ([`sgd`]) and `2c.tight`, `2c.tight.ctl` ([`storm`]) over every
 //! instance of the family, where the largest X̄/B is reached by noiseless instances (T = 2 and a
@@ -107,7 +110,7 @@ impl Sizes {
     pub fn budget(&self, algorithm: Algorithm) -> Budget {
         match algorithm {
             Algorithm::Sgd | Algorithm::SgdBaselined => self.sgd,
-            Algorithm::Storm => self.storm,
+            Algorithm::Storm | Algorithm::StormBaselined => self.storm,
             Algorithm::SgdPerState => self.sgd_per_state,
         }
     }
@@ -224,6 +227,8 @@ pub struct PreparedAll {
     storm: Vec<(Noise, Vec<Estimate>, storm::Prepared)>,
     /// Row 1.b's estimator (g_b), noisy instances only: with Var g ≡ 0 a baseline changes nothing.
     sgd_baselined: (Vec<Estimate>, sgd::Prepared),
+    /// Row 2.b's estimator (IS-STORM on g_b), noisy instances only, as for row 1.b.
+    storm_baselined: (Vec<Estimate>, storm::Prepared),
     /// Row 1b's family (one parameter per state).
     sgd_per_state: (Vec<Estimate>, sgd::Prepared),
 }
@@ -251,7 +256,7 @@ impl PreparedAll {
                     (
                         *n,
                         found.clone(),
-                        storm::prepare_from(found, inputs, &sizes),
+                        storm::prepare_from(found, inputs, &sizes, Algorithm::Storm),
                     )
                 })
                 .collect(),
@@ -262,6 +267,15 @@ impl PreparedAll {
                     inputs,
                     &sizes,
                     Algorithm::SgdBaselined,
+                ),
+            ),
+            storm_baselined: (
+                self.storm_baselined.0.clone(),
+                storm::prepare_from(
+                    &self.storm_baselined.0,
+                    inputs,
+                    &sizes,
+                    Algorithm::StormBaselined,
                 ),
             ),
             sgd_per_state: (
@@ -292,14 +306,19 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
         storm: NOISES
             .iter()
             .map(|&n| {
-                let found = storm::candidates(&sizes, n);
-                let p = storm::prepare_from(&found, inputs, &sizes);
+                let found = storm::candidates(&sizes, n, Algorithm::Storm);
+                let p = storm::prepare_from(&found, inputs, &sizes, Algorithm::Storm);
                 (n, found, p)
             })
             .collect(),
         sgd_baselined: {
             let found = sgd::candidates(&sizes, Noise::Required, Algorithm::SgdBaselined);
             let p = sgd::prepare_from(&found, inputs, &sizes, Algorithm::SgdBaselined);
+            (found, p)
+        },
+        storm_baselined: {
+            let found = storm::candidates(&sizes, Noise::Required, Algorithm::StormBaselined);
+            let p = storm::prepare_from(&found, inputs, &sizes, Algorithm::StormBaselined);
             (found, p)
         },
         sgd_per_state: {
@@ -315,7 +334,13 @@ pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Che
     let mut rows = vec![];
     for ((noise, _, s), (_, _, t)) in p.sgd.iter().zip(&p.storm) {
         rows.extend(sgd::rows_from(inputs, &sizes, *noise, Algorithm::Sgd, s));
-        rows.extend(storm::rows_from(inputs, &sizes, *noise, t));
+        rows.extend(storm::rows_from(
+            inputs,
+            &sizes,
+            *noise,
+            Algorithm::Storm,
+            t,
+        ));
     }
     rows.extend(sgd::rows_from(
         inputs,
@@ -323,6 +348,13 @@ pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Che
         Noise::Required,
         Algorithm::SgdBaselined,
         &p.sgd_baselined.1,
+    ));
+    rows.extend(storm::rows_from(
+        inputs,
+        &sizes,
+        Noise::Required,
+        Algorithm::StormBaselined,
+        &p.storm_baselined.1,
     ));
     rows.extend(sgd::rows_from(
         inputs,
@@ -372,6 +404,7 @@ mod tests {
             "{ids:?}"
         );
         assert!(ids.contains(&"1.b.tight.noisy"), "{ids:?}");
+        assert!(ids.contains(&"2.b.tight.noisy"), "{ids:?}");
         assert!(ids.contains(&"1b.tight"), "{ids:?}");
         for r in &all {
             let want = if r.role == Role::NegativeControl {
@@ -430,7 +463,7 @@ mod tests {
         let s = Sizes::quick();
         let turned = sgd::rows(&wrong, &s, Noise::Any, Algorithm::Sgd)
             .into_iter()
-            .chain(storm::rows(&wrong, &s, Noise::Any));
+            .chain(storm::rows(&wrong, &s, Noise::Any, Algorithm::Storm));
         for r in turned.filter(|r| r.role != Role::NegativeControl) {
             assert_eq!(r.verdict, Verdict::Fails, "{}: {}", r.id, r.details);
         }

@@ -14,7 +14,10 @@
 //! that holds every iterate almost surely, on which the rows' box constants are valid.
 
 use crate::certify::charts::prefix_terms_baselined;
+use crate::certify::global_baselined::ratio_of;
 use crate::inputs::TableInputs;
+use ilopt::algo::ConfigNumber;
+use ilopt::baseline::{Baseline, Baselined};
 use ilopt::exact::enumerate::prefixes;
 use ilopt::exact::forward::forward;
 use ilopt::problem::{Cost, IlProblem, Weighting};
@@ -89,6 +92,49 @@ fn grad_norm_sq<S: Scalar>(problem: &ToyProblem<S>, theta: &[S]) -> Result<S, St
     ))
 }
 
+/// One prefix τ̄ drawn at θ: its states and actions, p(τ̄; θ) and the estimate at θ.
+struct Draw<S> {
+    states: Vec<usize>,
+    actions: Vec<usize>,
+    prob: S,
+    estimate: Vec<S>,
+}
+
+/// Every prefix at θ with the estimate the run draws there: g (eq. 3.15, the enumeration X1), or
+/// with `baseline` = Some(b) the baselined g_b = g − b Σ_i ψ_i of one parameter (docs/math.md §9,
+/// the engine's own baselined terms, `certify::charts::prefix_terms_baselined`). Both list the
+/// prefixes in the same order, which does not depend on θ.
+fn draws<S: Scalar>(
+    problem: &ToyProblem<S>,
+    theta: &[S],
+    baseline: Option<&S>,
+) -> Result<Vec<Draw<S>>, String> {
+    Ok(match baseline {
+        None => prefixes(problem, theta)
+            .map_err(|e| e.to_string())?
+            .into_iter()
+            .map(|pre| Draw {
+                states: pre.states,
+                actions: pre.actions,
+                prob: pre.prob,
+                estimate: pre.estimate,
+            })
+            .collect(),
+        Some(b) => {
+            let table = problem.table(theta).map_err(|e| e.to_string())?;
+            prefix_terms_baselined(problem, &table, b)?
+                .into_iter()
+                .map(|pre| Draw {
+                    states: pre.states,
+                    actions: pre.actions,
+                    prob: pre.prob,
+                    estimate: vec![pre.estimate],
+                })
+                .collect()
+        }
+    })
+}
+
 /// SGD with constant step η from θ₁ (Algorithm 3, eqs. 3.23–3.27): E X over every path, where
 /// `X = (1/K) Σ_{k=1}^K ‖∇F(θ_k)‖²` is the statistic of eq. 3.27 and θ_{k+1} = θ_k − η ĝ_k,
 /// ĝ_k = `inputs.estimate(g(θ_k, τ̄_k))`; with `baseline` = Some(b) the estimate is the baselined
@@ -119,21 +165,12 @@ pub fn sgd_mean<S: Enclose>(
             continue;
         }
         let acc = acc + grad_norm_sq(&problem, &theta)?;
-        let draws: Vec<(S, Vec<S>)> = match baseline {
-            None => prefixes(&problem, &theta)
-                .map_err(|e| e.to_string())?
-                .into_iter()
-                .map(|pre| (pre.prob, pre.estimate))
-                .collect(),
-            Some(b) => {
-                let table = problem.table(&theta).map_err(|e| e.to_string())?;
-                prefix_terms_baselined(&problem, &table, b)?
-                    .into_iter()
-                    .map(|pre| (pre.prob, vec![pre.estimate]))
-                    .collect()
-            }
-        };
-        for (pre_prob, estimate) in draws {
+        for Draw {
+            prob: pre_prob,
+            estimate,
+            ..
+        } in draws(&problem, &theta, baseline)?
+        {
             let g = inputs.estimate(estimate);
             let next: Vec<S> = theta
                 .iter()
@@ -172,8 +209,13 @@ pub fn storm_schedule<S: Scalar + Roots>(l: &S, k: u64) -> Result<Vec<(S, S)>, S
 /// `d_{k+1} = ĝ(θ_{k+1}, τ̄_{k+1}) + (1 − a_{k+1})(d_k − w ĝ(θ_k, τ̄_{k+1}))` with τ̄_{k+1} drawn at
 /// θ_{k+1} and w = p(τ̄; θ_k)/p(τ̄; θ_{k+1}) (every estimate through `inputs.estimate`).
 ///
+/// With `baseline` = Some(b) the run is row 2.b's: every estimate is the baselined g_b = g − b Σ_i ψ_i
+/// (one constant b for every decision, docs/math.md §9), the new point's from the engine's
+/// baselined terms as in [`sgd_mean`], the old-point term w g_b(θ_k, τ̄) from the kit's
+/// [`Baselined`] oracle (m = 1), as `ilopt run` computes it.
+///
 /// # Errors
-/// As [`sgd_mean`], or if `S` has no cube root.
+/// As [`sgd_mean`], if `S` has no cube root, or if b is not a ratio of 64-bit integers.
 pub fn storm_mean<S: Enclose + Roots>(
     mdp: &ToyMdp,
     theta1: &[S],
@@ -181,8 +223,18 @@ pub fn storm_mean<S: Enclose + Roots>(
     k: u64,
     inputs: &TableInputs,
     max_paths: u64,
+    baseline: Option<&BigRational>,
 ) -> Result<PathMean<S>, String> {
     let mut problem = ToyProblem::<S>::new(mdp);
+    let b_s = baseline.map(S::from_rational);
+    let mut baselined = baseline
+        .map(|b| {
+            let (num, den) = ratio_of(b)?;
+            let value = ConfigNumber::ratio(num, den);
+            Baselined::new(ToyProblem::<S>::new(mdp), 1, &Baseline::Constant { value })
+                .map_err(|e| e.to_string())
+        })
+        .transpose()?;
     let paths = path_count(&problem, theta1, k, max_paths)?;
     let schedule = storm_schedule(l, k)?;
     let eta_sum = schedule.iter().fold(S::zero(), |a, (e, _)| a + e);
@@ -205,7 +257,7 @@ pub fn storm_mean<S: Enclose + Roots>(
     let mut cost = Cost::default();
     // Depth-first: (k, θ_k, d_k, path probability, Σ_{i<k} η_i ‖∇F(θ_i)‖²).
     let mut stack = vec![];
-    for pre in prefixes(&problem, theta1).map_err(|e| e.to_string())? {
+    for pre in draws(&problem, theta1, b_s.as_ref())? {
         let d = inputs.estimate(pre.estimate);
         stack.push((1u64, theta1.to_vec(), d, pre.prob, S::zero()));
     }
@@ -227,12 +279,22 @@ pub fn storm_mean<S: Enclose + Roots>(
             DVector::from_column_slice(&theta),
             DVector::from_column_slice(&next),
         );
-        for pre in prefixes(&problem, &next).map_err(|e| e.to_string())? {
+        for pre in draws(&problem, &next, b_s.as_ref())? {
             let g = inputs.estimate(pre.estimate);
             let traj = trajectory(&pre.states, &pre.actions);
-            let wg = problem
-                .weighted_estimate(&old, &new, &traj, Weighting::Trajectory, &mut cost)
-                .map_err(|e| e.to_string())?;
+            let wg = match &mut baselined {
+                None => {
+                    problem.weighted_estimate(&old, &new, &traj, Weighting::Trajectory, &mut cost)
+                }
+                Some(oracle) => oracle.weighted_estimate(
+                    &old,
+                    &new,
+                    &vec![traj],
+                    Weighting::Trajectory,
+                    &mut cost,
+                ),
+            }
+            .map_err(|e| e.to_string())?;
             let wg = inputs.estimate(wg.iter().cloned().collect());
             let keep = S::one() - a;
             let d2: Vec<S> = g
@@ -348,7 +410,7 @@ mod tests {
         )
         .unwrap();
         let (l, k) = (8.0, 12u64);
-        let m = storm_mean(&mdp, &[0.5f64], &l, k, &TableInputs::thesis(), 10).unwrap();
+        let m = storm_mean(&mdp, &[0.5f64], &l, k, &TableInputs::thesis(), 10, None).unwrap();
         let p = ToyProblem::<f64>::new(&mdp);
         let (mut theta, mut num, mut den) = (0.5f64, 0.0, 0.0);
         for i in 1..=k {
@@ -373,12 +435,77 @@ mod tests {
             k,
             &TableInputs::thesis(),
             10,
+            None,
         )
         .unwrap();
         assert!(
             iv.mean.inf() <= num / den * (1.0 + 1e-12)
                 && num / den * (1.0 - 1e-12) <= iv.mean.sup()
         );
+    }
+
+    /// K = 3 with row 2.b's baseline: X̄ written out over the 6 × 6 paths that decide θ₃, with
+    /// the old-point term w g_b(θ₁, τ̄₂) assembled here from the baselined terms at θ₁ and the
+    /// prefix weight w = p(τ̄₂; θ₁)/p(τ̄₂; θ₂), not by the `Baselined` oracle the walk uses; and
+    /// b = 0 gives the plain walk.
+    #[test]
+    fn a_baselined_storm_walk_matches_the_recursion_written_out() {
+        let mdp = m1_tied();
+        let p = ToyProblem::<f64>::new(&mdp);
+        let (l, theta1, b) = (8.0f64, 0.25f64, q("1/8"));
+        let bf = Scalar::to_f64(&b);
+        let terms = |theta: f64| {
+            let table = p.table(&[theta]).unwrap();
+            prefix_terms_baselined(&p, &table, &bf).unwrap()
+        };
+        let grad = |theta: f64| forward(&p, &[theta]).unwrap().gradient[0];
+        let sched: Vec<(f64, f64)> = (1..=3)
+            .map(|i| {
+                let y = (7.0 / (i as f64 + 7.0)).cbrt();
+                (y / (4.0 * l), y * y)
+            })
+            .collect();
+        let eta_sum: f64 = sched.iter().map(|s| s.0).sum();
+        let mut want = 0.0;
+        let at1 = terms(theta1);
+        for t1 in &at1 {
+            let d1 = t1.estimate;
+            let theta2 = theta1 - sched[0].0 * d1;
+            let at2 = terms(theta2);
+            for (t2, old) in at2.iter().zip(&at1) {
+                assert_eq!((&t2.states, &t2.actions), (&old.states, &old.actions));
+                let w = old.prob / t2.prob;
+                let d2 = t2.estimate + (1.0 - sched[0].1) * (d1 - w * old.estimate);
+                let theta3 = theta2 - sched[1].0 * d2;
+                let x = sched[0].0 * grad(theta1).powi(2)
+                    + sched[1].0 * grad(theta2).powi(2)
+                    + sched[2].0 * grad(theta3).powi(2);
+                want += t1.prob * t2.prob * x / eta_sum;
+            }
+        }
+        let walk = |baseline: Option<&BigRational>| {
+            storm_mean(
+                &mdp,
+                &[theta1],
+                &l,
+                3,
+                &TableInputs::thesis(),
+                1000,
+                baseline,
+            )
+            .unwrap()
+        };
+        let got = walk(Some(&b));
+        assert_eq!(got.paths, 216);
+        assert!(
+            (got.mean - want).abs() <= 1e-12 * want,
+            "{} {want}",
+            got.mean
+        );
+        let plain = walk(None).mean;
+        assert!((got.mean - plain).abs() > 1e-9, "{} {plain}", got.mean);
+        let zero = walk(Some(&q("0"))).mean;
+        assert!((zero - plain).abs() <= 1e-12 * plain, "{zero} {plain}");
     }
 
     /// K = 1: X = ‖∇F(θ₁)‖² (η₁ cancels); on M1 at θ₁ = 0 the enclosure holds 1/4.
@@ -391,6 +518,7 @@ mod tests {
             1,
             &TableInputs::thesis(),
             10,
+            None,
         )
         .unwrap();
         assert!(m.mean.inf() <= 0.25 && 0.25 <= m.mean.sup(), "{:?}", m.mean);

@@ -18,6 +18,7 @@
 use super::instance::{Instance, exact};
 use super::paths::{PathMean, sgd_mean, storm_mean};
 use crate::bounds::{sgd_constant, storm_fixed};
+use crate::certify::charts::prefix_terms_with;
 use crate::inputs::TableInputs;
 use ilopt::exact::baseline::baselined_moments;
 use ilopt::exact::enumerate::{moments, prefixes};
@@ -57,23 +58,39 @@ pub enum Algorithm {
     /// IS-STORM with schedule (3.43), eq. (3.60\*); the step parameter is the schedule's L.
     Storm,
     /// SGD with constant η on the baselined estimator g_b = g − bψ (one constant b =
-    /// [`baseline`] for every decision, docs/math.md §9), eq. 3.27 with σ²_b: row 1.b's estimator.
+    /// [`baseline`] for every decision, docs/math.md §9), eq. 3.27 with σ²_b: row 1.b's estimator,
+    /// on the instances where the baseline changes the estimate ([`baseline_moves_estimate`]).
     SgdBaselined,
     /// SGD with constant η, eq. 3.27, on the second toy's family: the M family with one parameter
     /// per state (θ₁ ∈ ℚ², [`Instance`]), row 1b's setting. Only instances on which both
     /// parameters move are admitted (otherwise the instance is a one-parameter one of row 1.tight).
     SgdPerState,
+    /// IS-STORM with schedule (3.43), eq. (3.60\*), on the baselined estimator g_b = g − bψ (b =
+    /// [`baseline`]), the trajectory weight on the old point's g_b: row 2.b's estimator, with σ²_b
+    /// and L̃_b in place of σ² and L̃. Like [`Algorithm::SgdBaselined`], it admits only instances on
+    /// which the baseline changes the estimate ([`baseline_moves_estimate`]).
+    StormBaselined,
 }
 
 impl Algorithm {
     /// Whether the algorithm is SGD with constant η (eq. 3.27), whatever its estimator.
     pub fn is_sgd(self) -> bool {
-        self != Algorithm::Storm
+        !self.is_storm()
+    }
+
+    /// Whether the algorithm is IS-STORM with schedule (3.43), whatever its estimator.
+    pub fn is_storm(self) -> bool {
+        matches!(self, Algorithm::Storm | Algorithm::StormBaselined)
+    }
+
+    /// The constant b of the baselined estimator g_b = g − bψ, or `None` for the plain one.
+    pub fn baseline(self) -> Option<BigRational> {
+        matches!(self, Algorithm::SgdBaselined | Algorithm::StormBaselined).then(baseline)
     }
 }
 
-/// The constant baseline of [`Algorithm::SgdBaselined`], fixed before the search: b = 1/8, the
-/// constant row 1.b's rule picks on M1.
+/// The constant baseline of [`Algorithm::SgdBaselined`] and [`Algorithm::StormBaselined`], fixed
+/// before the search: b = 1/8, the constant the rules of rows 1.b and 2.b pick on M1.
 pub fn baseline() -> BigRational {
     BigRational::from_ratio(1, 8)
 }
@@ -218,8 +235,16 @@ fn variance_estimate(mdp: &ToyMdp, pts: &[Vec<f64>], baseline: Option<f64>) -> R
 }
 
 /// √(½ max |∂²V_IS/∂θ′²|) over pairs of grid points: the Taylor bound of (A4) that
-/// [`crate::certify::box_constants::l_tilde`] certifies, estimated.
-fn l_tilde_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
+/// [`crate::certify::box_constants::l_tilde`] certifies, estimated; with `baseline` = Some(b) the
+/// same for V_b of the baselined estimator ([`l_tilde_baselined_estimate`]).
+fn l_tilde_estimate(
+    mdp: &ToyMdp,
+    pts: &[f64],
+    baseline: Option<&BigRational>,
+) -> Result<f64, String> {
+    if let Some(b) = baseline {
+        return l_tilde_baselined_estimate(mdp, pts, b);
+    }
     let pf = ToyProblem::<f64>::new(mdp);
     let pd = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
     let mut m = 0.0f64;
@@ -242,6 +267,53 @@ fn l_tilde_estimate(mdp: &ToyMdp, pts: &[f64]) -> Result<f64, String> {
     Ok((m / 2.0).sqrt())
 }
 
+/// √(½ max |∂²V_b/∂θ′²|) over pairs of grid points, V_b(θ, θ′) = E_{τ∼θ′}(g_b(θ′, τ) −
+/// w g_b(θ, τ))² with the trajectory weight w on the old point's g_b: the bound
+/// [`crate::certify::box_constants::l_tilde_baselined`] certifies, estimated.
+fn l_tilde_baselined_estimate(mdp: &ToyMdp, pts: &[f64], b: &BigRational) -> Result<f64, String> {
+    let pf = ToyProblem::<f64>::new(mdp);
+    let pd = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
+    let (bf, bd) = (
+        <f64 as Scalar>::from_rational(b),
+        Dual::<Dual<f64>>::from_rational(b),
+    );
+    let mut m = 0.0f64;
+    for &x in pts {
+        let at = prefix_terms_with(&pf, &pf.table(&[x]).map_err(|e| e.to_string())?, Some(&bf))?;
+        for &y in pts {
+            let v = Dual::variable(Dual::variable(y, 0, 1), 0, 1);
+            let table = pd
+                .table(std::slice::from_ref(&v))
+                .map_err(|e| e.to_string())?;
+            let at_prime = prefix_terms_with(&pd, &table, Some(&bd))?;
+            let lift = |x: f64| Dual::constant(Dual::constant(x));
+            let mut total = Dual::<Dual<f64>>::zero();
+            for (a, q) in at.iter().zip(&at_prime) {
+                let old = lift(a.prob) / &q.prob * lift(a.estimate);
+                let e = q.estimate.clone() - old;
+                total += q.prob.clone() * &e * &e;
+            }
+            m = m.max(total.gradient_padded(1)[0].gradient_padded(1)[0].abs());
+        }
+    }
+    Ok((m / 2.0).sqrt())
+}
+
+/// Whether g_b = g − b Σ_i ψ_i differs from g on some prefix at θ₁: on an instance without a
+/// scored decision (Σ_i ψ_i ≡ 0, e.g. T = 2, where only the start state is random) the baselined
+/// row would repeat the plain one, so the baselined searches admit only instances where it does
+/// not.
+fn baseline_moves_estimate(mdp: &ToyMdp, theta1: &[f64], b: f64) -> Result<bool, String> {
+    let p = ToyProblem::<f64>::new(mdp);
+    let plain = prefixes(&p, theta1).map_err(|e| e.to_string())?;
+    let table = p.table(theta1).map_err(|e| e.to_string())?;
+    let baselined = prefix_terms_with(&p, &table, Some(&b))?;
+    Ok(plain
+        .iter()
+        .zip(&baselined)
+        .any(|(g, gb)| (g.estimate[0] - gb.estimate).abs() > 1e-9 * (1.0 + g.estimate[0].abs())))
+}
+
 /// Evaluate a candidate (module docs); `None` if its step condition fails with the estimated
 /// constants, or it cannot be evaluated (too many paths, a table that cannot be built).
 pub fn evaluate(
@@ -257,7 +329,13 @@ pub fn evaluate(
     let mdp = inst.mdp().ok()?;
     let theta1: Vec<f64> = inst.theta1.iter().map(Scalar::to_f64).collect();
     let inputs = TableInputs::thesis();
-    let b = (algorithm == Algorithm::SgdBaselined).then(|| Scalar::to_f64(&baseline()));
+    let exact_b = algorithm.baseline();
+    let b = exact_b.as_ref().map(Scalar::to_f64);
+    if let Some(b) = b
+        && !baseline_moves_estimate(&mdp, &theta1, b).ok()?
+    {
+        return None;
+    }
     let run = match algorithm {
         Algorithm::Sgd | Algorithm::SgdBaselined | Algorithm::SgdPerState => sgd_mean(
             &mdp,
@@ -269,7 +347,7 @@ pub fn evaluate(
             b.as_ref(),
         )
         .ok()?,
-        Algorithm::Storm => {
+        Algorithm::Storm | Algorithm::StormBaselined => {
             // In intervals, as the row will run it: a long run whose enclosure grows useless
             // (interval arithmetic's wrapping) is passed over here rather than at certification.
             let iv = |x: f64| Interval::try_from((x, x)).ok();
@@ -280,6 +358,7 @@ pub fn evaluate(
                 inst.k,
                 &inputs,
                 max_paths,
+                exact_b.as_ref(),
             )
             .ok()?;
             let width = run.mean.wid();
@@ -317,9 +396,9 @@ pub fn evaluate(
             let b = |s2: f64| sgd_constant(l_f, c.step, s2, b_f, inst.k);
             (b(sigma2), b(0.0))
         }
-        Algorithm::Storm => {
+        Algorithm::Storm | Algorithm::StormBaselined => {
             let coarse = grid(run.hull[0], GRID.div_ceil(4), PAIR_SPACING);
-            let l = l_f.max(l_tilde_estimate(&mdp, &coarse).ok()?);
+            let l = l_f.max(l_tilde_estimate(&mdp, &coarse, exact_b.as_ref()).ok()?);
             if l * MARGIN > c.step {
                 return None;
             }
@@ -354,7 +433,7 @@ const STORM_KS: [u64; 8] = [1, 2, 4, 8, 16, 24, 40, 64];
 /// The horizons K a search draws from and moves between.
 fn ks(algorithm: Algorithm) -> &'static [u64] {
     match algorithm {
-        Algorithm::Storm => &STORM_KS,
+        Algorithm::Storm | Algorithm::StormBaselined => &STORM_KS,
         Algorithm::SgdPerState => &PER_STATE_KS,
         Algorithm::Sgd | Algorithm::SgdBaselined => &SGD_KS,
     }
@@ -404,7 +483,7 @@ fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate>
         .collect();
     let l = l_f_estimate(&instance.mdp().ok()?, &points(&square)).ok()?;
     let step = match algorithm {
-        Algorithm::Storm => dyadic(rng.random_range(1.0..2.5) * l),
+        Algorithm::Storm | Algorithm::StormBaselined => dyadic(rng.random_range(1.0..2.5) * l),
         _ => dyadic(rng.random_range(0.2..1.0) / l),
     };
     Some(Candidate { instance, step })
@@ -510,6 +589,45 @@ pub fn search(algorithm: Algorithm, noise: Noise, budget: Budget) -> Vec<Estimat
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::certify::box_constants::l_tilde;
+    use crate::protocol::m1_tied;
+
+    /// The box L̃ and L̃_b of rows 2c.tight and 2.b.tight: each certified enclosure
+    /// [attained, value] holds the value the search estimates on a grid of pairs inside the box
+    /// (an `f64` route: the enumeration's estimate for L̃, the baselined prefix terms for L̃_b),
+    /// and lies below the bound over all of ℝ² of the chart route ([`crate::certify::global`]).
+    #[test]
+    fn the_box_l_tilde_encloses_its_estimate_and_stays_below_the_global_one() {
+        use crate::certify::global::l_tilde as global_l_tilde;
+        use crate::certify::global_baselined::l_tilde_baselined as global_l_tilde_b;
+        use ilopt::problem::Weighting;
+        let m1 = m1_tied();
+        let domain = [-0.5, 0.75];
+        let pts = grid(domain, 9, 1.0);
+        let eighth = baseline();
+        for b in [None, Some(&eighth)] {
+            let c = l_tilde(&m1, b, domain, 1e-3, 4000).unwrap();
+            let est = l_tilde_estimate(&m1, &pts, b).unwrap();
+            let attained = c.attained.unwrap();
+            let global = match b {
+                None => global_l_tilde(&m1, Weighting::Trajectory, 1.0, 4000),
+                Some(b) => global_l_tilde_b(&m1, b, 1.0, 4000),
+            }
+            .unwrap();
+            println!(
+                "{}: [{attained}, {}] on the box, grid estimate {est}, over ℝ² ≤ {}",
+                c.name, c.value, global.value
+            );
+            assert!(attained <= c.value, "{attained} {}", c.value);
+            assert!(
+                est <= c.value,
+                "estimate {est} above the certified {}",
+                c.value
+            );
+            assert!(est >= 0.9 * attained, "estimate {est}, attained {attained}");
+            assert!(attained <= global.value, "{attained} {}", global.value);
+        }
+    }
 
     /// The quick budget's search, printed (the documented way to reproduce it).
     #[test]

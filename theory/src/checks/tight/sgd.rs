@@ -8,7 +8,7 @@
 use super::Sizes;
 use super::instance::exact;
 use super::paths::sgd_mean;
-use super::search::{Algorithm, Estimate, Noise, baseline, search};
+use super::search::{Algorithm, Estimate, Noise, search};
 use crate::bounds::{sgd_step_admissible, upper};
 use crate::certify::box_constants::{b_f, l_f, sigma2, sigma2_baselined};
 use crate::inputs::{ConstantKind, TableInputs};
@@ -26,7 +26,7 @@ fn stem(algorithm: Algorithm) -> (&'static str, &'static str) {
     match algorithm {
         Algorithm::SgdBaselined => ("1.b", RESULT_BASELINED),
         Algorithm::SgdPerState => ("1b", RESULT_PER_STATE),
-        Algorithm::Sgd | Algorithm::Storm => ("1", RESULT),
+        Algorithm::Sgd | Algorithm::Storm | Algorithm::StormBaselined => ("1", RESULT),
     }
 }
 
@@ -73,7 +73,7 @@ pub fn certify(
     let inst = &e.candidate.instance;
     let mdp = inst.mdp()?;
     let eta = exact(e.candidate.step);
-    let b = (algorithm == Algorithm::SgdBaselined).then(baseline);
+    let b = algorithm.baseline();
     let run = sgd_mean(
         &mdp,
         &inst.theta1_in::<BigRational>(),

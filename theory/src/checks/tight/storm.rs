@@ -1,10 +1,12 @@
 //! Rows 2c.tight and 2c.tight.ctl: the IS-STORM bound (eq. 3.60\*, Theorem S with schedule (3.43))
 //! at the instance of largest X̄/B found by [`super::search`], with E X enclosed in intervals over
-//! every path ([`super::paths::storm_mean`]).
+//! every path ([`super::paths::storm_mean`]); rows 2.b.tight.noisy and its control the same for
+//! row 2.b's baselined estimator g_b = g − bψ ([`Algorithm::StormBaselined`]), with σ²_b and
+//! L̃_b of (A4) for the trajectory-weighted g_b certified on the hull.
 //!
 //! The schedule's constant L is the candidate's step parameter: Theorem S holds for any
-//! L ≥ max(L_F, L̃), so the row certifies L_F and L̃ on the hull of the iterates and checks that
-//! condition before it states the bound with that L.
+//! L ≥ max(L_F, L̃), so the row certifies L_F and L̃ (L̃_b) on the hull of the iterates and checks
+//! that condition before it states the bound with that L.
 
 use super::Sizes;
 use super::instance::exact;
@@ -12,19 +14,32 @@ use super::paths::storm_mean;
 use super::search::{Algorithm, Estimate, Noise, search};
 use super::sgd::search_text;
 use crate::bounds::upper;
-use crate::certify::box_constants::{b_f, l_f, l_tilde, sigma2};
+use crate::certify::box_constants::{b_f, l_f, l_tilde, sigma2, sigma2_baselined};
 use crate::inputs::{ConstantKind, TableInputs};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::record::constant::Constant;
 use ilopt::scalar::{BigRational, Interval, Scalar};
 
 const RESULT: &str = "STORM, eq. (3.60*) (tight instance)";
+const RESULT_BASELINED: &str =
+    "STORM, eq. (3.60*), with a baseline (tight instance, beyond the thesis)";
+
+/// The row id's stem and the result of `algorithm`'s rows: "2c" (plain) or "2.b" (baselined).
+fn stem(algorithm: Algorithm) -> (&'static str, &'static str) {
+    if algorithm == Algorithm::StormBaselined {
+        ("2.b", RESULT_BASELINED)
+    } else {
+        ("2c", RESULT)
+    }
+}
 
 /// What one certified candidate gives: the enclosure of X̄, the constants on the hull.
 #[derive(Debug, Clone)]
 pub struct Certified {
     /// The search's estimate for the candidate.
     pub estimate: Estimate,
+    /// The estimator the candidate was searched and certified for.
+    pub algorithm: Algorithm,
     /// The schedule's L (the candidate's, or raised to the certified constants).
     pub l: f64,
     /// An enclosure of X̄ = E[Σ_k η_k ‖∇F(θ_k)‖² / Σ_k η_k].
@@ -33,8 +48,11 @@ pub struct Certified {
     pub hull: Vec<[f64; 2]>,
     /// Number of paths.
     pub paths: u64,
-    /// B_F (exact), L_F, L̃ and σ² (rigorous on the hull).
+    /// B_F (exact), L_F, L̃ and σ² (L̃_b and σ²_b for the baselined estimator; rigorous on the
+    /// hull).
     pub constants: [Constant; 4],
+    /// The baseline b of the estimator g_b = g − bψ, or `None` for the plain estimator.
+    pub baseline: Option<BigRational>,
 }
 
 /// Rounds of [`certify`]: how often the schedule's L may be raised to the certified
@@ -50,14 +68,21 @@ fn dyadic_up(x: f64) -> f64 {
 /// hull of those iterates. Theorem S needs the schedule's L ≥ max(L_F, L̃) on that hull; where the
 /// certified constants (branch-and-bound upper bounds, above the search's estimates) exceed the
 /// candidate's L, L is raised to them (rounded up to a multiple of 2⁻¹⁰) and the run and the
-/// constants are redone, for at most [`ROUNDS`] rounds.
+/// constants are redone, for at most [`ROUNDS`] rounds. For [`Algorithm::StormBaselined`] the run,
+/// L̃ and σ² are those of g_b.
 ///
 /// # Errors
 /// A message saying why the candidate was passed over.
-pub fn certify(e: &Estimate, inputs: &TableInputs, s: &Sizes) -> Result<Certified, String> {
+pub fn certify(
+    e: &Estimate,
+    inputs: &TableInputs,
+    s: &Sizes,
+    algorithm: Algorithm,
+) -> Result<Certified, String> {
     let inst = &e.candidate.instance;
     let mdp = inst.mdp()?;
     let one = BigRational::from_integer(1.into());
+    let b = algorithm.baseline();
     let mut l_s = e.candidate.step;
     for _ in 0..ROUNDS {
         let l = Interval::from_rational(&exact(l_s));
@@ -67,25 +92,33 @@ pub fn certify(e: &Estimate, inputs: &TableInputs, s: &Sizes) -> Result<Certifie
             &l,
             inst.k,
             inputs,
-            s.storm.max_paths,
+            s.budget(algorithm).max_paths,
+            b.as_ref(),
         )
         .map_err(|m| format!("{}, L = {l_s}: {m}", inst.describe()))?;
         let lf = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-        let lt = l_tilde(&mdp, run.hull[0], s.tol, s.max_boxes).map_err(|e| e.to_string())?;
+        let lt = l_tilde(&mdp, b.as_ref(), run.hull[0], s.tol, s.max_boxes)
+            .map_err(|e| e.to_string())?;
         let need = lf.value.max(lt.value);
         if need > l_s {
             l_s = dyadic_up(need);
             continue;
         }
-        let v = sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
+        let v = match &b {
+            None => sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes),
+            Some(b) => sigma2_baselined(&mdp, b, &run.hull, s.tol, s.max_boxes),
+        }
+        .map_err(|e| e.to_string())?;
         let bf = b_f(&mdp, &inst.theta1, None)?;
         return Ok(Certified {
             estimate: e.clone(),
+            algorithm,
             l: l_s,
             x_bar: run.mean,
             hull: run.hull,
             paths: run.paths,
             constants: [bf, lf, lt, v],
+            baseline: b,
         });
     }
     Err(format!(
@@ -106,31 +139,45 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
     let l_f = inputs.constant_f64(ConstantKind::LF, lf.value);
     let l_t = inputs.constant_f64(ConstantKind::LTilde, lt.value);
     let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
+    let (lt_name, v_name) = (&lt.name, &v.name);
+    let (stem, result) = stem(c.algorithm);
     let (id, role, prefix) = if scale == 1.0 {
         (
-            format!("2c.tight{}", noise.suffix()),
+            format!("{stem}.tight{}", noise.suffix()),
             Role::Corrected,
             String::new(),
         )
     } else {
         (
-            format!("2c.tight{}.ctl", noise.suffix()),
+            format!("{stem}.tight{}.ctl", noise.suffix()),
             Role::NegativeControl,
             format!("{scale}·"),
         )
     };
+    let (estimator, unbiased) = match &c.baseline {
+        None => (
+            String::new(),
+            "(A2) E g = ∇F, and the weighted old-point term is unbiased (identity I3)".to_string(),
+        ),
+        Some(b) => (
+            format!(" on g_b = g − bψ, b = {b}, with σ²_b and L̃_b"),
+            format!(
+                "(A2) for g_b, b = {b} fixed before any run: E g_b = ∇F and E_{{τ∼θ′}}[w g_b(θ, τ)] = ∇F(θ) (docs/math.md §9)"
+            ),
+        ),
+    };
     let claim = format!(
-        "Σ_k η_k E‖∇F(θ_k)‖² / Σ_k η_k ≤ {prefix}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))] / Σ_k (7/(k+7))^{{1/3}} for IS-STORM (trajectory weights), schedule (3.43) with L = {}, on the instance of largest X̄/B found: {}",
+        "Σ_k η_k E‖∇F(θ_k)‖² / Σ_k η_k ≤ {prefix}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))] / Σ_k (7/(k+7))^{{1/3}} for IS-STORM (trajectory weights){estimator}, schedule (3.43) with L = {}, on the instance of largest X̄/B found: {}",
         exact(l),
         inst.describe()
     );
-    let builder = Check::builder(id, RESULT, claim, role)
+    let builder = Check::builder(id, result, claim, role)
         .assumptions([
             format!(
                 "(A1), (A3), (A4) on the hull {:?} of every iterate θ₁..θ_{{K+1}} of every path",
                 c.hull
             ),
-            "(A2) E g = ∇F, and the weighted old-point term is unbiased (identity I3)".into(),
+            unbiased,
             "L ≥ max(L_F, L̃), so (C1) and (C2) hold for schedule (3.43)".into(),
         ])
         .constants(c.constants.to_vec())
@@ -140,7 +187,7 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
         return builder
             .measured(Measured::exact(x))
             .details(format!(
-                "L = {l} < max(L_F, L̃) = max({l_f}, {l_t}): Theorem S does not apply"
+                "L = {l} < max(L_F, {lt_name}) = max({l_f}, {l_t}): Theorem S does not apply"
             ))
             .decided(Method::Rigorous, Verdict::Inconclusive);
     }
@@ -158,13 +205,13 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
         .measured(Measured::exact(x).with_interval(c.x_bar.inf(), c.x_bar.sup()))
         .tightness(x / (bound * scale))
         .details(format!(
-            "X̄ = E X enclosed in intervals over all {} paths, X̄ ∈ [{:.8}, {:.8}], B = {bound:.6} (σ² = {s2:.5}, B_F = {b_f:.5}, σ² term {:.1} % of B), X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); max(L_F, L̃) = {:.4} ≤ L",
+            "X̄ = E X enclosed in intervals over all {} paths, X̄ ∈ [{:.8}, {:.8}], B = {bound:.6} ({v_name} = {s2:.5}, B_F = {b_f:.5}, {v_name} term {:.1} % of B), X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); max(L_F, {lt_name}) = {:.4} ≤ L",
             c.paths,
             c.x_bar.inf(),
             c.x_bar.sup(),
             100.0 * (1.0 - (inputs.formulas.storm_fixed)(l, 0.0, b_f, inst.k) / bound),
             x / bound,
-            search_text(&s.storm),
+            search_text(&s.budget(c.algorithm)),
             c.estimate.ratio,
             l_f.max(l_t)
         ))
@@ -174,46 +221,66 @@ pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: No
 /// The search's candidates and the first one certified under an oracle ([`super::Prepared`]).
 pub type Prepared = super::Prepared<Certified>;
 
-/// The seeded search's candidates ([`search`]); it reads no input of the table.
-pub fn candidates(s: &Sizes, noise: Noise) -> Vec<Estimate> {
-    search(Algorithm::Storm, noise, s.storm)
+/// The seeded search's candidates ([`search`]) for `algorithm` ([`Algorithm::Storm`] or
+/// [`Algorithm::StormBaselined`]); it reads no input of the table.
+pub fn candidates(s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Estimate> {
+    search(algorithm, noise, s.budget(algorithm))
 }
 
 /// Certify the best of the [`candidates`] in order until one passes, under `inputs`' oracle.
-pub fn prepare_from(found: &[Estimate], inputs: &TableInputs, s: &Sizes) -> Prepared {
-    super::first_certified(found, s.tries, |e| certify(e, inputs, s))
+pub fn prepare_from(
+    found: &[Estimate],
+    inputs: &TableInputs,
+    s: &Sizes,
+    algorithm: Algorithm,
+) -> Prepared {
+    super::first_certified(found, s.tries, |e| certify(e, inputs, s, algorithm))
 }
 
 /// Search (seeded, [`search`]) and certify the best candidates in order until one passes.
-pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Prepared {
-    prepare_from(&candidates(s, noise), inputs, s)
+pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise, algorithm: Algorithm) -> Prepared {
+    prepare_from(&candidates(s, noise, algorithm), inputs, s, algorithm)
 }
 
-/// Rows 2c.tight and 2c.tight.ctl (module docs) from [`prepare`]d candidates (made with the same
-/// oracle, sizes and noise), or one inconclusive row saying why no candidate could be certified.
-pub fn rows_from(inputs: &TableInputs, s: &Sizes, noise: Noise, p: &Prepared) -> Vec<Check> {
+/// Rows 2c.tight and 2c.tight.ctl, or 2.b.tight and its control (module docs), from
+/// [`prepare`]d candidates (made with the same oracle, sizes, noise and algorithm), or one
+/// inconclusive row saying why no candidate could be certified.
+pub fn rows_from(
+    inputs: &TableInputs,
+    s: &Sizes,
+    noise: Noise,
+    algorithm: Algorithm,
+    p: &Prepared,
+) -> Vec<Check> {
+    let (stem, result) = stem(algorithm);
     match &p.certified {
         Some(c) => super::with_control(
             |scale| row(c, inputs, scale, s, noise),
-            super::control_always(noise, Algorithm::Storm),
+            super::control_always(noise, algorithm),
             &p.passed_over,
         ),
         None => vec![p.none_certified(
             Check::builder(
-                format!("2c.tight{}", noise.suffix()),
-                RESULT,
+                format!("{stem}.tight{}", noise.suffix()),
+                result,
                 "a tight instance of eq. (3.60*)",
                 Role::Corrected,
             ),
-            &s.storm,
+            &s.budget(algorithm),
             Method::Rigorous,
         )],
     }
 }
 
 /// [`prepare`], then [`rows_from`].
-pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise) -> Vec<Check> {
-    rows_from(inputs, s, noise, &prepare(inputs, s, noise))
+pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Check> {
+    rows_from(
+        inputs,
+        s,
+        noise,
+        algorithm,
+        &prepare(inputs, s, noise, algorithm),
+    )
 }
 
 #[cfg(test)]
@@ -231,7 +298,7 @@ mod tests {
     #[test]
     fn the_tight_row_holds_and_a_halved_bound_turns_it() {
         let s = Sizes::quick();
-        let rows = rows(&TableInputs::thesis(), &s, Noise::Any);
+        let rows = rows(&TableInputs::thesis(), &s, Noise::Any, Algorithm::Storm);
         for r in &rows {
             println!(
                 "{} {:?} {:?}: {}\n  {}",
@@ -250,7 +317,56 @@ mod tests {
             },
             ..TableInputs::thesis()
         };
-        let turned = super::rows(&wrong, &s, Noise::Any);
+        let turned = super::rows(&wrong, &s, Noise::Any, Algorithm::Storm);
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
+    }
+
+    /// Row 2.b.tight.noisy at the quick size: IS-STORM on row 2.b's g_b over the noisy instances
+    /// holds with its constants (σ²_b, L̃_b) certified on the hull, reports X̄/B, and states a
+    /// B ÷ 2 control, refuted, where X̄/B ≥ ½ was reached; (3.60\*) halved refutes the row there.
+    #[test]
+    fn the_baselined_tight_row_holds_with_its_certified_constants() {
+        let s = Sizes::quick();
+        let t = std::time::Instant::now();
+        let p = prepare(
+            &TableInputs::thesis(),
+            &s,
+            Noise::Required,
+            Algorithm::StormBaselined,
+        );
+        println!("prepared in {:?}", t.elapsed());
+        let rows = rows_from(
+            &TableInputs::thesis(),
+            &s,
+            Noise::Required,
+            Algorithm::StormBaselined,
+            &p,
+        );
+        for r in &rows {
+            println!(
+                "{} {:?} {:?}: {}\n  {}",
+                r.id, r.verdict, r.tightness, r.claim, r.details
+            );
+        }
+        assert_eq!(rows[0].id, "2.b.tight.noisy", "{rows:#?}");
+        assert_eq!(rows[0].verdict, Verdict::Holds, "{}", rows[0].details);
+        let c = p.certified.as_ref().expect("a certified candidate");
+        assert_eq!(c.baseline, Some(super::super::search::baseline()));
+        let names: Vec<&str> = c.constants.iter().map(|k| k.name.as_str()).collect();
+        assert_eq!(names, ["B_F", "L_F", "L̃_b", "σ²_b"], "{names:?}");
+        assert!(rows[0].claim.contains("g_b = g − bψ"), "{}", rows[0].claim);
+        if rows[0].tightness.unwrap() >= 0.5 {
+            assert_eq!(rows[1].id, "2.b.tight.noisy.ctl");
+            assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
+            let wrong = TableInputs {
+                formulas: Formulas {
+                    storm_fixed: half,
+                    ..Formulas::THESIS
+                },
+                ..TableInputs::thesis()
+            };
+            let turned = rows_from(&wrong, &s, Noise::Required, Algorithm::StormBaselined, &p);
+            assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
+        }
     }
 }
