@@ -293,6 +293,10 @@ mod tests {
         0.5 * storm_fixed(l, s2, b_f, k)
     }
 
+    fn control_scaled(l: f64, s2: f64, b_f: f64, k: u64) -> f64 {
+        crate::checks::statistical::STORM_CONTROL_SCALE * storm_fixed(l, s2, b_f, k)
+    }
+
     /// At the quick size: the tight row holds with X̄/B ≥ ½, its B ÷ 2 control is refuted, and
     /// (3.60\*) halved refutes the theorem's row.
     #[test]
@@ -322,8 +326,9 @@ mod tests {
     }
 
     /// Row 2.b.tight.noisy at the quick size: IS-STORM on row 2.b's g_b over the noisy instances
-    /// holds with its constants (σ²_b, L̃_b) certified on the hull, reports X̄/B, and states a
-    /// B ÷ 2 control, refuted, where X̄/B ≥ ½ was reached; (3.60\*) halved refutes the row there.
+    /// holds with its constants (σ²_b, L̃_b) certified on the hull and reports X̄/B; (3.60\*) at
+    /// row 2c.ctl's control scale refutes it; where X̄/B ≥ ½ was reached it states a B ÷ 2
+    /// control, refuted, and (3.60\*) halved refutes the row.
     #[test]
     fn the_baselined_tight_row_holds_with_its_certified_constants() {
         let s = Sizes::quick();
@@ -355,6 +360,23 @@ mod tests {
         let names: Vec<&str> = c.constants.iter().map(|k| k.name.as_str()).collect();
         assert_eq!(names, ["B_F", "L_F", "L̃_b", "σ²_b"], "{names:?}");
         assert!(rows[0].claim.contains("g_b = g − bψ"), "{}", rows[0].claim);
+        // The row can fail at its size: (3.60*) scaled as the Monte-Carlo row 2c.ctl's control
+        // is refuted (X̄/B ≥ 0.01 here, so B × 1/200 lies below X̄).
+        let understated = TableInputs {
+            formulas: Formulas {
+                storm_fixed: control_scaled,
+                ..Formulas::THESIS
+            },
+            ..TableInputs::thesis()
+        };
+        let turned = rows_from(
+            &understated,
+            &s,
+            Noise::Required,
+            Algorithm::StormBaselined,
+            &p,
+        );
+        assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
         if rows[0].tightness.unwrap() >= 0.5 {
             assert_eq!(rows[1].id, "2.b.tight.noisy.ctl");
             assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
