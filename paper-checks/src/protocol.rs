@@ -322,6 +322,44 @@ pub fn ranking(scored: &[(usize, &Score, String)]) -> Vec<usize> {
     order.into_iter().map(|x| x.0).collect()
 }
 
+/// How many points a rung of successive halving promotes: the first `k` of `order` (the rung's
+/// [`ranking`], best first) and every point after them that ties with the k-th on the keys that
+/// read the runs ([`Score::ties_on_runs`]), so that a rung which cannot tell points apart
+/// eliminates none of them (the step and m break ties for the final pick, not for promotion).
+/// `scored` holds every ranked point's score by index.
+///
+/// # Panics
+/// If `k` is 0 or exceeds `order`, or a ranked index has no score in `scored`.
+pub fn promoted(order: &[usize], k: usize, scored: &[(usize, Score)]) -> usize {
+    let score_of = |i: usize| {
+        &scored
+            .iter()
+            .find(|x| x.0 == i)
+            .expect("a ranked point's score")
+            .1
+    };
+    let cutoff = score_of(order[k - 1]);
+    k + order[k..]
+        .iter()
+        .take_while(|&&i| score_of(i).ties_on_runs(cutoff))
+        .count()
+}
+
+/// The points other than the pick (grid index `pick`) that reached the pick's final budget with
+/// a score tied with its own on the keys that read the runs: the ties the step and m broke.
+pub fn tied_with(reached: &[PointResult], pick: usize, pick_score: &Score) -> Vec<String> {
+    reached
+        .iter()
+        .filter(|p| p.point.index != pick)
+        .filter(|p| {
+            p.score
+                .as_ref()
+                .is_some_and(|s| s.budget == pick_score.budget && s.ties_on_runs(pick_score))
+        })
+        .map(|p| p.point.describe())
+        .collect()
+}
+
 /// One grid point's tuning runs and score at the highest rung it reached.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PointResult {
@@ -718,6 +756,77 @@ mod tests {
         let c = (2, &base, "a".to_string());
         assert_eq!(ranking(&[a.clone(), b.clone(), c.clone()]), vec![1, 2, 0]);
         assert_eq!(ranking(&[c, a, b]), vec![1, 2, 0]);
+    }
+
+    fn scored_at(budget: u64, median_calls: f64, auc: f64, step: f64) -> Score {
+        Score {
+            budget,
+            median_calls,
+            auc,
+            step,
+            m: 1,
+            converged: 0,
+            diverged: 0,
+        }
+    }
+
+    /// A rung promotes its best k and every point tied with the k-th on the run-reading keys,
+    /// whatever their steps; a point that differs from the k-th is cut, even where it ties with
+    /// a point behind it.
+    #[test]
+    fn a_rung_promotes_its_best_k_and_the_points_tied_with_the_kth() {
+        let inf = f64::INFINITY;
+        // Scored in grid order; point 4 ties with point 1 on the runs, with a larger step.
+        let scored = vec![
+            (0, scored_at(400, 200.0, 0.5, 1e-3)),
+            (1, scored_at(400, 300.0, 0.4, 1e-3)),
+            (2, scored_at(400, inf, 0.1, 1e-3)),
+            (3, scored_at(400, 100.0, 0.9, 1e-3)),
+            (4, scored_at(400, 300.0, 0.4, 1e-2)),
+        ];
+        let ranked: Vec<(usize, &Score, String)> =
+            scored.iter().map(|(i, s)| (*i, s, i.to_string())).collect();
+        let order = ranking(&ranked);
+        assert_eq!(order, vec![3, 0, 1, 4, 2]);
+        let kept: Vec<usize> = (1..=5).map(|k| promoted(&order, k, &scored)).collect();
+        assert_eq!(kept, vec![1, 2, 4, 4, 5]);
+    }
+
+    /// The ties a pick names are the other points scored at its final budget that tie with it on
+    /// the run-reading keys: not a point with the same keys cut at an earlier rung, not one at the
+    /// final budget with another area, not one without a score.
+    #[test]
+    fn the_ties_named_are_the_points_at_the_picks_budget_that_tie_on_the_runs() {
+        let inf = f64::INFINITY;
+        let at = |i: usize, eta: f64, budget: u64, auc: f64| {
+            let mut p = point(eta, 1);
+            p.index = i;
+            PointResult {
+                point: p,
+                runs: vec![],
+                score: Some(scored_at(budget, inf, auc, eta)),
+                rung: 0,
+            }
+        };
+        let reached = vec![
+            at(0, 1e-4, 800, 0.3),
+            at(1, 1e-3, 800, 0.3),
+            at(2, 1e-2, 400, 0.3),
+            at(3, 1e-5, 800, 0.2),
+            PointResult {
+                score: None,
+                ..at(4, 1e-6, 800, 0.3)
+            },
+        ];
+        let pick = reached[0].score.clone().unwrap();
+        assert_eq!(
+            tied_with(&reached, 0, &pick),
+            vec![reached[1].point.describe()]
+        );
+        assert_eq!(
+            tied_with(&reached, 1, &reached[1].score.clone().unwrap()),
+            vec![reached[0].point.describe()]
+        );
     }
 
     #[test]

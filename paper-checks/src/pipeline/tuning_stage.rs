@@ -12,8 +12,8 @@ use crate::grid::GridPoint;
 use crate::naming::slug;
 use crate::progress::Progress;
 use crate::protocol::{
-    PointResult, Round, RungRecord, Score, TuningResult, TuningRun, ranking, tuning_eval_key,
-    tuning_seed,
+    PointResult, Round, RungRecord, Score, TuningResult, TuningRun, promoted, ranking, tied_with,
+    tuning_eval_key, tuning_seed,
 };
 use crate::shard::{Mode, Units, unit_key};
 use crate::storage::{read_json, to_json, write_atomic};
@@ -249,19 +249,10 @@ impl Row<'_> {
                         .collect::<Vec<_>>(),
                 );
                 let last = r + 1 == budgets.len();
-                let score_of = |i: usize| &scored.iter().find(|x| x.0 == i).expect("scored").1;
                 let keep = if last {
                     1
                 } else {
-                    // The best ⌈n/halving⌉, and every point tied with the last of them on the
-                    // run-reading keys: a rung that cannot tell points apart eliminates none of
-                    // them (the step tie-break is for the final pick, not for promotion).
-                    let k = protocol.kept(alive.len());
-                    let cutoff = score_of(order[k - 1]);
-                    k + order[k..]
-                        .iter()
-                        .take_while(|&&i| score_of(i).ties_on_runs(cutoff))
-                        .count()
+                    promoted(&order, protocol.kept(alive.len()), &scored)
                 };
                 rungs.push(RungRecord {
                     budget: b,
@@ -322,17 +313,8 @@ impl Row<'_> {
                     .as_ref()
                     .and_then(|p| p.score.clone())
                     .ok_or_else(|| Error::experiment(&e.label, "the pick has no score"))?;
-                let tied_with = reached
-                    .iter()
-                    .flatten()
-                    .filter(|p| p.point.index != pick)
-                    .filter(|p| {
-                        p.score.as_ref().is_some_and(|s| {
-                            s.budget == final_score.budget && s.ties_on_runs(&final_score)
-                        })
-                    })
-                    .map(|p| p.point.describe())
-                    .collect();
+                let points: Vec<PointResult> = reached.into_iter().flatten().collect();
+                let ties = tied_with(&points, pick, &final_score);
                 let on_edge = edges
                     .iter()
                     .map(|&(d, up)| {
@@ -343,7 +325,6 @@ impl Row<'_> {
                         )
                     })
                     .collect();
-                let points: Vec<PointResult> = reached.into_iter().flatten().collect();
                 let selected = points
                     .iter()
                     .position(|p| p.point.index == pick)
@@ -361,7 +342,7 @@ impl Row<'_> {
                         budget: t.budget,
                         rounds,
                         on_edge,
-                        tied_with,
+                        tied_with: ties,
                         tuning_seeds: seeds,
                     },
                     unit_keys,
