@@ -29,11 +29,14 @@ use std::borrow::Borrow;
 /// [`crate::problem::IlProblem::trajectory_loss`] sums them (start it at the absorbing tail's
 /// value): the trajectory loss from the same pass.
 ///
-/// Per decision: one [`Policy::loss_score_into`](crate::policy::Policy::loss_score_into) into
-/// preallocated buffers and O(d) field operations ([`accumulate`]), no allocation; on validated
-/// features without weights, the whole pass (the tail's term included) is the policy's
-/// [`EstimatorKernel::causal_sum_validated`]. When the loss fails at one decision and the
-/// likelihood ratio at an earlier one, the ratio's error is reported.
+/// On validated features without per-decision weights or a baseline, the whole pass (the tail's
+/// term included) is the policy's [`EstimatorKernel::causal_sum_validated`] (or its noted form),
+/// after the trajectory's log-ratios when `ratio` is given: the weight multiplies the whole
+/// estimate, so it does not enter the sum, and a failing ratio is reported before a failing
+/// loss. Otherwise, per decision: one
+/// [`Policy::loss_score_into`](crate::policy::Policy::loss_score_into) into preallocated buffers
+/// and O(d) field operations ([`accumulate`]), no allocation; the first failing decision's error
+/// is reported (its loss before its ratio).
 pub(crate) fn causal_pass<S, P, L, A>(
     policy: &P,
     theta: &[S],
@@ -52,15 +55,24 @@ where
     let scored = t.scored();
     let mut g = vec![S::zero(); d];
     let mut log_w = S::zero();
-    // θ has been checked by the caller; with every φ checked here once, the per-decision calls can
-    // skip the policy's own checks (`causal_step_validated`). Otherwise the checked calls below
-    // report the first failure.
-    // A baseline needs each decision's score, which the validated step does not write out.
+    // θ has been checked by the caller; with every φ checked here once, the policy's pass can
+    // skip its own checks. Otherwise the checked calls below report the first failure. A
+    // baseline or per-decision weights need each decision's score inside the sum, which the
+    // policy's pass does not write out.
     let validated = !per_decision && baseline.is_none() && features_valid(policy, t);
     let tail = t.absorbed;
-    if validated && ratio.is_none() {
-        // The plain causal estimator: the whole pass in the policy (one loop it may specialise),
-        // the absorbing tail's term after it.
+    if validated {
+        // The whole-trajectory weight first (so that a failing ratio is reported before a
+        // failing loss, as in the checked loop below), then the plain causal estimator: the
+        // whole pass in the policy (one loop it may specialise), the absorbing tail's term after
+        // it. The weight multiplies the whole estimate, so it does not enter the sum.
+        if let Some(theta_new) = ratio {
+            for (phi, a) in t.feature_rows().zip(t.actions).take(scored) {
+                log_w += policy
+                    .log_likelihood_ratio(theta, theta_new, phi, a)
+                    .map_err(policy_error)?;
+            }
+        }
         let (rows, actions, labels) = (t.feature_data, t.actions, t.labels);
         // Scratch only if the policy's pass asks for it (the logistic policy's records its
         // decisions there: one buffer per call).
@@ -97,25 +109,16 @@ where
     // `w_{1:t−1}` of the current step t (per-decision weights): `exp` of the log-ratios so far.
     let mut w = log_w.exp();
     for (step, ((phi, a), y)) in t.feature_rows().zip(t.actions).zip(t.labels).enumerate() {
-        if validated {
-            let l = policy
-                .causal_step_validated(theta, phi, y.borrow(), a, grad, score, &mut g, score_sum)
-                .map_err(policy_error)?;
-            if let Some(total) = loss.as_deref_mut() {
-                *total += l;
-            }
+        let l = policy
+            .loss_score_into(theta, phi, y.borrow(), a, grad, score)
+            .map_err(policy_error)?;
+        if per_decision {
+            accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
         } else {
-            let l = policy
-                .loss_score_into(theta, phi, y.borrow(), a, grad, score)
-                .map_err(policy_error)?;
-            if per_decision {
-                accumulate(&mut g, Some(&w), &l, grad, score, score_sum);
-            } else {
-                accumulate(&mut g, None, &l, grad, score, score_sum);
-            }
-            if let Some(total) = loss.as_deref_mut() {
-                *total += l;
-            }
+            accumulate(&mut g, None, &l, grad, score, score_sum);
+        }
+        if let Some(total) = loss.as_deref_mut() {
+            *total += l;
         }
         if step < scored {
             if let Some(theta_new) = ratio {
