@@ -38,13 +38,20 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     ) -> Result<(), OracleError>;
 
     /// The baselined causal estimator `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) at θ on one
-    /// trajectory, for baselines fixed before the pass (unbiased for ∇F(θ) when τ ∼ p(·; θ), since
-    /// b_i does not depend on τ).
+    /// trajectory, for baselines fixed before the pass: unbiased for ∇F(θ) when τ ∼ p(·; θ),
+    /// since b_i does not depend on τ. With `weights = Some((θ_new, weighting))` it is the
+    /// baselined importance-weighted old-point estimate at θ = θ_old on a trajectory sampled at
+    /// θ_new ([`IlProblem::weighted_estimate`] with the baseline of [`crate::baseline`]):
+    /// `g_b = c · (D + Σ_i ψ_i (L_i − w_{1:i} b_i))` ([`DecisionTerms`]; per-decision weights: the
+    /// prefix weight `w_{1:i}` on decision i's baseline term, `c = 1`; trajectory weight: every
+    /// `w = 1` inside and `c` the trajectory's weight), unbiased for ∇F(θ_old) by the argument of
+    /// the module docs of [`crate::baseline`].
     ///
     /// The default assembles it from [`PerDecisionTerms::decision_terms`] (one pass, storing each
     /// decision's score); a problem may override it with a faster pass (the real tasks fold the
     /// baseline into the plain estimator's loop, see
-    /// [`crate::oracle::EstimatorKernel::causal_sum_validated`]).
+    /// [`crate::oracle::EstimatorKernel::causal_sum_validated`], and subtract each decision's
+    /// term as it is met in the weighted pass).
     ///
     /// # Errors
     /// As [`PerDecisionTerms::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list
@@ -53,50 +60,17 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         &self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
         baseline: Given<'_, S>,
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
         let mut terms = DecisionTerms::new();
-        self.decision_terms(theta, trajectory, None, &mut terms, cost)?;
+        self.decision_terms(theta, trajectory, weights, &mut terms, cost)?;
         terms.finish();
         if !baseline.covers(terms.decisions()) {
             return Err(too_few_baselines(terms.decisions()));
         }
         let mut g = vec![S::zero(); theta.len()];
-        terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
-        Ok(DVector::from_vec(g))
-    }
-
-    /// The baselined importance-weighted old-point estimate at θ_old on a trajectory sampled at
-    /// θ_new ([`IlProblem::weighted_estimate`] with the baseline of [`crate::baseline`]), for
-    /// baselines fixed before the pass: `g_b = c · (D + Σ_i ψ_i (L_i − w_{1:i} b_i))`
-    /// ([`DecisionTerms`]; per-decision weights: the prefix weight `w_{1:i}` on decision i's
-    /// baseline term, `c = 1`; trajectory weight: every `w = 1` inside and `c` the trajectory's
-    /// weight). Unbiased for ∇F(θ_old) by the argument of the module docs of [`crate::baseline`].
-    ///
-    /// The default assembles it from [`PerDecisionTerms::decision_terms`]; a problem may override
-    /// it with one pass that subtracts each decision's term as it is met (the real tasks).
-    ///
-    /// # Errors
-    /// As [`PerDecisionTerms::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list
-    /// is shorter than the trajectory's scored decisions.
-    fn weighted_baselined_estimate(
-        &self,
-        theta_old: &DVector<S>,
-        theta_new: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        weighting: Weighting,
-        baseline: Given<'_, S>,
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        let mut terms = DecisionTerms::new();
-        let weights = Some((theta_new, weighting));
-        self.decision_terms(theta_old, trajectory, weights, &mut terms, cost)?;
-        terms.finish();
-        if !baseline.covers(terms.decisions()) {
-            return Err(too_few_baselines(terms.decisions()));
-        }
-        let mut g = vec![S::zero(); theta_old.len()];
         terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
         Ok(DVector::from_vec(g))
     }

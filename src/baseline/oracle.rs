@@ -72,7 +72,7 @@ struct Buffers<S> {
 /// one assembles it from [`DecisionTerms`], as [`Baselined::estimate_by_terms`] does for every
 /// kind. Baselines known before the pass (a constant, per-decision constants, the committed
 /// estimated ones) enter the weighted estimate through the problem's own weighted pass
-/// ([`PerDecisionTerms::weighted_baselined_estimate`]).
+/// ([`PerDecisionTerms::baselined_estimate`] with weights).
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
 /// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines from
@@ -322,7 +322,9 @@ fn given_estimate<S: Scalar, P: PerDecisionTerms<S>>(
     given: Given<'_, S>,
     cost: &mut Cost,
 ) -> Result<DVector<S>, OracleError> {
-    mean_of(batch, |t| inner.baselined_estimate(theta, t, given, cost))
+    mean_of(batch, |t| {
+        inner.baselined_estimate(theta, t, None, given, cost)
+    })
 }
 
 /// The mean of one baselined estimate per trajectory of `batch` ([`crate::batched`]'s mean),
@@ -835,7 +837,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
             buffers,
         } = self;
         let weighted = |inner: &P, t: &P::Trajectory, given: Given<'_, S>, cost: &mut Cost| {
-            inner.weighted_baselined_estimate(theta_old, theta_new, t, weighting, given, cost)
+            inner.baselined_estimate(theta_old, t, Some((theta_new, weighting)), given, cost)
         };
         match kind {
             Kind::None => {

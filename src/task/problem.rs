@@ -375,67 +375,54 @@ where
     P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S>,
     T::Label: Borrow<P::Label>,
 {
-    /// The pass of [`crate::oracle`]'s `baselined_pass`: the baseline folded into the causal
-    /// kernel as loss shifts where the trajectory allows it, otherwise from the [`DecisionTerms`].
+    /// Without weights, the pass of [`crate::oracle`]'s `baselined_pass`: the baseline folded
+    /// into the causal kernel as loss shifts where the trajectory allows it, otherwise from the
+    /// [`DecisionTerms`]. With weights, the weighted causal pass with the baseline subtracted at
+    /// each scored decision as it is met (no per-decision terms stored).
     fn baselined_estimate(
         &self,
         theta: &DVector<S>,
         trajectory: &Self::Trajectory,
+        weights: Option<(&DVector<S>, Weighting)>,
         baseline: Given<'_, S>,
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
         check_theta(theta, self.dim())?;
+        if let Some((theta_new, _)) = weights {
+            check_theta(theta_new, self.dim())?;
+        }
         check_trajectory(trajectory)?;
         let t = trajectory.decisions();
         let scored = t.scored();
         if !baseline.covers(scored) {
             return Err(crate::baseline::too_few_baselines(scored));
         }
-        let mut g = vec![S::zero(); self.dim()];
-        baselined_pass(&self.policy, theta.as_slice(), &t, baseline, &mut g)?;
-        cost.gradient_evaluations += t.len() as u64;
-        if !g.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the baselined gradient estimate"));
-        }
-        Ok(DVector::from_vec(g))
-    }
-
-    /// The weighted causal pass of [`crate::oracle`] with the baseline subtracted at each scored
-    /// decision as it is met (no per-decision terms stored).
-    fn weighted_baselined_estimate(
-        &self,
-        theta_old: &DVector<S>,
-        theta_new: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        weighting: Weighting,
-        baseline: Given<'_, S>,
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        check_theta(theta_old, self.dim())?;
-        check_theta(theta_new, self.dim())?;
-        check_trajectory(trajectory)?;
-        let t = trajectory.decisions();
-        let scored = t.scored();
-        if !baseline.covers(scored) {
-            return Err(crate::baseline::too_few_baselines(scored));
-        }
-        let (old, new) = (theta_old.as_slice(), theta_new.as_slice());
-        let per_decision = weighting == Weighting::PerDecision;
-        let (mut g, log_w) = causal_pass(
-            &self.policy,
-            old,
-            Some(new),
-            per_decision,
-            &t,
-            Some(baseline),
-            None,
-        )?;
-        if !per_decision {
-            let w = log_w.exp();
-            for x in &mut g {
-                *x *= &w;
+        let g = match weights {
+            None => {
+                let mut g = vec![S::zero(); self.dim()];
+                baselined_pass(&self.policy, theta.as_slice(), &t, baseline, &mut g)?;
+                g
             }
-        }
+            Some((theta_new, weighting)) => {
+                let per_decision = weighting == Weighting::PerDecision;
+                let (mut g, log_w) = causal_pass(
+                    &self.policy,
+                    theta.as_slice(),
+                    Some(theta_new.as_slice()),
+                    per_decision,
+                    &t,
+                    Some(baseline),
+                    None,
+                )?;
+                if !per_decision {
+                    let w = log_w.exp();
+                    for x in &mut g {
+                        *x *= &w;
+                    }
+                }
+                g
+            }
+        };
         cost.gradient_evaluations += t.len() as u64;
         if !g.iter().all(Scalar::is_finite) {
             return Err(OracleError::NonFinite("the baselined gradient estimate"));

@@ -949,7 +949,7 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
             let n = t.len();
             let zero = 0.0;
             let fused = p
-                .baselined_estimate(theta, &t, Given::Constant(&zero), &mut cost)
+                .baselined_estimate(theta, &t, None, Given::Constant(&zero), &mut cost)
                 .unwrap();
             let plain = p
                 .estimate(theta, &t, EstimatorForm::Causal, &mut cost)
@@ -962,7 +962,9 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
             let ramp: Vec<f64> = (0..n).map(|i| 3.0 - i as f64 / 50.0).collect();
             let constant = 2.5;
             for given in [Given::Constant(&constant), Given::TimeIndexed(&ramp)] {
-                let fused = p.baselined_estimate(theta, &t, given, &mut cost).unwrap();
+                let fused = p
+                    .baselined_estimate(theta, &t, None, given, &mut cost)
+                    .unwrap();
                 let mut terms = DecisionTerms::new();
                 p.decision_terms(theta, &t, None, &mut terms, &mut cost)
                     .unwrap();
@@ -1062,7 +1064,7 @@ fn task_decision_terms_reproduce_the_task_estimators() {
                 ] {
                     terms.estimate_into(|i| given.at(i).cloned(), &mut g);
                     let fused = p
-                        .weighted_baselined_estimate(theta, theta_new, &t, w, given, &mut cost)
+                        .baselined_estimate(theta, &t, Some((theta_new, w)), given, &mut cost)
                         .unwrap();
                     assert!(
                         derivative_f64_agrees(&g, fused.as_slice()),
