@@ -119,7 +119,14 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
     let mut o = String::from(preamble);
     o += FLOAT_BARRIER;
     let mut section = String::new();
-    for b in blocks {
+    let opens = landscape_openings(blocks);
+    // Whether a landscape page was opened before the table it is for.
+    let mut opened = false;
+    for (b, &open) in blocks.iter().zip(&opens) {
+        if open && !matches!(b, Block::Table(_)) {
+            o += "\\begin{landscape}\n";
+            opened = true;
+        }
         match b {
             Block::Heading { level, text } => {
                 section.clone_from(text);
@@ -138,7 +145,10 @@ pub fn latex(blocks: &[Block], preamble: &str) -> String {
             }
             Block::Table(t) => {
                 let c = t.caption.as_deref().unwrap_or(&section);
-                o += &latex_table(t, &caption_parts(c));
+                let layout = column_layout(&t.header, &t.rows, &t.spec);
+                let open_here = layout.landscape && !opened;
+                o += &latex_table(t, &layout, &caption_parts(c), open_here);
+                opened = false;
             }
             Block::Figure { path, caption } => {
                 let svg_note = if path.ends_with(".svg") {
@@ -435,13 +445,48 @@ fn row_lines(width: &[f64], rows: &[Vec<String>]) -> f64 {
     total / rows.len() as f64
 }
 
+/// For each block, whether it opens a landscape page: a landscape table ([`column_layout`])
+/// opens its own, unless a section's opening leads straight into it — its heading and at most
+/// [`LEAD_IN`] paragraphs, nothing else — which then opens the page instead, so that the
+/// heading and its first words are not left alone on the portrait page before the table.
+fn landscape_openings(blocks: &[Block]) -> Vec<bool> {
+    let mut open = vec![false; blocks.len()];
+    for (j, b) in blocks.iter().enumerate() {
+        let Block::Table(t) = b else { continue };
+        if !column_layout(&t.header, &t.rows, &t.spec).landscape {
+            continue;
+        }
+        let paras = blocks[..j]
+            .iter()
+            .rev()
+            .take_while(|b| matches!(b, Block::Para(_)))
+            .count();
+        let heading = j > paras && matches!(blocks[j - paras - 1], Block::Heading { .. });
+        open[if heading && paras <= LEAD_IN {
+            j - paras - 1
+        } else {
+            j
+        }] = true;
+    }
+    open
+}
+
+/// The most paragraphs between a heading and a landscape table that go onto its page.
+const LEAD_IN: usize = 2;
+
 /// A table as a booktabs `longtable` (it breaks across pages and stays where it stands), its
-/// columns laid out by [`column_layout`], the header repeated on every page; captioned with
-/// `(thesis number, text)` ([`caption_parts`]).
-fn latex_table(t: &Table, (number, caption): &(Option<String>, String)) -> String {
-    let layout = column_layout(&t.header, &t.rows, &t.spec);
+/// columns laid out by `layout` ([`column_layout`]), the header repeated on every page; captioned
+/// with `(thesis number, text)` ([`caption_parts`]). A landscape layout ends its page after the
+/// table, and opens it before the table when `open` (else [`landscape_openings`] opened it
+/// earlier).
+fn latex_table(
+    t: &Table,
+    layout: &ColumnLayout,
+    (number, caption): &(Option<String>, String),
+    open: bool,
+) -> String {
     let mut o = String::new();
-    if layout.landscape {
+    if open {
         o += "\\begin{landscape}\n";
     }
     let _ = writeln!(
@@ -641,5 +686,46 @@ mod tests {
             "llllll",
         );
         assert!(tall.landscape, "{tall:?}");
+    }
+
+    /// A landscape table opens its own page, unless a heading and at most two paragraphs lead
+    /// straight into it: they then go onto its page, and the page opens once, before them.
+    #[test]
+    fn a_sections_opening_goes_onto_its_landscape_tables_page() {
+        let long = "description ".repeat(25);
+        let tall = Block::Table(Table {
+            caption: Some("checks".into()),
+            label: "tab:x".into(),
+            header: (0..6).map(|i| i.to_string()).collect(),
+            rows: vec![(0..6).map(|_| long.clone()).collect(); 2],
+            spec: "llllll".into(),
+        });
+        let heading = Block::Heading {
+            level: 2,
+            text: "Theorem checks".into(),
+        };
+        let para = |t: &str| Block::Para(t.into());
+        let opens_at = |blocks: &[Block]| {
+            let t = latex(blocks, "");
+            assert_eq!(t.matches("\\begin{landscape}").count(), 1, "{t}");
+            assert_eq!(t.matches("\\end{landscape}").count(), 1, "{t}");
+            let at = t.find("\\begin{landscape}").unwrap();
+            (
+                t[..at].contains("Theorem checks"),
+                t[..at].contains("intro"),
+            )
+        };
+        let led = [heading.clone(), para("intro"), para("more"), tall.clone()];
+        assert_eq!(opens_at(&led), (false, false));
+        let long_lead = [
+            heading.clone(),
+            para("intro"),
+            para("more"),
+            para("and more"),
+            tall.clone(),
+        ];
+        assert_eq!(opens_at(&long_lead), (true, true));
+        let listed = [heading, para("intro"), Block::List(vec!["x".into()]), tall];
+        assert_eq!(opens_at(&listed), (true, true));
     }
 }
