@@ -281,7 +281,7 @@ where
             );
 
             // The weighted passes towards the other θ: per-decision (the checked loop) and
-            // whole-trajectory (the per-step kernel loop, then the weight); towards θ itself every
+            // whole-trajectory (the policy's causal sum, then the weight); towards θ itself every
             // weight is exactly 1 and the plain estimate comes back bit for bit.
             for weighting in [Weighting::PerDecision, Weighting::Trajectory] {
                 let per_decision = weighting == Weighting::PerDecision;
