@@ -186,19 +186,6 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         let _ = (trajectory, decisions);
         None
     }
-
-    /// The trajectory's loss `Σ_t l_t` ([`IlProblem::trajectory_loss`] at the θ of the record)
-    /// read off what [`PerDecisionTerms::record_decisions`] recorded on it, when the problem's
-    /// records give the same value ([`IlProblem::trajectory_loss`]'s, bit for bit in floating
-    /// point); `None` otherwise, and then the caller computes it. The default: `None`.
-    fn recorded_trajectory_loss(
-        &self,
-        trajectory: &Self::Trajectory,
-        recorded: &RecordedPass<S>,
-    ) -> Option<S> {
-        let _ = (trajectory, recorded);
-        None
-    }
 }
 
 /// The number of leading state features to use out of `available`: all for `None`.

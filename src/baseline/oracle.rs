@@ -789,7 +789,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
     /// Without a baseline, the minibatch's own (one pass per trajectory). With a baseline the
     /// estimate, then the trajectory loss: for the kinds that record every trajectory's decisions
     /// (estimated, leave-one-out, state-dependent) read off the records where the problem can
-    /// ([`PerDecisionTerms::recorded_trajectory_loss`]; the same value), else computed again.
+    /// ([`RecordedPass::trajectory_loss`]; the same value), else computed again.
     fn estimate_with_loss(
         &mut self,
         theta: &DVector<S>,
@@ -811,9 +811,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         let mut records = self.buffers.records.iter();
         // `Batched::trajectory_loss`'s mean, over the same per-trajectory losses.
         let loss = crate::batched::mean(trajectory, |t| {
-            let recorded = records
-                .next()
-                .and_then(|r| inner.recorded_trajectory_loss(t, r));
+            let recorded = records.next().and_then(RecordedPass::trajectory_loss);
             let l = match recorded {
                 Some(l) => l,
                 None => inner.trajectory_loss(theta, t)?,

@@ -37,6 +37,7 @@ where
     if let Some(tail) = t.absorbed {
         out.losses.push(tail.clone());
     }
+    out.tail = t.absorbed.is_some();
     out.decisions = t.scored();
     Ok(())
 }

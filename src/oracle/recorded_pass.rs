@@ -30,6 +30,8 @@ pub struct RecordedPass<S> {
     pub(crate) scores: Vec<S>,
     /// Whether this is the default form: `estimate` and ψ_i as rows of d entries in `scores`.
     pub(crate) score_rows: bool,
+    /// Whether the last entry of `losses` is the absorbing tail's `L_abs`.
+    pub(crate) tail: bool,
     /// Working storage of the summing pass.
     pub(crate) work: Vec<S>,
     /// Storage of the default route through [`DecisionTerms`].
@@ -51,6 +53,7 @@ impl<S: Scalar> RecordedPass<S> {
             decisions: 0,
             scores: Vec::new(),
             score_rows: true,
+            tail: false,
             work: Vec::new(),
             terms: DecisionTerms::new(),
         }
@@ -65,6 +68,25 @@ impl<S: Scalar> RecordedPass<S> {
     /// the sum of the entries after entry i.
     pub fn losses(&self) -> &[S] {
         &self.losses
+    }
+
+    /// The trajectory's loss `Σ_t l_t` read off the policy's own records (the real tasks'
+    /// [`crate::task::TaskProblem`]): the absorbing tail (recorded last) first, then the per-step
+    /// losses in order, as [`crate::problem::IlProblem::trajectory_loss`] adds them, so the same
+    /// value bit for bit; `None` for records of the default form, whose losses come from the
+    /// problem's per-decision terms and whose trajectory loss the caller computes.
+    pub fn trajectory_loss(&self) -> Option<S> {
+        if self.score_rows {
+            return None;
+        }
+        let (steps, mut total) = match (self.tail, self.losses.split_last()) {
+            (true, Some((tail, steps))) => (steps, tail.clone()),
+            _ => (&self.losses[..], S::zero()),
+        };
+        for l in steps {
+            total += l;
+        }
+        Some(total)
     }
 
     /// The per-decision terms to fill for [`RecordedPass::fill_from_terms`].
@@ -95,6 +117,7 @@ impl<S: Scalar> RecordedPass<S> {
             self.scores.extend_from_slice(t.score(i));
         }
         self.score_rows = true;
+        self.tail = false;
     }
 
     /// [`ScoreProducts`] of the default form's rows.

@@ -565,26 +565,4 @@ where
         (stride > 0 && trajectory.rows >= decisions)
             .then(|| (&trajectory.feature_data()[..decisions * stride], stride))
     }
-
-    /// From the policy's own records: the absorbing tail (recorded last), then the per-step
-    /// losses in order, as [`IlProblem::trajectory_loss`] adds them; `None` for records made
-    /// from rows.
-    fn recorded_trajectory_loss(
-        &self,
-        trajectory: &Self::Trajectory,
-        recorded: &RecordedPass<S>,
-    ) -> Option<S> {
-        if recorded.score_rows {
-            return None;
-        }
-        let losses = recorded.losses();
-        let (steps, mut total) = match (&trajectory.absorbed, losses.split_last()) {
-            (Some(_), Some((tail, steps))) => (steps, tail.clone()),
-            _ => (losses, S::zero()),
-        };
-        for l in steps {
-            total += l;
-        }
-        Some(total)
-    }
 }
