@@ -23,7 +23,7 @@
 //! X̄/B ≥ ½ was reached. Row 2.b's estimator (IS-STORM on g_b, the trajectory weight on the old
 //! point's g_b, [`Algorithm::StormBaselined`]) gets the noisy STORM search: `2.b.tight.noisy` and
 //! its control, with σ²_b and L̃_b certified on the hull
-//! ([`crate::certify::box_constants::l_tilde_baselined`]).
+//! ([`crate::certify::box_constants::l_tilde`] with the baseline).
 //!
 //! Rows: `1.tight`, `1.tight.ctl` ([`sgd`]) and `2c.tight`, `2c.tight.ctl` ([`storm`]) over every
 //! instance of the family, where the largest X̄/B is reached by noiseless instances (T = 2 and a
@@ -39,6 +39,7 @@
 //! condition (the row is then inconclusive), while a wrong B_F or a dropped factor of the
 //! formula moves B itself.
 
+pub mod bound;
 pub mod instance;
 pub mod paths;
 pub mod search;
@@ -48,6 +49,8 @@ pub mod storm;
 use crate::inputs::TableInputs;
 use crate::record::check::{Check, CheckBuilder, Method, Verdict};
 use search::{Algorithm, Budget, Estimate, Noise};
+use sgd::Sgd;
+use storm::Storm;
 
 /// Sizes of the tight rows.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -219,18 +222,18 @@ fn first_certified<E, C>(
 /// The noise settings of the rows, in their order.
 const NOISES: [Noise; 2] = [Noise::Any, Noise::Required];
 
-/// Each algorithm's and noise's search candidates ([`sgd::candidates`], [`storm::candidates`])
-/// and their [`sgd::prepare_from`] / [`storm::prepare_from`] under one oracle.
+/// Each algorithm's and noise's search candidates ([`bound::candidates`]) and their
+/// certification ([`bound::prepare_from`]) under one oracle.
 #[derive(Debug, Clone)]
 pub struct PreparedAll {
-    sgd: Vec<(Noise, Vec<Estimate>, sgd::Prepared)>,
-    storm: Vec<(Noise, Vec<Estimate>, storm::Prepared)>,
+    sgd: Vec<(Noise, Vec<Estimate>, Prepared<sgd::Certified>)>,
+    storm: Vec<(Noise, Vec<Estimate>, Prepared<storm::Certified>)>,
     /// Row 1.b's estimator (g_b), noisy instances only: with Var g ≡ 0 a baseline changes nothing.
-    sgd_baselined: (Vec<Estimate>, sgd::Prepared),
+    sgd_baselined: (Vec<Estimate>, Prepared<sgd::Certified>),
     /// Row 2.b's estimator (IS-STORM on g_b), noisy instances only, as for row 1.b.
-    storm_baselined: (Vec<Estimate>, storm::Prepared),
+    storm_baselined: (Vec<Estimate>, Prepared<storm::Certified>),
     /// Row 1b's family (one parameter per state).
-    sgd_per_state: (Vec<Estimate>, sgd::Prepared),
+    sgd_per_state: (Vec<Estimate>, Prepared<sgd::Certified>),
 }
 
 impl PreparedAll {
@@ -245,7 +248,7 @@ impl PreparedAll {
                     (
                         *n,
                         found.clone(),
-                        sgd::prepare_from(found, inputs, &sizes, Algorithm::Sgd),
+                        bound::prepare_from::<Sgd>(found, inputs, &sizes, Algorithm::Sgd),
                     )
                 })
                 .collect(),
@@ -256,13 +259,13 @@ impl PreparedAll {
                     (
                         *n,
                         found.clone(),
-                        storm::prepare_from(found, inputs, &sizes, Algorithm::Storm),
+                        bound::prepare_from::<Storm>(found, inputs, &sizes, Algorithm::Storm),
                     )
                 })
                 .collect(),
             sgd_baselined: (
                 self.sgd_baselined.0.clone(),
-                sgd::prepare_from(
+                bound::prepare_from::<Sgd>(
                     &self.sgd_baselined.0,
                     inputs,
                     &sizes,
@@ -271,7 +274,7 @@ impl PreparedAll {
             ),
             storm_baselined: (
                 self.storm_baselined.0.clone(),
-                storm::prepare_from(
+                bound::prepare_from::<Storm>(
                     &self.storm_baselined.0,
                     inputs,
                     &sizes,
@@ -280,7 +283,7 @@ impl PreparedAll {
             ),
             sgd_per_state: (
                 self.sgd_per_state.0.clone(),
-                sgd::prepare_from(
+                bound::prepare_from::<Sgd>(
                     &self.sgd_per_state.0,
                     inputs,
                     &sizes,
@@ -298,32 +301,32 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
         sgd: NOISES
             .iter()
             .map(|&n| {
-                let found = sgd::candidates(&sizes, n, Algorithm::Sgd);
-                let p = sgd::prepare_from(&found, inputs, &sizes, Algorithm::Sgd);
+                let found = bound::candidates(&sizes, n, Algorithm::Sgd);
+                let p = bound::prepare_from::<Sgd>(&found, inputs, &sizes, Algorithm::Sgd);
                 (n, found, p)
             })
             .collect(),
         storm: NOISES
             .iter()
             .map(|&n| {
-                let found = storm::candidates(&sizes, n, Algorithm::Storm);
-                let p = storm::prepare_from(&found, inputs, &sizes, Algorithm::Storm);
+                let found = bound::candidates(&sizes, n, Algorithm::Storm);
+                let p = bound::prepare_from::<Storm>(&found, inputs, &sizes, Algorithm::Storm);
                 (n, found, p)
             })
             .collect(),
         sgd_baselined: {
-            let found = sgd::candidates(&sizes, Noise::Required, Algorithm::SgdBaselined);
-            let p = sgd::prepare_from(&found, inputs, &sizes, Algorithm::SgdBaselined);
+            let found = bound::candidates(&sizes, Noise::Required, Algorithm::SgdBaselined);
+            let p = bound::prepare_from::<Sgd>(&found, inputs, &sizes, Algorithm::SgdBaselined);
             (found, p)
         },
         storm_baselined: {
-            let found = storm::candidates(&sizes, Noise::Required, Algorithm::StormBaselined);
-            let p = storm::prepare_from(&found, inputs, &sizes, Algorithm::StormBaselined);
+            let found = bound::candidates(&sizes, Noise::Required, Algorithm::StormBaselined);
+            let p = bound::prepare_from::<Storm>(&found, inputs, &sizes, Algorithm::StormBaselined);
             (found, p)
         },
         sgd_per_state: {
-            let found = sgd::candidates(&sizes, Noise::Any, Algorithm::SgdPerState);
-            let p = sgd::prepare_from(&found, inputs, &sizes, Algorithm::SgdPerState);
+            let found = bound::candidates(&sizes, Noise::Any, Algorithm::SgdPerState);
+            let p = bound::prepare_from::<Sgd>(&found, inputs, &sizes, Algorithm::SgdPerState);
             (found, p)
         },
     }
@@ -333,8 +336,14 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
 pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Check> {
     let mut rows = vec![];
     for ((noise, _, s), (_, _, t)) in p.sgd.iter().zip(&p.storm) {
-        rows.extend(sgd::rows_from(inputs, &sizes, *noise, Algorithm::Sgd, s));
-        rows.extend(storm::rows_from(
+        rows.extend(bound::rows_from::<Sgd>(
+            inputs,
+            &sizes,
+            *noise,
+            Algorithm::Sgd,
+            s,
+        ));
+        rows.extend(bound::rows_from::<Storm>(
             inputs,
             &sizes,
             *noise,
@@ -342,21 +351,21 @@ pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Che
             t,
         ));
     }
-    rows.extend(sgd::rows_from(
+    rows.extend(bound::rows_from::<Sgd>(
         inputs,
         &sizes,
         Noise::Required,
         Algorithm::SgdBaselined,
         &p.sgd_baselined.1,
     ));
-    rows.extend(storm::rows_from(
+    rows.extend(bound::rows_from::<Storm>(
         inputs,
         &sizes,
         Noise::Required,
         Algorithm::StormBaselined,
         &p.storm_baselined.1,
     ));
-    rows.extend(sgd::rows_from(
+    rows.extend(bound::rows_from::<Sgd>(
         inputs,
         &sizes,
         Noise::Any,
@@ -461,9 +470,14 @@ mod tests {
             ..TableInputs::thesis()
         };
         let s = Sizes::quick();
-        let turned = sgd::rows(&wrong, &s, Noise::Any, Algorithm::Sgd)
+        let turned = bound::rows::<Sgd>(&wrong, &s, Noise::Any, Algorithm::Sgd)
             .into_iter()
-            .chain(storm::rows(&wrong, &s, Noise::Any, Algorithm::Storm));
+            .chain(bound::rows::<Storm>(
+                &wrong,
+                &s,
+                Noise::Any,
+                Algorithm::Storm,
+            ));
         for r in turned.filter(|r| r.role != Role::NegativeControl) {
             assert_eq!(r.verdict, Verdict::Fails, "{}: {}", r.id, r.details);
         }

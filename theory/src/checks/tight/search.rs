@@ -59,7 +59,7 @@ pub enum Algorithm {
     Storm,
     /// SGD with constant η on the baselined estimator g_b = g − bψ (one constant b =
     /// [`baseline`] for every decision, docs/math.md §9), eq. 3.27 with σ²_b: row 1.b's estimator,
-    /// on the instances where the baseline changes the estimate ([`baseline_moves_estimate`]).
+    /// on the instances where the baseline changes the estimate (the baseline must change the estimate on some prefix at θ₁).
     SgdBaselined,
     /// SGD with constant η, eq. 3.27, on the second toy's family: the M family with one parameter
     /// per state (θ₁ ∈ ℚ², [`Instance`]), row 1b's setting. Only instances on which both
@@ -68,7 +68,7 @@ pub enum Algorithm {
     /// IS-STORM with schedule (3.43), eq. (3.60\*), on the baselined estimator g_b = g − bψ (b =
     /// [`baseline`]), the trajectory weight on the old point's g_b: row 2.b's estimator, with σ²_b
     /// and L̃_b in place of σ² and L̃. Like [`Algorithm::SgdBaselined`], it admits only instances on
-    /// which the baseline changes the estimate ([`baseline_moves_estimate`]).
+    /// which the baseline changes the estimate (the baseline must change the estimate on some prefix at θ₁).
     StormBaselined,
 }
 

@@ -6,9 +6,10 @@
 //! sup ‖mag ∇²F‖_F and σ² certified on the 2-D hull.
 
 use super::Sizes;
+use super::bound::Bound;
 use super::instance::exact;
 use super::paths::sgd_mean;
-use super::search::{Algorithm, Estimate, Noise, search};
+use super::search::{Algorithm, Estimate, Noise};
 use crate::bounds::{sgd_step_admissible, upper};
 use crate::certify::box_constants::{b_f, l_f, sigma2, sigma2_baselined};
 use crate::inputs::{ConstantKind, TableInputs};
@@ -58,130 +59,6 @@ pub struct Certified {
     pub baseline: Option<BigRational>,
 }
 
-/// Certify one candidate: X̄ exactly over every path under `inputs`' oracle, the constants on the
-/// hull of those iterates; an error if the certified L_F breaks η ≤ 1/L (c = 1) or a computation
-/// fails.
-///
-/// # Errors
-/// A message saying why the candidate was passed over.
-pub fn certify(
-    e: &Estimate,
-    inputs: &TableInputs,
-    s: &Sizes,
-    algorithm: Algorithm,
-) -> Result<Certified, String> {
-    let inst = &e.candidate.instance;
-    let mdp = inst.mdp()?;
-    let eta = exact(e.candidate.step);
-    let b = algorithm.baseline();
-    let run = sgd_mean(
-        &mdp,
-        &inst.theta1_in::<BigRational>(),
-        &eta,
-        inst.k,
-        inputs,
-        s.budget(algorithm).max_paths,
-        b.as_ref(),
-    )?;
-    let one = BigRational::from_integer(1.into());
-    let l = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-    let v = match &b {
-        None => sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes),
-        Some(b) => sigma2_baselined(&mdp, b, &run.hull, s.tol, s.max_boxes),
-    }
-    .map_err(|e| e.to_string())?;
-    let bf = b_f(&mdp, &inst.theta1, None)?;
-    if !sgd_step_admissible(l.value, 1.0, e.candidate.step) {
-        return Err(format!(
-            "{}, η = {}: certified L_F = {:.5} breaks η ≤ 1/L",
-            inst.describe(),
-            e.candidate.step,
-            l.value
-        ));
-    }
-    Ok(Certified {
-        estimate: e.clone(),
-        algorithm,
-        x_bar: run.mean,
-        hull: run.hull,
-        paths: run.paths,
-        constants: [bf, l, v],
-        baseline: b,
-    })
-}
-
-/// The row for the claim `X̄ ≤ scale · B` at a certified candidate (scale 1: the theorem; ½: the
-/// negative control), B read through `inputs`: holds iff X̄ ≤ scale · upper(B) exactly.
-pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: Noise) -> Check {
-    let inst = &c.estimate.candidate.instance;
-    let eta = c.estimate.candidate.step;
-    let [bf, l, v] = &c.constants;
-    let b_f = inputs.constant_f64(ConstantKind::BF, bf.value);
-    let l_f = inputs.constant_f64(ConstantKind::LF, l.value);
-    let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
-    let (stem, result) = stem(c.algorithm);
-    let (id, role, prefix) = if scale == 1.0 {
-        (
-            format!("{stem}.tight{}", noise.suffix()),
-            role(c.algorithm),
-            String::new(),
-        )
-    } else {
-        (
-            format!("{stem}.tight{}.ctl", noise.suffix()),
-            Role::NegativeControl,
-            format!("{scale}·"),
-        )
-    };
-    let estimator = c.baseline.as_ref().map_or_else(String::new, |b| {
-        format!(" for g_b = g − bψ, b = {b}, with σ²_b")
-    });
-    let claim = format!(
-        "(1/K) Σ_k E‖∇F(θ_k)‖² ≤ {prefix}(Lησ² + 2B_F/(ηK)){estimator} on the instance of largest X̄/B found: {}, η = {}",
-        inst.describe(),
-        exact(eta)
-    );
-    let builder = Check::builder(id, result, claim, role)
-        .assumptions([
-            format!(
-                "(S1) F L-smooth on the hull {:?} of every iterate θ₁..θ_{{K+1}} of every path",
-                c.hull
-            ),
-            "(S2) E g = ∇F, E‖g‖² ≤ σ² + ‖∇F‖² (c = 1) on the hull".into(),
-            "(S3) fresh τ_k ∼ p(·; θ_k), η ≤ 1/(Lc)".into(),
-        ])
-        .constants(c.constants.to_vec());
-    let x = Scalar::to_f64(&c.x_bar);
-    if !sgd_step_admissible(l_f, 1.0, eta) {
-        return builder
-            .measured(Measured::exact(x))
-            .details(format!(
-                "side condition η ≤ 1/L fails: η = {eta}, L = {l_f}"
-            ))
-            .decided(Method::Exact, Verdict::Inconclusive);
-    }
-    let bound = (inputs.formulas.sgd_constant)(l_f, eta, s2, b_f, inst.k);
-    let claimed = upper(bound) * scale;
-    let verdict = match BigRational::from_float(claimed) {
-        Some(b) => Verdict::from_bool(c.x_bar <= b),
-        None => Verdict::Inconclusive,
-    };
-    builder
-        .bound(bound * scale)
-        .measured(Measured::exact(x))
-        .tightness(x / (bound * scale))
-        .details(format!(
-            "X̄ = E X exactly in ℚ over all {} paths (X̄ = {x:.6}), B = {bound:.6} (L_F = {l_f:.5}, σ² = {s2:.5}, B_F = {b_f:.5}, σ² term {:.1} % of B), X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); Lη = {:.4} ≤ 1",
-            c.paths,
-            100.0 * l_f * eta * s2 / bound,
-            x / bound,
-            search_text(&s.budget(c.algorithm)),
-            c.estimate.ratio,
-            l_f * eta
-        ))
-        .decided(Method::Exact, verdict)
-}
-
 /// The search's budget and seed, as the rows print them.
 pub(super) fn search_text(b: &super::search::Budget) -> String {
     format!(
@@ -194,74 +71,149 @@ pub(super) fn search_text(b: &super::search::Budget) -> String {
     )
 }
 
-/// The search's candidates and the first one certified under an oracle ([`super::Prepared`]).
-pub type Prepared = super::Prepared<Certified>;
+/// The tight rows of eq. 3.27 ([`Bound`]): how a candidate is certified and its rows read.
+pub struct Sgd;
 
-/// The seeded search's candidates ([`search`]) for `algorithm` ([`Algorithm::Sgd`] or
-/// [`Algorithm::SgdBaselined`]); it reads no input of the table.
-pub fn candidates(s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Estimate> {
-    search(algorithm, noise, s.budget(algorithm))
-}
+impl Bound for Sgd {
+    type Certified = Certified;
+    const EQUATION: &'static str = "eq. 3.27";
+    const METHOD: Method = Method::Exact;
 
-/// Certify the best of the [`candidates`] in order until one passes, under `inputs`' oracle.
-pub fn prepare_from(
-    found: &[Estimate],
-    inputs: &TableInputs,
-    s: &Sizes,
-    algorithm: Algorithm,
-) -> Prepared {
-    super::first_certified(found, s.tries, |e| certify(e, inputs, s, algorithm))
-}
-
-/// Search (seeded, [`search`]) and certify the best candidates in order until one passes.
-pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise, algorithm: Algorithm) -> Prepared {
-    prepare_from(&candidates(s, noise, algorithm), inputs, s, algorithm)
-}
-
-/// Rows 1.tight and 1.tight.ctl (module docs) from [`prepare`]d candidates (made with the same
-/// oracle, sizes and noise), or one inconclusive row saying why no candidate could be certified.
-pub fn rows_from(
-    inputs: &TableInputs,
-    s: &Sizes,
-    noise: Noise,
-    algorithm: Algorithm,
-    p: &Prepared,
-) -> Vec<Check> {
-    let (stem, result) = stem(algorithm);
-    match &p.certified {
-        Some(c) => super::with_control(
-            |scale| row(c, inputs, scale, s, noise),
-            super::control_always(noise, algorithm),
-            &p.passed_over,
-        ),
-        None => vec![p.none_certified(
-            Check::builder(
-                format!("{stem}.tight{}", noise.suffix()),
-                result,
-                "a tight instance of eq. 3.27",
-                role(algorithm),
-            ),
-            &s.budget(algorithm),
-            Method::Exact,
-        )],
+    /// Certify one candidate: X̄ exactly over every path under `inputs`' oracle, the constants on the
+    /// hull of those iterates; an error if the certified L_F breaks η ≤ 1/L (c = 1) or a computation
+    /// fails.
+    ///
+    /// # Errors
+    /// A message saying why the candidate was passed over.
+    fn certify(
+        e: &Estimate,
+        inputs: &TableInputs,
+        s: &Sizes,
+        algorithm: Algorithm,
+    ) -> Result<Self::Certified, String> {
+        let inst = &e.candidate.instance;
+        let mdp = inst.mdp()?;
+        let eta = exact(e.candidate.step);
+        let b = algorithm.baseline();
+        let run = sgd_mean(
+            &mdp,
+            &inst.theta1_in::<BigRational>(),
+            &eta,
+            inst.k,
+            inputs,
+            s.budget(algorithm).max_paths,
+            b.as_ref(),
+        )?;
+        let one = BigRational::from_integer(1.into());
+        let l = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
+        let v = match &b {
+            None => sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes),
+            Some(b) => sigma2_baselined(&mdp, b, &run.hull, s.tol, s.max_boxes),
+        }
+        .map_err(|e| e.to_string())?;
+        let bf = b_f(&mdp, &inst.theta1, None)?;
+        if !sgd_step_admissible(l.value, 1.0, e.candidate.step) {
+            return Err(format!(
+                "{}, η = {}: certified L_F = {:.5} breaks η ≤ 1/L",
+                inst.describe(),
+                e.candidate.step,
+                l.value
+            ));
+        }
+        Ok(Certified {
+            estimate: e.clone(),
+            algorithm,
+            x_bar: run.mean,
+            hull: run.hull,
+            paths: run.paths,
+            constants: [bf, l, v],
+            baseline: b,
+        })
     }
-}
 
-/// [`prepare`], then [`rows_from`].
-pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Check> {
-    rows_from(
-        inputs,
-        s,
-        noise,
-        algorithm,
-        &prepare(inputs, s, noise, algorithm),
-    )
+    /// The row for the claim `X̄ ≤ scale · B` at a certified candidate (scale 1: the theorem; ½: the
+    /// negative control), B read through `inputs`: holds iff X̄ ≤ scale · upper(B) exactly.
+    fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: Noise) -> Check {
+        let inst = &c.estimate.candidate.instance;
+        let eta = c.estimate.candidate.step;
+        let [bf, l, v] = &c.constants;
+        let b_f = inputs.constant_f64(ConstantKind::BF, bf.value);
+        let l_f = inputs.constant_f64(ConstantKind::LF, l.value);
+        let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
+        let (stem, result) = stem(c.algorithm);
+        let (id, role, prefix) = if scale == 1.0 {
+            (
+                format!("{stem}.tight{}", noise.suffix()),
+                role(c.algorithm),
+                String::new(),
+            )
+        } else {
+            (
+                format!("{stem}.tight{}.ctl", noise.suffix()),
+                Role::NegativeControl,
+                format!("{scale}·"),
+            )
+        };
+        let estimator = c.baseline.as_ref().map_or_else(String::new, |b| {
+            format!(" for g_b = g − bψ, b = {b}, with σ²_b")
+        });
+        let claim = format!(
+            "(1/K) Σ_k E‖∇F(θ_k)‖² ≤ {prefix}(Lησ² + 2B_F/(ηK)){estimator} on the instance of largest X̄/B found: {}, η = {}",
+            inst.describe(),
+            exact(eta)
+        );
+        let builder = Check::builder(id, result, claim, role)
+            .assumptions([
+                format!(
+                    "(S1) F L-smooth on the hull {:?} of every iterate θ₁..θ_{{K+1}} of every path",
+                    c.hull
+                ),
+                "(S2) E g = ∇F, E‖g‖² ≤ σ² + ‖∇F‖² (c = 1) on the hull".into(),
+                "(S3) fresh τ_k ∼ p(·; θ_k), η ≤ 1/(Lc)".into(),
+            ])
+            .constants(c.constants.to_vec());
+        let x = Scalar::to_f64(&c.x_bar);
+        if !sgd_step_admissible(l_f, 1.0, eta) {
+            return builder
+                .measured(Measured::exact(x))
+                .details(format!(
+                    "side condition η ≤ 1/L fails: η = {eta}, L = {l_f}"
+                ))
+                .decided(Method::Exact, Verdict::Inconclusive);
+        }
+        let bound = (inputs.formulas.sgd_constant)(l_f, eta, s2, b_f, inst.k);
+        let claimed = upper(bound) * scale;
+        let verdict = match BigRational::from_float(claimed) {
+            Some(b) => Verdict::from_bool(c.x_bar <= b),
+            None => Verdict::Inconclusive,
+        };
+        builder
+            .bound(bound * scale)
+            .measured(Measured::exact(x))
+            .tightness(x / (bound * scale))
+            .details(format!(
+                "X̄ = E X exactly in ℚ over all {} paths (X̄ = {x:.6}), B = {bound:.6} (L_F = {l_f:.5}, σ² = {s2:.5}, B_F = {b_f:.5}, σ² term {:.1} % of B), X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); Lη = {:.4} ≤ 1",
+                c.paths,
+                100.0 * l_f * eta * s2 / bound,
+                x / bound,
+                search_text(&s.budget(c.algorithm)),
+                c.estimate.ratio,
+                l_f * eta
+            ))
+            .decided(Method::Exact, verdict)
+    }
+
+    fn names(algorithm: Algorithm) -> (&'static str, &'static str, Role) {
+        let (stem, result) = stem(algorithm);
+        (stem, result, role(algorithm))
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bounds::sgd_constant;
+    use crate::checks::tight::bound;
     use crate::inputs::Formulas;
 
     fn half(l: f64, eta: f64, s2: f64, b_f: f64, k: u64) -> f64 {
@@ -278,7 +230,7 @@ mod tests {
     #[test]
     fn the_tight_row_holds_and_a_halved_bound_turns_it() {
         let s = Sizes::quick();
-        let rows = rows(&TableInputs::thesis(), &s, Noise::Any, Algorithm::Sgd);
+        let rows = bound::rows::<Sgd>(&TableInputs::thesis(), &s, Noise::Any, Algorithm::Sgd);
         for r in &rows {
             println!(
                 "{} {:?} {:?}: {}\n  {}",
@@ -298,7 +250,7 @@ mod tests {
             },
             ..TableInputs::thesis()
         };
-        let turned = super::rows(&wrong, &s, Noise::Any, Algorithm::Sgd);
+        let turned = bound::rows::<Sgd>(&wrong, &s, Noise::Any, Algorithm::Sgd);
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 
@@ -308,7 +260,7 @@ mod tests {
     #[test]
     fn the_second_toys_tight_row_holds_and_a_dropped_factor_turns_it() {
         let s = Sizes::quick();
-        let rows = rows(
+        let rows = bound::rows::<Sgd>(
             &TableInputs::thesis(),
             &s,
             Noise::Any,
@@ -334,7 +286,7 @@ mod tests {
             },
             ..TableInputs::thesis()
         };
-        let turned = super::rows(&wrong, &s, Noise::Any, Algorithm::SgdPerState);
+        let turned = bound::rows::<Sgd>(&wrong, &s, Noise::Any, Algorithm::SgdPerState);
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 }

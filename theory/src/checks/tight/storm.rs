@@ -9,9 +9,10 @@
 //! that condition before it states the bound with that L.
 
 use super::Sizes;
+use super::bound::Bound;
 use super::instance::exact;
 use super::paths::storm_mean;
-use super::search::{Algorithm, Estimate, Noise, search};
+use super::search::{Algorithm, Estimate, Noise};
 use super::sgd::search_text;
 use crate::bounds::upper;
 use crate::certify::box_constants::{b_f, l_f, l_tilde, sigma2, sigma2_baselined};
@@ -55,8 +56,8 @@ pub struct Certified {
     pub baseline: Option<BigRational>,
 }
 
-/// Rounds of [`certify`]: how often the schedule's L may be raised to the certified
-/// max(L_F, L̃) of the previous round's hull.
+/// Rounds of [`Storm`]'s certification ([`Bound::certify`]): how often the schedule's L may be
+/// raised to the certified max(L_F, L̃) of the previous round's hull.
 pub const ROUNDS: usize = 3;
 
 /// The smallest multiple of 2⁻¹⁰ that is ≥ `x` (a short dyadic rational).
@@ -64,233 +65,195 @@ fn dyadic_up(x: f64) -> f64 {
     (x * 1024.0).ceil() / 1024.0
 }
 
-/// Certify one candidate: X̄ enclosed over every path under `inputs`' oracle, the constants on the
-/// hull of those iterates. Theorem S needs the schedule's L ≥ max(L_F, L̃) on that hull; where the
-/// certified constants (branch-and-bound upper bounds, above the search's estimates) exceed the
-/// candidate's L, L is raised to them (rounded up to a multiple of 2⁻¹⁰) and the run and the
-/// constants are redone, for at most [`ROUNDS`] rounds. For [`Algorithm::StormBaselined`] the run,
-/// L̃ and σ² are those of g_b.
-///
-/// # Errors
-/// A message saying why the candidate was passed over.
-pub fn certify(
-    e: &Estimate,
-    inputs: &TableInputs,
-    s: &Sizes,
-    algorithm: Algorithm,
-) -> Result<Certified, String> {
-    let inst = &e.candidate.instance;
-    let mdp = inst.mdp()?;
-    let one = BigRational::from_integer(1.into());
-    let b = algorithm.baseline();
-    let mut l_s = e.candidate.step;
-    for _ in 0..ROUNDS {
-        let l = Interval::from_rational(&exact(l_s));
-        let run = storm_mean(
-            &mdp,
-            &inst.theta1_in::<Interval>(),
-            &l,
-            inst.k,
-            inputs,
-            s.budget(algorithm).max_paths,
-            b.as_ref(),
-        )
-        .map_err(|m| format!("{}, L = {l_s}: {m}", inst.describe()))?;
-        let lf = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-        let lt = l_tilde(&mdp, b.as_ref(), run.hull[0], s.tol, s.max_boxes)
+/// The tight rows of eq. (3.60\*) ([`Bound`]): how a candidate is certified and its rows read.
+pub struct Storm;
+
+impl Bound for Storm {
+    type Certified = Certified;
+    const EQUATION: &'static str = "eq. (3.60*)";
+    const METHOD: Method = Method::Rigorous;
+
+    /// Certify one candidate: X̄ enclosed over every path under `inputs`' oracle, the constants on the
+    /// hull of those iterates. Theorem S needs the schedule's L ≥ max(L_F, L̃) on that hull; where the
+    /// certified constants (branch-and-bound upper bounds, above the search's estimates) exceed the
+    /// candidate's L, L is raised to them (rounded up to a multiple of 2⁻¹⁰) and the run and the
+    /// constants are redone, for at most [`ROUNDS`] rounds. For [`Algorithm::StormBaselined`] the run,
+    /// L̃ and σ² are those of g_b.
+    ///
+    /// # Errors
+    /// A message saying why the candidate was passed over.
+    fn certify(
+        e: &Estimate,
+        inputs: &TableInputs,
+        s: &Sizes,
+        algorithm: Algorithm,
+    ) -> Result<Self::Certified, String> {
+        let inst = &e.candidate.instance;
+        let mdp = inst.mdp()?;
+        let one = BigRational::from_integer(1.into());
+        let b = algorithm.baseline();
+        let mut l_s = e.candidate.step;
+        for _ in 0..ROUNDS {
+            let l = Interval::from_rational(&exact(l_s));
+            let run = storm_mean(
+                &mdp,
+                &inst.theta1_in::<Interval>(),
+                &l,
+                inst.k,
+                inputs,
+                s.budget(algorithm).max_paths,
+                b.as_ref(),
+            )
+            .map_err(|m| format!("{}, L = {l_s}: {m}", inst.describe()))?;
+            let lf = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
+            let lt = l_tilde(&mdp, b.as_ref(), run.hull[0], s.tol, s.max_boxes)
+                .map_err(|e| e.to_string())?;
+            let need = lf.value.max(lt.value);
+            if need > l_s {
+                l_s = dyadic_up(need);
+                continue;
+            }
+            let v = match &b {
+                None => sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes),
+                Some(b) => sigma2_baselined(&mdp, b, &run.hull, s.tol, s.max_boxes),
+            }
             .map_err(|e| e.to_string())?;
-        let need = lf.value.max(lt.value);
-        if need > l_s {
-            l_s = dyadic_up(need);
-            continue;
+            let bf = b_f(&mdp, &inst.theta1, None)?;
+            return Ok(Certified {
+                estimate: e.clone(),
+                algorithm,
+                l: l_s,
+                x_bar: run.mean,
+                hull: run.hull,
+                paths: run.paths,
+                constants: [bf, lf, lt, v],
+                baseline: b,
+            });
         }
-        let v = match &b {
-            None => sigma2(&mdp, &one, &run.hull, s.tol, s.max_boxes),
-            Some(b) => sigma2_baselined(&mdp, b, &run.hull, s.tol, s.max_boxes),
-        }
-        .map_err(|e| e.to_string())?;
-        let bf = b_f(&mdp, &inst.theta1, None)?;
-        return Ok(Certified {
-            estimate: e.clone(),
-            algorithm,
-            l: l_s,
-            x_bar: run.mean,
-            hull: run.hull,
-            paths: run.paths,
-            constants: [bf, lf, lt, v],
-            baseline: b,
-        });
-    }
-    Err(format!(
-        "{}, L = {}: the certified max(L_F, L̃) still exceeds L after {ROUNDS} rounds",
-        inst.describe(),
-        e.candidate.step
-    ))
-}
-
-/// The row for `X̄ ≤ scale · B` at a certified candidate (scale 1: the theorem; ½: the negative
-/// control), B read through `inputs`: holds if the enclosure of X̄ is ≤ scale · upper(B), fails if
-/// it is above, inconclusive if it straddles.
-pub fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: Noise) -> Check {
-    let inst = &c.estimate.candidate.instance;
-    let l = c.l;
-    let [bf, lf, lt, v] = &c.constants;
-    let b_f = inputs.constant_f64(ConstantKind::BF, bf.value);
-    let l_f = inputs.constant_f64(ConstantKind::LF, lf.value);
-    let l_t = inputs.constant_f64(ConstantKind::LTilde, lt.value);
-    let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
-    let (lt_name, v_name) = (&lt.name, &v.name);
-    let (stem, result) = stem(c.algorithm);
-    let (id, role, prefix) = if scale == 1.0 {
-        (
-            format!("{stem}.tight{}", noise.suffix()),
-            Role::Corrected,
-            String::new(),
-        )
-    } else {
-        (
-            format!("{stem}.tight{}.ctl", noise.suffix()),
-            Role::NegativeControl,
-            format!("{scale}·"),
-        )
-    };
-    let (estimator, unbiased) = match &c.baseline {
-        None => (
-            String::new(),
-            "(A2) E g = ∇F, and the weighted old-point term is unbiased (identity I3)".to_string(),
-        ),
-        Some(b) => (
-            format!(" on g_b = g − bψ, b = {b}, with σ²_b and L̃_b"),
-            format!(
-                "(A2) for g_b, b = {b} fixed before any run: E g_b = ∇F and E_{{τ∼θ′}}[w g_b(θ, τ)] = ∇F(θ) (docs/math.md §9)"
-            ),
-        ),
-    };
-    let claim = format!(
-        "Σ_k η_k E‖∇F(θ_k)‖² / Σ_k η_k ≤ {prefix}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))] / Σ_k (7/(k+7))^{{1/3}} for IS-STORM (trajectory weights){estimator}, schedule (3.43) with L = {}, on the instance of largest X̄/B found: {}",
-        exact(l),
-        inst.describe()
-    );
-    let builder = Check::builder(id, result, claim, role)
-        .assumptions([
-            format!(
-                "(A1), (A3), (A4) on the hull {:?} of every iterate θ₁..θ_{{K+1}} of every path",
-                c.hull
-            ),
-            unbiased,
-            "L ≥ max(L_F, L̃), so (C1) and (C2) hold for schedule (3.43)".into(),
-        ])
-        .constants(c.constants.to_vec())
-        .erratum("E8");
-    let x = c.x_bar.mid();
-    if l_f.max(l_t) > l {
-        return builder
-            .measured(Measured::exact(x))
-            .details(format!(
-                "L = {l} < max(L_F, {lt_name}) = max({l_f}, {l_t}): Theorem S does not apply"
-            ))
-            .decided(Method::Rigorous, Verdict::Inconclusive);
-    }
-    let bound = (inputs.formulas.storm_fixed)(l, s2, b_f, inst.k);
-    let claimed = upper(bound) * scale;
-    let verdict = if c.x_bar.sup() <= claimed {
-        Verdict::Holds
-    } else if c.x_bar.inf() > claimed {
-        Verdict::Fails
-    } else {
-        Verdict::Inconclusive
-    };
-    builder
-        .bound(bound * scale)
-        .measured(Measured::exact(x).with_interval(c.x_bar.inf(), c.x_bar.sup()))
-        .tightness(x / (bound * scale))
-        .details(format!(
-            "X̄ = E X enclosed in intervals over all {} paths, X̄ ∈ [{:.8}, {:.8}], B = {bound:.6} ({v_name} = {s2:.5}, B_F = {b_f:.5}, {v_name} term {:.1} % of B), X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); max(L_F, {lt_name}) = {:.4} ≤ L",
-            c.paths,
-            c.x_bar.inf(),
-            c.x_bar.sup(),
-            100.0 * (1.0 - (inputs.formulas.storm_fixed)(l, 0.0, b_f, inst.k) / bound),
-            x / bound,
-            search_text(&s.budget(c.algorithm)),
-            c.estimate.ratio,
-            l_f.max(l_t)
+        Err(format!(
+            "{}, L = {}: the certified max(L_F, L̃) still exceeds L after {ROUNDS} rounds",
+            inst.describe(),
+            e.candidate.step
         ))
-        .decided(Method::Rigorous, verdict)
-}
-
-/// The search's candidates and the first one certified under an oracle ([`super::Prepared`]).
-pub type Prepared = super::Prepared<Certified>;
-
-/// The seeded search's candidates ([`search`]) for `algorithm` ([`Algorithm::Storm`] or
-/// [`Algorithm::StormBaselined`]); it reads no input of the table.
-pub fn candidates(s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Estimate> {
-    search(algorithm, noise, s.budget(algorithm))
-}
-
-/// Certify the best of the [`candidates`] in order until one passes, under `inputs`' oracle.
-pub fn prepare_from(
-    found: &[Estimate],
-    inputs: &TableInputs,
-    s: &Sizes,
-    algorithm: Algorithm,
-) -> Prepared {
-    super::first_certified(found, s.tries, |e| certify(e, inputs, s, algorithm))
-}
-
-/// Search (seeded, [`search`]) and certify the best candidates in order until one passes.
-pub fn prepare(inputs: &TableInputs, s: &Sizes, noise: Noise, algorithm: Algorithm) -> Prepared {
-    prepare_from(&candidates(s, noise, algorithm), inputs, s, algorithm)
-}
-
-/// Rows 2c.tight and 2c.tight.ctl, or 2.b.tight and its control (module docs), from
-/// [`prepare`]d candidates (made with the same oracle, sizes, noise and algorithm), or one
-/// inconclusive row saying why no candidate could be certified.
-pub fn rows_from(
-    inputs: &TableInputs,
-    s: &Sizes,
-    noise: Noise,
-    algorithm: Algorithm,
-    p: &Prepared,
-) -> Vec<Check> {
-    let (stem, result) = stem(algorithm);
-    match &p.certified {
-        Some(c) => super::with_control(
-            |scale| row(c, inputs, scale, s, noise),
-            super::control_always(noise, algorithm),
-            &p.passed_over,
-        ),
-        None => vec![p.none_certified(
-            Check::builder(
-                format!("{stem}.tight{}", noise.suffix()),
-                result,
-                "a tight instance of eq. (3.60*)",
-                Role::Corrected,
-            ),
-            &s.budget(algorithm),
-            Method::Rigorous,
-        )],
     }
-}
 
-/// [`prepare`], then [`rows_from`].
-pub fn rows(inputs: &TableInputs, s: &Sizes, noise: Noise, algorithm: Algorithm) -> Vec<Check> {
-    rows_from(
-        inputs,
-        s,
-        noise,
-        algorithm,
-        &prepare(inputs, s, noise, algorithm),
-    )
+    /// The row for `X̄ ≤ scale · B` at a certified candidate (scale 1: the theorem; ½: the negative
+    /// control), B read through `inputs`: holds if the enclosure of X̄ is ≤ scale · upper(B), fails if
+    /// it is above, inconclusive if it straddles.
+    fn row(c: &Certified, inputs: &TableInputs, scale: f64, s: &Sizes, noise: Noise) -> Check {
+        let inst = &c.estimate.candidate.instance;
+        let l = c.l;
+        let [bf, lf, lt, v] = &c.constants;
+        let b_f = inputs.constant_f64(ConstantKind::BF, bf.value);
+        let l_f = inputs.constant_f64(ConstantKind::LF, lf.value);
+        let l_t = inputs.constant_f64(ConstantKind::LTilde, lt.value);
+        let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
+        let (lt_name, v_name) = (&lt.name, &v.name);
+        let (stem, result) = stem(c.algorithm);
+        let (id, role, prefix) = if scale == 1.0 {
+            (
+                format!("{stem}.tight{}", noise.suffix()),
+                Role::Corrected,
+                String::new(),
+            )
+        } else {
+            (
+                format!("{stem}.tight{}.ctl", noise.suffix()),
+                Role::NegativeControl,
+                format!("{scale}·"),
+            )
+        };
+        let (estimator, unbiased) = match &c.baseline {
+            None => (
+                String::new(),
+                "(A2) E g = ∇F, and the weighted old-point term is unbiased (identity I3)"
+                    .to_string(),
+            ),
+            Some(b) => (
+                format!(" on g_b = g − bψ, b = {b}, with σ²_b and L̃_b"),
+                format!(
+                    "(A2) for g_b, b = {b} fixed before any run: E g_b = ∇F and E_{{τ∼θ′}}[w g_b(θ, τ)] = ∇F(θ) (docs/math.md §9)"
+                ),
+            ),
+        };
+        let claim = format!(
+            "Σ_k η_k E‖∇F(θ_k)‖² / Σ_k η_k ≤ {prefix}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))] / Σ_k (7/(k+7))^{{1/3}} for IS-STORM (trajectory weights){estimator}, schedule (3.43) with L = {}, on the instance of largest X̄/B found: {}",
+            exact(l),
+            inst.describe()
+        );
+        let builder = Check::builder(id, result, claim, role)
+            .assumptions([
+                format!(
+                    "(A1), (A3), (A4) on the hull {:?} of every iterate θ₁..θ_{{K+1}} of every path",
+                    c.hull
+                ),
+                unbiased,
+                "L ≥ max(L_F, L̃), so (C1) and (C2) hold for schedule (3.43)".into(),
+            ])
+            .constants(c.constants.to_vec())
+            .erratum("E8");
+        let x = c.x_bar.mid();
+        if l_f.max(l_t) > l {
+            return builder
+                .measured(Measured::exact(x))
+                .details(format!(
+                    "L = {l} < max(L_F, {lt_name}) = max({l_f}, {l_t}): Theorem S does not apply"
+                ))
+                .decided(Method::Rigorous, Verdict::Inconclusive);
+        }
+        let bound = (inputs.formulas.storm_fixed)(l, s2, b_f, inst.k);
+        let claimed = upper(bound) * scale;
+        let verdict = if c.x_bar.sup() <= claimed {
+            Verdict::Holds
+        } else if c.x_bar.inf() > claimed {
+            Verdict::Fails
+        } else {
+            Verdict::Inconclusive
+        };
+        builder
+            .bound(bound * scale)
+            .measured(Measured::exact(x).with_interval(c.x_bar.inf(), c.x_bar.sup()))
+            .tightness(x / (bound * scale))
+            .details(format!(
+                "X̄ = E X enclosed in intervals over all {} paths, X̄ ∈ [{:.8}, {:.8}], B = {bound:.6} ({v_name} = {s2:.5}, B_F = {b_f:.5}, {v_name} term {:.1} % of B), X̄/B = {:.4}; search: {} (estimated X̄/B = {:.4}); max(L_F, {lt_name}) = {:.4} ≤ L",
+                c.paths,
+                c.x_bar.inf(),
+                c.x_bar.sup(),
+                100.0 * (1.0 - (inputs.formulas.storm_fixed)(l, 0.0, b_f, inst.k) / bound),
+                x / bound,
+                search_text(&s.budget(c.algorithm)),
+                c.estimate.ratio,
+                l_f.max(l_t)
+            ))
+            .decided(Method::Rigorous, verdict)
+    }
+
+    fn names(algorithm: Algorithm) -> (&'static str, &'static str, Role) {
+        let (stem, result) = stem(algorithm);
+        (stem, result, Role::Corrected)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bounds::storm_fixed;
+    use crate::checks::tight::bound;
     use crate::inputs::Formulas;
 
     fn half(l: f64, s2: f64, b_f: f64, k: u64) -> f64 {
         0.5 * storm_fixed(l, s2, b_f, k)
+    }
+
+    /// The table's inputs with (3.60\*) computed by `storm_fixed`.
+    fn with_bound(storm_fixed: fn(f64, f64, f64, u64) -> f64) -> TableInputs {
+        TableInputs {
+            formulas: Formulas {
+                storm_fixed,
+                ..Formulas::THESIS
+            },
+            ..TableInputs::thesis()
+        }
     }
 
     fn control_scaled(l: f64, s2: f64, b_f: f64, k: u64) -> f64 {
@@ -302,7 +265,7 @@ mod tests {
     #[test]
     fn the_tight_row_holds_and_a_halved_bound_turns_it() {
         let s = Sizes::quick();
-        let rows = rows(&TableInputs::thesis(), &s, Noise::Any, Algorithm::Storm);
+        let rows = bound::rows::<Storm>(&TableInputs::thesis(), &s, Noise::Any, Algorithm::Storm);
         for r in &rows {
             println!(
                 "{} {:?} {:?}: {}\n  {}",
@@ -314,14 +277,8 @@ mod tests {
         assert_eq!(rows[0].verdict, Verdict::Holds, "{}", rows[0].details);
         assert!(rows[0].tightness.unwrap() >= 0.5, "{}", rows[0].details);
         assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
-        let wrong = TableInputs {
-            formulas: Formulas {
-                storm_fixed: half,
-                ..Formulas::THESIS
-            },
-            ..TableInputs::thesis()
-        };
-        let turned = super::rows(&wrong, &s, Noise::Any, Algorithm::Storm);
+        let wrong = with_bound(half);
+        let turned = bound::rows::<Storm>(&wrong, &s, Noise::Any, Algorithm::Storm);
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 
@@ -333,14 +290,14 @@ mod tests {
     fn the_baselined_tight_row_holds_with_its_certified_constants() {
         let s = Sizes::quick();
         let t = std::time::Instant::now();
-        let p = prepare(
+        let p = bound::prepare::<Storm>(
             &TableInputs::thesis(),
             &s,
             Noise::Required,
             Algorithm::StormBaselined,
         );
         println!("prepared in {:?}", t.elapsed());
-        let rows = rows_from(
+        let rows = bound::rows_from::<Storm>(
             &TableInputs::thesis(),
             &s,
             Noise::Required,
@@ -362,14 +319,8 @@ mod tests {
         assert!(rows[0].claim.contains("g_b = g − bψ"), "{}", rows[0].claim);
         // The row can fail at its size: (3.60*) scaled as the Monte-Carlo row 2c.ctl's control
         // is refuted (X̄/B ≥ 0.01 here, so B × 1/200 lies below X̄).
-        let understated = TableInputs {
-            formulas: Formulas {
-                storm_fixed: control_scaled,
-                ..Formulas::THESIS
-            },
-            ..TableInputs::thesis()
-        };
-        let turned = rows_from(
+        let understated = with_bound(control_scaled);
+        let turned = bound::rows_from::<Storm>(
             &understated,
             &s,
             Noise::Required,
@@ -380,14 +331,14 @@ mod tests {
         if rows[0].tightness.unwrap() >= 0.5 {
             assert_eq!(rows[1].id, "2.b.tight.noisy.ctl");
             assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
-            let wrong = TableInputs {
-                formulas: Formulas {
-                    storm_fixed: half,
-                    ..Formulas::THESIS
-                },
-                ..TableInputs::thesis()
-            };
-            let turned = rows_from(&wrong, &s, Noise::Required, Algorithm::StormBaselined, &p);
+            let wrong = with_bound(half);
+            let turned = bound::rows_from::<Storm>(
+                &wrong,
+                &s,
+                Noise::Required,
+                Algorithm::StormBaselined,
+                &p,
+            );
             assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
         }
     }
