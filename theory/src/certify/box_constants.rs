@@ -284,11 +284,13 @@ pub fn tied_softmax_g_inf_closed_form(horizon: usize, c: f64) -> f64 {
     (2f64.sqrt() * ((t - 1.0) * 4.0 / (n * c).sqrt() + (t - 1.0) * (t - 2.0) * psi)) * (1.0 + 1e-12)
 }
 
-/// L̃ of (A4) for IS-STORM with the trajectory weight, over the box `domain`²:
-/// `V(θ, θ′) = E_{τ∼θ′}(g(θ′, τ) − w g(θ, τ))²` with w = p(τ̄;θ)/p(τ̄;θ′) vanishes with zero
-/// θ′-derivative at θ′ = θ, so by Taylor `L̃² ≤ ½ sup_{θ,ϑ ∈ box} |∂²V/∂θ′²(θ, ϑ)|`, enclosed box by
+/// L̃ of (A4) for IS-STORM with `weighting`'s importance weights, over the box `domain`²:
+/// `V(θ, θ′) = E_{τ∼θ′}(g(θ′, τ) − g̃(θ → θ′, τ))²`, with the old-point term g̃ = w g(θ, τ) and
+/// w = p(τ̄;θ)/p(τ̄;θ′) for the trajectory weight, or the per-decision form (math.md §4), vanishes
+/// with zero θ′-derivative at θ′ = θ, so by Taylor `L̃² ≤ ½ sup_{θ,ϑ ∈ box} |∂²V/∂θ′²(θ, ϑ)|`, enclosed box by
 /// box by 2-D branch-and-bound with the mean-value form of [`crate::certify::v_is`] in the core
-/// chart (θ itself). With `baseline` = Some(b) the estimator is the baselined
+/// chart (θ itself). With `baseline` = Some(b) (trajectory weights only) the estimator is the
+/// baselined
 /// `g_b = g − b Σ_i ψ_i` (one constant b for every decision, the weight on `g_b(θ, τ̄)`,
 /// docs/math.md §9) and the constant is L̃_b. (This is the whole-trajectory form of (A4), the one
 /// of math.md §3.2.) It holds on the box only; the STORM rows use
@@ -299,6 +301,7 @@ pub fn tied_softmax_g_inf_closed_form(horizon: usize, c: f64) -> f64 {
 /// [`BnbError`] if the engine fails on a box, or for a policy with more than one parameter.
 pub fn l_tilde(
     mdp: &ToyMdp,
+    weighting: Weighting,
     baseline: Option<&BigRational>,
     domain: [f64; 2],
     tol: f64,
@@ -312,15 +315,16 @@ pub fn l_tilde(
     }
     let pd = ToyProblem::<SecondOrder>::new(mdp);
     let p3 = ToyProblem::<ThirdOrder>::new(mdp);
-    let curvature = Curvature::new(mdp, &pd, &p3, Weighting::Trajectory, baseline);
+    let curvature = Curvature::new(mdp, &pd, &p3, weighting, baseline);
     let f = |x: &[Interval]| -> Result<Interval, String> {
         Ok(curvature.mean_value(&[Chart::Core, Chart::Core], x)?.abs())
     };
     let r = sup_bound(f, &[domain, domain], tol, max_boxes)?;
     let v = sqrt_up(r.upper / 2.0 * (1.0 + 1e-15));
-    let (name, estimator) = match baseline {
-        None => ("L̃", String::new()),
-        Some(b) => ("L̃_b", format!(" (trajectory weight on g_b, b = {b})")),
+    let (name, estimator) = match (baseline, weighting) {
+        (None, Weighting::Trajectory) => ("L̃", String::new()),
+        (None, Weighting::PerDecision) => ("L̃_PD", " (per-decision weights)".to_string()),
+        (Some(b), _) => ("L̃_b", format!(" (trajectory weight on g_b, b = {b})")),
     };
     let how = format!(
         "√(½ sup |∂²V/∂θ′²|){estimator} over {domain:?}² by 2-D interval branch-and-bound, mean-value form ({} boxes)",

@@ -97,6 +97,43 @@ fn v_is_total<S: Scalar>(
     Ok(total)
 }
 
+/// `max |∂²V/∂θ′²(θ, θ′)|` over every pair (θ, θ′) of `points`, evaluated in `f64` second-order
+/// duals by the sum the certificates enclose ([`v_is_total`]; θ in the core chart): the (A4)
+/// quantity of `weighting`'s old-point term, of the baselined estimator g_b when a `baseline` is
+/// given. Each point's terms are built once. The tight instances' search ranks its candidates
+/// with it ([`crate::checks::tight::search`]); the rows certify the constant by
+/// [`crate::certify::box_constants::l_tilde`].
+///
+/// # Errors
+/// If a table cannot be built or the prefix sets differ.
+pub(crate) fn max_v_is_second_at(
+    mdp: &ToyMdp,
+    weighting: Weighting,
+    baseline: Option<&BigRational>,
+    points: &[f64],
+) -> Result<f64, String> {
+    type Point = Dual<Dual<f64>>;
+    let p = ToyProblem::<Point>::new(mdp);
+    let b = baseline.map(Point::from_rational);
+    let terms = |x: Point| PointTerms::new(mdp, &p, b.as_ref(), Chart::Core, &x);
+    let old: Vec<PointTerms<Point>> = points
+        .iter()
+        .map(|&x| terms(Dual::constant(Dual::constant(x))))
+        .collect::<Result<_, _>>()?;
+    let new: Vec<PointTerms<Point>> = points
+        .iter()
+        .map(|&y| terms(Dual::variable(Dual::variable(y, 0, 1), 0, 1)))
+        .collect::<Result<_, _>>()?;
+    let mut m = 0.0f64;
+    for o in &old {
+        for n in &new {
+            let total = v_is_total(weighting, baseline.is_some(), o, n)?;
+            m = m.max(total.gradient_padded(1)[0].gradient_padded(1)[0].abs());
+        }
+    }
+    Ok(m)
+}
+
 /// A third-order jet: [`SecondOrder`] differentiated once more, in both chart coordinates.
 pub(crate) type ThirdOrder = Dual<SecondOrder>;
 

@@ -4,6 +4,7 @@
 //! policy tables.
 
 use crate::common::{q, v_b, v_is_trajectory};
+use ilopt::problem::Weighting;
 use ilopt::scalar::{BigRational, Scalar};
 use ilopt::toy::ToyProblem;
 use ilopt_theory::certify::box_constants::l_tilde;
@@ -14,7 +15,7 @@ type Q = BigRational;
 #[test]
 fn rigorous_l_tilde_dominates_exact_quotients() {
     let m1 = m1_tied();
-    let c = l_tilde(&m1, None, [-1.0, 1.0], 0.5, 3_000).unwrap();
+    let c = l_tilde(&m1, Weighting::Trajectory, None, [-1.0, 1.0], 0.5, 3_000).unwrap();
     assert!(c.value.is_finite(), "{}", c.how);
     let l2 = BigRational::from_float(c.value * c.value).unwrap();
     let p = ToyProblem::<Q>::new(&m1);
@@ -43,7 +44,15 @@ fn rigorous_l_tilde_dominates_exact_quotients() {
 fn rigorous_l_tilde_b_dominates_exact_quotients_and_a_lowered_one_does_not() {
     let m1 = m1_tied();
     let b = q("1/8");
-    let c = l_tilde(&m1, Some(&b), [-1.0, 1.0], 0.05, 3_000).unwrap();
+    let c = l_tilde(
+        &m1,
+        Weighting::Trajectory,
+        Some(&b),
+        [-1.0, 1.0],
+        0.05,
+        3_000,
+    )
+    .unwrap();
     assert_eq!(c.name, "L̃_b");
     let l2 = BigRational::from_float(c.value * c.value).unwrap();
     let p = ToyProblem::<Q>::new(&m1);

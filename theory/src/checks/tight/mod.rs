@@ -23,7 +23,9 @@
 //! X̄/B ≥ ½ was reached. Row 2.b's estimator (IS-STORM on g_b, the trajectory weight on the old
 //! point's g_b, [`Algorithm::StormBaselined`]) gets the noisy STORM search: `2.b.tight.noisy` and
 //! its control, with σ²_b and L̃_b certified on the hull
-//! ([`crate::certify::box_constants::l_tilde`] with the baseline).
+//! ([`crate::certify::box_constants::l_tilde`] with the baseline). Row 2c.pd's (IS-STORM with
+//! per-decision weights, [`Algorithm::StormPerDecision`]) gets it too: `2c.pd.tight.noisy`, with
+//! L̃_PD certified on the hull.
 //!
 //! Rows: `1.tight`, `1.tight.ctl` ([`sgd`]) and `2c.tight`, `2c.tight.ctl` ([`storm`]) over every
 //! instance of the family, where the largest X̄/B is reached by noiseless instances (T = 2 and a
@@ -113,7 +115,9 @@ impl Sizes {
     pub fn budget(&self, algorithm: Algorithm) -> Budget {
         match algorithm {
             Algorithm::Sgd | Algorithm::SgdBaselined => self.sgd,
-            Algorithm::Storm | Algorithm::StormBaselined => self.storm,
+            Algorithm::Storm | Algorithm::StormBaselined | Algorithm::StormPerDecision => {
+                self.storm
+            }
             Algorithm::SgdPerState => self.sgd_per_state,
         }
     }
@@ -232,6 +236,9 @@ pub struct PreparedAll {
     sgd_baselined: (Vec<Estimate>, Prepared<sgd::Certified>),
     /// Row 2.b's estimator (IS-STORM on g_b), noisy instances only, as for row 1.b.
     storm_baselined: (Vec<Estimate>, Prepared<storm::Certified>),
+    /// Row 2c.pd's estimator (IS-STORM with per-decision weights), noisy instances only: without
+    /// a scored decision the weights never enter.
+    storm_per_decision: (Vec<Estimate>, Prepared<storm::Certified>),
     /// Row 1b's family (one parameter per state).
     sgd_per_state: (Vec<Estimate>, Prepared<sgd::Certified>),
 }
@@ -281,6 +288,15 @@ impl PreparedAll {
                     Algorithm::StormBaselined,
                 ),
             ),
+            storm_per_decision: (
+                self.storm_per_decision.0.clone(),
+                bound::prepare_from::<Storm>(
+                    &self.storm_per_decision.0,
+                    inputs,
+                    &sizes,
+                    Algorithm::StormPerDecision,
+                ),
+            ),
             sgd_per_state: (
                 self.sgd_per_state.0.clone(),
                 bound::prepare_from::<Sgd>(
@@ -324,6 +340,12 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
             let p = bound::prepare_from::<Storm>(&found, inputs, &sizes, Algorithm::StormBaselined);
             (found, p)
         },
+        storm_per_decision: {
+            let found = bound::candidates(&sizes, Noise::Required, Algorithm::StormPerDecision);
+            let p =
+                bound::prepare_from::<Storm>(&found, inputs, &sizes, Algorithm::StormPerDecision);
+            (found, p)
+        },
         sgd_per_state: {
             let found = bound::candidates(&sizes, Noise::Any, Algorithm::SgdPerState);
             let p = bound::prepare_from::<Sgd>(&found, inputs, &sizes, Algorithm::SgdPerState);
@@ -364,6 +386,13 @@ pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Che
         Noise::Required,
         Algorithm::StormBaselined,
         &p.storm_baselined.1,
+    ));
+    rows.extend(bound::rows_from::<Storm>(
+        inputs,
+        &sizes,
+        Noise::Required,
+        Algorithm::StormPerDecision,
+        &p.storm_per_decision.1,
     ));
     rows.extend(bound::rows_from::<Sgd>(
         inputs,
@@ -414,6 +443,7 @@ mod tests {
         );
         assert!(ids.contains(&"1.b.tight.noisy"), "{ids:?}");
         assert!(ids.contains(&"2.b.tight.noisy"), "{ids:?}");
+        assert!(ids.contains(&"2c.pd.tight.noisy"), "{ids:?}");
         assert!(ids.contains(&"1b.tight"), "{ids:?}");
         for r in &all {
             let want = if r.role == Role::NegativeControl {

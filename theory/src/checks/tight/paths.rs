@@ -187,6 +187,20 @@ pub fn sgd_mean<S: Enclose>(
     })
 }
 
+/// A prefix τ̄ (its states and actions) completed into a trajectory of `mdp` with the expert's
+/// labels, for the oracle's weighted estimate: its last action and state enter no estimate.
+pub(super) fn completed(mdp: &ToyMdp, states: &[usize], actions: &[usize]) -> ToyTrajectory {
+    let mut st = states.to_vec();
+    st.push(states[states.len() - 1]);
+    let mut ac = actions.to_vec();
+    ac.push(0);
+    ToyTrajectory {
+        labels: states.iter().map(|s| mdp.expert[*s]).collect(),
+        states: st,
+        actions: ac,
+    }
+}
+
 /// The schedule (3.43) in `S`: `η_k = (1/(4L)) (7/(k+7))^{1/3}` and `a_{k+1} = (7/(k+7))^{2/3}`
 /// for k = 1..K.
 ///
@@ -209,13 +223,18 @@ pub fn storm_schedule<S: Scalar + Roots>(l: &S, k: u64) -> Result<Vec<(S, S)>, S
 /// `d_{k+1} = ĝ(θ_{k+1}, τ̄_{k+1}) + (1 − a_{k+1})(d_k − w ĝ(θ_k, τ̄_{k+1}))` with τ̄_{k+1} drawn at
 /// θ_{k+1} and w = p(τ̄; θ_k)/p(τ̄; θ_{k+1}) (every estimate through `inputs.estimate`).
 ///
-/// With `baseline` = Some(b) the run is row 2.b's: every estimate is the baselined g_b = g − b Σ_i ψ_i
+/// `weighting` is the old-point term's importance weight: the trajectory weight w above, or the
+/// per-decision weights of row 2c.pd ([`IlProblem::weighted_estimate`], math.md §4).
+///
+/// With `baseline` = Some(b) the run is row 2.b's (trajectory weights only): every estimate is the baselined g_b = g − b Σ_i ψ_i
 /// (one constant b for every decision, docs/math.md §9), the new point's from the engine's
 /// baselined terms as in [`sgd_mean`], the old-point term w g_b(θ_k, τ̄) from the kit's
 /// [`Baselined`] oracle (m = 1), as `ilopt run` computes it.
 ///
 /// # Errors
-/// As [`sgd_mean`], if `S` has no cube root, or if b is not a ratio of 64-bit integers.
+/// As [`sgd_mean`], if `S` has no cube root, if b is not a ratio of 64-bit integers, or for a
+/// baseline with per-decision weights.
+#[allow(clippy::too_many_arguments)] // the run's instance, schedule, oracle and estimator
 pub fn storm_mean<S: Enclose + Roots>(
     mdp: &ToyMdp,
     theta1: &[S],
@@ -223,8 +242,12 @@ pub fn storm_mean<S: Enclose + Roots>(
     k: u64,
     inputs: &TableInputs,
     max_paths: u64,
+    weighting: Weighting,
     baseline: Option<&BigRational>,
 ) -> Result<PathMean<S>, String> {
+    if baseline.is_some() && weighting != Weighting::Trajectory {
+        return Err("the baselined IS-STORM walk is written for trajectory weights".into());
+    }
     let mut problem = ToyProblem::<S>::new(mdp);
     let b_s = baseline.map(S::from_rational);
     let mut baselined = baseline
@@ -241,19 +264,7 @@ pub fn storm_mean<S: Enclose + Roots>(
     let mut hull = vec![[f64::INFINITY, f64::NEG_INFINITY]; theta1.len()];
     widen(&mut hull, theta1);
     let mut total = S::zero();
-    let label = |s: &usize| mdp.expert[*s];
-    // The prefix completed into a trajectory (its last action and state enter no estimate).
-    let trajectory = |states: &[usize], actions: &[usize]| {
-        let mut st = states.to_vec();
-        st.push(states[states.len() - 1]);
-        let mut ac = actions.to_vec();
-        ac.push(0);
-        ToyTrajectory {
-            labels: states.iter().map(label).collect(),
-            states: st,
-            actions: ac,
-        }
-    };
+    let trajectory = |states: &[usize], actions: &[usize]| completed(mdp, states, actions);
     let mut cost = Cost::default();
     // Depth-first: (k, θ_k, d_k, path probability, Σ_{i<k} η_i ‖∇F(θ_i)‖²).
     let mut stack = vec![];
@@ -283,9 +294,7 @@ pub fn storm_mean<S: Enclose + Roots>(
             let g = inputs.estimate(pre.estimate);
             let traj = trajectory(&pre.states, &pre.actions);
             let wg = match &mut baselined {
-                None => {
-                    problem.weighted_estimate(&old, &new, &traj, Weighting::Trajectory, &mut cost)
-                }
+                None => problem.weighted_estimate(&old, &new, &traj, weighting, &mut cost),
                 Some(oracle) => oracle.weighted_estimate(
                     &old,
                     &new,
@@ -410,7 +419,17 @@ mod tests {
         )
         .unwrap();
         let (l, k) = (8.0, 12u64);
-        let m = storm_mean(&mdp, &[0.5f64], &l, k, &TableInputs::thesis(), 10, None).unwrap();
+        let m = storm_mean(
+            &mdp,
+            &[0.5f64],
+            &l,
+            k,
+            &TableInputs::thesis(),
+            10,
+            Weighting::Trajectory,
+            None,
+        )
+        .unwrap();
         let p = ToyProblem::<f64>::new(&mdp);
         let (mut theta, mut num, mut den) = (0.5f64, 0.0, 0.0);
         for i in 1..=k {
@@ -435,6 +454,7 @@ mod tests {
             k,
             &TableInputs::thesis(),
             10,
+            Weighting::Trajectory,
             None,
         )
         .unwrap();
@@ -491,6 +511,7 @@ mod tests {
                 3,
                 &TableInputs::thesis(),
                 1000,
+                Weighting::Trajectory,
                 baseline,
             )
             .unwrap()
@@ -518,6 +539,7 @@ mod tests {
             1,
             &TableInputs::thesis(),
             10,
+            Weighting::Trajectory,
             None,
         )
         .unwrap();

@@ -16,15 +16,18 @@
 //! tight::search -- --nocapture` prints the quick budget's best instances.
 
 use super::instance::{Instance, exact};
-use super::paths::{PathMean, sgd_mean, storm_mean};
+use super::paths::{PathMean, completed, sgd_mean, storm_mean};
 use crate::bounds::{sgd_constant, storm_fixed};
 use crate::certify::charts::prefix_terms_with;
+use crate::certify::v_is::max_v_is_second_at;
 use crate::inputs::TableInputs;
 use ilopt::exact::baseline::baselined_moments;
 use ilopt::exact::enumerate::{moments, prefixes};
 use ilopt::exact::forward::forward;
+use ilopt::problem::{Cost, IlProblem, Weighting};
 use ilopt::scalar::{BigRational, Dual, Interval, Scalar, norm_sq};
 use ilopt::toy::{ToyMdp, ToyProblem};
+use nalgebra::DVector;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
@@ -70,6 +73,10 @@ pub enum Algorithm {
     /// and L̃_b in place of σ² and L̃. Like [`Algorithm::SgdBaselined`], it admits only instances on
     /// which the baseline changes the estimate (the baseline must change the estimate on some prefix at θ₁).
     StormBaselined,
+    /// IS-STORM with schedule (3.43), eq. (3.60\*), with per-decision importance weights on the
+    /// old-point term (math.md §4): row 2c.pd's estimator, with L̃_PD in place of L̃, on the
+    /// instances where those weights change the old-point term ([`Algorithm::weighting`]).
+    StormPerDecision,
 }
 
 impl Algorithm {
@@ -80,7 +87,20 @@ impl Algorithm {
 
     /// Whether the algorithm is IS-STORM with schedule (3.43), whatever its estimator.
     pub fn is_storm(self) -> bool {
-        matches!(self, Algorithm::Storm | Algorithm::StormBaselined)
+        matches!(
+            self,
+            Algorithm::Storm | Algorithm::StormBaselined | Algorithm::StormPerDecision
+        )
+    }
+
+    /// The importance weights of the STORM old-point term: per decision for
+    /// [`Algorithm::StormPerDecision`], the whole trajectory's otherwise.
+    pub fn weighting(self) -> Weighting {
+        if self == Algorithm::StormPerDecision {
+            Weighting::PerDecision
+        } else {
+            Weighting::Trajectory
+        }
     }
 
     /// The constant b of the baselined estimator g_b = g − bψ, or `None` for the plain one.
@@ -234,69 +254,17 @@ fn variance_estimate(mdp: &ToyMdp, pts: &[Vec<f64>], baseline: Option<f64>) -> R
     Ok(m)
 }
 
-/// √(½ max |∂²V_IS/∂θ′²|) over pairs of grid points: the Taylor bound of (A4) that
-/// [`crate::certify::box_constants::l_tilde`] certifies, estimated; with `baseline` = Some(b) the
-/// same for V_b of the baselined estimator ([`l_tilde_baselined_estimate`]).
+/// √(½ max |∂²V/∂θ′²|) over pairs of grid points: the Taylor bound of (A4) that
+/// [`crate::certify::box_constants::l_tilde`] certifies, estimated for the algorithm's old-point
+/// term (its weighting and, for the baselined estimator, b) by the sum the certificate encloses
+/// ([`crate::certify::v_is`]).
 fn l_tilde_estimate(
     mdp: &ToyMdp,
     pts: &[f64],
+    weighting: Weighting,
     baseline: Option<&BigRational>,
 ) -> Result<f64, String> {
-    if let Some(b) = baseline {
-        return l_tilde_baselined_estimate(mdp, pts, b);
-    }
-    let pf = ToyProblem::<f64>::new(mdp);
-    let pd = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
-    let mut m = 0.0f64;
-    for &x in pts {
-        let at = prefixes(&pf, &[x]).map_err(|e| e.to_string())?;
-        for &y in pts {
-            let v = Dual::variable(Dual::variable(y, 0, 1), 0, 1);
-            let at_prime = prefixes(&pd, &[v]).map_err(|e| e.to_string())?;
-            let lift = |x: f64| Dual::constant(Dual::constant(x));
-            let mut total = Dual::<Dual<f64>>::zero();
-            for (a, b) in at.iter().zip(&at_prime) {
-                let (p, g) = (lift(a.prob), lift(a.estimate[0]));
-                let (pp, gp) = (&b.prob, &b.estimate[0]);
-                total += pp.clone() * gp * gp - Dual::from_i64(2) * &p * gp * &g
-                    + p.clone() * &p / pp * &g * &g;
-            }
-            m = m.max(total.gradient_padded(1)[0].gradient_padded(1)[0].abs());
-        }
-    }
-    Ok((m / 2.0).sqrt())
-}
-
-/// √(½ max |∂²V_b/∂θ′²|) over pairs of grid points, V_b(θ, θ′) = E_{τ∼θ′}(g_b(θ′, τ) −
-/// w g_b(θ, τ))² with the trajectory weight w on the old point's g_b: the bound
-/// [`crate::certify::box_constants::l_tilde_baselined`] certifies, estimated.
-fn l_tilde_baselined_estimate(mdp: &ToyMdp, pts: &[f64], b: &BigRational) -> Result<f64, String> {
-    let pf = ToyProblem::<f64>::new(mdp);
-    let pd = ToyProblem::<Dual<Dual<f64>>>::new(mdp);
-    let (bf, bd) = (
-        <f64 as Scalar>::from_rational(b),
-        Dual::<Dual<f64>>::from_rational(b),
-    );
-    let mut m = 0.0f64;
-    for &x in pts {
-        let at = prefix_terms_with(&pf, &pf.table(&[x]).map_err(|e| e.to_string())?, Some(&bf))?;
-        for &y in pts {
-            let v = Dual::variable(Dual::variable(y, 0, 1), 0, 1);
-            let table = pd
-                .table(std::slice::from_ref(&v))
-                .map_err(|e| e.to_string())?;
-            let at_prime = prefix_terms_with(&pd, &table, Some(&bd))?;
-            let lift = |x: f64| Dual::constant(Dual::constant(x));
-            let mut total = Dual::<Dual<f64>>::zero();
-            for (a, q) in at.iter().zip(&at_prime) {
-                let old = lift(a.prob) / &q.prob * lift(a.estimate);
-                let e = q.estimate.clone() - old;
-                total += q.prob.clone() * &e * &e;
-            }
-            m = m.max(total.gradient_padded(1)[0].gradient_padded(1)[0].abs());
-        }
-    }
-    Ok((m / 2.0).sqrt())
+    Ok((max_v_is_second_at(mdp, weighting, baseline, pts)? / 2.0).sqrt())
 }
 
 /// Whether g_b = g − b Σ_i ψ_i differs from g on some prefix at θ₁: on an instance without a
@@ -312,6 +280,29 @@ fn baseline_moves_estimate(mdp: &ToyMdp, theta1: &[f64], b: f64) -> Result<bool,
         .iter()
         .zip(&baselined)
         .any(|(g, gb)| (g.estimate[0] - gb.estimate).abs() > 1e-9 * (1.0 + g.estimate[0].abs())))
+}
+
+/// Whether per-decision weights give another old-point term than the trajectory weight on some
+/// prefix, between θ₁ and θ₁ + 1/4 (the oracle's own weighted estimates): with fewer than two
+/// scored decisions they coincide, and the per-decision row would repeat the trajectory one, so
+/// its search admits only instances where they do not.
+fn weighting_moves_estimate(mdp: &ToyMdp, theta1: &[f64]) -> Result<bool, String> {
+    let mut p = ToyProblem::<f64>::new(mdp);
+    let old = DVector::from_column_slice(theta1);
+    let new = old.map(|t| t + 0.25);
+    let mut cost = Cost::default();
+    for pre in prefixes(&p, new.as_slice()).map_err(|e| e.to_string())? {
+        let t = completed(mdp, &pre.states, &pre.actions);
+        let mut by = |w| {
+            p.weighted_estimate(&old, &new, &t, w, &mut cost)
+                .map_err(|e| e.to_string())
+        };
+        let (pd, tr) = (by(Weighting::PerDecision)?, by(Weighting::Trajectory)?);
+        if (pd - &tr).amax() > 1e-9 * (1.0 + tr.amax()) {
+            return Ok(true);
+        }
+    }
+    Ok(false)
 }
 
 /// Evaluate a candidate (module docs); `None` if its step condition fails with the estimated
@@ -336,6 +327,11 @@ pub fn evaluate(
     {
         return None;
     }
+    if algorithm.weighting() == Weighting::PerDecision
+        && !weighting_moves_estimate(&mdp, &theta1).ok()?
+    {
+        return None;
+    }
     let run = match algorithm {
         Algorithm::Sgd | Algorithm::SgdBaselined | Algorithm::SgdPerState => sgd_mean(
             &mdp,
@@ -347,7 +343,7 @@ pub fn evaluate(
             b.as_ref(),
         )
         .ok()?,
-        Algorithm::Storm | Algorithm::StormBaselined => {
+        Algorithm::Storm | Algorithm::StormBaselined | Algorithm::StormPerDecision => {
             // In intervals, as the row will run it: a long run whose enclosure grows useless
             // (interval arithmetic's wrapping) is passed over here rather than at certification.
             let iv = |x: f64| Interval::try_from((x, x)).ok();
@@ -358,6 +354,7 @@ pub fn evaluate(
                 inst.k,
                 &inputs,
                 max_paths,
+                algorithm.weighting(),
                 exact_b.as_ref(),
             )
             .ok()?;
@@ -396,9 +393,11 @@ pub fn evaluate(
             let b = |s2: f64| sgd_constant(l_f, c.step, s2, b_f, inst.k);
             (b(sigma2), b(0.0))
         }
-        Algorithm::Storm | Algorithm::StormBaselined => {
+        Algorithm::Storm | Algorithm::StormBaselined | Algorithm::StormPerDecision => {
             let coarse = grid(run.hull[0], GRID.div_ceil(4), PAIR_SPACING);
-            let l = l_f.max(l_tilde_estimate(&mdp, &coarse, exact_b.as_ref()).ok()?);
+            let l = l_f.max(
+                l_tilde_estimate(&mdp, &coarse, algorithm.weighting(), exact_b.as_ref()).ok()?,
+            );
             if l * MARGIN > c.step {
                 return None;
             }
@@ -433,7 +432,7 @@ const STORM_KS: [u64; 8] = [1, 2, 4, 8, 16, 24, 40, 64];
 /// The horizons K a search draws from and moves between.
 fn ks(algorithm: Algorithm) -> &'static [u64] {
     match algorithm {
-        Algorithm::Storm | Algorithm::StormBaselined => &STORM_KS,
+        Algorithm::Storm | Algorithm::StormBaselined | Algorithm::StormPerDecision => &STORM_KS,
         Algorithm::SgdPerState => &PER_STATE_KS,
         Algorithm::Sgd | Algorithm::SgdBaselined => &SGD_KS,
     }
@@ -483,7 +482,9 @@ fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate>
         .collect();
     let l = l_f_estimate(&instance.mdp().ok()?, &points(&square)).ok()?;
     let step = match algorithm {
-        Algorithm::Storm | Algorithm::StormBaselined => dyadic(rng.random_range(1.0..2.5) * l),
+        Algorithm::Storm | Algorithm::StormBaselined | Algorithm::StormPerDecision => {
+            dyadic(rng.random_range(1.0..2.5) * l)
+        }
         _ => dyadic(rng.random_range(0.2..1.0) / l),
     };
     Some(Candidate { instance, step })
@@ -592,25 +593,28 @@ mod tests {
     use crate::certify::box_constants::l_tilde;
     use crate::protocol::m1_tied;
 
-    /// The box L̃ and L̃_b of rows 2c.tight and 2.b.tight: each certified enclosure
-    /// [attained, value] holds the value the search estimates on a grid of pairs inside the box
-    /// (an `f64` route: the enumeration's estimate for L̃, the baselined prefix terms for L̃_b),
-    /// and lies below the bound over all of ℝ² of the chart route ([`crate::certify::global`]).
+    /// The box L̃, L̃_b and L̃_PD of rows 2c.tight, 2.b.tight and 2c.pd.tight: each certified
+    /// enclosure [attained, value] holds the value the search estimates on a grid of pairs inside
+    /// the box (in `f64` duals), and lies below the bound over all of ℝ² of the chart route
+    /// ([`crate::certify::global`]).
     #[test]
     fn the_box_l_tilde_encloses_its_estimate_and_stays_below_the_global_one() {
         use crate::certify::global::l_tilde as global_l_tilde;
         use crate::certify::global_baselined::l_tilde_baselined as global_l_tilde_b;
-        use ilopt::problem::Weighting;
         let m1 = m1_tied();
         let domain = [-0.5, 0.75];
         let pts = grid(domain, 9, 1.0);
         let eighth = baseline();
-        for b in [None, Some(&eighth)] {
-            let c = l_tilde(&m1, b, domain, 1e-3, 4000).unwrap();
-            let est = l_tilde_estimate(&m1, &pts, b).unwrap();
+        for (w, b) in [
+            (Weighting::Trajectory, None),
+            (Weighting::Trajectory, Some(&eighth)),
+            (Weighting::PerDecision, None),
+        ] {
+            let c = l_tilde(&m1, w, b, domain, 1e-3, 4000).unwrap();
+            let est = l_tilde_estimate(&m1, &pts, w, b).unwrap();
             let attained = c.attained.unwrap();
             let global = match b {
-                None => global_l_tilde(&m1, Weighting::Trajectory, 1.0, 4000),
+                None => global_l_tilde(&m1, w, 1.0, 4000),
                 Some(b) => global_l_tilde_b(&m1, b, 1.0, 4000),
             }
             .unwrap();

@@ -27,7 +27,10 @@ fn stem(algorithm: Algorithm) -> (&'static str, &'static str) {
     match algorithm {
         Algorithm::SgdBaselined => ("1.b", RESULT_BASELINED),
         Algorithm::SgdPerState => ("1b", RESULT_PER_STATE),
-        Algorithm::Sgd | Algorithm::Storm | Algorithm::StormBaselined => ("1", RESULT),
+        Algorithm::Sgd
+        | Algorithm::Storm
+        | Algorithm::StormBaselined
+        | Algorithm::StormPerDecision => ("1", RESULT),
     }
 }
 

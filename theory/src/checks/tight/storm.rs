@@ -24,13 +24,15 @@ use ilopt::scalar::{BigRational, Interval, Scalar};
 const RESULT: &str = "STORM, eq. (3.60*) (tight instance)";
 const RESULT_BASELINED: &str =
     "STORM, eq. (3.60*), with a baseline (tight instance, beyond the thesis)";
+const RESULT_PER_DECISION: &str = "STORM, eq. (3.60*), per-decision weights (tight instance)";
 
-/// The row id's stem and the result of `algorithm`'s rows: "2c" (plain) or "2.b" (baselined).
+/// The row id's stem and the result of `algorithm`'s rows: "2c" (trajectory weights), "2c.pd"
+/// (per-decision weights) or "2.b" (baselined).
 fn stem(algorithm: Algorithm) -> (&'static str, &'static str) {
-    if algorithm == Algorithm::StormBaselined {
-        ("2.b", RESULT_BASELINED)
-    } else {
-        ("2c", RESULT)
+    match algorithm {
+        Algorithm::StormBaselined => ("2.b", RESULT_BASELINED),
+        Algorithm::StormPerDecision => ("2c.pd", RESULT_PER_DECISION),
+        _ => ("2c", RESULT),
     }
 }
 
@@ -102,12 +104,20 @@ impl Bound for Storm {
                 inst.k,
                 inputs,
                 s.budget(algorithm).max_paths,
+                algorithm.weighting(),
                 b.as_ref(),
             )
             .map_err(|m| format!("{}, L = {l_s}: {m}", inst.describe()))?;
             let lf = l_f(&mdp, &run.hull, s.tol, s.max_boxes).map_err(|e| e.to_string())?;
-            let lt = l_tilde(&mdp, b.as_ref(), run.hull[0], s.tol, s.max_boxes)
-                .map_err(|e| e.to_string())?;
+            let lt = l_tilde(
+                &mdp,
+                algorithm.weighting(),
+                b.as_ref(),
+                run.hull[0],
+                s.tol,
+                s.max_boxes,
+            )
+            .map_err(|e| e.to_string())?;
             let need = lf.value.max(lt.value);
             if need > l_s {
                 l_s = dyadic_up(need);
@@ -163,11 +173,22 @@ impl Bound for Storm {
                 format!("{scale}·"),
             )
         };
+        let weights = if c.algorithm == Algorithm::StormPerDecision {
+            "per-decision weights"
+        } else {
+            "trajectory weights"
+        };
         let (estimator, unbiased) = match &c.baseline {
             None => (
                 String::new(),
-                "(A2) E g = ∇F, and the weighted old-point term is unbiased (identity I3)"
-                    .to_string(),
+                format!(
+                    "(A2) E g = ∇F, and the {} old-point term is unbiased (identity I3)",
+                    if c.algorithm == Algorithm::StormPerDecision {
+                        "per-decision weighted"
+                    } else {
+                        "trajectory-weighted"
+                    }
+                ),
             ),
             Some(b) => (
                 format!(" on g_b = g − bψ, b = {b}, with σ²_b and L̃_b"),
@@ -177,7 +198,7 @@ impl Bound for Storm {
             ),
         };
         let claim = format!(
-            "Σ_k η_k E‖∇F(θ_k)‖² / Σ_k η_k ≤ {prefix}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))] / Σ_k (7/(k+7))^{{1/3}} for IS-STORM (trajectory weights){estimator}, schedule (3.43) with L = {}, on the instance of largest X̄/B found: {}",
+            "Σ_k η_k E‖∇F(θ_k)‖² / Σ_k η_k ≤ {prefix}4[2LB_F + σ²(1 + 14(H_{{K+7}} − H_7))] / Σ_k (7/(k+7))^{{1/3}} for IS-STORM ({weights}){estimator}, schedule (3.43) with L = {}, on the instance of largest X̄/B found: {}",
             exact(l),
             inst.describe()
         );
@@ -279,6 +300,36 @@ mod tests {
         assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
         let wrong = with_bound(half);
         let turned = bound::rows::<Storm>(&wrong, &s, Noise::Any, Algorithm::Storm);
+        assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
+    }
+
+    /// Row 2c.pd.tight.noisy at the quick size: IS-STORM with per-decision weights over the noisy
+    /// instances holds with L̃_PD certified on the hull (and σ², the estimator being g), and
+    /// (3.60\*) at row 2c.ctl's control scale refutes it.
+    #[test]
+    fn the_per_decision_tight_row_holds_and_an_understated_bound_turns_it() {
+        let s = Sizes::quick();
+        let a = Algorithm::StormPerDecision;
+        let p = bound::prepare::<Storm>(&TableInputs::thesis(), &s, Noise::Required, a);
+        let rows = bound::rows_from::<Storm>(&TableInputs::thesis(), &s, Noise::Required, a, &p);
+        for r in &rows {
+            println!(
+                "{} {:?} {:?}: {}\n  {}",
+                r.id, r.verdict, r.tightness, r.claim, r.details
+            );
+        }
+        assert_eq!(rows[0].id, "2c.pd.tight.noisy", "{rows:#?}");
+        assert_eq!(rows[0].verdict, Verdict::Holds, "{}", rows[0].details);
+        let c = p.certified.as_ref().expect("a certified candidate");
+        let names: Vec<&str> = c.constants.iter().map(|k| k.name.as_str()).collect();
+        assert_eq!(names, ["B_F", "L_F", "L̃_PD", "σ²"], "{names:?}");
+        assert!(
+            rows[0].claim.contains("per-decision weights"),
+            "{}",
+            rows[0].claim
+        );
+        let turned =
+            bound::rows_from::<Storm>(&with_bound(control_scaled), &s, Noise::Required, a, &p);
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 
