@@ -303,24 +303,38 @@ mod tests {
         assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 
-    /// Row 2c.pd.tight.noisy at the quick size: IS-STORM with per-decision weights over the noisy
-    /// instances holds with L̃_PD certified on the hull (and σ², the estimator being g), and
-    /// (3.60\*) at row 2c.ctl's control scale refutes it.
-    #[test]
-    fn the_per_decision_tight_row_holds_and_an_understated_bound_turns_it() {
+    /// `algorithm`'s noisy tight rows at the quick size, printed, with its certified candidate:
+    /// the main row holds, and (3.60\*) scaled as the Monte-Carlo row 2c.ctl's control refutes it
+    /// (X̄/B ≥ 0.01 there, so B × 1/200 lies below X̄): the row can fail at its size.
+    fn noisy_rows(algorithm: Algorithm, id: &str) -> (Certified, Vec<Check>) {
         let s = Sizes::quick();
-        let a = Algorithm::StormPerDecision;
-        let p = bound::prepare::<Storm>(&TableInputs::thesis(), &s, Noise::Required, a);
-        let rows = bound::rows_from::<Storm>(&TableInputs::thesis(), &s, Noise::Required, a, &p);
+        let n = Noise::Required;
+        let p = bound::prepare::<Storm>(&TableInputs::thesis(), &s, n, algorithm);
+        let rows = bound::rows_from::<Storm>(&TableInputs::thesis(), &s, n, algorithm, &p);
         for r in &rows {
             println!(
                 "{} {:?} {:?}: {}\n  {}",
                 r.id, r.verdict, r.tightness, r.claim, r.details
             );
         }
-        assert_eq!(rows[0].id, "2c.pd.tight.noisy", "{rows:#?}");
+        assert_eq!(rows[0].id, id, "{rows:#?}");
         assert_eq!(rows[0].verdict, Verdict::Holds, "{}", rows[0].details);
-        let c = p.certified.as_ref().expect("a certified candidate");
+        let turned = bound::rows_from::<Storm>(&with_bound(control_scaled), &s, n, algorithm, &p);
+        assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
+        if rows[0].tightness.unwrap() >= 0.5 {
+            assert_eq!(rows[1].id, format!("{id}.ctl"));
+            assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
+            let turned = bound::rows_from::<Storm>(&with_bound(half), &s, n, algorithm, &p);
+            assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
+        }
+        (p.certified.expect("a certified candidate"), rows)
+    }
+
+    /// Row 2c.pd.tight.noisy ([`noisy_rows`]): IS-STORM with per-decision weights, L̃_PD
+    /// certified on the hull (and σ², the estimator being g).
+    #[test]
+    fn the_per_decision_tight_row_holds_and_an_understated_bound_turns_it() {
+        let (c, rows) = noisy_rows(Algorithm::StormPerDecision, "2c.pd.tight.noisy");
         let names: Vec<&str> = c.constants.iter().map(|k| k.name.as_str()).collect();
         assert_eq!(names, ["B_F", "L_F", "L̃_PD", "σ²"], "{names:?}");
         assert!(
@@ -328,69 +342,16 @@ mod tests {
             "{}",
             rows[0].claim
         );
-        let turned =
-            bound::rows_from::<Storm>(&with_bound(control_scaled), &s, Noise::Required, a, &p);
-        assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
     }
 
-    /// Row 2.b.tight.noisy at the quick size: IS-STORM on row 2.b's g_b over the noisy instances
-    /// holds with its constants (σ²_b, L̃_b) certified on the hull and reports X̄/B; (3.60\*) at
-    /// row 2c.ctl's control scale refutes it; where X̄/B ≥ ½ was reached it states a B ÷ 2
-    /// control, refuted, and (3.60\*) halved refutes the row.
+    /// Row 2.b.tight.noisy ([`noisy_rows`]): IS-STORM on row 2.b's g_b, σ²_b and L̃_b certified
+    /// on the hull.
     #[test]
     fn the_baselined_tight_row_holds_with_its_certified_constants() {
-        let s = Sizes::quick();
-        let t = std::time::Instant::now();
-        let p = bound::prepare::<Storm>(
-            &TableInputs::thesis(),
-            &s,
-            Noise::Required,
-            Algorithm::StormBaselined,
-        );
-        println!("prepared in {:?}", t.elapsed());
-        let rows = bound::rows_from::<Storm>(
-            &TableInputs::thesis(),
-            &s,
-            Noise::Required,
-            Algorithm::StormBaselined,
-            &p,
-        );
-        for r in &rows {
-            println!(
-                "{} {:?} {:?}: {}\n  {}",
-                r.id, r.verdict, r.tightness, r.claim, r.details
-            );
-        }
-        assert_eq!(rows[0].id, "2.b.tight.noisy", "{rows:#?}");
-        assert_eq!(rows[0].verdict, Verdict::Holds, "{}", rows[0].details);
-        let c = p.certified.as_ref().expect("a certified candidate");
+        let (c, rows) = noisy_rows(Algorithm::StormBaselined, "2.b.tight.noisy");
         assert_eq!(c.baseline, Some(super::super::search::baseline()));
         let names: Vec<&str> = c.constants.iter().map(|k| k.name.as_str()).collect();
         assert_eq!(names, ["B_F", "L_F", "L̃_b", "σ²_b"], "{names:?}");
         assert!(rows[0].claim.contains("g_b = g − bψ"), "{}", rows[0].claim);
-        // The row can fail at its size: (3.60*) scaled as the Monte-Carlo row 2c.ctl's control
-        // is refuted (X̄/B ≥ 0.01 here, so B × 1/200 lies below X̄).
-        let understated = with_bound(control_scaled);
-        let turned = bound::rows_from::<Storm>(
-            &understated,
-            &s,
-            Noise::Required,
-            Algorithm::StormBaselined,
-            &p,
-        );
-        assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
-        if rows[0].tightness.unwrap() >= 0.5 {
-            assert_eq!(rows[1].id, "2.b.tight.noisy.ctl");
-            assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
-            let wrong = with_bound(half);
-            let turned = bound::rows_from::<Storm>(
-                &wrong,
-                &s,
-                Noise::Required,
-                Algorithm::StormBaselined,
-                &p,
-            );
-            assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
-        }
     }
 }
