@@ -12,30 +12,37 @@ use ilopt_theory::protocol::m1_tied;
 
 type Q = BigRational;
 
+/// The largest V(θ, θ′)/(θ′ − θ)² over a fixed sample of pairs in [−1, 1]², each checked ≤ L̃²
+/// (`l`, the certified constant) as it is computed.
+fn worst_quotient(l: f64, v: impl Fn(&Q, &Q) -> Q) -> Q {
+    let l2 = BigRational::from_float(l * l).unwrap();
+    let mut worst = Q::zero();
+    for a in [-8i64, -1, 0, 3, -5, 7, -7, 4] {
+        for (c, d) in [(1i64, 8i64), (-1, 2), (5, 8), (0, 1), (63, 64)] {
+            let (th, pr) = (Q::new(a.into(), 8.into()), Q::new(c.into(), d.into()));
+            if th == pr {
+                continue;
+            }
+            let quotient = v(&th, &pr) / ((pr.clone() - &th) * (pr - &th));
+            assert!(
+                quotient <= l2,
+                "V/Δ² = {} exceeds L̃² = {}",
+                quotient.to_f64(),
+                l * l
+            );
+            worst = worst.max(quotient);
+        }
+    }
+    worst
+}
+
 #[test]
 fn rigorous_l_tilde_dominates_exact_quotients() {
     let m1 = m1_tied();
     let c = l_tilde(&m1, Weighting::Trajectory, None, [-1.0, 1.0], 0.5, 3_000).unwrap();
     assert!(c.value.is_finite(), "{}", c.how);
-    let l2 = BigRational::from_float(c.value * c.value).unwrap();
     let p = ToyProblem::<Q>::new(&m1);
-    let mut worst = Q::zero();
-    for a in [-8i64, -1, 0, 3, -5, 7, -7, 4] {
-        for (c2, d2) in [(1i64, 8i64), (-1, 2), (5, 8), (0, 1)] {
-            let (th, pr) = (Q::new(a.into(), 8.into()), Q::new(c2.into(), d2.into()));
-            if th == pr {
-                continue;
-            }
-            let q = v_is_trajectory(&p, &th, &pr) / ((pr.clone() - &th) * (pr - &th));
-            assert!(
-                q <= l2,
-                "V_IS/Δ² = {} exceeds L̃² = {}",
-                q.to_f64(),
-                c.value * c.value
-            );
-            worst = worst.max(q);
-        }
-    }
+    let worst = worst_quotient(c.value, |th, pr| v_is_trajectory(&p, th, pr));
     // The sampled quotient is well below the bound but of the same order (math.md: ≈ 4.34²).
     assert!(worst > Q::from_i64(1), "{}", worst.to_f64());
 }
@@ -54,25 +61,8 @@ fn rigorous_l_tilde_b_dominates_exact_quotients_and_a_lowered_one_does_not() {
     )
     .unwrap();
     assert_eq!(c.name, "L̃_b");
-    let l2 = BigRational::from_float(c.value * c.value).unwrap();
     let p = ToyProblem::<Q>::new(&m1);
-    let mut worst = Q::zero();
-    for a in [-8i64, -1, 0, 3, -5, 7, -7, 4] {
-        for (c2, d2) in [(1i64, 8i64), (-1, 2), (5, 8), (0, 1), (63, 64)] {
-            let (th, pr) = (Q::new(a.into(), 8.into()), Q::new(c2.into(), d2.into()));
-            if th == pr {
-                continue;
-            }
-            let quotient = v_b(&p, &b, &th, &pr) / ((pr.clone() - &th) * (pr - &th));
-            assert!(
-                quotient <= l2,
-                "V_b/Δ² = {} exceeds L̃_b² = {}",
-                quotient.to_f64(),
-                c.value * c.value
-            );
-            worst = worst.max(quotient);
-        }
-    }
+    let worst = worst_quotient(c.value, |th, pr| v_b(&p, &b, th, pr));
     // The check can fail: the bound a third lower is exceeded by some sampled quotient.
     let lowered = BigRational::from_float(c.value * c.value * 4.0 / 9.0).unwrap();
     assert!(worst > lowered, "{} {}", worst.to_f64(), lowered.to_f64());
