@@ -27,6 +27,10 @@
 //! per-decision weights, [`Algorithm::StormPerDecision`]) gets it too: `2c.pd.tight.noisy`, with
 //! L̃_PD certified on the hull.
 //!
+//! Row 3b's algorithm (Algorithm 5, IL-correct) gets `3b.tight` and `3b.tight.noisy` ([`o2nc`]):
+//! with blocks of length T ≤ 2 its iterates depend on finitely many draws, and E X is enclosed
+//! over every path with an interval Riemann sum over the uniform s_n.
+//!
 //! Rows: `1.tight`, `1.tight.ctl` ([`sgd`]) and `2c.tight`, `2c.tight.ctl` ([`storm`]) over every
 //! instance of the family, where the largest X̄/B is reached by noiseless instances (T = 2 and a
 //! deterministic start: the estimate is ∇F itself and Var g ≡ 0, the certified σ² being only the
@@ -43,6 +47,7 @@
 
 pub mod bound;
 pub mod instance;
+pub mod o2nc;
 pub mod paths;
 pub mod search;
 pub mod sgd;
@@ -63,6 +68,8 @@ pub struct Sizes {
     pub storm: Budget,
     /// The SGD search over the second toy's family (one parameter per state).
     pub sgd_per_state: Budget,
+    /// The O2NC search (Algorithm 5 with blocks of length T ≤ 2, [`o2nc`]).
+    pub o2nc: Budget,
     /// Branch-and-bound tolerance of the certified constants.
     pub tol: f64,
     /// Box budget of each certified constant.
@@ -74,7 +81,8 @@ pub struct Sizes {
 
 impl Sizes {
     /// The quick profile: 400 random candidates and 400 pattern-search evaluations per algorithm (seed 1), at
-    /// most 1,296 paths (6⁴) per candidate; the second toy's family: 400 and 400, at most 64 paths.
+    /// most 1,296 paths (6⁴) per candidate; the second toy's family: 400 and 400, at most 64 paths;
+    /// O2NC, whose candidates cost little (one forward pass per cell of s), 2,000 and 2,000.
     pub fn quick() -> Self {
         let b = Budget {
             random: 400,
@@ -86,6 +94,11 @@ impl Sizes {
             sgd: b,
             storm: b,
             sgd_per_state: PER_STATE,
+            o2nc: Budget {
+                random: 2000,
+                refine: 2000,
+                ..b
+            },
             tol: 1e-4,
             max_boxes: 4000,
             tries: 8,
@@ -93,7 +106,8 @@ impl Sizes {
     }
 
     /// The full profile: 1,000 random candidates and 500 pattern-search evaluations per algorithm (seed 1);
-    /// the second toy's family as in the quick profile (its exact X̄ limits the paths, not the budget).
+    /// the second toy's family as in the quick profile (its exact X̄ limits the paths, not the budget);
+    /// O2NC 5,000 and 5,000.
     pub fn full() -> Self {
         let b = Budget {
             random: 1000,
@@ -105,6 +119,11 @@ impl Sizes {
             sgd: b,
             storm: b,
             sgd_per_state: PER_STATE,
+            o2nc: Budget {
+                random: 5000,
+                refine: 5000,
+                ..b
+            },
             tol: 1e-5,
             max_boxes: 20_000,
             tries: 8,
@@ -241,6 +260,24 @@ pub struct PreparedAll {
     storm_per_decision: (Vec<Estimate>, Prepared<storm::Certified>),
     /// Row 1b's family (one parameter per state).
     sgd_per_state: (Vec<Estimate>, Prepared<sgd::Certified>),
+    /// Row 3b's algorithm (Algorithm 5, IL-correct), per noise setting.
+    o2nc: Vec<(Noise, Vec<o2nc::Estimate>, Prepared<o2nc::Certified>)>,
+}
+
+/// [`o2nc::prepare_from`] with the sizes' budget, tolerance and tries.
+fn prepare_o2nc(
+    found: &[o2nc::Estimate],
+    inputs: &TableInputs,
+    sizes: &Sizes,
+) -> Prepared<o2nc::Certified> {
+    o2nc::prepare_from(
+        found,
+        inputs,
+        &sizes.o2nc,
+        sizes.tol,
+        sizes.max_boxes,
+        sizes.tries,
+    )
 }
 
 impl PreparedAll {
@@ -306,12 +343,18 @@ impl PreparedAll {
                     Algorithm::SgdPerState,
                 ),
             ),
+            o2nc: self
+                .o2nc
+                .iter()
+                .map(|(n, found, _)| (*n, found.clone(), prepare_o2nc(found, inputs, &sizes)))
+                .collect(),
         }
     }
 }
 
 /// Search and certify for both algorithms and both noise settings, for row 1.b's baselined
-/// estimator on the noisy instances, and for SGD on row 1b's family.
+/// estimator on the noisy instances, for SGD on row 1b's family, and for O2NC (both noise
+/// settings).
 pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
     PreparedAll {
         sgd: NOISES
@@ -351,6 +394,14 @@ pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
             let p = bound::prepare_from::<Sgd>(&found, inputs, &sizes, Algorithm::SgdPerState);
             (found, p)
         },
+        o2nc: NOISES
+            .iter()
+            .map(|&n| {
+                let found = o2nc::search(n, sizes.o2nc);
+                let p = prepare_o2nc(&found, inputs, &sizes);
+                (n, found, p)
+            })
+            .collect(),
     }
 }
 
@@ -401,6 +452,9 @@ pub fn rows_from(inputs: &TableInputs, sizes: Sizes, p: &PreparedAll) -> Vec<Che
         Algorithm::SgdPerState,
         &p.sgd_per_state.1,
     ));
+    for (noise, _, prepared) in &p.o2nc {
+        rows.extend(o2nc::rows_from(inputs, &sizes.o2nc, *noise, prepared));
+    }
     rows
 }
 
@@ -445,6 +499,8 @@ mod tests {
         assert!(ids.contains(&"2.b.tight.noisy"), "{ids:?}");
         assert!(ids.contains(&"2c.pd.tight.noisy"), "{ids:?}");
         assert!(ids.contains(&"1b.tight"), "{ids:?}");
+        assert!(ids.contains(&"3b.tight"), "{ids:?}");
+        assert!(ids.contains(&"3b.tight.noisy"), "{ids:?}");
         for r in &all {
             let want = if r.role == Role::NegativeControl {
                 Verdict::Fails

@@ -543,33 +543,53 @@ fn moves(algorithm: Algorithm, c: &Candidate, h: f64) -> Vec<Candidate> {
 /// Starting points of the refinement: the best distinct random candidates.
 pub const STARTS: usize = 4;
 
-/// The search (module docs) over the instances `noise` admits: `budget.random` random
-/// candidates, then a pattern search from each of the [`STARTS`] best of them, `budget.refine`
-/// evaluations in all: at scale h (from ½) every move of `moves` is tried, the best improving
-/// one is taken, and h is halved when none improves (down to 2⁻¹⁰). Returns every feasible
-/// distinct candidate evaluated, best first (ties in the order of evaluation).
+/// The search (module docs) over the instances `noise` admits: [`random_then_pattern`] with this
+/// family's random candidates, evaluation and moves.
 pub fn search(algorithm: Algorithm, noise: Noise, budget: Budget) -> Vec<Estimate> {
+    random_then_pattern(
+        budget,
+        |rng| random_candidate(algorithm, rng),
+        |c| evaluate(algorithm, noise, c, budget.max_paths),
+        |c, h| moves(algorithm, c, h),
+        |e| (e.ratio, &e.candidate),
+    )
+}
+
+/// The search loop of every tight row, for any family of candidates `C` evaluated to `E`
+/// (`key` reads an evaluation's X̄/B and its candidate): `budget.random` candidates drawn by
+/// `random` from the seeded RNG, then a pattern search from each of the [`STARTS`] best of them,
+/// `budget.refine` evaluations in all: at scale h (from ½) every move of `moves` is tried, the
+/// best improving one is taken, and h is halved when none improves (down to 2⁻¹⁰). Returns every
+/// feasible distinct candidate evaluated, best first (ties in the order of evaluation).
+pub fn random_then_pattern<C: Clone + PartialEq, E: Clone>(
+    budget: Budget,
+    mut random: impl FnMut(&mut StdRng) -> Option<C>,
+    evaluate: impl Fn(&C) -> Option<E>,
+    moves: impl Fn(&C, f64) -> Vec<C>,
+    key: impl Fn(&E) -> (f64, &C),
+) -> Vec<E> {
+    let ratio = |e: &E| key(e).0;
     let mut rng = StdRng::seed_from_u64(budget.seed);
-    let mut found: Vec<Estimate> = vec![];
+    let mut found: Vec<E> = vec![];
     for _ in 0..budget.random {
-        if let Some(c) = random_candidate(algorithm, &mut rng) {
-            found.extend(evaluate(algorithm, noise, &c, budget.max_paths));
+        if let Some(c) = random(&mut rng) {
+            found.extend(evaluate(&c));
         }
     }
-    found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
-    let starts: Vec<Estimate> = found.iter().take(STARTS).cloned().collect();
+    found.sort_by(|a, b| ratio(b).total_cmp(&ratio(a)));
+    let starts: Vec<E> = found.iter().take(STARTS).cloned().collect();
     let per_start = budget.refine / STARTS.max(1);
     for start in starts {
         let (mut best, mut h, mut spent) = (start, 0.5f64, 0usize);
         while spent < per_start && h >= 1.0 / 1024.0 {
-            let mut improved = None::<Estimate>;
-            for c in moves(algorithm, &best.candidate, h) {
+            let mut improved = None::<E>;
+            for c in moves(key(&best).1, h) {
                 if spent >= per_start {
                     break;
                 }
                 spent += 1;
-                if let Some(e) = evaluate(algorithm, noise, &c, budget.max_paths) {
-                    if e.ratio > improved.as_ref().map_or(best.ratio, |i| i.ratio) {
+                if let Some(e) = evaluate(&c) {
+                    if ratio(&e) > improved.as_ref().map_or(ratio(&best), ratio) {
                         improved = Some(e.clone());
                     }
                     found.push(e);
@@ -581,9 +601,9 @@ pub fn search(algorithm: Algorithm, noise: Noise, budget: Budget) -> Vec<Estimat
             }
         }
     }
-    found.sort_by(|a, b| b.ratio.total_cmp(&a.ratio));
+    found.sort_by(|a, b| ratio(b).total_cmp(&ratio(a)));
     // A candidate the pattern search revisited appears once (its copies are adjacent: equal ratio).
-    found.dedup_by(|a, b| a.candidate == b.candidate);
+    found.dedup_by(|a, b| key(a).1 == key(b).1);
     found
 }
 

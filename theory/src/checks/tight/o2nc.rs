@@ -1,0 +1,892 @@
+//! Rows 3b.tight and 3b.tight.ctl: the theorem-level O2NC bound (Theorem 3.8 with the realised
+//! T, K, D, M; [`crate::bounds::o2nc_theorem`]) for Algorithm 5 with IL-correct sampling
+//! (τ_n ∼ p(·; w_n), E11) at the instance of largest X̄/B a seeded search finds, with
+//! E X **enclosed** over every outcome of the run.
+//!
+//! Why the runs are enumerable. Algorithm 5 draws s_n ∼ U[0, 1] at every step, so its outcomes
+//! are not finitely many. With blocks of length T ≤ 2 the walk still has a closed form:
+//!
+//! * at t = 1 the restart gives Δ_n = 0, so w_n = θ_{n−1} and θ_n = θ_{n−1}; the prefix τ̄ drawn
+//!   there sets Δ = Π_{|·|≤D}(−η ĝ(θ, τ̄));
+//! * at t = 2, θ_n = θ_{n−1} + Δ and w_n = θ_{n−1} + s_n Δ; the prefix drawn at w_n enters only the
+//!   next Δ, which the next block's restart discards.
+//!
+//! So the iterates θ depend on the prefixes drawn at the blocks' first steps alone (finitely many
+//! paths, each with its probability), s_n enters only through w_n, and the statistic
+//! `X = (1/K) Σ_k |(1/T) Σ_t ∇F(wᵏ_t)|` has the expectation
+//!
+//! ```text
+//! E X = Σ_paths p(path) (1/K) Σ_k ∫₀¹ |∇F(θ_k) + ∇F(θ_k + sΔ_k)|/2 ds      (T = 2)
+//! E X = |∇F(θ₁)|                                                              (T = 1)
+//! ```
+//!
+//! The integral is enclosed by an interval Riemann sum over [`CELLS`] cells of s (each cell's
+//! |∇F(θ + [s_j, s_{j+1}]Δ) + ∇F(θ)| enclosed by the forward DP in intervals), so the decision is
+//! a proof, not a test. T ≤ 2 means GNδ/Δ₀ ≤ 2√2: the search's parameter x = GNδ/Δ₀ ranges up
+//! to that, and a candidate whose blocks are longer is refused.
+//!
+//! The algorithm's inputs are exact rationals: G (a dyadic, the candidate's), Δ₀ = F(θ₁) (F ≥ 0,
+//! so Δ₀ ≥ F(θ₁) − F*) and δ = xΔ₀/(GN); T, K, M and D come from the kit's own
+//! [`O2ncConfig::parameters`]. The theorem needs G² ≥ E‖g‖² and σ² ≥ Var g at every point the
+//! run visits: both are certified by interval branch-and-bound on the hull of every iterate
+//! (which holds every w_n), and a candidate whose certified G² exceeds its G² is passed over.
+//! Every gradient estimate that moves an iterate is the oracle's own, read through
+//! [`TableInputs::estimate`].
+
+use super::instance::{Instance, exact};
+use super::paths::{Enclose, PathMean};
+use super::search::{
+    Budget, GRID, MARGIN, MAX_WIDTH, NOISE_SHARE, Noise, SPACING, STARTS, random_then_pattern,
+};
+use super::{Prepared, first_certified, with_control};
+use crate::bounds::{O2ncParams, upper};
+use crate::certify::box_constants::sigma2;
+use crate::inputs::{ConstantKind, TableInputs};
+use crate::record::check::{Check, Measured, Method, Role, Verdict};
+use crate::record::constant::Constant;
+use ilopt::algo::ConfigNumber;
+use ilopt::algo::o2nc::{O2ncConfig, O2ncParameters};
+use ilopt::exact::enumerate::{moments, prefixes};
+use ilopt::exact::forward::forward;
+use ilopt::problem::EstimatorForm;
+use ilopt::scalar::{BigRational, Dual, Interval, Scalar, Sqrt};
+use ilopt::toy::{ToyMdp, ToyProblem};
+use rand::Rng;
+use rand::rngs::StdRng;
+
+const RESULT: &str = "Online-to-non-convex (Alg. 5, IL-correct), Thm 3.8 (tight instance)";
+
+/// Cells of s ∈ [0, 1] in the certified Riemann enclosure of each block's integral.
+pub const CELLS: usize = 64;
+/// Cells of the search's midpoint rule (an estimate that only ranks candidates).
+pub const SEARCH_CELLS: usize = 8;
+/// The largest x = GNδ/Δ₀ the search draws: 181/64, the largest multiple of 2⁻⁶ with T ≤ 2
+/// (T = ⌈x^{2/3}⌉ ≤ 2 iff x ≤ 2√2 ≈ 2.8284).
+pub const X_MAX: f64 = 2.828125;
+
+/// A scalar the walk integrates in: ∇F on a cell of s at its midpoint in `f64` (the midpoint
+/// rule of the search), enclosed over the whole cell in intervals (a rigorous Riemann enclosure).
+pub trait Quadrature: Enclose + Sqrt {
+    /// What evaluates ∇F on the cells (built once per walk).
+    type Engine;
+    /// The engine for `mdp`.
+    fn engine(mdp: &ToyMdp) -> Self::Engine;
+    /// ∇F(θ) at one point.
+    fn grad_at(engine: &Self::Engine, theta: &Self) -> Result<Self, String>;
+    /// ∇F on each of the `cells` equal cells [s_j, s_{j+1}] of s ∈ [0, 1] along θ + sΔ.
+    fn grads_on_cells(
+        engine: &Self::Engine,
+        theta: &Self,
+        delta: &Self,
+        cells: usize,
+    ) -> Result<Vec<Self>, String>;
+    /// |self|.
+    fn magnitude(&self) -> Self;
+    /// The projection onto [−d, d] (Algorithm 5's Π in one dimension).
+    fn clamp_to(&self, d: &Self) -> Self;
+}
+
+/// ∇F(θ) (one parameter) in `S`.
+fn grad<S: Scalar>(problem: &ToyProblem<S>, theta: &S) -> Result<S, String> {
+    Ok(forward(problem, std::slice::from_ref(theta))
+        .map_err(|e| e.to_string())?
+        .gradient[0]
+        .clone())
+}
+
+impl Quadrature for f64 {
+    type Engine = ToyProblem<f64>;
+    fn engine(mdp: &ToyMdp) -> ToyProblem<f64> {
+        ToyProblem::new(mdp)
+    }
+    fn grad_at(engine: &ToyProblem<f64>, theta: &f64) -> Result<f64, String> {
+        grad(engine, theta)
+    }
+    /// At the cells' midpoints.
+    fn grads_on_cells(
+        engine: &ToyProblem<f64>,
+        theta: &f64,
+        delta: &f64,
+        cells: usize,
+    ) -> Result<Vec<f64>, String> {
+        (0..cells)
+            .map(|j| grad(engine, &(theta + (j as f64 + 0.5) / cells as f64 * delta)))
+            .collect()
+    }
+    fn magnitude(&self) -> f64 {
+        self.abs()
+    }
+    fn clamp_to(&self, d: &f64) -> f64 {
+        self.clamp(-d, *d)
+    }
+}
+
+impl Quadrature for Interval {
+    type Engine = (ToyProblem<Interval>, ToyProblem<Dual<Interval>>);
+    fn engine(mdp: &ToyMdp) -> Self::Engine {
+        (ToyProblem::new(mdp), ToyProblem::new(mdp))
+    }
+    fn grad_at(engine: &Self::Engine, theta: &Interval) -> Result<Interval, String> {
+        grad(&engine.0, theta)
+    }
+    /// The mean-value form on each cell, intersected with the direct enclosure:
+    /// ∇F(θ + sΔ) ∈ ∇F(θ + m_jΔ) + F″(θ + [s_j, s_{j+1}]Δ)·([s_j, s_{j+1}] − m_j)Δ, m_j the cell's
+    /// midpoint (F″ from the forward pass in `Dual<Interval>`). The direct enclosure alone widens
+    /// with the forward pass's dependency on θ; the mean-value form's width falls with the cell.
+    fn grads_on_cells(
+        engine: &Self::Engine,
+        theta: &Interval,
+        delta: &Interval,
+        cells: usize,
+    ) -> Result<Vec<Interval>, String> {
+        let n = cells as f64;
+        (0..cells)
+            .map(|j| {
+                // The cell's ends and midpoint are multiples of 1/(2·cells), exact in `f64`.
+                let (lo, hi, mid) = (j as f64 / n, (j + 1) as f64 / n, (j as f64 + 0.5) / n);
+                let s = Interval::try_from((lo, hi)).map_err(|e| format!("{e:?}"))?;
+                let w = *theta + s * *delta;
+                let d = grad(&engine.1, &Dual::variable(w, 0, 1))?;
+                let (direct, second) = d.into_parts(1);
+                let at_mid = grad(
+                    &engine.0,
+                    &(*theta
+                        + Interval::try_from((mid, mid)).map_err(|e| format!("{e:?}"))? * *delta),
+                )?;
+                let offset =
+                    Interval::try_from((lo - mid, hi - mid)).map_err(|e| format!("{e:?}"))?;
+                let mean_value = at_mid + second[0] * offset * *delta;
+                Ok(mean_value.intersection(direct))
+            })
+            .collect()
+    }
+    fn magnitude(&self) -> Interval {
+        self.abs()
+    }
+    /// Π is monotone in its argument and the radius, so the elementwise min and max enclose it.
+    fn clamp_to(&self, d: &Interval) -> Interval {
+        self.min(*d).max(-*d)
+    }
+}
+
+/// A candidate: an instance of the M family (its `k` is the budget N), the algorithm's G and
+/// x = GNδ/Δ₀, both short dyadic rationals stored as `f64`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Candidate {
+    /// The instance; `instance.k` is Algorithm 5's budget N.
+    pub instance: Instance,
+    /// G > 0, the algorithm's bound on √E‖g‖².
+    pub g: f64,
+    /// x = GNδ/Δ₀, which sets δ (T ≤ 2 iff x ≤ 2√2).
+    pub x: f64,
+}
+
+/// The exact inputs of Algorithm 5 for a candidate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Setting {
+    /// Δ₀ = F(θ₁).
+    pub delta0: BigRational,
+    /// δ = xΔ₀/(GN).
+    pub delta: BigRational,
+    /// G.
+    pub g: BigRational,
+    /// T, K, M and D, from the kit's [`O2ncConfig::parameters`].
+    pub params: O2ncParameters,
+}
+
+impl Candidate {
+    /// Algorithm 5's exact inputs.
+    ///
+    /// # Errors
+    /// If F(θ₁) = 0 (nothing to descend), the configuration is invalid, or T > 2.
+    pub fn setting(&self) -> Result<Setting, String> {
+        let mdp = self.instance.mdp()?;
+        let delta0 = forward(&ToyProblem::<BigRational>::new(&mdp), &self.instance.theta1)
+            .map_err(|e| e.to_string())?
+            .objective;
+        if !delta0.is_certainly_positive() {
+            return Err(format!("F(θ₁) = {delta0}: Δ₀ must be positive"));
+        }
+        let g = exact(self.g);
+        let n = BigRational::from_i64(self.instance.k as i64);
+        let delta = exact(self.x) * &delta0 / (g.clone() * n);
+        let config = O2ncConfig {
+            budget: self.instance.k,
+            delta: ConfigNumber::Exact(delta.clone()),
+            g: ConfigNumber::Exact(g.clone()),
+            delta0: ConfigNumber::Exact(delta0.clone()),
+            form: EstimatorForm::Causal,
+        };
+        let params = config.parameters().map_err(|e| e.to_string())?;
+        if params.t > 2 {
+            return Err(format!(
+                "T = {}: blocks longer than 2 are not enumerable",
+                params.t
+            ));
+        }
+        Ok(Setting {
+            delta0,
+            delta,
+            g,
+            params,
+        })
+    }
+
+    /// `M(…), c, θ₁, N, G, x` as the rows print it.
+    pub fn describe(&self) -> String {
+        self.instance.describe().replace(", K = ", ", N = ")
+            + &format!(", G = {}, x = GNδ/Δ₀ = {}", exact(self.g), exact(self.x))
+    }
+}
+
+/// (1/cells) Σ_j |∇F(θ) + ∇F(θ + s_j Δ)|/2 over the cells s_j of [0, 1]
+/// ([`Quadrature::grads_on_cells`]): the block's ∫₀¹ |(∇F(w₁) + ∇F(w₂))/2| ds, enclosed
+/// (intervals) or estimated (`f64`).
+fn block_integral<S: Quadrature>(
+    engine: &S::Engine,
+    theta: &S,
+    grad_theta: &S,
+    delta: &S,
+    cells: usize,
+) -> Result<S, String> {
+    let mut acc = S::zero();
+    for g in S::grads_on_cells(engine, theta, delta, cells)? {
+        acc += (g + grad_theta).magnitude();
+    }
+    Ok(acc / S::from_i64(2 * cells as i64))
+}
+
+/// Algorithm 5 (IL-correct, T ≤ 2) from θ₁ with the exact inputs `setting` (module docs): E X over
+/// every path of the prefixes drawn at the blocks' first steps, each block's integral over s by
+/// [`block_integral`] with `cells` cells, and the hull of every iterate θ (which holds every w).
+///
+/// # Errors
+/// If T > 2, there are more than `max_paths` paths, or the engine fails at an iterate.
+pub fn o2nc_mean<S: Quadrature>(
+    mdp: &ToyMdp,
+    theta1: &S,
+    setting: &Setting,
+    inputs: &TableInputs,
+    max_paths: u64,
+    cells: usize,
+) -> Result<PathMean<S>, String> {
+    let problem = ToyProblem::<S>::new(mdp);
+    let engine = S::engine(mdp);
+    let O2ncParameters { t, k, .. } = setting.params;
+    let mut hull = vec![[f64::INFINITY, f64::NEG_INFINITY]];
+    let widen = |hull: &mut Vec<[f64; 2]>, x: &S| {
+        let [lo, hi] = x.enclosure();
+        hull[0] = [hull[0][0].min(lo), hull[0][1].max(hi)];
+    };
+    widen(&mut hull, theta1);
+    if t == 1 {
+        // Δ_n = 0 at every step: every w_n = θ₁.
+        return Ok(PathMean {
+            mean: S::grad_at(&engine, theta1)?.magnitude(),
+            hull,
+            paths: 1,
+        });
+    }
+    if t != 2 {
+        return Err(format!("T = {t}: the walk is written for T ≤ 2"));
+    }
+    let branches = prefixes(&problem, std::slice::from_ref(theta1))
+        .map_err(|e| e.to_string())?
+        .len() as u64;
+    let paths = u32::try_from(k)
+        .ok()
+        .and_then(|k| branches.checked_pow(k))
+        .filter(|p| *p <= max_paths)
+        .ok_or_else(|| format!("{branches}^{k} paths exceed the limit of {max_paths}"))?;
+    let d = S::from_rational(&setting.params.d);
+    let eta = d.clone() / (S::from_rational(&setting.g) * S::from_i64(2).sqrt());
+    let mut total = S::zero();
+    // Depth-first over paths: (blocks done, θ at the block's start, path probability, Σ of the
+    // blocks' integrals so far).
+    let mut stack = vec![(0u64, theta1.clone(), S::one(), S::zero())];
+    while let Some((done, theta, prob, acc)) = stack.pop() {
+        widen(&mut hull, &theta);
+        if done == k {
+            total += prob * acc;
+            continue;
+        }
+        let grad_theta = S::grad_at(&engine, &theta)?;
+        for pre in prefixes(&problem, std::slice::from_ref(&theta)).map_err(|e| e.to_string())? {
+            let g = inputs.estimate(pre.estimate)[0].clone();
+            let step = (S::zero() - eta.clone() * g).clamp_to(&d);
+            let integral = block_integral::<S>(&engine, &theta, &grad_theta, &step, cells)?;
+            let next = theta.clone() + step;
+            stack.push((
+                done + 1,
+                next,
+                prob.clone() * &pre.prob,
+                acc.clone() + integral,
+            ));
+        }
+    }
+    Ok(PathMean {
+        mean: total / S::from_i64(k as i64),
+        hull,
+        paths,
+    })
+}
+
+/// A candidate's estimated X̄/B.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// The candidate.
+    pub candidate: Candidate,
+    /// X̄ (every path, the midpoint rule).
+    pub x_bar: f64,
+    /// B with the estimated σ².
+    pub bound: f64,
+    /// X̄/B.
+    pub ratio: f64,
+    /// The hull of the iterates.
+    pub hull: [f64; 2],
+    /// Number of paths.
+    pub paths: u64,
+}
+
+/// The theorem's B = Δ₀/(DM) + (G + σ)/√T through `inputs`' formula, with every input rounded
+/// the way that makes B larger (B falls with δ and grows with Δ₀, G and σ).
+fn bound(inputs: &TableInputs, s: &Setting, delta0: f64, sigma: f64) -> f64 {
+    let p = &s.params;
+    let delta = Scalar::to_f64(&s.delta).next_down();
+    let g = Scalar::to_f64(&s.g).next_up();
+    upper((inputs.formulas.o2nc_theorem)(
+        delta0.next_up(),
+        delta,
+        g,
+        sigma.next_up(),
+        O2ncParams {
+            t: p.t,
+            k: p.k,
+            m: p.m,
+        },
+    ))
+}
+
+/// max E‖g‖² and max Var g on the grid of the hull (X1, in `f64`).
+fn moment_estimates(mdp: &ToyMdp, hull: [f64; 2]) -> Result<(f64, f64), String> {
+    let p = ToyProblem::<f64>::new(mdp);
+    let n = GRID.max(((hull[1] - hull[0]) / SPACING).ceil() as usize + 1);
+    let (mut g2, mut v) = (0.0f64, 0.0f64);
+    for i in 0..n {
+        let x = hull[0] + (hull[1] - hull[0]) * i as f64 / (n - 1) as f64;
+        let m = moments(&p, &[x]).map_err(|e| e.to_string())?;
+        g2 = g2.max(m.second_moment);
+        v = v.max(m.variance);
+    }
+    Ok((g2, v))
+}
+
+/// Evaluate a candidate: X̄ over every path by the midpoint rule, B with σ² estimated on the
+/// hull; `None` if it cannot be run (T > 2, too many paths, a hull wider than [`MAX_WIDTH`]), its
+/// G is below the estimated √max E‖g‖² on the hull (with [`MARGIN`]), or `noise` is
+/// [`Noise::Required`] and the run is not noisy: it needs T = 2 and K ≥ 2 blocks (so that the
+/// oracle's noise moves the iterates X̄ averages over) and the σ term at least [`NOISE_SHARE`]
+/// of B.
+pub fn evaluate(c: &Candidate, noise: Noise, max_paths: u64) -> Option<Estimate> {
+    let setting = c.setting().ok()?;
+    if noise == Noise::Required && (setting.params.t < 2 || setting.params.k < 2) {
+        return None;
+    }
+    let mdp = c.instance.mdp().ok()?;
+    let theta1 = Scalar::to_f64(&c.instance.theta1[0]);
+    let inputs = TableInputs::thesis();
+    let run = o2nc_mean(&mdp, &theta1, &setting, &inputs, max_paths, SEARCH_CELLS).ok()?;
+    let hull = run.hull[0];
+    let width = hull[1] - hull[0];
+    if width.is_nan() || width > MAX_WIDTH {
+        return None;
+    }
+    let (g2, var) = moment_estimates(&mdp, hull).ok()?;
+    if g2 * MARGIN > c.g * c.g {
+        return None;
+    }
+    let delta0 = Scalar::to_f64(&setting.delta0);
+    let b = bound(&inputs, &setting, delta0, var.max(0.0).sqrt());
+    let share = (b - bound(&inputs, &setting, delta0, 0.0)) / b;
+    if noise == Noise::Required && (share.is_nan() || share < NOISE_SHARE) {
+        return None;
+    }
+    let ratio = run.mean / b;
+    ratio.is_finite().then(|| Estimate {
+        candidate: c.clone(),
+        x_bar: run.mean,
+        bound: b,
+        ratio,
+        hull,
+        paths: run.paths,
+    })
+}
+
+const PROBS: [(i64, i64); 5] = [(0, 1), (1, 4), (1, 2), (3, 4), (1, 1)];
+const CS: [(i64, i64); 7] = [(1, 100), (1, 50), (1, 20), (1, 10), (1, 5), (1, 2), (1, 1)];
+/// The budgets N drawn and moved between (T = 2 gives K = ⌊N/2⌋ blocks).
+const NS: [u64; 9] = [4, 5, 6, 8, 12, 16, 24, 32, 64];
+
+/// Round to a multiple of 2⁻¹⁰, at least 2⁻¹⁰.
+fn dyadic(x: f64) -> f64 {
+    ((x * 1024.0).round() / 1024.0).max(1.0 / 1024.0)
+}
+
+fn pick(rng: &mut StdRng, set: &[(i64, i64)]) -> BigRational {
+    let (n, d) = set[rng.random_range(0..set.len())];
+    BigRational::from_ratio(n, d)
+}
+
+/// A random candidate: an instance as the other tight searches draw it (θ₁ on a 1/16 grid of
+/// [−4, 4]), N from [`NS`], G = u·√max E‖g‖² on [θ₁ − 1, θ₁ + 1] with u ∈ [1, 3/2], and
+/// x ∈ [1/2, [`X_MAX`]].
+fn random_candidate(rng: &mut StdRng) -> Option<Candidate> {
+    let instance = Instance {
+        mu_a: pick(rng, &PROBS),
+        p0: pick(rng, &PROBS),
+        p1: pick(rng, &PROBS),
+        horizon: rng.random_range(2..=3),
+        c: pick(rng, &CS),
+        theta1: vec![exact(rng.random_range(-64..=64) as f64 / 16.0)],
+        k: NS[rng.random_range(0..NS.len())],
+    };
+    let t = Scalar::to_f64(&instance.theta1[0]);
+    let (g2, _) = moment_estimates(&instance.mdp().ok()?, [t - 1.0, t + 1.0]).ok()?;
+    let g = dyadic(rng.random_range(1.0..1.5) * g2.sqrt());
+    let x = dyadic(rng.random_range(0.5..X_MAX));
+    Some(Candidate { instance, g, x })
+}
+
+/// The pattern search's moves at scale h: θ₁ ± h, G and x × (1 ± h/4), the adjacent N and c.
+fn moves(c: &Candidate, h: f64) -> Vec<Candidate> {
+    let mut out = vec![];
+    let t = Scalar::to_f64(&c.instance.theta1[0]);
+    for dt in [-h, h] {
+        let mut n = c.clone();
+        let x = t + dt;
+        n.instance.theta1[0] = exact(dyadic(x.abs()) * x.signum());
+        out.push(n);
+    }
+    for f in [1.0 - h / 4.0, 1.0 + h / 4.0] {
+        let mut n = c.clone();
+        n.g = dyadic(c.g * f);
+        out.push(n);
+        let mut n = c.clone();
+        n.x = dyadic(c.x * f).min(X_MAX);
+        out.push(n);
+    }
+    if let Some(i) = NS.iter().position(|n| *n == c.instance.k) {
+        for j in [i.wrapping_sub(1), i + 1] {
+            if let Some(n_new) = NS.get(j) {
+                let mut n = c.clone();
+                n.instance.k = *n_new;
+                out.push(n);
+            }
+        }
+    }
+    let v = Scalar::to_f64(&c.instance.c);
+    let i = (0..CS.len())
+        .min_by(|a, b| {
+            let d = |i: usize| (CS[i].0 as f64 / CS[i].1 as f64 - v).abs();
+            d(*a).total_cmp(&d(*b))
+        })
+        .unwrap_or(0);
+    for j in [i.wrapping_sub(1), i + 1] {
+        if let Some((num, den)) = CS.get(j) {
+            let mut n = c.clone();
+            n.instance.c = BigRational::from_ratio(*num, *den);
+            out.push(n);
+        }
+    }
+    out
+}
+
+/// The seeded search ([`random_then_pattern`]) over the M family, N, G and x, among the
+/// instances `noise` admits.
+pub fn search(noise: Noise, budget: Budget) -> Vec<Estimate> {
+    random_then_pattern(
+        budget,
+        random_candidate,
+        |c| evaluate(c, noise, budget.max_paths),
+        moves,
+        |e| (e.ratio, &e.candidate),
+    )
+}
+
+/// What one certified candidate gives.
+#[derive(Debug, Clone)]
+pub struct Certified {
+    /// The search's estimate.
+    pub estimate: Estimate,
+    /// Algorithm 5's exact inputs.
+    pub setting: Setting,
+    /// The enclosure of X̄.
+    pub x_bar: Interval,
+    /// The hull of the iterates the constants hold on.
+    pub hull: [f64; 2],
+    /// Number of paths.
+    pub paths: u64,
+    /// Δ₀ = F(θ₁) (exact), G² = sup E‖g‖² and σ² = sup Var g on the hull (rigorous).
+    pub constants: [Constant; 3],
+}
+
+/// Certify a candidate: X̄ enclosed over every path under `inputs`' oracle, G² and σ² certified on
+/// the hull of the iterates.
+///
+/// # Errors
+/// Why the candidate was passed over: the walk fails, or the certified G² exceeds the algorithm's
+/// G², so the theorem does not apply.
+pub fn certify(
+    e: &Estimate,
+    inputs: &TableInputs,
+    budget: &Budget,
+    tol: f64,
+    max_boxes: usize,
+) -> Result<Certified, String> {
+    let c = &e.candidate;
+    let mdp = c.instance.mdp()?;
+    let setting = c.setting()?;
+    let theta1 = Interval::from_rational(&c.instance.theta1[0]);
+    let run = o2nc_mean(&mdp, &theta1, &setting, inputs, budget.max_paths, CELLS)
+        .map_err(|m| format!("{}: {m}", c.describe()))?;
+    let hull = run.hull[0];
+    let zero = BigRational::from_i64(0);
+    let g2 = sigma2(&mdp, &zero, &[hull], tol, max_boxes).map_err(|e| e.to_string())?;
+    let g2_value = inputs.constant_f64(ConstantKind::G2, g2.value);
+    if g2_value > c.g * c.g {
+        return Err(format!(
+            "{}: the certified G² = {g2_value} on the hull exceeds G² = {}",
+            c.describe(),
+            c.g * c.g
+        ));
+    }
+    let v = sigma2(&mdp, &BigRational::from_i64(1), &[hull], tol, max_boxes)
+        .map_err(|e| e.to_string())?;
+    let d0 = Constant::exact("Δ₀", &setting.delta0, "F(θ₁) − 0 (F ≥ 0)");
+    Ok(Certified {
+        estimate: e.clone(),
+        setting,
+        x_bar: run.mean,
+        hull,
+        paths: run.paths,
+        constants: [d0, g2, v],
+    })
+}
+
+/// The row `X̄ ≤ scale · B` at a certified candidate (scale 1: the theorem's; ½: its negative
+/// control), B through `inputs`: holds if the enclosure of X̄ is ≤ scale · B, fails if it lies
+/// above, inconclusive if it straddles.
+pub fn row(
+    c: &Certified,
+    inputs: &TableInputs,
+    scale: f64,
+    budget: &Budget,
+    noise: Noise,
+) -> Check {
+    let cand = &c.estimate.candidate;
+    let [d0, g2, v] = &c.constants;
+    let delta0 = inputs.constant_f64(ConstantKind::BF, d0.value);
+    let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
+    let g2_value = inputs.constant_f64(ConstantKind::G2, g2.value);
+    let s = &c.setting;
+    let p = &s.params;
+    let (id, role, prefix) = if scale == 1.0 {
+        (
+            format!("3b.tight{}", noise.suffix()),
+            Role::Corrected,
+            String::new(),
+        )
+    } else {
+        (
+            format!("3b.tight{}.ctl", noise.suffix()),
+            Role::NegativeControl,
+            format!("{scale}·"),
+        )
+    };
+    let claim = format!(
+        "E[(1/K) Σ_k ‖(1/T) Σ_t ∇F(wᵏ_t)‖] ≤ {prefix}(Δ₀/(DM) + (G + σ)/√T) for Algorithm 5 (IL-correct sampling τ_n ∼ p(·; w_n)), Δ₀ = F(θ₁) ≈ {:.6}, δ = xΔ₀/(GN) ≈ {:.6} (exact rationals in the details), on the instance of largest X̄/B found: {}",
+        Scalar::to_f64(&s.delta0),
+        Scalar::to_f64(&s.delta),
+        cand.describe()
+    );
+    let builder = Check::builder(id, RESULT, claim, role)
+        .assumptions([
+            format!(
+                "G² ≥ E‖g‖² and σ² ≥ Var g on the hull {:?} of every iterate (it holds every w_n)",
+                c.hull
+            ),
+            "E[g_n | w_n] = ∇F(w_n): τ_n ∼ p(·; w_n) (E11)".into(),
+            "Δ₀ ≥ F(θ₁) − F* (F ≥ 0)".into(),
+        ])
+        .constants(c.constants.to_vec())
+        .erratum("E11, E12, E13");
+    let x = c.x_bar.mid();
+    if g2_value > cand.g * cand.g {
+        return builder
+            .measured(Measured::exact(x))
+            .details(format!(
+                "G² = {} < the certified sup E‖g‖² = {g2_value}: the theorem does not apply",
+                cand.g * cand.g
+            ))
+            .decided(Method::Rigorous, Verdict::Inconclusive);
+    }
+    let b = bound(inputs, s, delta0, s2.max(0.0).sqrt());
+    let claimed = b * scale;
+    let verdict = if c.x_bar.sup() <= claimed {
+        Verdict::Holds
+    } else if c.x_bar.inf() > claimed {
+        Verdict::Fails
+    } else {
+        Verdict::Inconclusive
+    };
+    let sigma_share = bound(inputs, s, delta0, s2.max(0.0).sqrt()) - bound(inputs, s, delta0, 0.0);
+    builder
+        .bound(claimed)
+        .measured(Measured::exact(x).with_interval(c.x_bar.inf(), c.x_bar.sup()))
+        .tightness(x / claimed)
+        .details(format!(
+            "Δ₀ = {}, δ = {}; T = {}, K = {}, M = {}, D = δ/T; X̄ = E X enclosed over {} of the blocks' first draws, each block's integral over s by a {CELLS}-cell interval Riemann sum: X̄ ∈ [{:.8}, {:.8}]; B = {b:.6} (σ² = {s2:.3e}, σ term {:.1} % of B), X̄/B = {:.4}; search: seeded random search, seed {}, {} random candidates, then {} pattern-search evaluations from the best {STARTS}, at most {} paths each (estimated X̄/B = {:.4})",
+            s.delta0,
+            s.delta,
+            p.t,
+            p.k,
+            p.m,
+            match c.paths {
+                1 => "the one path".to_string(),
+                n => format!("all {n} paths"),
+            },
+            c.x_bar.inf(),
+            c.x_bar.sup(),
+            100.0 * sigma_share / b,
+            x / b,
+            budget.seed,
+            budget.random,
+            budget.refine,
+            budget.max_paths,
+            c.estimate.ratio,
+        ))
+        .decided(Method::Rigorous, verdict)
+}
+
+/// The search's candidates and the first one certified (of the best `tries`), under `inputs`'
+/// oracle.
+pub fn prepare_from(
+    found: &[Estimate],
+    inputs: &TableInputs,
+    budget: &Budget,
+    tol: f64,
+    max_boxes: usize,
+    tries: usize,
+) -> Prepared<Certified> {
+    first_certified(found, tries, |e| certify(e, inputs, budget, tol, max_boxes))
+}
+
+/// Row 3b.tight (3b.tight.noisy) and its B ÷ 2 control (stated always over every instance, where
+/// X̄/B ≥ ½ was reached over the noisy ones), or one inconclusive row saying why no candidate was
+/// certified.
+pub fn rows_from(
+    inputs: &TableInputs,
+    budget: &Budget,
+    noise: Noise,
+    p: &Prepared<Certified>,
+) -> Vec<Check> {
+    match &p.certified {
+        Some(c) => with_control(
+            |scale| row(c, inputs, scale, budget, noise),
+            noise == Noise::Any,
+            &p.passed_over,
+        ),
+        None => vec![
+            Check::builder(
+                format!("3b.tight{}", noise.suffix()),
+                RESULT,
+                "a tight instance of Theorem 3.8's bound",
+                Role::Corrected,
+            )
+            .details(format!(
+                "no candidate certified ({} feasible found): {}",
+                p.found,
+                p.passed_over.join("; ")
+            ))
+            .decided(Method::Rigorous, Verdict::Inconclusive),
+        ],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bounds::o2nc_theorem;
+    use crate::checks::statistical::CONTROL_SCALE;
+    use crate::checks::tight::Sizes;
+    use crate::inputs::Formulas;
+    use ilopt::algo::config::{AlgorithmConfig, RunConfig};
+    use ilopt::algo::{IterationMetrics, Runner, StoppingRule};
+    use std::cell::RefCell;
+
+    fn q(n: i64, d: i64) -> BigRational {
+        BigRational::from_ratio(n, d)
+    }
+
+    /// A noisy candidate with T = 2 and K = 3 blocks: M(0, 0, 0, 3), c = 1, θ₁ = 3/2 (the
+    /// family of the noisy search's winner).
+    fn noisy() -> Candidate {
+        Candidate {
+            instance: Instance {
+                mu_a: q(0, 1),
+                p0: q(0, 1),
+                p1: q(0, 1),
+                horizon: 3,
+                c: q(1, 1),
+                theta1: vec![q(3, 2)],
+                k: 6,
+            },
+            g: 2.0,
+            x: 2.5,
+        }
+    }
+
+    /// The walk is the kit's Algorithm 5: R = 40,000 seeded runs of `ilopt::algo::o2nc` with the
+    /// same exact inputs, X computed from ∇F at the w_n the runs report, average within 4
+    /// standard errors of the walk's enclosure of E X. The comparison can fail: the walk with a
+    /// radius D four times too large leaves that band.
+    #[test]
+    fn the_walk_agrees_with_seeded_runs_of_the_kits_algorithm_5() {
+        let c = noisy();
+        let setting = c.setting().unwrap();
+        assert_eq!((setting.params.t, setting.params.k), (2, 3));
+        let mdp = c.instance.mdp().unwrap();
+        let inputs = TableInputs::thesis();
+        let theta1 = Interval::from_rational(&c.instance.theta1[0]);
+        let walk = o2nc_mean(&mdp, &theta1, &setting, &inputs, 1296, CELLS).unwrap();
+        let config = O2ncConfig {
+            budget: c.instance.k,
+            delta: ConfigNumber::Exact(setting.delta.clone()),
+            g: ConfigNumber::Exact(setting.g.clone()),
+            delta0: ConfigNumber::Exact(setting.delta0.clone()),
+            form: EstimatorForm::Causal,
+        };
+        let fp = ToyProblem::<f64>::new(&mdp);
+        let mut pf = ToyProblem::<f64>::new(&mdp);
+        let runs = 40_000u64;
+        let (mut sum, mut sum_sq) = (0.0, 0.0);
+        for seed in 0..runs {
+            let cfg = RunConfig {
+                algorithm: AlgorithmConfig::O2nc(config.clone()),
+                theta0: vec![ConfigNumber::Exact(c.instance.theta1[0].clone())],
+                seed,
+                stop: StoppingRule::iterations(setting.params.m + 1),
+            };
+            let ws = RefCell::new(vec![]);
+            let observer = |m: &IterationMetrics<f64>| {
+                if let Some(w) = &m.evaluated_at {
+                    ws.borrow_mut().push(w[0]);
+                }
+            };
+            Runner::new(cfg.stop.clone())
+                .unwrap()
+                .keep_history(false)
+                .with_observer(observer)
+                .run_config(&cfg, &mut pf)
+                .unwrap();
+            let ws = ws.into_inner();
+            assert_eq!(ws.len() as u64, setting.params.m);
+            let x = ws
+                .chunks(2)
+                .map(|b| (grad(&fp, &b[0]).unwrap() + grad(&fp, &b[1]).unwrap()).abs() / 2.0)
+                .sum::<f64>()
+                / 3.0;
+            sum += x;
+            sum_sq += x * x;
+        }
+        let mean = sum / runs as f64;
+        let se = ((sum_sq / runs as f64 - mean * mean) / (runs - 1) as f64).sqrt();
+        println!(
+            "walk X̄ ∈ [{:.6}, {:.6}], runs {mean:.6} ± {se:.6}",
+            walk.mean.inf(),
+            walk.mean.sup()
+        );
+        assert!(
+            walk.mean.inf() - 4.0 * se <= mean && mean <= walk.mean.sup() + 4.0 * se,
+            "{mean} {se} {:?}",
+            walk.mean
+        );
+        // The walk's value with the errors above is far outside the band.
+        let at_end = {
+            let mut s2 = setting.clone();
+            s2.params.d = s2.params.d.clone() * q(4, 1);
+            o2nc_mean(&mdp, &1.5f64, &s2, &inputs, 1296, CELLS)
+                .unwrap()
+                .mean
+        };
+        assert!((at_end - mean).abs() > 10.0 * se, "{at_end} {mean} {se}");
+    }
+
+    /// With T = 1 (x ≤ 1) Δ_n = 0 at every step, so E X = |∇F(θ₁)| on one path.
+    #[test]
+    fn one_step_blocks_never_move() {
+        let c = Candidate { x: 0.75, ..noisy() };
+        let setting = c.setting().unwrap();
+        assert_eq!(setting.params.t, 1);
+        let mdp = c.instance.mdp().unwrap();
+        let run = o2nc_mean::<f64>(&mdp, &1.5, &setting, &TableInputs::thesis(), 1, CELLS).unwrap();
+        let exact_grad = forward(&ToyProblem::<BigRational>::new(&mdp), &[q(3, 2)])
+            .unwrap()
+            .gradient[0]
+            .clone();
+        assert_eq!(run.paths, 1);
+        assert_eq!(run.hull, vec![[1.5, 1.5]]);
+        assert!((run.mean - Scalar::to_f64(&exact_grad).abs()).abs() < 1e-15);
+        // x = 8: T = min(⌈8^{2/3}⌉, ⌊6/2⌋) = 3, refused.
+        let longer = Candidate { x: 8.0, ..noisy() };
+        assert!(longer.setting().unwrap_err().contains("T = 3"));
+    }
+
+    fn with_theorem(o2nc_theorem: fn(f64, f64, f64, f64, O2ncParams) -> f64) -> TableInputs {
+        TableInputs {
+            formulas: Formulas {
+                o2nc_theorem,
+                ..Formulas::THESIS
+            },
+            ..TableInputs::thesis()
+        }
+    }
+
+    fn half(d0: f64, d: f64, g: f64, s: f64, p: O2ncParams) -> f64 {
+        0.5 * o2nc_theorem(d0, d, g, s, p)
+    }
+
+    fn control_scaled(d0: f64, d: f64, g: f64, s: f64, p: O2ncParams) -> f64 {
+        CONTROL_SCALE * o2nc_theorem(d0, d, g, s, p)
+    }
+
+    /// At the quick size both rows (every instance, and the noisy ones) hold with X̄/B ≥ ½ and
+    /// their B ÷ 2 controls are refuted; Theorem 3.8's bound halved, or scaled as row 3b.ctl's
+    /// control, refutes both rows: they can fail at their size.
+    #[test]
+    fn the_quick_rows_hold_their_controls_are_refuted_and_a_halved_bound_turns_them() {
+        let s = Sizes::quick();
+        let thesis = TableInputs::thesis();
+        for noise in [Noise::Any, Noise::Required] {
+            let found = search(noise, s.o2nc);
+            let p = prepare_from(&found, &thesis, &s.o2nc, s.tol, s.max_boxes, s.tries);
+            let rows = rows_from(&thesis, &s.o2nc, noise, &p);
+            for r in &rows {
+                println!(
+                    "{} {:?} {:?}: {}\n  {}",
+                    r.id, r.verdict, r.tightness, r.claim, r.details
+                );
+            }
+            let id = format!("3b.tight{}", noise.suffix());
+            let ids: Vec<&str> = rows.iter().map(|r| r.id.as_str()).collect();
+            assert_eq!(ids, [id.clone(), format!("{id}.ctl")], "{rows:#?}");
+            assert_eq!(rows[0].verdict, Verdict::Holds, "{}", rows[0].details);
+            assert!(rows[0].tightness.unwrap() >= 0.5, "{}", rows[0].details);
+            assert_eq!(rows[1].verdict, Verdict::Fails, "{}", rows[1].details);
+            for wrong in [half, control_scaled] {
+                let turned = rows_from(&with_theorem(wrong), &s.o2nc, noise, &p);
+                assert_eq!(turned[0].verdict, Verdict::Fails, "{}", turned[0].details);
+            }
+        }
+    }
+}
