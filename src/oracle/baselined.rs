@@ -57,6 +57,7 @@ where
             .causal_sum_validated(
                 theta,
                 t.feature_data,
+                None,
                 t.labels,
                 t.actions,
                 Some(&shifts),

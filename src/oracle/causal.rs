@@ -30,7 +30,7 @@ use std::borrow::Borrow;
 /// value): the trajectory loss from the same pass.
 ///
 /// On validated features without per-decision weights or a baseline, the whole pass (the tail's
-/// term included) is the policy's [`EstimatorKernel::causal_sum_validated`] (or its noted form),
+/// term included) is the policy's [`EstimatorKernel::causal_sum_validated`] (with the roll-out's notes where usable),
 /// after the trajectory's log-ratios when `ratio` is given: the weight multiplies the whole
 /// estimate, so it does not enter the sum, and a failing ratio is reported before a failing
 /// loss. Otherwise, per decision: one
@@ -77,21 +77,11 @@ where
         // Scratch only if the policy's pass asks for it (the logistic policy's records its
         // decisions there: one buffer per call).
         let mut scratch = Vec::new();
-        match usable_notes(policy, theta, t) {
-            Some(notes) => policy.causal_sum_noted(
+        policy
+            .causal_sum_validated(
                 theta,
                 rows,
-                notes,
-                labels,
-                actions,
-                tail,
-                &mut g,
-                loss,
-                &mut scratch,
-            ),
-            None => policy.causal_sum_validated(
-                theta,
-                rows,
+                usable_notes(policy, theta, t),
                 labels,
                 actions,
                 None,
@@ -99,9 +89,8 @@ where
                 &mut g,
                 loss,
                 &mut scratch,
-            ),
-        }
-        .map_err(policy_error)?;
+            )
+            .map_err(policy_error)?;
         return Ok((g, log_w));
     }
     let mut scratch = Scratch::new(d);

@@ -8,7 +8,8 @@
 //! and linear-Gaussian policies override the per-decision methods with their checked methods'
 //! work after the θ and φ checks the oracle has made, and the loss without its gradient; the
 //! softmax policy notes the probabilities it samples from, and the estimate at the same θ reads
-//! them ([`EstimatorKernel::sample_noting`]). Every override returns the default's values bit
+//! them ([`EstimatorKernel::sample_noting`], the `notes` of
+//! [`EstimatorKernel::causal_sum_validated`]). Every override returns the default's values bit
 //! for bit and the default's first error, except the logistic policy's `score_products`, which
 //! forms the same products in another order (equal up to rounding).
 
@@ -107,19 +108,26 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// unshifted losses: the trajectory loss of [`crate::problem::IlProblem::trajectory_loss`],
     /// summed in its order when `loss` starts at the absorbing tail's value, or 0).
     ///
+    /// `notes` are the entries [`EstimatorKernel::sample_noting`] noted while the trajectory was
+    /// sampled at this θ ([`EstimatorKernel::note_len`] per row of `features`), or `None`: a
+    /// policy that notes something (the softmax policy's probabilities) reads them instead of
+    /// recomputing them, with the same values and errors; the caller guarantees that θ, the
+    /// features and the notes are those of the roll-out. Every other policy ignores them.
+    ///
     /// `scratch` is working storage the implementation sizes as it needs (the default:
     /// `3 ·` [`Policy::param_dim`] entries; the logistic policy's fixed-dimension loop needs
     /// none). The default runs [`EstimatorKernel::causal_step_validated`] decision after decision
-    /// (`causal_sum_by_steps`).
+    /// (`causal_sum_by_steps`) and ignores the notes.
     ///
     /// # Errors
     /// As [`EstimatorKernel::causal_step_validated`] at the first failing decision.
-    #[allow(clippy::too_many_arguments)] // the trajectory, the shifts and the output
+    #[allow(clippy::too_many_arguments)] // the trajectory, its notes, the shifts and the output
     #[inline]
     fn causal_sum_validated<L: Borrow<Self::Label>>(
         &self,
         theta: &[S],
         features: &[S],
+        notes: Option<&[S]>,
         labels: &[L],
         actions: &[Self::Action],
         shifts: Option<&[S]>,
@@ -128,6 +136,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         loss: Option<&mut S>,
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
+        let _ = notes;
         causal_sum_by_steps(
             self, theta, features, labels, actions, shifts, end, g, loss, scratch,
         )
@@ -141,7 +150,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
 
     /// [`EstimatorKernel::sample_validated`] (the same action, draws and errors), appending to
     /// `notes` the [`EstimatorKernel::note_len`] entries of this decision that
-    /// [`EstimatorKernel::causal_sum_noted`] reads instead of recomputing them (the softmax
+    /// [`EstimatorKernel::causal_sum_validated`] reads instead of recomputing them (the softmax
     /// policy's probabilities). The default notes nothing.
     ///
     /// # Errors
@@ -157,33 +166,6 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     ) -> Result<Self::Action, PolicyError> {
         let _ = notes;
         self.sample_validated(theta, phi, rng)
-    }
-
-    /// [`EstimatorKernel::causal_sum_validated`] without shifts (the same values and errors) for
-    /// a trajectory sampled at this θ by [`EstimatorKernel::sample_noting`], whose notes
-    /// ([`EstimatorKernel::note_len`] entries per row of `features`) it reads instead of
-    /// recomputing them. The caller guarantees that θ, the features and the notes are those of
-    /// the roll-out. The default ignores the notes.
-    ///
-    /// # Errors
-    /// As [`EstimatorKernel::causal_sum_validated`].
-    #[allow(clippy::too_many_arguments)] // the trajectory, its notes and the output
-    fn causal_sum_noted<L: Borrow<Self::Label>>(
-        &self,
-        theta: &[S],
-        features: &[S],
-        notes: &[S],
-        labels: &[L],
-        actions: &[Self::Action],
-        end: Option<&S>,
-        g: &mut [S],
-        loss: Option<&mut S>,
-        scratch: &mut Vec<S>,
-    ) -> Result<(), PolicyError> {
-        let _ = notes;
-        self.causal_sum_validated(
-            theta, features, labels, actions, None, end, g, loss, scratch,
-        )
     }
 
     /// The decisions of one trajectory recorded for the causal estimator of eq. 3.15, without
@@ -649,27 +631,34 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
         self.sample_noting_probs(theta, phi, rng, notes)
     }
 
-    /// Each decision's step from its noted probabilities, not from θ (two actions' copied into a
-    /// two-entry array, so that the loops over the actions unroll).
-    fn causal_sum_noted<L: Borrow<usize>>(
+    /// With notes, each decision's step from its noted probabilities, not from θ (two actions'
+    /// copied into a two-entry array, so that the loops over the actions unroll); without, the
+    /// default's steps from θ.
+    fn causal_sum_validated<L: Borrow<usize>>(
         &self,
-        _theta: &[S],
+        theta: &[S],
         features: &[S],
-        notes: &[S],
+        notes: Option<&[S]>,
         labels: &[L],
         actions: &[usize],
+        shifts: Option<&[S]>,
         end: Option<&S>,
         g: &mut [S],
         loss: Option<&mut S>,
         scratch: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
+        let Some(notes) = notes else {
+            return causal_sum_by_steps(
+                self, theta, features, labels, actions, shifts, end, g, loss, scratch,
+            );
+        };
         let k = self.actions();
         causal_sum_with_steps(
             self,
             features,
             labels,
             actions,
-            None,
+            shifts,
             end,
             g,
             loss,
@@ -914,31 +903,18 @@ mod tests {
         let d = Policy::<S>::param_dim(pi);
         let run = |noted: bool| {
             let (mut g, mut loss, mut scratch) = (vec![S::zero(); d], S::zero(), vec![]);
-            let r = if noted {
-                pi.causal_sum_noted(
-                    theta,
-                    rows,
-                    &notes,
-                    labels,
-                    actions,
-                    Some(&end),
-                    &mut g,
-                    Some(&mut loss),
-                    &mut scratch,
-                )
-            } else {
-                pi.causal_sum_validated(
-                    theta,
-                    rows,
-                    labels,
-                    actions,
-                    None,
-                    Some(&end),
-                    &mut g,
-                    Some(&mut loss),
-                    &mut scratch,
-                )
-            };
+            let r = pi.causal_sum_validated(
+                theta,
+                rows,
+                noted.then_some(&notes[..]),
+                labels,
+                actions,
+                None,
+                Some(&end),
+                &mut g,
+                Some(&mut loss),
+                &mut scratch,
+            );
             (r, g, loss)
         };
         let ((r1, g1, l1), (r2, g2, l2)) = (run(true), run(false));

@@ -238,12 +238,14 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     /// With a compile-time dimension for 1 to 8 features in two loops (`record_fixed`, with the
     /// records in `scratch`, then `accumulate_fixed`, each loss shifted first when `shifts` is
     /// given, the `end` loss after them), else (and to report a failing decision) the default
-    /// loop over [`EstimatorKernel::causal_step_validated`].
+    /// loop over [`EstimatorKernel::causal_step_validated`]. The policy notes nothing, so `notes`
+    /// is ignored.
     #[inline]
     fn causal_sum_validated<L: Borrow<usize>>(
         &self,
         theta: &[S],
         features: &[S],
+        _notes: Option<&[S]>,
         labels: &[L],
         actions: &[usize],
         shifts: Option<&[S]>,
@@ -479,6 +481,7 @@ mod tests {
                         pi.causal_sum_validated(
                             &theta,
                             features,
+                            None,
                             labels,
                             actions,
                             None,
@@ -640,6 +643,7 @@ mod tests {
                 pi.causal_sum_validated(
                     &theta,
                     &features,
+                    None,
                     &labels,
                     &actions,
                     None,

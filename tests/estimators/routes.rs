@@ -323,6 +323,7 @@ where
                 .causal_sum_validated(
                     th,
                     t.feature_data(),
+                    None,
                     &labels,
                     &t.actions,
                     None,
@@ -359,6 +360,7 @@ where
                 .causal_sum_validated(
                     th,
                     t.feature_data(),
+                    None,
                     &labels,
                     &t.actions,
                     Some(&shifts),
