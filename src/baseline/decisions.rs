@@ -7,7 +7,7 @@
 //! causal pass). The algorithms see only [`IlProblem`]; [`crate::baseline::Baselined`] needs this
 //! trait of the problem it wraps.
 
-use crate::oracle::{DecisionTerms, Given, LinearBaseline, RecordedPass, ScoreProducts};
+use crate::oracle::{DecisionTerms, Given, RecordedPass, ScoreProducts};
 use crate::problem::{Cost, IlProblem, OracleError, Weighting};
 use crate::scalar::Scalar;
 use nalgebra::DVector;
@@ -120,7 +120,9 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     /// [`ScoreProducts`] for the scored decisions of `trajectory`, from what
     /// [`PerDecisionTerms::record_decisions`] recorded there: the statistics of the
     /// variance-minimising baseline ([`crate::baseline::RunningOptimum`]) and its correction
-    /// `g −= Σ_i b_i ψ_i`. The default reads the rows of the default form.
+    /// `g −= Σ_i b_i ψ_i`, with b_i given or the linear state-dependent baseline's on the rows of
+    /// [`PerDecisionTerms::state_feature_rows`] ([`crate::oracle::Baselines`]). The default reads
+    /// the rows of the default form.
     fn recorded_score_products(
         &self,
         trajectory: &Self::Trajectory,
@@ -129,24 +131,6 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     ) {
         let _ = trajectory;
         recorded.score_row_products(out);
-    }
-
-    /// The correction `g −= Σ_i b_i ψ_i` of [`PerDecisionTerms::recorded_score_products`] (no
-    /// statistics) for the scored decisions recorded in `recorded`, with the linear
-    /// state-dependent baseline on the rows of [`PerDecisionTerms::state_feature_rows`] formed
-    /// in the same pass (b_i from row i, [`LinearBaseline::next`]). Returns true having
-    /// subtracted, bit for bit, what `recorded_score_products` subtracts given the b_i of
-    /// [`crate::baseline::RunningRegression::baselines_from_rows`]; false, with `g` untouched,
-    /// when the problem has no such pass (the default), and the caller forms the b_i itself.
-    fn recorded_state_correction(
-        &self,
-        trajectory: &Self::Trajectory,
-        recorded: &RecordedPass<S>,
-        baseline: &LinearBaseline<'_, S>,
-        g: &mut [S],
-    ) -> bool {
-        let _ = (trajectory, recorded, baseline, g);
-        false
     }
 
     /// The state features φ_b(s_i) of the first n = `decisions` scored decisions of `trajectory`,

@@ -2,7 +2,7 @@
 
 use super::{Baseline, PerDecisionTerms, RunningOptimum, RunningRegression, leading_features};
 use crate::batched::Batched;
-use crate::oracle::{DecisionTerms, Given, LinearBaseline, RecordedPass, ScoreProducts};
+use crate::oracle::{Baselines, DecisionTerms, Given, LinearBaseline, RecordedPass, ScoreProducts};
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
 use crate::scalar::Scalar;
 use nalgebra::DVector;
@@ -503,7 +503,7 @@ fn estimated<S: Scalar, P: PerDecisionTerms<S>>(
         let (cross, moment) = running.pending_mut(n);
         let out = ScoreProducts {
             v: plain,
-            baseline: &baseline[..n],
+            baseline: Baselines::Given(&baseline[..n]),
             cross,
             moment,
             g,
@@ -521,12 +521,12 @@ fn estimated<S: Scalar, P: PerDecisionTerms<S>>(
 /// products `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
 /// ([`PerDecisionTerms::recorded_score_products`]), from which the statistics are summed
 /// ([`RunningRegression::observe_products`]). A trajectory whose statistics are not taken
-/// ([`RunningRegression::takes_next`]) needs the correction alone: the problem's one pass
-/// that forms each `b_i` off the stored feature rows as it reads ψ_i
-/// ([`PerDecisionTerms::recorded_state_correction`]), else its baselines read off those rows
-/// ([`RunningRegression::baselines_from_rows`]) or, without rows, from the columns, then the
-/// products pass without statistics. Every route gives the same estimate, bit for bit. No
-/// allocation per step.
+/// ([`RunningRegression::takes_next`]) needs the correction alone: with stored feature rows,
+/// one products pass given the baseline's weights and the rows
+/// ([`crate::oracle::Baselines::Linear`]; the logistic policy forms each `b_i` as it reads ψ_i,
+/// the others form the b_i first), else its baselines from the columns, then the products pass
+/// without statistics. Every route gives the same estimate, bit for bit. No allocation per step
+/// (a policy that forms the b_i before the products pass allocates them once per trajectory).
 fn state_dependent<S: Scalar, P: PerDecisionTerms<S>>(
     inner: &P,
     state: &mut StateDependent<S>,
@@ -564,17 +564,31 @@ fn state_dependent<S: Scalar, P: PerDecisionTerms<S>>(
         let take = running.takes_next();
         add_plain(inner, t, r, plain, g);
         // A trajectory whose statistics are not taken, when the problem stores its feature
-        // rows: its correction in one pass that forms the baselines off them, when the
-        // problem has one, else its baselines read off them. The statistics need the
+        // rows: its correction in one products pass with the baseline's weights and the rows
+        // (a policy may form each b_i in the pass that reads ψ_i). The statistics need the
         // features by columns.
         let mut from_rows = false;
         if !take
             && let Some(rows) = inner.state_feature_rows(t, n)
             && let Ok(k) = leading_features(rows.1, *leading)
         {
-            if LinearBaseline::new(running.weights(), k, *time)
-                .is_some_and(|b| inner.recorded_state_correction(t, r, &b, g))
+            if let Some(b) = LinearBaseline::new(running.weights(), k, *time)
+                && k <= rows.1
+                && rows.0.len() >= n * rows.1
             {
+                let out = ScoreProducts {
+                    v: plain,
+                    baseline: Baselines::Linear {
+                        baseline: b,
+                        rows: rows.0,
+                        stride: rows.1,
+                        decisions: n,
+                    },
+                    cross: &mut [],
+                    moment: &mut [],
+                    g,
+                };
+                inner.recorded_score_products(t, r, out);
                 continue;
             }
             from_rows = running.baselines_from_rows(rows, k, *time, n, baseline);
@@ -595,7 +609,7 @@ fn state_dependent<S: Scalar, P: PerDecisionTerms<S>>(
         }
         let out = ScoreProducts {
             v: plain,
-            baseline,
+            baseline: Baselines::Given(baseline),
             cross,
             moment,
             g,

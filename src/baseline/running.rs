@@ -1,7 +1,7 @@
 //! [`RunningOptimum`]: the variance-minimising baselines estimated from earlier iterations only.
 
 use crate::oracle::DecisionTerms;
-use crate::oracle::ScoreProducts;
+use crate::oracle::{Baselines, ScoreProducts};
 use crate::scalar::Scalar;
 
 /// Running estimates of `b*_i = E[g·ψ_i] / E‖ψ_i‖²` (time-indexed) and of
@@ -105,7 +105,7 @@ impl<S: Scalar> RunningOptimum<S> {
         let (cross, moment) = self.pending_mut(n);
         let statistics = ScoreProducts {
             v: &g,
-            baseline: &[],
+            baseline: Baselines::Given(&[]),
             cross,
             moment,
             g: &mut [],

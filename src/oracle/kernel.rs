@@ -13,7 +13,6 @@
 //! for bit and the default's first error, except the logistic policy's `score_products`, which
 //! forms the same products in another order (equal up to rounding).
 
-use super::linear_baseline::LinearBaseline;
 use super::products::ScoreProducts;
 use crate::policy::{
     ActionVector, LinearGaussian, MlpGaussian, MlpSoftmax, Policy, PolicyError, Softmax,
@@ -221,33 +220,15 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
 
     /// [`ScoreProducts`] for the decisions that [`EstimatorKernel::record_validated`] recorded in
     /// `records` for the same `features`: the statistics of the variance-minimising baseline
-    /// ([`crate::baseline::RunningOptimum`]) and the baseline's correction of the estimate.
-    /// The default reads the rows of `record_rows` ([`ScoreProducts::add_rows`]).
+    /// ([`crate::baseline::RunningOptimum`]) and the baseline's correction of the estimate, with
+    /// b_i given or the linear state-dependent baseline's ([`super::Baselines`]), which a policy
+    /// may form in the pass that reads ψ_i. The default reads the rows of `record_rows`
+    /// ([`ScoreProducts::add_rows`], the linear baseline's b_i formed first).
     fn score_products(&self, features: &[S], records: &[S], out: ScoreProducts<'_, S>) {
         let _ = features;
         let d = self.param_dim();
         let (scores, _) = split_score_rows(records, d);
         out.add_rows(scores.chunks_exact(d.max(1)));
-    }
-
-    /// The correction alone of [`EstimatorKernel::score_products`], `g −= Σ_i b_i ψ_i` over the
-    /// first `decisions` decisions recorded in `records` for `features` (the scored ones: a
-    /// trajectory's last decision may be recorded and not scored), with each b_i formed from
-    /// the decision's own row of `features` ([`LinearBaseline::next`]: the state features are
-    /// the policy's, their first k) in the same pass that reads ψ_i. Returns true having
-    /// subtracted, bit for bit, what [`EstimatorKernel::score_products`] subtracts given those
-    /// b_i; false, with `g` untouched, when the policy has no such pass (the default) or none
-    /// for this k, and the caller forms the b_i itself.
-    fn state_baseline_correction(
-        &self,
-        features: &[S],
-        records: &[S],
-        baseline: &LinearBaseline<'_, S>,
-        decisions: usize,
-        g: &mut [S],
-    ) -> bool {
-        let _ = (features, records, baseline, decisions, g);
-        false
     }
 }
 

@@ -7,8 +7,7 @@
 //! kernel in the same order.
 
 use super::kernel::{EstimatorKernel, causal_sum_by_steps};
-use super::linear_baseline::LinearBaseline;
-use super::products::ScoreProducts;
+use super::products::{Baselines, ScoreProducts};
 use crate::policy::logistic::{brier, finite_logit, score_coefficient, sigmoid_of_finite};
 use crate::policy::softmax::check_action;
 use crate::policy::{Logistic, Policy, PolicyError, check_out, check_vec_scalar, logistic_sigmoid};
@@ -367,25 +366,52 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     /// With ψ_i = c_i φ_i from the recorded coefficient: `g −= (b_i c_i) φ_i`, then
     /// `cross[i] += c_i (v·φ_i)` and `moment[i] += c_i² ‖φ_i‖²`, for 1 to 8 features with the rows,
     /// v and g in `[S; N]` locals (registers for `f64`); else ψ_i formed in `Vec`s and
-    /// [`ScoreProducts::add_rows`]. The same products up to rounding.
+    /// [`ScoreProducts::add_rows`]. The same products up to rounding. The linear state-dependent
+    /// baseline's b_i are formed row by row in the correction's pass when its rows have the
+    /// policy's N features and k is all of them ([`super::FixedLinearBaseline::next`]), else
+    /// first: the same b_i and the same operations either way.
     fn score_products(&self, features: &[S], records: &[S], out: ScoreProducts<'_, S>) {
         let dim = Policy::<S>::feature_dim(self);
         let coefficients = &records[..records.len() / 2];
         by_feature_count!(dim, N => {
             let ScoreProducts { v, baseline, cross, moment, g } = out;
-            let v: [S; N] = std::array::from_fn(|j| v[j].clone());
-            let (rows, _) = features.as_chunks::<N>();
             // g has N entries (d = N for this policy) whenever there is a correction to make.
-            if !baseline.is_empty() {
+            let fused = match &baseline {
+                Baselines::Linear { baseline, rows, stride, decisions } if *stride == N => {
+                    baseline.fixed::<N>().map(|b| (b, *rows, *decisions))
+                }
+                _ => None,
+            };
+            if let Some((b, state_rows, decisions)) = fused {
+                let (state_rows, _) = state_rows.as_chunks::<N>();
+                let (rows, _) = features.as_chunks::<N>();
                 let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
-                for ((phi, c), b) in rows.iter().zip(coefficients).zip(baseline) {
-                    let bc = b.clone() * c;
+                let mut index = S::zero();
+                let decisions = rows.iter().zip(state_rows).zip(coefficients).take(decisions);
+                for ((phi, state), c) in decisions {
+                    let bc = b.next(state, &mut index) * c;
                     for (a, x) in acc.iter_mut().zip(phi) {
                         *a -= bc.clone() * x;
                     }
                 }
                 g.clone_from_slice(&acc);
+            } else {
+                let mut buf = Vec::new();
+                let baseline = baseline.values(&mut buf);
+                let (rows, _) = features.as_chunks::<N>();
+                if !baseline.is_empty() {
+                    let mut acc: [S; N] = std::array::from_fn(|j| g[j].clone());
+                    for ((phi, c), b) in rows.iter().zip(coefficients).zip(baseline) {
+                        let bc = b.clone() * c;
+                        for (a, x) in acc.iter_mut().zip(phi) {
+                            *a -= bc.clone() * x;
+                        }
+                    }
+                    g.clone_from_slice(&acc);
+                }
             }
+            let v: [S; N] = std::array::from_fn(|j| v[j].clone());
+            let (rows, _) = features.as_chunks::<N>();
             // The statistics, for as many decisions as `cross` has (none: the correction alone).
             let products = cross.iter_mut().zip(moment.iter_mut());
             for ((phi, c), (cr, mo)) in rows.iter().zip(coefficients).zip(products) {
@@ -393,48 +419,17 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
                 *mo += c.square() * crate::scalar::norm_sq(phi);
             }
         }, _ => {
+            let corrected = match &out.baseline {
+                Baselines::Given(b) => b.len(),
+                Baselines::Linear { decisions, .. } => *decisions,
+            };
             let rows = features.chunks_exact(dim.max(1)).zip(coefficients);
             let scores: Vec<Vec<S>> = rows
-                .take(out.cross.len().max(out.baseline.len()))
+                .take(out.cross.len().max(corrected))
                 .map(|(phi, c)| phi.iter().map(|x| c.clone() * x).collect())
                 .collect();
             out.add_rows(scores.iter().map(Vec::as_slice));
         });
-    }
-
-    /// For 1 to 8 features, with k all of them: per row b_i
-    /// ([`super::FixedLinearBaseline::next`]), then `g −= (b_i c_i) φ_i` with g in an `[S; N]`
-    /// local, the operations of [`EstimatorKernel::score_products`]'s correction in its order.
-    /// Else false.
-    fn state_baseline_correction(
-        &self,
-        features: &[S],
-        records: &[S],
-        baseline: &LinearBaseline<'_, S>,
-        decisions: usize,
-        g: &mut [S],
-    ) -> bool {
-        let dim = Policy::<S>::feature_dim(self);
-        let coefficients = &records[..records.len() / 2];
-        by_feature_count!(dim, N => {
-            let Some(baseline) = baseline.fixed::<N>() else {
-                return false;
-            };
-            let Ok(g) = <&mut [S; N]>::try_from(g) else {
-                return false;
-            };
-            let (rows, _) = features.as_chunks::<N>();
-            let mut acc: [S; N] = g.clone();
-            let mut index = S::zero();
-            for (phi, c) in rows.iter().zip(coefficients).take(decisions) {
-                let bc = baseline.next(phi, &mut index) * c;
-                for (a, x) in acc.iter_mut().zip(phi) {
-                    *a -= bc.clone() * x;
-                }
-            }
-            *g = acc;
-            true
-        }, _ => false)
     }
 }
 

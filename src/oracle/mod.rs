@@ -39,7 +39,7 @@ pub use decision_terms::DecisionTerms;
 pub use given::Given;
 pub use kernel::EstimatorKernel;
 pub use linear_baseline::{FixedLinearBaseline, LinearBaseline};
-pub use products::ScoreProducts;
+pub use products::{Baselines, ScoreProducts};
 pub use recorded_pass::RecordedPass;
 
 pub(crate) use baselined::baselined_pass;

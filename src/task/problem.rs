@@ -5,9 +5,8 @@ use super::rollout::sample_learner;
 use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
 use crate::baseline::PerDecisionTerms;
 use crate::oracle::{
-    DecisionTerms, EstimatorKernel, Given, LinearBaseline, RecordedPass, ScoreProducts,
-    baselined_pass, causal_pass, features_valid, full_pass, policy_error, record_pass,
-    sum_recorded, terms_pass,
+    DecisionTerms, EstimatorKernel, Given, RecordedPass, ScoreProducts, baselined_pass,
+    causal_pass, features_valid, full_pass, policy_error, record_pass, sum_recorded, terms_pass,
 };
 use crate::policy::LikelihoodRatio;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -506,26 +505,6 @@ where
             let features = &trajectory.feature_data;
             (self.policy).score_products(features, &recorded.scores, out);
         }
-    }
-
-    /// Through [`EstimatorKernel::state_baseline_correction`] when the policy recorded the
-    /// decisions: the state features are the learner's, the rows
-    /// [`PerDecisionTerms::state_feature_rows`] gives.
-    fn recorded_state_correction(
-        &self,
-        trajectory: &Self::Trajectory,
-        recorded: &RecordedPass<S>,
-        baseline: &LinearBaseline<'_, S>,
-        g: &mut [S],
-    ) -> bool {
-        !recorded.score_rows
-            && (self.policy).state_baseline_correction(
-                &trajectory.feature_data,
-                &recorded.scores,
-                baseline,
-                recorded.decisions(),
-                g,
-            )
     }
 
     /// The learner's features φ(s_i) of each scored decision (their first `leading` entries),

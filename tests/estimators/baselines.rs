@@ -1112,10 +1112,10 @@ fn task_decision_terms_reproduce_the_task_estimators() {
 /// 6, … only, so its weights equal, bit for bit, those of an oracle that takes every trajectory
 /// and is shown only those; a trajectory whose statistics are not taken gets the same estimate,
 /// bit for bit, as from an oracle with the same weights that takes its statistics (features by
-/// columns). On CartPole (resets; the logistic policy's correction pass forms each `w·φ_i` off
-/// the stored feature rows, `EstimatorKernel::state_baseline_correction`) and the obstacle task
-/// (an absorbing tail; the baselines read off the stored rows, then the Gaussian policy's
-/// default products pass through `ScoreProducts::add_rows` makes the correction alone). Fails if
+/// columns). On CartPole (resets; the logistic policy's products pass forms each `w·φ_i` off
+/// the stored feature rows, `Baselines::Linear`) and the obstacle task (an absorbing tail; the
+/// Gaussian policy's default products pass, `ScoreProducts::add_rows`, forms the baselines off
+/// the stored rows first and makes the correction alone). Fails if
 /// the selection depended on anything but the count, if a row route summed `w·φ_i` in another
 /// order or corrected a decision that is not scored, or if the correction stopped with the
 /// statistics.

@@ -494,6 +494,20 @@ where
             ridge: Some(number(1e-3)),
             fit_every: Some(1),
         },
+        Baseline::StateDependent {
+            features: None,
+            time: false,
+            decay: Some(number(0.9)),
+            ridge: Some(number(1e-3)),
+            fit_every: Some(2),
+        },
+        Baseline::StateDependent {
+            features: Some(2),
+            time: true,
+            decay: None,
+            ridge: Some(number(1e-2)),
+            fit_every: Some(3),
+        },
     ];
     let theta = &thetas[0];
     let th = theta.as_slice();
