@@ -369,6 +369,7 @@ impl<S: Real> CartPoleEpisode<S> {
 
     /// A new episode from Gymnasium's reset law ([`sample_reset_state`]), its `f64` draws
     /// converted exactly into `S` (a float, a rational, or a point interval).
+    #[inline]
     pub fn reset(rng: &mut KitRng) -> Self {
         let s = sample_reset_state(rng);
         Self::at(std::array::from_fn(|i| {

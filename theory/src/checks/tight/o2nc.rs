@@ -1,4 +1,4 @@
-//! Rows 3b.tight and 3b.tight.ctl: the theorem-level O2NC bound (Theorem 3.8 with the realised
+//! Rows 3b.tight, 3b.tight.noisy and their B ÷ 2 controls: the theorem-level O2NC bound (Theorem 3.8 with the realised
 //! T, K, D, M; [`crate::bounds::o2nc_theorem`]) for Algorithm 5 with IL-correct sampling
 //! (τ_n ∼ p(·; w_n), E11) at the instance of largest X̄/B a seeded search finds, with
 //! E X **enclosed** over every outcome of the run.
@@ -21,8 +21,10 @@
 //! ```
 //!
 //! The integral is enclosed by an interval Riemann sum over [`CELLS`] cells of s (each cell's
-//! |∇F(θ + [s_j, s_{j+1}]Δ) + ∇F(θ)| enclosed by the forward DP in intervals), so the decision is
-//! a proof, not a test. T ≤ 2 means GNδ/Δ₀ ≤ 2√2: the search's parameter x = GNδ/Δ₀ ranges up
+//! |∇F(θ + [s_j, s_{j+1}]Δ) + ∇F(θ)| enclosed by the mean-value form, [`Quadrature`]), so the
+//! decision is a proof, not a test. It holds for the kit's draw of s as well: a dyadic uniform
+//! k/2⁵³ ([`ilopt::sampling::dyadic_uniform`]), of which every cell holds the same number of
+//! values, all inside it. T ≤ 2 means GNδ/Δ₀ ≤ 2√2: the search's parameter x = GNδ/Δ₀ ranges up
 //! to that, and a candidate whose blocks are longer is refused.
 //!
 //! The algorithm's inputs are exact rationals: G (a dyadic, the candidate's), Δ₀ = F(θ₁) (F ≥ 0,
