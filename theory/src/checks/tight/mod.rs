@@ -54,7 +54,8 @@ pub mod sgd;
 pub mod storm;
 
 use crate::inputs::TableInputs;
-use crate::record::check::{Check, CheckBuilder, Method, Verdict};
+use crate::record::check::{Check, CheckBuilder, Method, Role, Verdict};
+use ilopt::scalar::Interval;
 use search::{Algorithm, Budget, Estimate, Noise};
 use sgd::Sgd;
 use storm::Storm;
@@ -168,6 +169,37 @@ const PER_STATE: Budget = Budget {
 /// need not reach it, and state a control only where they do.
 fn control_always(noise: Noise, algorithm: Algorithm) -> bool {
     noise == Noise::Any && algorithm != Algorithm::SgdPerState
+}
+
+/// The id, role and claim prefix of a tight row stating `scale · B`: at scale 1 the bound's row
+/// `{stem}.tight{noise}` with `role`, else its control `{stem}.tight{noise}.ctl`, a negative
+/// control whose claim reads "{scale}·B".
+fn row_names(stem: &str, noise: Noise, scale: f64, role: Role) -> (String, Role, String) {
+    if scale == 1.0 {
+        (
+            format!("{stem}.tight{}", noise.suffix()),
+            role,
+            String::new(),
+        )
+    } else {
+        (
+            format!("{stem}.tight{}.ctl", noise.suffix()),
+            Role::NegativeControl,
+            format!("{scale}·"),
+        )
+    }
+}
+
+/// `X̄ ≤ claimed` decided from an enclosure of X̄: holds if the enclosure lies at or below,
+/// fails if it lies above, inconclusive if it straddles.
+fn enclosure_verdict(x_bar: &Interval, claimed: f64) -> Verdict {
+    if x_bar.sup() <= claimed {
+        Verdict::Holds
+    } else if x_bar.inf() > claimed {
+        Verdict::Fails
+    } else {
+        Verdict::Inconclusive
+    }
 }
 
 /// The rows of one certified candidate: the bound's row, then its B ÷ 2 control where X̄/B ≥ ½

@@ -38,7 +38,8 @@
 use super::instance::{Instance, exact};
 use super::paths::{Enclose, PathMean};
 use super::search::{
-    Budget, GRID, MARGIN, MAX_WIDTH, NOISE_SHARE, Noise, SPACING, STARTS, random_then_pattern,
+    Budget, GRID, MARGIN, MAX_WIDTH, NOISE_SHARE, Noise, SPACING, STARTS, adjacent_c, dyadic,
+    nudged, random_instance, random_then_pattern,
 };
 use super::{Prepared, first_certified, with_control};
 use crate::bounds::{O2ncParams, upper};
@@ -260,7 +261,7 @@ fn block_integral<S: Quadrature>(
 
 /// Algorithm 5 (IL-correct, T ≤ 2) from θ₁ with the exact inputs `setting` (module docs): E X over
 /// every path of the prefixes drawn at the blocks' first steps, each block's integral over s by
-/// [`block_integral`] with `cells` cells, and the hull of every iterate θ (which holds every w).
+/// `block_integral` with `cells` cells, and the hull of every iterate θ (which holds every w).
 ///
 /// # Errors
 /// If T > 2, there are more than `max_paths` paths, or the engine fails at an iterate.
@@ -424,34 +425,15 @@ pub fn evaluate(c: &Candidate, noise: Noise, max_paths: u64) -> Option<Estimate>
     })
 }
 
-const PROBS: [(i64, i64); 5] = [(0, 1), (1, 4), (1, 2), (3, 4), (1, 1)];
-const CS: [(i64, i64); 7] = [(1, 100), (1, 50), (1, 20), (1, 10), (1, 5), (1, 2), (1, 1)];
 /// The budgets N drawn and moved between (T = 2 gives K = ⌊N/2⌋ blocks).
 const NS: [u64; 9] = [4, 5, 6, 8, 12, 16, 24, 32, 64];
 
-/// Round to a multiple of 2⁻¹⁰, at least 2⁻¹⁰.
-fn dyadic(x: f64) -> f64 {
-    ((x * 1024.0).round() / 1024.0).max(1.0 / 1024.0)
-}
-
-fn pick(rng: &mut StdRng, set: &[(i64, i64)]) -> BigRational {
-    let (n, d) = set[rng.random_range(0..set.len())];
-    BigRational::from_ratio(n, d)
-}
-
-/// A random candidate: an instance as the other tight searches draw it (θ₁ on a 1/16 grid of
-/// [−4, 4]), N from [`NS`], G = u·√max E‖g‖² on [θ₁ − 1, θ₁ + 1] with u ∈ [1, 3/2], and
+/// A random candidate: an instance as the other tight searches draw it ([`random_instance`]),
+/// then N from [`NS`], G = u·√max E‖g‖² on [θ₁ − 1, θ₁ + 1] with u ∈ [1, 3/2], and
 /// x ∈ [1/2, [`X_MAX`]].
 fn random_candidate(rng: &mut StdRng) -> Option<Candidate> {
-    let instance = Instance {
-        mu_a: pick(rng, &PROBS),
-        p0: pick(rng, &PROBS),
-        p1: pick(rng, &PROBS),
-        horizon: rng.random_range(2..=3),
-        c: pick(rng, &CS),
-        theta1: vec![exact(rng.random_range(-64..=64) as f64 / 16.0)],
-        k: NS[rng.random_range(0..NS.len())],
-    };
+    let mut instance = random_instance(rng, 0, 2..=3, 1);
+    instance.k = NS[rng.random_range(0..NS.len())];
     let t = Scalar::to_f64(&instance.theta1[0]);
     let (g2, _) = moment_estimates(&instance.mdp().ok()?, [t - 1.0, t + 1.0]).ok()?;
     let g = dyadic(rng.random_range(1.0..1.5) * g2.sqrt());
@@ -462,11 +444,9 @@ fn random_candidate(rng: &mut StdRng) -> Option<Candidate> {
 /// The pattern search's moves at scale h: θ₁ ± h, G and x × (1 ± h/4), the adjacent N and c.
 fn moves(c: &Candidate, h: f64) -> Vec<Candidate> {
     let mut out = vec![];
-    let t = Scalar::to_f64(&c.instance.theta1[0]);
-    for dt in [-h, h] {
+    for t in nudged(&c.instance.theta1[0], h) {
         let mut n = c.clone();
-        let x = t + dt;
-        n.instance.theta1[0] = exact(dyadic(x.abs()) * x.signum());
+        n.instance.theta1[0] = t;
         out.push(n);
     }
     for f in [1.0 - h / 4.0, 1.0 + h / 4.0] {
@@ -486,19 +466,10 @@ fn moves(c: &Candidate, h: f64) -> Vec<Candidate> {
             }
         }
     }
-    let v = Scalar::to_f64(&c.instance.c);
-    let i = (0..CS.len())
-        .min_by(|a, b| {
-            let d = |i: usize| (CS[i].0 as f64 / CS[i].1 as f64 - v).abs();
-            d(*a).total_cmp(&d(*b))
-        })
-        .unwrap_or(0);
-    for j in [i.wrapping_sub(1), i + 1] {
-        if let Some((num, den)) = CS.get(j) {
-            let mut n = c.clone();
-            n.instance.c = BigRational::from_ratio(*num, *den);
-            out.push(n);
-        }
+    for cv in adjacent_c(&c.instance.c) {
+        let mut n = c.clone();
+        n.instance.c = cv;
+        out.push(n);
     }
     out
 }
@@ -592,19 +563,7 @@ pub fn row(
     let g2_value = inputs.constant_f64(ConstantKind::G2, g2.value);
     let s = &c.setting;
     let p = &s.params;
-    let (id, role, prefix) = if scale == 1.0 {
-        (
-            format!("3b.tight{}", noise.suffix()),
-            Role::Corrected,
-            String::new(),
-        )
-    } else {
-        (
-            format!("3b.tight{}.ctl", noise.suffix()),
-            Role::NegativeControl,
-            format!("{scale}·"),
-        )
-    };
+    let (id, role, prefix) = super::row_names("3b", noise, scale, Role::Corrected);
     let claim = format!(
         "E[(1/K) Σ_k ‖(1/T) Σ_t ∇F(wᵏ_t)‖] ≤ {prefix}(Δ₀/(DM) + (G + σ)/√T) for Algorithm 5 (IL-correct sampling τ_n ∼ p(·; w_n)), Δ₀ = F(θ₁) ≈ {:.6}, δ = xΔ₀/(GN) ≈ {:.6} (exact rationals in the details), on the instance of largest X̄/B found: {}",
         Scalar::to_f64(&s.delta0),
@@ -634,13 +593,7 @@ pub fn row(
     }
     let b = bound(inputs, s, delta0, s2.max(0.0).sqrt());
     let claimed = b * scale;
-    let verdict = if c.x_bar.sup() <= claimed {
-        Verdict::Holds
-    } else if c.x_bar.inf() > claimed {
-        Verdict::Fails
-    } else {
-        Verdict::Inconclusive
-    };
+    let verdict = super::enclosure_verdict(&c.x_bar, claimed);
     let sigma_share = bound(inputs, s, delta0, s2.max(0.0).sqrt()) - bound(inputs, s, delta0, 0.0);
     builder
         .bound(claimed)

@@ -444,8 +444,32 @@ fn ratio(rng: &mut StdRng, set: &[(i64, i64)]) -> BigRational {
 }
 
 /// Round to a multiple of 2⁻¹⁰ (a short dyadic rational), at least 2⁻¹⁰.
-fn dyadic(x: f64) -> f64 {
+pub(super) fn dyadic(x: f64) -> f64 {
     ((x * 1024.0).round() / 1024.0).max(1.0 / 1024.0)
+}
+
+/// An instance of the M family as every tight search draws it, with K = `k` given: μ_A, p₀ and
+/// p₁ from {0, ¼, ½, ¾, 1}, the horizon from `horizons`, c from {1/100, …, 1}, then `dims`
+/// coordinates of θ₁ on the 1/16 grid of [−4, 4].
+pub(super) fn random_instance(
+    rng: &mut StdRng,
+    k: u64,
+    horizons: std::ops::RangeInclusive<usize>,
+    dims: usize,
+) -> Instance {
+    let mut instance = Instance {
+        mu_a: ratio(rng, &PROBS),
+        p0: ratio(rng, &PROBS),
+        p1: ratio(rng, &PROBS),
+        horizon: rng.random_range(horizons),
+        c: ratio(rng, &CS),
+        theta1: vec![],
+        k,
+    };
+    instance.theta1 = (0..dims)
+        .map(|_| exact((rng.random_range(-64..=64) as f64) / 16.0))
+        .collect();
+    instance
 }
 
 /// A random candidate. The step is drawn relative to max |F″| on [θ₁ − 1, θ₁ + 1] (estimated on
@@ -460,18 +484,7 @@ fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate>
         Algorithm::SgdPerState => (2..=4, 2),
         _ => (2..=3, 1),
     };
-    let mut instance = Instance {
-        mu_a: ratio(rng, &PROBS),
-        p0: ratio(rng, &PROBS),
-        p1: ratio(rng, &PROBS),
-        horizon: rng.random_range(horizons),
-        c: ratio(rng, &CS),
-        theta1: vec![],
-        k,
-    };
-    instance.theta1 = (0..dims)
-        .map(|_| exact((rng.random_range(-64..=64) as f64) / 16.0))
-        .collect();
+    let instance = random_instance(rng, k, horizons, dims);
     let square: Vec<[f64; 2]> = instance
         .theta1
         .iter()
@@ -490,27 +503,40 @@ fn random_candidate(algorithm: Algorithm, rng: &mut StdRng) -> Option<Candidate>
     Some(Candidate { instance, step })
 }
 
-/// Index of `x` in `set` (the nearest entry), for moving to an adjacent one.
-fn position(set: &[(i64, i64)], x: &BigRational) -> usize {
-    let v = Scalar::to_f64(x);
-    (0..set.len())
-        .min_by(|a, b| {
-            let d = |i: usize| (set[i].0 as f64 / set[i].1 as f64 - v).abs();
-            d(*a).total_cmp(&d(*b))
-        })
-        .unwrap_or(0)
+/// θ ∓ h and θ + h, each rounded to a multiple of 2⁻¹⁰ (the pattern search's moves of a
+/// coordinate of θ₁).
+pub(super) fn nudged(theta: &BigRational, h: f64) -> [BigRational; 2] {
+    let t = Scalar::to_f64(theta);
+    [-h, h].map(|dt| {
+        let x = t + dt;
+        exact(dyadic(x.abs()) * x.signum())
+    })
 }
 
-/// The moves of the pattern search from `c` at scale `h`: each coordinate of θ₁ ± h, the step ×
+/// The entries of c's list {1/100, …, 1} next to `c` (the nearest entry's neighbours).
+pub(super) fn adjacent_c(c: &BigRational) -> Vec<BigRational> {
+    let v = Scalar::to_f64(c);
+    let i = (0..CS.len())
+        .min_by(|a, b| {
+            let d = |i: usize| (CS[i].0 as f64 / CS[i].1 as f64 - v).abs();
+            d(*a).total_cmp(&d(*b))
+        })
+        .unwrap_or(0);
+    [i.wrapping_sub(1), i + 1]
+        .into_iter()
+        .filter_map(|j| CS.get(j))
+        .map(|(num, den)| BigRational::from_ratio(*num, *den))
+        .collect()
+}
+
+/// The moves of the pattern search from `c` at scale h: each coordinate of θ₁ ± h, the step ×
 /// (1 ± h/4), and the adjacent K and c of their lists.
 fn moves(algorithm: Algorithm, c: &Candidate, h: f64) -> Vec<Candidate> {
     let mut out = vec![];
     for (i, t) in c.instance.theta1.iter().enumerate() {
-        let t = Scalar::to_f64(t);
-        for dt in [-h, h] {
+        for x in nudged(t, h) {
             let mut n = c.clone();
-            let x = t + dt;
-            n.instance.theta1[i] = exact(dyadic(x.abs()) * x.signum());
+            n.instance.theta1[i] = x;
             out.push(n);
         }
     }
@@ -529,13 +555,10 @@ fn moves(algorithm: Algorithm, c: &Candidate, h: f64) -> Vec<Candidate> {
             }
         }
     }
-    let i = position(&CS, &c.instance.c);
-    for j in [i.wrapping_sub(1), i + 1] {
-        if let Some((num, den)) = CS.get(j) {
-            let mut n = c.clone();
-            n.instance.c = BigRational::from_ratio(*num, *den);
-            out.push(n);
-        }
+    for cv in adjacent_c(&c.instance.c) {
+        let mut n = c.clone();
+        n.instance.c = cv;
+        out.push(n);
     }
     out
 }

@@ -144,19 +144,7 @@ impl Bound for Sgd {
         let l_f = inputs.constant_f64(ConstantKind::LF, l.value);
         let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
         let (stem, result) = stem(c.algorithm);
-        let (id, role, prefix) = if scale == 1.0 {
-            (
-                format!("{stem}.tight{}", noise.suffix()),
-                role(c.algorithm),
-                String::new(),
-            )
-        } else {
-            (
-                format!("{stem}.tight{}.ctl", noise.suffix()),
-                Role::NegativeControl,
-                format!("{scale}·"),
-            )
-        };
+        let (id, role, prefix) = super::row_names(stem, noise, scale, role(c.algorithm));
         let estimator = c.baseline.as_ref().map_or_else(String::new, |b| {
             format!(" for g_b = g − bψ, b = {b}, with σ²_b")
         });

@@ -160,19 +160,7 @@ impl Bound for Storm {
         let s2 = inputs.constant_f64(ConstantKind::Sigma2, v.value);
         let (lt_name, v_name) = (&lt.name, &v.name);
         let (stem, result) = stem(c.algorithm);
-        let (id, role, prefix) = if scale == 1.0 {
-            (
-                format!("{stem}.tight{}", noise.suffix()),
-                Role::Corrected,
-                String::new(),
-            )
-        } else {
-            (
-                format!("{stem}.tight{}.ctl", noise.suffix()),
-                Role::NegativeControl,
-                format!("{scale}·"),
-            )
-        };
+        let (id, role, prefix) = super::row_names(stem, noise, scale, Role::Corrected);
         let weights = if c.algorithm == Algorithm::StormPerDecision {
             "per-decision weights"
         } else {
@@ -224,13 +212,7 @@ impl Bound for Storm {
         }
         let bound = (inputs.formulas.storm_fixed)(l, s2, b_f, inst.k);
         let claimed = upper(bound) * scale;
-        let verdict = if c.x_bar.sup() <= claimed {
-            Verdict::Holds
-        } else if c.x_bar.inf() > claimed {
-            Verdict::Fails
-        } else {
-            Verdict::Inconclusive
-        };
+        let verdict = super::enclosure_verdict(&c.x_bar, claimed);
         builder
             .bound(bound * scale)
             .measured(Measured::exact(x).with_interval(c.x_bar.inf(), c.x_bar.sup()))
