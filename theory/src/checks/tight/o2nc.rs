@@ -38,7 +38,7 @@
 use super::instance::{Instance, exact};
 use super::paths::{Enclose, PathMean};
 use super::search::{
-    Budget, GRID, MARGIN, MAX_WIDTH, NOISE_SHARE, Noise, SPACING, STARTS, adjacent_c, dyadic,
+    Budget, GRID, MARGIN, MAX_WIDTH, NOISE_SHARE, Noise, SPACING, STARTS, dyadic, list_moves,
     nudged, random_instance, random_then_pattern,
 };
 use super::{Prepared, first_certified, with_control};
@@ -334,22 +334,9 @@ pub fn o2nc_mean<S: Quadrature>(
     })
 }
 
-/// A candidate's estimated X̄/B.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Estimate {
-    /// The candidate.
-    pub candidate: Candidate,
-    /// X̄ (every path, the midpoint rule).
-    pub x_bar: f64,
-    /// B with the estimated σ².
-    pub bound: f64,
-    /// X̄/B.
-    pub ratio: f64,
-    /// The hull of the iterates.
-    pub hull: [f64; 2],
-    /// Number of paths.
-    pub paths: u64,
-}
+/// A candidate's estimated X̄/B: X̄ over every path by the midpoint rule, B with σ² estimated on
+/// the hull (one coordinate).
+pub type Estimate = super::search::Estimate<Candidate>;
 
 /// The theorem's B = Δ₀/(DM) + (G + σ)/√T through `inputs`' formula, with every input rounded
 /// the way that makes B larger (B falls with δ and grows with Δ₀, G and σ).
@@ -420,8 +407,9 @@ pub fn evaluate(c: &Candidate, noise: Noise, max_paths: u64) -> Option<Estimate>
         x_bar: run.mean,
         bound: b,
         ratio,
-        hull,
+        hull: run.hull,
         paths: run.paths,
+        sigma2: var,
     })
 }
 
@@ -457,20 +445,14 @@ fn moves(c: &Candidate, h: f64) -> Vec<Candidate> {
         n.x = dyadic(c.x * f).min(X_MAX);
         out.push(n);
     }
-    if let Some(i) = NS.iter().position(|n| *n == c.instance.k) {
-        for j in [i.wrapping_sub(1), i + 1] {
-            if let Some(n_new) = NS.get(j) {
-                let mut n = c.clone();
-                n.instance.k = *n_new;
-                out.push(n);
-            }
-        }
-    }
-    for cv in adjacent_c(&c.instance.c) {
-        let mut n = c.clone();
-        n.instance.c = cv;
-        out.push(n);
-    }
+    out.extend(
+        list_moves(&c.instance, &NS)
+            .into_iter()
+            .map(|instance| Candidate {
+                instance,
+                ..c.clone()
+            }),
+    );
     out
 }
 

@@ -146,11 +146,11 @@ pub struct Candidate {
     pub step: f64,
 }
 
-/// A candidate's estimated X̄/B.
+/// A candidate's estimated X̄/B (`C`: the family's candidate; [`Candidate`] for SGD and STORM).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Estimate {
+pub struct Estimate<C = Candidate> {
     /// The candidate.
-    pub candidate: Candidate,
+    pub candidate: C,
     /// X̄ (over every path, in `f64`).
     pub x_bar: f64,
     /// B with the estimated constants.
@@ -514,7 +514,7 @@ pub(super) fn nudged(theta: &BigRational, h: f64) -> [BigRational; 2] {
 }
 
 /// The entries of c's list {1/100, …, 1} next to `c` (the nearest entry's neighbours).
-pub(super) fn adjacent_c(c: &BigRational) -> Vec<BigRational> {
+fn adjacent_c(c: &BigRational) -> Vec<BigRational> {
     let v = Scalar::to_f64(c);
     let i = (0..CS.len())
         .min_by(|a, b| {
@@ -545,20 +545,37 @@ fn moves(algorithm: Algorithm, c: &Candidate, h: f64) -> Vec<Candidate> {
         n.step = dyadic(c.step * f);
         out.push(n);
     }
-    let ks = ks(algorithm);
-    if let Some(i) = ks.iter().position(|k| *k == c.instance.k) {
+    out.extend(
+        list_moves(&c.instance, ks(algorithm))
+            .into_iter()
+            .map(|instance| Candidate {
+                instance,
+                ..c.clone()
+            }),
+    );
+    out
+}
+
+/// The instance with its K moved to the entries of `ks` next to it, then with its c moved to
+/// the entries of c's list next to it ([`adjacent_c`]): the pattern search's moves along the
+/// lists.
+pub(super) fn list_moves(instance: &Instance, ks: &[u64]) -> Vec<Instance> {
+    let mut out = vec![];
+    if let Some(i) = ks.iter().position(|k| *k == instance.k) {
         for j in [i.wrapping_sub(1), i + 1] {
             if let Some(k) = ks.get(j) {
-                let mut n = c.clone();
-                n.instance.k = *k;
-                out.push(n);
+                out.push(Instance {
+                    k: *k,
+                    ..instance.clone()
+                });
             }
         }
     }
-    for cv in adjacent_c(&c.instance.c) {
-        let mut n = c.clone();
-        n.instance.c = cv;
-        out.push(n);
+    for c in adjacent_c(&instance.c) {
+        out.push(Instance {
+            c,
+            ..instance.clone()
+        });
     }
     out
 }
