@@ -121,7 +121,7 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     /// [`PerDecisionTerms::record_decisions`] recorded there: the statistics of the
     /// variance-minimising baseline ([`crate::baseline::RunningOptimum`]) and its correction
     /// `g −= Σ_i b_i ψ_i`, with b_i given or the linear state-dependent baseline's on the rows of
-    /// [`PerDecisionTerms::state_feature_rows`] ([`crate::oracle::Baselines`]). The default reads
+    /// [`PerDecisionTerms::state_features`] ([`crate::oracle::Baselines`]). The default reads
     /// the rows of the default form.
     fn recorded_score_products(
         &self,
@@ -135,40 +135,27 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
 
     /// The state features φ_b(s_i) of the first n = `decisions` scored decisions of `trajectory`,
     /// for the state-dependent baseline `b_i = w·φ_b(s_i)`
-    /// ([`crate::baseline::Baseline::StateDependent`]), by columns into `out` (cleared first):
-    /// entry `j·n + i` is feature j of decision i; k, the number of columns, is returned.
-    /// `leading` keeps only the first that many features. The features must be a function of
-    /// s_i alone (nothing from a_i on), which keeps the baseline unbiased.
+    /// ([`crate::baseline::Baseline::StateDependent`]), by rows: `(rows, stride)` with decision
+    /// i's features starting at `rows[i·stride]` (n rows; stride: the features available). A
+    /// problem returns the rows it stores (borrowed from the trajectory) or builds them in
+    /// `scratch` (cleared first). The features must be a function of s_i alone (nothing from a_i
+    /// on), which keeps the baseline unbiased.
     ///
     /// The default offers none.
     ///
     /// # Errors
-    /// [`OracleError::Baseline`] when the problem offers no state features, or fewer than
-    /// `leading`.
-    fn state_features(
+    /// [`OracleError::Baseline`] when the problem offers no state features;
+    /// [`OracleError::Trajectory`] when the trajectory holds fewer than n states.
+    fn state_features<'a>(
         &self,
-        trajectory: &Self::Trajectory,
+        trajectory: &'a Self::Trajectory,
         decisions: usize,
-        leading: Option<usize>,
-        out: &mut Vec<S>,
-    ) -> Result<usize, OracleError> {
-        let _ = (trajectory, decisions, leading, out);
+        scratch: &'a mut Vec<S>,
+    ) -> Result<(&'a [S], usize), OracleError> {
+        let _ = (trajectory, decisions, scratch);
         Err(OracleError::Baseline(
             "this problem offers no state features for a state-dependent baseline".into(),
         ))
-    }
-
-    /// The same features as [`PerDecisionTerms::state_features`] as the problem stores them, by
-    /// rows: `(data, stride)` with decision i's features starting at `data[i·stride]`, at least
-    /// `decisions` rows; `None` when the problem stores no such rows (the default), and the
-    /// state-dependent baseline then takes its features by columns.
-    fn state_feature_rows<'t>(
-        &self,
-        trajectory: &'t Self::Trajectory,
-        decisions: usize,
-    ) -> Option<(&'t [S], usize)> {
-        let _ = (trajectory, decisions);
-        None
     }
 }
 

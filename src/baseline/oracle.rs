@@ -39,11 +39,12 @@ struct StateDependent<S> {
 /// Reused storage of one oracle call: per trajectory its [`DecisionTerms`] or its
 /// [`RecordedPass`], the leave-one-out step totals or the estimated baselines, per-step losses,
 /// one trajectory's plain estimate, the estimate; per trajectory its state features (k per
-/// decision) and the number k.
+/// decision) and the number k, and the rows of a problem that builds them.
 #[derive(Debug, Clone)]
 struct Buffers<S> {
     terms: Vec<DecisionTerms<S>>,
     features: Vec<(Vec<S>, usize)>,
+    rows: Vec<S>,
     products: (Vec<S>, Vec<S>),
     records: Vec<RecordedPass<S>>,
     totals: Vec<S>,
@@ -192,6 +193,7 @@ impl<P, S: Scalar> Baselined<P, S> {
             buffers: Buffers {
                 terms: Vec::new(),
                 features: Vec::new(),
+                rows: Vec::new(),
                 products: (Vec::new(), Vec::new()),
                 records: Vec::new(),
                 totals: Vec::new(),
@@ -231,9 +233,10 @@ impl<P, S: Scalar> Baselined<P, S> {
 }
 
 /// The state features of the first `n` scored decisions of `t` by columns into `columns` (k of
-/// n entries, k returned): the problem's ([`PerDecisionTerms::state_features`]), then with
-/// `time` the decision index i (as a sum of ones, exact for every index a trajectory can have)
-/// and a column of ones.
+/// n entries, k returned): the first k (all for `None`) of the problem's
+/// ([`PerDecisionTerms::state_features`], its rows in `rows` if it builds them), then with `time`
+/// the decision index i (as a sum of ones, exact for every index a trajectory can have) and a
+/// column of ones.
 fn state_columns<S: Scalar, P: PerDecisionTerms<S>>(
     inner: &P,
     t: &P::Trajectory,
@@ -241,8 +244,18 @@ fn state_columns<S: Scalar, P: PerDecisionTerms<S>>(
     leading: Option<usize>,
     time: bool,
     columns: &mut Vec<S>,
+    rows: &mut Vec<S>,
 ) -> Result<usize, OracleError> {
-    let k = inner.state_features(t, n, leading, columns)?;
+    let (data, stride) = inner.state_features(t, n, rows)?;
+    let k = leading_features(stride, leading)?;
+    columns.clear();
+    for j in 0..k {
+        columns.extend(
+            data.chunks_exact(stride.max(1))
+                .take(n)
+                .map(|phi| phi[j].clone()),
+        );
+    }
     if !time {
         return Ok(k);
     }
@@ -544,6 +557,7 @@ fn state_dependent<S: Scalar, P: PerDecisionTerms<S>>(
     let Buffers {
         records,
         features,
+        rows: row_scratch,
         products: (cross, moment),
         totals: baseline,
         plain,
@@ -569,7 +583,7 @@ fn state_dependent<S: Scalar, P: PerDecisionTerms<S>>(
         // features by columns.
         let mut from_rows = false;
         if !take
-            && let Some(rows) = inner.state_feature_rows(t, n)
+            && let Ok(rows) = inner.state_features(t, n, row_scratch)
             && let Ok(k) = leading_features(rows.1, *leading)
         {
             if let Some(b) = LinearBaseline::new(running.weights(), k, *time)
@@ -596,7 +610,7 @@ fn state_dependent<S: Scalar, P: PerDecisionTerms<S>>(
         let k = if from_rows {
             0
         } else {
-            let k = state_columns(inner, t, n, *leading, *time, phi)?;
+            let k = state_columns(inner, t, n, *leading, *time, phi, row_scratch)?;
             running.baselines_into(phi, n, baseline);
             k
         };
@@ -639,6 +653,7 @@ fn baselined<S: Scalar, P: PerDecisionTerms<S>>(
     let Buffers {
         terms,
         features,
+        rows,
         totals,
         g,
         ..
@@ -656,7 +671,15 @@ fn baselined<S: Scalar, P: PerDecisionTerms<S>>(
             features.resize_with(m, || (Vec::new(), 0));
         }
         for ((t, out), (phi, k)) in batch.iter().zip(terms).zip(features.iter_mut()) {
-            *k = state_columns(inner, t, out.decisions(), state.leading, state.time, phi)?;
+            *k = state_columns(
+                inner,
+                t,
+                out.decisions(),
+                state.leading,
+                state.time,
+                phi,
+                rows,
+            )?;
         }
     }
     if observe {

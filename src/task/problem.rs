@@ -507,41 +507,20 @@ where
         }
     }
 
-    /// The learner's features φ(s_i) of each scored decision (their first `leading` entries),
-    /// as the roll-out stored them, by columns.
-    fn state_features(
+    /// The learner's features φ(s_i) of each scored decision, as the roll-out stored them.
+    fn state_features<'a>(
         &self,
-        trajectory: &Self::Trajectory,
+        trajectory: &'a Self::Trajectory,
         decisions: usize,
-        leading: Option<usize>,
-        out: &mut Vec<S>,
-    ) -> Result<usize, OracleError> {
-        let k = crate::baseline::leading_features(trajectory.feature_dim(), leading)?;
+        _scratch: &'a mut Vec<S>,
+    ) -> Result<(&'a [S], usize), OracleError> {
         if trajectory.rows < decisions {
             return Err(OracleError::Trajectory(format!(
                 "{decisions} scored decisions but {} feature rows",
                 trajectory.rows
             )));
         }
-        out.clear();
-        let rows = &trajectory.feature_data()[..decisions * trajectory.feature_dim()];
-        for j in 0..k {
-            out.extend(
-                rows.chunks_exact(trajectory.feature_dim().max(1))
-                    .map(|phi| phi[j].clone()),
-            );
-        }
-        Ok(k)
-    }
-
-    /// The learner's features φ(s_i) as the roll-out stored them, one row per state.
-    fn state_feature_rows<'t>(
-        &self,
-        trajectory: &'t Self::Trajectory,
-        decisions: usize,
-    ) -> Option<(&'t [S], usize)> {
         let stride = trajectory.feature_dim();
-        (stride > 0 && trajectory.rows >= decisions)
-            .then(|| (&trajectory.feature_data()[..decisions * stride], stride))
+        Ok((&trajectory.feature_data()[..decisions * stride], stride))
     }
 }

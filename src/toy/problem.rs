@@ -578,29 +578,23 @@ impl<S: Scalar> PerDecisionTerms<S> for ToyProblem<S> {
         Ok(())
     }
 
-    /// The one-hot vector of decision i's state s_i (|S| entries, or the first `leading`), so that
-    /// `b_i = w_{s_i}`: one baseline per state (by columns: column j marks the decisions in
-    /// state j).
-    fn state_features(
+    /// The one-hot vector of decision i's state s_i (|S| entries), so that `b_i = w_{s_i}`: one
+    /// baseline per state. Built in `scratch`, one row per decision (at most the trajectory's
+    /// decisions).
+    fn state_features<'a>(
         &self,
-        trajectory: &ToyTrajectory,
+        trajectory: &'a ToyTrajectory,
         decisions: usize,
-        leading: Option<usize>,
-        out: &mut Vec<S>,
-    ) -> Result<usize, OracleError> {
+        scratch: &'a mut Vec<S>,
+    ) -> Result<(&'a [S], usize), OracleError> {
         self.check(trajectory)?;
-        let k = crate::baseline::leading_features(self.mdp.states, leading)?;
+        let k = self.mdp.states;
         let (states, _) = self.prefix(trajectory);
-        let states = &states[..decisions.min(states.len())];
-        out.clear();
-        for j in 0..k {
-            out.extend(
-                states
-                    .iter()
-                    .map(|&s| if j == s { S::one() } else { S::zero() }),
-            );
+        scratch.clear();
+        for &s in &states[..decisions.min(states.len())] {
+            scratch.extend((0..k).map(|j| if j == s { S::one() } else { S::zero() }));
         }
-        Ok(k)
+        Ok((scratch, k))
     }
 }
 
