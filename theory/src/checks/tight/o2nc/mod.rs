@@ -29,314 +29,32 @@
 //!
 //! The algorithm's inputs are exact rationals: G (a dyadic, the candidate's), Δ₀ = F(θ₁) (F ≥ 0,
 //! so Δ₀ ≥ F(θ₁) − F*) and δ = xΔ₀/(GN); T, K, M and D come from the kit's own
-//! [`O2ncConfig::parameters`]. The theorem needs G² ≥ E‖g‖² and σ² ≥ Var g at every point the
-//! run visits: both are certified by interval branch-and-bound on the hull of every iterate
-//! (which holds every w_n), and a candidate whose certified G² exceeds its G² is passed over.
+//! [`ilopt::algo::o2nc::O2ncConfig::parameters`]. The theorem needs G² ≥ E‖g‖² and σ² ≥ Var g
+//! at every point the run visits: both are certified by interval branch-and-bound on the hull
+//! of every iterate (which holds every w_n), and a candidate whose certified G² exceeds its G²
+//! is passed over.
+//!
+//! Files: `walk` (the path walk and its quadrature), `search` (candidates, their exact inputs
+//! and the seeded search); here the certification and the rows.
 //! Every gradient estimate that moves an iterate is the oracle's own, read through
 //! [`TableInputs::estimate`].
 
-use super::instance::{Instance, exact};
-use super::paths::{Enclose, PathMean};
-use super::search::{
-    Budget, GRID, MARGIN, MAX_WIDTH, NOISE_SHARE, Noise, SPACING, STARTS, dyadic, list_moves,
-    nudged, random_instance, random_then_pattern,
-};
+mod search;
+mod walk;
+
+pub use search::{Candidate, Estimate, Setting, X_MAX, evaluate, search};
+pub use walk::{CELLS, Quadrature, o2nc_mean};
+
+use super::search::{Budget, Noise, STARTS};
 use super::{Prepared, first_certified, with_control};
 use crate::bounds::{O2ncParams, upper};
 use crate::certify::box_constants::sigma2;
 use crate::inputs::{ConstantKind, TableInputs};
 use crate::record::check::{Check, Measured, Method, Role, Verdict};
 use crate::record::constant::Constant;
-use ilopt::algo::ConfigNumber;
-use ilopt::algo::o2nc::{O2ncConfig, O2ncParameters};
-use ilopt::exact::enumerate::{moments, prefixes};
-use ilopt::exact::forward::forward;
-use ilopt::problem::EstimatorForm;
-use ilopt::scalar::{BigRational, Dual, Interval, Scalar, Sqrt};
-use ilopt::toy::{ToyMdp, ToyProblem};
-use rand::Rng;
-use rand::rngs::StdRng;
+use ilopt::scalar::{BigRational, Interval, Scalar};
 
 const RESULT: &str = "Online-to-non-convex (Alg. 5, IL-correct), Thm 3.8 (tight instance)";
-
-/// Cells of s ∈ [0, 1] in the certified Riemann enclosure of each block's integral.
-pub const CELLS: usize = 64;
-/// Cells of the search's midpoint rule (an estimate that only ranks candidates).
-pub const SEARCH_CELLS: usize = 8;
-/// The largest x = GNδ/Δ₀ the search draws: 181/64, the largest multiple of 2⁻⁶ with T ≤ 2
-/// (T = ⌈x^{2/3}⌉ ≤ 2 iff x ≤ 2√2 ≈ 2.8284).
-pub const X_MAX: f64 = 2.828125;
-
-/// A scalar the walk integrates in: ∇F on a cell of s at its midpoint in `f64` (the midpoint
-/// rule of the search), enclosed over the whole cell in intervals (a rigorous Riemann enclosure).
-pub trait Quadrature: Enclose + Sqrt {
-    /// What evaluates ∇F on the cells (built once per walk).
-    type Engine;
-    /// The engine for `mdp`.
-    fn engine(mdp: &ToyMdp) -> Self::Engine;
-    /// ∇F(θ) at one point.
-    fn grad_at(engine: &Self::Engine, theta: &Self) -> Result<Self, String>;
-    /// ∇F on each of the `cells` equal cells [s_j, s_{j+1}] of s ∈ [0, 1] along θ + sΔ.
-    fn grads_on_cells(
-        engine: &Self::Engine,
-        theta: &Self,
-        delta: &Self,
-        cells: usize,
-    ) -> Result<Vec<Self>, String>;
-    /// |self|.
-    fn magnitude(&self) -> Self;
-    /// The projection onto [−d, d] (Algorithm 5's Π in one dimension).
-    fn clamp_to(&self, d: &Self) -> Self;
-}
-
-/// ∇F(θ) (one parameter) in `S`.
-fn grad<S: Scalar>(problem: &ToyProblem<S>, theta: &S) -> Result<S, String> {
-    Ok(forward(problem, std::slice::from_ref(theta))
-        .map_err(|e| e.to_string())?
-        .gradient[0]
-        .clone())
-}
-
-impl Quadrature for f64 {
-    type Engine = ToyProblem<f64>;
-    fn engine(mdp: &ToyMdp) -> ToyProblem<f64> {
-        ToyProblem::new(mdp)
-    }
-    fn grad_at(engine: &ToyProblem<f64>, theta: &f64) -> Result<f64, String> {
-        grad(engine, theta)
-    }
-    /// At the cells' midpoints.
-    fn grads_on_cells(
-        engine: &ToyProblem<f64>,
-        theta: &f64,
-        delta: &f64,
-        cells: usize,
-    ) -> Result<Vec<f64>, String> {
-        (0..cells)
-            .map(|j| grad(engine, &(theta + (j as f64 + 0.5) / cells as f64 * delta)))
-            .collect()
-    }
-    fn magnitude(&self) -> f64 {
-        self.abs()
-    }
-    fn clamp_to(&self, d: &f64) -> f64 {
-        self.clamp(-d, *d)
-    }
-}
-
-impl Quadrature for Interval {
-    type Engine = (ToyProblem<Interval>, ToyProblem<Dual<Interval>>);
-    fn engine(mdp: &ToyMdp) -> Self::Engine {
-        (ToyProblem::new(mdp), ToyProblem::new(mdp))
-    }
-    fn grad_at(engine: &Self::Engine, theta: &Interval) -> Result<Interval, String> {
-        grad(&engine.0, theta)
-    }
-    /// The mean-value form on each cell, intersected with the direct enclosure:
-    /// ∇F(θ + sΔ) ∈ ∇F(θ + m_jΔ) + F″(θ + [s_j, s_{j+1}]Δ)·([s_j, s_{j+1}] − m_j)Δ, m_j the cell's
-    /// midpoint (F″ from the forward pass in `Dual<Interval>`). The direct enclosure alone widens
-    /// with the forward pass's dependency on θ; the mean-value form's width falls with the cell.
-    fn grads_on_cells(
-        engine: &Self::Engine,
-        theta: &Interval,
-        delta: &Interval,
-        cells: usize,
-    ) -> Result<Vec<Interval>, String> {
-        let n = cells as f64;
-        (0..cells)
-            .map(|j| {
-                // The cell's ends and midpoint are multiples of 1/(2·cells), exact in `f64`.
-                let (lo, hi, mid) = (j as f64 / n, (j + 1) as f64 / n, (j as f64 + 0.5) / n);
-                let s = Interval::try_from((lo, hi)).map_err(|e| format!("{e:?}"))?;
-                let w = *theta + s * *delta;
-                let d = grad(&engine.1, &Dual::variable(w, 0, 1))?;
-                let (direct, second) = d.into_parts(1);
-                let at_mid = grad(
-                    &engine.0,
-                    &(*theta
-                        + Interval::try_from((mid, mid)).map_err(|e| format!("{e:?}"))? * *delta),
-                )?;
-                let offset =
-                    Interval::try_from((lo - mid, hi - mid)).map_err(|e| format!("{e:?}"))?;
-                let mean_value = at_mid + second[0] * offset * *delta;
-                Ok(mean_value.intersection(direct))
-            })
-            .collect()
-    }
-    fn magnitude(&self) -> Interval {
-        self.abs()
-    }
-    /// Π is monotone in its argument and the radius, so the elementwise min and max enclose it.
-    fn clamp_to(&self, d: &Interval) -> Interval {
-        self.min(*d).max(-*d)
-    }
-}
-
-/// A candidate: an instance of the M family (its `k` is the budget N), the algorithm's G and
-/// x = GNδ/Δ₀, both short dyadic rationals stored as `f64`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Candidate {
-    /// The instance; `instance.k` is Algorithm 5's budget N.
-    pub instance: Instance,
-    /// G > 0, the algorithm's bound on √E‖g‖².
-    pub g: f64,
-    /// x = GNδ/Δ₀, which sets δ (T ≤ 2 iff x ≤ 2√2).
-    pub x: f64,
-}
-
-/// The exact inputs of Algorithm 5 for a candidate.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Setting {
-    /// Δ₀ = F(θ₁).
-    pub delta0: BigRational,
-    /// δ = xΔ₀/(GN).
-    pub delta: BigRational,
-    /// G.
-    pub g: BigRational,
-    /// T, K, M and D, from the kit's [`O2ncConfig::parameters`].
-    pub params: O2ncParameters,
-}
-
-impl Candidate {
-    /// Algorithm 5's exact inputs.
-    ///
-    /// # Errors
-    /// If F(θ₁) = 0 (nothing to descend), the configuration is invalid, or T > 2.
-    pub fn setting(&self) -> Result<Setting, String> {
-        let mdp = self.instance.mdp()?;
-        let delta0 = forward(&ToyProblem::<BigRational>::new(&mdp), &self.instance.theta1)
-            .map_err(|e| e.to_string())?
-            .objective;
-        if !delta0.is_certainly_positive() {
-            return Err(format!("F(θ₁) = {delta0}: Δ₀ must be positive"));
-        }
-        let g = exact(self.g);
-        let n = BigRational::from_i64(self.instance.k as i64);
-        let delta = exact(self.x) * &delta0 / (g.clone() * n);
-        let config = O2ncConfig {
-            budget: self.instance.k,
-            delta: ConfigNumber::Exact(delta.clone()),
-            g: ConfigNumber::Exact(g.clone()),
-            delta0: ConfigNumber::Exact(delta0.clone()),
-            form: EstimatorForm::Causal,
-        };
-        let params = config.parameters().map_err(|e| e.to_string())?;
-        if params.t > 2 {
-            return Err(format!(
-                "T = {}: blocks longer than 2 are not enumerable",
-                params.t
-            ));
-        }
-        Ok(Setting {
-            delta0,
-            delta,
-            g,
-            params,
-        })
-    }
-
-    /// `M(…), c, θ₁, N, G, x` as the rows print it.
-    pub fn describe(&self) -> String {
-        self.instance.describe().replace(", K = ", ", N = ")
-            + &format!(", G = {}, x = GNδ/Δ₀ = {}", exact(self.g), exact(self.x))
-    }
-}
-
-/// (1/cells) Σ_j |∇F(θ) + ∇F(θ + s_j Δ)|/2 over the cells s_j of [0, 1]
-/// ([`Quadrature::grads_on_cells`]): the block's ∫₀¹ |(∇F(w₁) + ∇F(w₂))/2| ds, enclosed
-/// (intervals) or estimated (`f64`).
-fn block_integral<S: Quadrature>(
-    engine: &S::Engine,
-    theta: &S,
-    grad_theta: &S,
-    delta: &S,
-    cells: usize,
-) -> Result<S, String> {
-    let mut acc = S::zero();
-    for g in S::grads_on_cells(engine, theta, delta, cells)? {
-        acc += (g + grad_theta).magnitude();
-    }
-    Ok(acc / S::from_i64(2 * cells as i64))
-}
-
-/// Algorithm 5 (IL-correct, T ≤ 2) from θ₁ with the exact inputs `setting` (module docs): E X over
-/// every path of the prefixes drawn at the blocks' first steps, each block's integral over s by
-/// `block_integral` with `cells` cells, and the hull of every iterate θ (which holds every w).
-///
-/// # Errors
-/// If T > 2, there are more than `max_paths` paths, or the engine fails at an iterate.
-pub fn o2nc_mean<S: Quadrature>(
-    mdp: &ToyMdp,
-    theta1: &S,
-    setting: &Setting,
-    inputs: &TableInputs,
-    max_paths: u64,
-    cells: usize,
-) -> Result<PathMean<S>, String> {
-    let problem = ToyProblem::<S>::new(mdp);
-    let engine = S::engine(mdp);
-    let O2ncParameters { t, k, .. } = setting.params;
-    let mut hull = vec![[f64::INFINITY, f64::NEG_INFINITY]];
-    let widen = |hull: &mut Vec<[f64; 2]>, x: &S| {
-        let [lo, hi] = x.enclosure();
-        hull[0] = [hull[0][0].min(lo), hull[0][1].max(hi)];
-    };
-    widen(&mut hull, theta1);
-    if t == 1 {
-        // Δ_n = 0 at every step: every w_n = θ₁.
-        return Ok(PathMean {
-            mean: S::grad_at(&engine, theta1)?.magnitude(),
-            hull,
-            paths: 1,
-        });
-    }
-    if t != 2 {
-        return Err(format!("T = {t}: the walk is written for T ≤ 2"));
-    }
-    let branches = prefixes(&problem, std::slice::from_ref(theta1))
-        .map_err(|e| e.to_string())?
-        .len() as u64;
-    let paths = u32::try_from(k)
-        .ok()
-        .and_then(|k| branches.checked_pow(k))
-        .filter(|p| *p <= max_paths)
-        .ok_or_else(|| format!("{branches}^{k} paths exceed the limit of {max_paths}"))?;
-    let d = S::from_rational(&setting.params.d);
-    let eta = d.clone() / (S::from_rational(&setting.g) * S::from_i64(2).sqrt());
-    let mut total = S::zero();
-    // Depth-first over paths: (blocks done, θ at the block's start, path probability, Σ of the
-    // blocks' integrals so far).
-    let mut stack = vec![(0u64, theta1.clone(), S::one(), S::zero())];
-    while let Some((done, theta, prob, acc)) = stack.pop() {
-        widen(&mut hull, &theta);
-        if done == k {
-            total += prob * acc;
-            continue;
-        }
-        let grad_theta = S::grad_at(&engine, &theta)?;
-        for pre in prefixes(&problem, std::slice::from_ref(&theta)).map_err(|e| e.to_string())? {
-            let g = inputs.estimate(pre.estimate)[0].clone();
-            let step = (S::zero() - eta.clone() * g).clamp_to(&d);
-            let integral = block_integral::<S>(&engine, &theta, &grad_theta, &step, cells)?;
-            let next = theta.clone() + step;
-            stack.push((
-                done + 1,
-                next,
-                prob.clone() * &pre.prob,
-                acc.clone() + integral,
-            ));
-        }
-    }
-    Ok(PathMean {
-        mean: total / S::from_i64(k as i64),
-        hull,
-        paths,
-    })
-}
-
-/// A candidate's estimated X̄/B: X̄ over every path by the midpoint rule, B with σ² estimated on
-/// the hull (one coordinate).
-pub type Estimate = super::search::Estimate<Candidate>;
 
 /// The theorem's B = Δ₀/(DM) + (G + σ)/√T through `inputs`' formula, with every input rounded
 /// the way that makes B larger (B falls with δ and grows with Δ₀, G and σ).
@@ -355,117 +73,6 @@ fn bound(inputs: &TableInputs, s: &Setting, delta0: f64, sigma: f64) -> f64 {
             m: p.m,
         },
     ))
-}
-
-/// max E‖g‖² and max Var g on the grid of the hull (X1, in `f64`).
-fn moment_estimates(mdp: &ToyMdp, hull: [f64; 2]) -> Result<(f64, f64), String> {
-    let p = ToyProblem::<f64>::new(mdp);
-    let n = GRID.max(((hull[1] - hull[0]) / SPACING).ceil() as usize + 1);
-    let (mut g2, mut v) = (0.0f64, 0.0f64);
-    for i in 0..n {
-        let x = hull[0] + (hull[1] - hull[0]) * i as f64 / (n - 1) as f64;
-        let m = moments(&p, &[x]).map_err(|e| e.to_string())?;
-        g2 = g2.max(m.second_moment);
-        v = v.max(m.variance);
-    }
-    Ok((g2, v))
-}
-
-/// Evaluate a candidate: X̄ over every path by the midpoint rule, B with σ² estimated on the
-/// hull; `None` if it cannot be run (T > 2, too many paths, a hull wider than [`MAX_WIDTH`]), its
-/// G is below the estimated √max E‖g‖² on the hull (with [`MARGIN`]), or `noise` is
-/// [`Noise::Required`] and the run is not noisy: it needs T = 2 and K ≥ 2 blocks (so that the
-/// oracle's noise moves the iterates X̄ averages over) and the σ term at least [`NOISE_SHARE`]
-/// of B.
-pub fn evaluate(c: &Candidate, noise: Noise, max_paths: u64) -> Option<Estimate> {
-    let setting = c.setting().ok()?;
-    if noise == Noise::Required && (setting.params.t < 2 || setting.params.k < 2) {
-        return None;
-    }
-    let mdp = c.instance.mdp().ok()?;
-    let theta1 = Scalar::to_f64(&c.instance.theta1[0]);
-    let inputs = TableInputs::thesis();
-    let run = o2nc_mean(&mdp, &theta1, &setting, &inputs, max_paths, SEARCH_CELLS).ok()?;
-    let hull = run.hull[0];
-    let width = hull[1] - hull[0];
-    if width.is_nan() || width > MAX_WIDTH {
-        return None;
-    }
-    let (g2, var) = moment_estimates(&mdp, hull).ok()?;
-    if g2 * MARGIN > c.g * c.g {
-        return None;
-    }
-    let delta0 = Scalar::to_f64(&setting.delta0);
-    let b = bound(&inputs, &setting, delta0, var.max(0.0).sqrt());
-    let share = (b - bound(&inputs, &setting, delta0, 0.0)) / b;
-    if noise == Noise::Required && (share.is_nan() || share < NOISE_SHARE) {
-        return None;
-    }
-    let ratio = run.mean / b;
-    ratio.is_finite().then(|| Estimate {
-        candidate: c.clone(),
-        x_bar: run.mean,
-        bound: b,
-        ratio,
-        hull: run.hull,
-        paths: run.paths,
-        sigma2: var,
-    })
-}
-
-/// The budgets N drawn and moved between (T = 2 gives K = ⌊N/2⌋ blocks).
-const NS: [u64; 9] = [4, 5, 6, 8, 12, 16, 24, 32, 64];
-
-/// A random candidate: an instance as the other tight searches draw it ([`random_instance`]),
-/// then N from [`NS`], G = u·√max E‖g‖² on [θ₁ − 1, θ₁ + 1] with u ∈ [1, 3/2], and
-/// x ∈ [1/2, [`X_MAX`]].
-fn random_candidate(rng: &mut StdRng) -> Option<Candidate> {
-    let mut instance = random_instance(rng, 0, 2..=3, 1);
-    instance.k = NS[rng.random_range(0..NS.len())];
-    let t = Scalar::to_f64(&instance.theta1[0]);
-    let (g2, _) = moment_estimates(&instance.mdp().ok()?, [t - 1.0, t + 1.0]).ok()?;
-    let g = dyadic(rng.random_range(1.0..1.5) * g2.sqrt());
-    let x = dyadic(rng.random_range(0.5..X_MAX));
-    Some(Candidate { instance, g, x })
-}
-
-/// The pattern search's moves at scale h: θ₁ ± h, G and x × (1 ± h/4), the adjacent N and c.
-fn moves(c: &Candidate, h: f64) -> Vec<Candidate> {
-    let mut out = vec![];
-    for t in nudged(&c.instance.theta1[0], h) {
-        let mut n = c.clone();
-        n.instance.theta1[0] = t;
-        out.push(n);
-    }
-    for f in [1.0 - h / 4.0, 1.0 + h / 4.0] {
-        let mut n = c.clone();
-        n.g = dyadic(c.g * f);
-        out.push(n);
-        let mut n = c.clone();
-        n.x = dyadic(c.x * f).min(X_MAX);
-        out.push(n);
-    }
-    out.extend(
-        list_moves(&c.instance, &NS)
-            .into_iter()
-            .map(|instance| Candidate {
-                instance,
-                ..c.clone()
-            }),
-    );
-    out
-}
-
-/// The seeded search ([`random_then_pattern`]) over the M family, N, G and x, among the
-/// instances `noise` admits.
-pub fn search(noise: Noise, budget: Budget) -> Vec<Estimate> {
-    random_then_pattern(
-        budget,
-        random_candidate,
-        |c| evaluate(c, noise, budget.max_paths),
-        moves,
-        |e| (e.ratio, &e.candidate),
-    )
 }
 
 /// What one certified candidate gives.
@@ -652,13 +259,20 @@ pub fn rows_from(
 
 #[cfg(test)]
 mod tests {
+    use super::walk::grad;
     use super::*;
     use crate::bounds::o2nc_theorem;
     use crate::checks::statistical::CONTROL_SCALE;
     use crate::checks::tight::Sizes;
+    use crate::checks::tight::instance::Instance;
     use crate::inputs::Formulas;
+    use ilopt::algo::ConfigNumber;
     use ilopt::algo::config::{AlgorithmConfig, RunConfig};
+    use ilopt::algo::o2nc::O2ncConfig;
     use ilopt::algo::{IterationMetrics, Runner, StoppingRule};
+    use ilopt::exact::forward::forward;
+    use ilopt::problem::EstimatorForm;
+    use ilopt::toy::ToyProblem;
     use std::cell::RefCell;
 
     fn q(n: i64, d: i64) -> BigRational {
