@@ -235,6 +235,16 @@ pub struct Prepared<C> {
 }
 
 impl<C> Prepared<C> {
+    /// A search's candidates not certified yet (none found, none certified):
+    /// [`PreparedAll::recertified`] replaces it.
+    fn pending() -> Self {
+        Prepared {
+            found: 0,
+            certified: None,
+            passed_over: vec![],
+        }
+    }
+
     /// The inconclusive row that says why no candidate was certified.
     fn none_certified(&self, row: CheckBuilder, budget: &Budget, method: Method) -> Check {
         row.details(format!(
@@ -274,6 +284,9 @@ fn first_certified<E, C>(
     }
 }
 
+/// One noise setting's search: its candidates and their certification.
+type Searched<C> = (Noise, Vec<Estimate>, Prepared<C>);
+
 /// The noise settings of the rows, in their order.
 const NOISES: [Noise; 2] = [Noise::Any, Noise::Required];
 
@@ -281,8 +294,8 @@ const NOISES: [Noise; 2] = [Noise::Any, Noise::Required];
 /// certification ([`bound::prepare_from`]) under one oracle.
 #[derive(Debug, Clone)]
 pub struct PreparedAll {
-    sgd: Vec<(Noise, Vec<Estimate>, Prepared<sgd::Certified>)>,
-    storm: Vec<(Noise, Vec<Estimate>, Prepared<storm::Certified>)>,
+    sgd: Vec<Searched<sgd::Certified>>,
+    storm: Vec<Searched<storm::Certified>>,
     /// Row 1.b's estimator (g_b), noisy instances only: with Var g ≡ 0 a baseline changes nothing.
     sgd_baselined: (Vec<Estimate>, Prepared<sgd::Certified>),
     /// Row 2.b's estimator (IS-STORM on g_b), noisy instances only, as for row 1.b.
@@ -316,69 +329,52 @@ impl PreparedAll {
     /// The same candidates certified under `inputs`' oracle: the search reads no input, so only
     /// the certification is repeated.
     pub fn recertified(&self, inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
+        let s = &sizes;
+        fn again<B: bound::Bound>(
+            found: &[Estimate],
+            inputs: &TableInputs,
+            s: &Sizes,
+            a: Algorithm,
+        ) -> (Vec<Estimate>, Prepared<B::Certified>) {
+            (
+                found.to_vec(),
+                bound::prepare_from::<B>(found, inputs, s, a),
+            )
+        }
+        fn per_noise<B: bound::Bound>(
+            all: &[Searched<B::Certified>],
+            inputs: &TableInputs,
+            s: &Sizes,
+            a: Algorithm,
+        ) -> Vec<Searched<B::Certified>> {
+            all.iter()
+                .map(|(n, found, _)| {
+                    let (f, p) = again::<B>(found, inputs, s, a);
+                    (*n, f, p)
+                })
+                .collect()
+        }
         PreparedAll {
-            sgd: self
-                .sgd
-                .iter()
-                .map(|(n, found, _)| {
-                    (
-                        *n,
-                        found.clone(),
-                        bound::prepare_from::<Sgd>(found, inputs, &sizes, Algorithm::Sgd),
-                    )
-                })
-                .collect(),
-            storm: self
-                .storm
-                .iter()
-                .map(|(n, found, _)| {
-                    (
-                        *n,
-                        found.clone(),
-                        bound::prepare_from::<Storm>(found, inputs, &sizes, Algorithm::Storm),
-                    )
-                })
-                .collect(),
-            sgd_baselined: (
-                self.sgd_baselined.0.clone(),
-                bound::prepare_from::<Sgd>(
-                    &self.sgd_baselined.0,
-                    inputs,
-                    &sizes,
-                    Algorithm::SgdBaselined,
-                ),
+            sgd: per_noise::<Sgd>(&self.sgd, inputs, s, Algorithm::Sgd),
+            storm: per_noise::<Storm>(&self.storm, inputs, s, Algorithm::Storm),
+            sgd_baselined: again::<Sgd>(&self.sgd_baselined.0, inputs, s, Algorithm::SgdBaselined),
+            storm_baselined: again::<Storm>(
+                &self.storm_baselined.0,
+                inputs,
+                s,
+                Algorithm::StormBaselined,
             ),
-            storm_baselined: (
-                self.storm_baselined.0.clone(),
-                bound::prepare_from::<Storm>(
-                    &self.storm_baselined.0,
-                    inputs,
-                    &sizes,
-                    Algorithm::StormBaselined,
-                ),
+            storm_per_decision: again::<Storm>(
+                &self.storm_per_decision.0,
+                inputs,
+                s,
+                Algorithm::StormPerDecision,
             ),
-            storm_per_decision: (
-                self.storm_per_decision.0.clone(),
-                bound::prepare_from::<Storm>(
-                    &self.storm_per_decision.0,
-                    inputs,
-                    &sizes,
-                    Algorithm::StormPerDecision,
-                ),
-            ),
-            sgd_per_state: (
-                self.sgd_per_state.0.clone(),
-                bound::prepare_from::<Sgd>(
-                    &self.sgd_per_state.0,
-                    inputs,
-                    &sizes,
-                    Algorithm::SgdPerState,
-                ),
-            ),
+            sgd_per_state: again::<Sgd>(&self.sgd_per_state.0, inputs, s, Algorithm::SgdPerState),
             o2nc: self
                 .o2nc
                 .iter()
-                .map(|(n, found, _)| (*n, found.clone(), prepare_o2nc(found, inputs, &sizes)))
+                .map(|(n, found, _)| (*n, found.clone(), prepare_o2nc(found, inputs, s)))
                 .collect(),
         }
     }
@@ -386,55 +382,31 @@ impl PreparedAll {
 
 /// Search and certify for both algorithms and both noise settings, for row 1.b's baselined
 /// estimator on the noisy instances, for SGD on row 1b's family, and for O2NC (both noise
-/// settings).
+/// settings): every search first (they read no input), then every certification under `inputs`
+/// ([`PreparedAll::recertified`]).
 pub fn prepare(inputs: &TableInputs, sizes: Sizes) -> PreparedAll {
-    PreparedAll {
-        sgd: NOISES
+    fn found<C>(s: &Sizes, noise: Noise, a: Algorithm) -> (Vec<Estimate>, Prepared<C>) {
+        (bound::candidates(s, noise, a), Prepared::pending())
+    }
+    fn per_noise<C>(s: &Sizes, a: Algorithm) -> Vec<Searched<C>> {
+        NOISES
             .iter()
-            .map(|&n| {
-                let found = bound::candidates(&sizes, n, Algorithm::Sgd);
-                let p = bound::prepare_from::<Sgd>(&found, inputs, &sizes, Algorithm::Sgd);
-                (n, found, p)
-            })
-            .collect(),
-        storm: NOISES
-            .iter()
-            .map(|&n| {
-                let found = bound::candidates(&sizes, n, Algorithm::Storm);
-                let p = bound::prepare_from::<Storm>(&found, inputs, &sizes, Algorithm::Storm);
-                (n, found, p)
-            })
-            .collect(),
-        sgd_baselined: {
-            let found = bound::candidates(&sizes, Noise::Required, Algorithm::SgdBaselined);
-            let p = bound::prepare_from::<Sgd>(&found, inputs, &sizes, Algorithm::SgdBaselined);
-            (found, p)
-        },
-        storm_baselined: {
-            let found = bound::candidates(&sizes, Noise::Required, Algorithm::StormBaselined);
-            let p = bound::prepare_from::<Storm>(&found, inputs, &sizes, Algorithm::StormBaselined);
-            (found, p)
-        },
-        storm_per_decision: {
-            let found = bound::candidates(&sizes, Noise::Required, Algorithm::StormPerDecision);
-            let p =
-                bound::prepare_from::<Storm>(&found, inputs, &sizes, Algorithm::StormPerDecision);
-            (found, p)
-        },
-        sgd_per_state: {
-            let found = bound::candidates(&sizes, Noise::Any, Algorithm::SgdPerState);
-            let p = bound::prepare_from::<Sgd>(&found, inputs, &sizes, Algorithm::SgdPerState);
-            (found, p)
-        },
+            .map(|&n| (n, bound::candidates(s, n, a), Prepared::pending()))
+            .collect()
+    }
+    let searched = PreparedAll {
+        sgd: per_noise(&sizes, Algorithm::Sgd),
+        storm: per_noise(&sizes, Algorithm::Storm),
+        sgd_baselined: found(&sizes, Noise::Required, Algorithm::SgdBaselined),
+        storm_baselined: found(&sizes, Noise::Required, Algorithm::StormBaselined),
+        storm_per_decision: found(&sizes, Noise::Required, Algorithm::StormPerDecision),
+        sgd_per_state: found(&sizes, Noise::Any, Algorithm::SgdPerState),
         o2nc: NOISES
             .iter()
-            .map(|&n| {
-                let found = o2nc::search(n, sizes.o2nc);
-                let p = prepare_o2nc(&found, inputs, &sizes);
-                (n, found, p)
-            })
+            .map(|&n| (n, o2nc::search(n, sizes.o2nc), Prepared::pending()))
             .collect(),
-    }
+    };
+    searched.recertified(inputs, sizes)
 }
 
 /// [`rows`] from [`prepare`]d candidates (made with the same oracle and sizes).
