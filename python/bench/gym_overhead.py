@@ -12,10 +12,11 @@ step (user + system of this process):
 - `ilopt.run` with SGD on the causal eq. 3.15 estimate (one trajectory of 200 decisions per
   gradient, checkpoints only at 0 and the end, one evaluation episode each), per training step
   (the run's `env_steps`);
-- the same run's calls replayed in plain Python: every `env.reset(seed=...)` and `env.step(action)`
-  the run made (recorded once by a wrapper, untimed), with `expert(obs)` at every step. This is
-  the environment's and the expert's own cost along the run's trajectory: the learner's episodes
-  end sooner than the expert's, and each starts with a seeded reset (the run's RNG draws it).
+- the same run's calls replayed in plain Python: every `env.reset(seed=...)` (the seed's first
+  episode) or `env.reset()` (the others) and every `env.step(action)` the run made on its
+  training environment (recorded once by a wrapper, untimed), with `expert(obs)` at every step.
+  This is the environment's and the expert's own cost along the run's trajectory: the learner's
+  episodes end sooner than the expert's, so it resets more often.
 
 The kit's share is its time per step over a plain loop's, minus one: over the replay it is what the
 kit itself adds. The expert is CartPole's balancing rule (`obs[2] + 0.5 obs[3] > 0`), so the
@@ -69,7 +70,8 @@ def kit(env_id, n):
 
 
 class Recorder(gymnasium.Wrapper):
-    """Logs every reset's seed (as a 1-tuple) and every step's action."""
+    """Logs every reset's seed (as a 1-tuple, None for an unseeded reset) and every step's
+    action."""
 
     def __init__(self, env):
         super().__init__(env)
@@ -85,8 +87,8 @@ class Recorder(gymnasium.Wrapper):
 
 
 def record(env_id, n):
-    """The calls a kit run makes, without GymTask's own first reset (it reads the features'
-    length)."""
+    """The calls a kit run makes on its training environment, without GymTask's own first reset
+    (it reads the features' length); the evaluation episodes step a copy of the environment."""
     recorder = Recorder(gymnasium.make(env_id))
     task = ilopt.GymTask(recorder, expert=expert, steps=200)
     del recorder.log[:]

@@ -86,6 +86,33 @@ class RunResult:
         return pd.concat(frames, ignore_index=True)
 
 
+def _evaluation_env(gymnasium: Any, env: Any, env_id: Optional[str], eval_env: Any) -> Any:
+    """The environment of a GymTask's evaluation episodes: ``eval_env`` (an env or an id), else a
+    second ``gymnasium.make(env_id)``, else a deep copy of ``env``; its action space must be
+    ``env``'s."""
+    import copy
+
+    if isinstance(eval_env, str):
+        eval_env = gymnasium.make(eval_env)
+    elif eval_env is None and env_id is not None:
+        eval_env = gymnasium.make(env_id)
+    elif eval_env is None:
+        try:
+            eval_env = copy.deepcopy(env)
+        except Exception as e:
+            raise IloptError(
+                f"eval_env: the evaluation episodes need a second instance of the environment, "
+                f"and env could not be deep-copied ({type(e).__name__}: {e}); pass eval_env= "
+                f"(another instance, or the id for gymnasium.make)"
+            ) from None
+    space = getattr(eval_env, "action_space", None)
+    if space != env.action_space:
+        raise IloptError(
+            f"eval_env: its action space {space} is not env's {env.action_space}"
+        )
+    return eval_env
+
+
 class GymTask:
     """Any Gymnasium environment as a task of :func:`run`.
 
@@ -101,9 +128,13 @@ class GymTask:
     ``steps``); their score is the mean episode return.
 
     The environment steps in Python (one seed at a time); everything else — the algorithms, the
-    eq. 3.15 estimators and baselines, the checkpoints — is the kit's. Episode k of a run resets
-    the environment with a seed drawn from the run's seeded RNG, so a run is reproduced by its
-    seed.
+    eq. 3.15 estimators and baselines, the checkpoints — is the kit's. Each seed's run resets
+    ``env`` with a seed drawn from the run's seeded RNG at its first training episode and without
+    one after that (Gymnasium's own advice: a seeded reset builds a new generator). The
+    evaluation episodes run on ``eval_env``, each reset with a seed drawn from the checkpoint's
+    RNG, so every checkpoint meets the same episodes and evaluating does not move the training's
+    generator; ``eval_env`` defaults to a second ``gymnasium.make`` of the id, or a deep copy of
+    ``env``. A run is reproduced by its seed.
     """
 
     def __init__(
@@ -116,13 +147,16 @@ class GymTask:
         sigma: float = 0.1,
         eval_steps: Optional[int] = None,
         name: Optional[str] = None,
+        eval_env: Any = None,
     ):
         try:
             import gymnasium
         except ImportError as e:  # pragma: no cover - depends on the installation
             raise ImportError("ilopt.GymTask needs gymnasium: pip install gymnasium") from e
-        if isinstance(env, str):
-            env = gymnasium.make(env)
+        env_id = env if isinstance(env, str) else None
+        if env_id is not None:
+            env = gymnasium.make(env_id)
+        eval_env = _evaluation_env(gymnasium, env, env_id, eval_env)
         if name is None:
             spec_id = getattr(getattr(env, "spec", None), "id", None) or type(env).__name__
             name = "gym-" + re.sub(r"[^a-z0-9_-]+", "-", str(spec_id).lower()).strip("-")
@@ -158,7 +192,8 @@ class GymTask:
         self.feature_dim = int(np.asarray(phi, dtype=np.float64).size)
         if self.feature_dim < 1:
             raise IloptError("features(observation) is empty")
-        self.env, self.expert, self.features = env, expert, features
+        self.env, self.eval_env = env, eval_env
+        self.expert, self.features = expert, features
         self.steps, self.after_end, self.sigma = steps, after_end, float(sigma)
         self.eval_steps = int(eval_steps)
         self.name = name
@@ -199,6 +234,7 @@ def run(
             bool(overwrite),
             bool(quiet),
             task.env,
+            task.eval_env,
             task.expert,
             task.features,
             task.feature_dim,

@@ -8,8 +8,14 @@
 //! the seeds run one at a time, on the calling thread, which holds the GIL for the whole run:
 //! each call into Python re-enters the lock this thread already has.
 //!
-//! **Seeding.** Episode k of a run resets the environment with `seed` = the next draw of the
-//! run's RNG (63 bits), so a run is reproduced by its seed, as a built-in task's is.
+//! **Seeding.** Every reset draws a seed from the run's RNG (63 bits). The training environment
+//! is reset with it at the first episode of each seed's run ([`EnvRun::on_each_seed`] marks the
+//! start) and without a seed after that, so its own generator runs on from there, as Gymnasium
+//! recommends (a seeded reset builds a new generator, about five unseeded resets' cost on
+//! CartPole-v1). Evaluation episodes run on a second environment
+//! ([`EnvRun::with_evaluation_env`]), each reset with its draw, so that every checkpoint meets
+//! the same episodes and evaluating does not move the training's generator. A run is thus
+//! reproduced by its seed, whatever ran before it and whatever the checkpoint schedule.
 
 use ilopt::env::{Env, EnvError, Step};
 use ilopt::policy::{LinearGaussian, Softmax};
@@ -19,6 +25,8 @@ use ilopt_cli::run::{EnvRun, LoadedConfig, RunOptions, RunOutcome, execute_task}
 use pyo3::prelude::*;
 use rand::RngCore;
 use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// An observation: the Python object (for the expert), its features φ, or why it could not be
 /// had (a failed reset, reported by the expert's next call).
@@ -115,11 +123,9 @@ fn flatten_into(value: &Bound<'_, PyAny>, out: &mut Vec<f64>) -> PyResult<()> {
     Ok(())
 }
 
-/// The Python side of a Gymnasium task: the environment's bound `reset` and `step`, the expert
-/// and the feature map.
+/// The Python side of a Gymnasium task that both its environments share: the expert and the
+/// feature map.
 struct PySide {
-    reset: Py<PyAny>,
-    step: Py<PyAny>,
     expert: Py<PyAny>,
     features: Option<Py<PyAny>>,
     feature_dim: usize,
@@ -166,17 +172,54 @@ impl PySide {
 }
 
 /// A Gymnasium environment as an [`Env`] (module docs); `A` its action type (`usize` for
-/// `Discrete`, `Vec<f64>` for `Box`).
+/// `Discrete`, `Vec<f64>` for `Box`). Its copies are the one Python environment.
 pub struct PyEnv<A> {
-    side: std::sync::Arc<PySide>,
+    env: Arc<PyEnvMethods>,
+    side: Arc<PySide>,
     action: std::marker::PhantomData<A>,
 }
 
+/// One Python environment's bound `reset` and `step`, and when it is reset with a seed.
+struct PyEnvMethods {
+    /// `"env"` or `"eval_env"`, as errors name it.
+    name: &'static str,
+    reset: Py<PyAny>,
+    step: Py<PyAny>,
+    /// `None`: every reset passes its seed (evaluation episodes). `Some(flag)`: only the first
+    /// reset after the flag is raised (at each seed's start) does.
+    reseed: Option<AtomicBool>,
+}
+
 impl<A> PyEnv<A> {
-    fn new(side: std::sync::Arc<PySide>) -> Self {
-        PyEnv {
+    /// The environment `env`, named `name` in errors (its `reset` and `step` looked up once);
+    /// `every_episode` seeds every reset, else only the first after [`PyEnv::reseed`].
+    fn new(
+        name: &'static str,
+        env: &Bound<'_, PyAny>,
+        side: Arc<PySide>,
+        every_episode: bool,
+    ) -> Result<Self, String> {
+        let method = |m: &str| {
+            env.getattr(m)
+                .map(Bound::unbind)
+                .map_err(|e| format!("{name}.{m}: {e}"))
+        };
+        Ok(PyEnv {
+            env: Arc::new(PyEnvMethods {
+                name,
+                reset: method("reset")?,
+                step: method("step")?,
+                reseed: (!every_episode).then(|| AtomicBool::new(true)),
+            }),
             side,
             action: std::marker::PhantomData,
+        })
+    }
+
+    /// Seed the next reset (a seed's run starts).
+    fn reseed(&self) {
+        if let Some(flag) = &self.env.reseed {
+            flag.store(true, Ordering::SeqCst);
         }
     }
 }
@@ -184,6 +227,7 @@ impl<A> PyEnv<A> {
 impl<A> Clone for PyEnv<A> {
     fn clone(&self) -> Self {
         PyEnv {
+            env: self.env.clone(),
             side: self.side.clone(),
             action: std::marker::PhantomData,
         }
@@ -196,14 +240,27 @@ impl<A: PyAction> Env<f64> for PyEnv<A> {
 
     fn reset(&mut self, rng: &mut KitRng) -> PyObs {
         let seed = rng.next_u64() >> 1;
-        let side = &self.side;
+        let seeded = self
+            .env
+            .reseed
+            .as_ref()
+            .is_none_or(|flag| flag.swap(false, Ordering::SeqCst));
+        let (side, name) = (&self.side, self.env.name);
         Python::with_gil(|py| {
-            let obs = (|| {
+            let reset = self.env.reset.bind(py);
+            let obs = if seeded {
                 let kwargs = pyo3::types::PyDict::new(py);
-                kwargs.set_item("seed", seed)?;
-                side.reset.bind(py).call((), Some(&kwargs))?.get_item(0)
-            })()
-            .map_err(|e| format!("env.reset(seed={seed}): {e}"))?;
+                kwargs
+                    .set_item("seed", seed)
+                    .and_then(|()| reset.call((), Some(&kwargs)))
+                    .and_then(|r| r.get_item(0))
+                    .map_err(|e| format!("{name}.reset(seed={seed}): {e}"))?
+            } else {
+                reset
+                    .call0()
+                    .and_then(|r| r.get_item(0))
+                    .map_err(|e| format!("{name}.reset(): {e}"))?
+            };
             side.observe(py, obs)
         })
         .unwrap_or_else(|error| PyObs {
@@ -214,16 +271,17 @@ impl<A: PyAction> Env<f64> for PyEnv<A> {
     }
 
     fn step(&mut self, action: A) -> Result<Step<f64, PyObs>, EnvError> {
-        let side = &self.side;
+        let (side, name) = (&self.side, self.env.name);
         Python::with_gil(|py| {
             let a = action
                 .to_py(py)
                 .map_err(|e| format!("the action {action:?}: {e}"))?;
-            let out = side
+            let out = self
+                .env
                 .step
                 .bind(py)
                 .call1((a,))
-                .map_err(|e| format!("env.step({action:?}): {e}"))?;
+                .map_err(|e| format!("{name}.step({action:?}): {e}"))?;
             let parsed = || -> PyResult<(Bound<'_, PyAny>, f64, bool, bool)> {
                 use pyo3::types::{PySequence, PySequenceMethods};
                 let out = out.downcast::<PySequence>()?;
@@ -235,10 +293,10 @@ impl<A: PyAction> Env<f64> for PyEnv<A> {
                 ))
             };
             let (obs, reward, terminated, truncated) = parsed().map_err(|e| {
-                format!("env.step returned {out}, not (observation, reward, terminated, truncated, info): {e}")
+                format!("{name}.step returned {out}, not (observation, reward, terminated, truncated, info): {e}")
             })?;
             if !reward.is_finite() {
-                return Err(format!("env.step({action:?}) returned the reward {reward}"));
+                return Err(format!("{name}.step({action:?}) returned the reward {reward}"));
             }
             let obs = side.observe(py, obs)?;
             Ok(Step::new(obs, reward, terminated, truncated))
@@ -257,7 +315,7 @@ fn stored_features(o: &PyObs) -> Vec<f64> {
 /// The expert of a [`PyEnv`] task: the Python callable at the observation (a failed reset's
 /// error is reported here, at the episode's first decision).
 fn expert<A: PyAction>(
-    side: std::sync::Arc<PySide>,
+    side: Arc<PySide>,
 ) -> impl Fn(&PyObs) -> Result<A, String> + Clone + Send + Sync {
     move |o: &PyObs| {
         if let Some(e) = &o.error {
@@ -279,8 +337,10 @@ fn expert<A: PyAction>(
 
 /// What `ilopt.GymTask` passes to Rust.
 pub struct GymSpec {
-    /// The `gymnasium.Env`.
+    /// The `gymnasium.Env` of the training episodes.
     pub env: Py<PyAny>,
+    /// The `gymnasium.Env` of the checkpoints' evaluation episodes (another instance).
+    pub eval_env: Py<PyAny>,
     /// observation ↦ action.
     pub expert: Py<PyAny>,
     /// observation ↦ features, or none for (o, 1).
@@ -301,6 +361,21 @@ pub struct GymSpec {
     pub eval_steps: usize,
     /// The task's name in the records.
     pub name: String,
+}
+
+/// The training environment (seeded at each seed's start) and the evaluation one (seeded at
+/// every episode), as [`PyEnv`]s.
+fn envs<A>(
+    env: &Py<PyAny>,
+    eval_env: &Py<PyAny>,
+    side: &Arc<PySide>,
+) -> Result<(PyEnv<A>, PyEnv<A>), String> {
+    Python::with_gil(|py| {
+        Ok((
+            PyEnv::new("env", env.bind(py), side.clone(), false)?,
+            PyEnv::new("eval_env", eval_env.bind(py), side.clone(), true)?,
+        ))
+    })
 }
 
 /// Run `config` on the Gymnasium task of `spec` ([`execute_task`], one seed at a time), writing
@@ -324,17 +399,7 @@ pub fn run_gym(
             ));
         }
     };
-    let (reset, step) = Python::with_gil(|py| -> PyResult<_> {
-        let env = spec.env.bind(py);
-        Ok((
-            env.getattr("reset")?.unbind(),
-            env.getattr("step")?.unbind(),
-        ))
-    })
-    .map_err(|e| format!("env.reset and env.step: {e}"))?;
-    let side = std::sync::Arc::new(PySide {
-        reset,
-        step,
+    let side = Arc::new(PySide {
         expert: spec.expert,
         features: spec.features,
         feature_dim: spec.feature_dim,
@@ -344,7 +409,8 @@ pub fn run_gym(
     match spec.space.as_str() {
         "discrete" => {
             let policy = Softmax::new(spec.size, spec.feature_dim).map_err(|e| e.to_string())?;
-            let env = PyEnv::<usize>::new(side.clone());
+            let (env, eval_env) = envs::<usize>(&spec.env, &spec.eval_env, &side)?;
+            let reseed = env.clone();
             let task = EnvRun::new(
                 &spec.name,
                 "softmax",
@@ -354,13 +420,16 @@ pub fn run_gym(
                 spec.eval_steps,
             )
             .map_err(|e| e.to_string())?
+            .with_evaluation_env(eval_env)
+            .on_each_seed(move |_| reseed.reseed())
             .one_seed_at_a_time();
             execute_task(&task, config, out, Some(1), options).map_err(|e| e.to_string())
         }
         "box" => {
             let policy = LinearGaussian::new(spec.size, spec.feature_dim, spec.sigma)
                 .map_err(|e| format!("sigma: {e}"))?;
-            let env = PyEnv::<Vec<f64>>::new(side.clone());
+            let (env, eval_env) = envs::<Vec<f64>>(&spec.env, &spec.eval_env, &side)?;
+            let reseed = env.clone();
             let task = EnvRun::new(
                 &spec.name,
                 "linear-gaussian",
@@ -370,6 +439,8 @@ pub fn run_gym(
                 spec.eval_steps,
             )
             .map_err(|e| e.to_string())?
+            .with_evaluation_env(eval_env)
+            .on_each_seed(move |_| reseed.reseed())
             .one_seed_at_a_time();
             execute_task(&task, config, out, Some(1), options).map_err(|e| e.to_string())
         }

@@ -145,7 +145,7 @@ fn run<'py>(
 /// on a built-in one, but with the GIL held: the seeds run one at a time on this thread, and every
 /// step of the environment is a call into Python.
 #[pyfunction]
-#[pyo3(signature = (kind, text, out, overwrite, quiet, env, expert, features, feature_dim, space, size, steps, after_end, sigma, eval_steps, name))]
+#[pyo3(signature = (kind, text, out, overwrite, quiet, env, eval_env, expert, features, feature_dim, space, size, steps, after_end, sigma, eval_steps, name))]
 #[allow(clippy::too_many_arguments)]
 fn run_gym<'py>(
     py: Python<'py>,
@@ -155,6 +155,7 @@ fn run_gym<'py>(
     overwrite: bool,
     quiet: bool,
     env: Py<PyAny>,
+    eval_env: Py<PyAny>,
     expert: Py<PyAny>,
     features: Option<Py<PyAny>>,
     feature_dim: usize,
@@ -168,6 +169,7 @@ fn run_gym<'py>(
 ) -> PyResult<(String, Bound<'py, PyDict>, Bound<'py, PyDict>)> {
     let spec = gym::GymSpec {
         env,
+        eval_env,
         expert,
         features,
         feature_dim,

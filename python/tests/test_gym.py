@@ -109,6 +109,55 @@ def test_runs_are_reproduced_by_their_seeds_and_write_the_files_of_ilopt_run(tmp
     assert 'name = "custom"' in (tmp_path / "a" / "config.toml").read_text()
 
 
+class SeedLog(gymnasium.Wrapper):
+    """Records the seed of every reset (None for an unseeded one)."""
+
+    def __init__(self, env):
+        super().__init__(env)
+        self.seeds = []
+
+    def reset(self, *, seed=None, options=None):
+        self.seeds.append(seed)
+        return self.env.reset(seed=seed, options=options)
+
+
+def test_a_seed_is_passed_at_each_seeds_first_training_episode_and_every_evaluation_episode():
+    env, eval_env = SeedLog(gymnasium.make("CartPole-v1")), SeedLog(gymnasium.make("CartPole-v1"))
+    task = ilopt.GymTask(env, expert=balance, steps=50, eval_env=eval_env)
+    env.seeds.clear()
+    eval_env.seeds.clear()
+    r = ilopt.run(config(ADAM, 3000, seeds=(1, 2), every=1000, episodes=2), task=task)
+    seeded = [i for i, s in enumerate(env.seeds) if s is not None]
+    assert len(env.seeds) > 10 and len(seeded) == 2, env.seeds
+    assert seeded[0] == 0 and env.seeds[seeded[0]] != env.seeds[seeded[1]]
+    assert all(s is not None for s in eval_env.seeds) and len(eval_env.seeds) == 2 * 4 * 2
+    # every checkpoint meets the same evaluation episodes
+    assert eval_env.seeds[:2] == eval_env.seeds[2:4]
+
+
+def test_training_depends_neither_on_the_seeds_before_nor_on_the_checkpoint_schedule():
+    task = ilopt.GymTask("CartPole-v1", expert=balance, steps=50)
+    both = ilopt.run(config(ADAM, 3000, seeds=(2, 1), every=1000, episodes=2), task=task)
+    alone = ilopt.run(config(ADAM, 3000, seeds=(1,), every=3000, episodes=1), task=task)
+    np.testing.assert_array_equal(both.theta[1], alone.theta[1])
+    assert final(both, 1, "env_steps") == final(alone, 1, "env_steps")
+    assert not np.array_equal(both.theta[1], both.theta[2])
+
+
+def test_an_environment_that_cannot_be_copied_needs_an_eval_env():
+    class Uncopyable(gymnasium.Wrapper):
+        def __deepcopy__(self, memo):
+            raise TypeError("holds a simulator handle")
+
+    env = Uncopyable(gymnasium.make("CartPole-v1"))
+    with pytest.raises(ilopt.IloptError, match="eval_env: .*could not be deep-copied .*holds a simulator handle"):
+        ilopt.GymTask(env, expert=balance)
+    task = ilopt.GymTask(env, expert=balance, eval_env="CartPole-v1")
+    assert task.eval_env is not env
+    with pytest.raises(ilopt.IloptError, match="eval_env: its action space"):
+        ilopt.GymTask(env, expert=balance, eval_env="Pendulum-v1")
+
+
 def test_bad_gym_tasks_raise_with_a_message():
     with pytest.raises(ilopt.IloptError, match="Discrete\\(2\\)"):
         ilopt.run(config(DAGGER, 30_000), task=ilopt.GymTask("CartPole-v1", expert=lambda o: 7))
@@ -198,12 +247,13 @@ def test_a_gym_run_calls_python_on_the_calling_thread_once_per_decision():
     task = ilopt.GymTask(env, expert=expert, steps=50)
     calls.clear()
     r = ilopt.run(config(ADAM, 2000, every=1000, episodes=2), task=task)
-    assert env.threads == {threading.get_ident()}
+    assert env.threads == task.eval_env.threads == {threading.get_ident()}
     assert set(calls) == {threading.get_ident()}
-    # one expert call per training decision and per evaluation decision
+    # one expert call per training decision and per evaluation decision; the evaluation episodes
+    # step the second environment (a deep copy of env)
     eval_steps = len(calls) - int(final(r, 1, "expert_queries"))
     assert final(r, 1, "env_steps") == 2000 and final(r, 1, "expert_queries") == 2000
-    assert env.steps == 2000 + eval_steps
+    assert env.steps == 2000 and task.eval_env.steps == eval_steps > 0
 
 
 def test_a_failing_environment_raises_with_its_message():

@@ -85,6 +85,15 @@ impl<E: Env<S>, F, X, S: Scalar> EnvTask<E, F, X, S> {
         }
     }
 
+    /// The same task over `env` (its features, expert, time limit and absorbing loss kept): a
+    /// second instance of an environment, e.g. for evaluation episodes that must not move the
+    /// training's random generator.
+    #[must_use]
+    pub fn with_env(mut self, env: E) -> Self {
+        self.env = env;
+        self
+    }
+
     /// Declare the environment's time limit (its episodes end, truncated, after at most `steps`
     /// decisions), so that roll-outs reserve their storage once.
     #[must_use]

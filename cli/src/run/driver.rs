@@ -59,6 +59,7 @@ pub fn run_seed<T: RunTask + ?Sized>(
         }
     }
     let m = config.file.run.trajectories_per_gradient;
+    task.seed_started(seed);
     let drive = Drive {
         task,
         config,

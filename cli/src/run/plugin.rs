@@ -11,6 +11,14 @@
 //! decisions are made. The score is the mean episode return (the rewards' sum), recorded as
 //! `score` and `reward`; the loss is the mean per-decision supervised loss against the expert on
 //! the visited states.
+//!
+//! **An environment with state of its own.** [`EnvTask`] copies its environment for every
+//! episode; one that lives outside the program (a Python interpreter's Gymnasium environment)
+//! is the same environment in every copy, and its random generator runs on across episodes.
+//! Two settings keep such a run reproduced by its seed alone:
+//! [`EnvRun::on_each_seed`] is called before each seed's run (the environment reseeds there), and
+//! [`EnvRun::with_evaluation_env`] gives the checkpoints' evaluation episodes an environment of
+//! their own, so that evaluating does not move the training's generator.
 
 use super::evaluation::{Evaluation, episode_seed};
 use super::runnable::{RunTask, horizon_decisions};
@@ -28,19 +36,27 @@ pub struct EnvRun<E: Env<f64>, F, X, P> {
     name: String,
     policy_name: String,
     problem: TaskProblem<EnvTask<E, F, X, f64>, P>,
+    evaluation: Option<EnvTask<E, F, X, f64>>,
+    on_seed: Option<SeedHook>,
     eval_steps: usize,
     max_threads: usize,
 }
 
+/// What [`EnvRun::on_each_seed`] calls before a seed's run, with the seed.
+type SeedHook = std::sync::Arc<dyn Fn(u64) + Send + Sync>;
+
 impl<E: Env<f64>, F, X, P> Clone for EnvRun<E, F, X, P>
 where
     TaskProblem<EnvTask<E, F, X, f64>, P>: Clone,
+    EnvTask<E, F, X, f64>: Clone,
 {
     fn clone(&self) -> Self {
         EnvRun {
             name: self.name.clone(),
             policy_name: self.policy_name.clone(),
             problem: self.problem.clone(),
+            evaluation: self.evaluation.clone(),
+            on_seed: self.on_seed.clone(),
             eval_steps: self.eval_steps,
             max_threads: self.max_threads,
         }
@@ -53,6 +69,8 @@ impl<E: Env<f64>, F, X, P> std::fmt::Debug for EnvRun<E, F, X, P> {
             .field("name", &self.name)
             .field("policy_name", &self.policy_name)
             .field("eval_steps", &self.eval_steps)
+            .field("own_evaluation_env", &self.evaluation.is_some())
+            .field("on_each_seed", &self.on_seed.is_some())
             .finish_non_exhaustive()
     }
 }
@@ -124,9 +142,32 @@ impl<E: Env<f64>, F, X, P> EnvRun<E, F, X, P> {
                 policy,
                 horizon,
             },
+            evaluation: None,
+            on_seed: None,
             eval_steps,
             max_threads: usize::MAX,
         })
+    }
+
+    /// The same task, its checkpoints' evaluation episodes on `env` (copied for each episode)
+    /// instead of the training's environment, with the same features and expert: for an
+    /// environment whose copies share one random generator (module docs).
+    #[must_use]
+    pub fn with_evaluation_env(mut self, env: E) -> Self
+    where
+        EnvTask<E, F, X, f64>: Clone,
+    {
+        self.evaluation = Some(self.problem.task.clone().with_env(env));
+        self
+    }
+
+    /// The same task, `hook(seed)` called before each seed's run (before its first checkpoint's
+    /// evaluation and its first training episode), on the thread that runs the seed: where an
+    /// environment with a random generator of its own reseeds (module docs).
+    #[must_use]
+    pub fn on_each_seed(mut self, hook: impl Fn(u64) + Send + Sync + 'static) -> Self {
+        self.on_seed = Some(std::sync::Arc::new(hook));
+        self
     }
 
     /// The same task, its seeds run one at a time on the calling thread (an environment that
@@ -178,10 +219,16 @@ where
         self.max_threads
     }
 
+    fn seed_started(&self, seed: u64) {
+        if let Some(hook) = &self.on_seed {
+            hook(seed);
+        }
+    }
+
     fn evaluate(&self, theta: &[f64], episodes: u32, seed: u64) -> Result<Evaluation, String> {
         let policy = &self.problem.policy;
         let s = task_episodes(
-            &self.problem.task,
+            self.evaluation.as_ref().unwrap_or(&self.problem.task),
             &mut |_, phi, label| {
                 let (l, _) = PolicyExt::<f64>::loss(policy, theta, phi, label.borrow())
                     .map_err(|e| e.to_string())?;

@@ -40,6 +40,12 @@ pub trait RunTask: Sync {
         usize::MAX
     }
 
+    /// Called before each seed's run, on the thread that runs it (before the first checkpoint's
+    /// evaluation): a task whose environment keeps a random generator across runs reseeds it
+    /// here, so that a seed's run does not depend on the runs before it. The default does
+    /// nothing.
+    fn seed_started(&self, _seed: u64) {}
+
     /// The number of policy parameters.
     fn dim(&self) -> usize {
         IlProblem::<f64>::dim(self.problem())

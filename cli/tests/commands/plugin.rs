@@ -122,6 +122,98 @@ fn a_plugin_task_writes_the_files_of_ilopt_run_whatever_the_thread_count() {
     }
 }
 
+/// A corridor whose copies share one event log, as a Python environment's copies are one
+/// environment: every reset is logged with the environment's tag.
+#[derive(Clone)]
+struct Logged {
+    corridor: Corridor,
+    tag: &'static str,
+    log: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
+}
+
+impl Env<f64> for Logged {
+    type Obs = f64;
+    type Action = usize;
+    fn reset(&mut self, rng: &mut KitRng) -> f64 {
+        self.log.lock().expect("log").push(self.tag.to_string());
+        self.corridor.reset(rng)
+    }
+    fn step(&mut self, action: usize) -> Result<Step<f64, f64>, EnvError> {
+        self.corridor.step(action)
+    }
+}
+
+/// The seed hook runs before each seed's first reset (its checkpoint 0's evaluation), and the
+/// evaluation episodes reset the evaluation environment, never the training one; the files are
+/// those of the same task without either setting (the corridor keeps no state across episodes).
+#[test]
+fn the_seed_hook_runs_first_and_evaluation_episodes_use_their_own_environment() {
+    let log = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let env = |tag| Logged {
+        corridor: Corridor(0.0),
+        tag,
+        log: log.clone(),
+    };
+    let features: fn(&f64) -> Vec<f64> = |x| vec![*x, 1.0];
+    let expert: fn(&f64) -> Result<usize, String> = |x| Ok(usize::from(*x < 0.0));
+    let hook_log = log.clone();
+    let task = EnvRun::new(
+        "corridor",
+        "logistic",
+        EnvTask::new(env("train"), features, expert),
+        Logistic::new(2).expect("two features"),
+        Horizon::fixed(20, AfterEnd::Reset),
+        30,
+    )
+    .expect("a valid task")
+    .with_evaluation_env(env("eval"))
+    .on_each_seed(move |seed| hook_log.lock().expect("log").push(format!("seed {seed}")))
+    .one_seed_at_a_time();
+    let config = RunFile::parse(CONFIG, Path::new("corridor.toml")).expect("a valid config");
+    let (logged, plain) = (scratch("logged"), scratch("plain"));
+    run_task(&task, &config, &logged, None, QUIET).expect("the run");
+    let events = log.lock().expect("log").clone();
+    let starts: Vec<usize> = (0..events.len())
+        .filter(|&i| events[i].starts_with("seed "))
+        .collect();
+    assert_eq!(
+        starts
+            .iter()
+            .map(|&i| events[i].as_str())
+            .collect::<Vec<_>>(),
+        ["seed 3", "seed 1", "seed 2"],
+        "one hook call per seed, in the config's order"
+    );
+    for (k, &i) in starts.iter().enumerate() {
+        let end = starts.get(k + 1).copied().unwrap_or(events.len());
+        let seed = &events[i + 1..end];
+        // checkpoint 0's four evaluation episodes come first; five checkpoints of four episodes
+        assert_eq!(seed[..4], ["eval"; 4], "{seed:?}");
+        assert_eq!(seed.iter().filter(|e| *e == "eval").count(), 5 * 4);
+        // 4000 calls of 20-decision trajectories, each starting with a reset
+        assert!(seed.iter().filter(|e| *e == "train").count() >= 4000 / 20);
+    }
+    run_task(
+        &corridor("corridor", 30).expect("a valid task"),
+        &config,
+        &plain,
+        Some(1),
+        QUIET,
+    )
+    .expect("the run");
+    for file in [
+        "summary.json",
+        "seed-1.csv",
+        "seed-3.csv",
+        "theta-seed-2.json",
+    ] {
+        assert_eq!(read(&logged, file), read(&plain, file), "{file}");
+    }
+    for dir in [logged, plain] {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+}
+
 /// `eval_task` at the run's final θ with the run's seed and episodes meets the episodes of the
 /// last checkpoint, so its evaluation equals that checkpoint's.
 #[test]
