@@ -2,8 +2,9 @@
 
     python python/bench/run_speed.py [CONFIG] [--repeats N] [--threads T] [--bin PATH]
 
-Times `ilopt run --config CONFIG --out DIR --threads T` (a subprocess: process start and file
-writes included) and `ilopt.run(CONFIG, out=DIR, threads=T)` (the same files written), each
+Times `ilopt run --config CONFIG --out DIR --threads T --quiet` (a subprocess: process start and
+file writes included) and `ilopt.run(CONFIG, out=DIR, threads=T, quiet=True)` (the same files
+written, no log lines on stderr from either), each
 N times alternately, and prints the medians of the wall times and of the CPU times (user +
 system: the child's for the CLI, this process's for the package; less sensitive than wall time
 to other load on the machine) and the package's speed as a share of the CLI's.
@@ -41,14 +42,15 @@ def main():
             out = Path(tmp) / f"cli-{i}"
             t, c = time.perf_counter(), cpu(resource.RUSAGE_CHILDREN)
             subprocess.run(
-                [a.bin, "run", "--config", a.config, "--out", str(out), "--threads", str(a.threads)],
+                [a.bin, "run", "--config", a.config, "--out", str(out), "--threads", str(a.threads),
+                 "--quiet"],
                 check=True,
                 stdout=subprocess.DEVNULL,
             )
             cli.append(time.perf_counter() - t)
             cli_cpu.append(cpu(resource.RUSAGE_CHILDREN) - c)
             t, c = time.perf_counter(), cpu(resource.RUSAGE_SELF)
-            result = ilopt.run(a.config, out=Path(tmp) / f"py-{i}", threads=a.threads)
+            result = ilopt.run(a.config, out=Path(tmp) / f"py-{i}", threads=a.threads, quiet=True)
             py.append(time.perf_counter() - t)
             py_cpu.append(cpu(resource.RUSAGE_SELF) - c)
     med = statistics.median
