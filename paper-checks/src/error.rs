@@ -33,7 +33,7 @@ pub enum Error {
     Theory(String),
     /// `paper-checks merge` found work no shard has done.
     #[error(
-        "merge: {missing} of the profile's units are not in {store} ({what}); run the shards that have not finished (each twice: tuning, then report runs) and merge again"
+        "merge: {missing} of the profile's units are not in {store} ({what}); run the jobs that have not finished (each shard in passes until it says its report runs are stored; `paper-checks theory` for the theorem table) and merge again"
     )]
     Incomplete {
         /// How many units are missing.

@@ -47,7 +47,8 @@ struct Args {
     /// directory's unit store; run every shard in passes until it says its report runs are
     /// stored (each pass advances every row's tuning by one rung of successive halving, and the
     /// report runs need every row's tuning: at most 1 + rungs × (extensions + 1) passes), then
-    /// `paper-checks merge`.
+    /// `paper-checks merge`. The shards leave the theorem table to `paper-checks theory`, a job
+    /// that runs beside their passes.
     #[arg(long, value_name = "K/N", value_parser = Shard::parse)]
     shard: Option<Shard>,
     #[command(subcommand)]
@@ -59,6 +60,9 @@ enum Command {
     /// Assemble the appendix from the shards' results in the output directory, computing
     /// nothing (an error lists what is missing).
     Merge,
+    /// Compute only the theorem table into the output directory's store: the sharded run's job
+    /// beside the shards' passes (it shares nothing with them); `paper-checks merge` reads it.
+    Theory,
 }
 
 fn main() -> ExitCode {
@@ -86,7 +90,14 @@ fn main() -> ExitCode {
                 p.theory_profile = *t;
             }
             let mode = match (&args.command, args.shard) {
-                (Some(Command::Merge), _) => Mode::Merge,
+                (Some(Command::Merge | Command::Theory), Some(s)) => {
+                    return Err(paper_checks::Error::experiment(
+                        "--shard",
+                        format!("a shard's option; `merge` and `theory` take none (got {s})"),
+                    ));
+                }
+                (Some(Command::Merge), None) => Mode::Merge,
+                (Some(Command::Theory), None) => Mode::All,
                 (None, Some(s)) => Mode::Shard(s),
                 (None, None) => Mode::All,
             };
@@ -101,6 +112,22 @@ fn main() -> ExitCode {
                     "merge",
                     "--redo would recompute, and a merge computes nothing",
                 ));
+            }
+            if matches!(args.command, Some(Command::Theory)) {
+                use paper_checks::pipeline::TheoryJob;
+                let store = args.out.join("runs").join("theory.json");
+                return Ok(match paper_checks::pipeline::run_theory(&p, &opts)? {
+                    TheoryJob::Computed => format!(
+                        "theory: computed the theorem table in {:.1} s into {}",
+                        start.elapsed().as_secs_f64(),
+                        store.display()
+                    ),
+                    TheoryJob::Stored => format!(
+                        "theory: {} already holds this profile's theorem table",
+                        store.display()
+                    ),
+                    TheoryJob::NotRun => "theory: the profile runs no theorem table (theory_profile = \"none\")".to_string(),
+                });
             }
             if let Mode::Shard(s) = mode {
                 let r = paper_checks::pipeline::run_shard(&p, &opts)?;

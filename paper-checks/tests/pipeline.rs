@@ -699,6 +699,49 @@ fn three_shards_merged_give_the_single_run_s_data_byte_for_byte() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// The shards leave the theorem table to the theory job: with a profile that asks for one, no
+/// shard's pass computes it, and the merge names it as missing with the job that computes it;
+/// `paper-checks theory` says so when a profile runs no table, and takes no `--shard`.
+#[test]
+fn the_shards_leave_the_theorem_table_to_the_theory_job() {
+    let d = temp_dir("theory-job");
+    std::fs::create_dir_all(&d).expect("writable");
+    let cfg = d.join("tiny.toml");
+    let text = TINY.replace("theory_profile = \"none\"", "theory_profile = \"quick\"");
+    assert_ne!(text, TINY, "the tiny profile names its theory size");
+    std::fs::write(&cfg, &text).expect("writable");
+    let shared = d.join("shared");
+    for round in 0..5 {
+        for k in 1..=2 {
+            let (ok, err) = binary(&cfg, &shared, &["--shard", &format!("{k}/2")]);
+            assert!(ok, "round {round}, shard {k}: {err}");
+            assert!(
+                !err.contains("every unit of the profile is stored"),
+                "round {round}, shard {k}: {err}"
+            );
+        }
+    }
+    assert!(
+        !shared.join("runs/theory.json").exists(),
+        "a shard computed the theorem table"
+    );
+    let (ok, err) = binary(&cfg, &shared, &["merge"]);
+    assert!(
+        !ok && err.contains("the theorem table") && err.contains("`paper-checks theory`"),
+        "{err}"
+    );
+    let none = d.join("none.toml");
+    std::fs::write(&none, TINY).expect("writable");
+    let (ok, err) = binary(&none, &d.join("none"), &["theory"]);
+    assert!(ok && err.contains("runs no theorem table"), "{err}");
+    let (ok, err) = binary(&none, &d.join("none"), &["--shard", "1/2", "theory"]);
+    assert!(
+        !ok && err.contains("--shard") && err.contains("1/2"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// `--theory` overrides the profile's `theory_profile`: a profile asking for the quick table runs
 /// without one under `--theory none`, and the provenance and the appendix say so; a size that
 /// does not exist is refused with the flag's name and the sizes there are.

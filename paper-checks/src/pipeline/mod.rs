@@ -13,7 +13,7 @@
 use crate::config::Profile;
 use crate::error::Error;
 use crate::progress::Progress;
-use crate::results::Results;
+use crate::results::{Results, TheoryTable};
 use crate::shard::{Mode, Units};
 use crate::storage::{mkdir, to_json, write_atomic};
 use stages::{Experiments, stages};
@@ -162,6 +162,33 @@ pub fn run(profile: &Profile, opts: &Options) -> Result<Results, Error> {
         theory,
         computed,
         removed_stale,
+    })
+}
+
+/// What the theory job did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TheoryJob {
+    /// It computed the theorem table and stored it.
+    Computed,
+    /// The store already held the table of this profile and code.
+    Stored,
+    /// The profile runs no theorem table.
+    NotRun,
+}
+
+/// The theory job (`paper-checks theory`): compute the profile's theorem table into the output
+/// directory's store, where the shards leave it. It shares nothing with the shards' units, so it
+/// runs beside their passes, and `paper-checks merge` reads it.
+///
+/// # Errors
+/// A theory or I/O failure.
+pub fn run_theory(profile: &Profile, opts: &Options) -> Result<TheoryJob, Error> {
+    let runs_dir = opts.out.join("runs");
+    mkdir(&runs_dir)?;
+    Ok(match stages::theory_stage(profile, opts, true, false)? {
+        (Some(TheoryTable::NotRun), _) => TheoryJob::NotRun,
+        (_, true) => TheoryJob::Computed,
+        (_, false) => TheoryJob::Stored,
     })
 }
 

@@ -39,6 +39,64 @@ pub(super) struct Stages {
     pub(super) experiments: Experiments,
 }
 
+/// The theorem table, and whether this call computed it: the cached one if its key matches, else
+/// computed if `compute`, else `None` (a shard's or a merge's run, which leave it to the theory
+/// job). With `copies`, the copies
+/// beside the appendix (`theory.md`, `theory.json`) follow the table, and a profile without a
+/// table removes any left by an earlier one.
+pub(super) fn theory_stage(
+    profile: &Profile,
+    opts: &Options,
+    compute: bool,
+    copies: bool,
+) -> Result<(Option<TheoryTable>, bool), Error> {
+    let runs_dir = opts.out.join("runs");
+    let theory_file = opts.out.join("theory.md");
+    let theory_json = opts.out.join("theory.json");
+    let theory_cache_file = runs_dir.join("theory.json");
+    let tkey = theory_key(profile, &opts.source_version);
+    let cached = if opts.redo {
+        None
+    } else {
+        read_json::<TheoryCache>(&theory_cache_file).filter(|c| c.key_hash == tkey)
+    };
+    if let Some(c) = cached {
+        if copies {
+            // The copies beside the appendix follow the cached table the key names.
+            write_theory_copies(&theory_file, &theory_json, &c.checks)?;
+        }
+        return Ok((Some(TheoryTable::Checks(c.checks)), false));
+    }
+    if profile.theory_profile == TheorySize::None {
+        // No table this time: a table left by an earlier profile must not sit beside it.
+        for f in [&theory_file, &theory_json, &theory_cache_file] {
+            if copies && f.exists() {
+                std::fs::remove_file(f).map_err(|e| Error::io(f, e))?;
+            }
+        }
+        return Ok((Some(TheoryTable::NotRun), false));
+    }
+    if !compute {
+        return Ok((None, false));
+    }
+    let p = if profile.theory_profile == TheorySize::Full {
+        ilopt_theory::suite::Profile::Full
+    } else {
+        ilopt_theory::suite::Profile::Quick
+    };
+    // The whole table, real-environment rows included (as `ilopt-theory`'s binary prints it).
+    let checks = ilopt_theory::suite::whole_table(p).map_err(Error::Theory)?;
+    let cache = TheoryCache {
+        key_hash: tkey,
+        checks,
+    };
+    if copies {
+        write_theory_copies(&theory_file, &theory_json, &cache.checks)?;
+    }
+    write_atomic(&theory_cache_file, &to_json("theory cache", &cache)?)?;
+    Ok((Some(TheoryTable::Checks(cache.checks)), true))
+}
+
 /// The theorem table, the Fig. 4.2 study, and the tuning and report runs, concurrently.
 pub(super) fn stages(
     profile: &Profile,
@@ -67,52 +125,19 @@ pub(super) fn stages(
     let gkey = gradient_key(profile, &opts.source_version);
     let gcached: Option<GradientErrorResult> = if opts.redo { None } else { read_json(&gfile) };
     let gcached = gcached.filter(|g| g.key_hash == gkey);
-    let theory_file = opts.out.join("theory.md");
-    let theory_cache_file = runs_dir.join("theory.json");
-    let tkey = theory_key(profile, &opts.source_version);
-    let theory_cached: Option<TheoryCache> = if opts.redo {
-        None
-    } else {
-        read_json::<TheoryCache>(&theory_cache_file).filter(|c| c.key_hash == tkey)
-    };
-
     let seeds: Vec<u32> = (0..profile.seeds).collect();
 
-    let theory_job = || -> Result<Option<TheoryTable>, Error> {
-        let theory_json = opts.out.join("theory.json");
-        if let Some(c) = theory_cached.clone() {
-            if sharded.is_none() {
-                // The copies beside the appendix follow the cached table the key names.
-                write_theory_copies(&theory_file, &theory_json, &c.checks)?;
-            }
-            return Ok(Some(TheoryTable::Checks(c.checks)));
-        }
-        if profile.theory_profile == TheorySize::None {
-            // No table this time: a table left by an earlier profile must not sit beside it.
-            for f in [&theory_file, &theory_json, &theory_cache_file] {
-                if sharded.is_none() && f.exists() {
-                    std::fs::remove_file(f).map_err(|e| Error::io(f, e))?;
-                }
-            }
-            return Ok(Some(TheoryTable::NotRun));
-        }
-        if !computes(&tkey) {
-            return Ok(None);
-        }
-        let p = if profile.theory_profile == TheorySize::Full {
-            ilopt_theory::suite::Profile::Full
-        } else {
-            ilopt_theory::suite::Profile::Quick
-        };
-        // The whole table, real-environment rows included (as `ilopt-theory`'s binary prints it).
-        let checks = ilopt_theory::suite::whole_table(p).map_err(Error::Theory)?;
-        let cache = TheoryCache {
-            key_hash: tkey.clone(),
-            checks,
-        };
-        write_theory_copies(&theory_file, &theory_json, &cache.checks)?;
-        write_atomic(&theory_cache_file, &to_json("theory cache", &cache)?)?;
-        Ok(Some(TheoryTable::Checks(cache.checks)))
+    // A plain run computes the theorem table beside the other stages; a shard leaves it to the
+    // theory job (`paper-checks theory`), which runs beside the shards' passes instead of
+    // lengthening one of them; a merge reads it.
+    let theory_job = || {
+        theory_stage(
+            profile,
+            opts,
+            matches!(opts.mode, Mode::All),
+            sharded.is_none(),
+        )
+        .map(|(table, _)| table)
     };
 
     let gradient_job = || -> Result<Option<GradientErrorResult>, Error> {
