@@ -41,9 +41,8 @@ pub(super) struct Stages {
 
 /// The theorem table, and whether this call computed it: the cached one if its key matches, else
 /// computed if `compute`, else `None` (a shard's or a merge's run, which leave it to the theory
-/// job). With `copies`, the copies
-/// beside the appendix (`theory.md`, `theory.json`) follow the table, and a profile without a
-/// table removes any left by an earlier one.
+/// job). With `copies`, the copies beside the appendix (`theory.md`, `theory.json`) follow the
+/// table, and a profile without a table removes any left by an earlier one.
 pub(super) fn theory_stage(
     profile: &Profile,
     opts: &Options,
