@@ -94,6 +94,13 @@ def _evaluation_env(gymnasium: Any, env: Any, env_id: Optional[str], eval_env: A
 
     if isinstance(eval_env, str):
         eval_env = gymnasium.make(eval_env)
+    elif eval_env is not None and not all(
+        hasattr(eval_env, a) for a in ("reset", "step", "action_space")
+    ):
+        raise IloptError(
+            f"eval_env must be a gymnasium.Env or an id for gymnasium.make, got "
+            f"{type(eval_env).__name__}"
+        )
     elif eval_env is None and env_id is not None:
         eval_env = gymnasium.make(env_id)
     elif eval_env is None:

@@ -156,6 +156,8 @@ def test_an_environment_that_cannot_be_copied_needs_an_eval_env():
     assert task.eval_env is not env
     with pytest.raises(ilopt.IloptError, match="eval_env: its action space"):
         ilopt.GymTask(env, expert=balance, eval_env="Pendulum-v1")
+    with pytest.raises(ilopt.IloptError, match="eval_env must be a gymnasium.Env or an id .* got int"):
+        ilopt.GymTask(env, expert=balance, eval_env=42)
 
 
 def test_bad_gym_tasks_raise_with_a_message():
