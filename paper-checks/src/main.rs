@@ -137,6 +137,8 @@ fn main() -> ExitCode {
                     start.elapsed().as_secs_f64(),
                     if r.complete {
                         "every unit of the profile is stored: run `paper-checks merge`"
+                    } else if r.tuning_complete && !r.theory_stored {
+                        "this shard's report runs are stored; merge when every shard and the theory job (`paper-checks theory`) have finished"
                     } else if r.tuning_complete {
                         "this shard's report runs are stored; merge when every shard has finished"
                     } else {

@@ -725,6 +725,14 @@ fn the_shards_leave_the_theorem_table_to_the_theory_job() {
         !shared.join("runs/theory.json").exists(),
         "a shard computed the theorem table"
     );
+    // The last round's shards have their report runs and name the job still to finish.
+    for k in 1..=2 {
+        let (ok, err) = binary(&cfg, &shared, &["--shard", &format!("{k}/2")]);
+        assert!(
+            ok && err.contains("merge when every shard and the theory job"),
+            "shard {k}: {err}"
+        );
+    }
     let (ok, err) = binary(&cfg, &shared, &["merge"]);
     assert!(
         !ok && err.contains("the theorem table") && err.contains("`paper-checks theory`"),

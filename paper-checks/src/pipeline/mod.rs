@@ -199,6 +199,9 @@ pub struct ShardSummary {
     pub computed: usize,
     /// Whether every row's tuning is in the store (so the report runs could start).
     pub tuning_complete: bool,
+    /// Whether the theorem table is in the store, or the profile runs none (else the theory
+    /// job, `paper-checks theory`, has not finished).
+    pub theory_stored: bool,
     /// Whether everything of the profile is in the store (`paper-checks merge` can run).
     pub complete: bool,
 }
@@ -222,6 +225,7 @@ pub fn run_shard(profile: &Profile, opts: &Options) -> Result<ShardSummary, Erro
     Ok(ShardSummary {
         computed: units.computed(),
         tuning_complete: !matches!(st.experiments, Experiments::TuningIncomplete),
+        theory_stored: st.theory.is_some(),
         complete: units.missing() == 0
             && st.theory.is_some()
             && st.gradient.is_some()
