@@ -168,17 +168,17 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     }
 
     /// The decisions of one trajectory recorded for the causal estimator of eq. 3.15, without
-    /// summing it (the inputs of [`EstimatorKernel::causal_sum_validated`], no shifts): every
-    /// decision's loss `l_t` into `losses` (one entry per row) and into `records` what
+    /// summing it (the inputs of [`EstimatorKernel::causal_sum_validated`]): every decision's
+    /// loss `l_t` into `losses` (one entry per row) and into `records` what
     /// [`EstimatorKernel::accumulate_recorded`] needs to form `Σ_t [∇_θ l_t + l'_t Σ_{i<t} ψ_i]`
     /// for losses `l'_t` chosen afterwards, in a form of the policy's choosing. It serves
-    /// baselines known only after every trajectory's pass, such as leave-one-out, where b_i
-    /// depends on every trajectory's losses and enters as shifted losses ([`crate::baseline`]).
+    /// baselines, which enter as shifted losses ([`crate::baseline`]): leave-one-out's b_i depends
+    /// on every trajectory's losses, an estimated baseline's on the plain estimate.
     ///
     /// `losses` and `records` are cleared, then refilled: kept between calls, they allocate
-    /// nothing per decision once grown. The default records ψ_t as rows of
-    /// [`Policy::param_dim`] entries and `Σ_t ∇_θ l_t` after them, with
-    /// [`Policy::loss_score_into`] per decision (`record_rows`).
+    /// nothing per decision once grown. The default records `∇_θ l_t` and ψ_t per decision, as
+    /// rows of 2 · [`Policy::param_dim`] entries, with [`Policy::loss_score_into`] per decision
+    /// (`record_rows`).
     ///
     /// # Errors
     /// As [`Policy::loss_score_into`] at the first failing decision; `losses` and `records` are
@@ -198,10 +198,11 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// `g += Σ_{t<n} [∇_θ l_t + l'_t Σ_{i<t} ψ_i] + l'_n Σ_{i<n} ψ_i` over the n decisions that
     /// [`EstimatorKernel::record_validated`] recorded in `records` for the same `features`, with
     /// the losses `l'` given: n entries, or n + 1 when one more loss (an absorbing tail, a
-    /// baseline's weight after the last decision) weighs every score. With the recorded losses
-    /// and n entries it is the plain causal estimate of [`EstimatorKernel::causal_sum_validated`],
-    /// bit for bit for the logistic policy (the default adds `Σ_t ∇_θ l_t` first, so its sums
-    /// differ from the plain pass's in the last bits).
+    /// baseline's weight after the last decision) weighs every score. Decision by decision it
+    /// makes the operations of the policy's [`EstimatorKernel::causal_sum_validated`] in the
+    /// same order with `l'_t` in place of `l_t`: with the recorded losses it is the plain causal
+    /// estimate bit for bit (floats), and every baselined estimate, whose baseline enters as
+    /// shifted losses, is summed in that one order.
     ///
     /// `scratch` is working storage the implementation sizes as it needs (the default:
     /// [`Policy::param_dim`] entries for `Σ_{i<t} ψ_i`; the logistic policy's fixed-dimension
@@ -226,16 +227,13 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// ([`ScoreProducts::add_rows`], the linear baseline's b_i formed first).
     fn score_products(&self, features: &[S], records: &[S], out: ScoreProducts<'_, S>) {
         let _ = features;
-        let d = self.param_dim();
-        let (scores, _) = split_score_rows(records, d);
-        out.add_rows(scores.chunks_exact(d.max(1)));
+        out.add_rows(score_rows(records, self.param_dim()));
     }
 }
 
 /// The default [`EstimatorKernel::record_validated`]: per decision [`Policy::loss_score_into`]
-/// (with the policy's checks), its loss appended to `losses` and the row ψ_t to `records`
-/// (through [`record_by_steps`]), then the sum `Σ_t ∇_θ l_t` as one more row (the losses do
-/// not weigh it, so it is kept summed: one row of d per decision).
+/// (with the policy's checks), its loss appended to `losses` and the row `∇_θ l_t`, ψ_t (2d
+/// entries) to `records` (through [`record_by_steps`]).
 pub(crate) fn record_rows<S, P, L>(
     policy: &P,
     theta: &[S],
@@ -285,9 +283,8 @@ where
     L: Borrow<P::Label>,
 {
     let d = policy.param_dim();
-    let mut buf = vec![S::zero(); 3 * d];
-    let (grad, rest) = buf.split_at_mut(d);
-    let (score, total) = rest.split_at_mut(d);
+    let mut buf = vec![S::zero(); 2 * d];
+    let (grad, score) = buf.split_at_mut(d);
     let x = policy.feature_dim();
     record_by_steps(
         features,
@@ -296,24 +293,20 @@ where
         actions,
         losses,
         records,
-        d,
+        2 * d,
         |phi, y, a, records| {
             let l = loss_score(phi, y.borrow(), a, grad, score)?;
-            for (t, g) in total.iter_mut().zip(grad.iter()) {
-                *t += g;
-            }
+            records.extend_from_slice(grad);
             records.extend_from_slice(score);
             Ok(l)
         },
-    )?;
-    records.extend_from_slice(total);
-    Ok(())
+    )
 }
 
-/// The default [`EstimatorKernel::accumulate_recorded`] for the `records` of `record_rows` (n
-/// rows ψ_t of `d` entries, then `Σ_t ∇_θ l_t`): `g += Σ_t ∇_θ l_t`, then per decision
-/// `g += l'_t Σ_{i<t} ψ_i` and `Σ_{i<t} ψ_i += ψ_t`, then `l'_n Σ_{i<n} ψ_i` for an (n + 1)-th
-/// loss.
+/// The default [`EstimatorKernel::accumulate_recorded`] for the `records` of `record_rows` (per
+/// decision the row `∇_θ l_t`, ψ_t of `2d` entries): per decision [`accumulate`] with `l'_t` (the
+/// default causal pass's operations in its order), then `g += l'_n Σ_{i<n} ψ_i` for an
+/// (n + 1)-th loss.
 pub(crate) fn accumulate_rows<S: Scalar>(
     records: &[S],
     d: usize,
@@ -321,20 +314,14 @@ pub(crate) fn accumulate_rows<S: Scalar>(
     g: &mut [S],
     scratch: &mut Vec<S>,
 ) {
-    let (scores, total) = split_score_rows(records, d);
-    for (gj, t) in g.iter_mut().zip(total) {
-        *gj += t;
-    }
     scratch.clear();
     scratch.resize(d, S::zero());
     let score_sum = &mut scratch[..];
-    let rows = scores.chunks_exact(d.max(1));
+    let rows = records.chunks_exact(2 * d.max(1));
     let n = rows.len();
     for (row, l) in rows.zip(losses) {
-        for ((gj, sj), x) in g.iter_mut().zip(score_sum.iter_mut()).zip(row) {
-            *gj += l.clone() * &*sj;
-            *sj += x;
-        }
+        let (grad, score) = row.split_at(d);
+        accumulate(g, None, l, grad, score, score_sum);
     }
     if let Some(end) = losses.get(n) {
         for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
@@ -343,10 +330,9 @@ pub(crate) fn accumulate_rows<S: Scalar>(
     }
 }
 
-/// The records of `record_rows` split into the score rows and the summed loss gradients (the
-/// last `d` entries).
-fn split_score_rows<S>(records: &[S], d: usize) -> (&[S], &[S]) {
-    records.split_at(records.len().saturating_sub(d))
+/// The scores ψ_t of the records of `record_rows`, one row of `d` entries per decision.
+fn score_rows<S>(records: &[S], d: usize) -> impl Iterator<Item = &[S]> {
+    records.chunks_exact(2 * d.max(1)).map(move |row| &row[d..])
 }
 
 /// Every decision of a trajectory recorded, as [`EstimatorKernel::record_validated`] records

@@ -5,11 +5,12 @@
 //! `score_into`, `log_likelihood_ratio`) and the sums of eq. 3.15 written out (math.md §1.1, §4).
 //!
 //! Bit for bit (`f64` bits) where the route forms the reference's products in the reference's
-//! order: the plain estimate, the weighted estimates, the policy's causal sum. Within
-//! [`TOLERANCE`] (relative to the reference's largest entry) where a route sums the same products
-//! in another order: the per-decision terms (loss-to-go summed backwards), the recorded passes
-//! (`Σ_t ∇l_t` first; the logistic policy's fixed-dimension loops) and the baselines (folded into
-//! the losses as shifts).
+//! order: the plain estimate, the weighted estimates, the policy's causal sum, and the policy's
+//! recorded passes (one summation order per policy: the recorded losses give the plain estimate,
+//! shifted losses the plain order with `l'_t` for `l_t`). Within [`TOLERANCE`] (relative to the
+//! reference's largest entry) where a route sums the same products in another order: the
+//! per-decision terms (loss-to-go summed backwards) and the reference's baselined sum (each
+//! `b_i ψ_i` subtracted as it is met) against the shifted losses.
 //!
 //! One macro instantiates the contract for every policy × horizon kind; inside, every baseline
 //! kind runs on the same batches. The scalar is `f64` (the routes are generic; the exact
@@ -143,21 +144,31 @@ fn reference(
 }
 
 /// The unweighted reference without a baseline, bit for bit the plain pass's order.
-#[allow(clippy::needless_range_loop)] // the sums' indices, as written
 fn plain(t: &Terms, tail: Option<f64>) -> Vec<f64> {
+    let mut losses = t.losses.clone();
+    losses.extend(tail);
+    plain_with(t, &losses)
+}
+
+/// The plain pass's order with the per-step losses `l'` in place of the policy's:
+/// `Σ_t [∇l_t + l'_t Σ_{i<t} ψ_i]`, then `l'_n Σ_{i≤n} ψ_i` for an (n + 1)-th loss — how every
+/// route that sums recorded decisions folds a baseline in (shifted losses).
+#[allow(clippy::needless_range_loop)] // the sums' indices, as written
+fn plain_with(t: &Terms, losses: &[f64]) -> Vec<f64> {
     let d = t.grads.first().map_or(0, Vec::len);
+    let n = t.losses.len();
     let (mut g, mut score_sum) = (vec![0.0; d], vec![0.0; d]);
-    for step in 0..t.losses.len() {
+    for step in 0..n {
         for j in 0..d {
-            g[j] += t.grads[step][j] + t.losses[step] * score_sum[j];
+            g[j] += t.grads[step][j] + losses[step] * score_sum[j];
         }
         for j in 0..d {
             score_sum[j] += t.scores[step][j];
         }
     }
-    if let Some(tail) = tail {
+    if let Some(end) = losses.get(n) {
         for j in 0..d {
-            g[j] += tail * score_sum[j];
+            g[j] += end * score_sum[j];
         }
     }
     g
@@ -403,7 +414,7 @@ where
                 &mut g,
                 &mut scratch,
             );
-            close(&route("record_validated + accumulate_recorded"), &g, &want);
+            same(&route("record_validated + accumulate_recorded"), &g, &want);
 
             // The per-decision terms, unweighted.
             let mut dt = DecisionTerms::new();
@@ -422,7 +433,7 @@ where
             p.record_decisions(theta, &t, &mut rec, &mut cost).unwrap();
             let mut g = vec![0.0; th.len()];
             p.estimate_recorded(&t, &mut rec, None, &mut g);
-            close(&route("record_decisions + estimate_recorded"), &g, &want);
+            same(&route("record_decisions + estimate_recorded"), &g, &want);
             let mut rows = RecordedPass::new();
             p.decision_terms(theta, &t, None, rows.terms_mut(), &mut cost)
                 .unwrap();
@@ -438,15 +449,20 @@ where
                 .map(|(i, l)| l + b(i) - if i == 0 { 0.0 } else { b(i - 1) })
                 .collect();
             let want_b = reference(&ref_terms, tail, false, &b).0;
-            for (name, r) in [("recorded", &mut rec), ("rows", &mut rows)] {
-                let mut g = vec![0.0; th.len()];
-                p.estimate_recorded(&t, r, Some(&shifted), &mut g);
-                close(
-                    &route(&format!("estimate_recorded ({name}) with shifted losses")),
-                    &g,
-                    &want_b,
-                );
-            }
+            // The policy's records sum the shifted losses in the plain pass's order; the rows of
+            // the per-decision terms in theirs.
+            let mut g = vec![0.0; th.len()];
+            p.estimate_recorded(&t, &mut rec, Some(&shifted), &mut g);
+            let route_name = route("estimate_recorded (recorded) with shifted losses");
+            same(&route_name, &g, &plain_with(&ref_terms, &shifted));
+            close(&route_name, &g, &want_b);
+            let mut g = vec![0.0; th.len()];
+            p.estimate_recorded(&t, &mut rows, Some(&shifted), &mut g);
+            close(
+                &route("estimate_recorded (rows) with shifted losses"),
+                &g,
+                &want_b,
+            );
         }
     }
     if matches!(
