@@ -494,17 +494,9 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
             });
             weighted_counts.push(n);
         }
-        // Per call, never per step: the given baselines' pass allocates per trajectory its
-        // shifts, the logistic pass's records and its estimate, then the mean; leave-one-out and
-        // the estimated and the state-dependent baselines (decisions recorded into kept buffers)
-        // only their result.
-        let fast = match kind {
-            Baseline::LeaveOneOut
-            | Baseline::Estimated { .. }
-            | Baseline::StateDependent { .. } => 1,
-            Baseline::Constant { .. } => 3 * m as u64 + 1,
-            _ => m as u64 + 2,
-        };
+        // Per call, never per step: every baseline records the decisions into kept buffers, so
+        // each call allocates only its result.
+        let fast = 1;
         // The weighted estimate: with baselines known before the pass, per trajectory its
         // estimate and its pass's scratch, then the mean; leave-one-out's terms go into kept
         // buffers, then per trajectory its estimate, then the mean.

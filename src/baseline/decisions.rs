@@ -47,15 +47,20 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
     /// `w = 1` inside and `c` the trajectory's weight), unbiased for ∇F(θ_old) by the argument of
     /// the module docs of [`crate::baseline`].
     ///
-    /// The default assembles it from [`PerDecisionTerms::decision_terms`] (one pass, storing each
-    /// decision's score); a problem may override it with a faster pass (the real tasks fold the
-    /// baseline into the plain estimator's loop, see
-    /// [`crate::oracle::EstimatorKernel::causal_sum_validated`], and subtract each decision's
-    /// term as it is met in the weighted pass).
+    /// Without weights the default is every problem's one route for baselines known before the
+    /// pass (`given_by_records`): the decisions recorded ([`PerDecisionTerms::record_decisions`]),
+    /// then summed once with each step's loss shifted by the baseline
+    /// ([`PerDecisionTerms::estimate_recorded`] with `l'_t = l_t + b_t − b_{t−1}`, b_t = 0 from
+    /// the first unscored step on), as leave-one-out's are. With weights it assembles the
+    /// estimate from [`PerDecisionTerms::decision_terms`] (one pass, storing each decision's
+    /// score); a problem may override the weighted case with a faster pass (the real tasks
+    /// subtract each decision's term as it is met in the weighted pass).
     ///
     /// # Errors
-    /// As [`PerDecisionTerms::decision_terms`]; [`OracleError::Baseline`] when a time-indexed list
-    /// is shorter than the trajectory's scored decisions.
+    /// As [`PerDecisionTerms::decision_terms`] (weighted) or
+    /// [`PerDecisionTerms::record_decisions`] (unweighted); [`OracleError::Baseline`] when a
+    /// time-indexed list is shorter than the trajectory's scored decisions;
+    /// [`OracleError::NonFinite`] for a non-finite unweighted estimate.
     fn baselined_estimate(
         &self,
         theta: &DVector<S>,
@@ -64,6 +69,9 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         baseline: Given<'_, S>,
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
+        if weights.is_none() {
+            return given_by_records(self, theta, trajectory, baseline, cost);
+        }
         let mut terms = DecisionTerms::new();
         self.decision_terms(theta, trajectory, weights, &mut terms, cost)?;
         terms.finish();
@@ -201,5 +209,77 @@ pub(crate) fn record_by_terms<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
 ) -> Result<(), OracleError> {
     problem.decision_terms(theta, trajectory, None, out.terms_mut(), cost)?;
     out.fill_from_terms();
+    Ok(())
+}
+
+/// The baselined causal estimate `g − Σ_i b_i ψ_i` on one trajectory for baselines known before
+/// the pass ([`add_given_by_records`] into zeros, with buffers of its own), checked finite: the
+/// one route of [`PerDecisionTerms::baselined_estimate`] without weights, for every problem.
+///
+/// # Errors
+/// As [`add_given_by_records`]; [`OracleError::NonFinite`] for a non-finite estimate.
+pub(crate) fn given_by_records<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
+    problem: &P,
+    theta: &DVector<S>,
+    trajectory: &P::Trajectory,
+    baseline: Given<'_, S>,
+    cost: &mut Cost,
+) -> Result<DVector<S>, OracleError> {
+    let mut g = vec![S::zero(); problem.dim()];
+    let mut buffers = (RecordedPass::new(), Vec::new());
+    add_given_by_records(
+        problem,
+        theta,
+        trajectory,
+        baseline,
+        &mut buffers,
+        &mut g,
+        cost,
+    )?;
+    if !g.iter().all(Scalar::is_finite) {
+        return Err(OracleError::NonFinite("the baselined gradient estimate"));
+    }
+    Ok(DVector::from_vec(g))
+}
+
+/// Adds to `g` the baselined causal estimate `g − Σ_i b_i ψ_i` on one trajectory for baselines
+/// known before the pass, by summation by parts (`Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`):
+/// the decisions recorded ([`PerDecisionTerms::record_decisions`]) into `buffers.0`, then summed
+/// once ([`PerDecisionTerms::estimate_recorded`]) with the per-step losses
+/// `l'_t = l_t + (b_t − b_{t−1})` written into `buffers.1` (b_{−1} = 0, b_t = 0 from the first
+/// unscored step on, so the absorbing tail's entry, if any, carries `−b_{n−1}`) — the route of
+/// leave-one-out's estimates, with other shifts. The buffers are kept between calls: nothing is
+/// allocated per step once they have grown.
+///
+/// # Errors
+/// As [`PerDecisionTerms::record_decisions`]; [`OracleError::Baseline`] when a time-indexed list
+/// is shorter than the scored decisions.
+pub(crate) fn add_given_by_records<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
+    problem: &P,
+    theta: &DVector<S>,
+    trajectory: &P::Trajectory,
+    baseline: Given<'_, S>,
+    buffers: &mut (RecordedPass<S>, Vec<S>),
+    g: &mut [S],
+    cost: &mut Cost,
+) -> Result<(), OracleError> {
+    let (recorded, shifted) = buffers;
+    problem.record_decisions(theta, trajectory, recorded, cost)?;
+    let scored = recorded.decisions();
+    if !baseline.covers(scored) {
+        return Err(too_few_baselines(scored));
+    }
+    let mut previous = S::zero();
+    shifted.clear();
+    shifted.extend(recorded.losses().iter().enumerate().map(|(t, l)| {
+        let bt = (t < scored)
+            .then(|| baseline.at(t).cloned())
+            .flatten()
+            .unwrap_or_else(S::zero);
+        let shift = bt.clone() - &previous;
+        previous = bt;
+        l.clone() + shift
+    }));
+    problem.estimate_recorded(trajectory, recorded, Some(shifted), g);
     Ok(())
 }

@@ -44,7 +44,9 @@ mod regression;
 mod running;
 
 pub use decisions::PerDecisionTerms;
-pub(crate) use decisions::{leading_features, record_by_terms, too_few_baselines};
+pub(crate) use decisions::{
+    add_given_by_records, given_by_records, leading_features, record_by_terms, too_few_baselines,
+};
 pub use oracle::Baselined;
 pub use regression::{RunningRegression, solve_symmetric};
 pub use running::RunningOptimum;

@@ -39,9 +39,11 @@ struct StateDependent<S> {
 /// Reused storage of one oracle call: per trajectory its [`DecisionTerms`] or its
 /// [`RecordedPass`], the leave-one-out step totals or the estimated baselines, per-step losses,
 /// one trajectory's plain estimate, the estimate; per trajectory its state features (k per
-/// decision) and the number k, and the rows of a problem that builds them.
+/// decision) and the number k, and the rows of a problem that builds them; one trajectory's
+/// records and shifted losses for baselines given before the pass.
 #[derive(Debug, Clone)]
 struct Buffers<S> {
+    given: (RecordedPass<S>, Vec<S>),
     terms: Vec<DecisionTerms<S>>,
     features: Vec<(Vec<S>, usize)>,
     rows: Vec<S>,
@@ -191,6 +193,7 @@ impl<P, S: Scalar> Baselined<P, S> {
             batch,
             kind,
             buffers: Buffers {
+                given: (RecordedPass::new(), Vec::new()),
                 terms: Vec::new(),
                 features: Vec::new(),
                 rows: Vec::new(),
@@ -323,21 +326,29 @@ fn leave_one_out_losses<S: Scalar>(totals: &[S], own: &[S], others: &S, shifted:
     }
 }
 
-/// The mean over `batch` of the problem's own baselined pass with baselines known before it
-/// ([`PerDecisionTerms::baselined_estimate`]).
+/// The mean over `batch` of the baselined estimates with baselines known before the pass:
+/// every trajectory's decisions recorded and summed once with its losses shifted by the baseline
+/// ([`super::add_given_by_records`], into the kept buffers), as leave-one-out's are. No
+/// allocation per step.
 ///
 /// # Errors
-/// As [`mean_of`], and the pass's.
+/// For an empty batch, the first trajectory's error, and a non-finite mean.
 fn given_estimate<S: Scalar, P: PerDecisionTerms<S>>(
     inner: &P,
+    buffers: &mut Buffers<S>,
     theta: &DVector<S>,
     batch: &[P::Trajectory],
     given: Given<'_, S>,
     cost: &mut Cost,
 ) -> Result<DVector<S>, OracleError> {
-    mean_of(batch, |t| {
-        inner.baselined_estimate(theta, t, None, given, cost)
-    })
+    let m = batch_size(batch)?;
+    let Buffers { given: one, g, .. } = buffers;
+    g.clear();
+    g.resize(inner.dim(), S::zero());
+    for t in batch {
+        super::add_given_by_records(inner, theta, t, given, one, g, cost)?;
+    }
+    checked_mean(g, &S::from_i64(m as i64))
 }
 
 /// The mean of one baselined estimate per trajectory of `batch` ([`crate::batched`]'s mean),
@@ -803,11 +814,17 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
             _ if form == EstimatorForm::Full => {
                 Err(invalid("baselines apply to the causal form of eq. 3.15"))
             }
-            Kind::Constant(b) => {
-                given_estimate(batch.inner(), theta, trajectory, Given::Constant(b), cost)
-            }
+            Kind::Constant(b) => given_estimate(
+                batch.inner(),
+                buffers,
+                theta,
+                trajectory,
+                Given::Constant(b),
+                cost,
+            ),
             Kind::TimeIndexed(bs) => given_estimate(
                 batch.inner(),
+                buffers,
                 theta,
                 trajectory,
                 Given::TimeIndexed(bs),

@@ -84,7 +84,6 @@ where
                 usable_notes(policy, theta, t),
                 labels,
                 actions,
-                None,
                 tail,
                 &mut g,
                 loss,

@@ -11,7 +11,9 @@
 //! them ([`EstimatorKernel::sample_noting`], the `notes` of
 //! [`EstimatorKernel::causal_sum_validated`]). Every override returns the default's values bit
 //! for bit and the default's first error, except the logistic policy's `score_products`, which
-//! forms the same products in another order (equal up to rounding).
+//! forms the same products in another order (equal up to rounding). For each policy the recorded
+//! sum ([`EstimatorKernel::accumulate_recorded`]) makes the plain pass's operations in its order,
+//! with the losses it is given: one summation order for the plain and every baselined estimate.
 
 use super::products::ScoreProducts;
 use crate::policy::{
@@ -93,15 +95,12 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     }
 
     /// The unit-weight causal estimator of eq. 3.15 over one trajectory,
-    /// `g += Σ_t [∇_θ l_t + (l_t + δ_t) Σ_{i<t} ψ_i] + L Σ_{i≤n} ψ_i`, on validated inputs:
-    /// `features` holds φ(s_1), …, φ(s_n) row after row, `labels` and `actions` one entry per
-    /// row, `shifts` either `None` (every `δ_t = 0`: eq. 3.15 itself) or one `δ_t` per row, and
-    /// `end` the losses L after the last decision that weigh every score (an absorbing tail's
-    /// `L_abs`), or `None` (L = 0, no term).
-    ///
-    /// With `δ_t = b_t − b_{t−1}` (b_0 = 0, b_t = 0 after the last scored decision) this is the
-    /// baselined estimator `g − Σ_i b_i ψ_i` of [`crate::baseline`], by summation by parts:
-    /// `Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`.
+    /// `g += Σ_t [∇_θ l_t + l_t Σ_{i<t} ψ_i] + L Σ_{i≤n} ψ_i`, on validated inputs: `features`
+    /// holds φ(s_1), …, φ(s_n) row after row, `labels` and `actions` one entry per row, and `end`
+    /// the losses L after the last decision that weigh every score (an absorbing tail's
+    /// `L_abs`), or `None` (L = 0, no term). A baseline enters through the recorded route
+    /// ([`EstimatorKernel::record_validated`], then [`EstimatorKernel::accumulate_recorded`] with
+    /// shifted losses), which sums in this pass's order.
     ///
     /// With `loss`, every decision's `l_t` is added to it in the order of the rows (the
     /// unshifted losses: the trajectory loss of [`crate::problem::IlProblem::trajectory_loss`],
@@ -120,7 +119,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     ///
     /// # Errors
     /// As [`EstimatorKernel::causal_step_validated`] at the first failing decision.
-    #[allow(clippy::too_many_arguments)] // the trajectory, its notes, the shifts and the output
+    #[allow(clippy::too_many_arguments)] // the trajectory, its notes and the output
     #[inline]
     fn causal_sum_validated<L: Borrow<Self::Label>>(
         &self,
@@ -129,7 +128,6 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
         notes: Option<&[S]>,
         labels: &[L],
         actions: &[Self::Action],
-        shifts: Option<&[S]>,
         end: Option<&S>,
         g: &mut [S],
         loss: Option<&mut S>,
@@ -137,7 +135,7 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     ) -> Result<(), PolicyError> {
         let _ = notes;
         causal_sum_by_steps(
-            self, theta, features, labels, actions, shifts, end, g, loss, scratch,
+            self, theta, features, labels, actions, end, g, loss, scratch,
         )
     }
 
@@ -383,8 +381,8 @@ pub(crate) fn subtract_score_rows<S: Scalar>(
     }
 }
 
-/// The default [`EstimatorKernel::causal_sum_validated`]: per decision, `g += δ_t Σ_{i<t} ψ_i`
-/// (with shifts) then [`EstimatorKernel::causal_step_validated`], with `scratch` resized to
+/// The default [`EstimatorKernel::causal_sum_validated`]: per decision
+/// [`EstimatorKernel::causal_step_validated`], with `scratch` resized to
 /// `3 · param_dim` zeros and split into `∇l_t`, `ψ_t` and `Σ_{i<t} ψ_i`; then `g += L Σ_{i≤n} ψ_i`
 /// for an `end` L; with `loss`, each `l_t` added to it in order.
 #[allow(clippy::too_many_arguments)] // the method's arguments and the policy
@@ -395,7 +393,6 @@ pub(crate) fn causal_sum_by_steps<S, P, L>(
     features: &[S],
     labels: &[L],
     actions: &[P::Action],
-    shifts: Option<&[S]>,
     end: Option<&S>,
     g: &mut [S],
     loss: Option<&mut S>,
@@ -411,7 +408,6 @@ where
         features,
         labels,
         actions,
-        shifts,
         end,
         g,
         loss,
@@ -425,14 +421,13 @@ where
 /// `causal_sum_by_steps` with the per-decision step given: `step(t, φ_t, y_t, a_t, ∇l_t, ψ_t,
 /// g, Σ_{i<t} ψ_i)` does what [`EstimatorKernel::causal_step_validated`] does for decision t
 /// (0-based) and returns `l_t`.
-#[allow(clippy::too_many_arguments)] // the trajectory, the shifts, the output and the step
+#[allow(clippy::too_many_arguments)] // the trajectory, the output and the step
 #[inline]
 pub(crate) fn causal_sum_with_steps<S, P, L>(
     policy: &P,
     features: &[S],
     labels: &[L],
     actions: &[P::Action],
-    shifts: Option<&[S]>,
     end: Option<&S>,
     g: &mut [S],
     mut loss: Option<&mut S>,
@@ -459,14 +454,7 @@ where
     let (grad, rest) = scratch.split_at_mut(d);
     let (score, score_sum) = rest.split_at_mut(d);
     let rows = features.chunks_exact(policy.feature_dim().max(1));
-    // With shifts, the pass stops at the shorter of the decisions and the shifts.
-    let n = shifts.map_or(usize::MAX, <[S]>::len);
-    for (t, ((phi, y), a)) in rows.zip(labels).zip(actions).take(n).enumerate() {
-        if let Some(shifts) = shifts {
-            for (gj, sj) in g.iter_mut().zip(score_sum.iter()) {
-                *gj += shifts[t].clone() * sj;
-            }
-        }
+    for (t, ((phi, y), a)) in rows.zip(labels).zip(actions).enumerate() {
         let l = step(t, phi, y.borrow(), a, grad, score, g, score_sum)?;
         if let Some(total) = loss.as_deref_mut() {
             *total += l;
@@ -608,7 +596,6 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
         notes: Option<&[S]>,
         labels: &[L],
         actions: &[usize],
-        shifts: Option<&[S]>,
         end: Option<&S>,
         g: &mut [S],
         loss: Option<&mut S>,
@@ -616,7 +603,7 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
     ) -> Result<(), PolicyError> {
         let Some(notes) = notes else {
             return causal_sum_by_steps(
-                self, theta, features, labels, actions, shifts, end, g, loss, scratch,
+                self, theta, features, labels, actions, end, g, loss, scratch,
             );
         };
         let k = self.actions();
@@ -625,7 +612,6 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
             features,
             labels,
             actions,
-            shifts,
             end,
             g,
             loss,
@@ -876,7 +862,6 @@ mod tests {
                 noted.then_some(&notes[..]),
                 labels,
                 actions,
-                None,
                 Some(&end),
                 &mut g,
                 Some(&mut loss),

@@ -235,8 +235,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     }
 
     /// With a compile-time dimension for 1 to 8 features in two loops (`record_fixed`, with the
-    /// records in `scratch`, then `accumulate_fixed`, each loss shifted first when `shifts` is
-    /// given, the `end` loss after them), else (and to report a failing decision) the default
+    /// records in `scratch`, then `accumulate_fixed`, the `end` loss after them), else (and to report a failing decision) the default
     /// loop over [`EstimatorKernel::causal_step_validated`]. The policy notes nothing, so `notes`
     /// is ignored.
     #[inline]
@@ -247,7 +246,6 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         _notes: Option<&[S]>,
         labels: &[L],
         actions: &[usize],
-        shifts: Option<&[S]>,
         end: Option<&S>,
         g: &mut [S],
         mut loss: Option<&mut S>,
@@ -255,8 +253,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     ) -> Result<(), PolicyError> {
         let (x, y) = (features, labels);
         let done = by_feature_count!(Policy::<S>::feature_dim(self), N => {
-            // The shifted pass stops at the shorter of the decisions and the shifts.
-            let n = shifts.map_or(actions.len(), |d| d.len().min(actions.len()));
+            let n = actions.len();
             // Losses (with the end's after them), then the two coefficients per decision.
             let with_end = n + usize::from(end.is_some());
             scratch.clear();
@@ -265,17 +262,11 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
             let (coefficients, gradients) = rest.split_at_mut(n);
             let theta = fixed_theta::<S, N>(theta)?;
             check_out("g", g, N)?;
-            let a = &actions[..n];
             let decisions = &mut losses[..n];
-            record_fixed::<S, L, N>(theta, x, y, a, decisions, coefficients, gradients) && {
+            record_fixed::<S, L, N>(theta, x, y, actions, decisions, coefficients, gradients) && {
                 if let Some(total) = loss.as_deref_mut() {
                     for l in decisions.iter() {
                         *total += l;
-                    }
-                }
-                if let Some(shifts) = shifts {
-                    for (l, delta) in decisions.iter_mut().zip(shifts) {
-                        *l = l.clone() + delta;
                     }
                 }
                 if let Some(end) = end {
@@ -290,7 +281,7 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
         }
         // More than 8 features, or a decision failed a check: the default pass reports the first.
         causal_sum_by_steps(
-            self, theta, features, labels, actions, shifts, end, g, loss, scratch,
+            self, theta, features, labels, actions, end, g, loss, scratch,
         )
     }
 
@@ -479,7 +470,6 @@ mod tests {
                             None,
                             labels,
                             actions,
-                            None,
                             end,
                             &mut g,
                             None,
@@ -492,7 +482,6 @@ mod tests {
                             features,
                             labels,
                             actions,
-                            None,
                             end,
                             &mut g,
                             None,
@@ -635,7 +624,6 @@ mod tests {
                     None,
                     &labels,
                     &actions,
-                    None,
                     None,
                     &mut g_plain,
                     None,

@@ -10,19 +10,19 @@
 //! * the importance-weighted old-point estimates of math.md §4, with per-decision ratios
 //!   `π_old(a_i|s_i)/π_new(a_i|s_i) = exp(log π_old − log π_new)`;
 //! * the per-decision terms from which a baseline `b_i` is subtracted, `g − Σ_i b_i ψ_i`
-//!   ([`crate::baseline`]), also folded into the causal pass as loss shifts.
+//!   ([`crate::baseline`]), or entered as shifted losses into the decisions recorded once.
 //!
 //! One decision's update is `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then `Σ_{i<t} ψ_i += ψ_t`: in the
-//! generic passes [`kernel`]'s `accumulate`; the passes over recorded decisions apply its score
-//! part to the stored rows (`accumulate_rows`), and the logistic policy's fixed-dimension loops
-//! (its [`EstimatorKernel`] overrides) the same arithmetic on `[f64; N]` rows, tested against the
-//! generic route. The data the baselines need are here too: a trajectory's [`DecisionTerms`],
+//! generic passes [`kernel`]'s `accumulate`, also over recorded decisions (`accumulate_rows`,
+//! with the losses given: a baseline's shifted ones), so that for each policy the plain
+//! estimate and every baselined one are summed in one order; the logistic policy's
+//! fixed-dimension loops (its [`EstimatorKernel`] overrides) make the same operations on
+//! `[f64; N]` rows, bit for bit. The data the baselines need are here too: a trajectory's [`DecisionTerms`],
 //! baselines known before a pass ([`Given`]), decisions recorded to be summed with losses chosen
 //! later ([`RecordedPass`]), [`ScoreProducts`], and the linear state-dependent baseline evaluated
 //! off feature rows ([`LinearBaseline`]). The toy MDPs' estimators
 //! ([`crate::toy::estimator`]) are an independent route: the loss-to-go summed backwards.
 
-mod baselined;
 mod causal;
 mod decision_terms;
 mod full;
@@ -42,7 +42,6 @@ pub use linear_baseline::{FixedLinearBaseline, LinearBaseline};
 pub use products::{Baselines, ScoreProducts};
 pub use recorded_pass::RecordedPass;
 
-pub(crate) use baselined::baselined_pass;
 pub(crate) use causal::causal_pass;
 pub(crate) use full::full_pass;
 pub(crate) use logistic::by_feature_count;

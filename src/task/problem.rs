@@ -5,8 +5,8 @@ use super::rollout::sample_learner;
 use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
 use crate::baseline::PerDecisionTerms;
 use crate::oracle::{
-    DecisionTerms, EstimatorKernel, Given, RecordedPass, ScoreProducts, baselined_pass,
-    causal_pass, features_valid, full_pass, policy_error, record_pass, sum_recorded, terms_pass,
+    DecisionTerms, EstimatorKernel, Given, RecordedPass, ScoreProducts, causal_pass,
+    features_valid, full_pass, policy_error, record_pass, sum_recorded, terms_pass,
 };
 use crate::policy::LikelihoodRatio;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -374,10 +374,10 @@ where
     P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S>,
     T::Label: Borrow<P::Label>,
 {
-    /// Without weights, the pass of [`crate::oracle`]'s `baselined_pass`: the baseline folded
-    /// into the causal kernel as loss shifts where the trajectory allows it, otherwise from the
-    /// [`DecisionTerms`]. With weights, the weighted causal pass with the baseline subtracted at
-    /// each scored decision as it is met (no per-decision terms stored).
+    /// Without weights, every problem's route (the decisions recorded, then summed with shifted
+    /// losses: [`PerDecisionTerms::baselined_estimate`]). With weights, the weighted causal pass
+    /// with the baseline subtracted at each scored decision as it is met (no per-decision terms
+    /// stored).
     fn baselined_estimate(
         &self,
         theta: &DVector<S>,
@@ -386,42 +386,33 @@ where
         baseline: Given<'_, S>,
         cost: &mut Cost,
     ) -> Result<DVector<S>, OracleError> {
+        let Some((theta_new, weighting)) = weights else {
+            return crate::baseline::given_by_records(self, theta, trajectory, baseline, cost);
+        };
         check_theta(theta, self.dim())?;
-        if let Some((theta_new, _)) = weights {
-            check_theta(theta_new, self.dim())?;
-        }
+        check_theta(theta_new, self.dim())?;
         check_trajectory(trajectory)?;
         let t = trajectory.decisions();
         let scored = t.scored();
         if !baseline.covers(scored) {
             return Err(crate::baseline::too_few_baselines(scored));
         }
-        let g = match weights {
-            None => {
-                let mut g = vec![S::zero(); self.dim()];
-                baselined_pass(&self.policy, theta.as_slice(), &t, baseline, &mut g)?;
-                g
+        let per_decision = weighting == Weighting::PerDecision;
+        let (mut g, log_w) = causal_pass(
+            &self.policy,
+            theta.as_slice(),
+            Some(theta_new.as_slice()),
+            per_decision,
+            &t,
+            Some(baseline),
+            None,
+        )?;
+        if !per_decision {
+            let w = log_w.exp();
+            for x in &mut g {
+                *x *= &w;
             }
-            Some((theta_new, weighting)) => {
-                let per_decision = weighting == Weighting::PerDecision;
-                let (mut g, log_w) = causal_pass(
-                    &self.policy,
-                    theta.as_slice(),
-                    Some(theta_new.as_slice()),
-                    per_decision,
-                    &t,
-                    Some(baseline),
-                    None,
-                )?;
-                if !per_decision {
-                    let w = log_w.exp();
-                    for x in &mut g {
-                        *x *= &w;
-                    }
-                }
-                g
-            }
-        };
+        }
         cost.gradient_evaluations += t.len() as u64;
         if !g.iter().all(Scalar::is_finite) {
             return Err(OracleError::NonFinite("the baselined gradient estimate"));

@@ -922,10 +922,10 @@ fn the_configuration_round_trips_through_json() {
     );
 }
 
-/// The real tasks fold a given baseline into the plain estimator's loop (loss shifts
-/// `δ_t = b_t − b_{t−1}`, summation by parts); that fused pass agrees with the baselined estimate
+/// A given baseline enters the real tasks' recorded decisions as loss shifts
+/// `δ_t = b_t − b_{t−1}` (summation by parts); that sum agrees with the baselined estimate
 /// assembled term by term from the stored scores, for the logistic policy (its own fixed-
-/// dimension loop) and the softmax policy (the default loop), and with b = 0 it is the plain
+/// dimension loop) and the softmax policy (the default records), and with b = 0 it is the plain
 /// estimate bit for bit.
 #[test]
 fn the_fused_task_pass_agrees_with_the_term_by_term_one() {

@@ -18,7 +18,7 @@
 
 use ilopt::algo::ConfigNumber;
 use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms};
-use ilopt::oracle::{DecisionTerms, EstimatorKernel, RecordedPass};
+use ilopt::oracle::{DecisionTerms, EstimatorKernel, Given, RecordedPass};
 use ilopt::policy::{
     LikelihoodRatio, LinearGaussian, Logistic, Mlp, MlpGaussian, MlpSoftmax, Softmax,
     SpeedLimitedGaussian,
@@ -337,7 +337,6 @@ where
                     None,
                     &labels,
                     &t.actions,
-                    None,
                     tail.as_ref(),
                     &mut g,
                     Some(&mut loss),
@@ -351,8 +350,7 @@ where
                 "{}",
                 route("causal_sum_validated loss")
             );
-            // Shifts δ_t = b_t − b_{t−1} fold a baseline into the kernel's pass (b_t = 0 from the
-            // first unscored decision on).
+            // A baseline b_i on the scored decisions (b_t = 0 from the first unscored decision on).
             let scored = if tail.is_some() { t.len() } else { t.len() - 1 };
             let b = |i: usize| {
                 if i < scored {
@@ -361,31 +359,6 @@ where
                     0.0
                 }
             };
-            let shifts: Vec<f64> = (0..t.len())
-                .map(|i| b(i) - if i == 0 { 0.0 } else { b(i - 1) })
-                .collect();
-            // The absorbing tail's losses carry the last decision's −b as well.
-            let end = tail.map(|l| l - b(t.len() - 1));
-            let mut g = vec![0.0; th.len()];
-            p.policy
-                .causal_sum_validated(
-                    th,
-                    t.feature_data(),
-                    None,
-                    &labels,
-                    &t.actions,
-                    Some(&shifts),
-                    end.as_ref(),
-                    &mut g,
-                    None,
-                    &mut scratch,
-                )
-                .unwrap();
-            close(
-                &route("causal_sum_validated with shifts"),
-                &g,
-                &reference(&ref_terms, tail, false, &b).0,
-            );
             // The policy's records summed with the recorded losses, and with other losses.
             let (mut losses, mut records) = (vec![], vec![]);
             p.policy
@@ -446,9 +419,18 @@ where
                 .losses()
                 .iter()
                 .enumerate()
-                .map(|(i, l)| l + b(i) - if i == 0 { 0.0 } else { b(i - 1) })
+                .map(|(i, l)| l + (b(i) - if i == 0 { 0.0 } else { b(i - 1) }))
                 .collect();
             let want_b = reference(&ref_terms, tail, false, &b).0;
+            // Baselines given before the pass take the same route: the records summed with the
+            // losses shifted by b_t − b_{t−1}.
+            let bs: Vec<f64> = (0..scored).map(b).collect();
+            let g = p
+                .baselined_estimate(theta, &t, None, Given::TimeIndexed(&bs), &mut cost)
+                .unwrap();
+            let route_name = route("baselined_estimate, time-indexed");
+            same(&route_name, g.as_slice(), &plain_with(&ref_terms, &shifted));
+            close(&route_name, g.as_slice(), &want_b);
             // The policy's records sum the shifted losses in the plain pass's order; the rows of
             // the per-decision terms in theirs.
             let mut g = vec![0.0; th.len()];
