@@ -35,6 +35,9 @@
 //! on one trajectory without a baseline and with the estimated constants (committed from every
 //! probe trajectory's statistics before the timing), and on the pairs
 //! without a baseline and with leave-one-out, each baselined one compared with its plain one.
+//! Modes `softmax-single`, `softmax-constant`, `softmax-pairs` and `softmax-loo`: modes `single`,
+//! `constant`, `pairs` and `loo` with the softmax policy of mode `softmax` on its own roll-outs
+//! (a policy on the kernel's default records, ∇l_t and ψ_t per decision), compared likewise.
 
 #[path = "support/specialised.rs"]
 mod specialised;
@@ -79,7 +82,7 @@ fn oracle_once<P: IlProblem<f64>>(
 }
 
 /// Every mode the probe knows.
-const MODES: [&str; 23] = [
+const MODES: [&str; 27] = [
     "generic",
     "spec",
     "rollout",
@@ -103,6 +106,10 @@ const MODES: [&str; 23] = [
     "weighted-estimated",
     "weighted-pairs",
     "weighted-loo",
+    "softmax-single",
+    "softmax-constant",
+    "softmax-pairs",
+    "softmax-loo",
 ];
 
 /// Report a bad argument and exit with status 2.
@@ -161,6 +168,38 @@ fn main() {
             .map(|x| -x / 2.0)
             .chain(THETA.iter().map(|x| x / 2.0)),
     );
+    // The softmax policy's own roll-outs, one per seed, through `Baselined` as the logistic
+    // policy's: alone (m = 1) without a baseline and with b = 50, and in pairs without a baseline
+    // and with leave-one-out.
+    let soft_singles: Vec<Vec<_>> = (0..SEEDS)
+        .map(|seed| {
+            let mut rng = KitRng::seed_from_u64(seed);
+            let t = soft
+                .rollout(
+                    &Behaviour::Learner(&soft_theta),
+                    &mut rng,
+                    &mut Cost::default(),
+                )
+                .expect("roll-out");
+            vec![t]
+        })
+        .collect();
+    let soft_pairs: Vec<Vec<_>> = (0..SEEDS as usize)
+        .map(|s| {
+            let next = (s + 1) % SEEDS as usize;
+            vec![soft_singles[s][0].clone(), soft_singles[next][0].clone()]
+        })
+        .collect();
+    let soft_baselined = |m, baseline: &Baseline| {
+        Baselined::new(soft.clone(), m, baseline).expect("softmax baselined")
+    };
+    let b50 = Baseline::Constant {
+        value: ConfigNumber::ratio(50, 1),
+    };
+    let mut soft_single = soft_baselined(1, &Baseline::None);
+    let mut soft_constant = soft_baselined(1, &b50);
+    let mut soft_plain_pairs = soft_baselined(2, &Baseline::None);
+    let mut soft_loo = soft_baselined(2, &Baseline::LeaveOneOut);
     let gain = *LqrExpert::cartpole().expect("LQR design").gain();
     let fast = Specialised {
         k: std::array::from_fn(|i| gain[i]),
@@ -350,6 +389,21 @@ fn main() {
                             )[0];
                             one[0].len() as u64
                         }
+                        "softmax-single" | "softmax-constant" | "softmax-pairs" | "softmax-loo" => {
+                            let s = seed as usize;
+                            let (o, batch) = match mode {
+                                "softmax-single" => (&mut soft_single, &soft_singles[s]),
+                                "softmax-constant" => (&mut soft_constant, &soft_singles[s]),
+                                "softmax-pairs" => (&mut soft_plain_pairs, &soft_pairs[s]),
+                                _ => (&mut soft_loo, &soft_pairs[s]),
+                            };
+                            let th = black_box(&soft_theta);
+                            acc += black_box(
+                                o.estimate(th, batch, EstimatorForm::Causal, &mut cost)
+                                    .expect("estimate"),
+                            )[0];
+                            batch.iter().map(|tr| tr.len() as u64).sum()
+                        }
                         "spec" => {
                             fast.rollout(black_box(&THETA), &mut rng, &mut t);
                             acc += black_box(Specialised::estimate(black_box(&THETA), &t))[0];
@@ -427,6 +481,8 @@ fn main() {
         ("oracle-state-all", "oracle"),
         ("weighted-estimated", "weighted"),
         ("weighted-loo", "weighted-pairs"),
+        ("softmax-constant", "softmax-single"),
+        ("softmax-loo", "softmax-pairs"),
     ] {
         let mut ratios: Vec<f64> = per_round
             .iter()
