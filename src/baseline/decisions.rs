@@ -3,8 +3,9 @@
 //!
 //! A problem opts in by implementing [`PerDecisionTerms::decision_terms`]; every other method has
 //! a default built on it, which a problem overrides with a faster pass of the same mathematics
-//! (the real tasks' [`crate::task::TaskProblem`] folds the baselines into its policy's fused
-//! causal pass). The algorithms see only [`IlProblem`]; [`crate::baseline::Baselined`] needs this
+//! (the real tasks' [`crate::task::TaskProblem`] records the decisions with its policy's
+//! [`crate::oracle::EstimatorKernel`], whose sum with the baseline's shifted losses makes the
+//! plain pass's operations in its order). The algorithms see only [`IlProblem`]; [`crate::baseline::Baselined`] needs this
 //! trait of the problem it wraps.
 
 use crate::oracle::{DecisionTerms, Given, RecordedPass, ScoreProducts};

@@ -73,8 +73,9 @@ struct Buffers<S> {
 /// ([`PerDecisionTerms::record_decisions`]), then sums each trajectory's estimate once with its
 /// per-step losses shifted by the baseline ([`PerDecisionTerms::estimate_recorded`]); the weighted
 /// one assembles it from [`DecisionTerms`], as [`Baselined::estimate_by_terms`] does for every
-/// kind. Baselines known before the pass (a constant, per-decision constants, the committed
-/// estimated ones) enter the weighted estimate through the problem's own weighted pass
+/// kind. Baselines known before the pass (a constant, per-decision constants) take leave-one-out's
+/// route in the unweighted estimate, with their own shifts. They, and the committed estimated
+/// ones, enter the weighted estimate through the problem's own weighted pass
 /// ([`PerDecisionTerms::baselined_estimate`] with weights).
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
