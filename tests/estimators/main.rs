@@ -14,6 +14,7 @@ mod leave_one_out;
 mod oracle_monte_carlo;
 mod oracle_reference;
 mod oracle_sampling;
+mod route_scalars;
 mod routes;
 mod specialised;
 mod task_problems;

@@ -1,0 +1,1635 @@
+//! The contract of `routes` in other scalars: every route to the causal estimate of eq. 3.15 that
+//! compiles for a scalar, on f64 trajectories lifted to it exactly, against a reference built
+//! from `Policy`'s in-place methods in that scalar and the sums of eq. 3.15 written out
+//! (math.md §1.1, §4), with an exact or rigorous check instead of a tolerance.
+//!
+//! Every f64 is a dyadic rational, so a trajectory rolled out in f64 (features, actions, labels,
+//! the absorbing tail's losses) and θ are represented exactly by [`BigRational`]s and by point
+//! [`Interval`]s: the routes of every scalar then estimate the same real number.
+//!
+//! * [`BigRational`]: the linear-Gaussian policy (both action kinds), whose loss, score and
+//!   log-ratio are rational functions (σ = 1/16). [`TaskProblem`] and [`Baselined`] need a
+//!   [`Real`](ilopt::scalar::Real) scalar, so only the policy's kernel routes run; each must
+//!   equal the exact reference.
+//! * [`Interval`] without the `mpfr` feature: the same kernel routes of the linear-Gaussian and
+//!   speed-limited policies (no `exp`/`ln` needed).
+//! * [`Interval`] with the `mpfr` feature: every policy, every problem-level route over a task
+//!   that carries the lifted trajectories' types ([`Lifted`]), the kernel routes, and
+//!   [`Baselined`] with every baseline kind. Each enclosure must contain the exact value where
+//!   it is known (the linear-Gaussian policies' rational reference, for every quantity without
+//!   an `exp`), else intersect the interval reference (both enclose the same real number); the
+//!   f64 route's value must lie within [`TOLERANCE`] of the enclosure.
+//!
+//! The fixed horizons are `routes`' ([`STEPS`]) but the MLP-Gaussian policy's, shortened to
+//! [`LONG_STEPS`] for the intervals' cost; the enclosures stay below 10⁻⁹ of their size.
+//!
+//! The failure tests feed the same comparisons, on the same trajectories, the reference with the
+//! last decision's loss scaled by `1 + 2⁻ᵉ`, and require every comparison of a quantity that
+//! loss enters to fail: e = 40 in rationals, 30 for the intervals' kernel routes (containment
+//! of the exact value), 20 for the problem-level routes (where the reference is itself an
+//! enclosure, so that a wrong value is seen only when the two enclosures are disjoint).
+
+use ilopt::oracle::{Baselines, EstimatorKernel, ScoreProducts};
+use ilopt::policy::{ActionVector, LikelihoodRatio, LinearGaussian, SpeedLimitedGaussian};
+use ilopt::problem::{Behaviour, Cost, IlProblem, KitRng};
+use ilopt::scalar::{BigRational, Interval, Scalar, interval_contains_rational};
+use ilopt::task::obstacle::{self, ObstacleTask};
+use ilopt::task::{AfterEnd, Horizon, Task, TaskProblem, TaskTrajectory};
+use nalgebra::DVector;
+use rand::{Rng, SeedableRng};
+use std::borrow::Borrow;
+use std::cell::RefCell;
+#[cfg(feature = "mpfr")]
+use {
+    ilopt::algo::ConfigNumber,
+    ilopt::baseline::{Baseline, Baselined, PerDecisionTerms},
+    ilopt::oracle::{DecisionTerms, RecordedPass},
+    ilopt::problem::{EstimatorForm, OracleError, Weighting},
+    std::fmt::Debug,
+    std::marker::PhantomData,
+};
+
+/// Decisions of a fixed-horizon stream (the absorbing tail follows an episode that ends sooner).
+const STEPS: usize = 40;
+
+/// Decisions of the MLP-Gaussian policy's fixed-horizon streams: its episodes outlast [`STEPS`]
+/// (`routes` runs 600; 200 keep the interval instance within a second or two).
+#[cfg(feature = "mpfr")]
+const LONG_STEPS: usize = 200;
+
+/// The θ the kernel-only instances estimate at: the roll-out's. The kernel routes take no
+/// second θ, and the Gaussian policies note nothing when they sample, so another θ exercises
+/// nothing more there, while every rational decision costs milliseconds (the exact sums'
+/// denominators run to hundreds of bits). The problem-level instances estimate at both.
+const KERNEL_THETAS: usize = 1;
+
+/// The seeds of the trajectories rolled out per instance: on the
+/// obstacle task at a fixed horizon of [`STEPS`], one trajectory that runs to the horizon and
+/// two whose episodes end before it (an absorbing tail, or a reset); episodic, one long episode
+/// and two short ones.
+const SEEDS: [u64; 3] = [2, 5, 7];
+
+/// Trajectories per batch and batches per baseline kind (as `routes`).
+#[cfg(feature = "mpfr")]
+const M: usize = 2;
+#[cfg(feature = "mpfr")]
+const BATCHES: usize = 3;
+
+/// More decisions than any trajectory of these tasks takes (the time-indexed baselines' length).
+#[cfg(feature = "mpfr")]
+const LONGEST: usize = 5000;
+
+/// σ_π of the Gaussian policies: dyadic, so that σ² and the score's division are exact in
+/// rationals.
+const SIGMA: f64 = 1.0 / 16.0;
+
+/// How far an f64 route's value may lie from the interval enclosure of the same route, relative
+/// to `1 +` the enclosure's largest magnitude: twice `routes`' tolerance between two summation
+/// orders of up to 600 terms, for the f64 rounding of the terms themselves (and of the weights'
+/// `exp`) that the enclosure does not share.
+const TOLERANCE: f64 = 4.0 * 600.0 * f64::EPSILON;
+
+/// The widest enclosure accepted, relative to `1 +` its magnitude: wider, it would hide the
+/// kernel failure tests' perturbation (2⁻³⁰ ≈ 10⁻⁹ of one loss).
+const MAX_WIDTH: f64 = 1e-9;
+
+/// The perturbation of the rational failure tests: one decision's loss times `1 + 2⁻⁴⁰` (any
+/// change fails an exact comparison; this one is far below any f64 tolerance).
+const RATIONAL_PERTURBATION: u32 = 40;
+
+/// The perturbation of the interval failure tests of the kernel routes, `1 + 2⁻³⁰`: the
+/// enclosures are up to about 10⁻¹¹ wide (relative), which hides a change of one loss by 2⁻⁴⁰.
+const KERNEL_PERTURBATION: u32 = 30;
+
+/// The perturbation of the interval failure tests of the problem-level routes, `1 + 2⁻²⁰`:
+/// where the reference is itself an enclosure (the weights towards another θ, every policy but
+/// the linear-Gaussian one), a wrong value is seen only when the two enclosures are disjoint,
+/// and the estimates weighted along a trajectory are up to 10⁶ in size.
+#[cfg(feature = "mpfr")]
+const PROBLEM_PERTURBATION: u32 = 20;
+
+/// `x` exactly, in a scalar that holds every finite f64 (rationals, intervals, f64).
+fn exact<S: Scalar>(x: f64) -> S {
+    S::from_binary64(x).expect("a finite f64")
+}
+
+/// The baseline `b_i = 1/4 + i/128` of the shifted routes for scored decisions (`i < scored`),
+/// 0 after: dyadic, so the same real number in every scalar.
+fn shift_baseline<S: Scalar>(i: usize, scored: usize) -> S {
+    if i < scored {
+        S::from_ratio(32 + i as i64, 128)
+    } else {
+        S::zero()
+    }
+}
+
+#[cfg(feature = "mpfr")]
+/// The time-indexed baseline of decision i, `3/8 − i/1024` (dyadic: exact in every scalar).
+fn time_indexed(i: usize) -> f64 {
+    0.375 - i as f64 / 1024.0
+}
+
+#[cfg(feature = "mpfr")]
+/// A task that only names a scalar's label and action types: the problem-level routes estimate
+/// from lifted trajectories and never roll out, so that a [`TaskProblem`] over intervals exists
+/// for tasks implemented in f64 only (the obstacle task).
+#[derive(Debug)]
+struct Lifted<L, A>(PhantomData<fn() -> (L, A)>);
+
+#[cfg(feature = "mpfr")]
+impl<L, A> Clone for Lifted<L, A> {
+    fn clone(&self) -> Self {
+        Lifted(PhantomData)
+    }
+}
+
+#[cfg(feature = "mpfr")]
+impl<L, A> Lifted<L, A> {
+    fn new() -> Self {
+        Lifted(PhantomData)
+    }
+}
+
+#[cfg(feature = "mpfr")]
+impl<S: Scalar, L: Clone + Debug, A: Clone + Debug> Task<S> for Lifted<L, A> {
+    type Episode = ();
+    type Label = L;
+    type Action = A;
+
+    fn start(&self, _: &mut KitRng) -> Result<(), OracleError> {
+        Err(OracleError::Environment(
+            "lifted trajectories only: no roll-outs".into(),
+        ))
+    }
+    fn features(&self, _: &()) -> Vec<S> {
+        unreachable!("no roll-outs")
+    }
+    fn expert(&self, _: &()) -> Result<(L, A), OracleError> {
+        unreachable!("no roll-outs")
+    }
+    fn advance(&self, _: &mut (), _: &A) -> Result<bool, OracleError> {
+        unreachable!("no roll-outs")
+    }
+}
+
+/// An f64 trajectory in the scalar `S`, exactly: features, the absorbing tail's losses, labels
+/// and actions (through `label` and `action`), and the resets.
+fn lift<S: Scalar, L, A, L2, A2>(
+    t: &TaskTrajectory<f64, L, A>,
+    label: &dyn Fn(&L) -> L2,
+    action: &dyn Fn(&A) -> A2,
+) -> TaskTrajectory<S, L2, A2> {
+    let features = t
+        .features()
+        .iter()
+        .map(|row| row.iter().map(|&x| exact(x)).collect())
+        .collect();
+    let mut out = TaskTrajectory::from_parts(
+        features,
+        t.actions.iter().map(action).collect(),
+        t.labels.iter().map(label).collect(),
+    )
+    .unwrap();
+    out.absorbed = t.absorbed.map(exact);
+    out.resets = t.resets;
+    out
+}
+
+fn lift_theta<S: Scalar>(theta: &DVector<f64>) -> DVector<S> {
+    theta.map(exact)
+}
+
+/// An f64 vector action or label lifted entry by entry.
+fn lift_vec<S: Scalar, V: Borrow<[f64]>>(v: &V) -> Vec<S> {
+    v.borrow().iter().map(|&x| exact(x)).collect()
+}
+
+fn lift_pair<S: Scalar>(v: &[f64; 2]) -> [S; 2] {
+    v.map(exact)
+}
+
+/// One trajectory's per-decision terms from the policy's in-place methods in `S`: losses, loss
+/// gradients, scores, and the log-ratios `log π_θ(a|s) − log π_θnew(a|s)`; with the absorbing
+/// tail's losses and the number of scored decisions (n − 1, or n with an absorbing tail).
+#[derive(Clone)]
+struct Terms<S> {
+    losses: Vec<S>,
+    grads: Vec<Vec<S>>,
+    scores: Vec<Vec<S>>,
+    log_ratios: Vec<S>,
+    tail: Option<S>,
+    scored: usize,
+}
+
+fn terms<S, P, L>(
+    policy: &P,
+    theta: &[S],
+    theta_new: &[S],
+    t: &TaskTrajectory<S, L, P::Action>,
+) -> Terms<S>
+where
+    S: Scalar,
+    P: LikelihoodRatio<S>,
+    L: Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    let n = t.len();
+    let mut out = Terms {
+        losses: vec![],
+        grads: vec![],
+        scores: vec![],
+        log_ratios: vec![],
+        tail: t.absorbed.clone(),
+        scored: if t.absorbed.is_some() { n } else { n - 1 },
+    };
+    for ((phi, a), y) in t.feature_rows().zip(&t.actions).zip(&t.labels) {
+        let (mut grad, mut score) = (vec![S::zero(); d], vec![S::zero(); d]);
+        out.losses
+            .push(policy.loss_into(theta, phi, y.borrow(), &mut grad).unwrap());
+        policy.score_into(theta, phi, a, &mut score).unwrap();
+        out.grads.push(grad);
+        out.scores.push(score);
+        out.log_ratios.push(
+            policy
+                .log_likelihood_ratio(theta, theta_new, phi, a)
+                .unwrap(),
+        );
+    }
+    out
+}
+
+/// What a route estimates, for one trajectory at one θ (the reference of each: [`want`]).
+/// The weighted forms and eq. 3.16 are estimated by problem-level routes only (`mpfr`).
+#[cfg_attr(not(feature = "mpfr"), allow(dead_code))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Want {
+    /// Eq. 3.15 unweighted, no baseline.
+    Plain,
+    /// Eq. 3.16.
+    Full,
+    /// `L_abs + Σ_t l_t` (one entry).
+    Loss,
+    /// `l_t` per decision.
+    Losses,
+    /// Eq. 3.15 with the per-decision prefix weights towards the other θ.
+    PerDecision,
+    /// Eq. 3.15 times the trajectory's weight towards the other θ.
+    Trajectory,
+    /// Eq. 3.15 with the baseline [`shift_baseline`].
+    Baselined,
+    /// `v·ψ_i` per scored decision, v the plain estimate.
+    Cross,
+    /// `‖ψ_i‖²` per scored decision.
+    Moment,
+}
+
+/// `Σ_t [w_{1:t−1} ∇l_t + w_{1:t−1} l_t Σ_{i<t} ψ_i] + w_{1:n} L_abs Σ_{i≤n} ψ_i
+/// − Σ_{i<s} w_{1:i} b_i ψ_i` with `w_{1:i} = exp(Σ_{j≤i} log-ratio_j)` (`exp` given) or every
+/// weight 1 (`None`), as `routes`' reference.
+#[allow(clippy::needless_range_loop)] // the sums' indices, as written
+fn reference<S: Scalar>(
+    t: &Terms<S>,
+    exp: Option<&dyn Fn(&S) -> S>,
+    b: &dyn Fn(usize) -> S,
+) -> Vec<S> {
+    let d = t.grads.first().map_or(0, Vec::len);
+    let n = t.losses.len();
+    let (mut g, mut score_sum) = (vec![S::zero(); d], vec![S::zero(); d]);
+    let mut log_w = S::zero();
+    let mut w = S::one();
+    for step in 0..n {
+        let wl = w.clone() * &t.losses[step];
+        for j in 0..d {
+            g[j] += w.clone() * &t.grads[step][j] + wl.clone() * &score_sum[j];
+        }
+        for j in 0..d {
+            score_sum[j] += &t.scores[step][j];
+        }
+        if step < t.scored {
+            log_w += &t.log_ratios[step];
+            if let Some(exp) = exp {
+                w = exp(&log_w);
+            }
+            let c = w.clone() * b(step);
+            for j in 0..d {
+                g[j] -= c.clone() * &t.scores[step][j];
+            }
+        }
+    }
+    if let Some(tail) = &t.tail {
+        for j in 0..d {
+            g[j] += w.clone() * tail * &score_sum[j];
+        }
+    }
+    g
+}
+
+/// The reference of `what` from the terms; `exp` is the scalar's exponential where it has one.
+/// `None` where the value needs an `exp` the scalar lacks (a weight towards another θ).
+#[allow(clippy::needless_range_loop)] // the sums' indices, as written
+fn want<S: Scalar>(what: Want, t: &Terms<S>, exp: Option<&dyn Fn(&S) -> S>) -> Option<Vec<S>> {
+    let none = |_: usize| S::zero();
+    let b = |i: usize| shift_baseline::<S>(i, t.scored);
+    let total = || {
+        t.losses
+            .iter()
+            .fold(t.tail.clone().unwrap_or_else(S::zero), |a, l| a + l)
+    };
+    Some(match what {
+        Want::Plain => reference(t, None, &none),
+        Want::Baselined => reference(t, None, &b),
+        Want::PerDecision => reference(t, Some(exp?), &none),
+        Want::Trajectory => {
+            let log_w = t.log_ratios[..t.scored]
+                .iter()
+                .fold(S::zero(), |a, x| a + x);
+            let w = exp?(&log_w);
+            reference(t, None, &none)
+                .into_iter()
+                .map(|x| x * &w)
+                .collect()
+        }
+        Want::Full => {
+            let d = t.grads.first().map_or(0, Vec::len);
+            let total = total();
+            let mut g = vec![S::zero(); d];
+            for step in 0..t.losses.len() {
+                for j in 0..d {
+                    g[j] += &t.grads[step][j];
+                    if step < t.scored {
+                        g[j] += total.clone() * &t.scores[step][j];
+                    }
+                }
+            }
+            g
+        }
+        Want::Loss => vec![total()],
+        Want::Losses => t.losses.clone(),
+        Want::Cross => {
+            let v = reference(t, None, &none);
+            t.scores[..t.scored]
+                .iter()
+                .map(|psi| {
+                    v.iter()
+                        .zip(psi)
+                        .fold(S::zero(), |a, (x, y)| a + x.clone() * y)
+                })
+                .collect()
+        }
+        Want::Moment => t.scores[..t.scored]
+            .iter()
+            .map(|psi| psi.iter().fold(S::zero(), |a, x| a + x.clone() * x))
+            .collect(),
+    })
+}
+
+/// The references of one trajectory at one θ ([`want`] of its terms), each formed once.
+struct Wants<'a, S> {
+    terms: Terms<S>,
+    exp: Option<&'a dyn Fn(&S) -> S>,
+    formed: RefCell<Vec<(Want, Option<Vec<S>>)>>,
+}
+
+impl<'a, S: Scalar> Wants<'a, S> {
+    fn new(terms: Terms<S>, exp: Option<&'a dyn Fn(&S) -> S>) -> Self {
+        Wants {
+            terms,
+            exp,
+            formed: RefCell::new(vec![]),
+        }
+    }
+
+    fn get(&self, what: Want) -> Option<Vec<S>> {
+        let mut formed = self.formed.borrow_mut();
+        if let Some((_, w)) = formed.iter().find(|(x, _)| *x == what) {
+            return w.clone();
+        }
+        let w = want(what, &self.terms, self.exp);
+        formed.push((what, w.clone()));
+        w
+    }
+}
+
+/// The terms with the last decision's loss times `1 + 2⁻ᵉ`: the loss that weighs the longest
+/// sum of scores `Σ_{i<n} ψ_i`, with the latest per-decision weight `w_{1:n−1}` (a loss early
+/// in a trajectory is drowned in an estimate whose weights grow along it).
+fn perturbed<S: Scalar>(t: &Terms<S>, e: u32) -> Terms<S> {
+    let mut t = t.clone();
+    let k = t.losses.len() - 1;
+    let one_plus = S::from_ratio((1 << e) + 1, 1 << e);
+    t.losses[k] *= one_plus;
+    t
+}
+
+/// One route's output, named, with what it estimates.
+struct Route<S> {
+    name: String,
+    what: Want,
+    value: Vec<S>,
+}
+
+fn route<S>(name: impl Into<String>, what: Want, value: Vec<S>) -> Route<S> {
+    Route {
+        name: name.into(),
+        what,
+        value,
+    }
+}
+
+/// The policy's kernel routes on one trajectory at θ, in any scalar: the causal sum with its
+/// loss, the records summed with the recorded losses (and the tail) and with the
+/// baselined losses `l'_t = l_t + b_t − b_{t−1}` (the tail's `L_abs − b_{n−1}`), and the score
+/// products with `b_i` given (`g = v − Σ_{i<s} b_i ψ_i`, `v·ψ_i`, `‖ψ_i‖²`).
+fn kernel_routes<S, P, L>(
+    policy: &P,
+    theta: &[S],
+    t: &TaskTrajectory<S, L, P::Action>,
+) -> Vec<Route<S>>
+where
+    S: Scalar,
+    P: EstimatorKernel<S>,
+    L: Borrow<P::Label>,
+{
+    let d = policy.param_dim();
+    let n = t.len();
+    let tail = t.absorbed.as_ref();
+    let scored = if tail.is_some() { n } else { n - 1 };
+    let labels: Vec<&P::Label> = t.labels.iter().map(Borrow::borrow).collect();
+    let mut out = vec![];
+    let (mut g, mut scratch) = (vec![S::zero(); d], vec![]);
+    let mut loss = tail.cloned().unwrap_or_else(S::zero);
+    policy
+        .causal_sum_validated(
+            theta,
+            t.feature_data(),
+            None,
+            &labels,
+            &t.actions,
+            tail,
+            &mut g,
+            Some(&mut loss),
+            &mut scratch,
+        )
+        .unwrap();
+    out.push(route("causal_sum_validated", Want::Plain, g.clone()));
+    out.push(route("causal_sum_validated loss", Want::Loss, vec![loss]));
+    let (mut losses, mut records) = (vec![], vec![]);
+    policy
+        .record_validated(
+            theta,
+            t.feature_data(),
+            &labels,
+            &t.actions,
+            &mut losses,
+            &mut records,
+        )
+        .unwrap();
+    out.push(route(
+        "record_validated losses",
+        Want::Losses,
+        losses.clone(),
+    ));
+    let mut with_tail = losses.clone();
+    with_tail.extend(tail.cloned());
+    let mut acc = vec![S::zero(); d];
+    policy.accumulate_recorded(
+        t.feature_data(),
+        &records,
+        &with_tail,
+        &mut acc,
+        &mut scratch,
+    );
+    out.push(route(
+        "record_validated + accumulate_recorded",
+        Want::Plain,
+        acc,
+    ));
+    let b = |i: usize| shift_baseline::<S>(i, scored);
+    let mut shifted: Vec<S> = losses
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let before = if i == 0 { S::zero() } else { b(i - 1) };
+            l.clone() + b(i) - before
+        })
+        .collect();
+    shifted.extend(tail.map(|l| l.clone() - b(n - 1)));
+    let mut acc = vec![S::zero(); d];
+    policy.accumulate_recorded(t.feature_data(), &records, &shifted, &mut acc, &mut scratch);
+    out.push(route(
+        "record_validated + accumulate_recorded, shifted losses",
+        Want::Baselined,
+        acc,
+    ));
+    let given: Vec<S> = (0..scored).map(b).collect();
+    let (mut cross, mut moment) = (vec![S::zero(); scored], vec![S::zero(); scored]);
+    let mut corrected = g.clone();
+    policy.score_products(
+        t.feature_data(),
+        &records,
+        ScoreProducts {
+            v: &g,
+            baseline: Baselines::Given(&given),
+            cross: &mut cross,
+            moment: &mut moment,
+            g: &mut corrected,
+        },
+    );
+    out.push(route("score_products g", Want::Baselined, corrected));
+    out.push(route("score_products cross", Want::Cross, cross));
+    out.push(route("score_products moment", Want::Moment, moment));
+    out
+}
+
+/// The outcome of one comparison: `Err` names the route and the entry that failed.
+type Check = Result<(), String>;
+
+fn lengths<A, B>(name: &str, got: &[A], want: &[B]) -> Check {
+    if got.len() == want.len() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{name}: {} entries, want {}",
+            got.len(),
+            want.len()
+        ))
+    }
+}
+
+/// Exact equality with the rational reference.
+fn equal(name: &str, got: &[BigRational], want: &[BigRational]) -> Check {
+    lengths(name, got, want)?;
+    match got.iter().zip(want).position(|(a, b)| a != b) {
+        None => Ok(()),
+        Some(j) => Err(format!("{name}: entry {j}: {} != {}", got[j], want[j])),
+    }
+}
+
+/// Every enclosure contains the exact value.
+fn contains(name: &str, got: &[Interval], want: &[BigRational]) -> Check {
+    lengths(name, got, want)?;
+    match got
+        .iter()
+        .zip(want)
+        .position(|(x, q)| !interval_contains_rational(*x, q))
+    {
+        None => Ok(()),
+        Some(j) => Err(format!(
+            "{name}: entry {j}: {:?} excludes {}",
+            got[j],
+            Scalar::to_f64(&want[j])
+        )),
+    }
+}
+
+/// Every enclosure meets the reference's enclosure of the same real number.
+fn meets(name: &str, got: &[Interval], want: &[Interval]) -> Check {
+    lengths(name, got, want)?;
+    match got
+        .iter()
+        .zip(want)
+        .position(|(x, y)| x.intersection(*y).is_empty())
+    {
+        None => Ok(()),
+        Some(j) => Err(format!(
+            "{name}: entry {j}: {:?} and the reference {:?} are disjoint",
+            got[j], want[j]
+        )),
+    }
+}
+
+/// Every f64 value lies within [`TOLERANCE`] (relative to `1 +` the largest magnitude) of the
+/// enclosure of the same route.
+fn near(name: &str, got: &[f64], enclosure: &[Interval]) -> Check {
+    lengths(name, got, enclosure)?;
+    let scale = 1.0 + enclosure.iter().fold(0.0f64, |m, x| m.max(x.mag()));
+    for (j, (x, e)) in got.iter().zip(enclosure).enumerate() {
+        let distance = if *x < e.inf() {
+            e.inf() - x
+        } else if *x > e.sup() {
+            x - e.sup()
+        } else {
+            0.0
+        };
+        if distance.is_nan() || distance > TOLERANCE * scale {
+            return Err(format!(
+                "{name}: entry {j}: f64 {x} is {distance} from {e:?} (scale {scale})"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The largest width of the enclosures relative to `1 +` their magnitude.
+fn relative_width(xs: &[Interval]) -> f64 {
+    xs.iter()
+        .fold(0.0f64, |m, x| m.max(x.wid() / (1.0 + x.mag())))
+}
+
+/// Whether the checks run against the reference (every comparison must pass) or against a
+/// perturbed one (every comparison of a route that reads the perturbed loss must fail).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Mode {
+    Reference,
+    /// One decision's loss times `1 + 2⁻ᵉ` ([`perturbed`]).
+    Perturbed(u32),
+}
+
+impl Mode {
+    /// The terms the reference is built from in this mode.
+    fn apply<S: Scalar>(self, t: Terms<S>) -> Terms<S> {
+        match self {
+            Mode::Reference => t,
+            Mode::Perturbed(e) => perturbed(&t, e),
+        }
+    }
+}
+
+/// Tallies of one instance: comparisons made, failures seen in [`Mode::Perturbed`], and the
+/// widest enclosure.
+#[derive(Debug, Default)]
+struct Tally {
+    checks: usize,
+    rejected: usize,
+    width: f64,
+}
+
+impl Tally {
+    /// Record one comparison: in [`Mode::Reference`] it must pass; in [`Mode::Perturbed`] (made
+    /// only for quantities the perturbed loss enters: [`reads_loss`]) it must fail.
+    #[track_caller]
+    fn record(&mut self, mode: Mode, name: &str, check: Check) {
+        self.checks += 1;
+        match (mode, check) {
+            (Mode::Reference, Err(e)) => panic!("{e}"),
+            (Mode::Perturbed(_), Ok(())) => panic!("{name}: a perturbed reference passed"),
+            (Mode::Perturbed(_), Err(_)) => self.rejected += 1,
+            (Mode::Reference, Ok(())) => {}
+        }
+    }
+}
+
+/// Whether the perturbation of one decision's loss changes the quantity: every one but the
+/// scores' squared norms.
+fn reads_loss(what: Want) -> bool {
+    !matches!(what, Want::Moment)
+}
+
+/// The rational instance: the kernel routes of a rational policy on every lifted trajectory,
+/// at both θ, equal to the exact reference (or, perturbed, different from it).
+fn check_rational<T, P, PQ, LQ, AQ>(
+    p: &mut TaskProblem<T, P>,
+    pq: &PQ,
+    thetas: &[DVector<f64>; 2],
+    label: &dyn Fn(&T::Label) -> LQ,
+    action: &dyn Fn(&T::Action) -> AQ,
+    mode: Mode,
+) -> Tally
+where
+    T: Task<f64>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
+    T::Label: Borrow<P::Label>,
+    PQ: LikelihoodRatio<BigRational, Action = AQ> + EstimatorKernel<BigRational>,
+    LQ: Borrow<PQ::Label>,
+{
+    let mut tally = Tally::default();
+    let mut tails = 0;
+    for seed in SEEDS {
+        let mut cost = Cost::default();
+        let t = p
+            .rollout(
+                &Behaviour::Learner(&thetas[0]),
+                &mut KitRng::seed_from_u64(seed),
+                &mut cost,
+            )
+            .unwrap();
+        tails += usize::from(t.absorbed.is_some());
+        let tq = lift::<BigRational, _, _, _, _>(&t, label, action);
+        for k in 0..KERNEL_THETAS {
+            let (th, other) = (lift_theta(&thetas[k]), lift_theta(&thetas[1 - k]));
+            let x = Wants::new(
+                mode.apply(terms(pq, th.as_slice(), other.as_slice(), &tq)),
+                None,
+            );
+            for r in kernel_routes(pq, th.as_slice(), &tq) {
+                let w = x.get(r.what).unwrap();
+                let name = format!("seed {seed}, θ{k}: {}", r.name);
+                if mode == Mode::Reference || reads_loss(r.what) {
+                    tally.record(mode, &name, equal(&name, &r.value, &w));
+                }
+            }
+        }
+    }
+    assert_absorbs(&p.horizon, tails);
+    tally
+}
+
+/// A fixed horizon whose early ends absorb must have produced an absorbing tail.
+fn assert_absorbs(horizon: &Horizon, tails: usize) {
+    if matches!(
+        horizon,
+        Horizon::Fixed {
+            after_end: AfterEnd::Absorb,
+            ..
+        }
+    ) {
+        assert!(tails > 0, "no absorbing tail among the trajectories");
+    }
+}
+
+/// A trajectory of the task `T` in `S`.
+#[cfg(feature = "mpfr")]
+type Trajectory<S, T> = TaskTrajectory<S, <T as Task<S>>::Label, <T as Task<S>>::Action>;
+
+/// An f64 trajectory of the task `T`.
+type Trajectory64<T> = TaskTrajectory<f64, <T as Task<f64>>::Label, <T as Task<f64>>::Action>;
+
+/// The exact terms of an f64 trajectory at θ towards θ_new, from a rational policy.
+type ExactTerms<'a, T> =
+    dyn Fn(&Trajectory64<T>, &DVector<f64>, &DVector<f64>) -> Terms<BigRational> + 'a;
+
+/// [`ExactTerms`] of the rational policy `pq`, the trajectory lifted by `label` and `action`.
+fn exact_terms<'a, T, PQ, LQ, AQ>(
+    pq: &'a PQ,
+    label: &'a dyn Fn(&T::Label) -> LQ,
+    action: &'a dyn Fn(&T::Action) -> AQ,
+) -> impl Fn(&Trajectory64<T>, &DVector<f64>, &DVector<f64>) -> Terms<BigRational> + 'a
+where
+    T: Task<f64>,
+    PQ: LikelihoodRatio<BigRational, Action = AQ>,
+    LQ: Borrow<PQ::Label>,
+{
+    move |t, theta, theta_new| {
+        let tq = lift::<BigRational, _, _, _, _>(t, label, action);
+        terms(
+            pq,
+            lift_theta(theta).as_slice(),
+            lift_theta(theta_new).as_slice(),
+            &tq,
+        )
+    }
+}
+
+/// The references of one trajectory at one θ for the interval checks: the exact terms where the
+/// policy is rational, the interval terms, and the intervals' `exp` where the scalar has one.
+struct IntervalRefs<'a> {
+    exact: Option<Wants<'a, BigRational>>,
+    interval: Wants<'a, Interval>,
+}
+
+/// One interval route against its references: containment of the exact value where the
+/// rational reference has it, else a common point with the interval reference; the f64 route of
+/// the same name within [`TOLERANCE`] of the enclosure (against the reference only).
+fn check_interval_route(
+    tally: &mut Tally,
+    mode: Mode,
+    refs: &IntervalRefs<'_>,
+    r: &Route<Interval>,
+    f: &Route<f64>,
+    context: &str,
+) {
+    assert_eq!(r.name, f.name, "the routes of both scalars in one order");
+    tally.width = tally.width.max(relative_width(&r.value));
+    let name = format!("{context}: {}", r.name);
+    if matches!(mode, Mode::Perturbed(_)) && !reads_loss(r.what) {
+        return;
+    }
+    let exact = refs.exact.as_ref().and_then(|x| x.get(r.what));
+    let check = match exact {
+        Some(q) => contains(&name, &r.value, &q),
+        None => {
+            let w = refs.interval.get(r.what).expect("a reference in intervals");
+            meets(&name, &r.value, &w)
+        }
+    };
+    tally.record(mode, &name, check);
+    if mode == Mode::Reference {
+        tally.record(mode, &name, near(&name, &f.value, &r.value));
+    }
+}
+
+/// The interval instance without the `mpfr` feature: the kernel routes of an interval policy
+/// (one that needs no `exp`) on every lifted trajectory at both θ, against the exact reference
+/// (`exact`) or the interval reference, and the f64 policy's kernel routes near them.
+#[allow(clippy::too_many_arguments)] // the problem, the lifted policy and its lifts
+fn check_interval_kernel<T, P, PI, LI, AI>(
+    p: &mut TaskProblem<T, P>,
+    pi: &PI,
+    thetas: &[DVector<f64>; 2],
+    label: &dyn Fn(&T::Label) -> LI,
+    action: &dyn Fn(&T::Action) -> AI,
+    exact: Option<&ExactTerms<'_, T>>,
+    mode: Mode,
+) -> Tally
+where
+    T: Task<f64>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
+    T::Label: Borrow<P::Label>,
+    PI: LikelihoodRatio<Interval, Action = AI> + EstimatorKernel<Interval>,
+    LI: Borrow<PI::Label>,
+{
+    let mut tally = Tally::default();
+    let mut tails = 0;
+    for seed in SEEDS {
+        let mut cost = Cost::default();
+        let t = p
+            .rollout(
+                &Behaviour::Learner(&thetas[0]),
+                &mut KitRng::seed_from_u64(seed),
+                &mut cost,
+            )
+            .unwrap();
+        tails += usize::from(t.absorbed.is_some());
+        let ti = lift::<Interval, _, _, _, _>(&t, label, action);
+        for k in 0..KERNEL_THETAS {
+            let (th, other) = (lift_theta(&thetas[k]), lift_theta(&thetas[1 - k]));
+            let refs = IntervalRefs {
+                exact: exact
+                    .map(|e| Wants::new(mode.apply(e(&t, &thetas[k], &thetas[1 - k])), None)),
+                interval: Wants::new(
+                    mode.apply(terms(pi, th.as_slice(), other.as_slice(), &ti)),
+                    None,
+                ),
+            };
+            let fs = kernel_routes(&p.policy, thetas[k].as_slice(), &t);
+            let is = kernel_routes(pi, th.as_slice(), &ti);
+            for (r, f) in is.iter().zip(&fs) {
+                let context = format!("seed {seed}, θ{k}");
+                check_interval_route(&mut tally, mode, &refs, r, f, &context);
+            }
+        }
+    }
+    assert_absorbs(&p.horizon, tails);
+    tally
+}
+
+/// The route contract with the `mpfr` feature: every problem-level route and the baselined
+/// oracle over intervals.
+#[cfg(feature = "mpfr")]
+mod problem_level {
+    use super::*;
+    use ilopt::scalar::Real;
+
+    /// Every problem-level route of one trajectory at θ (estimated towards θ_new where weighted),
+    /// then the policy's kernel routes: the causal estimate with its loss, the trajectory loss,
+    /// the full form, the weighted estimates (towards θ_new, and at θ itself where every weight
+    /// is 1), the per-decision terms (weighted; unweighted with the baseline), the recorded
+    /// passes (recorded and filled from the terms) with the recorded and the baselined losses,
+    /// and the recorded score products.
+    pub(super) fn problem_routes<S, T, P>(
+        p: &mut TaskProblem<T, P>,
+        theta: &DVector<S>,
+        theta_new: &DVector<S>,
+        t: &TaskTrajectory<S, T::Label, T::Action>,
+    ) -> Vec<Route<S>>
+    where
+        S: Real,
+        T: Task<S>,
+        P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S>,
+        T::Label: Borrow<P::Label>,
+    {
+        let mut cost = Cost::default();
+        let d = theta.len();
+        let scored = if t.absorbed.is_some() {
+            t.len()
+        } else {
+            t.len() - 1
+        };
+        let b = |i: usize| shift_baseline::<S>(i, scored);
+        let mut out = vec![];
+        let (g, loss) = p
+            .estimate_with_loss(theta, t, EstimatorForm::Causal, &mut cost)
+            .unwrap();
+        out.push(route(
+            "estimate_with_loss",
+            Want::Plain,
+            g.as_slice().to_vec(),
+        ));
+        out.push(route("estimate_with_loss loss", Want::Loss, vec![loss]));
+        let loss = p.trajectory_loss(theta, t).unwrap();
+        out.push(route("trajectory_loss", Want::Loss, vec![loss]));
+        for (form, what) in [
+            (EstimatorForm::Causal, Want::Plain),
+            (EstimatorForm::Full, Want::Full),
+        ] {
+            let g = p.estimate(theta, t, form, &mut cost).unwrap();
+            out.push(route(
+                format!("estimate {form:?}"),
+                what,
+                g.as_slice().to_vec(),
+            ));
+        }
+        for (weighting, what) in [
+            (Weighting::PerDecision, Want::PerDecision),
+            (Weighting::Trajectory, Want::Trajectory),
+        ] {
+            let g = p
+                .weighted_estimate(theta, theta_new, t, weighting, &mut cost)
+                .unwrap();
+            out.push(route(
+                format!("weighted_estimate {weighting:?}"),
+                what,
+                g.as_slice().to_vec(),
+            ));
+            let g = p
+                .weighted_estimate(theta, theta, t, weighting, &mut cost)
+                .unwrap();
+            out.push(route(
+                format!("weighted_estimate {weighting:?} at θ"),
+                Want::Plain,
+                g.as_slice().to_vec(),
+            ));
+            let mut dt = DecisionTerms::new();
+            p.decision_terms(theta, t, Some((theta_new, weighting)), &mut dt, &mut cost)
+                .unwrap();
+            dt.finish();
+            let mut g = vec![S::zero(); d];
+            dt.estimate_into(|_| None, &mut g);
+            out.push(route(format!("decision_terms {weighting:?}"), what, g));
+        }
+        let mut dt = DecisionTerms::new();
+        p.decision_terms(theta, t, None, &mut dt, &mut cost)
+            .unwrap();
+        dt.finish();
+        let mut g = vec![S::zero(); d];
+        dt.estimate_into(|_| None, &mut g);
+        out.push(route("decision_terms", Want::Plain, g));
+        let mut g = vec![S::zero(); d];
+        dt.estimate_into(|i| Some(b(i)), &mut g);
+        out.push(route("decision_terms with b", Want::Baselined, g));
+        let mut rec = RecordedPass::new();
+        p.record_decisions(theta, t, &mut rec, &mut cost).unwrap();
+        let mut rows = RecordedPass::new();
+        p.decision_terms(theta, t, None, rows.terms_mut(), &mut cost)
+            .unwrap();
+        rows.fill_from_terms();
+        let shifted: Vec<S> = rec
+            .losses()
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let before = if i == 0 { S::zero() } else { b(i - 1) };
+                l.clone() + b(i) - before
+            })
+            .collect();
+        for (name, r) in [
+            ("record_decisions", &mut rec),
+            ("fill_from_terms", &mut rows),
+        ] {
+            let mut g = vec![S::zero(); d];
+            p.estimate_recorded(t, r, None, &mut g);
+            out.push(route(format!("{name} + estimate_recorded"), Want::Plain, g));
+            let mut g = vec![S::zero(); d];
+            p.estimate_recorded(t, r, Some(&shifted), &mut g);
+            out.push(route(
+                format!("{name} + estimate_recorded, shifted losses"),
+                Want::Baselined,
+                g,
+            ));
+        }
+        let v = out[0].value.clone();
+        let given: Vec<S> = (0..scored).map(b).collect();
+        for (name, r) in [("record_decisions", &rec), ("fill_from_terms", &rows)] {
+            let (mut cross, mut moment) = (vec![S::zero(); scored], vec![S::zero(); scored]);
+            let mut g = v.clone();
+            p.recorded_score_products(
+                t,
+                r,
+                ScoreProducts {
+                    v: &v,
+                    baseline: Baselines::Given(&given),
+                    cross: &mut cross,
+                    moment: &mut moment,
+                    g: &mut g,
+                },
+            );
+            out.push(route(
+                format!("{name} + recorded_score_products g"),
+                Want::Baselined,
+                g,
+            ));
+            out.push(route(
+                format!("{name} + recorded_score_products cross"),
+                Want::Cross,
+                cross,
+            ));
+            out.push(route(
+                format!("{name} + recorded_score_products moment"),
+                Want::Moment,
+                moment,
+            ));
+        }
+        out.extend(kernel_routes(&p.policy, theta.as_slice(), t));
+        out
+    }
+
+    /// Every kind of baseline, as `routes`' (the constants dyadic, so that the f64 and the
+    /// interval oracles estimate the same real number).
+    pub(super) fn kinds() -> Vec<Baseline> {
+        let number = |x: f64| ConfigNumber::from(x);
+        vec![
+            Baseline::None,
+            Baseline::Constant { value: number(0.5) },
+            Baseline::TimeIndexed {
+                values: (0..LONGEST).map(|i| number(time_indexed(i))).collect(),
+            },
+            Baseline::LeaveOneOut,
+            Baseline::Estimated {
+                time_indexed: true,
+                decay: Some(number(0.9)),
+            },
+            Baseline::Estimated {
+                time_indexed: false,
+                decay: None,
+            },
+            Baseline::StateDependent {
+                features: None,
+                time: true,
+                decay: None,
+                ridge: Some(number(1e-3)),
+                fit_every: Some(1),
+            },
+            Baseline::StateDependent {
+                features: None,
+                time: false,
+                decay: Some(number(0.9)),
+                ridge: Some(number(1e-3)),
+                fit_every: Some(2),
+            },
+            Baseline::StateDependent {
+                features: Some(2),
+                time: true,
+                decay: None,
+                ridge: Some(number(1e-2)),
+                fit_every: Some(3),
+            },
+        ]
+    }
+
+    /// The baselined oracle's routes for every kind on the same batches at θ: `estimate`,
+    /// `estimate_by_terms`, and (where the baselines are known from outside and not
+    /// leave-one-out) the weighted estimates at θ itself. One entry per kind, batch and route.
+    pub(super) fn baselined_routes<S, T, P>(
+        p: &TaskProblem<T, P>,
+        theta: &DVector<S>,
+        batches: &[Vec<Trajectory<S, T>>],
+    ) -> Vec<(usize, usize, Route<S>)>
+    where
+        S: Real,
+        T: Task<S> + Clone,
+        P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S> + Clone,
+        T::Label: Borrow<P::Label>,
+    {
+        let mut out = vec![];
+        for (k, kind) in kinds().iter().enumerate() {
+            let mut b = Baselined::new(p.clone(), M, kind).unwrap();
+            let mut cost = Cost::default();
+            for (batch, ts) in batches.iter().enumerate() {
+                let name = |r: &str| format!("{kind:?}, batch {batch}: {r}");
+                let g = b
+                    .estimate(theta, ts, EstimatorForm::Causal, &mut cost)
+                    .unwrap();
+                out.push((
+                    k,
+                    batch,
+                    route(name("estimate"), Want::Baselined, g.as_slice().to_vec()),
+                ));
+                let g = b.estimate_by_terms(theta, ts, &mut cost).unwrap();
+                out.push((
+                    k,
+                    batch,
+                    route(
+                        name("estimate_by_terms"),
+                        Want::Baselined,
+                        g.as_slice().to_vec(),
+                    ),
+                ));
+                if known(kind) && !matches!(kind, Baseline::LeaveOneOut) {
+                    for weighting in [Weighting::PerDecision, Weighting::Trajectory] {
+                        let g = b
+                            .weighted_estimate(theta, theta, ts, weighting, &mut cost)
+                            .unwrap();
+                        out.push((
+                            k,
+                            batch,
+                            route(
+                                name(&format!("weighted {weighting:?} at θ")),
+                                Want::Baselined,
+                                g.as_slice().to_vec(),
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Whether the kind's baselines are known from outside the oracle (so that the reference
+    /// can form them): none, constants, leave-one-out.
+    pub(super) fn known(kind: &Baseline) -> bool {
+        matches!(
+            kind,
+            Baseline::None
+                | Baseline::Constant { .. }
+                | Baseline::TimeIndexed { .. }
+                | Baseline::LeaveOneOut
+        )
+    }
+
+    /// The mean baselined estimate `(1/M) Σ_j [g_j − Σ_{i<s_j} b_i^{(j)} ψ_i^{(j)}]` of a known
+    /// kind from each trajectory's terms: b = 0, the constant 1/2, the time-indexed values, or
+    /// the other trajectory's loss-to-go `L_i = Σ_{t>i} l_t` (its tail included; 0 past its
+    /// end) for leave-one-out.
+    pub(super) fn batch_reference<S: Scalar>(kind: &Baseline, all: &[Terms<S>]) -> Vec<S> {
+        let to_go: Vec<Vec<S>> = all
+            .iter()
+            .map(|x| {
+                let mut after = x.tail.clone().unwrap_or_else(S::zero);
+                let mut out = vec![S::zero(); x.losses.len()];
+                for i in (0..x.losses.len()).rev() {
+                    out[i] = after.clone();
+                    after += &x.losses[i];
+                }
+                out
+            })
+            .collect();
+        let d = all[0].grads[0].len();
+        let mut mean = vec![S::zero(); d];
+        for (j, x) in all.iter().enumerate() {
+            let b = |i: usize| match kind {
+                Baseline::None => S::zero(),
+                Baseline::Constant { .. } => S::from_ratio(1, 2),
+                Baseline::TimeIndexed { .. } => exact(time_indexed(i)),
+                Baseline::LeaveOneOut => to_go[1 - j].get(i).cloned().unwrap_or_else(S::zero),
+                _ => unreachable!("a kind known from outside"),
+            };
+            for (m, g) in mean.iter_mut().zip(reference(x, None, &b)) {
+                *m += g;
+            }
+        }
+        let m = S::from_i64(all.len() as i64);
+        mean.into_iter().map(|x| x / &m).collect()
+    }
+
+    /// A batch reference: exact, or an enclosure.
+    enum BatchReference {
+        Exact(Vec<BigRational>),
+        Interval(Vec<Interval>),
+    }
+
+    fn interval_exp(x: &Interval) -> Interval {
+        Real::exp(x)
+    }
+
+    /// The interval instance with the `mpfr` feature: every problem-level route (over the
+    /// [`Lifted`] task) and the kernel routes on every lifted trajectory at both θ, then the
+    /// baselined oracle with every kind on lifted batches; each against the exact reference
+    /// (`exact`) or the interval reference, and the f64 problem's routes near them.
+    #[allow(clippy::too_many_arguments)] // the problem, the lifted policy and its lifts
+    pub(super) fn check_interval_problem<T, P, PI, LI, AI>(
+        p: &mut TaskProblem<T, P>,
+        pi: PI,
+        thetas: &[DVector<f64>; 2],
+        label: &dyn Fn(&T::Label) -> LI,
+        action: &dyn Fn(&T::Action) -> AI,
+        exact: Option<&ExactTerms<'_, T>>,
+        mode: Mode,
+    ) -> Tally
+    where
+        T: Task<f64> + Clone,
+        P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64> + Clone,
+        T::Label: Borrow<P::Label>,
+        PI: LikelihoodRatio<Interval, Action = AI> + EstimatorKernel<Interval> + Clone,
+        LI: Borrow<PI::Label> + Clone + Debug,
+        AI: Clone + Debug,
+    {
+        let mut pint = TaskProblem {
+            task: Lifted::<LI, AI>::new(),
+            policy: pi,
+            horizon: p.horizon,
+        };
+        let thetas_i = [lift_theta(&thetas[0]), lift_theta(&thetas[1])];
+        let mut tally = Tally::default();
+        let mut tails = 0;
+        let mut cost = Cost::default();
+        for seed in SEEDS {
+            let t = p
+                .rollout(
+                    &Behaviour::Learner(&thetas[0]),
+                    &mut KitRng::seed_from_u64(seed),
+                    &mut cost,
+                )
+                .unwrap();
+            tails += usize::from(t.absorbed.is_some());
+            let ti = lift::<Interval, _, _, _, _>(&t, label, action);
+            for k in 0..2 {
+                let (th, other) = (&thetas_i[k], &thetas_i[1 - k]);
+                let refs = IntervalRefs {
+                    exact: exact
+                        .map(|e| Wants::new(mode.apply(e(&t, &thetas[k], &thetas[1 - k])), None)),
+                    interval: Wants::new(
+                        mode.apply(terms(&pint.policy, th.as_slice(), other.as_slice(), &ti)),
+                        Some(&interval_exp),
+                    ),
+                };
+                let fs = problem_routes(p, &thetas[k], &thetas[1 - k], &t);
+                let is = problem_routes(&mut pint, th, other, &ti);
+                for (r, f) in is.iter().zip(&fs) {
+                    let context = format!("seed {seed}, θ{k}");
+                    check_interval_route(&mut tally, mode, &refs, r, f, &context);
+                }
+            }
+        }
+        assert_absorbs(&p.horizon, tails);
+
+        // The baselined oracle on batches of M trajectories.
+        let mut rng = KitRng::seed_from_u64(7);
+        let batches: Vec<Vec<_>> = (0..BATCHES)
+            .map(|_| {
+                (0..M)
+                    .map(|_| {
+                        p.rollout(&Behaviour::Learner(&thetas[0]), &mut rng, &mut cost)
+                            .unwrap()
+                    })
+                    .collect()
+            })
+            .collect();
+        let batches_i: Vec<Vec<_>> = batches
+            .iter()
+            .map(|ts| {
+                ts.iter()
+                    .map(|t| lift::<Interval, _, _, _, _>(t, label, action))
+                    .collect()
+            })
+            .collect();
+        let fs = baselined_routes(p, &thetas[0], &batches);
+        let is = baselined_routes(&pint, &thetas_i[0], &batches_i);
+        let all_kinds = kinds();
+        // Each batch's terms once (exact where the policy is rational, and in intervals), and
+        // each known kind's reference once per batch.
+        let exact_terms: Option<Vec<Vec<Terms<BigRational>>>> = exact.map(|e| {
+            batches
+                .iter()
+                .map(|ts| {
+                    ts.iter()
+                        .map(|t| mode.apply(e(t, &thetas[0], &thetas[0])))
+                        .collect()
+                })
+                .collect()
+        });
+        let interval_terms: Vec<Vec<Terms<Interval>>> = batches_i
+            .iter()
+            .map(|ts| {
+                let th = thetas_i[0].as_slice();
+                ts.iter()
+                    .map(|t| mode.apply(terms(&pint.policy, th, th, t)))
+                    .collect()
+            })
+            .collect();
+        let mut references: Vec<((usize, usize), BatchReference)> = vec![];
+        for (i, ((k, batch, r), (_, _, f))) in is.iter().zip(&fs).enumerate() {
+            assert_eq!(r.name, f.name, "the routes of both scalars in one order");
+            tally.width = tally.width.max(relative_width(&r.value));
+            let kind = &all_kinds[*k];
+            let check = if known(kind) {
+                let at = references.iter().position(|(key, _)| *key == (*k, *batch));
+                let at = at.unwrap_or_else(|| {
+                    let reference = match &exact_terms {
+                        Some(x) => BatchReference::Exact(batch_reference(kind, &x[*batch])),
+                        None => {
+                            BatchReference::Interval(batch_reference(kind, &interval_terms[*batch]))
+                        }
+                    };
+                    references.push(((*k, *batch), reference));
+                    references.len() - 1
+                });
+                match &references[at].1 {
+                    BatchReference::Exact(q) => contains(&r.name, &r.value, q),
+                    BatchReference::Interval(w) => meets(&r.name, &r.value, w),
+                }
+            } else if mode == Mode::Reference && r.name.ends_with("estimate_by_terms") {
+                // The estimated baselines: the oracle's estimate and its route by terms
+                // enclose the same real number.
+                meets(&r.name, &r.value, &is[i - 1].2.value)
+            } else {
+                Ok(())
+            };
+            if mode == Mode::Reference || known(kind) {
+                tally.record(mode, &r.name, check);
+            }
+            if mode == Mode::Reference {
+                tally.record(mode, &r.name, near(&r.name, &f.value, &r.value));
+            }
+        }
+        tally
+    }
+}
+
+#[cfg(feature = "mpfr")]
+use problem_level::check_interval_problem;
+
+/// Two θ of `d` entries: `base` plus independent uniform noise of half-width `spread` (as
+/// `routes`).
+fn two_thetas(d: usize, base: impl Fn(usize) -> f64, spread: f64) -> [DVector<f64>; 2] {
+    let mut rng = KitRng::seed_from_u64(d as u64);
+    let mut one = || {
+        DVector::from_fn(d, |i, _| {
+            base(i) + spread * (2.0 * rng.random::<f64>() - 1.0)
+        })
+    };
+    [one(), one()]
+}
+
+/// A pull towards the goal (rows of `n` features), with noise.
+fn obstacle_theta(n: usize) -> [DVector<f64>; 2] {
+    two_thetas(
+        2 * n,
+        |i| if i == 0 || i == n + 1 { 0.05 } else { 0.0 },
+        0.01,
+    )
+}
+
+fn with_horizon<T, P>(task: T, policy: P, horizon: Option<AfterEnd>) -> TaskProblem<T, P> {
+    match horizon {
+        Some(after_end) => TaskProblem::fixed(task, policy, STEPS, after_end).unwrap(),
+        None => TaskProblem::episodic(task, policy),
+    }
+}
+
+/// The linear-Gaussian policy (P3) of the obstacle task in `S`, σ = [`SIGMA`].
+fn gaussian<S: Scalar>() -> LinearGaussian<S> {
+    LinearGaussian::new(2, obstacle::FEATURES, exact(SIGMA)).unwrap()
+}
+
+/// The same with actions stored inline.
+fn gaussian_pair<S: Scalar>() -> LinearGaussian<S, [S; 2]> {
+    gaussian().with_actions::<[S; 2]>().unwrap()
+}
+
+/// The obstacle task with the actions of `A`.
+fn obstacle_task<A: ActionVector<f64>>() -> ObstacleTask<A> {
+    ObstacleTask::thesis().unwrap().with_actions::<A>()
+}
+
+fn linear_gaussian_rational(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+    let mut p = with_horizon(obstacle_task::<Vec<f64>>(), gaussian(), horizon);
+    let lift = lift_vec::<BigRational, Vec<f64>>;
+    let thetas = obstacle_theta(obstacle::FEATURES);
+    check_rational(&mut p, &gaussian(), &thetas, &lift, &lift, mode)
+}
+
+fn linear_gaussian_inline_rational(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+    let mut p = with_horizon(obstacle_task::<[f64; 2]>(), gaussian_pair(), horizon);
+    let lift = lift_pair::<BigRational>;
+    let thetas = obstacle_theta(obstacle::FEATURES);
+    check_rational(&mut p, &gaussian_pair(), &thetas, &lift, &lift, mode)
+}
+
+fn linear_gaussian_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+    let mut p = with_horizon(obstacle_task::<Vec<f64>>(), gaussian(), horizon);
+    let (lq, li) = (
+        lift_vec::<BigRational, Vec<f64>>,
+        lift_vec::<Interval, Vec<f64>>,
+    );
+    let pq = gaussian();
+    let exact = exact_terms::<ObstacleTask, _, _, _>(&pq, &lq, &lq);
+    let thetas = obstacle_theta(obstacle::FEATURES);
+    check_interval_kernel(&mut p, &gaussian(), &thetas, &li, &li, Some(&exact), mode)
+}
+
+fn linear_gaussian_inline_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+    let mut p = with_horizon(obstacle_task::<[f64; 2]>(), gaussian_pair(), horizon);
+    let (lq, li) = (lift_pair::<BigRational>, lift_pair::<Interval>);
+    let pq = gaussian_pair();
+    let exact = exact_terms::<ObstacleTask<[f64; 2]>, _, _, _>(&pq, &lq, &lq);
+    let thetas = obstacle_theta(obstacle::FEATURES);
+    check_interval_kernel(
+        &mut p,
+        &gaussian_pair(),
+        &thetas,
+        &li,
+        &li,
+        Some(&exact),
+        mode,
+    )
+}
+
+/// The speed-limited linear-Gaussian policy, with a limit below the pull's speed at the start
+/// so that both branches of the loss occur (as `routes`); its loss needs a square root, so it
+/// has no rational reference.
+fn speed_limited<S: ilopt::scalar::Sqrt>() -> SpeedLimitedGaussian<S, [S; 2]> {
+    SpeedLimitedGaussian::new(gaussian_pair(), exact(0.1)).unwrap()
+}
+
+fn speed_limited_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+    let mut p = with_horizon(obstacle_task::<[f64; 2]>(), speed_limited(), horizon);
+    let li = lift_pair::<Interval>;
+    let thetas = obstacle_theta(obstacle::FEATURES);
+    check_interval_kernel(&mut p, &speed_limited(), &thetas, &li, &li, None, mode)
+}
+
+/// The instances with the `mpfr` feature: every policy of `routes` over intervals.
+#[cfg(feature = "mpfr")]
+mod mpfr_instances {
+    use super::*;
+    use ilopt::policy::{Logistic, Mlp, MlpGaussian, MlpSoftmax, Softmax};
+    use ilopt::task::cartpole::{self, CartPoleTask};
+
+    fn cartpole_task() -> CartPoleTask<f64> {
+        CartPoleTask::with_lqr().unwrap()
+    }
+
+    fn cartpole_theta(d: usize) -> [DVector<f64>; 2] {
+        two_thetas(d, |_| 0.0, 2.0)
+    }
+
+    /// The network's initial weights, and the same scaled by 1.001 (as `routes`).
+    fn mlp_theta(net: &Mlp) -> [DVector<f64>; 2] {
+        let theta = DVector::from_vec(net.init::<f64>(&mut KitRng::seed_from_u64(5)));
+        let near = theta.map(|x| 1.001 * x);
+        [theta, near]
+    }
+
+    fn same(x: &usize) -> usize {
+        *x
+    }
+
+    pub(super) fn logistic_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = Logistic::new(cartpole::FEATURES).unwrap();
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        let thetas = cartpole_theta(cartpole::FEATURES);
+        check_interval_problem(&mut p, policy, &thetas, &same, &same, None, mode)
+    }
+
+    pub(super) fn softmax_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = Softmax::new(2, cartpole::FEATURES).unwrap();
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        let thetas = cartpole_theta(2 * cartpole::FEATURES);
+        check_interval_problem(&mut p, policy, &thetas, &same, &same, None, mode)
+    }
+
+    pub(super) fn mlp_softmax_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = MlpSoftmax::new(cartpole::FEATURES, 4, 2).unwrap();
+        let thetas = mlp_theta(policy.net());
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        check_interval_problem(&mut p, policy, &thetas, &same, &same, None, mode)
+    }
+
+    pub(super) fn linear_gaussian_interval_problem(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let mut p = with_horizon(obstacle_task::<Vec<f64>>(), gaussian(), horizon);
+        let (lq, li) = (
+            lift_vec::<BigRational, Vec<f64>>,
+            lift_vec::<Interval, Vec<f64>>,
+        );
+        let pq = gaussian();
+        let exact = exact_terms::<ObstacleTask, _, _, _>(&pq, &lq, &lq);
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        check_interval_problem(&mut p, gaussian(), &thetas, &li, &li, Some(&exact), mode)
+    }
+
+    pub(super) fn linear_gaussian_inline_interval_problem(
+        horizon: Option<AfterEnd>,
+        mode: Mode,
+    ) -> Tally {
+        let mut p = with_horizon(obstacle_task::<[f64; 2]>(), gaussian_pair(), horizon);
+        let (lq, li) = (lift_pair::<BigRational>, lift_pair::<Interval>);
+        let pq = gaussian_pair();
+        let exact = exact_terms::<ObstacleTask<[f64; 2]>, _, _, _>(&pq, &lq, &lq);
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        check_interval_problem(
+            &mut p,
+            gaussian_pair(),
+            &thetas,
+            &li,
+            &li,
+            Some(&exact),
+            mode,
+        )
+    }
+
+    pub(super) fn speed_limited_interval_problem(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let mut p = with_horizon(obstacle_task::<[f64; 2]>(), speed_limited(), horizon);
+        let li = lift_pair::<Interval>;
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        check_interval_problem(&mut p, speed_limited(), &thetas, &li, &li, None, mode)
+    }
+
+    /// The MLP-Gaussian policy with `routes`' weights (the linear pull through the tanh layer),
+    /// on fixed streams of [`LONG_STEPS`] decisions.
+    pub(super) fn mlp_gaussian_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let (n, h) = (obstacle::FEATURES, 4);
+        let policy = MlpGaussian::new(n, h, 2, SIGMA).unwrap();
+        let thetas = mlp_theta(policy.net()).map(|theta| {
+            let mut theta = theta.map(|x| 0.01 * x);
+            theta[0] = 0.1;
+            theta[n + 1] = 0.1;
+            theta[h * n + h] = 0.5;
+            theta[h * n + h + h + 1] = 0.5;
+            theta
+        });
+        let mut p = with_horizon(obstacle_task::<Vec<f64>>(), policy, horizon);
+        if let Some(after_end) = horizon {
+            p.horizon = Horizon::fixed(LONG_STEPS, after_end);
+        }
+        let pi = MlpGaussian::new(n, h, 2, exact::<Interval>(SIGMA)).unwrap();
+        let li = lift_vec::<Interval, Vec<f64>>;
+        check_interval_problem(&mut p, pi, &thetas, &li, &li, None, mode)
+    }
+}
+
+#[cfg(feature = "mpfr")]
+use mpfr_instances::*;
+
+/// One test per instance (policy × scalar) × horizon kind: episodic; a fixed horizon whose
+/// early ends absorb; one whose early ends reset. Every comparison must pass, and the interval
+/// enclosures stay narrower than [`MAX_WIDTH`].
+macro_rules! scalar_contract {
+    ($($(#[$attr:meta])* $instance:ident: $episodic:ident, $absorbing:ident, $reset:ident;)*) => {$(
+        $(#[$attr])*
+        #[test]
+        fn $episodic() {
+            run(stringify!($episodic), $instance(None, Mode::Reference));
+        }
+
+        $(#[$attr])*
+        #[test]
+        fn $absorbing() {
+            run(stringify!($absorbing), $instance(Some(AfterEnd::Absorb), Mode::Reference));
+        }
+
+        $(#[$attr])*
+        #[test]
+        fn $reset() {
+            run(stringify!($reset), $instance(Some(AfterEnd::Reset), Mode::Reference));
+        }
+    )*};
+}
+
+/// The tally of one instance: some comparisons made, the enclosures narrow.
+fn run(name: &str, tally: Tally) {
+    eprintln!("{name}: {tally:?}");
+    assert!(tally.checks > 0, "{name}: nothing compared");
+    assert!(
+        tally.width <= MAX_WIDTH,
+        "{name}: enclosures {} wide",
+        tally.width
+    );
+}
+
+scalar_contract! {
+    linear_gaussian_rational: linear_gaussian_rational_episodic, linear_gaussian_rational_fixed_absorbing, linear_gaussian_rational_fixed_reset;
+    linear_gaussian_inline_rational: linear_gaussian_inline_rational_episodic, linear_gaussian_inline_rational_fixed_absorbing, linear_gaussian_inline_rational_fixed_reset;
+    linear_gaussian_interval: linear_gaussian_interval_kernel_episodic, linear_gaussian_interval_kernel_fixed_absorbing, linear_gaussian_interval_kernel_fixed_reset;
+    linear_gaussian_inline_interval: linear_gaussian_inline_interval_kernel_episodic, linear_gaussian_inline_interval_kernel_fixed_absorbing, linear_gaussian_inline_interval_kernel_fixed_reset;
+    speed_limited_interval: speed_limited_interval_kernel_episodic, speed_limited_interval_kernel_fixed_absorbing, speed_limited_interval_kernel_fixed_reset;
+    #[cfg(feature = "mpfr")]
+    logistic_interval: logistic_interval_episodic, logistic_interval_fixed_absorbing, logistic_interval_fixed_reset;
+    #[cfg(feature = "mpfr")]
+    softmax_interval: softmax_interval_episodic, softmax_interval_fixed_absorbing, softmax_interval_fixed_reset;
+    #[cfg(feature = "mpfr")]
+    mlp_softmax_interval: mlp_softmax_interval_episodic, mlp_softmax_interval_fixed_absorbing, mlp_softmax_interval_fixed_reset;
+    #[cfg(feature = "mpfr")]
+    linear_gaussian_interval_problem: linear_gaussian_interval_episodic, linear_gaussian_interval_fixed_absorbing, linear_gaussian_interval_fixed_reset;
+    #[cfg(feature = "mpfr")]
+    linear_gaussian_inline_interval_problem: linear_gaussian_inline_interval_episodic, linear_gaussian_inline_interval_fixed_absorbing, linear_gaussian_inline_interval_fixed_reset;
+    #[cfg(feature = "mpfr")]
+    speed_limited_interval_problem: speed_limited_interval_episodic, speed_limited_interval_fixed_absorbing, speed_limited_interval_fixed_reset;
+    #[cfg(feature = "mpfr")]
+    mlp_gaussian_interval: mlp_gaussian_interval_episodic, mlp_gaussian_interval_fixed_absorbing, mlp_gaussian_interval_fixed_reset;
+}
+
+/// One failure test per instance: on a fixed horizon whose early ends absorb (the tail and
+/// every kind of decision present), the reference with the last decision's loss times
+/// `1 + 2⁻ᵉ` ([`perturbed`]; e per scalar and kind of route) must be rejected by every
+/// comparison of a quantity that loss enters.
+macro_rules! failure_demonstration {
+    ($($(#[$attr:meta])* $instance:ident($e:expr): $test:ident;)*) => {$(
+        $(#[$attr])*
+        #[test]
+        fn $test() {
+            let tally = $instance(Some(AfterEnd::Absorb), Mode::Perturbed($e));
+            eprintln!("{}: {tally:?}", stringify!($test));
+            assert!(tally.rejected > 0 && tally.rejected == tally.checks, "{tally:?}");
+        }
+    )*};
+}
+
+failure_demonstration! {
+    linear_gaussian_rational(RATIONAL_PERTURBATION): linear_gaussian_rational_rejects_a_perturbed_reference;
+    linear_gaussian_inline_rational(RATIONAL_PERTURBATION): linear_gaussian_inline_rational_rejects_a_perturbed_reference;
+    linear_gaussian_interval(KERNEL_PERTURBATION): linear_gaussian_interval_kernel_rejects_a_perturbed_reference;
+    speed_limited_interval(KERNEL_PERTURBATION): speed_limited_interval_kernel_rejects_a_perturbed_reference;
+    #[cfg(feature = "mpfr")]
+    logistic_interval(PROBLEM_PERTURBATION): logistic_interval_rejects_a_perturbed_reference;
+    #[cfg(feature = "mpfr")]
+    softmax_interval(PROBLEM_PERTURBATION): softmax_interval_rejects_a_perturbed_reference;
+    #[cfg(feature = "mpfr")]
+    mlp_softmax_interval(PROBLEM_PERTURBATION): mlp_softmax_interval_rejects_a_perturbed_reference;
+    #[cfg(feature = "mpfr")]
+    linear_gaussian_interval_problem(PROBLEM_PERTURBATION): linear_gaussian_interval_rejects_a_perturbed_reference;
+    #[cfg(feature = "mpfr")]
+    speed_limited_interval_problem(PROBLEM_PERTURBATION): speed_limited_interval_rejects_a_perturbed_reference;
+    #[cfg(feature = "mpfr")]
+    mlp_gaussian_interval(PROBLEM_PERTURBATION): mlp_gaussian_interval_rejects_a_perturbed_reference;
+}
