@@ -147,7 +147,7 @@ where
 /// The trajectory's notes ([`EstimatorKernel::sample_noting`]) when the estimate may read them:
 /// they were taken at this very θ (entry by entry equal, and for floats the same bits, so that
 /// `−0` and `0` differ) and hold [`EstimatorKernel::note_len`] entries for every feature row.
-fn usable_notes<'a, S, P, L, A>(
+pub(crate) fn usable_notes<'a, S, P, L, A>(
     policy: &P,
     theta: &[S],
     t: &Decisions<'a, S, L, A>,

@@ -173,23 +173,30 @@ pub trait EstimatorKernel<S: Scalar>: Policy<S> {
     /// baselines, which enter as shifted losses ([`crate::baseline`]): leave-one-out's b_i depends
     /// on every trajectory's losses, an estimated baseline's on the plain estimate.
     ///
+    /// `notes` are the roll-out's notes at this θ, or `None`, as for
+    /// [`EstimatorKernel::causal_sum_validated`]: a policy that notes something reads them
+    /// instead of recomputing them, with the same records and errors.
+    ///
     /// `losses` and `records` are cleared, then refilled: kept between calls, they allocate
     /// nothing per decision once grown. The default records `∇_θ l_t` and ψ_t per decision, as
     /// rows of 2 · [`Policy::param_dim`] entries, with [`Policy::loss_score_into`] per decision
-    /// (`record_rows`).
+    /// (`record_rows`), and ignores the notes.
     ///
     /// # Errors
     /// As [`Policy::loss_score_into`] at the first failing decision; `losses` and `records` are
     /// then unspecified.
+    #[allow(clippy::too_many_arguments)] // the trajectory, its notes and the records
     fn record_validated<L: Borrow<Self::Label>>(
         &self,
         theta: &[S],
         features: &[S],
+        notes: Option<&[S]>,
         labels: &[L],
         actions: &[Self::Action],
         losses: &mut Vec<S>,
         records: &mut Vec<S>,
     ) -> Result<(), PolicyError> {
+        let _ = notes;
         record_rows(self, theta, features, labels, actions, losses, records)
     }
 
@@ -502,9 +509,10 @@ pub(crate) fn accumulate<S: Scalar>(
 
 /// `causal_step_validated` and `record_validated` of a policy with a `loss_score_validated`:
 /// [`Policy::loss_score_into`]'s work after the θ and φ checks (the same values and, for
-/// validated θ and φ, the same errors), then the default's accumulation or records.
+/// validated θ and φ, the same errors), then the default's accumulation or records (with
+/// `noted`, `record_validated` is left to the policy).
 macro_rules! steps_by_validated {
-    ($label:ty, $action:ty) => {
+    ($label:ty, $action:ty, noted) => {
         #[inline]
         fn causal_step_validated(
             &self,
@@ -521,11 +529,15 @@ macro_rules! steps_by_validated {
             accumulate(g, None, &l, grad, score, score_sum);
             Ok(l)
         }
+    };
+    ($label:ty, $action:ty) => {
+        steps_by_validated!($label, $action, noted);
 
         fn record_validated<L: Borrow<$label>>(
             &self,
             theta: &[S],
             features: &[S],
+            _notes: Option<&[S]>,
             labels: &[L],
             actions: &[$action],
             losses: &mut Vec<S>,
@@ -568,7 +580,46 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
         self.sample_validated_theta(theta, phi, rng)
     }
 
-    steps_by_validated!(usize, usize);
+    steps_by_validated!(usize, usize, noted);
+
+    /// With notes, each decision's loss and score from its noted probabilities (as the causal
+    /// sum's); without, after the θ and φ checks the oracle has made.
+    fn record_validated<L: Borrow<usize>>(
+        &self,
+        theta: &[S],
+        features: &[S],
+        notes: Option<&[S]>,
+        labels: &[L],
+        actions: &[usize],
+        losses: &mut Vec<S>,
+        records: &mut Vec<S>,
+    ) -> Result<(), PolicyError> {
+        let Some(notes) = notes else {
+            return record_rows_with(
+                self,
+                features,
+                labels,
+                actions,
+                losses,
+                records,
+                |phi, y, a, grad, score| self.loss_score_validated(theta, phi, y, a, grad, score),
+            );
+        };
+        let k = self.actions();
+        let mut rows = notes.chunks_exact(k.max(1));
+        record_rows_with(
+            self,
+            features,
+            labels,
+            actions,
+            losses,
+            records,
+            |phi, y, a, grad, score| {
+                let probs = rows.next().unwrap_or_default();
+                self.noted_loss_score(probs, phi, *y, *a, grad, score)
+            },
+        )
+    }
 
     /// The probabilities π_θ(·|s_t): A entries per decision.
     fn note_len(&self) -> usize {
@@ -618,16 +669,34 @@ impl<S: Real> EstimatorKernel<S> for Softmax {
             scratch,
             |t, phi, y, a, grad, score, g, score_sum| {
                 let probs = &notes[t * k..(t + 1) * k];
-                let l = if let [p0, p1] = probs {
-                    let two = [p0.clone(), p1.clone()];
-                    self.loss_score_from_probs(&two, phi, *y, *a, grad, score)?
-                } else {
-                    self.loss_score_from_probs(probs, phi, *y, *a, grad, score)?
-                };
+                let l = self.noted_loss_score(probs, phi, *y, *a, grad, score)?;
                 accumulate(g, None, &l, grad, score, score_sum);
                 Ok(l)
             },
         )
+    }
+}
+
+impl Softmax {
+    /// One decision's loss and score from its noted probabilities
+    /// ([`Softmax::loss_score_from_probs`]), two actions' copied into a two-entry array so that
+    /// the loops over the actions unroll.
+    #[inline]
+    fn noted_loss_score<S: Real>(
+        &self,
+        probs: &[S],
+        phi: &[S],
+        label: usize,
+        action: usize,
+        grad: &mut [S],
+        score: &mut [S],
+    ) -> Result<S, PolicyError> {
+        if let [p0, p1] = probs {
+            let two = [p0.clone(), p1.clone()];
+            self.loss_score_from_probs(&two, phi, label, action, grad, score)
+        } else {
+            self.loss_score_from_probs(probs, phi, label, action, grad, score)
+        }
     }
 }
 
@@ -761,7 +830,15 @@ mod tests {
         let record = |validated: bool| {
             let (mut losses, mut records) = (vec![], vec![]);
             let r = if validated {
-                pi.record_validated(theta, rows, labels, actions, &mut losses, &mut records)
+                pi.record_validated(
+                    theta,
+                    rows,
+                    None,
+                    labels,
+                    actions,
+                    &mut losses,
+                    &mut records,
+                )
             } else {
                 record_rows(pi, theta, rows, labels, actions, &mut losses, &mut records)
             };
@@ -828,7 +905,8 @@ mod tests {
 
     /// Sampling every row with notes draws as `sample_validated` does and notes `note_len`
     /// entries per row; the causal sum from those notes is the validated sum's, bit for bit
-    /// (floats), with its errors, with an absorbing tail's losses `end` and the summed loss.
+    /// (floats), with its errors, with an absorbing tail's losses `end` and the summed loss; so
+    /// are the records from those notes.
     #[allow(clippy::too_many_arguments)] // a trajectory
     fn noted_sum_as_validated<S: Real>(
         pi: &Softmax,
@@ -873,6 +951,25 @@ mod tests {
         assert_eq!(r1, r2);
         if r1.is_ok() {
             assert!(same_all(&g1, &g2) && same(&l1, &l2));
+        }
+        let record = |noted: bool| {
+            let (mut losses, mut records) = (vec![], vec![]);
+            let notes = noted.then_some(&notes[..]);
+            let r = pi.record_validated(
+                theta,
+                rows,
+                notes,
+                labels,
+                actions,
+                &mut losses,
+                &mut records,
+            );
+            (r, losses, records)
+        };
+        let ((r1, l1, c1), (r2, l2, c2)) = (record(true), record(false));
+        assert_eq!(r1, r2);
+        if r1.is_ok() {
+            assert!(same_all(&l1, &l2) && same_all(&c1, &c2));
         }
     }
 

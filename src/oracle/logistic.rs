@@ -289,11 +289,12 @@ impl<S: Real> EstimatorKernel<S> for Logistic {
     /// n entries of `records`, `dz_t` (∇_θ l_t = dz_t φ_t) in the next n. With a compile-time
     /// dimension for 1 to 8 features in one loop (`record_fixed`); else (and to report a failing
     /// decision) decision by decision with the checks of
-    /// [`EstimatorKernel::causal_step_validated`].
+    /// [`EstimatorKernel::causal_step_validated`]. The policy notes nothing: `notes` is ignored.
     fn record_validated<L: Borrow<usize>>(
         &self,
         theta: &[S],
         features: &[S],
+        _notes: Option<&[S]>,
         labels: &[L],
         actions: &[usize],
         losses: &mut Vec<S>,
@@ -574,6 +575,7 @@ mod tests {
                         pi.record_validated(
                             &theta,
                             &features,
+                            None,
                             &labels,
                             actions,
                             &mut losses,

@@ -2,15 +2,17 @@
 //! trajectory's pass ([`RecordedPass`], leave-one-out).
 
 use super::RecordedPass;
+use super::causal::usable_notes;
 use super::{Decisions, policy_error};
 use crate::oracle::EstimatorKernel;
 use crate::problem::OracleError;
-use crate::scalar::Scalar;
+use crate::scalar::{Real, Scalar};
 use std::borrow::Borrow;
 
 /// Fills `out` on a trajectory whose θ and features are validated: the per-step losses `l_t`,
 /// then `L_abs` when it absorbed; the number of scored decisions (n − 1; n when it absorbed);
-/// and the decisions' records in the policy's form ([`EstimatorKernel::record_validated`]).
+/// and the decisions' records in the policy's form ([`EstimatorKernel::record_validated`], with
+/// the roll-out's notes where usable).
 pub(crate) fn record_pass<S, P, L, A>(
     policy: &P,
     theta: &[S],
@@ -18,7 +20,7 @@ pub(crate) fn record_pass<S, P, L, A>(
     out: &mut RecordedPass<S>,
 ) -> Result<(), OracleError>
 where
-    S: Scalar,
+    S: Real,
     P: EstimatorKernel<S, Action = A>,
     L: Borrow<P::Label>,
 {
@@ -28,6 +30,7 @@ where
         .record_validated(
             theta,
             t.feature_data,
+            usable_notes(policy, theta, t),
             t.labels,
             t.actions,
             &mut out.losses,

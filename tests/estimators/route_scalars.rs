@@ -478,6 +478,7 @@ where
         .record_validated(
             theta,
             t.feature_data(),
+            None,
             &labels,
             &t.actions,
             &mut losses,

@@ -365,6 +365,7 @@ where
                 .record_validated(
                     th,
                     t.feature_data(),
+                    None,
                     &labels,
                     &t.actions,
                     &mut losses,
