@@ -41,7 +41,6 @@ use std::borrow::Borrow;
 use std::cell::RefCell;
 #[cfg(feature = "mpfr")]
 use {
-    ilopt::algo::ConfigNumber,
     ilopt::baseline::{Baseline, Baselined, PerDecisionTerms},
     ilopt::oracle::{DecisionTerms, RecordedPass},
     ilopt::problem::{EstimatorForm, OracleError, Weighting},
@@ -74,10 +73,6 @@ const SEEDS: [u64; 3] = [2, 5, 7];
 const M: usize = 2;
 #[cfg(feature = "mpfr")]
 const BATCHES: usize = 3;
-
-/// More decisions than any trajectory of these tasks takes (the time-indexed baselines' length).
-#[cfg(feature = "mpfr")]
-const LONGEST: usize = 5000;
 
 /// σ_π of the Gaussian policies: dyadic, so that σ² and the score's division are exact in
 /// rationals.
@@ -121,12 +116,6 @@ fn shift_baseline<S: Scalar>(i: usize, scored: usize) -> S {
     } else {
         S::zero()
     }
-}
-
-#[cfg(feature = "mpfr")]
-/// The time-indexed baseline of decision i, `3/8 − i/1024` (dyadic: exact in every scalar).
-fn time_indexed(i: usize) -> f64 {
-    0.375 - i as f64 / 1024.0
 }
 
 #[cfg(feature = "mpfr")]
@@ -694,17 +683,7 @@ where
     LQ: Borrow<PQ::Label>,
 {
     let mut tally = Tally::default();
-    let mut tails = 0;
-    for seed in SEEDS {
-        let mut cost = Cost::default();
-        let t = p
-            .rollout(
-                &Behaviour::Learner(&thetas[0]),
-                &mut KitRng::seed_from_u64(seed),
-                &mut cost,
-            )
-            .unwrap();
-        tails += usize::from(t.absorbed.is_some());
+    for (seed, t) in SEEDS.into_iter().zip(rollouts(p, &thetas[0])) {
         let tq = lift::<BigRational, _, _, _, _>(&t, label, action);
         for k in 0..KERNEL_THETAS {
             let (th, other) = (lift_theta(&thetas[k]), lift_theta(&thetas[1 - k]));
@@ -721,21 +700,39 @@ where
             }
         }
     }
-    assert_absorbs(&p.horizon, tails);
     tally
 }
 
-/// A fixed horizon whose early ends absorb must have produced an absorbing tail.
-fn assert_absorbs(horizon: &Horizon, tails: usize) {
+/// The learner's roll-outs at θ, one per seed of [`SEEDS`]; on a fixed horizon whose early ends
+/// absorb, at least one of them absorbs.
+fn rollouts<T, P>(p: &mut TaskProblem<T, P>, theta: &DVector<f64>) -> Vec<Trajectory64<T>>
+where
+    T: Task<f64>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
+    T::Label: Borrow<P::Label>,
+{
+    let mut cost = Cost::default();
+    let ts: Vec<_> = SEEDS
+        .iter()
+        .map(|&seed| {
+            let mut rng = KitRng::seed_from_u64(seed);
+            p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                .unwrap()
+        })
+        .collect();
     if matches!(
-        horizon,
+        p.horizon,
         Horizon::Fixed {
             after_end: AfterEnd::Absorb,
             ..
         }
     ) {
-        assert!(tails > 0, "no absorbing tail among the trajectories");
+        assert!(
+            ts.iter().any(|t| t.absorbed.is_some()),
+            "no absorbing tail among the trajectories"
+        );
     }
+    ts
 }
 
 /// A trajectory of the task `T` in `S`.
@@ -830,17 +827,7 @@ where
     LI: Borrow<PI::Label>,
 {
     let mut tally = Tally::default();
-    let mut tails = 0;
-    for seed in SEEDS {
-        let mut cost = Cost::default();
-        let t = p
-            .rollout(
-                &Behaviour::Learner(&thetas[0]),
-                &mut KitRng::seed_from_u64(seed),
-                &mut cost,
-            )
-            .unwrap();
-        tails += usize::from(t.absorbed.is_some());
+    for (seed, t) in SEEDS.into_iter().zip(rollouts(p, &thetas[0])) {
         let ti = lift::<Interval, _, _, _, _>(&t, label, action);
         for k in 0..KERNEL_THETAS {
             let (th, other) = (lift_theta(&thetas[k]), lift_theta(&thetas[1 - k]));
@@ -860,7 +847,6 @@ where
             }
         }
     }
-    assert_absorbs(&p.horizon, tails);
     tally
 }
 
@@ -1024,47 +1010,9 @@ mod problem_level {
         out
     }
 
-    /// Every kind of baseline, as `routes`' (the constants dyadic, so that the f64 and the
-    /// interval oracles estimate the same real number).
+    /// Every kind of baseline, as `routes`'.
     pub(super) fn kinds() -> Vec<Baseline> {
-        let number = |x: f64| ConfigNumber::from(x);
-        vec![
-            Baseline::None,
-            Baseline::Constant { value: number(0.5) },
-            Baseline::TimeIndexed {
-                values: (0..LONGEST).map(|i| number(time_indexed(i))).collect(),
-            },
-            Baseline::LeaveOneOut,
-            Baseline::Estimated {
-                time_indexed: true,
-                decay: Some(number(0.9)),
-            },
-            Baseline::Estimated {
-                time_indexed: false,
-                decay: None,
-            },
-            Baseline::StateDependent {
-                features: None,
-                time: true,
-                decay: None,
-                ridge: Some(number(1e-3)),
-                fit_every: Some(1),
-            },
-            Baseline::StateDependent {
-                features: None,
-                time: false,
-                decay: Some(number(0.9)),
-                ridge: Some(number(1e-3)),
-                fit_every: Some(2),
-            },
-            Baseline::StateDependent {
-                features: Some(2),
-                time: true,
-                decay: None,
-                ridge: Some(number(1e-2)),
-                fit_every: Some(3),
-            },
-        ]
+        super::super::routes::baseline_kinds()
     }
 
     /// The baselined oracle's routes for every kind on the same batches at θ: `estimate`,
@@ -1161,7 +1109,7 @@ mod problem_level {
             let b = |i: usize| match kind {
                 Baseline::None => S::zero(),
                 Baseline::Constant { .. } => S::from_ratio(1, 2),
-                Baseline::TimeIndexed { .. } => exact(time_indexed(i)),
+                Baseline::TimeIndexed { .. } => exact(super::super::routes::time_indexed(i)),
                 Baseline::LeaveOneOut => to_go[1 - j].get(i).cloned().unwrap_or_else(S::zero),
                 _ => unreachable!("a kind known from outside"),
             };
@@ -1212,17 +1160,8 @@ mod problem_level {
         };
         let thetas_i = [lift_theta(&thetas[0]), lift_theta(&thetas[1])];
         let mut tally = Tally::default();
-        let mut tails = 0;
         let mut cost = Cost::default();
-        for seed in SEEDS {
-            let t = p
-                .rollout(
-                    &Behaviour::Learner(&thetas[0]),
-                    &mut KitRng::seed_from_u64(seed),
-                    &mut cost,
-                )
-                .unwrap();
-            tails += usize::from(t.absorbed.is_some());
+        for (seed, t) in SEEDS.into_iter().zip(rollouts(p, &thetas[0])) {
             let ti = lift::<Interval, _, _, _, _>(&t, label, action);
             for k in 0..2 {
                 let (th, other) = (&thetas_i[k], &thetas_i[1 - k]);
@@ -1242,7 +1181,6 @@ mod problem_level {
                 }
             }
         }
-        assert_absorbs(&p.horizon, tails);
 
         // The baselined oracle on batches of M trajectories.
         let mut rng = KitRng::seed_from_u64(7);

@@ -50,11 +50,12 @@ const M: usize = 2;
 const BATCHES: usize = 3;
 
 /// More decisions than any trajectory of these tasks takes (the time-indexed baselines' length).
-const LONGEST: usize = 5000;
+pub(super) const LONGEST: usize = 5000;
 
-/// The time-indexed baseline of decision i.
-fn time_indexed(i: usize) -> f64 {
-    0.3 - 1e-4 * i as f64
+/// The time-indexed baseline of decision i, `3/8 − i/1024` (dyadic: exact in every scalar, so
+/// that `route_scalars`' lifted oracles estimate the f64 oracle's real number).
+pub(super) fn time_indexed(i: usize) -> f64 {
+    0.375 - i as f64 / 1024.0
 }
 
 /// One trajectory's per-decision terms from the policy's in-place methods: losses, loss gradients,
@@ -470,44 +471,7 @@ where
     P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64> + Clone,
     T::Label: Borrow<P::Label>,
 {
-    let number = |x: f64| ConfigNumber::from(x);
-    let kinds = [
-        Baseline::None,
-        Baseline::Constant { value: number(0.5) },
-        Baseline::TimeIndexed {
-            values: (0..LONGEST).map(|i| number(time_indexed(i))).collect(),
-        },
-        Baseline::LeaveOneOut,
-        Baseline::Estimated {
-            time_indexed: true,
-            decay: Some(number(0.9)),
-        },
-        Baseline::Estimated {
-            time_indexed: false,
-            decay: None,
-        },
-        Baseline::StateDependent {
-            features: None,
-            time: true,
-            decay: None,
-            ridge: Some(number(1e-3)),
-            fit_every: Some(1),
-        },
-        Baseline::StateDependent {
-            features: None,
-            time: false,
-            decay: Some(number(0.9)),
-            ridge: Some(number(1e-3)),
-            fit_every: Some(2),
-        },
-        Baseline::StateDependent {
-            features: Some(2),
-            time: true,
-            decay: None,
-            ridge: Some(number(1e-2)),
-            fit_every: Some(3),
-        },
-    ];
+    let kinds = baseline_kinds();
     let theta = &thetas[0];
     let th = theta.as_slice();
     for kind in &kinds {
@@ -584,6 +548,49 @@ where
             }
         }
     }
+}
+
+/// Every kind of baseline the contracts run (its constants dyadic, so that the f64 and the
+/// lifted oracles of `route_scalars` estimate the same real number).
+pub(super) fn baseline_kinds() -> Vec<Baseline> {
+    let number = |x: f64| ConfigNumber::from(x);
+    vec![
+        Baseline::None,
+        Baseline::Constant { value: number(0.5) },
+        Baseline::TimeIndexed {
+            values: (0..LONGEST).map(|i| number(time_indexed(i))).collect(),
+        },
+        Baseline::LeaveOneOut,
+        Baseline::Estimated {
+            time_indexed: true,
+            decay: Some(number(0.9)),
+        },
+        Baseline::Estimated {
+            time_indexed: false,
+            decay: None,
+        },
+        Baseline::StateDependent {
+            features: None,
+            time: true,
+            decay: None,
+            ridge: Some(number(1e-3)),
+            fit_every: Some(1),
+        },
+        Baseline::StateDependent {
+            features: None,
+            time: false,
+            decay: Some(number(0.9)),
+            ridge: Some(number(1e-3)),
+            fit_every: Some(2),
+        },
+        Baseline::StateDependent {
+            features: Some(2),
+            time: true,
+            decay: None,
+            ridge: Some(number(1e-2)),
+            fit_every: Some(3),
+        },
+    ]
 }
 
 /// Two θ of `d` entries: `base` plus independent uniform noise of half-width `spread`.
