@@ -40,9 +40,11 @@
 //! [`TableInputs::estimate`].
 
 mod search;
+mod setting;
 mod walk;
 
-pub use search::{Candidate, Estimate, Setting, X_MAX, evaluate, search};
+pub use search::{Candidate, Estimate, X_MAX, evaluate, search};
+pub use setting::Setting;
 pub use walk::{CELLS, Quadrature, o2nc_mean};
 
 use super::search::{Budget, Noise, STARTS};

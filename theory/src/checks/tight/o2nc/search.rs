@@ -3,6 +3,7 @@
 //! Algorithm 5, and their X̄/B estimated in `f64`.
 
 use super::bound;
+use super::setting::Setting;
 use super::walk::o2nc_mean;
 use crate::checks::tight::instance::{Instance, exact};
 use crate::checks::tight::search::{
@@ -11,7 +12,7 @@ use crate::checks::tight::search::{
 };
 use crate::inputs::TableInputs;
 use ilopt::algo::ConfigNumber;
-use ilopt::algo::o2nc::{O2ncConfig, O2ncParameters};
+use ilopt::algo::o2nc::O2ncConfig;
 use ilopt::exact::enumerate::moments;
 use ilopt::exact::forward::forward;
 use ilopt::problem::EstimatorForm;
@@ -36,19 +37,6 @@ pub struct Candidate {
     pub g: f64,
     /// x = GNδ/Δ₀, which sets δ (T ≤ 2 iff x ≤ 2√2).
     pub x: f64,
-}
-
-/// The exact inputs of Algorithm 5 for a candidate.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Setting {
-    /// Δ₀ = F(θ₁).
-    pub delta0: BigRational,
-    /// δ = xΔ₀/(GN).
-    pub delta: BigRational,
-    /// G.
-    pub g: BigRational,
-    /// T, K, M and D, from the kit's [`O2ncConfig::parameters`].
-    pub params: O2ncParameters,
 }
 
 impl Candidate {

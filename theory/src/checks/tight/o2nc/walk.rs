@@ -2,7 +2,7 @@
 //! draws, each block's integral over s by a Riemann sum: enclosed in intervals (the rows), or by
 //! the midpoint rule in `f64` (the search). See the parent module for why the walk is exact.
 
-use super::search::Setting;
+use super::setting::Setting;
 use crate::checks::tight::paths::{Enclose, PathMean};
 use crate::inputs::TableInputs;
 use ilopt::algo::o2nc::O2ncParameters;
