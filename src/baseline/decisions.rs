@@ -214,11 +214,15 @@ pub(crate) fn record_by_terms<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
 }
 
 /// The baselined causal estimate `g − Σ_i b_i ψ_i` on one trajectory for baselines known before
-/// the pass ([`add_given_by_records`] into zeros, with buffers of its own), checked finite: the
-/// one route of [`PerDecisionTerms::baselined_estimate`] without weights, for every problem.
+/// the pass, by summation by parts (`Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`): the
+/// decisions recorded ([`PerDecisionTerms::record_decisions`]), then summed once
+/// ([`PerDecisionTerms::estimate_recorded`]) with the losses of [`shifted_by_given`] — the route
+/// of leave-one-out's estimates, with other shifts. The one route of
+/// [`PerDecisionTerms::baselined_estimate`] without weights, for every problem.
 ///
 /// # Errors
-/// As [`add_given_by_records`]; [`OracleError::NonFinite`] for a non-finite estimate.
+/// As [`PerDecisionTerms::record_decisions`]; [`OracleError::Baseline`] when a time-indexed list
+/// is shorter than the scored decisions; [`OracleError::NonFinite`] for a non-finite estimate.
 pub(crate) fn given_by_records<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
     problem: &P,
     theta: &DVector<S>,
@@ -226,46 +230,30 @@ pub(crate) fn given_by_records<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
     baseline: Given<'_, S>,
     cost: &mut Cost,
 ) -> Result<DVector<S>, OracleError> {
+    let mut recorded = RecordedPass::new();
+    problem.record_decisions(theta, trajectory, &mut recorded, cost)?;
+    let mut shifted = Vec::new();
+    shifted_by_given(&recorded, baseline, &mut shifted)?;
     let mut g = vec![S::zero(); problem.dim()];
-    let mut buffers = (RecordedPass::new(), Vec::new());
-    add_given_by_records(
-        problem,
-        theta,
-        trajectory,
-        baseline,
-        &mut buffers,
-        &mut g,
-        cost,
-    )?;
+    problem.estimate_recorded(trajectory, &mut recorded, Some(&shifted), &mut g);
     if !g.iter().all(Scalar::is_finite) {
         return Err(OracleError::NonFinite("the baselined gradient estimate"));
     }
     Ok(DVector::from_vec(g))
 }
 
-/// Adds to `g` the baselined causal estimate `g − Σ_i b_i ψ_i` on one trajectory for baselines
-/// known before the pass, by summation by parts (`Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`):
-/// the decisions recorded ([`PerDecisionTerms::record_decisions`]) into `buffers.0`, then summed
-/// once ([`PerDecisionTerms::estimate_recorded`]) with the per-step losses
-/// `l'_t = l_t + (b_t − b_{t−1})` written into `buffers.1` (b_{−1} = 0, b_t = 0 from the first
-/// unscored step on, so the absorbing tail's entry, if any, carries `−b_{n−1}`) — the route of
-/// leave-one-out's estimates, with other shifts. The buffers are kept between calls: nothing is
-/// allocated per step once they have grown.
+/// The recorded per-step losses with a baseline known before the pass folded in, into
+/// `shifted`: `l'_t = l_t + (b_t − b_{t−1})` (b_{−1} = 0, b_t = 0 from the first unscored step
+/// on, so the absorbing tail's entry, if any, carries `−b_{n−1}`), with which
+/// [`PerDecisionTerms::estimate_recorded`] sums `g − Σ_i b_i ψ_i`.
 ///
 /// # Errors
-/// As [`PerDecisionTerms::record_decisions`]; [`OracleError::Baseline`] when a time-indexed list
-/// is shorter than the scored decisions.
-pub(crate) fn add_given_by_records<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
-    problem: &P,
-    theta: &DVector<S>,
-    trajectory: &P::Trajectory,
+/// [`OracleError::Baseline`] when a time-indexed list is shorter than the scored decisions.
+pub(crate) fn shifted_by_given<S: Scalar>(
+    recorded: &RecordedPass<S>,
     baseline: Given<'_, S>,
-    buffers: &mut (RecordedPass<S>, Vec<S>),
-    g: &mut [S],
-    cost: &mut Cost,
+    shifted: &mut Vec<S>,
 ) -> Result<(), OracleError> {
-    let (recorded, shifted) = buffers;
-    problem.record_decisions(theta, trajectory, recorded, cost)?;
     let scored = recorded.decisions();
     if !baseline.covers(scored) {
         return Err(too_few_baselines(scored));
@@ -281,6 +269,5 @@ pub(crate) fn add_given_by_records<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
         previous = bt;
         l.clone() + shift
     }));
-    problem.estimate_recorded(trajectory, recorded, Some(shifted), g);
     Ok(())
 }

@@ -45,7 +45,7 @@ mod running;
 
 pub use decisions::PerDecisionTerms;
 pub(crate) use decisions::{
-    add_given_by_records, given_by_records, leading_features, record_by_terms, too_few_baselines,
+    given_by_records, leading_features, record_by_terms, shifted_by_given, too_few_baselines,
 };
 pub use oracle::Baselined;
 pub use regression::{RunningRegression, solve_symmetric};

@@ -39,11 +39,9 @@ struct StateDependent<S> {
 /// Reused storage of one oracle call: per trajectory its [`DecisionTerms`] or its
 /// [`RecordedPass`], the leave-one-out step totals or the estimated baselines, per-step losses,
 /// one trajectory's plain estimate, the estimate; per trajectory its state features (k per
-/// decision) and the number k, and the rows of a problem that builds them; one trajectory's
-/// records and shifted losses for baselines given before the pass.
+/// decision) and the number k, and the rows of a problem that builds them.
 #[derive(Debug, Clone)]
 struct Buffers<S> {
-    given: (RecordedPass<S>, Vec<S>),
     terms: Vec<DecisionTerms<S>>,
     features: Vec<(Vec<S>, usize)>,
     rows: Vec<S>,
@@ -194,7 +192,6 @@ impl<P, S: Scalar> Baselined<P, S> {
             batch,
             kind,
             buffers: Buffers {
-                given: (RecordedPass::new(), Vec::new()),
                 terms: Vec::new(),
                 features: Vec::new(),
                 rows: Vec::new(),
@@ -328,12 +325,14 @@ fn leave_one_out_losses<S: Scalar>(totals: &[S], own: &[S], others: &S, shifted:
 }
 
 /// The mean over `batch` of the baselined estimates with baselines known before the pass:
-/// every trajectory's decisions recorded and summed once with its losses shifted by the baseline
-/// ([`super::add_given_by_records`], into the kept buffers), as leave-one-out's are. No
-/// allocation per step.
+/// every trajectory's decisions recorded ([`PerDecisionTerms::record_decisions`]), then each
+/// trajectory's estimate summed once with its losses shifted by the baseline
+/// ([`super::shifted_by_given`], [`PerDecisionTerms::estimate_recorded`]), as leave-one-out's
+/// are. No allocation per step.
 ///
 /// # Errors
-/// For an empty batch, the first trajectory's error, and a non-finite mean.
+/// For an empty batch, the first trajectory's error, too few time-indexed baselines, and a
+/// non-finite mean.
 fn given_estimate<S: Scalar, P: PerDecisionTerms<S>>(
     inner: &P,
     buffers: &mut Buffers<S>,
@@ -343,11 +342,15 @@ fn given_estimate<S: Scalar, P: PerDecisionTerms<S>>(
     cost: &mut Cost,
 ) -> Result<DVector<S>, OracleError> {
     let m = batch_size(batch)?;
-    let Buffers { given: one, g, .. } = buffers;
+    let Buffers {
+        records, losses, g, ..
+    } = buffers;
+    let records = record_batch(inner, theta, batch, records, cost)?;
     g.clear();
     g.resize(inner.dim(), S::zero());
-    for t in batch {
-        super::add_given_by_records(inner, theta, t, given, one, g, cost)?;
+    for (t, r) in batch.iter().zip(records.iter_mut()) {
+        super::shifted_by_given(r, given, losses)?;
+        inner.estimate_recorded(t, r, Some(losses), g);
     }
     checked_mean(g, &S::from_i64(m as i64))
 }
@@ -842,9 +845,9 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
     }
 
     /// Without a baseline, the minibatch's own (one pass per trajectory). With a baseline the
-    /// estimate, then the trajectory loss: for the kinds that record every trajectory's decisions
-    /// (estimated, leave-one-out, state-dependent) read off the records where the problem can
-    /// ([`RecordedPass::trajectory_loss`]; the same value), else computed again.
+    /// estimate, which records every trajectory's decisions, then the trajectory loss read off
+    /// the records where the problem can ([`RecordedPass::trajectory_loss`]; the same value),
+    /// else computed again.
     fn estimate_with_loss(
         &mut self,
         theta: &DVector<S>,
@@ -855,10 +858,7 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
         if matches!(self.kind, Kind::None) {
             return self.batch.estimate_with_loss(theta, trajectory, form, cost);
         }
-        if !matches!(
-            self.kind,
-            Kind::Estimated { .. } | Kind::LeaveOneOut | Kind::StateDependent { .. }
-        ) {
+        if form == EstimatorForm::Full {
             return crate::problem::estimate_then_loss(self, theta, trajectory, form, cost);
         }
         let g = self.estimate(theta, trajectory, form, cost)?;

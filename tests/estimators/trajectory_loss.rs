@@ -96,14 +96,25 @@ fn assert_estimate_with_loss<P: IlProblem<f64>>(p: &mut P, thetas: &[DVector<f64
     }
 }
 
-/// The baselines whose estimates record every trajectory's decisions, from which the loss is
-/// read: the estimated optimum (time-indexed and one constant) and leave-one-out.
+/// Baselines whose estimates record every trajectory's decisions, from which the loss is read:
+/// a constant, per-decision constants, the estimated optimum (time-indexed and one constant) and
+/// leave-one-out.
 fn recorded_baselines() -> Vec<Baseline> {
     let estimated = |time_indexed| Baseline::Estimated {
         time_indexed,
         decay: Some(ConfigNumber::ratio(9, 10)),
     };
-    vec![estimated(true), estimated(false), Baseline::LeaveOneOut]
+    vec![
+        Baseline::Constant {
+            value: ConfigNumber::ratio(1, 4),
+        },
+        Baseline::TimeIndexed {
+            values: (0..600).map(|i| ConfigNumber::ratio(i % 7, 8)).collect(),
+        },
+        estimated(true),
+        estimated(false),
+        Baseline::LeaveOneOut,
+    ]
 }
 
 /// The loss summed in the estimate's own pass (`IlProblem::estimate_with_loss`) is the trajectory
