@@ -497,13 +497,9 @@ fn baselined_estimates_allocate_per_call_not_per_step() {
         // Per call, never per step: every baseline records the decisions into kept buffers, so
         // each call allocates only its result.
         let fast = 1;
-        // The weighted estimate: with baselines known before the pass, per trajectory its
-        // estimate and its pass's scratch, then the mean; leave-one-out's terms go into kept
-        // buffers, then per trajectory its estimate, then the mean.
-        let weighted = match kind {
-            Baseline::LeaveOneOut => m as u64 + 2,
-            _ => 2 * m as u64 + 1,
-        };
+        // The weighted estimate: every kind's terms go into kept buffers, then per trajectory
+        // its estimate, then the mean.
+        let weighted = m as u64 + 2;
         for (what, counts, max) in [
             ("baselined estimate", &estimate_counts, fast),
             ("baselined weighted estimate", &weighted_counts, weighted),

@@ -38,52 +38,6 @@ pub trait PerDecisionTerms<S: Scalar>: IlProblem<S> {
         cost: &mut Cost,
     ) -> Result<(), OracleError>;
 
-    /// The baselined causal estimator `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) at θ on one
-    /// trajectory, for baselines fixed before the pass: unbiased for ∇F(θ) when τ ∼ p(·; θ),
-    /// since b_i does not depend on τ. With `weights = Some((θ_new, weighting))` it is the
-    /// baselined importance-weighted old-point estimate at θ = θ_old on a trajectory sampled at
-    /// θ_new ([`IlProblem::weighted_estimate`] with the baseline of [`crate::baseline`]):
-    /// `g_b = c · (D + Σ_i ψ_i (L_i − w_{1:i} b_i))` ([`DecisionTerms`]; per-decision weights: the
-    /// prefix weight `w_{1:i}` on decision i's baseline term, `c = 1`; trajectory weight: every
-    /// `w = 1` inside and `c` the trajectory's weight), unbiased for ∇F(θ_old) by the argument of
-    /// the module docs of [`crate::baseline`].
-    ///
-    /// Without weights the default is every problem's one route for baselines known before the
-    /// pass (`given_by_records`): the decisions recorded ([`PerDecisionTerms::record_decisions`]),
-    /// then summed once with each step's loss shifted by the baseline
-    /// ([`PerDecisionTerms::estimate_recorded`] with `l'_t = l_t + b_t − b_{t−1}`, b_t = 0 from
-    /// the first unscored step on), as leave-one-out's are. With weights it assembles the
-    /// estimate from [`PerDecisionTerms::decision_terms`] (one pass, storing each decision's
-    /// score); a problem may override the weighted case with a faster pass (the real tasks
-    /// subtract each decision's term as it is met in the weighted pass).
-    ///
-    /// # Errors
-    /// As [`PerDecisionTerms::decision_terms`] (weighted) or
-    /// [`PerDecisionTerms::record_decisions`] (unweighted); [`OracleError::Baseline`] when a
-    /// time-indexed list is shorter than the trajectory's scored decisions;
-    /// [`OracleError::NonFinite`] for a non-finite unweighted estimate.
-    fn baselined_estimate(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        weights: Option<(&DVector<S>, Weighting)>,
-        baseline: Given<'_, S>,
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        if weights.is_none() {
-            return given_by_records(self, theta, trajectory, baseline, cost);
-        }
-        let mut terms = DecisionTerms::new();
-        self.decision_terms(theta, trajectory, weights, &mut terms, cost)?;
-        terms.finish();
-        if !baseline.covers(terms.decisions()) {
-            return Err(too_few_baselines(terms.decisions()));
-        }
-        let mut g = vec![S::zero(); theta.len()];
-        terms.estimate_into(|i| baseline.at(i).cloned(), &mut g);
-        Ok(DVector::from_vec(g))
-    }
-
     /// The decisions of one trajectory at θ recorded for the causal estimator of eq. 3.15
     /// ([`RecordedPass`]): every step's loss `l_t` (the absorbing tail as one more), the number of
     /// scored decisions, and what [`PerDecisionTerms::estimate_recorded`] needs to sum the estimate
@@ -213,17 +167,20 @@ pub(crate) fn record_by_terms<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
     Ok(())
 }
 
-/// The baselined causal estimate `g − Σ_i b_i ψ_i` on one trajectory for baselines known before
-/// the pass, by summation by parts (`Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`): the
-/// decisions recorded ([`PerDecisionTerms::record_decisions`]), then summed once
-/// ([`PerDecisionTerms::estimate_recorded`]) with the losses of [`shifted_by_given`] — the route
-/// of leave-one-out's estimates, with other shifts. The one route of
-/// [`PerDecisionTerms::baselined_estimate`] without weights, for every problem.
+/// The baselined causal estimator `g_b = g − Σ_i b_i ψ_i` ([`crate::baseline`]) at θ on one
+/// trajectory of `problem`, for baselines fixed before the pass: unbiased for ∇F(θ) when
+/// τ ∼ p(·; θ), since b_i does not depend on τ. By summation by parts
+/// (`Σ_i b_i ψ_i = Σ_t (b_{t−1} − b_t) Σ_{i<t} ψ_i`): the decisions recorded
+/// ([`PerDecisionTerms::record_decisions`]), then summed once
+/// ([`PerDecisionTerms::estimate_recorded`]) with the per-step losses
+/// `l'_t = l_t + (b_t − b_{t−1})` (b_{−1} = 0, b_t = 0 from the first unscored step on) — the route
+/// of every unweighted baseline in [`crate::baseline::Baselined`], for every problem. Counts the
+/// same gradient evaluations as [`IlProblem::estimate`].
 ///
 /// # Errors
 /// As [`PerDecisionTerms::record_decisions`]; [`OracleError::Baseline`] when a time-indexed list
 /// is shorter than the scored decisions; [`OracleError::NonFinite`] for a non-finite estimate.
-pub(crate) fn given_by_records<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
+pub fn baselined_estimate<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
     problem: &P,
     theta: &DVector<S>,
     trajectory: &P::Trajectory,

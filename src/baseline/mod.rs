@@ -43,10 +43,8 @@ mod oracle;
 mod regression;
 mod running;
 
-pub use decisions::PerDecisionTerms;
-pub(crate) use decisions::{
-    given_by_records, leading_features, record_by_terms, shifted_by_given, too_few_baselines,
-};
+pub use decisions::{PerDecisionTerms, baselined_estimate};
+pub(crate) use decisions::{leading_features, record_by_terms, shifted_by_given};
 pub use oracle::Baselined;
 pub use regression::{RunningRegression, solve_symmetric};
 pub use running::RunningOptimum;

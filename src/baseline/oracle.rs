@@ -69,12 +69,11 @@ struct Buffers<S> {
 /// estimate the weighted loss-to-go). It is a function of the other trajectories only, which are
 /// independent of τ_j. The unweighted estimate records each trajectory's decisions
 /// ([`PerDecisionTerms::record_decisions`]), then sums each trajectory's estimate once with its
-/// per-step losses shifted by the baseline ([`PerDecisionTerms::estimate_recorded`]); the weighted
-/// one assembles it from [`DecisionTerms`], as [`Baselined::estimate_by_terms`] does for every
-/// kind. Baselines known before the pass (a constant, per-decision constants) take leave-one-out's
-/// route in the unweighted estimate, with their own shifts. They, and the committed estimated
-/// ones, enter the weighted estimate through the problem's own weighted pass
-/// ([`PerDecisionTerms::baselined_estimate`] with weights).
+/// per-step losses shifted by the baseline ([`PerDecisionTerms::estimate_recorded`]). Baselines
+/// known before the pass (a constant, per-decision constants) take the same route with their own
+/// shifts ([`super::baselined_estimate`]). Every weighted estimate, of every kind, is assembled
+/// from the trajectories' weighted [`DecisionTerms`], as [`Baselined::estimate_by_terms`]
+/// assembles the unweighted ones.
 ///
 /// Estimated optimum: the statistics of the trajectories of a call enter the baselines when the
 /// next roll-out starts ([`RunningOptimum`]), so every trajectory is estimated with baselines from
@@ -353,22 +352,6 @@ fn given_estimate<S: Scalar, P: PerDecisionTerms<S>>(
         inner.estimate_recorded(t, r, Some(losses), g);
     }
     checked_mean(g, &S::from_i64(m as i64))
-}
-
-/// The mean of one baselined estimate per trajectory of `batch` ([`crate::batched`]'s mean),
-/// checked finite.
-///
-/// # Errors
-/// For an empty batch, the first error of `estimate`, and a non-finite mean.
-fn mean_of<S: Scalar, T>(
-    batch: &[T],
-    estimate: impl FnMut(&T) -> Result<DVector<S>, OracleError>,
-) -> Result<DVector<S>, OracleError> {
-    let g = crate::batched::mean(batch, estimate)?;
-    if !g.iter().all(Scalar::is_finite) {
-        return Err(OracleError::NonFinite("the baselined gradient estimate"));
-    }
-    Ok(g)
 }
 
 /// Trajectory `t`'s plain estimate from its records ([`PerDecisionTerms::estimate_recorded`]
@@ -889,30 +872,11 @@ impl<S: Scalar, P: PerDecisionTerms<S>> IlProblem<S> for Baselined<P, S> {
             kind,
             buffers,
         } = self;
-        let weighted = |inner: &P, t: &P::Trajectory, given: Given<'_, S>, cost: &mut Cost| {
-            inner.baselined_estimate(theta_old, t, Some((theta_new, weighting)), given, cost)
-        };
         match kind {
             Kind::None => {
                 batch.weighted_estimate(theta_old, theta_new, trajectory, weighting, cost)
             }
-            Kind::Constant(b) => mean_of(trajectory, |t| {
-                weighted(batch.inner(), t, Given::Constant(b), cost)
-            }),
-            Kind::TimeIndexed(bs) => mean_of(trajectory, |t| {
-                weighted(batch.inner(), t, Given::TimeIndexed(bs), cost)
-            }),
-            Kind::Estimated(state) => {
-                // The committed baselines, in the buffer of the step totals.
-                let committed = &mut buffers.totals;
-                state.running.committed(state.time_indexed, committed);
-                let given = match (state.time_indexed, committed.first()) {
-                    (false, Some(b)) => Given::Constant(b),
-                    _ => Given::Leading(committed),
-                };
-                mean_of(trajectory, |t| weighted(batch.inner(), t, given, cost))
-            }
-            Kind::LeaveOneOut | Kind::StateDependent(_) => {
+            _ => {
                 let inner = batch.inner();
                 baselined(inner, kind, buffers, trajectory, false, |t, out| {
                     inner.decision_terms(theta_old, t, Some((theta_new, weighting)), out, cost)

@@ -1,7 +1,7 @@
 //! The causal estimator of eq. 3.15 (math.md §1.1), optionally importance-weighted (math.md §4),
 //! in one pass over a trajectory.
 
-use super::{Decisions, Given, Scratch, features_valid, policy_error};
+use super::{Decisions, Scratch, features_valid, policy_error};
 use crate::oracle::EstimatorKernel;
 use crate::oracle::kernel::accumulate;
 use crate::policy::LikelihoodRatio;
@@ -20,16 +20,11 @@ use std::borrow::Borrow;
 /// every decision: `+ w_{1:n} L_abs Σ_{i≤n} ψ_i` (they carry no `∇l`: they do not depend on θ
 /// but through the law of the end state).
 ///
-/// With `baseline`, baselines fixed before the pass are subtracted at every scored decision i:
-/// `− w_{1:i} b_i ψ_i` with per-decision weights, `− b_i ψ_i` otherwise (the trajectory's weight
-/// then multiplies the whole baselined estimate) — the baselined estimator of
-/// [`crate::baseline`], `c · (D + Σ_i ψ_i (L_i − w_{1:i} b_i))` ([`super::DecisionTerms`]).
-///
 /// With `loss`, every step's `l_t` (at θ) is added to it in order, as
 /// [`crate::problem::IlProblem::trajectory_loss`] sums them (start it at the absorbing tail's
 /// value): the trajectory loss from the same pass.
 ///
-/// On validated features without per-decision weights or a baseline, the whole pass (the tail's
+/// On validated features without per-decision weights, the whole pass (the tail's
 /// term included) is the policy's [`EstimatorKernel::causal_sum_validated`] (with the roll-out's notes where usable),
 /// after the trajectory's log-ratios when `ratio` is given: the weight multiplies the whole
 /// estimate, so it does not enter the sum, and a failing ratio is reported before a failing
@@ -43,7 +38,6 @@ pub(crate) fn causal_pass<S, P, L, A>(
     ratio: Option<&[S]>,
     per_decision: bool,
     t: &Decisions<'_, S, L, A>,
-    baseline: Option<Given<'_, S>>,
     mut loss: Option<&mut S>,
 ) -> Result<(Vec<S>, S), OracleError>
 where
@@ -56,10 +50,10 @@ where
     let mut g = vec![S::zero(); d];
     let mut log_w = S::zero();
     // θ has been checked by the caller; with every φ checked here once, the policy's pass can
-    // skip its own checks. Otherwise the checked calls below report the first failure. A
-    // baseline or per-decision weights need each decision's score inside the sum, which the
-    // policy's pass does not write out.
-    let validated = !per_decision && baseline.is_none() && features_valid(policy, t);
+    // skip its own checks. Otherwise the checked calls below report the first failure.
+    // Per-decision weights need each decision's weight inside the sum, which the policy's pass
+    // does not form.
+    let validated = !per_decision && features_valid(policy, t);
     let tail = t.absorbed;
     if validated {
         // The whole-trajectory weight first (so that a failing ratio is reported before a
@@ -108,25 +102,12 @@ where
         if let Some(total) = loss.as_deref_mut() {
             *total += l;
         }
-        if step < scored {
-            if let Some(theta_new) = ratio {
-                log_w += policy
-                    .log_likelihood_ratio(theta, theta_new, phi, a)
-                    .map_err(policy_error)?;
-                if per_decision {
-                    w = log_w.exp();
-                }
-            }
-            if let Some(b) = baseline.and_then(|b| b.at(step)) {
-                // `w` is now w_{1:i} for this decision i.
-                let c = if per_decision {
-                    w.clone() * b
-                } else {
-                    b.clone()
-                };
-                for (gj, sj) in g.iter_mut().zip(score.iter()) {
-                    *gj -= c.clone() * sj;
-                }
+        if let Some(theta_new) = ratio.filter(|_| step < scored) {
+            log_w += policy
+                .log_likelihood_ratio(theta, theta_new, phi, a)
+                .map_err(policy_error)?;
+            if per_decision {
+                w = log_w.exp();
             }
         }
     }

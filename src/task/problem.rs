@@ -5,8 +5,8 @@ use super::rollout::sample_learner;
 use super::{AfterEnd, Horizon, Task, TaskExample, TaskTrajectory};
 use crate::baseline::PerDecisionTerms;
 use crate::oracle::{
-    DecisionTerms, EstimatorKernel, Given, RecordedPass, ScoreProducts, causal_pass,
-    features_valid, full_pass, policy_error, record_pass, sum_recorded, terms_pass,
+    DecisionTerms, EstimatorKernel, RecordedPass, ScoreProducts, causal_pass, features_valid,
+    full_pass, policy_error, record_pass, sum_recorded, terms_pass,
 };
 use crate::policy::LikelihoodRatio;
 use crate::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError, Weighting};
@@ -134,7 +134,7 @@ impl<T, P> TaskProblem<T, P> {
         let th = theta.as_slice();
         let t = trajectory.decisions();
         let g = match form {
-            EstimatorForm::Causal => causal_pass(&self.policy, th, None, false, &t, None, loss)?.0,
+            EstimatorForm::Causal => causal_pass(&self.policy, th, None, false, &t, loss)?.0,
             EstimatorForm::Full => full_pass(&self.policy, th, &t)?,
         };
         cost.gradient_evaluations += trajectory.len() as u64;
@@ -285,7 +285,6 @@ where
                     true,
                     &trajectory.decisions(),
                     None,
-                    None,
                 )?
                 .0
             }
@@ -296,7 +295,6 @@ where
                     Some(new),
                     false,
                     &trajectory.decisions(),
-                    None,
                     None,
                 )?;
                 let w = log_w.exp();
@@ -374,52 +372,6 @@ where
     P: LikelihoodRatio<S, Action = T::Action> + EstimatorKernel<S>,
     T::Label: Borrow<P::Label>,
 {
-    /// Without weights, every problem's route (the decisions recorded, then summed with shifted
-    /// losses: [`PerDecisionTerms::baselined_estimate`]). With weights, the weighted causal pass
-    /// with the baseline subtracted at each scored decision as it is met (no per-decision terms
-    /// stored).
-    fn baselined_estimate(
-        &self,
-        theta: &DVector<S>,
-        trajectory: &Self::Trajectory,
-        weights: Option<(&DVector<S>, Weighting)>,
-        baseline: Given<'_, S>,
-        cost: &mut Cost,
-    ) -> Result<DVector<S>, OracleError> {
-        let Some((theta_new, weighting)) = weights else {
-            return crate::baseline::given_by_records(self, theta, trajectory, baseline, cost);
-        };
-        check_theta(theta, self.dim())?;
-        check_theta(theta_new, self.dim())?;
-        check_trajectory(trajectory)?;
-        let t = trajectory.decisions();
-        let scored = t.scored();
-        if !baseline.covers(scored) {
-            return Err(crate::baseline::too_few_baselines(scored));
-        }
-        let per_decision = weighting == Weighting::PerDecision;
-        let (mut g, log_w) = causal_pass(
-            &self.policy,
-            theta.as_slice(),
-            Some(theta_new.as_slice()),
-            per_decision,
-            &t,
-            Some(baseline),
-            None,
-        )?;
-        if !per_decision {
-            let w = log_w.exp();
-            for x in &mut g {
-                *x *= &w;
-            }
-        }
-        cost.gradient_evaluations += t.len() as u64;
-        if !g.iter().all(Scalar::is_finite) {
-            return Err(OracleError::NonFinite("the baselined gradient estimate"));
-        }
-        Ok(DVector::from_vec(g))
-    }
-
     fn decision_terms(
         &self,
         theta: &DVector<S>,

@@ -17,7 +17,7 @@
 //! per-scalar identities of the policies are `tests/exactness/policy_*.rs`).
 
 use ilopt::algo::ConfigNumber;
-use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms};
+use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms, baselined_estimate};
 use ilopt::oracle::{DecisionTerms, EstimatorKernel, Given, RecordedPass};
 use ilopt::policy::{
     LikelihoodRatio, LinearGaussian, Logistic, Mlp, MlpGaussian, MlpSoftmax, Softmax,
@@ -427,9 +427,7 @@ where
             // Baselines given before the pass take the same route: the records summed with the
             // losses shifted by b_t − b_{t−1}.
             let bs: Vec<f64> = (0..scored).map(b).collect();
-            let g = p
-                .baselined_estimate(theta, &t, None, Given::TimeIndexed(&bs), &mut cost)
-                .unwrap();
+            let g = baselined_estimate(p, theta, &t, Given::TimeIndexed(&bs), &mut cost).unwrap();
             let route_name = route("baselined_estimate, time-indexed");
             same(&route_name, g.as_slice(), &plain_with(&ref_terms, &shifted));
             close(&route_name, g.as_slice(), &want_b);
