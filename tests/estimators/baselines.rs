@@ -923,12 +923,13 @@ fn the_configuration_round_trips_through_json() {
 }
 
 /// A given baseline enters the real tasks' recorded decisions as loss shifts
-/// `δ_t = b_t − b_{t−1}` (summation by parts); that sum agrees with the baselined estimate
+/// `δ_t = b_t − b_{t−1}` (summation by parts, `ilopt::baseline::baselined_estimate`); that sum
+/// agrees with the baselined estimate
 /// assembled term by term from the stored scores, for the logistic policy (its own fixed-
 /// dimension loop) and the softmax policy (the default records), and with b = 0 it is the plain
 /// estimate bit for bit.
 #[test]
-fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
+fn the_records_route_agrees_with_the_term_by_term_one() {
     use ilopt::oracle::Given;
     use ilopt::policy::{Logistic, Softmax};
     use ilopt::task::cartpole::{self, CartPoleTask};
@@ -948,20 +949,20 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
                 .unwrap();
             let n = t.len();
             let zero = 0.0;
-            let fused =
+            let recorded =
                 baselined_estimate(p, theta, &t, Given::Constant(&zero), &mut cost).unwrap();
             let plain = p
                 .estimate(theta, &t, EstimatorForm::Causal, &mut cost)
                 .unwrap();
             assert_eq!(
-                fused.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                recorded.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
                 plain.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
                 "b = 0 is the plain estimate"
             );
             let ramp: Vec<f64> = (0..n).map(|i| 3.0 - i as f64 / 50.0).collect();
             let constant = 2.5;
             for given in [Given::Constant(&constant), Given::TimeIndexed(&ramp)] {
-                let fused = baselined_estimate(p, theta, &t, given, &mut cost).unwrap();
+                let recorded = baselined_estimate(p, theta, &t, given, &mut cost).unwrap();
                 let mut terms = DecisionTerms::new();
                 p.decision_terms(theta, &t, None, &mut terms, &mut cost)
                     .unwrap();
@@ -969,8 +970,8 @@ fn the_fused_task_pass_agrees_with_the_term_by_term_one() {
                 let mut direct = vec![0.0; theta.len()];
                 terms.estimate_into(|i| given.at(i).copied(), &mut direct);
                 assert!(
-                    derivative_f64_agrees(fused.as_slice(), &direct),
-                    "{given:?}: {fused:?} vs {direct:?}"
+                    derivative_f64_agrees(recorded.as_slice(), &direct),
+                    "{given:?}: {recorded:?} vs {direct:?}"
                 );
             }
         }
