@@ -71,18 +71,6 @@ impl<S: Scalar> RunningOptimum<S> {
         out.resize(n, S::zero());
     }
 
-    /// The committed baselines into `out` (cleared first): time-indexed, `b_i` for every index
-    /// with statistics (0 where [`RunningOptimum::time_indexed`] is `None`); otherwise the one
-    /// constant, or nothing before any nonzero score was seen.
-    pub fn committed(&self, time_indexed: bool, out: &mut Vec<S>) {
-        out.clear();
-        if time_indexed {
-            out.extend_from_slice(&self.per_decision);
-        } else {
-            out.extend(self.constant.clone());
-        }
-    }
-
     /// The committed constant baseline; `None` (0) before any nonzero score was seen.
     pub fn constant(&self) -> Option<S> {
         self.constant.clone()
@@ -276,14 +264,9 @@ mod tests {
                 // The copies the estimates read: 0 where no baseline is formed.
                 let mut copied = Vec::new();
                 running.time_indexed_into(14, &mut copied);
-                let mut all = Vec::new();
-                running.committed(true, &mut all);
                 for i in 0..14 {
                     let b = eager.time_indexed(i).unwrap_or_else(|| q(0, 1));
                     assert_eq!(copied[i], b, "copied b_{i}");
-                    if i < all.len() {
-                        assert_eq!(all[i], b, "committed b_{i}");
-                    }
                 }
                 assert_eq!(running.constant(), eager.constant());
             }

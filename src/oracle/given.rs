@@ -8,9 +8,6 @@ pub enum Given<'a, S> {
     Constant(&'a S),
     /// b_1, b_2, … (a decision beyond the list is an error of the estimate).
     TimeIndexed(&'a [S]),
-    /// b_1, …, b_k, and no baseline (b_i = 0) at the decisions after them: the estimated
-    /// baselines, which have no statistics yet at decisions no earlier trajectory reached.
-    Leading(&'a [S]),
 }
 
 // By hand: the references are `Copy` whatever `S` is.
@@ -27,14 +24,14 @@ impl<'a, S> Given<'a, S> {
     pub fn at(&self, i: usize) -> Option<&'a S> {
         match *self {
             Given::Constant(b) => Some(b),
-            Given::TimeIndexed(bs) | Given::Leading(bs) => bs.get(i),
+            Given::TimeIndexed(bs) => bs.get(i),
         }
     }
 
     /// Whether `decisions` scored decisions all have a baseline.
     pub fn covers(&self, decisions: usize) -> bool {
         match self {
-            Given::Constant(_) | Given::Leading(_) => true,
+            Given::Constant(_) => true,
             Given::TimeIndexed(bs) => bs.len() >= decisions,
         }
     }
