@@ -174,8 +174,12 @@ pub(crate) fn record_by_terms<S: Scalar, P: PerDecisionTerms<S> + ?Sized>(
 /// ([`PerDecisionTerms::record_decisions`]), then summed once
 /// ([`PerDecisionTerms::estimate_recorded`]) with the per-step losses
 /// `l'_t = l_t + (b_t − b_{t−1})` (b_{−1} = 0, b_t = 0 from the first unscored step on) — the route
-/// of every unweighted baseline in [`crate::baseline::Baselined`], for every problem. Counts the
-/// same gradient evaluations as [`IlProblem::estimate`].
+/// of every unweighted baseline fixed before the pass in [`crate::baseline::Baselined`], for
+/// every problem, in the plain pass's order. Its rounding grows with
+/// `Σ_t |b_t − b_{t−1}| ‖Σ_{i<t} ψ_i‖`: small for baselines that move slowly from step to step; a
+/// list that jumps at every step is summed more accurately from the terms
+/// ([`crate::baseline::Baselined::estimate_by_terms`]). Counts the same gradient evaluations as
+/// [`IlProblem::estimate`].
 ///
 /// # Errors
 /// As [`PerDecisionTerms::record_decisions`]; [`OracleError::Baseline`] when a time-indexed list

@@ -471,6 +471,13 @@ fn leave_one_out<S: Scalar, P: PerDecisionTerms<S>>(
 /// ([`PerDecisionTerms::estimate_recorded`] with its own losses, read in place), then one more read of its
 /// scores for both the statistics `g·ψ_i`, `‖ψ_i‖²` and the correction `g − Σ_i b_i ψ_i`
 /// ([`PerDecisionTerms::recorded_score_products`]). No allocation per step.
+///
+/// The committed b_i are known before the pass, yet they are not folded into shifted losses as
+/// a given baseline's are ([`super::shifted_by_given`]): the statistics need g in any case, and
+/// per-decision estimates jump from one decision to the next, so summation by parts would
+/// multiply each jump `b_t − b_{t−1}` by the prefix sum `Σ_{i<t} ψ_i`, where the correction's
+/// rounding grows with `|b_i| ‖ψ_i‖` alone (docs/architecture.md). The same holds for the
+/// state-dependent baseline's `b_i = w·φ_i`.
 fn estimated<S: Scalar, P: PerDecisionTerms<S>>(
     inner: &P,
     state: &mut Estimated<S>,
