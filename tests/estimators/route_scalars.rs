@@ -1,7 +1,9 @@
 //! The contract of `routes` in other scalars: every route to the causal estimate of eq. 3.15 that
 //! compiles for a scalar, on f64 trajectories lifted to it exactly, against a reference built
 //! from `Policy`'s in-place methods in that scalar and the sums of eq. 3.15 written out
-//! (math.md §1.1, §4), with an exact or rigorous check instead of a tolerance.
+//! (math.md §1.1, §4): an exact or rigorous check where the scalar is exact or encloses
+//! (rationals, intervals), a tolerance against such a reference where it rounds (f32, the
+//! tangents of duals over f64), and bit-for-bit equalities where the rounding is `routes`'.
 //!
 //! Every f64 is a dyadic rational, so a trajectory rolled out in f64 (features, actions, labels,
 //! the absorbing tail's losses) and θ are represented exactly by [`BigRational`]s and by point
@@ -19,6 +21,24 @@
 //!   it is known (the linear-Gaussian policies' rational reference, for every quantity without
 //!   an `exp`), else intersect the interval reference (both enclose the same real number); the
 //!   f64 route's value must lie within [`TOLERANCE`] of the enclosure.
+//! * f32: every policy, every problem-level route, the kernel routes and [`Baselined`] with every
+//!   kind, on the f64 trajectories and θ rounded to f32 (whose values every scalar holds
+//!   exactly). Each value must lie within [`F32_TOLERANCE`] of the interval reference (relative
+//!   to the quantity's largest magnitude), and every route that `routes` asserts bit for bit in
+//!   f64 must equal, bit for bit, the reference formed in f32 in that route's order
+//!   ([`SAME_ORDER`]). Without `mpfr` the policies whose terms need `exp` (and the weighted
+//!   estimates towards another θ) have no interval reference: their routes run with the
+//!   bit-for-bit checks only.
+//! * `Dual<f64>`: the same routes, θ seeded along a fixed dyadic direction ([`dual_theta`]). The
+//!   value parts must equal the f64 routes' values on the same inputs bit for bit (but the score
+//!   products' `v·ψ_i` over at least [`DOT_LANES_FROM`] entries: f64's `dot` sums those in
+//!   lanes, the duals' left to right, so that they are compared within [`TOLERANCE`]); the
+//!   tangents must lie within [`TANGENT_TOLERANCE`] of the tangent of the reference in duals over
+//!   intervals (with the same gaps as f32 without `mpfr`).
+//!
+//! The f32 and dual references are intervals, not rationals, for the linear-Gaussian policies
+//! too: their checks are tolerances, which an enclosure below [`MAX_WIDTH`] serves as well, and
+//! rational (dual) references would cost seconds per instance.
 //!
 //! The fixed horizons are `routes`' ([`STEPS`]) but the MLP-Gaussian policy's, shortened to
 //! [`LONG_STEPS`] for the intervals' cost; the enclosures stay below 10⁻⁹ of their size.
@@ -27,33 +47,38 @@
 //! last decision's loss scaled by `1 + 2⁻ᵉ`, and require every comparison of a quantity that
 //! loss enters to fail: e = 40 in rationals, 30 for the intervals' kernel routes (containment
 //! of the exact value), 20 for the problem-level routes (where the reference is itself an
-//! enclosure, so that a wrong value is seen only when the two enclosures are disjoint).
+//! enclosure, so that a wrong value is seen only when the two enclosures are disjoint), 20 for
+//! the dual tangents, and 0 (the loss doubled) for f32, at the roll-out's θ only (at the other
+//! θ the last loss is too small a part of the sums it enters). The bit-for-bit checks (f32 against its
+//! own reference, dual values against f64) are fed the same value with its first entry one unit
+//! in the last place off, and must fail.
 
+use ilopt::baseline::{Baseline, Baselined, PerDecisionTerms, baselined_estimate};
 use ilopt::oracle::{Baselines, EstimatorKernel, ScoreProducts};
-use ilopt::policy::{ActionVector, LikelihoodRatio, LinearGaussian, SpeedLimitedGaussian};
+use ilopt::oracle::{DecisionTerms, Given, RecordedPass};
+use ilopt::policy::{
+    ActionVector, LikelihoodRatio, LinearGaussian, Logistic, Mlp, MlpGaussian, MlpSoftmax, Softmax,
+    SpeedLimitedGaussian,
+};
 use ilopt::problem::{Behaviour, Cost, IlProblem, KitRng};
+use ilopt::problem::{EstimatorForm, OracleError, Weighting};
 use ilopt::scalar::{BigRational, Interval, Scalar, interval_contains_rational};
+use ilopt::scalar::{DOT_LANES_FROM, Dual, Real};
+use ilopt::task::cartpole::{self, CartPoleTask};
 use ilopt::task::obstacle::{self, ObstacleTask};
 use ilopt::task::{AfterEnd, Horizon, Task, TaskProblem, TaskTrajectory};
 use nalgebra::DVector;
 use rand::{Rng, SeedableRng};
 use std::borrow::Borrow;
 use std::cell::RefCell;
-#[cfg(feature = "mpfr")]
-use {
-    ilopt::baseline::{Baseline, Baselined, PerDecisionTerms},
-    ilopt::oracle::{DecisionTerms, RecordedPass},
-    ilopt::problem::{EstimatorForm, OracleError, Weighting},
-    std::fmt::Debug,
-    std::marker::PhantomData,
-};
+use std::fmt::Debug;
+use std::marker::PhantomData;
 
 /// Decisions of a fixed-horizon stream (the absorbing tail follows an episode that ends sooner).
 const STEPS: usize = 40;
 
 /// Decisions of the MLP-Gaussian policy's fixed-horizon streams: its episodes outlast [`STEPS`]
 /// (`routes` runs 600; 200 keep the interval instance within a second or two).
-#[cfg(feature = "mpfr")]
 const LONG_STEPS: usize = 200;
 
 /// The θ the kernel-only instances estimate at: the roll-out's. The kernel routes take no
@@ -69,9 +94,7 @@ const KERNEL_THETAS: usize = 1;
 const SEEDS: [u64; 3] = [2, 5, 7];
 
 /// Trajectories per batch and batches per baseline kind (as `routes`).
-#[cfg(feature = "mpfr")]
 const M: usize = 2;
-#[cfg(feature = "mpfr")]
 const BATCHES: usize = 3;
 
 /// σ_π of the Gaussian policies: dyadic, so that σ² and the score's division are exact in
@@ -118,28 +141,24 @@ fn shift_baseline<S: Scalar>(i: usize, scored: usize) -> S {
     }
 }
 
-#[cfg(feature = "mpfr")]
 /// A task that only names a scalar's label and action types: the problem-level routes estimate
 /// from lifted trajectories and never roll out, so that a [`TaskProblem`] over intervals exists
 /// for tasks implemented in f64 only (the obstacle task).
 #[derive(Debug)]
 struct Lifted<L, A>(PhantomData<fn() -> (L, A)>);
 
-#[cfg(feature = "mpfr")]
 impl<L, A> Clone for Lifted<L, A> {
     fn clone(&self) -> Self {
         Lifted(PhantomData)
     }
 }
 
-#[cfg(feature = "mpfr")]
 impl<L, A> Lifted<L, A> {
     fn new() -> Self {
         Lifted(PhantomData)
     }
 }
 
-#[cfg(feature = "mpfr")]
 impl<S: Scalar, L: Clone + Debug, A: Clone + Debug> Task<S> for Lifted<L, A> {
     type Episode = ();
     type Label = L;
@@ -249,7 +268,6 @@ where
 
 /// What a route estimates, for one trajectory at one θ (the reference of each: [`want`]).
 /// The weighted forms and eq. 3.16 are estimated by problem-level routes only (`mpfr`).
-#[cfg_attr(not(feature = "mpfr"), allow(dead_code))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Want {
     /// Eq. 3.15 unweighted, no baseline.
@@ -642,6 +660,14 @@ struct Tally {
     checks: usize,
     rejected: usize,
     width: f64,
+    /// The largest distance of an f32 value or a dual tangent from its reference, relative to
+    /// the quantity's scale.
+    worst: f64,
+    /// Perturbed, the least such distance of a quantity (its largest over the entries).
+    least: Option<f64>,
+    /// Dual values compared within [`TOLERANCE`] rather than bit for bit: the score products'
+    /// `v·ψ_i` over at least [`DOT_LANES_FROM`] entries, which f64 sums in lanes.
+    in_lanes: usize,
 }
 
 impl Tally {
@@ -736,7 +762,6 @@ where
 }
 
 /// A trajectory of the task `T` in `S`.
-#[cfg(feature = "mpfr")]
 type Trajectory<S, T> = TaskTrajectory<S, <T as Task<S>>::Label, <T as Task<S>>::Action>;
 
 /// An f64 trajectory of the task `T`.
@@ -850,19 +875,17 @@ where
     tally
 }
 
-/// The route contract with the `mpfr` feature: every problem-level route and the baselined
-/// oracle over intervals.
-#[cfg(feature = "mpfr")]
+/// The problem-level routes and the baselined oracle in any [`Real`] scalar, and the interval
+/// instance over them (with the `mpfr` feature, through which intervals are [`Real`]).
 mod problem_level {
     use super::*;
-    use ilopt::scalar::Real;
 
     /// Every problem-level route of one trajectory at θ (estimated towards θ_new where weighted),
     /// then the policy's kernel routes: the causal estimate with its loss, the trajectory loss,
     /// the full form, the weighted estimates (towards θ_new, and at θ itself where every weight
-    /// is 1), the per-decision terms (weighted; unweighted with the baseline), the recorded
-    /// passes (recorded and filled from the terms) with the recorded and the baselined losses,
-    /// and the recorded score products.
+    /// is 1), the per-decision terms (weighted; unweighted with the baseline), the baselined
+    /// estimate with the baseline given, the recorded passes (recorded and filled from the
+    /// terms) with the recorded and the baselined losses, and the recorded score products.
     pub(super) fn problem_routes<S, T, P>(
         p: &mut TaskProblem<T, P>,
         theta: &DVector<S>,
@@ -944,6 +967,13 @@ mod problem_level {
         let mut g = vec![S::zero(); d];
         dt.estimate_into(|i| Some(b(i)), &mut g);
         out.push(route("decision_terms with b", Want::Baselined, g));
+        let bs: Vec<S> = (0..scored).map(b).collect();
+        let g = baselined_estimate(p, theta, t, Given::TimeIndexed(&bs), &mut cost).unwrap();
+        out.push(route(
+            "baselined_estimate, time-indexed",
+            Want::Baselined,
+            g.as_slice().to_vec(),
+        ));
         let mut rec = RecordedPass::new();
         p.record_decisions(theta, t, &mut rec, &mut cost).unwrap();
         let mut rows = RecordedPass::new();
@@ -1122,12 +1152,14 @@ mod problem_level {
     }
 
     /// A batch reference: exact, or an enclosure.
+    #[cfg(feature = "mpfr")]
     enum BatchReference {
         Exact(Vec<BigRational>),
         Interval(Vec<Interval>),
     }
 
-    fn interval_exp(x: &Interval) -> Interval {
+    #[cfg(feature = "mpfr")]
+    pub(super) fn interval_exp(x: &Interval) -> Interval {
         Real::exp(x)
     }
 
@@ -1135,6 +1167,7 @@ mod problem_level {
     /// [`Lifted`] task) and the kernel routes on every lifted trajectory at both θ, then the
     /// baselined oracle with every kind on lifted batches; each against the exact reference
     /// (`exact`) or the interval reference, and the f64 problem's routes near them.
+    #[cfg(feature = "mpfr")]
     #[allow(clippy::too_many_arguments)] // the problem, the lifted policy and its lifts
     pub(super) fn check_interval_problem<T, P, PI, LI, AI>(
         p: &mut TaskProblem<T, P>,
@@ -1268,6 +1301,670 @@ mod problem_level {
 #[cfg(feature = "mpfr")]
 use problem_level::check_interval_problem;
 
+use problem_level::{baselined_routes, batch_reference, kinds, known, problem_routes};
+
+/// How far an f32 route's value may lie from the reference, relative to the largest magnitude in
+/// the quantity's reference (per vector): as [`TOLERANCE`] in f64, twice `routes`' bound between
+/// two summation orders of up to [`LONG_STEPS`] terms (each within `LONG_STEPS · ε₃₂` of the
+/// exact sum relative to the terms' magnitudes), for the rounding of the terms themselves. The
+/// estimates with leave-one-out baselines come closest (0.4 of it: the baselines cancel most of
+/// the terms).
+const F32_TOLERANCE: f64 = 4.0 * LONG_STEPS as f64 * f32::EPSILON as f64;
+
+/// The same for the tangent of a dual route against the exact or enclosed tangent: as
+/// [`TOLERANCE`], the tangent's own sums and products being of the value's length.
+const TANGENT_TOLERANCE: f64 = TOLERANCE;
+
+/// The perturbation of the f32 failure tests, `1 + 2⁰`: the last decision's loss is as little
+/// as 3·10⁻⁴ of the trajectory's loss on these trajectories (the learner ends near the goal), so
+/// that only doubling it moves every sum it enters by more than [`F32_TOLERANCE`] (about 10⁻⁴;
+/// the least such move is 1.5 times that), at the roll-out's θ and but for the leave-one-out
+/// estimates (where the other trajectory's baselines take up most of the change).
+const F32_PERTURBATION: u32 = 0;
+
+/// The perturbation of the dual failure tests' tangents, `1 + 2⁻²⁰`: as the interval
+/// problem-level routes' ([`TANGENT_TOLERANCE`] is far below, the widest enclosure of a tangent
+/// below [`MAX_WIDTH`]).
+const DUAL_PERTURBATION: u32 = 20;
+
+/// Where a reference quantity lies, entry by entry, in f64: `[lo, hi]`.
+type Bounds = Vec<(f64, f64)>;
+
+fn interval_bounds(x: &Interval) -> (f64, f64) {
+    (x.inf(), x.sup())
+}
+
+/// A dual's tangent: its derivative along the one seeded direction.
+fn tangent<R: Scalar>(x: &Dual<R>) -> R {
+    x.gradient().first().cloned().unwrap_or_else(R::zero)
+}
+
+/// The quantities every reference forms per trajectory.
+const WANTS: [Want; 9] = [
+    Want::Plain,
+    Want::Full,
+    Want::Loss,
+    Want::Losses,
+    Want::PerDecision,
+    Want::Trajectory,
+    Want::Baselined,
+    Want::Cross,
+    Want::Moment,
+];
+
+/// A reference of the f32 and dual instances, seen through [`Bounds`]: every quantity of one
+/// f64 trajectory at θ towards θ_new ([`want`]; `None` where the scalar lacks the `exp` it
+/// needs), and the batch references of the baseline kinds known from outside.
+trait Reference<T: Task<f64>> {
+    fn wants(
+        &self,
+        t: &Trajectory64<T>,
+        theta: &DVector<f64>,
+        theta_new: &DVector<f64>,
+        mode: Mode,
+    ) -> Vec<(Want, Option<Bounds>)>;
+
+    /// One entry per kind of `kinds`: the mean baselined estimate at θ on the batch `ts` for a
+    /// kind known from outside ([`batch_reference`]), else `None`.
+    fn batch(
+        &self,
+        kinds: &[Baseline],
+        ts: &[Trajectory64<T>],
+        theta: &DVector<f64>,
+        mode: Mode,
+    ) -> Vec<Option<Bounds>>;
+}
+
+/// A [`Reference`] in the scalar `R`: the terms from a policy in `R` on the trajectory and θ
+/// lifted exactly, `R`'s `exp` where it has one, and what of a value is compared (the value of
+/// a rational or an interval, the tangent of a dual).
+struct InScalar<'a, T: Task<f64>, R> {
+    terms: Box<TermsIn<'a, T, R>>,
+    exp: Option<fn(&R) -> R>,
+    bounds: fn(&R) -> (f64, f64),
+}
+
+/// The terms of an f64 trajectory at θ towards θ_new in `R`.
+type TermsIn<'a, T, R> = dyn Fn(&Trajectory64<T>, &DVector<f64>, &DVector<f64>) -> Terms<R> + 'a;
+
+impl<T: Task<f64>, R: Scalar> Reference<T> for InScalar<'_, T, R> {
+    fn wants(
+        &self,
+        t: &Trajectory64<T>,
+        theta: &DVector<f64>,
+        theta_new: &DVector<f64>,
+        mode: Mode,
+    ) -> Vec<(Want, Option<Bounds>)> {
+        let x = mode.apply((self.terms)(t, theta, theta_new));
+        let exp = self.exp.as_ref().map(|f| f as &dyn Fn(&R) -> R);
+        WANTS
+            .iter()
+            .map(|&w| {
+                (
+                    w,
+                    want(w, &x, exp).map(|v| v.iter().map(self.bounds).collect()),
+                )
+            })
+            .collect()
+    }
+
+    fn batch(
+        &self,
+        kinds: &[Baseline],
+        ts: &[Trajectory64<T>],
+        theta: &DVector<f64>,
+        mode: Mode,
+    ) -> Vec<Option<Bounds>> {
+        let all: Vec<Terms<R>> = ts
+            .iter()
+            .map(|t| mode.apply((self.terms)(t, theta, theta)))
+            .collect();
+        kinds
+            .iter()
+            .map(|kind| {
+                known(kind).then(|| {
+                    batch_reference(kind, &all)
+                        .iter()
+                        .map(self.bounds)
+                        .collect()
+                })
+            })
+            .collect()
+    }
+}
+
+/// A [`Reference`] from the policy `pr` in `R`, the trajectories lifted by `label` and
+/// `action`, θ by `theta`.
+fn reference_in<'a, T, R, PR, LR, AR>(
+    pr: PR,
+    label: impl Fn(&T::Label) -> LR + 'a,
+    action: impl Fn(&T::Action) -> AR + 'a,
+    theta: fn(&DVector<f64>) -> DVector<R>,
+    exp: Option<fn(&R) -> R>,
+    bounds: fn(&R) -> (f64, f64),
+) -> Box<dyn Reference<T> + 'a>
+where
+    T: Task<f64> + 'a,
+    R: Scalar,
+    PR: LikelihoodRatio<R, Action = AR> + 'a,
+    LR: Borrow<PR::Label>,
+{
+    let terms = move |t: &Trajectory64<T>, th: &DVector<f64>, other: &DVector<f64>| {
+        let tr = lift::<R, _, _, _, _>(t, &label, &action);
+        terms(&pr, theta(th).as_slice(), theta(other).as_slice(), &tr)
+    };
+    Box::new(InScalar {
+        terms: Box::new(terms),
+        exp,
+        bounds,
+    })
+}
+
+/// θ in duals along the fixed direction `u_j = ±((j mod 3) + 1)/8`, the sign alternating with
+/// j (dyadic, so that every scalar's duals carry the same direction).
+fn dual_theta<S: Scalar>(theta: &DVector<f64>) -> DVector<Dual<S>> {
+    DVector::from_fn(theta.len(), |j, _| {
+        let sign = if j % 2 == 0 { 1 } else { -1 };
+        let u = S::from_ratio(sign * (j % 3 + 1) as i64, 8);
+        Dual::new(exact(theta[j]), vec![u])
+    })
+}
+
+/// Record whether every entry lies within `tolerance` of its bounds, relative to the largest
+/// magnitude of the bounds (the quantity's scale); the largest relative distance of the entries
+/// joins [`Tally::worst`] (against the reference) or [`Tally::least`] (perturbed).
+fn within(tally: &mut Tally, mode: Mode, name: &str, got: &[f64], want: &Bounds, tolerance: f64) {
+    let check = lengths(name, got, want).and_then(|()| {
+        let scale = want
+            .iter()
+            .fold(0.0f64, |m, (lo, hi)| m.max(lo.abs()).max(hi.abs()));
+        let mut far = (0.0f64, 0);
+        for (j, (x, (lo, hi))) in got.iter().zip(want).enumerate() {
+            let distance = (lo - x).max(x - hi).max(0.0);
+            let relative = if distance == 0.0 {
+                0.0
+            } else {
+                distance / scale
+            };
+            if relative.is_nan() || relative > far.0 {
+                far = (relative, j);
+            }
+        }
+        match mode {
+            Mode::Reference => tally.worst = tally.worst.max(far.0),
+            Mode::Perturbed(_) => tally.least = Some(tally.least.map_or(far.0, |m| m.min(far.0))),
+        }
+        if far.0 <= tolerance {
+            Ok(())
+        } else {
+            let (j, x, (lo, hi)) = (far.1, got[far.1], want[far.1]);
+            Err(format!(
+                "{name}: entry {j}: {x} is {} (relative) from [{lo}, {hi}]",
+                far.0
+            ))
+        }
+    });
+    tally.record(mode, name, check);
+}
+
+/// The same f64 bits entry by entry (an f32 widened exactly).
+fn same_bits(name: &str, got: &[f64], want: &[f64]) -> Check {
+    lengths(name, got, want)?;
+    match got
+        .iter()
+        .zip(want)
+        .position(|(a, b)| a.to_bits() != b.to_bits())
+    {
+        None => Ok(()),
+        Some(j) => Err(format!(
+            "{name}: entry {j}: {} != {} (bits)",
+            got[j], want[j]
+        )),
+    }
+}
+
+/// The largest width of the bounds relative to `1 +` their magnitude.
+fn bounds_width(b: &Bounds) -> f64 {
+    b.iter().fold(0.0f64, |m, (lo, hi)| {
+        m.max((hi - lo) / (1.0 + lo.abs().max(hi.abs())))
+    })
+}
+
+/// One route's compared part (`got`: f32 values widened, or a dual's tangents) within
+/// `tolerance` of the first reference that has its quantity (the references in order: exact,
+/// then enclosures); nothing is compared where none has it.
+fn check_bounds(
+    tally: &mut Tally,
+    mode: Mode,
+    name: &str,
+    what: Want,
+    got: &[f64],
+    refs: &[Vec<(Want, Option<Bounds>)>],
+    tolerance: f64,
+) {
+    if matches!(mode, Mode::Perturbed(_)) && !reads_loss(what) {
+        return;
+    }
+    let found = refs.iter().find_map(|r| {
+        r.iter()
+            .find(|(w, _)| *w == what)
+            .and_then(|(_, b)| b.as_ref())
+    });
+    if let Some(b) = found {
+        tally.width = tally.width.max(bounds_width(b));
+        within(tally, mode, name, got, b, tolerance);
+    }
+}
+
+/// The batch routes' compared parts (`part` of each route's value), each within `tolerance` of
+/// its kind's batch reference where the kind is known from outside, else (against the
+/// reference only) `estimate_by_terms` within `tolerance` of the oracle's `estimate` before it.
+fn check_batches<X>(
+    tally: &mut Tally,
+    mode: Mode,
+    routes: &[(usize, usize, Route<X>)],
+    part: &dyn Fn(&[X]) -> Vec<f64>,
+    references: &[Vec<Option<Bounds>>],
+    tolerance: f64,
+) {
+    for (i, (k, batch, r)) in routes.iter().enumerate() {
+        let got = part(&r.value);
+        if let Some(b) = &references[*batch][*k] {
+            tally.width = tally.width.max(bounds_width(b));
+            within(tally, mode, &r.name, &got, b, tolerance);
+        } else if mode == Mode::Reference && r.name.ends_with("estimate_by_terms") {
+            let before: Bounds = part(&routes[i - 1].2.value)
+                .into_iter()
+                .map(|x| (x, x))
+                .collect();
+            within(tally, mode, &r.name, &got, &before, tolerance);
+        }
+    }
+}
+
+/// The learner's batches of [`M`] roll-outs at θ for the baselined oracle, [`BATCHES`] of them
+/// (the same as the interval instance's).
+fn batches<T, P>(p: &mut TaskProblem<T, P>, theta: &DVector<f64>) -> Vec<Vec<Trajectory64<T>>>
+where
+    T: Task<f64>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
+    T::Label: Borrow<P::Label>,
+{
+    let mut rng = KitRng::seed_from_u64(7);
+    let mut cost = Cost::default();
+    (0..BATCHES)
+        .map(|_| {
+            (0..M)
+                .map(|_| {
+                    p.rollout(&Behaviour::Learner(theta), &mut rng, &mut cost)
+                        .unwrap()
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The batch references of every kind: per batch, per kind, from the first reference.
+fn batch_references<T: Task<f64>>(
+    references: &[Box<dyn Reference<T> + '_>],
+    batches: &[Vec<Trajectory64<T>>],
+    theta: &DVector<f64>,
+    mode: Mode,
+) -> Vec<Vec<Option<Bounds>>> {
+    let all = kinds();
+    batches
+        .iter()
+        .map(|ts| match references.first() {
+            Some(r) => r.batch(&all, ts, theta, mode),
+            None => vec![None; all.len()],
+        })
+        .collect()
+}
+
+/// `x` rounded to the nearest f32 (finite), as an f64.
+fn to_f32(x: f64) -> f64 {
+    let y = x as f32;
+    assert!(y.is_finite(), "{x} overflows f32");
+    f64::from(y)
+}
+
+#[allow(clippy::ptr_arg)] // the obstacle task's label and action type
+fn round_vec(v: &Vec<f64>) -> Vec<f64> {
+    v.iter().map(|&x| to_f32(x)).collect()
+}
+
+fn round_pair(v: &[f64; 2]) -> [f64; 2] {
+    v.map(to_f32)
+}
+
+/// An f64 trajectory with every value rounded to f32 (features, the tail's losses, labels and
+/// actions through `label` and `action`): the f32 instance's inputs, exact in every scalar.
+fn round_trajectory<T: Task<f64>>(
+    t: &Trajectory64<T>,
+    label: &dyn Fn(&T::Label) -> T::Label,
+    action: &dyn Fn(&T::Action) -> T::Action,
+) -> Trajectory64<T> {
+    let features = t
+        .features()
+        .iter()
+        .map(|row| row.iter().map(|&x| to_f32(x)).collect())
+        .collect();
+    let mut out = TaskTrajectory::from_parts(
+        features,
+        t.actions.iter().map(action).collect(),
+        t.labels.iter().map(label).collect(),
+    )
+    .unwrap();
+    out.absorbed = t.absorbed.map(to_f32);
+    out.resets = t.resets;
+    out
+}
+
+/// The reference order of a route that `routes` asserts bit for bit in f64: the plain pass
+/// (`Σ_t [∇l_t + l_t Σ_{i<t} ψ_i]`, then the tail), a quantity of [`want`] formed in the
+/// route's order (the full form, the losses and their sum, the weighted estimates), or the plain
+/// pass with the losses shifted by the baseline as the recorded routes shift them
+/// (`(l_t + b_t) − b_{t−1}`) or as `baselined_estimate` does (`l_t + (b_t − b_{t−1})`).
+#[derive(Debug, Clone, Copy)]
+enum Order {
+    Plain,
+    Want(Want),
+    Shifted,
+    ShiftedGiven,
+}
+
+/// The routes that `routes` asserts bit for bit in f64, with their order; the policy's records
+/// summed with the shifted losses are the pass that `estimate_recorded` takes for the
+/// problem's recorded pass.
+const SAME_ORDER: [(&str, Order); 16] = [
+    ("estimate_with_loss", Order::Plain),
+    ("estimate_with_loss loss", Order::Want(Want::Loss)),
+    ("estimate Causal", Order::Plain),
+    ("estimate Full", Order::Want(Want::Full)),
+    (
+        "weighted_estimate PerDecision",
+        Order::Want(Want::PerDecision),
+    ),
+    ("weighted_estimate PerDecision at θ", Order::Plain),
+    (
+        "weighted_estimate Trajectory",
+        Order::Want(Want::Trajectory),
+    ),
+    ("weighted_estimate Trajectory at θ", Order::Plain),
+    ("baselined_estimate, time-indexed", Order::ShiftedGiven),
+    ("record_decisions + estimate_recorded", Order::Plain),
+    (
+        "record_decisions + estimate_recorded, shifted losses",
+        Order::Shifted,
+    ),
+    ("causal_sum_validated", Order::Plain),
+    ("causal_sum_validated loss", Order::Want(Want::Loss)),
+    ("record_validated losses", Order::Want(Want::Losses)),
+    ("record_validated + accumulate_recorded", Order::Plain),
+    (
+        "record_validated + accumulate_recorded, shifted losses",
+        Order::Shifted,
+    ),
+];
+
+/// `Σ_t [∇l_t + l'_t Σ_{i<t} ψ_i]`, then `l'_n Σ_{i≤n} ψ_i` for an (n + 1)-th loss: `routes`'
+/// plain pass with the losses `l'`.
+#[allow(clippy::needless_range_loop)] // the sums' indices, as written
+fn plain_with<S: Scalar>(t: &Terms<S>, losses: &[S]) -> Vec<S> {
+    let d = t.grads.first().map_or(0, Vec::len);
+    let n = t.losses.len();
+    let (mut g, mut score_sum) = (vec![S::zero(); d], vec![S::zero(); d]);
+    for step in 0..n {
+        for j in 0..d {
+            g[j] += t.grads[step][j].clone() + losses[step].clone() * &score_sum[j];
+        }
+        for j in 0..d {
+            score_sum[j] += &t.scores[step][j];
+        }
+    }
+    if let Some(end) = losses.get(n) {
+        for j in 0..d {
+            g[j] += end.clone() * &score_sum[j];
+        }
+    }
+    g
+}
+
+/// The losses and the tail shifted by [`shift_baseline`], `grouped` as `baselined_estimate`
+/// groups them (`l + (b_t − b_{t−1})`), else as the routes here (`(l + b_t) − b_{t−1}`).
+fn shifted_losses<S: Scalar>(t: &Terms<S>, grouped: bool) -> Vec<S> {
+    let b = |i: usize| shift_baseline::<S>(i, t.scored);
+    t.losses
+        .iter()
+        .chain(&t.tail)
+        .enumerate()
+        .map(|(i, l)| {
+            let before = if i == 0 { S::zero() } else { b(i - 1) };
+            if grouped {
+                l.clone() + (b(i) - before)
+            } else {
+                l.clone() + b(i) - before
+            }
+        })
+        .collect()
+}
+
+/// The reference in `routes`' order of a route's quantity, from the terms in the route's scalar.
+fn in_order<S: Real>(order: Order, t: &Terms<S>) -> Vec<S> {
+    let exp = |x: &S| x.exp();
+    match order {
+        Order::Plain => {
+            let mut losses = t.losses.clone();
+            losses.extend(t.tail.clone());
+            plain_with(t, &losses)
+        }
+        Order::Want(what) => want(what, t, Some(&exp)).expect("an exp"),
+        Order::Shifted => plain_with(t, &shifted_losses(t, false)),
+        Order::ShiftedGiven => plain_with(t, &shifted_losses(t, true)),
+    }
+}
+
+/// The f32 instance: every problem-level route (over the [`Lifted`] task) and the kernel routes
+/// on every trajectory rounded to f32 at both θ (rounded), then the baselined oracle with every
+/// kind on rounded batches; each within [`F32_TOLERANCE`] of the first reference that has the
+/// quantity, and, where `routes` asserts it in f64, bit for bit the reference formed in f32 in
+/// the route's order ([`SAME_ORDER`]). `round_*` round the f64 labels and actions, `label` and
+/// `action` lift the rounded ones to f32.
+#[allow(clippy::too_many_arguments)] // the problem, the f32 policy, the roundings and lifts
+fn check_f32<T, P, P32, L32, A32>(
+    p: &mut TaskProblem<T, P>,
+    p32: P32,
+    thetas: &[DVector<f64>; 2],
+    round_label: &dyn Fn(&T::Label) -> T::Label,
+    round_action: &dyn Fn(&T::Action) -> T::Action,
+    label: &dyn Fn(&T::Label) -> L32,
+    action: &dyn Fn(&T::Action) -> A32,
+    references: &[Box<dyn Reference<T> + '_>],
+    mode: Mode,
+) -> Tally
+where
+    T: Task<f64>,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64>,
+    T::Label: Borrow<P::Label>,
+    P32: LikelihoodRatio<f32, Action = A32> + EstimatorKernel<f32> + Clone,
+    L32: Borrow<P32::Label> + Clone + Debug,
+    A32: Clone + Debug,
+{
+    let mut p32 = TaskProblem {
+        task: Lifted::<L32, A32>::new(),
+        policy: p32,
+        horizon: p.horizon,
+    };
+    let rounded = thetas.clone().map(|th| th.map(to_f32));
+    let th32 = rounded.clone().map(|th| lift_theta::<f32>(&th));
+    let widen = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect::<Vec<_>>();
+    let mut tally = Tally::default();
+    for (seed, t) in SEEDS.into_iter().zip(rollouts(p, &thetas[0])) {
+        let t = round_trajectory::<T>(&t, round_label, round_action);
+        let t32 = lift::<f32, _, _, _, _>(&t, label, action);
+        // Perturbed, at the roll-out's θ only: at the other, the last loss is too small a part
+        // of the sums for F32_TOLERANCE to see it doubled (F32_PERTURBATION).
+        let ks = if mode == Mode::Reference { 2 } else { 1 };
+        for k in 0..ks {
+            let refs: Vec<_> = references
+                .iter()
+                .map(|r| r.wants(&t, &rounded[k], &rounded[1 - k], mode))
+                .collect();
+            let own = terms(
+                &p32.policy,
+                th32[k].as_slice(),
+                th32[1 - k].as_slice(),
+                &t32,
+            );
+            let routes = problem_routes(&mut p32, &th32[k], &th32[1 - k], &t32);
+            let mut bitwise = 0;
+            for r in &routes {
+                let name = format!("seed {seed}, θ{k}: {}", r.name);
+                let got = widen(&r.value);
+                check_bounds(&mut tally, mode, &name, r.what, &got, &refs, F32_TOLERANCE);
+                if let Some((_, order)) = SAME_ORDER.iter().find(|(n, _)| *n == r.name) {
+                    bitwise += 1;
+                    let mut want = in_order(*order, &own);
+                    if let (Mode::Perturbed(_), Some(x)) = (mode, want.first_mut()) {
+                        *x = f32::from_bits(x.to_bits() ^ 1);
+                    }
+                    tally.record(mode, &name, same_bits(&name, &got, &widen(&want)));
+                }
+            }
+            assert_eq!(bitwise, SAME_ORDER.len(), "every route of SAME_ORDER ran");
+        }
+    }
+
+    let batches = batches(p, &thetas[0]);
+    let batches: Vec<Vec<_>> = batches
+        .iter()
+        .map(|ts| {
+            ts.iter()
+                .map(|t| round_trajectory::<T>(t, round_label, round_action))
+                .collect()
+        })
+        .collect();
+    let batches32: Vec<Vec<_>> = batches
+        .iter()
+        .map(|ts| {
+            ts.iter()
+                .map(|t| lift::<f32, _, _, _, _>(t, label, action))
+                .collect()
+        })
+        .collect();
+    let routes = baselined_routes(&p32, &th32[0], &batches32);
+    let mut refs = batch_references(references, &batches, &rounded[0], mode);
+    if mode != Mode::Reference {
+        // The leave-one-out estimate: the other trajectory's baselines take up most of the
+        // doubled loss's part, too little remains for F32_TOLERANCE.
+        let leave_one_out = kinds()
+            .iter()
+            .position(|k| matches!(k, Baseline::LeaveOneOut));
+        for r in &mut refs {
+            r[leave_one_out.unwrap()] = None;
+        }
+    }
+    check_batches(&mut tally, mode, &routes, &widen, &refs, F32_TOLERANCE);
+    tally
+}
+
+/// The `Dual<f64>` instance: every problem-level route and the kernel routes on every f64
+/// trajectory at both θ, then the baselined oracle with every kind, θ seeded along
+/// [`dual_theta`]'s direction. The value parts must be the f64 routes' values on the same
+/// inputs, bit for bit (dual arithmetic's value is f64 arithmetic in the same order); the
+/// tangents within [`TANGENT_TOLERANCE`] of the first reference that has the quantity (duals
+/// over rationals or intervals). Perturbed, the f64 values are nudged by one unit in the last
+/// place (first entry) and every value comparison must fail.
+fn check_dual<T, P, PD, LD, AD>(
+    p: &mut TaskProblem<T, P>,
+    pd: PD,
+    thetas: &[DVector<f64>; 2],
+    label: &dyn Fn(&T::Label) -> LD,
+    action: &dyn Fn(&T::Action) -> AD,
+    references: &[Box<dyn Reference<T> + '_>],
+    mode: Mode,
+) -> Tally
+where
+    T: Task<f64> + Clone,
+    P: LikelihoodRatio<f64, Action = T::Action> + EstimatorKernel<f64> + Clone,
+    T::Label: Borrow<P::Label>,
+    PD: LikelihoodRatio<Dual<f64>, Action = AD> + EstimatorKernel<Dual<f64>> + Clone,
+    LD: Borrow<PD::Label> + Clone + Debug,
+    AD: Clone + Debug,
+{
+    let mut pd = TaskProblem {
+        task: Lifted::<LD, AD>::new(),
+        policy: pd,
+        horizon: p.horizon,
+    };
+    let thd = [dual_theta::<f64>(&thetas[0]), dual_theta(&thetas[1])];
+    let values = |v: &[Dual<f64>]| v.iter().map(|x| *x.value()).collect::<Vec<_>>();
+    let tangents = |v: &[Dual<f64>]| v.iter().map(tangent).collect::<Vec<_>>();
+    let mut tally = Tally::default();
+    let lanes = thetas[0].len() >= DOT_LANES_FROM;
+    let check_value = |tally: &mut Tally, name: &str, what: Want, got: &[Dual<f64>], f: &[f64]| {
+        if lanes && what == Want::Cross {
+            // `v·ψ_i` through `scalar::dot`: f64 sums it in lanes, duals left to right.
+            if mode == Mode::Reference {
+                let f = f.iter().map(|&x| (x, x)).collect();
+                within(tally, mode, name, &values(got), &f, TOLERANCE);
+                tally.in_lanes += 1;
+            }
+            return;
+        }
+        let mut f = f.to_vec();
+        if let (Mode::Perturbed(_), Some(x)) = (mode, f.first_mut()) {
+            *x = f64::from_bits(x.to_bits() ^ 1);
+        }
+        tally.record(mode, name, same_bits(name, &values(got), &f));
+    };
+    for (seed, t) in SEEDS.into_iter().zip(rollouts(p, &thetas[0])) {
+        let td = lift::<Dual<f64>, _, _, _, _>(&t, label, action);
+        for k in 0..2 {
+            let refs: Vec<_> = references
+                .iter()
+                .map(|r| r.wants(&t, &thetas[k], &thetas[1 - k], mode))
+                .collect();
+            let fs = problem_routes(p, &thetas[k], &thetas[1 - k], &t);
+            let ds = problem_routes(&mut pd, &thd[k], &thd[1 - k], &td);
+            for (r, f) in ds.iter().zip(&fs) {
+                assert_eq!(r.name, f.name, "the routes of both scalars in one order");
+                let name = format!("seed {seed}, θ{k}: {}", r.name);
+                check_value(&mut tally, &name, r.what, &r.value, &f.value);
+                let got = tangents(&r.value);
+                check_bounds(
+                    &mut tally,
+                    mode,
+                    &name,
+                    r.what,
+                    &got,
+                    &refs,
+                    TANGENT_TOLERANCE,
+                );
+            }
+        }
+    }
+
+    let batches = batches(p, &thetas[0]);
+    let batches_d: Vec<Vec<_>> = batches
+        .iter()
+        .map(|ts| {
+            ts.iter()
+                .map(|t| lift::<Dual<f64>, _, _, _, _>(t, label, action))
+                .collect()
+        })
+        .collect();
+    let fs = baselined_routes(p, &thetas[0], &batches);
+    let ds = baselined_routes(&pd, &thd[0], &batches_d);
+    for ((_, _, r), (_, _, f)) in ds.iter().zip(&fs) {
+        assert_eq!(r.name, f.name, "the routes of both scalars in one order");
+        check_value(&mut tally, &r.name, r.what, &r.value, &f.value);
+    }
+    let refs = batch_references(references, &batches, &thetas[0], mode);
+    check_batches(&mut tally, mode, &ds, &tangents, &refs, TANGENT_TOLERANCE);
+    tally
+}
+
 /// Two θ of `d` entries: `base` plus independent uniform noise of half-width `spread` (as
 /// `routes`).
 fn two_thetas(d: usize, base: impl Fn(usize) -> f64, spread: f64) -> [DVector<f64>; 2] {
@@ -1369,30 +2066,57 @@ fn speed_limited_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
 }
 
 /// The instances with the `mpfr` feature: every policy of `routes` over intervals.
+fn cartpole_task() -> CartPoleTask<f64> {
+    CartPoleTask::with_lqr().unwrap()
+}
+
+fn cartpole_theta(d: usize) -> [DVector<f64>; 2] {
+    two_thetas(d, |_| 0.0, 2.0)
+}
+
+/// The network's initial weights, and the same scaled by 1.001 (as `routes`).
+fn mlp_theta(net: &Mlp) -> [DVector<f64>; 2] {
+    let theta = DVector::from_vec(net.init::<f64>(&mut KitRng::seed_from_u64(5)));
+    let near = theta.map(|x| 1.001 * x);
+    [theta, near]
+}
+
+fn same(x: &usize) -> usize {
+    *x
+}
+
+/// The MLP-Gaussian policy's θ, as `routes`': the linear pull through the tanh layer.
+fn mlp_gaussian_theta(net: &Mlp, n: usize, h: usize) -> [DVector<f64>; 2] {
+    mlp_theta(net).map(|theta| {
+        let mut theta = theta.map(|x| 0.01 * x);
+        theta[0] = 0.1;
+        theta[n + 1] = 0.1;
+        theta[h * n + h] = 0.5;
+        theta[h * n + h + h + 1] = 0.5;
+        theta
+    })
+}
+
+/// The MLP-Gaussian problem, on fixed streams of [`LONG_STEPS`] decisions.
+fn mlp_gaussian_problem(
+    horizon: Option<AfterEnd>,
+) -> (
+    TaskProblem<ObstacleTask, MlpGaussian<f64>>,
+    [DVector<f64>; 2],
+) {
+    let (n, h) = (obstacle::FEATURES, 4);
+    let policy = MlpGaussian::new(n, h, 2, SIGMA).unwrap();
+    let thetas = mlp_gaussian_theta(policy.net(), n, h);
+    let mut p = with_horizon(obstacle_task::<Vec<f64>>(), policy, horizon);
+    if let Some(after_end) = horizon {
+        p.horizon = Horizon::fixed(LONG_STEPS, after_end);
+    }
+    (p, thetas)
+}
+
 #[cfg(feature = "mpfr")]
 mod mpfr_instances {
     use super::*;
-    use ilopt::policy::{Logistic, Mlp, MlpGaussian, MlpSoftmax, Softmax};
-    use ilopt::task::cartpole::{self, CartPoleTask};
-
-    fn cartpole_task() -> CartPoleTask<f64> {
-        CartPoleTask::with_lqr().unwrap()
-    }
-
-    fn cartpole_theta(d: usize) -> [DVector<f64>; 2] {
-        two_thetas(d, |_| 0.0, 2.0)
-    }
-
-    /// The network's initial weights, and the same scaled by 1.001 (as `routes`).
-    fn mlp_theta(net: &Mlp) -> [DVector<f64>; 2] {
-        let theta = DVector::from_vec(net.init::<f64>(&mut KitRng::seed_from_u64(5)));
-        let near = theta.map(|x| 1.001 * x);
-        [theta, near]
-    }
-
-    fn same(x: &usize) -> usize {
-        *x
-    }
 
     pub(super) fn logistic_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
         let policy = Logistic::new(cartpole::FEATURES).unwrap();
@@ -1457,21 +2181,8 @@ mod mpfr_instances {
     /// The MLP-Gaussian policy with `routes`' weights (the linear pull through the tanh layer),
     /// on fixed streams of [`LONG_STEPS`] decisions.
     pub(super) fn mlp_gaussian_interval(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
-        let (n, h) = (obstacle::FEATURES, 4);
-        let policy = MlpGaussian::new(n, h, 2, SIGMA).unwrap();
-        let thetas = mlp_theta(policy.net()).map(|theta| {
-            let mut theta = theta.map(|x| 0.01 * x);
-            theta[0] = 0.1;
-            theta[n + 1] = 0.1;
-            theta[h * n + h] = 0.5;
-            theta[h * n + h + h + 1] = 0.5;
-            theta
-        });
-        let mut p = with_horizon(obstacle_task::<Vec<f64>>(), policy, horizon);
-        if let Some(after_end) = horizon {
-            p.horizon = Horizon::fixed(LONG_STEPS, after_end);
-        }
-        let pi = MlpGaussian::new(n, h, 2, exact::<Interval>(SIGMA)).unwrap();
+        let (mut p, thetas) = mlp_gaussian_problem(horizon);
+        let pi = MlpGaussian::new(obstacle::FEATURES, 4, 2, exact::<Interval>(SIGMA)).unwrap();
         let li = lift_vec::<Interval, Vec<f64>>;
         check_interval_problem(&mut p, pi, &thetas, &li, &li, None, mode)
     }
@@ -1479,6 +2190,267 @@ mod mpfr_instances {
 
 #[cfg(feature = "mpfr")]
 use mpfr_instances::*;
+
+/// The f32 and `Dual<f64>` instances of every policy of `routes`. Their references: exact
+/// (rationals, duals over rationals) for the linear-Gaussian policies, and enclosures (intervals,
+/// duals over intervals) for the speed-limited one; with the `mpfr` feature, enclosures also for
+/// the quantities that need an `exp` and for the policies whose terms do (without it, those
+/// policies run every route with the bit-for-bit checks only).
+mod lifted_instances {
+    use super::*;
+
+    type DI = Dual<Interval>;
+    type References<'a, T> = Vec<Box<dyn Reference<T> + 'a>>;
+
+    /// The intervals' `exp`, where they have one (the `mpfr` feature).
+    fn interval_exp() -> Option<fn(&Interval) -> Interval> {
+        #[cfg(feature = "mpfr")]
+        return Some(<Interval as Real>::exp);
+        #[cfg(not(feature = "mpfr"))]
+        None
+    }
+
+    fn dual_interval_exp() -> Option<fn(&DI) -> DI> {
+        #[cfg(feature = "mpfr")]
+        return Some(<DI as Real>::exp);
+        #[cfg(not(feature = "mpfr"))]
+        None
+    }
+
+    /// The interval reference of the f32 instance (values).
+    fn enclosed_values<'a, T, PI, L, A>(
+        pi: PI,
+        label: fn(&T::Label) -> L,
+        action: fn(&T::Action) -> A,
+    ) -> Box<dyn Reference<T> + 'a>
+    where
+        T: Task<f64> + 'a,
+        PI: LikelihoodRatio<Interval, Action = A> + 'a,
+        L: Borrow<PI::Label> + 'a,
+        A: 'a,
+    {
+        reference_in(
+            pi,
+            label,
+            action,
+            lift_theta::<Interval>,
+            interval_exp(),
+            interval_bounds,
+        )
+    }
+
+    /// The interval reference of the dual instance (tangents).
+    fn enclosed_tangents<'a, T, PI, L, A>(
+        pi: PI,
+        label: fn(&T::Label) -> L,
+        action: fn(&T::Action) -> A,
+    ) -> Box<dyn Reference<T> + 'a>
+    where
+        T: Task<f64> + 'a,
+        PI: LikelihoodRatio<DI, Action = A> + 'a,
+        L: Borrow<PI::Label> + 'a,
+        A: 'a,
+    {
+        reference_in(
+            pi,
+            label,
+            action,
+            dual_theta::<Interval>,
+            dual_interval_exp(),
+            |x| interval_bounds(&tangent(x)),
+        )
+    }
+
+    /// The speed-limited policy with the f32 instance's limit (0.1 rounded to f32), so that
+    /// the f32 policy and its references limit at the same real number.
+    fn speed_limited_at_f32<S: ilopt::scalar::Sqrt>() -> SpeedLimitedGaussian<S, [S; 2]> {
+        SpeedLimitedGaussian::new(gaussian_pair(), exact(to_f32(0.1))).unwrap()
+    }
+
+    fn mlp_gaussian<S: Scalar>() -> MlpGaussian<S> {
+        MlpGaussian::new(obstacle::FEATURES, 4, 2, exact::<S>(SIGMA)).unwrap()
+    }
+
+    type Obstacle = ObstacleTask;
+    type ObstaclePair = ObstacleTask<[f64; 2]>;
+    type CartPole = CartPoleTask<f64>;
+
+    pub(super) fn linear_gaussian_f32(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let mut p = with_horizon(obstacle_task::<Vec<f64>>(), gaussian(), horizon);
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        let li = lift_vec::<Interval, Vec<f64>>;
+        let refs: References<Obstacle> = vec![enclosed_values(gaussian(), li, li)];
+        let l32 = lift_vec::<f32, Vec<f64>>;
+        let round = round_vec;
+        check_f32(
+            &mut p,
+            gaussian(),
+            &thetas,
+            &round,
+            &round,
+            &l32,
+            &l32,
+            &refs,
+            mode,
+        )
+    }
+
+    pub(super) fn linear_gaussian_inline_f32(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let mut p = with_horizon(obstacle_task::<[f64; 2]>(), gaussian_pair(), horizon);
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        let li = lift_pair::<Interval>;
+        let refs: References<ObstaclePair> = vec![enclosed_values(gaussian_pair(), li, li)];
+        let (l32, round) = (lift_pair::<f32>, round_pair);
+        let policy = gaussian_pair();
+        check_f32(
+            &mut p, policy, &thetas, &round, &round, &l32, &l32, &refs, mode,
+        )
+    }
+
+    pub(super) fn speed_limited_f32(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let mut p = with_horizon(obstacle_task::<[f64; 2]>(), speed_limited(), horizon);
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        let li = lift_pair::<Interval>;
+        let refs: References<ObstaclePair> = vec![enclosed_values(speed_limited_at_f32(), li, li)];
+        let (l32, round) = (lift_pair::<f32>, round_pair);
+        let policy = speed_limited_at_f32();
+        check_f32(
+            &mut p, policy, &thetas, &round, &round, &l32, &l32, &refs, mode,
+        )
+    }
+
+    pub(super) fn logistic_f32(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = Logistic::new(cartpole::FEATURES).unwrap();
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        let thetas = cartpole_theta(cartpole::FEATURES);
+        #[cfg(feature = "mpfr")]
+        let refs: References<CartPole> = vec![enclosed_values(policy, same, same)];
+        #[cfg(not(feature = "mpfr"))]
+        let refs: References<CartPole> = vec![];
+        check_f32(
+            &mut p, policy, &thetas, &same, &same, &same, &same, &refs, mode,
+        )
+    }
+
+    pub(super) fn softmax_f32(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = Softmax::new(2, cartpole::FEATURES).unwrap();
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        let thetas = cartpole_theta(2 * cartpole::FEATURES);
+        #[cfg(feature = "mpfr")]
+        let refs: References<CartPole> = vec![enclosed_values(policy, same, same)];
+        #[cfg(not(feature = "mpfr"))]
+        let refs: References<CartPole> = vec![];
+        check_f32(
+            &mut p, policy, &thetas, &same, &same, &same, &same, &refs, mode,
+        )
+    }
+
+    pub(super) fn mlp_softmax_f32(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = MlpSoftmax::new(cartpole::FEATURES, 4, 2).unwrap();
+        let thetas = mlp_theta(policy.net());
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        #[cfg(feature = "mpfr")]
+        let refs: References<CartPole> = vec![enclosed_values(policy, same, same)];
+        #[cfg(not(feature = "mpfr"))]
+        let refs: References<CartPole> = vec![];
+        check_f32(
+            &mut p, policy, &thetas, &same, &same, &same, &same, &refs, mode,
+        )
+    }
+
+    pub(super) fn mlp_gaussian_f32(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let (mut p, thetas) = mlp_gaussian_problem(horizon);
+        #[cfg(feature = "mpfr")]
+        let refs: References<Obstacle> = vec![enclosed_values(
+            mlp_gaussian::<Interval>(),
+            lift_vec::<Interval, Vec<f64>>,
+            lift_vec::<Interval, Vec<f64>>,
+        )];
+        #[cfg(not(feature = "mpfr"))]
+        let refs: References<Obstacle> = vec![];
+        let (l32, round) = (lift_vec::<f32, Vec<f64>>, round_vec);
+        let policy = mlp_gaussian::<f32>();
+        check_f32(
+            &mut p, policy, &thetas, &round, &round, &l32, &l32, &refs, mode,
+        )
+    }
+
+    pub(super) fn linear_gaussian_dual(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let mut p = with_horizon(obstacle_task::<Vec<f64>>(), gaussian(), horizon);
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        let li = lift_vec::<DI, Vec<f64>>;
+        let refs: References<Obstacle> = vec![enclosed_tangents(gaussian(), li, li)];
+        let ld = lift_vec::<Dual<f64>, Vec<f64>>;
+        check_dual(&mut p, gaussian(), &thetas, &ld, &ld, &refs, mode)
+    }
+
+    pub(super) fn linear_gaussian_inline_dual(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let mut p = with_horizon(obstacle_task::<[f64; 2]>(), gaussian_pair(), horizon);
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        let li = lift_pair::<DI>;
+        let refs: References<ObstaclePair> = vec![enclosed_tangents(gaussian_pair(), li, li)];
+        let ld = lift_pair::<Dual<f64>>;
+        check_dual(&mut p, gaussian_pair(), &thetas, &ld, &ld, &refs, mode)
+    }
+
+    pub(super) fn speed_limited_dual(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let mut p = with_horizon(obstacle_task::<[f64; 2]>(), speed_limited(), horizon);
+        let thetas = obstacle_theta(obstacle::FEATURES);
+        let li = lift_pair::<DI>;
+        let refs: References<ObstaclePair> = vec![enclosed_tangents(speed_limited(), li, li)];
+        let ld = lift_pair::<Dual<f64>>;
+        check_dual(&mut p, speed_limited(), &thetas, &ld, &ld, &refs, mode)
+    }
+
+    pub(super) fn logistic_dual(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = Logistic::new(cartpole::FEATURES).unwrap();
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        let thetas = cartpole_theta(cartpole::FEATURES);
+        #[cfg(feature = "mpfr")]
+        let refs: References<CartPole> = vec![enclosed_tangents(policy, same, same)];
+        #[cfg(not(feature = "mpfr"))]
+        let refs: References<CartPole> = vec![];
+        check_dual(&mut p, policy, &thetas, &same, &same, &refs, mode)
+    }
+
+    pub(super) fn softmax_dual(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = Softmax::new(2, cartpole::FEATURES).unwrap();
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        let thetas = cartpole_theta(2 * cartpole::FEATURES);
+        #[cfg(feature = "mpfr")]
+        let refs: References<CartPole> = vec![enclosed_tangents(policy, same, same)];
+        #[cfg(not(feature = "mpfr"))]
+        let refs: References<CartPole> = vec![];
+        check_dual(&mut p, policy, &thetas, &same, &same, &refs, mode)
+    }
+
+    pub(super) fn mlp_softmax_dual(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let policy = MlpSoftmax::new(cartpole::FEATURES, 4, 2).unwrap();
+        let thetas = mlp_theta(policy.net());
+        let mut p = with_horizon(cartpole_task(), policy, horizon);
+        #[cfg(feature = "mpfr")]
+        let refs: References<CartPole> = vec![enclosed_tangents(policy, same, same)];
+        #[cfg(not(feature = "mpfr"))]
+        let refs: References<CartPole> = vec![];
+        check_dual(&mut p, policy, &thetas, &same, &same, &refs, mode)
+    }
+
+    pub(super) fn mlp_gaussian_dual(horizon: Option<AfterEnd>, mode: Mode) -> Tally {
+        let (mut p, thetas) = mlp_gaussian_problem(horizon);
+        #[cfg(feature = "mpfr")]
+        let refs: References<Obstacle> = vec![enclosed_tangents(
+            mlp_gaussian::<DI>(),
+            lift_vec::<DI, Vec<f64>>,
+            lift_vec::<DI, Vec<f64>>,
+        )];
+        #[cfg(not(feature = "mpfr"))]
+        let refs: References<Obstacle> = vec![];
+        let ld = lift_vec::<Dual<f64>, Vec<f64>>;
+        check_dual(&mut p, mlp_gaussian(), &thetas, &ld, &ld, &refs, mode)
+    }
+}
+
+use lifted_instances::*;
 
 /// One test per instance (policy × scalar) × horizon kind: episodic; a fixed horizon whose
 /// early ends absorb; one whose early ends reset. Every comparison must pass, and the interval
@@ -1536,6 +2508,20 @@ scalar_contract! {
     speed_limited_interval_problem: speed_limited_interval_episodic, speed_limited_interval_fixed_absorbing, speed_limited_interval_fixed_reset;
     #[cfg(feature = "mpfr")]
     mlp_gaussian_interval: mlp_gaussian_interval_episodic, mlp_gaussian_interval_fixed_absorbing, mlp_gaussian_interval_fixed_reset;
+    linear_gaussian_f32: linear_gaussian_f32_episodic, linear_gaussian_f32_fixed_absorbing, linear_gaussian_f32_fixed_reset;
+    linear_gaussian_inline_f32: linear_gaussian_inline_f32_episodic, linear_gaussian_inline_f32_fixed_absorbing, linear_gaussian_inline_f32_fixed_reset;
+    speed_limited_f32: speed_limited_f32_episodic, speed_limited_f32_fixed_absorbing, speed_limited_f32_fixed_reset;
+    logistic_f32: logistic_f32_episodic, logistic_f32_fixed_absorbing, logistic_f32_fixed_reset;
+    softmax_f32: softmax_f32_episodic, softmax_f32_fixed_absorbing, softmax_f32_fixed_reset;
+    mlp_softmax_f32: mlp_softmax_f32_episodic, mlp_softmax_f32_fixed_absorbing, mlp_softmax_f32_fixed_reset;
+    mlp_gaussian_f32: mlp_gaussian_f32_episodic, mlp_gaussian_f32_fixed_absorbing, mlp_gaussian_f32_fixed_reset;
+    linear_gaussian_dual: linear_gaussian_dual_episodic, linear_gaussian_dual_fixed_absorbing, linear_gaussian_dual_fixed_reset;
+    linear_gaussian_inline_dual: linear_gaussian_inline_dual_episodic, linear_gaussian_inline_dual_fixed_absorbing, linear_gaussian_inline_dual_fixed_reset;
+    speed_limited_dual: speed_limited_dual_episodic, speed_limited_dual_fixed_absorbing, speed_limited_dual_fixed_reset;
+    logistic_dual: logistic_dual_episodic, logistic_dual_fixed_absorbing, logistic_dual_fixed_reset;
+    softmax_dual: softmax_dual_episodic, softmax_dual_fixed_absorbing, softmax_dual_fixed_reset;
+    mlp_softmax_dual: mlp_softmax_dual_episodic, mlp_softmax_dual_fixed_absorbing, mlp_softmax_dual_fixed_reset;
+    mlp_gaussian_dual: mlp_gaussian_dual_episodic, mlp_gaussian_dual_fixed_absorbing, mlp_gaussian_dual_fixed_reset;
 }
 
 /// One failure test per instance: on a fixed horizon whose early ends absorb (the tail and
@@ -1571,4 +2557,18 @@ failure_demonstration! {
     speed_limited_interval_problem(PROBLEM_PERTURBATION): speed_limited_interval_rejects_a_perturbed_reference;
     #[cfg(feature = "mpfr")]
     mlp_gaussian_interval(PROBLEM_PERTURBATION): mlp_gaussian_interval_rejects_a_perturbed_reference;
+    linear_gaussian_f32(F32_PERTURBATION): linear_gaussian_f32_rejects_a_perturbed_reference;
+    linear_gaussian_inline_f32(F32_PERTURBATION): linear_gaussian_inline_f32_rejects_a_perturbed_reference;
+    speed_limited_f32(F32_PERTURBATION): speed_limited_f32_rejects_a_perturbed_reference;
+    logistic_f32(F32_PERTURBATION): logistic_f32_rejects_a_perturbed_reference;
+    softmax_f32(F32_PERTURBATION): softmax_f32_rejects_a_perturbed_reference;
+    mlp_softmax_f32(F32_PERTURBATION): mlp_softmax_f32_rejects_a_perturbed_reference;
+    mlp_gaussian_f32(F32_PERTURBATION): mlp_gaussian_f32_rejects_a_perturbed_reference;
+    linear_gaussian_dual(DUAL_PERTURBATION): linear_gaussian_dual_rejects_a_perturbed_reference;
+    linear_gaussian_inline_dual(DUAL_PERTURBATION): linear_gaussian_inline_dual_rejects_a_perturbed_reference;
+    speed_limited_dual(DUAL_PERTURBATION): speed_limited_dual_rejects_a_perturbed_reference;
+    logistic_dual(DUAL_PERTURBATION): logistic_dual_rejects_a_perturbed_reference;
+    softmax_dual(DUAL_PERTURBATION): softmax_dual_rejects_a_perturbed_reference;
+    mlp_softmax_dual(DUAL_PERTURBATION): mlp_softmax_dual_rejects_a_perturbed_reference;
+    mlp_gaussian_dual(DUAL_PERTURBATION): mlp_gaussian_dual_rejects_a_perturbed_reference;
 }
