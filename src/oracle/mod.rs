@@ -15,7 +15,9 @@
 //! One decision's update is `g += w ∇l_t + w l_t Σ_{i<t} ψ_i`, then `Σ_{i<t} ψ_i += ψ_t`: in the
 //! generic passes [`kernel`]'s `accumulate`, also over recorded decisions (`accumulate_rows`,
 //! with the losses given: a baseline's shifted ones), so that for each policy the plain
-//! estimate and every baselined one are summed in one order; the logistic policy's
+//! estimate and every estimate with a baseline fixed before the pass are summed in one order
+//! (the learned baselines subtract `Σ_i b_i ψ_i` from the plain estimate, docs/architecture.md);
+//! the logistic policy's
 //! fixed-dimension loops (its [`EstimatorKernel`] overrides) make the same operations on
 //! `[f64; N]` rows, bit for bit. The data the baselines need are here too: a trajectory's [`DecisionTerms`],
 //! baselines known before a pass ([`Given`]), decisions recorded to be summed with losses chosen
