@@ -7,6 +7,7 @@
 use crate::error::Error;
 pub use crate::grid::GridDim;
 use ilopt::algo::AlgorithmConfig;
+pub use ilopt::task::cartpole::CartPoleExpertChoice;
 use ilopt::task::{AfterEnd, Horizon};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -237,48 +238,16 @@ pub enum Role {
     Control,
 }
 
-/// Which expert labels CartPole's states.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum CartPoleExpertChoice {
-    /// The committed PPO expert `experts/cartpole-ppo.json` (thesis §4.2.1: "We use PPO as
-    /// expert"), acting greedily.
-    #[default]
-    Ppo,
-    /// The kit's LQR controller on the linearised dynamics.
-    Lqr,
-}
-
-impl CartPoleExpertChoice {
-    /// The embedded PPO expert, validated.
-    ///
-    /// # Errors
-    /// A message if the embedded file does not validate (it is checked by the kit's tests).
-    pub fn ppo_expert() -> Result<ilopt::expert::ppo::PpoExpert, String> {
-        ilopt::expert::ppo::PpoExpertFile::committed_cartpole()
-            .and_then(|f| f.expert())
-            .map_err(|e| e.to_string())
-    }
-
-    /// `"PPO"` / `"LQR"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            CartPoleExpertChoice::Ppo => "PPO",
-            CartPoleExpertChoice::Lqr => "LQR",
-        }
-    }
-
-    /// What determines the expert's labels, for the reuse key: the choice and, for PPO, a hash
-    /// of the expert file's bytes (a retrained expert invalidates the cached results).
-    pub fn identity(self) -> String {
-        match self {
-            CartPoleExpertChoice::Lqr => "lqr".into(),
-            CartPoleExpertChoice::Ppo => {
-                format!(
-                    "ppo:{:016x}",
-                    crate::stats::fnv1a(ilopt::expert::ppo::COMMITTED_CARTPOLE_EXPERT)
-                )
-            }
+/// What determines CartPole's expert's labels, for the reuse key: the choice and, for PPO, a
+/// hash of the expert file's bytes (a retrained expert invalidates the cached results).
+pub fn expert_identity(choice: CartPoleExpertChoice) -> String {
+    match choice {
+        CartPoleExpertChoice::Lqr => "lqr".into(),
+        CartPoleExpertChoice::Ppo => {
+            format!(
+                "ppo:{:016x}",
+                crate::stats::fnv1a(ilopt::expert::ppo::COMMITTED_CARTPOLE_EXPERT)
+            )
         }
     }
 }

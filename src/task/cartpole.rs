@@ -24,6 +24,48 @@ pub enum CartPoleExpert {
     Ppo(PpoExpert),
 }
 
+/// Which expert labels CartPole's states, as the configuration files name it (`"ppo"`,
+/// `"lqr"`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CartPoleExpertChoice {
+    /// The committed PPO expert `experts/cartpole-ppo.json` (thesis §4.2.1: "We use PPO as
+    /// expert"), acting greedily.
+    #[default]
+    Ppo,
+    /// The LQR controller on the linearised dynamics ([`crate::expert::lqr`]).
+    Lqr,
+}
+
+impl CartPoleExpertChoice {
+    /// The chosen expert: the LQR controller, or the committed PPO expert (built into the
+    /// library).
+    ///
+    /// # Errors
+    /// [`OracleError::Environment`] if the LQR design fails or the committed PPO file does not
+    /// validate.
+    pub fn expert(self) -> Result<CartPoleExpert, OracleError> {
+        let environment = |e: &dyn std::fmt::Display| OracleError::Environment(e.to_string());
+        match self {
+            CartPoleExpertChoice::Lqr => LqrExpert::cartpole()
+                .map(|e| CartPoleExpert::Lqr(Box::new(e)))
+                .map_err(|e| environment(&e)),
+            CartPoleExpertChoice::Ppo => crate::expert::ppo::PpoExpertFile::committed_cartpole()
+                .and_then(|f| f.expert())
+                .map(CartPoleExpert::Ppo)
+                .map_err(|e| environment(&e)),
+        }
+    }
+
+    /// `"PPO"` / `"LQR"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            CartPoleExpertChoice::Ppo => "PPO",
+            CartPoleExpertChoice::Lqr => "LQR",
+        }
+    }
+}
+
 /// CartPole with an expert, episodes truncated at `max_steps` (Gymnasium: 500).
 #[derive(Debug, Clone)]
 pub struct CartPoleTask<S> {
@@ -170,5 +212,28 @@ impl<S: Real> Task<S> for CartPoleTask<S> {
             .advance(&self.dynamics, *action, self.max_steps)
             .map_err(env_error)?;
         Ok(end.terminated || end.truncated)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The configuration files' names, the PPO default, and each choice's expert.
+    #[test]
+    fn expert_choices_read_their_names_and_build_their_experts() {
+        let read = |s: &str| serde_json::from_str::<CartPoleExpertChoice>(s);
+        assert_eq!(read("\"ppo\"").unwrap(), CartPoleExpertChoice::Ppo);
+        assert_eq!(read("\"lqr\"").unwrap(), CartPoleExpertChoice::Lqr);
+        assert!(read("\"LQR\"").is_err());
+        assert_eq!(CartPoleExpertChoice::default(), CartPoleExpertChoice::Ppo);
+        assert!(matches!(
+            CartPoleExpertChoice::Ppo.expert(),
+            Ok(CartPoleExpert::Ppo(_))
+        ));
+        assert!(matches!(
+            CartPoleExpertChoice::Lqr.expert(),
+            Ok(CartPoleExpert::Lqr(_))
+        ));
     }
 }

@@ -8,6 +8,7 @@ use super::error::{RunError, invalid};
 use super::integer_keys::{check_schema_integers, integer_error};
 use ilopt::algo::AlgorithmConfig;
 use ilopt::task::AfterEnd;
+pub use ilopt::task::cartpole::CartPoleExpertChoice;
 use ilopt::task::obstacle::ObstacleFeatures;
 use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::{Deserialize, Serialize, Serializer};
@@ -67,17 +68,6 @@ impl TaskName {
     }
 }
 
-/// CartPole's expert.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ExpertChoice {
-    /// The PPO expert: the committed `experts/cartpole-ppo.json` (built into the binary) or
-    /// `task.expert_file`.
-    Ppo,
-    /// The LQR controller.
-    Lqr,
-}
-
 /// The objective's kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -96,7 +86,7 @@ pub struct TaskSection {
     pub name: TaskName,
     /// CartPole: `ppo` (default) or `lqr`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub expert: Option<ExpertChoice>,
+    pub expert: Option<CartPoleExpertChoice>,
     /// CartPole with `expert = "ppo"`: a PPO expert file instead of the built-in one (relative
     /// to the config file's directory).
     #[serde(default, skip_serializing_if = "Option::is_none")]

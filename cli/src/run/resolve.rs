@@ -3,8 +3,8 @@
 //! `integer_keys`), each failure naming its key.
 
 use super::config::{
-    DEFAULT_EPISODES, DEFAULT_SIGMA, ExpertChoice, HorizonKind, MAX_SEEDS, PolicyKind, RunFile,
-    TaskName, Theta0,
+    CartPoleExpertChoice, DEFAULT_EPISODES, DEFAULT_SIGMA, HorizonKind, MAX_SEEDS, PolicyKind,
+    RunFile, TaskName, Theta0,
 };
 use super::error::{RunError, invalid};
 use ilopt::task::AfterEnd;
@@ -49,8 +49,8 @@ impl RunFile {
                 not_for("task.mdp", t.mdp.is_some())?;
                 not_for("policy.sigma", p.sigma.is_some())?;
                 not_for("policy.features", p.features.is_some())?;
-                let expert = *t.expert.get_or_insert(ExpertChoice::Ppo);
-                if expert == ExpertChoice::Lqr && t.expert_file.is_some() {
+                let expert = *t.expert.get_or_insert(CartPoleExpertChoice::Ppo);
+                if expert == CartPoleExpertChoice::Lqr && t.expert_file.is_some() {
                     return Err(bad("task.expert_file", &"only with expert = \"ppo\""));
                 }
                 p.kind.get_or_insert(PolicyKind::Softmax);

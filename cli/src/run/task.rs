@@ -4,7 +4,7 @@
 //! (or LQR) expert, the obstacle task with the linear-Gaussian learner, a toy MDP as its file
 //! gives it. Evaluation episode j of a seed draws from [`episode_seed`]`(seed, j)`.
 
-use super::config::{ExpertChoice, HorizonKind, LoadedConfig, PolicyKind, RunFile, TaskName};
+use super::config::{HorizonKind, LoadedConfig, PolicyKind, RunFile, TaskName};
 use super::error::RunError;
 use super::evaluation::{Evaluation, episode_seed};
 use super::runnable::{RunTask, horizon_decisions};
@@ -13,11 +13,10 @@ pub use ilopt::evaluate::builtin::TaskLearner;
 use ilopt::evaluate::builtin::{
     BuildError, CartPoleLearner, CartPolePolicy, ObstacleLearner, ObstacleProblem, ToyLearner,
 };
-use ilopt::expert::lqr::LqrExpert;
-use ilopt::expert::ppo::{PpoExpert, PpoExpertFile};
+use ilopt::expert::ppo::PpoExpert;
 use ilopt::policy::Greedy;
-use ilopt::problem::{IlProblem, OracleError};
-use ilopt::task::cartpole::{CartPoleExpert, CartPoleTask};
+use ilopt::problem::IlProblem;
+use ilopt::task::cartpole::{CartPoleExpert, CartPoleExpertChoice, CartPoleTask};
 use ilopt::task::{Horizon, TaskProblem};
 use ilopt::toy::{ToyMdp, ToyProblem};
 
@@ -38,17 +37,11 @@ pub fn task_learner(config: &LoadedConfig) -> Result<TaskLearner, RunError> {
     let horizon = horizon(f);
     match f.task.name {
         TaskName::Cartpole => {
-            let expert = match (f.task.expert, &f.task.expert_file) {
-                (Some(ExpertChoice::Lqr), _) => LqrExpert::cartpole()
-                    .map(|e| CartPoleExpert::Lqr(Box::new(e)))
-                    .map_err(|e| task_err(&OracleError::Environment(e.to_string())))?,
-                (_, Some(path)) => PpoExpert::load(path)
+            let expert = match (f.task.expert.unwrap_or_default(), &f.task.expert_file) {
+                (CartPoleExpertChoice::Ppo, Some(path)) => PpoExpert::load(path)
                     .map(CartPoleExpert::Ppo)
                     .map_err(|e| config.invalid("task.expert_file", e))?,
-                (_, None) => PpoExpertFile::committed_cartpole()
-                    .and_then(|f| f.expert())
-                    .map(CartPoleExpert::Ppo)
-                    .map_err(|e| task_err(&e))?,
+                (choice, _) => choice.expert().map_err(|e| task_err(&e))?,
             };
             let policy = match f.policy.kind.unwrap_or(PolicyKind::Softmax) {
                 PolicyKind::Softmax => CartPolePolicy::Softmax,

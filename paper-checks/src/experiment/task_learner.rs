@@ -5,16 +5,14 @@
 //! learners ([`ReferencePolicy`]).
 
 use super::{TaskKind, cartpole_max_steps};
-use crate::config::{CartPoleExpertChoice, TaskSection};
+use crate::config::TaskSection;
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::evaluate::Evaluation;
 pub use ilopt::evaluate::builtin::TaskLearner;
 use ilopt::evaluate::builtin::{CartPoleLearner, CartPolePolicy};
-use ilopt::expert::lqr::LqrExpert;
 use ilopt::policy::Greedy;
-use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, OracleError};
-use ilopt::task::cartpole::CartPoleExpert;
+use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng};
 use ilopt::task::{Horizon, Task};
 use nalgebra::DVector;
 use rand::SeedableRng;
@@ -74,15 +72,11 @@ pub fn task_learner(
         )
         .map_err(|x| e(&x)),
         TaskKind::Cartpole => {
-            let expert = match task.expert.unwrap_or_default() {
-                CartPoleExpertChoice::Lqr => LqrExpert::cartpole()
-                    .map(|x| CartPoleExpert::Lqr(Box::new(x)))
-                    .map_err(|x| OracleError::Environment(x.to_string())),
-                CartPoleExpertChoice::Ppo => CartPoleExpertChoice::ppo_expert()
-                    .map(CartPoleExpert::Ppo)
-                    .map_err(OracleError::Environment),
-            }
-            .map_err(|x| e(&x))?;
+            let expert = task
+                .expert
+                .unwrap_or_default()
+                .expert()
+                .map_err(|x| e(&x))?;
             TaskLearner::cartpole(expert, CartPolePolicy::Softmax, horizon).map_err(|x| e(&x))
         }
     }

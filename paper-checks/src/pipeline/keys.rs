@@ -8,7 +8,8 @@ use crate::stats::fnv1a;
 /// What determines a task's runs apart from the algorithm rows: the section without its rows,
 /// and the expert's identity.
 pub(super) fn section_key(kind: TaskKind, t: &TaskSection) -> String {
-    let expert = (kind == TaskKind::Cartpole).then(|| t.expert.unwrap_or_default().identity());
+    let expert = (kind == TaskKind::Cartpole)
+        .then(|| crate::config::expert_identity(t.expert.unwrap_or_default()));
     let mut bare = t.clone();
     bare.algorithms.clear();
     format!(
