@@ -21,7 +21,8 @@
 //! need `num_traits::Zero`, which intervals (inari's type, so the kit cannot add it) do not
 //! implement.
 
-use crate::policy::{LinearGaussian, Policy, PolicyError, PolicyExt};
+use crate::oracle::EstimatorKernel;
+use crate::policy::{LinearGaussian, Policy, PolicyError, check_vec_scalar};
 use crate::problem::KitRng;
 use crate::sampling::standard_normal;
 use crate::scalar::{Dual, Scalar, Sqrt};
@@ -437,13 +438,17 @@ impl<S: Scalar> LqgSystem<S> {
 
     /// The eq. 3.15 estimate on one trajectory, with the policy's own loss gradient and score
     /// (φ(s) = s, label π*(s) = Ks): `g = Σ_{t=1}^{T−1} [∇l_t + l_t Σ_{i<t} ∇log π(a_i|s_i)]`,
-    /// returned with the trajectory loss `Σ_t l_t` (an unbiased estimate of F(W)).
+    /// returned with the trajectory loss `Σ_t l_t` (an unbiased estimate of F(W)). The sum is the
+    /// task problems' own: the policy's [`EstimatorKernel::causal_sum_validated`] after θ and the
+    /// states are checked here.
     ///
     /// The policy's σ_π² should equal the system's for `E[g]` to be
     /// [`LqgSystem::expected_estimate`].
     ///
     /// # Errors
-    /// [`LqgError::Policy`] for a policy, θ or trajectory of the wrong shape.
+    /// [`LqgError::Shape`] for a trajectory with fewer than T − 1 states or actions;
+    /// [`LqgError::Policy`] for a policy, θ, state or action of the wrong shape, or a non-finite θ
+    /// or state.
     pub fn estimate(
         &self,
         policy: &LinearGaussian<S>,
@@ -451,34 +456,55 @@ impl<S: Scalar> LqgSystem<S> {
         trajectory: &LqgTrajectory<S>,
     ) -> Result<(S, Vec<S>), LqgError> {
         let steps = self.horizon - 1;
-        if trajectory.states.len() < steps || trajectory.actions.len() + 1 < steps {
-            return Err(LqgError::Shape {
-                param: "trajectory",
-                rows: steps,
-                cols: self.state_dim(),
-                got_rows: trajectory.states.len(),
-                got_cols: trajectory.states.first().map_or(0, Vec::len),
-            });
+        let short = |param, rows, got_rows, first: Option<&Vec<S>>, cols| LqgError::Shape {
+            param,
+            rows,
+            cols,
+            got_rows,
+            got_cols: first.map_or(0, Vec::len),
+        };
+        if trajectory.states.len() < steps {
+            let t = &trajectory.states;
+            return Err(short(
+                "trajectory",
+                steps,
+                t.len(),
+                t.first(),
+                self.state_dim(),
+            ));
         }
-        let d = policy.param_dim();
-        let mut g = vec![S::zero(); d];
-        let mut score_sum = vec![S::zero(); d];
+        if trajectory.actions.len() < steps {
+            let a = &trajectory.actions;
+            return Err(short(
+                "actions",
+                steps,
+                a.len(),
+                a.first(),
+                self.action_dim(),
+            ));
+        }
+        check_vec_scalar("theta", theta, policy.param_dim())?;
+        let states = &trajectory.states[..steps];
+        let mut features = Vec::with_capacity(steps * self.state_dim());
+        let mut labels = Vec::with_capacity(steps);
+        for s in states {
+            check_vec_scalar("state", s, policy.feature_dim())?;
+            features.extend_from_slice(s);
+            labels.push(self.expert(s)?);
+        }
+        let mut g = vec![S::zero(); policy.param_dim()];
         let mut total = S::zero();
-        for t in 0..steps {
-            let s = &trajectory.states[t];
-            let label = self.expert(s)?;
-            let (l, loss_grad) = policy.loss(theta, s, &label)?;
-            for j in 0..d {
-                g[j] += loss_grad[j].clone() + l.clone() * &score_sum[j];
-            }
-            total += l;
-            if t + 1 < steps {
-                let psi = policy.score(theta, s, &trajectory.actions[t])?;
-                for (acc, x) in score_sum.iter_mut().zip(psi) {
-                    *acc += x;
-                }
-            }
-        }
+        policy.causal_sum_validated(
+            theta,
+            &features,
+            None,
+            &labels,
+            &trajectory.actions[..steps],
+            None,
+            &mut g,
+            Some(&mut total),
+            &mut Vec::new(),
+        )?;
         Ok((total, g))
     }
 

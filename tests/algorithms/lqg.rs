@@ -572,3 +572,76 @@ fn monte_carlo_z_scores_are_calibrated() {
     assert_abs_diff_eq!(mean_sq, 1.0, epsilon = 0.5);
     assert!(tail <= 45, "{tail} of {} beyond 1.96", zs.len());
 }
+
+/// The one-trajectory estimate (the kernel's causal pass) against eq. 3.15 written out from the
+/// policy's loss and score, exactly in rationals; short or malformed trajectories and θ are
+/// refused with the input named.
+#[test]
+fn one_trajectory_estimate_is_eq_3_15_exactly_and_refuses_bad_input() {
+    use ilopt::lqg::LqgTrajectory;
+    use ilopt::policy::PolicyExt;
+    let (sys, w) = mc_system();
+    let policy = LinearGaussian::<Q>::new(sys.action_dim(), sys.state_dim(), q("1/2")).unwrap();
+    let theta = theta_of(&w);
+    let states: Vec<Vec<Q>> = [
+        ["1/2", "-3/4"],
+        ["1/8", "5/4"],
+        ["-2", "3/8"],
+        ["7/16", "1"],
+    ]
+    .iter()
+    .map(|s| common::qs(s))
+    .collect();
+    let actions: Vec<Vec<Q>> = [["1/4"], ["-5/8"], ["3/2"]]
+        .iter()
+        .map(|a| common::qs(a))
+        .collect();
+    let tau = LqgTrajectory {
+        states: states.clone(),
+        actions: actions.clone(),
+    };
+    let (total, g) = sys.estimate(&policy, &theta, &tau).unwrap();
+
+    let steps = sys.horizon() - 1;
+    let mut want = vec![Q::zero(); theta.len()];
+    let mut score_sum = vec![Q::zero(); theta.len()];
+    let mut want_total = Q::zero();
+    for t in 0..steps {
+        let label = sys.expert(&states[t]).unwrap();
+        let (l, grad) = policy.loss(&theta, &states[t], &label).unwrap();
+        for j in 0..theta.len() {
+            want[j] += grad[j].clone() + l.clone() * &score_sum[j];
+        }
+        want_total += l;
+        let psi = policy.score(&theta, &states[t], &actions[t]).unwrap();
+        for (s, x) in score_sum.iter_mut().zip(psi) {
+            *s += x;
+        }
+    }
+    assert_eq!(g, want);
+    assert_eq!(total, want_total);
+
+    let short = LqgTrajectory {
+        states: states.clone(),
+        actions: actions[..2].to_vec(),
+    };
+    assert!(matches!(
+        sys.estimate(&policy, &theta, &short),
+        Err(LqgError::Shape {
+            param: "actions",
+            rows: 3,
+            got_rows: 2,
+            ..
+        })
+    ));
+    let mut bad_state = tau.clone();
+    bad_state.states[1].push(Q::zero());
+    assert!(matches!(
+        sys.estimate(&policy, &theta, &bad_state),
+        Err(LqgError::Policy(_))
+    ));
+    assert!(matches!(
+        sys.estimate(&policy, &theta[..1], &tau),
+        Err(LqgError::Policy(_))
+    ));
+}
