@@ -31,9 +31,9 @@ pub struct Profile {
     /// Fig. 4.2.
     pub gradient_error: GradientError,
     /// Figs. 4.3–4.6, Tables 4.1/4.2.
-    pub obstacle: TaskSection,
+    pub obstacle: TaskExperiment,
     /// Figs. 4.8–4.10, Tables 4.3/4.4.
-    pub cartpole: TaskSection,
+    pub cartpole: TaskExperiment,
 }
 
 pub use crate::gradient_error::GradientError;
@@ -112,7 +112,7 @@ impl Default for TuningProtocol {
 /// One task's experiment: the learner, the evaluation, the convergence criterion, the algorithms.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct TaskSection {
+pub struct TaskExperiment {
     /// σ_π of the linear-Gaussian learner (obstacle task only; must be absent for CartPole).
     #[serde(default)]
     pub sigma: Option<f64>,
@@ -295,7 +295,7 @@ pub struct AlgorithmEntry {
 
 impl AlgorithmEntry {
     /// The objective of this row's runs.
-    pub fn horizon(&self, task: &TaskSection, kind: TaskKind) -> Horizon {
+    pub fn horizon(&self, task: &TaskExperiment, kind: TaskKind) -> Horizon {
         self.horizon
             .or(task.horizon)
             .unwrap_or_else(|| default_horizon(kind))

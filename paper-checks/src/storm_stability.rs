@@ -16,7 +16,7 @@
 //! trajectories are split into B batches, every statistic is recomputed from the mean of the other
 //! B − 1 batches, and the standard error is `√((B − 1)/B Σ_b (x_(−b) − x̄_(·))²)`.
 
-use crate::config::{Profile, TaskSection};
+use crate::config::{Profile, TaskExperiment};
 use crate::error::Error;
 use crate::experiment::TaskKind;
 use crate::experiment::{TaskLearner, task_learner};
@@ -404,7 +404,7 @@ pub fn bench_of(profile: &Profile, kind: TaskKind) -> Result<TaskLearner, Error>
     task_learner(kind, task, horizon)
 }
 
-fn task_of(profile: &Profile, kind: TaskKind) -> &TaskSection {
+fn task_of(profile: &Profile, kind: TaskKind) -> &TaskExperiment {
     match kind {
         TaskKind::Obstacle => &profile.obstacle,
         TaskKind::Cartpole => &profile.cartpole,

@@ -8,7 +8,7 @@ use super::{
     Checkpoint, Evaluated, ReferencePolicy, SeedRun, SeedTiming, TaskKind, TaskLearner, status_of,
     sustained,
 };
-use crate::config::{AlgorithmEntry, TaskSection, Theta1};
+use crate::config::{AlgorithmEntry, TaskExperiment, Theta1};
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::algo::{
@@ -51,7 +51,7 @@ pub fn run_key_of(
 }
 
 /// [`run_key_of`] for a row at its configured hyper-parameters.
-pub fn run_key(kind: TaskKind, task: &TaskSection, entry: &AlgorithmEntry) -> String {
+pub fn run_key(kind: TaskKind, task: &TaskExperiment, entry: &AlgorithmEntry) -> String {
     run_key_of(
         kind,
         &entry.label,
@@ -68,7 +68,7 @@ pub struct RunSpec<'a> {
     /// The task.
     pub kind: TaskKind,
     /// Its section (budget, checkpoints, bound, θ₁, evaluation).
-    pub task: &'a TaskSection,
+    pub task: &'a TaskExperiment,
     /// The algorithm.
     pub config: &'a AlgorithmConfig,
     /// Trajectories per gradient (oracle methods; 1 = the plain problem).
@@ -114,7 +114,7 @@ fn theta1(law: Theta1, dim: usize, key: &str) -> DVector<f64> {
 pub fn run_seed(
     bench: &TaskLearner,
     kind: TaskKind,
-    task: &TaskSection,
+    task: &TaskExperiment,
     entry: &AlgorithmEntry,
     seed_index: u32,
 ) -> Result<(SeedRun, SeedTiming), Error> {
@@ -334,7 +334,7 @@ pub fn eval_key(kind: TaskKind, seed_index: u32) -> String {
 pub fn baseline_seed(
     bench: &TaskLearner,
     kind: TaskKind,
-    task: &TaskSection,
+    task: &TaskExperiment,
     baseline: ReferencePolicy,
     seed_index: u32,
 ) -> Result<Checkpoint, Error> {

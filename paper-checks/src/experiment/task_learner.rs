@@ -5,7 +5,7 @@
 //! learners ([`ReferencePolicy`]).
 
 use super::{TaskKind, cartpole_max_steps};
-use crate::config::TaskSection;
+use crate::config::TaskExperiment;
 use crate::error::Error;
 use crate::stats::derive_seed;
 use ilopt::evaluate::Evaluation;
@@ -33,7 +33,7 @@ pub enum ReferencePolicy {
 impl ReferencePolicy {
     /// Its label in tables and figures, for the task `kind` as `task` sets it up (CartPole's
     /// expert choice).
-    pub fn label(self, kind: TaskKind, task: &TaskSection) -> String {
+    pub fn label(self, kind: TaskKind, task: &TaskExperiment) -> String {
         match (self, kind) {
             (ReferencePolicy::Expert, TaskKind::Obstacle) => "Expert (VO)".into(),
             (ReferencePolicy::Expert, TaskKind::Cartpole) => {
@@ -60,7 +60,7 @@ impl ReferencePolicy {
 /// [`Error::Experiment`] if the environment, expert or policy cannot be built.
 pub fn task_learner(
     kind: TaskKind,
-    task: &TaskSection,
+    task: &TaskExperiment,
     horizon: Horizon,
 ) -> Result<TaskLearner, Error> {
     let e = |x: &dyn std::fmt::Display| Error::experiment(kind.name(), x);

@@ -1,13 +1,13 @@
 //! The cache keys: a hash of everything that determines a stored result (the row, its task's
 //! section and expert, the seeds, the size profile, and the code version).
 
-use crate::config::{AlgorithmEntry, Profile, TaskSection};
+use crate::config::{AlgorithmEntry, Profile, TaskExperiment};
 use crate::experiment::{TaskKind, run_key};
 use crate::stats::fnv1a;
 
 /// What determines a task's runs apart from the algorithm rows: the section without its rows,
 /// and the expert's identity.
-pub(super) fn section_key(kind: TaskKind, t: &TaskSection) -> String {
+pub(super) fn section_key(kind: TaskKind, t: &TaskExperiment) -> String {
     let expert = (kind == TaskKind::Cartpole)
         .then(|| crate::config::expert_identity(t.expert.unwrap_or_default()));
     let mut bare = t.clone();
@@ -24,7 +24,7 @@ pub(super) fn section_key(kind: TaskKind, t: &TaskSection) -> String {
 pub(super) fn task_key(
     profile: &Profile,
     kind: TaskKind,
-    t: &TaskSection,
+    t: &TaskExperiment,
     e: &AlgorithmEntry,
     version: &str,
 ) -> String {
@@ -45,7 +45,7 @@ pub(super) fn task_key(
 pub(super) fn tuning_key(
     profile: &Profile,
     kind: TaskKind,
-    t: &TaskSection,
+    t: &TaskExperiment,
     e: &AlgorithmEntry,
     version: &str,
 ) -> String {

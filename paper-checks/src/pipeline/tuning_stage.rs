@@ -4,7 +4,7 @@
 use super::Options;
 use super::keys::tuning_key;
 use super::task_learners::TaskLearners;
-use crate::config::{AlgorithmEntry, Profile, TaskSection};
+use crate::config::{AlgorithmEntry, Profile, TaskExperiment};
 use crate::error::Error;
 use crate::experiment::{AppendixRun, Evaluated};
 use crate::experiment::{RunSpec, TaskKind, run_key_of, run_spec};
@@ -170,7 +170,7 @@ struct Row<'a> {
     progress: &'a Progress,
     units: &'a Units,
     kind: TaskKind,
-    task: &'a TaskSection,
+    task: &'a TaskExperiment,
     entry: &'a AlgorithmEntry,
     key: &'a str,
 }

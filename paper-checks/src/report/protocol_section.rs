@@ -4,7 +4,7 @@
 
 use super::aggregate::num;
 use super::blocks::{Block, Table};
-use crate::config::{Profile, Role, TaskSection};
+use crate::config::{Profile, Role, TaskExperiment};
 use crate::experiment::AppendixRun;
 use crate::experiment::{RunStatus, TaskKind};
 use crate::protocol::{Score, TuningResult};
@@ -22,7 +22,7 @@ fn role(r: Role) -> &'static str {
     }
 }
 
-fn section(profile: &Profile, kind: TaskKind) -> &TaskSection {
+fn section(profile: &Profile, kind: TaskKind) -> &TaskExperiment {
     match kind {
         TaskKind::Obstacle => &profile.obstacle,
         TaskKind::Cartpole => &profile.cartpole,
