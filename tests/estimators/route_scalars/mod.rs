@@ -196,17 +196,18 @@ impl<S: Scalar, L: Clone + Debug, A: Clone + Debug> Task<S> for Lifted<L, A> {
     }
 }
 
-/// An f64 trajectory in the scalar `S`, exactly: features, the absorbing tail's losses, labels
-/// and actions (through `label` and `action`), and the resets.
-fn lift<S: Scalar, L, A, L2, A2>(
+/// An f64 trajectory with every value mapped by `value` (features, the absorbing tail's losses),
+/// labels and actions by `label` and `action`, and the resets kept.
+fn map_trajectory<S: Scalar, L, A, L2, A2>(
     t: &TaskTrajectory<f64, L, A>,
+    value: &dyn Fn(f64) -> S,
     label: &dyn Fn(&L) -> L2,
     action: &dyn Fn(&A) -> A2,
 ) -> TaskTrajectory<S, L2, A2> {
     let features = t
         .features()
         .iter()
-        .map(|row| row.iter().map(|&x| exact(x)).collect())
+        .map(|row| row.iter().map(|&x| value(x)).collect())
         .collect();
     let mut out = TaskTrajectory::from_parts(
         features,
@@ -214,9 +215,29 @@ fn lift<S: Scalar, L, A, L2, A2>(
         t.labels.iter().map(label).collect(),
     )
     .unwrap();
-    out.absorbed = t.absorbed.map(exact);
+    out.absorbed = t.absorbed.map(value);
     out.resets = t.resets;
     out
+}
+
+/// An f64 trajectory in the scalar `S`, exactly: features, the absorbing tail's losses, labels
+/// and actions (through `label` and `action`), and the resets.
+fn lift<S: Scalar, L, A, L2, A2>(
+    t: &TaskTrajectory<f64, L, A>,
+    label: &dyn Fn(&L) -> L2,
+    action: &dyn Fn(&A) -> A2,
+) -> TaskTrajectory<S, L2, A2> {
+    map_trajectory(t, &exact, label, action)
+}
+
+/// The problem of `policy` over the [`Lifted`] task with the labels `L` and actions `A` of
+/// lifted trajectories, at `horizon`.
+fn lifted<L, A, P>(policy: P, horizon: Horizon) -> TaskProblem<Lifted<L, A>, P> {
+    TaskProblem {
+        task: Lifted::new(),
+        policy,
+        horizon,
+    }
 }
 
 fn lift_theta<S: Scalar>(theta: &DVector<f64>) -> DVector<S> {

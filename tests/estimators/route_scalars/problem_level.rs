@@ -309,14 +309,9 @@ where
     LI: Borrow<PI::Label> + Clone + Debug,
     AI: Clone + Debug,
 {
-    let mut pint = TaskProblem {
-        task: Lifted::<LI, AI>::new(),
-        policy: pi,
-        horizon: p.horizon,
-    };
+    let mut pint = lifted::<LI, AI, _>(pi, p.horizon);
     let thetas_i = [lift_theta(&thetas[0]), lift_theta(&thetas[1])];
     let mut tally = Tally::default();
-    let mut cost = Cost::default();
     for (seed, t) in SEEDS.into_iter().zip(rollouts(p, &thetas[0])) {
         let ti = lift::<Interval, _, _, _, _>(&t, label, action);
         for k in 0..2 {
@@ -339,17 +334,7 @@ where
     }
 
     // The baselined oracle on batches of M trajectories.
-    let mut rng = KitRng::seed_from_u64(7);
-    let batches: Vec<Vec<_>> = (0..BATCHES)
-        .map(|_| {
-            (0..M)
-                .map(|_| {
-                    p.rollout(&Behaviour::Learner(&thetas[0]), &mut rng, &mut cost)
-                        .unwrap()
-                })
-                .collect()
-        })
-        .collect();
+    let batches = batches(p, &thetas[0]);
     let batches_i: Vec<Vec<_>> = batches
         .iter()
         .map(|ts| {

@@ -357,20 +357,7 @@ pub(super) fn round_trajectory<T: Task<f64>>(
     label: &dyn Fn(&T::Label) -> T::Label,
     action: &dyn Fn(&T::Action) -> T::Action,
 ) -> Trajectory64<T> {
-    let features = t
-        .features()
-        .iter()
-        .map(|row| row.iter().map(|&x| to_f32(x)).collect())
-        .collect();
-    let mut out = TaskTrajectory::from_parts(
-        features,
-        t.actions.iter().map(action).collect(),
-        t.labels.iter().map(label).collect(),
-    )
-    .unwrap();
-    out.absorbed = t.absorbed.map(to_f32);
-    out.resets = t.resets;
-    out
+    map_trajectory(t, &to_f32, label, action)
 }
 
 /// The reference order of a route that `routes` asserts bit for bit in f64: the plain pass
@@ -503,11 +490,7 @@ where
     L32: Borrow<P32::Label> + Clone + Debug,
     A32: Clone + Debug,
 {
-    let mut p32 = TaskProblem {
-        task: Lifted::<L32, A32>::new(),
-        policy: p32,
-        horizon: p.horizon,
-    };
+    let mut p32 = lifted::<L32, A32, _>(p32, p.horizon);
     let rounded = thetas.clone().map(|th| th.map(to_f32));
     let th32 = rounded.clone().map(|th| lift_theta::<f32>(&th));
     let widen = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect::<Vec<_>>();
@@ -605,11 +588,7 @@ where
     LD: Borrow<PD::Label> + Clone + Debug,
     AD: Clone + Debug,
 {
-    let mut pd = TaskProblem {
-        task: Lifted::<LD, AD>::new(),
-        policy: pd,
-        horizon: p.horizon,
-    };
+    let mut pd = lifted::<LD, AD, _>(pd, p.horizon);
     let thd = [dual_theta::<f64>(&thetas[0]), dual_theta(&thetas[1])];
     let values = |v: &[Dual<f64>]| v.iter().map(|x| *x.value()).collect::<Vec<_>>();
     let tangents = |v: &[Dual<f64>]| v.iter().map(tangent).collect::<Vec<_>>();
