@@ -24,6 +24,7 @@ use ilopt::policy::{
     SpeedLimitedGaussian,
 };
 use ilopt::problem::{Behaviour, Cost, EstimatorForm, IlProblem, KitRng, Weighting};
+use ilopt::scalar::Scalar;
 use ilopt::task::cartpole::{self, CartPoleTask};
 use ilopt::task::obstacle::{self, ObstacleTask};
 use ilopt::task::{AfterEnd, Horizon, Task, TaskProblem, TaskTrajectory};
@@ -58,34 +59,43 @@ pub(super) fn time_indexed(i: usize) -> f64 {
     0.375 - i as f64 / 1024.0
 }
 
-/// One trajectory's per-decision terms from the policy's in-place methods: losses, loss gradients,
-/// scores, and the log-ratios `log π_θ(a|s) − log π_θnew(a|s)`.
-struct Terms {
-    losses: Vec<f64>,
-    grads: Vec<Vec<f64>>,
-    scores: Vec<Vec<f64>>,
-    log_ratios: Vec<f64>,
+/// One trajectory's per-decision terms from the policy's in-place methods in `S`: losses, loss
+/// gradients, scores, and the log-ratios `log π_θ(a|s) − log π_θnew(a|s)`; with the absorbing
+/// tail's losses and the number of scored decisions (n − 1, or n with an absorbing tail). Also
+/// `route_scalars`' terms, in every scalar.
+#[derive(Clone)]
+pub(super) struct Terms<S> {
+    pub(super) losses: Vec<S>,
+    pub(super) grads: Vec<Vec<S>>,
+    pub(super) scores: Vec<Vec<S>>,
+    pub(super) log_ratios: Vec<S>,
+    pub(super) tail: Option<S>,
+    pub(super) scored: usize,
 }
 
-fn terms<P, L>(
+pub(super) fn terms<S, P, L>(
     policy: &P,
-    theta: &[f64],
-    theta_new: &[f64],
-    t: &TaskTrajectory<f64, L, P::Action>,
-) -> Terms
+    theta: &[S],
+    theta_new: &[S],
+    t: &TaskTrajectory<S, L, P::Action>,
+) -> Terms<S>
 where
-    P: LikelihoodRatio<f64>,
+    S: Scalar,
+    P: LikelihoodRatio<S>,
     L: Borrow<P::Label>,
 {
     let d = policy.param_dim();
+    let n = t.len();
     let mut out = Terms {
         losses: vec![],
         grads: vec![],
         scores: vec![],
         log_ratios: vec![],
+        tail: t.absorbed.clone(),
+        scored: if t.absorbed.is_some() { n } else { n - 1 },
     };
-    for ((phi, a), y) in t.features().iter().zip(&t.actions).zip(&t.labels) {
-        let (mut grad, mut score) = (vec![0.0; d], vec![0.0; d]);
+    for ((phi, a), y) in t.feature_rows().zip(&t.actions).zip(&t.labels) {
+        let (mut grad, mut score) = (vec![S::zero(); d], vec![S::zero(); d]);
         out.losses
             .push(policy.loss_into(theta, phi, y.borrow(), &mut grad).unwrap());
         policy.score_into(theta, phi, a, &mut score).unwrap();
@@ -106,7 +116,7 @@ where
 /// `Σ_{i<s} log-ratio_i`.
 #[allow(clippy::needless_range_loop)] // the sums' indices, as written
 fn reference(
-    t: &Terms,
+    t: &Terms<f64>,
     tail: Option<f64>,
     weighted: bool,
     baselines: &dyn Fn(usize) -> f64,
@@ -145,7 +155,7 @@ fn reference(
 }
 
 /// The unweighted reference without a baseline, bit for bit the plain pass's order.
-fn plain(t: &Terms, tail: Option<f64>) -> Vec<f64> {
+fn plain(t: &Terms<f64>, tail: Option<f64>) -> Vec<f64> {
     let mut losses = t.losses.clone();
     losses.extend(tail);
     plain_with(t, &losses)
@@ -155,21 +165,21 @@ fn plain(t: &Terms, tail: Option<f64>) -> Vec<f64> {
 /// `Σ_t [∇l_t + l'_t Σ_{i<t} ψ_i]`, then `l'_n Σ_{i≤n} ψ_i` for an (n + 1)-th loss — how every
 /// route that sums recorded decisions folds a baseline in (shifted losses).
 #[allow(clippy::needless_range_loop)] // the sums' indices, as written
-fn plain_with(t: &Terms, losses: &[f64]) -> Vec<f64> {
+pub(super) fn plain_with<S: Scalar>(t: &Terms<S>, losses: &[S]) -> Vec<S> {
     let d = t.grads.first().map_or(0, Vec::len);
     let n = t.losses.len();
-    let (mut g, mut score_sum) = (vec![0.0; d], vec![0.0; d]);
+    let (mut g, mut score_sum) = (vec![S::zero(); d], vec![S::zero(); d]);
     for step in 0..n {
         for j in 0..d {
-            g[j] += t.grads[step][j] + losses[step] * score_sum[j];
+            g[j] += t.grads[step][j].clone() + losses[step].clone() * &score_sum[j];
         }
         for j in 0..d {
-            score_sum[j] += t.scores[step][j];
+            score_sum[j] += &t.scores[step][j];
         }
     }
     if let Some(end) = losses.get(n) {
         for j in 0..d {
-            g[j] += end * score_sum[j];
+            g[j] += end.clone() * &score_sum[j];
         }
     }
     g
@@ -177,7 +187,7 @@ fn plain_with(t: &Terms, losses: &[f64]) -> Vec<f64> {
 
 /// The full form (eq. 3.16) `Σ_t ∇l_t + (L_abs + Σ_t l_t) Σ_{i<s} ψ_i`, s scored decisions.
 #[allow(clippy::needless_range_loop)] // the sums' indices, as written
-fn full(t: &Terms, tail: Option<f64>) -> Vec<f64> {
+fn full(t: &Terms<f64>, tail: Option<f64>) -> Vec<f64> {
     let d = t.grads.first().map_or(0, Vec::len);
     let n = t.losses.len();
     let scored = if tail.is_some() { n } else { n - 1 };
@@ -195,7 +205,7 @@ fn full(t: &Terms, tail: Option<f64>) -> Vec<f64> {
 }
 
 /// The loss-to-go `L_i = Σ_{t>i} l_t` (the tail included) of each decision.
-fn loss_to_go(t: &Terms, tail: Option<f64>) -> Vec<f64> {
+fn loss_to_go(t: &Terms<f64>, tail: Option<f64>) -> Vec<f64> {
     let mut after = tail.unwrap_or(0.0);
     let mut out = vec![0.0; t.losses.len()];
     for i in (0..t.losses.len()).rev() {
@@ -490,7 +500,7 @@ where
                 g.as_slice(),
                 by_terms.as_slice(),
             );
-            let all: Vec<Terms> = ts.iter().map(|t| terms(&p.policy, th, th, t)).collect();
+            let all: Vec<Terms<f64>> = ts.iter().map(|t| terms(&p.policy, th, th, t)).collect();
             let to_go: Vec<Vec<f64>> = all
                 .iter()
                 .zip(&ts)

@@ -81,6 +81,7 @@ mod policies;
 mod problem_level;
 mod rounded;
 
+use super::routes::{Terms, plain_with, terms};
 use lifted_instances::*;
 #[cfg(feature = "mpfr")]
 use mpfr_instances::*;
@@ -155,6 +156,28 @@ fn shift_baseline<S: Scalar>(i: usize, scored: usize) -> S {
     } else {
         S::zero()
     }
+}
+
+/// The per-step losses `losses` (the absorbing tail's last, if any) shifted by
+/// [`shift_baseline`]: `(l_t + b_t) − b_{t−1}` as the recorded routes here shift them, or,
+/// `grouped`, `l_t + (b_t − b_{t−1})` as `baselined_estimate` does (b_{−1} = 0).
+fn shifted<'a, S: Scalar + 'a>(
+    losses: impl Iterator<Item = &'a S>,
+    scored: usize,
+    grouped: bool,
+) -> Vec<S> {
+    let b = |i: usize| shift_baseline::<S>(i, scored);
+    losses
+        .enumerate()
+        .map(|(i, l)| {
+            let before = if i == 0 { S::zero() } else { b(i - 1) };
+            if grouped {
+                l.clone() + (b(i) - before)
+            } else {
+                l.clone() + b(i) - before
+            }
+        })
+        .collect()
 }
 
 /// A task that only names a scalar's label and action types: the problem-level routes estimate
@@ -251,56 +274,6 @@ fn lift_vec<S: Scalar, V: Borrow<[f64]>>(v: &V) -> Vec<S> {
 
 fn lift_pair<S: Scalar>(v: &[f64; 2]) -> [S; 2] {
     v.map(exact)
-}
-
-/// One trajectory's per-decision terms from the policy's in-place methods in `S`: losses, loss
-/// gradients, scores, and the log-ratios `log π_θ(a|s) − log π_θnew(a|s)`; with the absorbing
-/// tail's losses and the number of scored decisions (n − 1, or n with an absorbing tail).
-#[derive(Clone)]
-struct Terms<S> {
-    losses: Vec<S>,
-    grads: Vec<Vec<S>>,
-    scores: Vec<Vec<S>>,
-    log_ratios: Vec<S>,
-    tail: Option<S>,
-    scored: usize,
-}
-
-fn terms<S, P, L>(
-    policy: &P,
-    theta: &[S],
-    theta_new: &[S],
-    t: &TaskTrajectory<S, L, P::Action>,
-) -> Terms<S>
-where
-    S: Scalar,
-    P: LikelihoodRatio<S>,
-    L: Borrow<P::Label>,
-{
-    let d = policy.param_dim();
-    let n = t.len();
-    let mut out = Terms {
-        losses: vec![],
-        grads: vec![],
-        scores: vec![],
-        log_ratios: vec![],
-        tail: t.absorbed.clone(),
-        scored: if t.absorbed.is_some() { n } else { n - 1 },
-    };
-    for ((phi, a), y) in t.feature_rows().zip(&t.actions).zip(&t.labels) {
-        let (mut grad, mut score) = (vec![S::zero(); d], vec![S::zero(); d]);
-        out.losses
-            .push(policy.loss_into(theta, phi, y.borrow(), &mut grad).unwrap());
-        policy.score_into(theta, phi, a, &mut score).unwrap();
-        out.grads.push(grad);
-        out.scores.push(score);
-        out.log_ratios.push(
-            policy
-                .log_likelihood_ratio(theta, theta_new, phi, a)
-                .unwrap(),
-        );
-    }
-    out
 }
 
 /// What a route estimates, for one trajectory at one θ (the reference of each: [`want`]).
@@ -549,16 +522,7 @@ where
         Want::Plain,
         acc,
     ));
-    let b = |i: usize| shift_baseline::<S>(i, scored);
-    let mut shifted: Vec<S> = losses
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let before = if i == 0 { S::zero() } else { b(i - 1) };
-            l.clone() + b(i) - before
-        })
-        .collect();
-    shifted.extend(tail.map(|l| l.clone() - b(n - 1)));
+    let shifted = shifted(losses.iter().chain(tail), scored, false);
     let mut acc = vec![S::zero(); d];
     policy.accumulate_recorded(t.feature_data(), &records, &shifted, &mut acc, &mut scratch);
     out.push(route(
@@ -566,7 +530,9 @@ where
         Want::Baselined,
         acc,
     ));
-    let given: Vec<S> = (0..scored).map(b).collect();
+    let given: Vec<S> = (0..scored)
+        .map(|i| shift_baseline::<S>(i, scored))
+        .collect();
     let (mut cross, mut moment) = (vec![S::zero(); scored], vec![S::zero(); scored]);
     let mut corrected = g.clone();
     policy.score_products(

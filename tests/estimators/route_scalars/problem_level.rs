@@ -103,15 +103,7 @@ where
     p.decision_terms(theta, t, None, rows.terms_mut(), &mut cost)
         .unwrap();
     rows.fill_from_terms();
-    let shifted: Vec<S> = rec
-        .losses()
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let before = if i == 0 { S::zero() } else { b(i - 1) };
-            l.clone() + b(i) - before
-        })
-        .collect();
+    let shifted = shifted(rec.losses().iter(), scored, false);
     for (name, r) in [
         ("record_decisions", &mut rec),
         ("fill_from_terms", &mut rows),

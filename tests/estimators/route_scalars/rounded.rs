@@ -407,48 +407,6 @@ pub(super) const SAME_ORDER: [(&str, Order); 16] = [
     ),
 ];
 
-/// `Σ_t [∇l_t + l'_t Σ_{i<t} ψ_i]`, then `l'_n Σ_{i≤n} ψ_i` for an (n + 1)-th loss: `routes`'
-/// plain pass with the losses `l'`.
-#[allow(clippy::needless_range_loop)] // the sums' indices, as written
-pub(super) fn plain_with<S: Scalar>(t: &Terms<S>, losses: &[S]) -> Vec<S> {
-    let d = t.grads.first().map_or(0, Vec::len);
-    let n = t.losses.len();
-    let (mut g, mut score_sum) = (vec![S::zero(); d], vec![S::zero(); d]);
-    for step in 0..n {
-        for j in 0..d {
-            g[j] += t.grads[step][j].clone() + losses[step].clone() * &score_sum[j];
-        }
-        for j in 0..d {
-            score_sum[j] += &t.scores[step][j];
-        }
-    }
-    if let Some(end) = losses.get(n) {
-        for j in 0..d {
-            g[j] += end.clone() * &score_sum[j];
-        }
-    }
-    g
-}
-
-/// The losses and the tail shifted by [`shift_baseline`], `grouped` as `baselined_estimate`
-/// groups them (`l + (b_t − b_{t−1})`), else as the routes here (`(l + b_t) − b_{t−1}`).
-pub(super) fn shifted_losses<S: Scalar>(t: &Terms<S>, grouped: bool) -> Vec<S> {
-    let b = |i: usize| shift_baseline::<S>(i, t.scored);
-    t.losses
-        .iter()
-        .chain(&t.tail)
-        .enumerate()
-        .map(|(i, l)| {
-            let before = if i == 0 { S::zero() } else { b(i - 1) };
-            if grouped {
-                l.clone() + (b(i) - before)
-            } else {
-                l.clone() + b(i) - before
-            }
-        })
-        .collect()
-}
-
 /// The reference in `routes`' order of a route's quantity, from the terms in the route's scalar.
 pub(super) fn in_order<S: Real>(order: Order, t: &Terms<S>) -> Vec<S> {
     let exp = |x: &S| x.exp();
@@ -459,8 +417,10 @@ pub(super) fn in_order<S: Real>(order: Order, t: &Terms<S>) -> Vec<S> {
             plain_with(t, &losses)
         }
         Order::Want(what) => want(what, t, Some(&exp)).expect("an exp"),
-        Order::Shifted => plain_with(t, &shifted_losses(t, false)),
-        Order::ShiftedGiven => plain_with(t, &shifted_losses(t, true)),
+        Order::Shifted => plain_with(t, &shifted(t.losses.iter().chain(&t.tail), t.scored, false)),
+        Order::ShiftedGiven => {
+            plain_with(t, &shifted(t.losses.iter().chain(&t.tail), t.scored, true))
+        }
     }
 }
 
